@@ -1,0 +1,74 @@
+"""taopt: optimisation modelling for cooperative multi-vehicle task assignment.
+
+Navigation in drift fields (CasADi collocation, PMP shooting) produces
+asymmetric travel-time matrices; exact models (cvxpy + HiGHS) certify optima
+of small instances; the thesis's heuristics are compared with them on the
+same data and scored by one ``evaluate`` per problem.
+
+Quick tour
+----------
+>>> import numpy as np, taopt
+>>> problem = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
+>>> taopt.evaluate(problem, [[1, 0]])
+4.0
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from taopt.errors import (
+    ConvergenceError,
+    FeasibilityError,
+    InstanceError,
+    SolverError,
+    TaoptError,
+)
+from taopt.fields import GriddedField, LinearField, UniformField, thesis_field
+from taopt.instance import Instance, Obstacle, Target, Vehicle
+from taopt.result import Solution
+from taopt.routing.problem import AssignmentProblem
+from taopt.scoring import evaluate
+
+__version__ = "0.1.0"
+
+_LAZY = {
+    # chapter 5 objects live in taopt.delivery; imported on first use
+    "DeliveryInstance": ("taopt.delivery.instance", "DeliveryInstance"),
+    "Plan": ("taopt.delivery.instance", "Plan"),
+    "schedule": ("taopt.delivery.schedule", "schedule"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'taopt' has no attribute {name!r}")
+
+
+__all__ = [
+    "AssignmentProblem",
+    "DeliveryInstance",
+    "Plan",
+    "Instance",
+    "Vehicle",
+    "Target",
+    "Obstacle",
+    "Solution",
+    "evaluate",
+    "schedule",
+    "UniformField",
+    "LinearField",
+    "GriddedField",
+    "thesis_field",
+    "TaoptError",
+    "InstanceError",
+    "FeasibilityError",
+    "SolverError",
+    "ConvergenceError",
+]

@@ -1,0 +1,1 @@
+"""Chapter 5: precedence-constrained truck–drone delivery."""
