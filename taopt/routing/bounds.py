@@ -1,0 +1,247 @@
+"""Chapter 2 bounds: the thesis's Algorithm 1 ("MCGA"), a valid arborescence bound, f_da.
+
+Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
+(DESIGN invariant 3):
+
+* :func:`arborescence_bound` — **valid** for every non-negative matrix. Every
+  feasible solution (one open path per vehicle) plus zero-cost edges from a
+  super-root to the vehicles is a spanning arborescence of the graph used, so
+  the minimum-cost one (Edmonds' algorithm) is never above f_o.
+* :func:`thesis_mcga` — Algorithm 1 exactly as printed: Prim-like growth from
+  the vehicle set. On a symmetric matrix it is a minimum spanning forest
+  rooted at the vehicles, hence valid (Lemma 2.4). On an asymmetric matrix
+  Prim's greedy growth is *not* a minimum-cost arborescence, and its value can
+  exceed f_o (Lemma 2.4 fails there; :mod:`taopt.routing.claims` finds such
+  instances). Kept because the thesis's quality ratio q = f / f_a (2.26) uses it.
+* :func:`f_da` — Lemma 2.5's upper bound: the MCGA with every edge duplicated
+  in the opposite direction.
+* :func:`lp_bound` — the LP relaxation of the exact model (valid).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import networkx as nx
+import numpy as np
+
+from taopt.routing.problem import AssignmentProblem
+
+
+@dataclass(frozen=True)
+class GrowthTree:
+    """The tree grown by Algorithm 1 / the extended Voronoi clustering (2.12)–(2.14).
+
+    Attributes
+    ----------
+    parent : (n,) int array
+        ``parent[k]`` is the point (index into ``problem.cost``: a target
+        ``0..n-1`` or a vehicle start ``n..n+m-1``) joined to target k.
+    vehicle : (n,) int array
+        ``vehicle[k]`` in ``0..m-1``: the vehicle whose subtree holds target k
+        (the cluster of (2.14)).
+    order : (n,) int array
+        Targets in the order they were added (line 3 of Algorithm 1).
+    weight : (n,) float array
+        ``weight[k] = cost[parent[k], k]``, the edge weight added for target k.
+    """
+
+    parent: np.ndarray
+    vehicle: np.ndarray
+    order: np.ndarray
+    weight: np.ndarray
+
+    @property
+    def value(self) -> float:
+        """Sum of the edge weights, the thesis's f_a."""
+        return float(self.weight.sum())
+
+
+def mcga_tree(problem: AssignmentProblem) -> GrowthTree:
+    """Grow Algorithm 1's tree ("MCGA") from the vehicle set, as printed.
+
+    Line 1 puts every vehicle start in the tree; each pass of lines 3–5 adds
+    the target ``p*`` and tree vertex ``j*`` minimising ``t(j, p)`` over
+    (tree vertex, target not yet in the tree). This is also exactly the
+    extended Voronoi clustering (2.12)–(2.14): ``T_j`` = the vehicle's start
+    plus its subtree.
+
+    Parameters
+    ----------
+    problem : AssignmentProblem
+
+    Returns
+    -------
+    GrowthTree
+
+    Notes
+    -----
+    The zero-cost vehicle–vehicle edges of §2.4.3 never matter: all vehicles
+    are in the tree from line 1 and only targets are added, so no edge into a
+    vehicle is ever chosen. Ties in the argmin: the lowest target index
+    ``p``; among tree vertices at equal cost, the one that entered the tree
+    first (vehicle starts in index order, then targets in the order added).
+    Vectorised Prim: O(n (n + m)) time.
+
+    References
+    ----------
+    Thesis §2.4.3, Algorithm 1; (2.12)–(2.14).
+    """
+    n = problem.n
+    cost = problem.cost
+    from_vehicles = cost[n:, :n]  # (m, n): t(p_j, k)
+    source = np.argmin(from_vehicles, axis=0)  # lowest vehicle on ties
+    best = from_vehicles[source, np.arange(n)].copy()
+    parent = n + source
+    vehicle = source.copy()
+    open_ = np.ones(n, dtype=bool)
+    order = np.empty(n, dtype=int)
+    weight = np.empty(n, dtype=float)
+    masked = best.copy()
+    for step in range(n):
+        k = int(np.argmin(masked))  # lowest target index on ties
+        order[step] = k
+        weight[k] = best[k]
+        open_[k] = False
+        masked[k] = np.inf
+        # Target k joins the tree: it may now be the closest tree vertex of others.
+        better = open_ & (cost[k, :n] < best)  # strict: earlier vertex wins ties
+        best[better] = cost[k, :n][better]
+        parent[better] = k
+        vehicle[better] = vehicle[k]
+        masked[better] = best[better]
+    return GrowthTree(parent=parent, vehicle=vehicle, order=order, weight=weight)
+
+
+def thesis_mcga(problem: AssignmentProblem) -> float:
+    """The thesis's f_a: value of Algorithm 1's tree, as printed.
+
+    Valid lower bound for symmetric matrices only (see the module notes): on
+    asymmetric matrices it may exceed the optimum; use
+    :func:`arborescence_bound` for a valid bound.
+
+    Example
+    -------
+    One vehicle (point 2) and two targets where greedy growth is fooled:
+
+    >>> import numpy as np
+    >>> cost = np.array([[0, 10, 9], [0, 0, 9], [1, 10, 0]])
+    >>> p = AssignmentProblem(cost, n_targets=2)
+    >>> thesis_mcga(p), p.evaluate([[1, 0]])  # f_a = 1 + 10 > f_o = 10 + 0
+    (11.0, 10.0)
+    """
+    return mcga_tree(problem).value
+
+
+def arborescence_graph(problem: AssignmentProblem) -> nx.DiGraph:
+    """The digraph of the valid bound: super-root -> vehicles (0), vehicles/targets -> targets."""
+    n, m = problem.n, problem.m
+    cost = problem.cost
+    graph = nx.DiGraph()
+    root = "root"
+    graph.add_node(root)
+    graph.add_edges_from(((root, n + j, {"weight": 0.0}) for j in range(m)))
+    sources, targets = np.nonzero(~np.eye(n + m, n, dtype=bool))
+    graph.add_edges_from(
+        (int(i), int(k), {"weight": float(cost[i, k])}) for i, k in zip(sources, targets)
+    )
+    return graph
+
+
+def arborescence_bound(problem: AssignmentProblem) -> float:
+    """Valid lower bound: minimum-cost spanning arborescence with a super-root.
+
+    The graph has a super-root joined to every vehicle start at zero cost and
+    the edges ``i -> k`` of weight ``t(i, k)`` from every point to every
+    target (no edges into vehicles other than from the root). Any feasible
+    solution of (2.2)–(2.5) plus the root edges is a spanning arborescence of
+    it, so the minimum (Edmonds' algorithm, networkx
+    ``minimum_spanning_arborescence``) is <= f_o for every non-negative
+    matrix, symmetric or not.
+
+    Returns
+    -------
+    float
+        The arborescence's weight; always <= :func:`thesis_mcga`.
+
+    Notes
+    -----
+    O(E log V) with E ~ (n + m) n edges.
+
+    References
+    ----------
+    Thesis §2.4.3 (the MCGA it intends); Edmonds (1967).
+    """
+    graph = arborescence_graph(problem)
+    tree = nx.minimum_spanning_arborescence(graph, attr="weight", preserve_attrs=True)
+    return float(sum(w for _, _, w in tree.edges(data="weight")))
+
+
+def f_da(problem: AssignmentProblem, tree: str = "thesis") -> float:
+    """Lemma 2.5's f_da: the MCGA with each edge duplicated in the opposite direction.
+
+    Sums ``t(u, k) + t(k, u)`` over the edges ``u -> k`` of the tree (u a
+    vehicle start or a target, k a target), i.e. over the n edges of each
+    vehicle's arborescence after the zero-cost vehicle edges are removed.
+
+    Parameters
+    ----------
+    problem : AssignmentProblem
+    tree : {"thesis", "edmonds"}
+        "thesis" (default, as in Lemma 2.5): Algorithm 1's tree
+        (:func:`mcga_tree`). "edmonds": the minimum-cost arborescence of
+        :func:`arborescence_bound`.
+
+    Returns
+    -------
+    float
+        When the matrix satisfies the triangle inequality (Lemma 2.3), an
+        upper bound on f_o (a depth-first walk of the doubled tree,
+        shortcut, is a feasible solution). For a symmetric matrix with
+        ``tree="thesis"`` it equals ``2 * thesis_mcga(problem)``.
+
+    References
+    ----------
+    Thesis Lemma 2.5.
+    """
+    cost = problem.cost
+    n = problem.n
+    if tree == "thesis":
+        parent = mcga_tree(problem).parent
+    elif tree == "edmonds":
+        graph = arborescence_graph(problem)
+        arb = nx.minimum_spanning_arborescence(graph, attr="weight")
+        parent = np.empty(n, dtype=int)
+        for u, k in arb.edges():
+            if u != "root":
+                parent[k] = u
+    else:
+        from taopt.errors import InstanceError
+
+        raise InstanceError(f"tree must be 'thesis' or 'edmonds', got {tree!r}")
+    targets = np.arange(n)
+    return float((cost[parent, targets] + cost[targets, parent]).sum())
+
+
+def lp_bound(problem: AssignmentProblem, sec: str = "mtz", **options: Any) -> float:
+    """Valid lower bound from the LP relaxation of the exact model (2.2)–(2.5).
+
+    Calls ``taopt.models.solve_routing(problem, sec=sec, relax=True, **options)``
+    and returns its objective (the relaxation's value).
+    """
+    from taopt.models import solve_routing
+
+    result = solve_routing(problem, sec=sec, relax=True, **options)
+    return float(result.bound if result.bound is not None else result.objective)
+
+
+__all__ = [
+    "GrowthTree",
+    "mcga_tree",
+    "thesis_mcga",
+    "arborescence_bound",
+    "arborescence_graph",
+    "f_da",
+    "lp_bound",
+]
