@@ -5,8 +5,8 @@
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
 """
 
-from taopt.models.routing import solve_routing
 from taopt.models.delivery import solve_delivery
+from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop
 
 __all__ = ["solve_routing", "solve_delivery", "solve_sop"]

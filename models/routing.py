@@ -36,6 +36,7 @@ Example
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -45,10 +46,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import InstanceError, SolverError
-from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, OPTIMAL, RELAXATION, TIME_LIMIT, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
+#: "optimal" is only reported when (objective - bound) / objective is at most this.
+OPTIMALITY_TOLERANCE = 1e-6
 
 __all__ = [
     "SUBTOUR_ELIMINATIONS",
@@ -56,7 +59,9 @@ __all__ = [
     "build",
     "decode",
     "describe",
+    "entry_bound",
     "find_subtours",
+    "greedy_routes",
     "repair",
     "solve_routing",
 ]
@@ -279,11 +284,15 @@ def describe(problem: AssignmentProblem, sec: str = "dfj", show: bool = True) ->
     _check(problem, sec)
     model = build(problem, sec)
     n = problem.n
-    families = [{"family": "variables sigma_ij (binary)", "equation": "(2.2)", "rows": len(model.tails)}]
+    families = [
+        {"family": "variables sigma_ij (binary)", "equation": "(2.2)", "rows": len(model.tails)}
+    ]
     if model.order is not None:
         families.append({"family": "variables u_j (MTZ order)", "equation": "(2.5)", "rows": n})
     if model.flow is not None:
-        families.append({"family": "variables f_ij (flow)", "equation": "(2.5)", "rows": len(model.tails)})
+        families.append(
+            {"family": "variables f_ij (flow)", "equation": "(2.5)", "rows": len(model.tails)}
+        )
     for constraint in model.problem.constraints:
         label = constraint.label or str(constraint)
         equation = label.split(" ")[0] if label.startswith("(") else "bounds"
@@ -313,7 +322,9 @@ def _successors(model: RoutingModel, values: np.ndarray | None = None) -> dict[i
     for arc in used:
         tail = int(model.tails[arc])
         if tail in successor:
-            raise SolverError(f"point {tail} is left twice in the solver's solution; (2.4) violated")
+            raise SolverError(
+                f"point {tail} is left twice in the solver's solution; (2.4) violated"
+            )
         successor[tail] = int(model.heads[arc])
     return successor
 
@@ -375,16 +386,41 @@ def repair(
     routes = [list(r) for r in routes]
     for cycle in subtours:
         cycle = list(cycle)
-        nxt = np.roll(cycle, -1)
-        cycle_cost = float(cost[cycle, nxt].sum())
         # opening at position p drops arc cycle[p-1] -> cycle[p]; the path starts at cycle[p]
         prev = np.roll(cycle, 1)
         ends = np.array([r[-1] if r else problem.n + k for k, r in enumerate(routes)])
         # price[k, p] = t(end of route k, cycle[p]) - t(cycle[p-1], cycle[p])
         price = cost[ends][:, cycle] - cost[prev, cycle][None, :]
         k, p = np.unravel_index(int(np.argmin(price)), price.shape)
-        _ = cycle_cost
         routes[k].extend(cycle[p:] + cycle[:p])
+    return routes
+
+
+def entry_bound(problem: AssignmentProblem) -> float:
+    """``Σ_j min_{i≠j} t(i, j)``: a valid lower bound, since (2.3) enters each target once."""
+    cost = np.array(problem.cost[:, : problem.n], dtype=float)
+    cost[np.arange(problem.n), np.arange(problem.n)] = np.inf
+    return float(cost.min(axis=0).sum())
+
+
+def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
+    """A quick feasible solution: repeatedly append the cheapest (route end, target) pair.
+
+    Only a fallback incumbent for :func:`solve_routing` when a limit strikes
+    before the solver finds one; the thesis's heuristics live in
+    ``taopt.heuristics``.
+    """
+    n, m = problem.n, problem.m
+    cost = problem.cost[:, :n].copy()
+    routes: list[list[int]] = [[] for _ in range(m)]
+    ends = np.arange(n, n + m)
+    left = np.ones(n, dtype=bool)
+    for _ in range(n):
+        price = np.where(left[None, :], cost[ends], np.inf)
+        k, target = np.unravel_index(int(np.argmin(price)), price.shape)
+        routes[k].append(int(target))
+        ends[k] = target
+        left[target] = False
     return routes
 
 
@@ -403,7 +439,10 @@ def _run(model: RoutingModel, time_limit: float | None, mip_gap: float, verbose:
     if not model.relax:
         options["mip_rel_gap"] = float(mip_gap)
     try:
-        model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
+        with warnings.catch_warnings():
+            # cvxpy warns "Solution may be inaccurate" on every limit; the status says it
+            warnings.simplefilter("ignore", UserWarning)
+            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
         status = model.problem.status
     except cp.error.SolverError as exc:  # e.g. a limit hit before any incumbent
         status = "solver_error"
@@ -444,8 +483,11 @@ def solve_routing(
     time_limit : float, optional
         Wall-clock seconds for the whole solve (all DFJ rounds together).
     mip_gap : float
-        Relative MIP gap passed to HiGHS (``mip_rel_gap``). "optimal" means
-        proven within this gap.
+        Relative MIP gap passed to HiGHS (``mip_rel_gap``). The status is
+        "optimal" only when the final gap is at most
+        :data:`OPTIMALITY_TOLERANCE` (1e-6); a run stopped by a looser
+        ``mip_gap`` is "feasible" with its proven bound
+        (``info["stopped_by"] == "mip_gap"``).
     relax : bool
         Return the LP relaxation value instead (status "relaxation",
         objective = bound = LP value, routes None). For DFJ the LP is solved
@@ -459,7 +501,9 @@ def solve_routing(
     -------
     Solution
         ``routes`` (one list per vehicle), ``objective`` = ``evaluate(routes)``,
-        ``status`` "optimal" or "time_limit", ``bound`` a proven lower bound.
+        ``status`` "optimal", "time_limit" or "feasible" (loose ``mip_gap``),
+        ``bound`` a proven lower bound (HiGHS's MIP dual bound, the DFJ LP
+        value, or Σ_j min_i t(i, j), whichever is largest).
         ``info`` holds rounds, cuts and the solver status.
 
     Raises
@@ -493,9 +537,14 @@ def solve_routing(
 
     cuts: list[tuple[int, ...]] = []
     rounds = 0
+    # Start from a greedy incumbent and the trivial bound of (2.3): every target is
+    # entered once, so the optimum is at least Σ_j min_i t(i, j).
+    best_routes = greedy_routes(problem)
+    best_value = evaluate_routes(problem, best_routes)
+    best_bound = entry_bound(problem)
     if sec == "dfj":
-        cuts = _lp_subtour_cuts(problem, verbose, deadline=remaining())
-    best_routes, best_value, best_bound = None, np.inf, -np.inf
+        cuts, lp_bound = _lp_subtour_cuts(problem, verbose, budget=remaining())
+        best_bound = max(best_bound, lp_bound)
     status = TIME_LIMIT
     solver_status = ""
     while True:
@@ -525,12 +574,12 @@ def solve_routing(
         if solver_status == "optimal":
             status = OPTIMAL
         break
-    if best_routes is None:
-        raise SolverError(
-            f"no feasible solution found within time_limit={time_limit}s "
-            f"(best bound {best_bound if np.isfinite(best_bound) else 'none'})"
-        )
-    bound = min(best_bound, best_value) if np.isfinite(best_bound) else None
+    bound = min(best_bound, best_value)
+    gap = (best_value - bound) / best_value if best_value > 0 else 0.0
+    stopped_by = "time_limit" if status == TIME_LIMIT else "optimal"
+    if status == OPTIMAL and mip_gap > OPTIMALITY_TOLERANCE and gap > OPTIMALITY_TOLERANCE:
+        # HiGHS stopped at a loose user mip_gap: proven within it, not optimal
+        status, stopped_by = FEASIBLE, "mip_gap"
     return Solution(
         objective=best_value,
         status=status,
@@ -538,7 +587,13 @@ def solve_routing(
         runtime=time.perf_counter() - start,
         method=f"exact-{sec}",
         routes=best_routes,
-        info={"rounds": rounds, "cuts": len(cuts), "solver_status": solver_status, "mip_gap": mip_gap},
+        info={
+            "rounds": rounds,
+            "cuts": len(cuts),
+            "solver_status": solver_status,
+            "mip_gap": mip_gap,
+            "stopped_by": stopped_by,
+        },
     )
 
 
@@ -571,22 +626,32 @@ def _violated_subsets(problem: AssignmentProblem, model: RoutingModel, values) -
     return sorted(found)
 
 
-def _lp_subtour_cuts(problem, verbose, deadline=None, max_rounds=50) -> list[tuple[int, ...]]:
-    """Solve the DFJ LP with cuts separated by minimum cut; return the cuts."""
+def _lp_subtour_cuts(problem, verbose, budget=None, max_rounds=50) -> tuple[list, float]:
+    """Solve the DFJ LP with cuts separated by minimum cut.
+
+    Returns the cuts and the last LP value (a valid lower bound: every LP
+    solved is a relaxation of (2.2)–(2.5)); ``-inf`` if no LP finished. Stops
+    after half of ``budget`` seconds so the MIP rounds keep the rest.
+    """
     start = time.perf_counter()
     cuts: list[tuple[int, ...]] = []
+    bound = -np.inf
     for _ in range(max_rounds):
-        if deadline is not None and time.perf_counter() - start > 0.5 * deadline:
+        left = None if budget is None else 0.5 * budget - (time.perf_counter() - start)
+        if left is not None and left <= 0:
             break
         model = build(problem, "dfj", relax=True, cuts=cuts)
-        run = _run(model, None, 0.0, verbose)
-        if run["values"] is None:
+        run = _run(model, left, 0.0, verbose)
+        if run["values"] is None or run["status"] != "optimal":
             break
-        new = [c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts]
+        bound = max(bound, run["bound"])
+        new = [
+            c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts
+        ]
         if not new:
             break
         cuts.extend(new)
-    return cuts
+    return cuts, bound
 
 
 def _solve_relaxation(problem, sec, start, verbose) -> Solution:
@@ -600,7 +665,9 @@ def _solve_relaxation(problem, sec, start, verbose) -> Solution:
             raise SolverError(f"LP relaxation ended with status {run['status']!r}")
         if sec != "dfj":
             break
-        new = [c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts]
+        new = [
+            c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts
+        ]
         if not new:
             break
         cuts.extend(new)

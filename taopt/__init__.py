@@ -40,7 +40,16 @@ _LAZY = {
 }
 
 
+_SUBMODULES = ("models", "heuristics", "bounds", "navigation", "routing", "delivery", "plot")
+
+
 def __getattr__(name: str) -> Any:
+    if name in _SUBMODULES:
+        import importlib
+
+        module = importlib.import_module(f"taopt.{name}")
+        globals()[name] = module
+        return module
     if name in _LAZY:
         import importlib
 

@@ -23,7 +23,7 @@ Region = tuple[float, float, float, float]  # (xmin, xmax, ymin, ymax)
 
 def _points(xy: Any) -> np.ndarray:
     arr = np.asarray(xy, dtype=float)
-    if arr.ndim == 1:
+    if arr.ndim == 1 and arr.size == 2:
         arr = arr.reshape(1, 2)
     if arr.ndim != 2 or arr.shape[1] != 2:
         raise InstanceError(f"points must have shape (N, 2), got {arr.shape}")
@@ -152,7 +152,9 @@ class LinearField(Field):
         self.A = np.array(A, dtype=float)
         self.b = np.array(b, dtype=float)
         if self.A.shape != (2, 2) or self.b.shape != (2,):
-            raise InstanceError(f"LinearField needs A (2, 2) and b (2,), got {self.A.shape}, {self.b.shape}")
+            raise InstanceError(
+                f"LinearField needs A (2, 2) and b (2,), got {self.A.shape}, {self.b.shape}"
+            )
         if not (np.isfinite(self.A).all() and np.isfinite(self.b).all()):
             raise InstanceError("LinearField A and b must be finite")
 
@@ -222,7 +224,9 @@ class GriddedField(Field):
         shape = (self.x.size, self.y.size)
         for name, arr in (("x", self.x), ("y", self.y)):
             if arr.ndim != 1 or arr.size < 2 or not np.all(np.diff(arr) > 0):
-                raise InstanceError(f"GriddedField {name} must be strictly increasing with >= 2 values")
+                raise InstanceError(
+                    f"GriddedField {name} must be strictly increasing with >= 2 values"
+                )
         for name, arr in (("vx", self.vx), ("vy", self.vy)):
             if arr.shape != shape:
                 raise InstanceError(f"GriddedField {name} must have shape {shape}, got {arr.shape}")
@@ -230,7 +234,9 @@ class GriddedField(Field):
                 bad = np.argwhere(~np.isfinite(arr))[0]
                 raise InstanceError(f"GriddedField {name}[{bad[0]}, {bad[1]}] is not finite")
         if method not in ("bspline", "linear"):
-            raise InstanceError(f"GriddedField method must be 'bspline' or 'linear', got {method!r}")
+            raise InstanceError(
+                f"GriddedField method must be 'bspline' or 'linear', got {method!r}"
+            )
         if method == "bspline" and min(shape) < 4:
             raise InstanceError("GriddedField 'bspline' needs at least 4 samples per axis")
         # CasADi wants the data flattened in Fortran order (x fastest).
@@ -260,8 +266,9 @@ class GriddedField(Field):
         return v[0], v[1]
 
     def max_speed(self, region: Region) -> float:
-        # Samples inside the region plus a dense evaluation (the spline can overshoot).
-        pts = _region_samples(region, 81)
+        # Dense samples of the region (the spline can overshoot the data); the same
+        # samples as argmax_speed, so an error message names a consistent location.
+        pts = _region_samples(region, 101)
         return float(np.max(self.speed(pts)))
 
     def to_dict(self) -> dict[str, Any]:
@@ -294,7 +301,9 @@ def field_from_dict(data: dict[str, Any]) -> Field:
         if kind == "linear":
             return LinearField(data["A"], data.get("b", (0.0, 0.0)))
         if kind == "gridded":
-            return GriddedField(data["x"], data["y"], data["vx"], data["vy"], data.get("method", "bspline"))
+            return GriddedField(
+                data["x"], data["y"], data["vx"], data["vy"], data.get("method", "bspline")
+            )
     except KeyError as exc:
         raise InstanceError(f"field of kind {kind!r} is missing {exc.args[0]!r}") from None
     raise InstanceError(f"unknown field kind {kind!r} (expected uniform, linear or gridded)")

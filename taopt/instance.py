@@ -17,7 +17,7 @@ import json
 import math
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -122,9 +122,17 @@ class Instance:
         try:
             xmin, xmax, ymin, ymax = (float(v) for v in self.region)
         except (TypeError, ValueError):
-            raise InstanceError(f"region must be (xmin, xmax, ymin, ymax), got {self.region!r}") from None
-        if not all(math.isfinite(v) for v in (xmin, xmax, ymin, ymax)) or xmin >= xmax or ymin >= ymax:
-            raise InstanceError(f"region {self.region!r} must be finite with xmin < xmax and ymin < ymax")
+            raise InstanceError(
+                f"region must be (xmin, xmax, ymin, ymax), got {self.region!r}"
+            ) from None
+        if (
+            not all(math.isfinite(v) for v in (xmin, xmax, ymin, ymax))
+            or xmin >= xmax
+            or ymin >= ymax
+        ):
+            raise InstanceError(
+                f"region {self.region!r} must be finite with xmin < xmax and ymin < ymax"
+            )
         object.__setattr__(self, "region", (xmin, xmax, ymin, ymax))
         if not self.vehicles:
             raise InstanceError("an instance needs at least one vehicle")
@@ -144,9 +152,13 @@ class Instance:
                 raise InstanceError(f"duplicate id {v.id!r} (vehicle)")
             seen.add(v.id)
             if not (math.isfinite(v.speed) and v.speed > 0):
-                raise InstanceError(f"vehicle {v.id!r}: speed must be positive and finite, got {v.speed}")
+                raise InstanceError(
+                    f"vehicle {v.id!r}: speed must be positive and finite, got {v.speed}"
+                )
             if not inside(start):
-                raise InstanceError(f"vehicle {v.id!r}: start {start} is outside the region {self.region}")
+                raise InstanceError(
+                    f"vehicle {v.id!r}: start {start} is outside the region {self.region}"
+                )
             vehicles.append(dataclasses.replace(v, start=start, speed=float(v.speed)))
         targets = []
         capabilities = {v.capability for v in vehicles}
@@ -158,7 +170,9 @@ class Instance:
                 raise InstanceError(f"duplicate id {t.id!r} (target)")
             seen.add(t.id)
             if not inside(pos):
-                raise InstanceError(f"target {t.id!r}: position {pos} is outside the region {self.region}")
+                raise InstanceError(
+                    f"target {t.id!r}: position {pos} is outside the region {self.region}"
+                )
             demands = tuple(t.demands)
             if not demands:
                 raise InstanceError(f"target {t.id!r} demands no capability")
@@ -178,7 +192,9 @@ class Instance:
                 _xy(vert, f"obstacle {obs.id or k!r}")
         if self.field is not None:
             if not isinstance(self.field, Field):
-                raise InstanceError(f"field must be a taopt.fields.Field, got {type(self.field).__name__}")
+                raise InstanceError(
+                    f"field must be a taopt.fields.Field, got {type(self.field).__name__}"
+                )
             drift = self.field.max_speed(self.region)
             where = tuple(float(c) for c in self.field.argmax_speed(self.region))
             for v in vehicles:
@@ -200,7 +216,9 @@ class Instance:
     @property
     def points(self) -> np.ndarray:
         """(n + m, 2) positions: targets first, then vehicle starts (thesis order)."""
-        return np.array([t.position for t in self.targets] + [v.start for v in self.vehicles], dtype=float)
+        return np.array(
+            [t.position for t in self.targets] + [v.start for v in self.vehicles], dtype=float
+        )
 
     @property
     def speeds(self) -> np.ndarray:
@@ -247,9 +265,12 @@ class Instance:
                 for v in self.vehicles
             ],
             "targets": [
-                {"id": t.id, "position": list(t.position), "demands": list(t.demands)} for t in self.targets
+                {"id": t.id, "position": list(t.position), "demands": list(t.demands)}
+                for t in self.targets
             ],
-            "obstacles": [{"id": o.id, "vertices": [list(p) for p in o.vertices]} for o in self.obstacles],
+            "obstacles": [
+                {"id": o.id, "vertices": [list(p) for p in o.vertices]} for o in self.obstacles
+            ],
             "metadata": self.metadata,
         }
 
@@ -259,17 +280,27 @@ class Instance:
         try:
             return cls(
                 vehicles=tuple(
-                    Vehicle(str(v["id"]), tuple(v["start"]), float(v.get("speed", 1.0)), str(v.get("capability", "any")))
+                    Vehicle(
+                        str(v["id"]),
+                        tuple(v["start"]),
+                        float(v.get("speed", 1.0)),
+                        str(v.get("capability", "any")),
+                    )
                     for v in data["vehicles"]
                 ),
                 targets=tuple(
-                    Target(str(t["id"]), tuple(t["position"]), tuple(str(c) for c in t.get("demands", ["any"])))
+                    Target(
+                        str(t["id"]),
+                        tuple(t["position"]),
+                        tuple(str(c) for c in t.get("demands", ["any"])),
+                    )
                     for t in data["targets"]
                 ),
                 region=tuple(data["region"]),
                 field=None if data.get("field") is None else field_from_dict(data["field"]),
                 obstacles=tuple(
-                    Obstacle(tuple(tuple(p) for p in o["vertices"]), str(o.get("id", ""))) for o in data.get("obstacles", [])
+                    Obstacle(tuple(tuple(p) for p in o["vertices"]), str(o.get("id", "")))
+                    for o in data.get("obstacles", [])
                 ),
                 name=str(data.get("name", "")),
                 metadata=dict(data.get("metadata", {})),
@@ -318,4 +349,13 @@ def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") ->
     return tuple(Target(f"{prefix}{k}", tuple(p)) for k, p in enumerate(points))
 
 
-__all__ = ["Instance", "Vehicle", "Target", "Obstacle", "SCHEMA_VERSION", "save_json", "load_json", "check_schema"]
+__all__ = [
+    "Instance",
+    "Vehicle",
+    "Target",
+    "Obstacle",
+    "SCHEMA_VERSION",
+    "save_json",
+    "load_json",
+    "check_schema",
+]

@@ -32,8 +32,8 @@ def evaluate(problem: Any, solution: Any) -> float:
         if routes is None:
             raise InstanceError("this solution carries no routes to evaluate")
         return evaluate_routes(problem, routes)
-    from taopt.delivery.instance import DeliveryInstance
     from taopt.delivery.evaluate import evaluate_plan
+    from taopt.delivery.instance import DeliveryInstance
 
     if isinstance(problem, DeliveryInstance):
         plan = getattr(solution, "plan", None) if hasattr(solution, "objective") else solution

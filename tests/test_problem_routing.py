@@ -80,6 +80,8 @@ def test_unknown_schema_version(tmp_path) -> None:
 
 
 def test_solution_gap_and_summary() -> None:
-    s = taopt.Solution(objective=110.0, status="time_limit", bound=100.0, runtime=1.5, method="exact-dfj")
+    s = taopt.Solution(
+        objective=110.0, status="time_limit", bound=100.0, runtime=1.5, method="exact-dfj"
+    )
     assert s.gap == pytest.approx(10 / 110)
     assert "gap=9.091%" in s.summary() and "time_limit" in s.summary()

@@ -82,7 +82,9 @@ def as_field(field: Field | None) -> Field:
     if field is None:
         return STILL_WATER
     if not isinstance(field, Field):
-        raise InstanceError(f"field must be a taopt.fields.Field or None, got {type(field).__name__}")
+        raise InstanceError(
+            f"field must be a taopt.fields.Field or None, got {type(field).__name__}"
+        )
     return field
 
 
@@ -125,7 +127,7 @@ def check_drift(field: Field, points: np.ndarray, speed: float, margin: float = 
         where = tuple(round(float(c), 6) for c in field.argmax_speed(region))
         raise InstanceError(
             f"speed {speed:g} is not greater than the drift speed {drift:g} at {where} "
-            "(Assumption 2.1 needs v > |v_c| everywhere on the way)"
+            "(Assumption 2.1 needs v > |v_c|; checked on the bounding box of the points)"
         )
 
 

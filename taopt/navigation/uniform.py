@@ -61,7 +61,9 @@ def uniform_travel_times(drift: Any, starts: Any, goals: Any, speed: float = 1.0
     dist = np.linalg.norm(delta, axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         direction = delta / dist[..., None]
-        vnet = net_speed(np.broadcast_to(np.asarray(drift, dtype=float), delta.shape), direction, speed)
+        vnet = net_speed(
+            np.broadcast_to(np.asarray(drift, dtype=float), delta.shape), direction, speed
+        )
         times = dist / vnet
     times = np.where(np.isnan(times), np.inf, times)
     return np.where(dist == 0, 0.0, times)
@@ -77,7 +79,9 @@ def uniform_heading(drift: Any, start: Any, goal: Any, speed: float = 1.0) -> fl
     return float(np.arctan2(thrust[1], thrust[0]))
 
 
-def closed_form_path(drift: Any, start: Any, goal: Any, speed: float = 1.0, samples: int = 21) -> Path:
+def closed_form_path(
+    drift: Any, start: Any, goal: Any, speed: float = 1.0, samples: int = 21
+) -> Path:
     """The straight-line minimum-time path in a uniform drift (closed form)."""
     start = as_point(start, "start")
     goal = as_point(goal, "goal")

@@ -133,7 +133,11 @@ class AssignmentProblem:
 
         check_schema(data, "assignment_problem")
         try:
-            return cls(np.array(data["cost"], dtype=float), int(data["n_targets"]), str(data.get("name", "")))
+            return cls(
+                np.array(data["cost"], dtype=float),
+                int(data["n_targets"]),
+                str(data.get("name", "")),
+            )
         except KeyError as exc:
             raise InstanceError(f"assignment_problem JSON is missing {exc.args[0]!r}") from None
 
@@ -165,7 +169,9 @@ def evaluate_routes(problem: AssignmentProblem, routes: Sequence[Sequence[int]])
         clean = []
         for target in route:
             if isinstance(target, bool) or not isinstance(target, (int, np.integer)):
-                raise FeasibilityError(f"route of vehicle {vehicle}: {target!r} is not an integer target index")
+                raise FeasibilityError(
+                    f"route of vehicle {vehicle}: {target!r} is not an integer target index"
+                )
             target = int(target)
             if not 0 <= target < problem.n:
                 raise FeasibilityError(
@@ -180,5 +186,7 @@ def evaluate_routes(problem: AssignmentProblem, routes: Sequence[Sequence[int]])
         total += problem.route_cost(vehicle, clean)
     if len(seen) != problem.n:
         missing = sorted(set(range(problem.n)) - set(seen))
-        raise FeasibilityError(f"target {missing[0]} is never visited ((2.3)); missing: {missing[:10]}")
+        raise FeasibilityError(
+            f"target {missing[0]} is never visited ((2.3)); missing: {missing[:10]}"
+        )
     return total
