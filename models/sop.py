@@ -54,6 +54,7 @@ Example
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -71,9 +72,7 @@ __all__ = ["FORMULATIONS", "SopModel", "build", "decode", "describe", "solve_sop
 
 
 # ----------------------------------------------------------------------------- data
-def check_sop(
-    cost, precedences, start: int, end: int
-) -> tuple[np.ndarray, nx.DiGraph]:
+def check_sop(cost, precedences, start: int, end: int) -> tuple[np.ndarray, nx.DiGraph]:
     """Validate SOP data; return the cost array and the closed precedence DAG.
 
     The DAG holds every node, the given pairs, ``start -> v`` and ``v -> end``
@@ -119,9 +118,7 @@ def check_sop(
             graph.add_edge(v, end)
     if not nx.is_directed_acyclic_graph(graph):
         cycle = [u for u, _ in nx.find_cycle(graph)]
-        raise InstanceError(
-            "precedence cycle " + " -> ".join(str(v) for v in cycle + [cycle[0]])
-        )
+        raise InstanceError("precedence cycle " + " -> ".join(str(v) for v in cycle + [cycle[0]]))
     return cost, nx.transitive_closure_dag(graph)
 
 
@@ -277,16 +274,14 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
             prec_r.append(r)
             prec_k.append(int(np.searchsorted(commodities, k)))
     if prec_r:
-        row_of = {(k, r): i for i, (k, r) in enumerate(zip(prec_k, prec_r))}
+        row_of = {(k, r): i for i, (k, r) in enumerate(zip(prec_k, prec_r, strict=True))}
         entries = [
             (row_of[(k, heads[a])], p)
-            for p, (k, a) in enumerate(zip(pair_k, pair_a))
+            for p, (k, a) in enumerate(zip(pair_k, pair_a, strict=True))
             if (k, heads[a]) in row_of
         ]
-        r_idx, c_idx = zip(*entries) if entries else ((), ())
-        through = sp.csr_matrix(
-            (np.ones(len(r_idx)), (r_idx, c_idx)), shape=(len(prec_r), n_pairs)
-        )
+        r_idx, c_idx = zip(*entries, strict=True) if entries else ((), ())
+        through = sp.csr_matrix((np.ones(len(r_idx)), (r_idx, c_idx)), shape=(len(prec_r), n_pairs))
         rows.append(
             (through @ flow == 1).set_label(
                 "(5.7) precedence r before k: commodity k's path enters r"
@@ -338,9 +333,9 @@ def _mtz_rows(model: SopModel, closure: nx.DiGraph) -> list:
         (position <= n - 1 - n_succ).set_label("MTZ: u_v <= n - 1 - number of successors"),
     ]
     # u_j >= u_i + 1 - (n-1)(1 - x_ij) - (n-3) x_ji  (lifted; x_ji only if that arc exists)
-    index = {(int(i), int(j)): a for a, (i, j) in enumerate(zip(tails, heads))}
+    index = {(int(i), int(j)): a for a, (i, j) in enumerate(zip(tails, heads, strict=True))}
     n_arcs = len(tails)
-    reverse = np.array([index.get((int(j), int(i)), -1) for i, j in zip(tails, heads)])
+    reverse = np.array([index.get((int(j), int(i)), -1) for i, j in zip(tails, heads, strict=True)])
     has_rev = reverse >= 0
     lift = sp.csr_matrix(
         (np.full(has_rev.sum(), n - 3.0), (np.flatnonzero(has_rev), reverse[has_rev])),
@@ -395,7 +390,7 @@ def decode(model: SopModel, values: np.ndarray | None = None) -> list[int]:
     if values is None:
         raise SolverError("the model has no solution to decode")
     chosen = np.asarray(values) > 0.5
-    successor = dict(zip(model.tails[chosen].tolist(), model.heads[chosen].tolist()))
+    successor = dict(zip(model.tails[chosen].tolist(), model.heads[chosen].tolist(), strict=True))
     order = [model.start]
     while order[-1] in successor and len(order) <= len(model.cost):
         order.append(successor[order[-1]])
@@ -464,7 +459,9 @@ def solve_sop(
     if time_limit is not None:
         options["time_limit"] = float(time_limit)
     try:
-        model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
+        with warnings.catch_warnings():  # "may be inaccurate" on a time limit: reported below
+            warnings.filterwarnings("ignore", message="Solution may be inaccurate")
+            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
         status = model.problem.status
     except cp.error.SolverError as exc:
         raise SolverError(f"HiGHS failed on the SOP model: {exc}") from exc
@@ -474,8 +471,7 @@ def solve_sop(
     has_point = int(getattr(info, "primal_solution_status", 0)) == 2
     if status not in ("optimal", "user_limit") or not has_point:
         raise SolverError(
-            f"HiGHS returned status {status!r} without a feasible path "
-            f"(time_limit={time_limit})"
+            f"HiGHS returned status {status!r} without a feasible path (time_limit={time_limit})"
         )
     order = decode(model)
     objective = float(model.cost[order[:-1], order[1:]].sum())

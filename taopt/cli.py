@@ -153,7 +153,23 @@ def build_parser() -> argparse.ArgumentParser:
     demo = add_subcommand(parser, "demo", cmd_demo, "run the embedded default instance")
     demo.add_argument("--plot", metavar="PNG", help="draw the instance to this PNG file")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    add_study_subcommands(parser)
     return parser
+
+
+def add_study_subcommands(parser: argparse.ArgumentParser) -> None:
+    """``taopt study drift`` (chapter 2, §2.5) and ``taopt study delivery`` (chapter 5, §5.5)."""
+    from taopt.delivery.study import register_cli as register_delivery
+    from taopt.routing.study import register_cli as register_drift
+
+    study = add_subcommand(parser, "study", None, "run a thesis study (chapter 2 or chapter 5)")
+    group = study.add_subparsers(dest="study", metavar="STUDY")
+    group.required = True
+    drift = register_drift(group)
+    drift.set_defaults(handler=lambda args: args.func(args))
+    # The delivery study finds the "study" group created above and adds itself to it.
+    register_delivery(parser._subcommands)  # type: ignore[attr-defined]
 
 
 def add_subcommand(

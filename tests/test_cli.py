@@ -95,6 +95,7 @@ def test_demo_runs_and_reports(capsys, tmp_path):
     out = capsys.readouterr().out
     assert "10 targets, 3 vehicles" in out
     assert "Lemma 2.3 triangle inequality within 1e-6: True" in out
+    assert "exact-dfj: optimal" in out and "gap_to_exact" in out
     assert png.exists()
 
 
@@ -111,6 +112,19 @@ def test_run_demo_matrix_matches_navigation():
     i, j = 11, 4  # a vehicle start to a target
     ref = min_time_path(inst.field, inst.points[i], inst.points[j], method="shooting").time
     assert T[i, j] == pytest.approx(ref, rel=1e-6)
+    # The demo's gap table: a certified optimum that no heuristic beats, every objective
+    # re-scored by the one scorer.
+    import taopt
+
+    solutions = result["solutions"]
+    exact = solutions["exact"]
+    assert exact.status == "optimal"
+    assert exact.objective == pytest.approx(taopt.evaluate(result["problem"], exact.routes), rel=1e-6)
+    for name, sol in solutions.items():
+        assert sol.objective == pytest.approx(taopt.evaluate(result["problem"], sol.routes), rel=1e-9)
+        assert sol.objective >= exact.objective * (1 - 1e-6), name
+    assert set(result["table"]["method"]) == {"exact", "VN", "VM", "EVN", "EVM", "MC", "GA"}
+    assert (result["table"]["gap_to_exact"] >= -1e-6).all()
 
 
 def test_parser_has_subcommands_for_extension():

@@ -136,7 +136,9 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
     np.fill_diagonal(minus, False)
     if not (minus[1:, start].all() and minus[end, :end].all() and not minus[start].any()):
         raise InstanceError(f"{path.name}: node 0 is not first or node {end} is not last")
-    precedences = [(int(r), int(j)) for j, r in zip(*np.nonzero(minus)) if r != start and j != end]
+    precedences = [
+        (int(r), int(j)) for j, r in zip(*np.nonzero(minus), strict=True) if r != start and j != end
+    ]
     if (raw[~minus] < 0).any():
         raise InstanceError(f"{path.name}: negative weight other than -1")
     cost = np.where(minus, np.inf, raw)

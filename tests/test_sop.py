@@ -1,0 +1,181 @@
+"""Tests of the TSPLIB .sop loader and the exact SOP model (helper-6).
+
+Solutions are checked without trusting the solver: the decoded order is re-scored
+from the cost matrix, every precedence is re-checked, and random instances are
+compared with an independent Held–Karp dynamic programme written here.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from taopt.delivery.sop import KNOWN_OPTIMA, load_sop, path_cost, shipped_sop
+from taopt.errors import InstanceError, SolverError
+from taopt.models import solve_sop
+from taopt.models.sop import describe
+
+
+# ----------------------------------------------------------------------------- helpers
+def held_karp_sop(cost: np.ndarray, precedences, start: int, end: int) -> float:
+    """Exact SOP optimum by dynamic programming over (visited set, last node).
+
+    A node v may be appended once all its predecessors are visited; ``end`` only
+    last. Independent of the MILP (plain Python, n <= 12).
+    """
+    n = len(cost)
+    need = [0] * n
+    for r, j in precedences:
+        need[j] |= 1 << r
+    full = (1 << n) - 1
+    best = {(1 << start, start): 0.0}
+    for size in range(1, n):
+        layer = {}
+        for (mask, last), value in best.items():
+            if bin(mask).count("1") != size:
+                continue
+            for v in range(n):
+                if mask >> v & 1 or need[v] & ~mask or not np.isfinite(cost[last, v]):
+                    continue
+                if v == end and (mask | 1 << v) != full:
+                    continue
+                key = (mask | 1 << v, v)
+                cand = value + cost[last, v]
+                if cand < layer.get(key, np.inf):
+                    layer[key] = cand
+        best.update(layer)
+    return best.get((full, end), np.inf)
+
+
+def random_sop(seed: int, n: int):
+    """Random asymmetric integer costs, a few random forbidden arcs and precedences."""
+    rng = np.random.default_rng(seed)
+    cost = rng.integers(0, 50, size=(n, n)).astype(float)
+    cost[rng.random((n, n)) < 0.1] = np.inf
+    np.fill_diagonal(cost, 0.0)
+    inner = rng.permutation(np.arange(1, n - 1))
+    precedences = [
+        (int(inner[a]), int(inner[b]))
+        for a, b in itertools.combinations(range(n - 2), 2)
+        if rng.random() < 0.35
+    ]
+    return cost, precedences, 0, n - 1
+
+
+def assert_valid_order(order, cost, precedences, start, end, objective):
+    n = len(cost)
+    assert sorted(order) == list(range(n))
+    assert order[0] == start and order[-1] == end
+    position = {v: p for p, v in enumerate(order)}
+    for r, j in precedences:
+        assert position[r] < position[j], f"precedence ({r}, {j}) violated by {order}"
+    assert path_cost(cost, order) == pytest.approx(objective, rel=1e-9)
+
+
+# ----------------------------------------------------------------------------- loader
+def test_shipped_files_parse_with_the_tsplib_convention():
+    assert {"ESC07", "ESC11", "ESC12", "br17.10", "br17.12"} <= set(shipped_sop())
+    expected = {"ESC07": (9, 7), "ESC11": (13, 5), "ESC12": (14, 11), "br17.10": (18, 15)}
+    for name, (n, n_prec) in expected.items():
+        cost, precedences, start, end, read_name = load_sop(name)
+        assert read_name == name and cost.shape == (n, n)
+        assert (start, end) == (0, n - 1)
+        assert len(precedences) == n_prec  # inner -1 entries (closed relation)
+        assert np.isinf(cost[start, end])
+        for r, j in precedences:
+            assert np.isinf(cost[j, r])  # the arc back to an earlier node is unusable
+            assert start not in (r, j) and end not in (r, j)
+
+
+def test_loader_rejects_a_non_sop_file(tmp_path):
+    bad = tmp_path / "x.sop"
+    bad.write_text("NAME: x\nTYPE: ATSP\nDIMENSION: 2\nEDGE_WEIGHT_FORMAT: FULL_MATRIX\n")
+    with pytest.raises(InstanceError, match="SOP"):
+        load_sop(bad)
+    with pytest.raises(InstanceError, match="no shipped"):
+        load_sop("nope")
+
+
+# ----------------------------------------------------------------------------- TSPLIB
+@pytest.mark.parametrize("name", ["ESC07", "ESC11"])
+def test_tsplib_optimum_is_certified(name):
+    cost, precedences, start, end, _ = load_sop(name)
+    sol = solve_sop(cost, precedences, start, end)
+    assert sol.status == "optimal"
+    assert sol.objective == KNOWN_OPTIMA[name]
+    assert sol.bound == pytest.approx(KNOWN_OPTIMA[name], abs=1e-6)
+    assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+
+
+def test_held_karp_reproduces_esc07():
+    """The test's own DP agrees with the TSPLIB value (it is a valid reference)."""
+    cost, precedences, start, end, _ = load_sop("ESC07")
+    assert held_karp_sop(cost, precedences, start, end) == KNOWN_OPTIMA["ESC07"]
+
+
+def test_mtz_formulation_agrees_on_esc07():
+    cost, precedences, start, end, _ = load_sop("ESC07")
+    sol = solve_sop(cost, precedences, start, end, formulation="mtz")
+    assert sol.status == "optimal" and sol.objective == KNOWN_OPTIMA["ESC07"]
+
+
+def test_time_limit_returns_a_certified_gap_or_fails_loudly():
+    cost, precedences, start, end, _ = load_sop("br17.10")
+    try:
+        sol = solve_sop(cost, precedences, start, end, time_limit=1.0)
+    except SolverError:
+        return  # no incumbent within the limit: an error, never a fake optimum
+    assert sol.status in ("time_limit", "optimal")
+    assert sol.bound <= KNOWN_OPTIMA["br17.10"] + 1e-6 <= sol.objective + 2e-6
+    assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+
+
+# ----------------------------------------------------------------------------- random
+@pytest.mark.parametrize("formulation", ["flow", "mtz"])
+@pytest.mark.parametrize("seed", range(6))
+def test_random_sop_matches_held_karp(seed, formulation):
+    cost, precedences, start, end = random_sop(seed, n=5 + seed % 4)
+    expected = held_karp_sop(cost, precedences, start, end)
+    if not np.isfinite(expected):
+        with pytest.raises(InstanceError):
+            solve_sop(cost, precedences, start, end, formulation=formulation)
+        return
+    sol = solve_sop(cost, precedences, start, end, formulation=formulation)
+    assert sol.status == "optimal"
+    assert sol.objective == pytest.approx(expected, abs=1e-9)
+    assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+
+
+def test_precedences_change_the_answer():
+    """Without the precedence 2 -> 1 the cheap path 0,1,2,3 is optimal; with it, not."""
+    cost = np.array([[0, 1, 5, 9], [9, 0, 1, 5], [1, 9, 0, 1], [9, 9, 9, 0.0]])
+    assert solve_sop(cost, [], 0, 3).order == [0, 1, 2, 3]
+    sol = solve_sop(cost, [(2, 1)], 0, 3)
+    assert sol.order == [0, 2, 1, 3] and sol.objective == 5 + 9 + 5
+
+
+# ----------------------------------------------------------------------------- input
+def test_bad_input_is_rejected_before_solving():
+    cost = np.zeros((4, 4))
+    with pytest.raises(InstanceError, match="precedence cycle"):
+        solve_sop(cost, [(1, 2), (2, 1)], 0, 3)
+    with pytest.raises(InstanceError, match="self-precedence"):
+        solve_sop(cost, [(1, 1)], 0, 3)
+    with pytest.raises(InstanceError, match="before start"):
+        solve_sop(cost, [(1, 0)], 0, 3)
+    with pytest.raises(InstanceError, match="square"):
+        solve_sop(np.zeros((3, 4)), [], 0, 2)
+    with pytest.raises(InstanceError, match="same node"):
+        solve_sop(cost, [], 1, 1)
+    with pytest.raises(InstanceError, match="formulation"):
+        solve_sop(cost, [], 0, 3, formulation="dfj")
+
+
+def test_describe_lists_labelled_families():
+    cost, precedences, start, end, _ = load_sop("ESC07")
+    table = describe(cost, precedences, start, end, show=False)
+    labels = " ".join(row["label"] for row in table)
+    assert "degree" in labels and "flow conservation" in labels and "(5.7)" in labels
+    assert all(row["rows"] > 0 for row in table)
