@@ -5,16 +5,20 @@ The printed formulation (§5.2.2) is not a MILP and is not complete:
 * (5.5) ``P(t_j − d(i, j)/v_d) σ_ijk = σ_ijk i`` uses the truck position P(t) as
   a function of continuous time: not linear, and the truck's motion is not
   modelled by any other constraint.
-* (5.3) ``σ_ijk = y_ik`` for all j forces σ_ijk to take the same value for every
-  customer j, so if the truck drives i -> k every customer is served from i to
-  k; read literally, (5.2)+(5.3) are infeasible for n ≥ 2 unless every customer
-  uses the same (i, k). The intent ("the drone is recovered by the truck after
-  each customer") is kept below as the sortie chain.
+* (5.3) ``σ_ijk = y_ik`` for all j (and k ≠ i) ties every customer to the same
+  truck move: if the truck drives i -> k (y_ik = 1) then σ_ijk = 1 for EVERY
+  customer j, so with (5.2) at most one truck move exists, and either all
+  customers are served i -> k, or every sortie lands where it was launched
+  (k = i, which (5.3) does not cover) and the truck never moves. The intent
+  ("the drone is recovered by the truck after each customer") is kept below
+  as the sortie chain with truck continuity.
 * There is no truck routing (continuity of the truck between sorties) and no
-  timing constraint linking t_j to the truck and drone motions; (5.4)
-  ``y_ii = 0`` forbids launching and landing at the same stop, which the
-  timing semantics of the interface (and the thesis's own patterns t_α of
-  (5.8)) allow, so it is not imposed.
+  timing constraint linking t_j to the truck and drone motions; (5.5) only
+  says the truck is at i when the drone leaves, nothing about k.
+* (5.4) ``y_ii = 0`` says the truck never "drives" from a stop to itself. Here a
+  zero-length leg ``w[p, k, k]`` means the truck stays where the drone landed,
+  and a sortie may land where it was launched (k = i, as (5.3) excluding k = i
+  and the thesis's pattern t_α (5.8) allow); so (5.4) has no counterpart.
 
 This module implements the problem under the project's timing semantics
 (:mod:`taopt.delivery.evaluate`): sortie p launches at stop i at ``S_p``, serves
@@ -383,6 +387,22 @@ def build(
         constraints.append(constraint)
         families.append({"label": label, "rows": int(constraint.size), "implements": printed})
 
+    families.append(
+        {
+            "label": "(5.6) flight range: only triples with d(i,j) + d(j,k) <= L get a y "
+            f"({triples.feasible} feasible of {n * s * s}; by construction, no rows)",
+            "rows": 0,
+            "implements": "(5.6) (d(i,j) + d(j,k)) sigma_ijk <= L",
+        }
+    )
+    families.append(
+        {
+            "label": "(5.4) y_ii = 0: no counterpart (a zero-length leg w[p,k,k] = the truck "
+            "stays; landing where launched is allowed)",
+            "rows": 0,
+            "implements": "(5.4) y_ii = 0",
+        }
+    )
     # (5.2) each customer served by exactly one sortie
     add(
         _indicator(customer, n, n_y) @ sortie == 1,
@@ -546,12 +566,43 @@ def decode(model: DeliveryModel, instance: DeliveryInstance, values=None) -> Pla
 
 
 # ----------------------------------------------------------------------------- solve
+def _run(model: DeliveryModel, verbose: bool, options: dict[str, Any]) -> tuple[str, Any, bool]:
+    """Solve with HiGHS; return cvxpy's status, HiGHS's info and whether a point exists."""
+    try:
+        with warnings.catch_warnings():  # "may be inaccurate" on a time limit: reported
+            warnings.filterwarnings("ignore", message="Solution may be inaccurate")
+            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
+    except cp.error.SolverError as exc:
+        raise SolverError(f"HiGHS failed on the delivery model: {exc}") from exc
+    info = model.problem.solver_stats.extra_stats
+    has_point = int(getattr(info, "primal_solution_status", 0)) == 2
+    return model.problem.status, info, has_point
+
+
+def _cutoff(instance: DeliveryInstance, incumbent: Any) -> float | None:
+    """Makespan of the incumbent plan (see :func:`solve_delivery`), or None."""
+    if incumbent is None:
+        return None
+    if isinstance(incumbent, str):
+        if incumbent != "auto":
+            raise InstanceError(
+                f"incumbent must be 'auto', a Plan, a Solution or None, got {incumbent!r}"
+            )
+        try:
+            from taopt.heuristics import run
+        except ImportError:  # heuristics not installed: solve without a cut-off
+            return None
+        return min(run(name, instance).objective for name in ("NIA", "MMA", "SMMA"))
+    return evaluate_plan(instance, incumbent)
+
+
 def solve_delivery(
     instance: DeliveryInstance,
     time_limit: float | None = None,
     mip_gap: float | None = None,
     verbose: bool = False,
     customer_legs: bool = False,
+    incumbent: Any = "auto",
 ) -> Solution:
     """Exact optimum of (5.1)–(5.7) by the linear model of this module (HiGHS).
 
@@ -567,6 +618,14 @@ def solve_delivery(
         Print HiGHS's log.
     customer_legs : bool
         Add the customer-pair valid inequalities (see :func:`build`).
+    incumbent : "auto", Plan, Solution or None
+        A known feasible plan whose makespan f (scored by :func:`taopt.evaluate`)
+        is given to HiGHS as an objective cut-off (``objective_bound`` =
+        f·(1 + 1e-6)): nodes whose bound exceeds it are pruned. It only prunes, so
+        the result is still proven by HiGHS's own bound, and the returned plan is
+        HiGHS's. "auto" (default) uses the best of the NIA, MMA and SMMA delivery
+        heuristics when :mod:`taopt.heuristics` is importable (cuts the 8-customer
+        benchmark times by about a third); None uses no cut-off.
 
     Returns
     -------
@@ -591,19 +650,19 @@ def solve_delivery(
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
     if mip_gap is not None and not (0 <= mip_gap < 1):
         raise InstanceError(f"mip_gap must be in [0, 1), got {mip_gap}")
+    cutoff = _cutoff(instance, incumbent)
     model = build(instance, customer_legs=customer_legs)
     options: dict[str, Any] = {"mip_rel_gap": 1e-9 if mip_gap is None else float(mip_gap)}
+    if cutoff is not None:
+        options["objective_bound"] = cutoff * (1 + 1e-6) + 1e-9
     if time_limit is not None:
         options["time_limit"] = float(time_limit)
-    try:
-        with warnings.catch_warnings():  # "may be inaccurate" on a time limit: reported below
-            warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
-    except cp.error.SolverError as exc:
-        raise SolverError(f"HiGHS failed on the delivery model: {exc}") from exc
-    status = model.problem.status
-    info = model.problem.solver_stats.extra_stats
-    has_point = int(getattr(info, "primal_solution_status", 0)) == 2
+    status, info, has_point = _run(model, verbose, options)
+    if status in ("infeasible", "infeasible_or_unbounded") and cutoff is not None:
+        # the cut-off pruned everything (cannot happen for a valid incumbent, since a
+        # plan at least as good is always in the reduced model): re-solve without it
+        options.pop("objective_bound")
+        status, info, has_point = _run(model, verbose, options)
     if status not in ("optimal", "user_limit") or not has_point:
         raise SolverError(
             f"HiGHS returned status {status!r} without a feasible plan (time_limit={time_limit})"
@@ -632,5 +691,6 @@ def solve_delivery(
             "legs": 0 if model.truck_leg is None else int(model.truck_leg.size),
             "nodes": int(getattr(info, "mip_node_count", -1)),
             "mip_gap": float(getattr(info, "mip_gap", np.nan)),
+            "cutoff": cutoff,
         },
     )
