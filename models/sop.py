@@ -40,11 +40,11 @@ by j.
     ``benchmarks/bench_sop.py``: br17.x are very slow with it).
 
 Measured on the TSPLIB files (``benchmarks/bench_sop.py``, 2 shared cores): the
-flow model proves ESC07, ESC11, ESC12 in < 0.2 s, br17.10 in ~5 s, br17.12 in
-~13 s and ESC25 in ~70 s; MTZ proves ESC07/11/12 but stops at bound 38 (br17.10)
-and 45 (br17.12) after 60 s. The nesting rows are what closes br17.x: without
-them the flow LP bound of br17.10 is 39.7 and a 120 s run ended at bound 47;
-with them the LP bound is the optimum 55. "flow" is therefore the default.
+flow model proves ESC07, ESC11, ESC12 in < 0.2 s, br17.10 in 3.5–5 s, br17.12
+in 9–13 s and ESC25 in ~52 s; MTZ proves ESC07/11/12 but stops at bound 38
+(br17.10) and 45 (br17.12) after 60 s. The nesting rows are what closes
+br17.x: without them the flow LP bound of br17.10 is 39.7 and a 120 s run
+ended at bound 47; with them the LP bound is the optimum 55. "flow" is therefore the default.
 
 Example
 -------

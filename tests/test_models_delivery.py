@@ -121,6 +121,17 @@ def test_without_incumbent_cutoff_and_with_a_given_plan():
     assert given.objective == pytest.approx(expected, rel=REL)
 
 
+def test_time_limit_keeps_a_certified_gap():
+    """A tiny limit: never a fake optimum; the bound stays below the true optimum."""
+    inst = random_instance(1, n=7)
+    expected = enumerate_optimum(inst)
+    sol = solve_delivery(inst, time_limit=0.05)
+    assert sol.status in ("time_limit", "optimal")
+    assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=REL)
+    assert sol.objective >= expected * (1 - REL)
+    assert sol.bound <= expected * (1 + REL)
+
+
 def test_customer_leg_cuts_keep_the_optimum():
     inst = random_instance(2, n=5)
     plain = solve_delivery(inst)
