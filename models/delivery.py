@@ -650,7 +650,8 @@ def solve_delivery(
         bound of Proposition 5.3 (:func:`taopt.delivery.bounds.arborescence_bound`).
         If the time limit stops HiGHS before it finds a plan below the incumbent's
         cut-off, the incumbent is returned (status "time_limit", HiGHS's bound,
-        ``info["model_objective"]`` NaN).
+        ``info["model_objective"]`` NaN); a time-limited run never returns a plan
+        worse than the incumbent.
 
     Raises
     ------
@@ -694,6 +695,10 @@ def solve_delivery(
         plan = decode(model, instance)
         objective = evaluate_plan(instance, plan)
         model_objective = float(model.problem.value)
+        if status != "optimal" and known is not None and known[0] < objective:
+            # stopped by the limit with a plan worse than the incumbent: return the best
+            # known plan (HiGHS's bound stays proven for the instance)
+            plan, objective = known[1], known[0]
     bound = float(getattr(info, "mip_dual_bound", np.nan))
     bound = bound if np.isfinite(bound) else None
     optimal = status == "optimal"

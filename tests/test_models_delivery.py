@@ -161,3 +161,25 @@ def test_bad_input():
         solve_delivery("not an instance")
     with pytest.raises(InstanceError, match="time_limit"):
         solve_delivery(random_instance(0), time_limit=-1)
+
+
+def test_time_limited_run_on_many_stops_is_no_worse_than_the_heuristics():
+    """121 stops make the MILP large: stopped by the limit it must still return the best known
+    plan (never worse than NIA/MMA/SMMA) with a bound below the subset-DP optimum."""
+    import taopt.heuristics
+    from taopt.delivery.schedule import optimal_plan
+    from taopt.delivery.study import study_instance
+
+    inst = study_instance("small", 0, seed=3, ratio=0.3)
+    sol = solve_delivery(inst, time_limit=2.0)
+    best_heuristic = min(
+        taopt.heuristics.run(name, inst).objective for name in ("NIA", "MMA", "SMMA")
+    )
+    optimum = optimal_plan(inst).objective
+    assert sol.objective <= best_heuristic * (1 + 1e-9)
+    assert sol.objective == pytest.approx(taopt.evaluate(inst, sol.plan), rel=1e-9)
+    assert sol.bound is not None and sol.bound <= optimum * (1 + 1e-9)
+    if sol.status == "optimal":
+        assert sol.objective == pytest.approx(optimum, rel=1e-6)
+    else:
+        assert sol.status == "time_limit" and sol.gap is not None

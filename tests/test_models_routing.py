@@ -8,12 +8,12 @@ from itertools import combinations
 import numpy as np
 import pytest
 from scipy.sparse.csgraph import floyd_warshall
-from taopt.models import solve_routing
-from taopt.models.routing import build, decode, describe, entry_bound, repair
 
 import taopt
 from taopt import AssignmentProblem
 from taopt.errors import InstanceError
+from taopt.models import solve_routing
+from taopt.models.routing import build, decode, describe, entry_bound, repair
 from taopt.navigation import uniform_travel_times
 
 SECS = ("dfj", "mtz", "flow")
@@ -211,3 +211,44 @@ def test_loose_mip_gap_is_not_called_optimal():
     else:
         assert loose.status == "feasible" and loose.info["stopped_by"] == "mip_gap"
         assert loose.gap <= 0.5 + 1e-9
+
+
+def navigation_problem(n: int, m: int, seed: int) -> AssignmentProblem:
+    """Random points in thesis Fig. 2.1's linear field (100 m square), times by collocation."""
+    from taopt.fields import thesis_field
+    from taopt.navigation import travel_time_matrix
+
+    points = np.random.default_rng(seed).uniform(0, 100, size=(n + m, 2))
+    return AssignmentProblem(travel_time_matrix(thesis_field(1e-2), points, jobs=1), n)
+
+
+def test_drift_field_instance_matches_independent_dp() -> None:
+    """A true drift-field matrix (asymmetric, from navigation): MILP == subset DP (claims module)."""
+    from taopt.routing.claims import exact_optimum
+
+    problem = navigation_problem(10, 3, seed=11)
+    assert not problem.is_symmetric
+    reference, _ = exact_optimum(problem)
+    for sec in SECS:
+        sol = solve_routing(problem, sec=sec)
+        assert sol.status == "optimal"
+        assert sol.objective == pytest.approx(reference, rel=1e-6)
+        assert taopt.evaluate(problem, sol.routes) == pytest.approx(sol.objective, rel=1e-9)
+
+
+def test_drift_field_fifteen_targets_all_formulations_agree() -> None:
+    """n = 15 in the drift field: DFJ, MTZ and flow certify the same optimum; no heuristic beats it."""
+    import taopt.heuristics
+
+    problem = navigation_problem(15, 3, seed=12)
+    values = {sec: solve_routing(problem, sec=sec) for sec in SECS}
+    optimum = values["dfj"].objective
+    for sec, sol in values.items():
+        assert sol.status == "optimal", sec
+        assert sol.objective == pytest.approx(optimum, rel=1e-6), sec
+    assert taopt.bounds.arborescence(problem) <= optimum * (1 + 1e-9)
+    for name in ("VN", "VM", "EVN", "EVM", "MC", "GA"):
+        heuristic = taopt.heuristics.run(
+            name, problem, seed=0, **({"generations": 50} if name == "GA" else {})
+        )
+        assert heuristic.objective >= optimum * (1 - 1e-9), name
