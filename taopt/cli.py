@@ -155,7 +155,36 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
 
     add_study_subcommands(parser)
+
+    claims = add_subcommand(
+        parser, "claims", cmd_claims, "check chapter 2's lemmas and theorems on random instances"
+    )
+    claims.add_argument("--samples", type=int, default=200, help="instances per class")
+    claims.add_argument("--seed", type=int, default=0)
+    claims.add_argument(
+        "--out", default=None, help="folder for the smallest counterexamples (JSON)"
+    )
+    claims.add_argument(
+        "--classes",
+        default="euclidean,uniform-drift,drift,metric",
+        help="comma list of instance classes",
+    )
     return parser
+
+
+def cmd_claims(args: argparse.Namespace) -> int:
+    """Run :func:`taopt.routing.claims.check_claims` and print how often each claim holds."""
+    from taopt.routing.claims import check_claims
+
+    table = check_claims(
+        samples=args.samples,
+        seed=args.seed,
+        out_dir=args.out,
+        classes=tuple(c.strip() for c in args.classes.split(",") if c.strip()),
+    )
+    shown = [c for c in table.columns if c not in ("instance",)]
+    print(table[shown].to_string(index=False))
+    return 0
 
 
 def add_study_subcommands(parser: argparse.ArgumentParser) -> None:
