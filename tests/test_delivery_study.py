@@ -73,3 +73,19 @@ def test_cli_registration(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "average q" in out and "gap to the optimum" in out
     assert len(pd.read_csv(tmp_path / "delivery_small.csv")) == 2
+
+
+def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
+    """Through the real ``taopt`` entry point: the study prints its tables and draws q vs L/L0."""
+    from taopt.cli import main
+
+    png = tmp_path / "q.png"
+    argv = ["study", "delivery", "--setup", "small", "--instances", "1", "--ratios", "0.3,0.9"]
+    argv += ["--methods", "MMA,DP", "--out", str(tmp_path), "--quiet", "--plot", str(png)]
+    assert main(argv) == 0
+    assert png.stat().st_size > 0
+    df = pd.read_csv(tmp_path / "delivery_small.csv")
+    # the subset DP is exact, so no heuristic is below it on the same instance and ratio
+    optimum = df[df.method == "DP"].set_index("ratio")["makespan"]
+    mma = df[df.method == "MMA"].set_index("ratio")["makespan"]
+    assert (mma >= optimum * (1 - 1e-9)).all()

@@ -118,8 +118,20 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None) -> Any:
         ax.annotate(str(j), (t, drone_y + h / 2), ha="center", va="bottom", fontsize=7)
     ax.axvline(line.makespan, color="k", ls=":", lw=1)
     ax.set_yticks([drone_y, truck_y], ["drone", "truck"])
+    ax.set_ylim(-0.6, 1.9)
     ax.set_xlabel("time (s)")
     ax.set_title(f"makespan (5.1) = {line.makespan:.1f} s")
+    from matplotlib.patches import Patch
+
+    legend = [
+        Patch(color="tab:blue", label="truck drives, drone aboard"),
+        Patch(color="lightsteelblue", label="truck drives, drone out"),
+        Patch(color="0.75", label="waiting"),
+        Patch(color="tab:orange", label="drone flies"),
+        Patch(color="tab:red", label="landing time τ"),
+    ]
+    ax.legend(handles=legend, loc="upper center", ncol=5, fontsize=7, frameon=False)
+    ax.figure.tight_layout()
     return ax
 
 

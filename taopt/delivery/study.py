@@ -316,6 +316,34 @@ def thesis_table(df: pd.DataFrame, value: str = "makespan") -> pd.DataFrame:
     return df.pivot_table(index="method", columns="ratio", values=value, aggfunc="mean")
 
 
+def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | None = None) -> Any:
+    """Mean ``value`` ("q", "makespan", "gap_to_optimum", ...) per method against L/L0.
+
+    The picture of Tables 5.1–5.6: one line per method. Saves a PNG when ``path`` is given.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    from matplotlib.figure import Figure
+
+    if ax is None:
+        ax = Figure(figsize=(6, 4)).add_subplot()
+    table = thesis_table(df, value)
+    for method, row in table.iterrows():
+        ax.plot(row.index.astype(float), row.to_numpy(dtype=float), marker="o", label=str(method))
+    ax.set_xlabel("L / L0")
+    ax.set_ylabel(
+        {"q": "mean q = f / f_a (5.19)", "makespan": "mean makespan (s)"}.get(value, value)
+    )
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    if path is not None:
+        ax.figure.tight_layout()
+        ax.figure.savefig(path, dpi=120)
+    return ax
+
+
 # -- command line ----------------------------------------------------------------------------
 
 
@@ -352,6 +380,9 @@ def _cmd_study_delivery(args: argparse.Namespace) -> int:
             print(thesis_table(df, "gap_to_optimum").round(4).to_string())
     if args.out:
         print(f"\nrows: {Path(args.out) / f'delivery_{args.setup}.csv'}")
+    if args.plot:
+        plot_study(df, "q", path=args.plot)
+        print(f"plot written to {args.plot}")
     return 0
 
 
@@ -404,6 +435,7 @@ def register_cli(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--ga-generations", type=int, default=None)
     parser.add_argument("--time-limit", type=float, default=None, help="for --methods exact")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--plot", default=None, metavar="PNG", help="draw mean q against L/L0")
     parser.set_defaults(handler=_cmd_study_delivery)
     return parser
 
