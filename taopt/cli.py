@@ -156,6 +156,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_study_subcommands(parser)
 
+    solve = add_subcommand(
+        parser, "solve", cmd_solve, "solve an instance file exactly and with every heuristic"
+    )
+    solve.add_argument(
+        "file", help="JSON: an instance, an assignment_problem or a delivery_instance"
+    )
+    solve.add_argument("--methods", default=None, help="comma list (default: all that apply)")
+    solve.add_argument("--seed", type=int, default=0)
+    solve.add_argument("--time-limit", type=float, default=60.0, help="seconds for a MILP")
+    solve.add_argument("--plot", metavar="PNG", help="draw the best solution")
+    solve.add_argument("--gantt", metavar="PNG", help="chapter 5: truck and drone timelines")
+    solve.add_argument("--quiet", action="store_true", help="no progress bar")
+
     claims = add_subcommand(
         parser, "claims", cmd_claims, "check chapter 2's lemmas and theorems on random instances"
     )
@@ -170,6 +183,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma list of instance classes",
     )
     return parser
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    """Solve an instance file (chapter 2 or chapter 5) and print the gap table."""
+    from taopt.solve import solve_file
+
+    methods = None
+    if args.methods:
+        methods = tuple(m.strip() for m in args.methods.split(",") if m.strip())
+    solve_file(
+        args.file,
+        methods=methods,
+        seed=args.seed,
+        time_limit=args.time_limit,
+        plot=args.plot,
+        gantt=args.gantt,
+        progress=not args.quiet,
+    )
+    return 0
 
 
 def cmd_claims(args: argparse.Namespace) -> int:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 
 import numpy as np
@@ -119,9 +120,13 @@ def test_run_demo_matrix_matches_navigation():
     solutions = result["solutions"]
     exact = solutions["exact"]
     assert exact.status == "optimal"
-    assert exact.objective == pytest.approx(taopt.evaluate(result["problem"], exact.routes), rel=1e-6)
+    assert exact.objective == pytest.approx(
+        taopt.evaluate(result["problem"], exact.routes), rel=1e-6
+    )
     for name, sol in solutions.items():
-        assert sol.objective == pytest.approx(taopt.evaluate(result["problem"], sol.routes), rel=1e-9)
+        assert sol.objective == pytest.approx(
+            taopt.evaluate(result["problem"], sol.routes), rel=1e-9
+        )
         assert sol.objective >= exact.objective * (1 - 1e-6), name
     assert set(result["table"]["method"]) == {"exact", "VN", "VM", "EVN", "EVM", "MC", "GA"}
     assert (result["table"]["gap_to_exact"] >= -1e-6).all()
@@ -131,3 +136,40 @@ def test_parser_has_subcommands_for_extension():
     parser = build_parser()
     args = parser.parse_args(["demo"])
     assert args.command == "demo" and callable(args.handler)
+
+
+def test_solve_command_on_each_file_kind(tmp_path, capsys):
+    """`taopt solve` reads the three JSON kinds; no method beats the certified optimum."""
+    import taopt
+    from taopt.delivery.instance import DeliveryInstance
+    from taopt.solve import solve_file
+
+    # chapter 2, from a cost matrix
+    rng = np.random.default_rng(5)
+    problem = taopt.AssignmentProblem(rng.uniform(1, 50, size=(9, 9)), n_targets=6)
+    problem.save(tmp_path / "p.json")
+    result = solve_file(tmp_path / "p.json", out=io.StringIO(), progress=False)
+    table = result["table"]
+    assert table.loc[table.method == "exact", "status"].item() == "optimal"
+    assert (table["gap_to_exact"] >= -1e-9).all()
+    # chapter 5, with the exact subset DP and the MILP
+    inst = DeliveryInstance.grid(
+        rng.uniform(0, 600, size=(5, 2)), 3, 600.0, 1.0, 1.0, 700.0, precedences=[(0, 1), (2, 3)]
+    )
+    inst.save(tmp_path / "d.json")
+    png, gantt = tmp_path / "plan.png", tmp_path / "gantt.png"
+    argv = ["solve", str(tmp_path / "d.json"), "--methods", "NIA,MMA,SMMA,DP,exact"]
+    assert main(argv + ["--plot", str(png), "--gantt", str(gantt), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "DP" in out and "exact" in out and png.exists() and gantt.exists()
+    result = solve_file(tmp_path / "d.json", methods=("MMA", "DP", "exact"), out=io.StringIO())
+    table = result["table"].set_index("method")
+    assert table.loc["DP", "makespan"] == pytest.approx(table.loc["exact", "makespan"], rel=1e-6)
+    assert table.loc["MMA", "makespan"] >= table.loc["DP", "makespan"] * (1 - 1e-9)
+
+
+def test_solve_command_rejects_unknown_kind(tmp_path, capsys):
+    bad = tmp_path / "x.json"
+    bad.write_text('{"schema_version": 1, "kind": "pizza"}')
+    assert main(["solve", str(bad)]) == 2
+    assert "kind 'pizza'" in capsys.readouterr().err
