@@ -25,6 +25,11 @@ import time
 from functools import partial
 
 import numpy as np
+
+import taopt
+import taopt.bounds
+from taopt.delivery.costs import drone_cost_matrix
+from taopt.delivery.dags import paired_precedences
 from taopt.heuristics.ga_delivery import ga_order
 from taopt.heuristics.sequencing import (
     delivery_cost_matrix,
@@ -34,11 +39,6 @@ from taopt.heuristics.sequencing import (
     schedule_order,
     smma_order,
 )
-
-import taopt
-import taopt.bounds
-from taopt.delivery.costs import drone_cost_matrix
-from taopt.delivery.dags import paired_precedences
 
 
 def pairs_instance(seed: int, n: int = 120, range_ratio: float = 0.45) -> taopt.DeliveryInstance:

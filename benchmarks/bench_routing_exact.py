@@ -21,9 +21,8 @@ import statistics
 import time
 from pathlib import Path
 
-from taopt.models import solve_routing
-
 import taopt
+from taopt.models import solve_routing
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 from taopt.routing.tsplib import atsp_to_assignment, load_atsp
 

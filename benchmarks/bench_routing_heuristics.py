@@ -26,9 +26,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import taopt.heuristics
 
 import taopt
+import taopt.heuristics
 from taopt.fields import UniformField, thesis_field
 from taopt.instance import Instance
 from taopt.routing.bounds import arborescence_bound, thesis_mcga

@@ -38,8 +38,8 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
-from taopt.heuristics.registry import register
 
+from taopt.heuristics.registry import register
 from taopt.result import FEASIBLE, Solution
 from taopt.routing.bounds import mcga_tree
 from taopt.routing.problem import AssignmentProblem, evaluate_routes

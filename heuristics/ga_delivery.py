@@ -37,10 +37,10 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
-from taopt.heuristics.registry import register
-from taopt.heuristics.sequencing import _validate, delivery_cost_matrix, schedule_order
 
 from taopt.errors import InstanceError
+from taopt.heuristics.registry import register
+from taopt.heuristics.sequencing import _validate, delivery_cost_matrix, schedule_order
 from taopt.result import Solution
 
 __all__ = ["ga_order", "ga_search"]

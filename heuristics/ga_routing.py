@@ -35,9 +35,9 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from taopt.heuristics.registry import register
 
 from taopt.errors import InstanceError
+from taopt.heuristics.registry import register
 from taopt.result import FEASIBLE, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 

@@ -36,9 +36,9 @@ from typing import Any
 
 import networkx as nx
 import numpy as np
-from taopt.heuristics.registry import register
 
 from taopt.errors import InstanceError
+from taopt.heuristics.registry import register
 from taopt.result import Solution
 
 __all__ = [

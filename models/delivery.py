@@ -91,7 +91,6 @@ Example
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -104,7 +103,8 @@ from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
-from taopt.result import OPTIMAL, TIME_LIMIT, Solution
+from taopt.models.highs import certify, solve_highs
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution
 
 __all__ = [
     "DeliveryModel",
@@ -573,19 +573,6 @@ def decode(model: DeliveryModel, instance: DeliveryInstance, values=None) -> Pla
 
 
 # ----------------------------------------------------------------------------- solve
-def _run(model: DeliveryModel, verbose: bool, options: dict[str, Any]) -> tuple[str, Any, bool]:
-    """Solve with HiGHS; return cvxpy's status, HiGHS's info and whether a point exists."""
-    try:
-        with warnings.catch_warnings():  # "may be inaccurate" on a time limit: reported
-            warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
-    except cp.error.SolverError as exc:
-        raise SolverError(f"HiGHS failed on the delivery model: {exc}") from exc
-    info = model.problem.solver_stats.extra_stats
-    has_point = int(getattr(info, "primal_solution_status", 0)) == 2
-    return model.problem.status, info, has_point
-
-
 def _cutoff(instance: DeliveryInstance, incumbent: Any) -> tuple[float, Plan] | None:
     """Makespan and plan of the incumbent (see :func:`solve_delivery`), or None."""
     if incumbent is None:
@@ -626,7 +613,11 @@ def solve_delivery(
         Seconds for HiGHS. On the limit the incumbent is returned with status
         "time_limit" and the proven bound.
     mip_gap : float, optional
-        HiGHS relative gap tolerance; default 1e-9 (optimal means proven).
+        HiGHS relative gap tolerance; default 1e-9. The status is "optimal"
+        only when the final gap is at most 1e-6
+        (:data:`taopt.models.highs.OPTIMALITY_TOLERANCE`); a run stopped by a
+        looser ``mip_gap`` is "feasible" with its proven bound
+        (``info["stopped_by"] == "mip_gap"``).
     verbose : bool
         Print HiGHS's log.
     customer_legs : bool
@@ -645,13 +636,14 @@ def solve_delivery(
     Solution
         ``.plan`` the decoded :class:`Plan`, ``.objective`` = ``taopt.evaluate`` of
         it (the model's own value is in ``info["model_objective"]``), ``.status``
-        "optimal" or "time_limit", ``.bound`` the proven lower bound, ``.runtime``.
+        "optimal", "feasible" (loose ``mip_gap``) or "time_limit", ``.bound`` the
+        proven lower bound, ``.runtime``.
         On a time limit the bound is the larger of HiGHS's and the arborescence
         bound of Proposition 5.3 (:func:`taopt.delivery.bounds.arborescence_bound`).
         If the time limit stops HiGHS before it finds a plan below the incumbent's
         cut-off, the incumbent is returned (status "time_limit", HiGHS's bound,
-        ``info["model_objective"]`` NaN); a time-limited run never returns a plan
-        worse than the incumbent.
+        ``info["model_objective"]`` NaN); a run stopped by a limit or a loose
+        ``mip_gap`` never returns a plan worse than the incumbent.
 
     Raises
     ------
@@ -672,47 +664,55 @@ def solve_delivery(
     known = _cutoff(instance, incumbent)
     cutoff = None if known is None else known[0]
     model = build(instance, customer_legs=customer_legs)
-    options: dict[str, Any] = {"mip_rel_gap": 1e-9 if mip_gap is None else float(mip_gap)}
-    if cutoff is not None:
-        options["objective_bound"] = cutoff * (1 + 1e-6) + 1e-9
-    if time_limit is not None:
-        options["time_limit"] = float(time_limit)
-    status, info, has_point = _run(model, verbose, options)
-    if status in ("infeasible", "infeasible_or_unbounded") and cutoff is not None:
+    options: dict[str, Any] = {
+        "time_limit": time_limit,
+        "mip_rel_gap": 1e-9 if mip_gap is None else float(mip_gap),
+        "objective_bound": None if cutoff is None else cutoff * (1 + 1e-6) + 1e-9,
+        "verbose": verbose,
+    }
+    run = solve_highs(model.problem, **options)
+    if run.status == INFEASIBLE and cutoff is not None:
         # the cut-off pruned everything (cannot happen for a valid incumbent, since a
         # plan at least as good is always in the reduced model): re-solve without it
-        options.pop("objective_bound")
-        status, info, has_point = _run(model, verbose, options)
-    if status == "user_limit" and not has_point and known is not None:
+        options["objective_bound"] = None
+        run = solve_highs(model.problem, **options)
+    if run.solver_status == "solver_error":
+        raise SolverError(f"HiGHS failed on the delivery model: {run.message}")
+    stopped_by = run.stopped_by
+    if run.status == TIME_LIMIT and not run.has_point and known is not None:
         # the limit came before HiGHS found a plan below the cut-off: the incumbent
         # is the best known plan, HiGHS's bound is still proven
         plan, objective, model_objective = known[1], known[0], float("nan")
-    elif status not in ("optimal", "user_limit") or not has_point:
+    elif run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT) or not run.has_point:
         raise SolverError(
-            f"HiGHS returned status {status!r} without a feasible plan (time_limit={time_limit})"
+            f"HiGHS returned status {run.solver_status!r} without a feasible plan "
+            f"(time_limit={time_limit})"
         )
     else:
         plan = decode(model, instance)
         objective = evaluate_plan(instance, plan)
-        model_objective = float(model.problem.value)
-        if status != "optimal" and known is not None and known[0] < objective:
-            # stopped by the limit with a plan worse than the incumbent: return the best
-            # known plan (HiGHS's bound stays proven for the instance)
+        model_objective = float(run.objective)
+        if abs(objective - model_objective) > 1e-6 * max(1.0, abs(objective)):
+            # the model's times equal the scorer's at every integral point HiGHS
+            # returns at an optimum; at a limit the model may wait, so only >= holds
+            if run.status == OPTIMAL or objective > model_objective + 1e-6 * abs(objective):
+                raise SolverError(
+                    f"decoded plan scores {objective!r} but the model says {model_objective!r}"
+                )
+        if run.status != OPTIMAL and known is not None and known[0] < objective:
+            # stopped by a limit or a loose mip_gap with a plan worse than the incumbent:
+            # return the best known plan (HiGHS's bound stays proven for the instance)
             plan, objective = known[1], known[0]
-    bound = float(getattr(info, "mip_dual_bound", np.nan))
-    bound = bound if np.isfinite(bound) else None
-    optimal = status == "optimal"
-    if not optimal:  # also Proposition 5.3's valid bound, so a time limit keeps a gap
+    bound = run.bound
+    if run.status != OPTIMAL:  # also Proposition 5.3's valid bound, so a limit keeps a gap
         arborescence = arborescence_bound(instance)
         bound = arborescence if bound is None else max(bound, arborescence)
     bound = None if bound is None else min(bound, objective)
-    if optimal and abs(objective - model_objective) > 1e-6 * max(1.0, abs(objective)):
-        raise SolverError(
-            f"decoded plan scores {objective!r} but the model says {model_objective!r}"
-        )
+    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
+    status, stopped_by = certify(objective, bound, stopped_by)
     return Solution(
         objective=objective,
-        status=OPTIMAL if optimal else TIME_LIMIT,
+        status=status,
         bound=bound,
         runtime=time.perf_counter() - began,
         method="exact-milp",
@@ -722,8 +722,10 @@ def solve_delivery(
             "model_objective": model_objective,
             "binaries": int(model.sortie.size),
             "legs": 0 if model.truck_leg is None else int(model.truck_leg.size),
-            "nodes": int(getattr(info, "mip_node_count", -1)),
-            "mip_gap": float(getattr(info, "mip_gap", np.nan)),
+            "nodes": run.nodes,
+            "mip_gap": run.mip_gap,
             "cutoff": cutoff,
+            "solver_status": run.solver_status,
+            "stopped_by": stopped_by,
         },
     )

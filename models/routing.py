@@ -36,7 +36,6 @@ Example
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,14 +45,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import InstanceError, SolverError
-from taopt.result import FEASIBLE, OPTIMAL, RELAXATION, TIME_LIMIT, Solution
+from taopt.models.highs import OPTIMALITY_TOLERANCE, certify, solve_highs
+from taopt.result import RELAXATION, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
-#: "optimal" is only reported when (objective - bound) / objective is at most this.
-OPTIMALITY_TOLERANCE = 1e-6
 
 __all__ = [
+    "OPTIMALITY_TOLERANCE",
     "SUBTOUR_ELIMINATIONS",
     "RoutingModel",
     "build",
@@ -425,43 +424,23 @@ def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
 
 
 # --------------------------------------------------------------------------- solving
-def _run(model: RoutingModel, time_limit: float | None, mip_gap: float, verbose: bool) -> dict:
-    """Solve once with HiGHS; return status, values, objective and the proven bound.
+def _run(model: RoutingModel, time_limit: float | None, mip_gap: float, verbose: bool):
+    """Solve once with :func:`taopt.models.highs.solve_highs`; return the run and σ's values.
 
-    cvxpy maps HiGHS's kOptimal to "optimal" and kTimeLimit (and other limits) to
-    "user_limit"; ``problem.solver_stats.extra_stats`` is HiGHS's ``HighsInfo``,
-    which carries ``mip_dual_bound`` (the proven bound of a MIP),
-    ``mip_gap`` and ``primal_solution_status`` (2 = a feasible point exists).
+    The values are None when HiGHS holds no feasible point (a limit came first,
+    or cvxpy raised). Any other outcome than optimal / a limit / a cvxpy error
+    (e.g. "infeasible", impossible for (2.2)–(2.5) with a vehicle) raises.
     """
-    options: dict[str, Any] = {}
-    if time_limit is not None:
-        options["time_limit"] = max(float(time_limit), 1e-3)
-    if not model.relax:
-        options["mip_rel_gap"] = float(mip_gap)
-    try:
-        with warnings.catch_warnings():
-            # cvxpy warns "Solution may be inaccurate" on every limit; the status says it
-            warnings.simplefilter("ignore", UserWarning)
-            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
-        status = model.problem.status
-    except cp.error.SolverError as exc:  # e.g. a limit hit before any incumbent
-        status = "solver_error"
-        message = str(exc)
-    else:
-        message = ""
-    info = model.problem.solver_stats.extra_stats if model.problem.solver_stats else None
-    has_point = info is not None and int(getattr(info, "primal_solution_status", 0)) == 2
-    bound = None
-    if info is not None:
-        if model.relax:
-            bound = float(info.objective_function_value) if status == "optimal" else None
-        else:
-            dual_bound = float(getattr(info, "mip_dual_bound", np.nan))
-            bound = dual_bound if np.isfinite(dual_bound) else None
-    if status not in ("optimal", "user_limit", "solver_error"):
-        raise SolverError(f"HiGHS returned status {status!r} {message}".strip())
-    values = model.arc_use.value if (has_point and status != "solver_error") else None
-    return {"status": status, "values": values, "bound": bound, "info": info}
+    run = solve_highs(
+        model.problem,
+        time_limit=time_limit,
+        mip_rel_gap=None if model.relax else mip_gap,
+        verbose=verbose,
+    )
+    if run.solver_status not in ("optimal", "user_limit", "solver_error"):
+        raise SolverError(f"HiGHS returned status {run.solver_status!r} {run.message}".strip())
+    values = model.arc_use.value if run.has_point else None
+    return run, values
 
 
 def solve_routing(
@@ -495,13 +474,17 @@ def solve_routing(
     verbose : bool
         HiGHS log.
     max_rounds : int
-        Cap on DFJ rounds.
+        Cap on DFJ rounds. A loop stopped by it returns the best repaired
+        incumbent with status "feasible" (``info["stopped_by"] ==
+        "max_rounds"``) unless its gap is already closed.
 
     Returns
     -------
     Solution
         ``routes`` (one list per vehicle), ``objective`` = ``evaluate(routes)``,
-        ``status`` "optimal", "time_limit" or "feasible" (loose ``mip_gap``),
+        ``status`` by :func:`taopt.models.highs.certify`: "optimal" (gap at
+        most 1e-6), "time_limit", or "feasible" (loose ``mip_gap`` or
+        ``max_rounds``; ``info["stopped_by"]`` says which),
         ``bound`` a proven lower bound (HiGHS's MIP dual bound, the DFJ LP
         value, or Σ_j min_i t(i, j), whichever is largest).
         ``info`` holds rounds, cuts and the solver status.
@@ -511,7 +494,7 @@ def solve_routing(
     InstanceError
         Not an AssignmentProblem or unknown ``sec``.
     SolverError
-        HiGHS failed, or a limit was hit before any feasible point was known.
+        HiGHS returned an unexpected status (e.g. "infeasible").
 
     Notes
     -----
@@ -545,21 +528,26 @@ def solve_routing(
     if sec == "dfj":
         cuts, lp_bound = _lp_subtour_cuts(problem, verbose, budget=remaining())
         best_bound = max(best_bound, lp_bound)
-    status = TIME_LIMIT
     solver_status = ""
+    stopped_by = "time_limit"
+    message = ""
     while True:
         rounds += 1
         left = remaining()
         if left is not None and left <= 0:
+            stopped_by = "time_limit"
             break
         model = build(problem, sec, cuts=cuts)
-        run = _run(model, left, mip_gap, verbose)
-        solver_status = run["status"]
-        if run["bound"] is not None:
-            best_bound = max(best_bound, run["bound"])
-        if run["values"] is None:
+        run, values = _run(model, left, mip_gap, verbose)
+        solver_status, message = run.solver_status, run.message
+        if run.bound is not None:
+            best_bound = max(best_bound, run.bound)
+        if values is None:
+            # no point: a limit came first (or cvxpy raised); the greedy/earlier
+            # incumbent stands with the bound proven so far
+            stopped_by = run.stopped_by
             break
-        routes, subtours = decode(problem, model, run["values"])
+        routes, subtours = decode(problem, model, values)
         candidate = repair(problem, routes, subtours) if subtours else routes
         value = evaluate_routes(problem, candidate)
         if value < best_value:
@@ -568,18 +556,18 @@ def solve_routing(
             if sec != "dfj":
                 raise SolverError(f"{sec} model returned a subtour {subtours[0]}; (2.5) violated")
             cuts.extend(tuple(sorted(c)) for c in subtours)
+            if run.stopped_by == "time_limit":
+                stopped_by = "time_limit"
+                break
             if rounds >= max_rounds:
+                stopped_by = "max_rounds"
                 break
             continue
-        if solver_status == "optimal":
-            status = OPTIMAL
+        stopped_by = run.stopped_by  # "optimal", "mip_gap" or "time_limit"
         break
     bound = min(best_bound, best_value)
-    gap = (best_value - bound) / best_value if best_value > 0 else 0.0
-    stopped_by = "time_limit" if status == TIME_LIMIT else "optimal"
-    if status == OPTIMAL and mip_gap > OPTIMALITY_TOLERANCE and gap > OPTIMALITY_TOLERANCE:
-        # HiGHS stopped at a loose user mip_gap: proven within it, not optimal
-        status, stopped_by = FEASIBLE, "mip_gap"
+    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
+    status, stopped_by = certify(best_value, bound, stopped_by)
     return Solution(
         objective=best_value,
         status=status,
@@ -593,6 +581,7 @@ def solve_routing(
             "solver_status": solver_status,
             "mip_gap": mip_gap,
             "stopped_by": stopped_by,
+            **({"solver_message": message} if message else {}),
         },
     )
 
@@ -641,13 +630,11 @@ def _lp_subtour_cuts(problem, verbose, budget=None, max_rounds=50) -> tuple[list
         if left is not None and left <= 0:
             break
         model = build(problem, "dfj", relax=True, cuts=cuts)
-        run = _run(model, left, 0.0, verbose)
-        if run["values"] is None or run["status"] != "optimal":
+        run, values = _run(model, left, 0.0, verbose)
+        if values is None or run.solver_status != "optimal" or run.bound is None:
             break
-        bound = max(bound, run["bound"])
-        new = [
-            c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts
-        ]
+        bound = max(bound, run.bound)
+        new = [c for c in _violated_subsets(problem, model, np.asarray(values)) if c not in cuts]
         if not new:
             break
         cuts.extend(new)
@@ -660,18 +647,16 @@ def _solve_relaxation(problem, sec, start, verbose) -> Solution:
     while True:
         rounds += 1
         model = build(problem, sec, relax=True, cuts=cuts)
-        run = _run(model, None, 0.0, verbose)
-        if run["status"] != "optimal" or run["bound"] is None:
-            raise SolverError(f"LP relaxation ended with status {run['status']!r}")
+        run, values = _run(model, None, 0.0, verbose)
+        if run.solver_status != "optimal" or run.bound is None:
+            raise SolverError(f"LP relaxation ended with status {run.solver_status!r}")
         if sec != "dfj":
             break
-        new = [
-            c for c in _violated_subsets(problem, model, np.asarray(run["values"])) if c not in cuts
-        ]
+        new = [c for c in _violated_subsets(problem, model, np.asarray(values)) if c not in cuts]
         if not new:
             break
         cuts.extend(new)
-    value = float(run["bound"])
+    value = float(run.bound)
     return Solution(
         objective=value,
         status=RELAXATION,

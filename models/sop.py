@@ -57,9 +57,7 @@ Example
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass
-from typing import Any
 
 import cvxpy as cp
 import networkx as nx
@@ -67,7 +65,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import InstanceError, SolverError
-from taopt.result import OPTIMAL, TIME_LIMIT, Solution
+from taopt.models.highs import certify, solve_highs
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution
 
 FORMULATIONS = ("flow", "mtz")
 
@@ -403,6 +402,39 @@ def decode(model: SopModel, values: np.ndarray | None = None) -> list[int]:
 
 
 # ----------------------------------------------------------------------------- solve
+def _check_path(model: SopModel, order: list[int], precedences, model_value: float) -> float:
+    """Re-cost the decoded path from the data and check it without trusting the solver.
+
+    Checks every precedence ``(r, j)`` (r before j) on the decoded order, and
+    that the path's cost from ``model.cost`` equals the model's objective
+    within 1e-6 relative. Returns the re-costed value.
+
+    Raises
+    ------
+    SolverError
+        A precedence is violated, the path uses a forbidden arc, or the costs differ.
+    """
+    where = np.empty(len(order), dtype=np.int64)
+    where[order] = np.arange(len(order))
+    for pair in precedences:
+        r, j = (int(v) for v in pair)
+        if where[r] > where[j]:
+            raise SolverError(
+                f"decoded order visits {j} (position {where[j]}) before {r} "
+                f"(position {where[r]}): precedence ({r}, {j}) violated"
+            )
+    legs = model.cost[order[:-1], order[1:]]
+    if not np.isfinite(legs).all():
+        leg = int(np.flatnonzero(~np.isfinite(legs))[0])
+        raise SolverError(f"decoded order uses forbidden arc {order[leg]} -> {order[leg + 1]}")
+    objective = float(legs.sum())
+    if abs(objective - model_value) > 1e-6 * max(abs(objective), abs(model_value), 1e-12):
+        raise SolverError(
+            f"decoded path costs {objective!r} but the model's objective is {model_value!r}"
+        )
+    return objective
+
+
 def solve_sop(
     cost,
     precedences,
@@ -429,7 +461,11 @@ def solve_sop(
     formulation : {"flow", "mtz"}
         See the module docstring; "flow" is the stronger one.
     mip_gap : float
-        HiGHS relative gap tolerance (default 1e-9: optimal means proven).
+        HiGHS relative gap tolerance (default 1e-9). The status is "optimal"
+        only when the final gap is at most 1e-6
+        (:data:`taopt.models.highs.OPTIMALITY_TOLERANCE`); a run stopped by a
+        looser ``mip_gap`` is "feasible" with its proven bound
+        (``info["stopped_by"] == "mip_gap"``).
     verbose : bool
         HiGHS log.
 
@@ -437,15 +473,18 @@ def solve_sop(
     -------
     Solution
         ``order`` (start ... end), ``objective`` = its path cost recomputed
-        from ``cost`` (never the solver's number), ``status`` "optimal" or
-        "time_limit", ``bound`` the proven lower bound, ``runtime``.
+        from ``cost`` (never the solver's number; checked against the model's
+        value and every precedence), ``status`` "optimal", "feasible" (loose
+        ``mip_gap``) or "time_limit", ``bound`` the proven lower bound,
+        ``runtime``.
 
     Raises
     ------
     InstanceError
         Bad data (see :func:`check_sop`) or no feasible path exists.
     SolverError
-        HiGHS failed, or hit the limit with no feasible path.
+        HiGHS failed, hit the limit with no feasible path, or the decoded
+        path breaks a precedence or does not cost the model's value.
 
     Example
     -------
@@ -458,31 +497,26 @@ def solve_sop(
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
     model = build(cost, precedences, start, end, formulation)
-    options: dict[str, Any] = {"mip_rel_gap": float(mip_gap)}
-    if time_limit is not None:
-        options["time_limit"] = float(time_limit)
-    try:
-        with warnings.catch_warnings():  # "may be inaccurate" on a time limit: reported below
-            warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-            model.problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
-        status = model.problem.status
-    except cp.error.SolverError as exc:
-        raise SolverError(f"HiGHS failed on the SOP model: {exc}") from exc
-    info = model.problem.solver_stats.extra_stats
-    if status in ("infeasible", "infeasible_or_unbounded"):
+    run = solve_highs(
+        model.problem, time_limit=time_limit, mip_rel_gap=float(mip_gap), verbose=verbose
+    )
+    if run.solver_status == "solver_error":
+        raise SolverError(f"HiGHS failed on the SOP model: {run.message}")
+    if run.status == INFEASIBLE:
         raise InstanceError("no Hamiltonian path respects the precedences and forbidden arcs")
-    has_point = int(getattr(info, "primal_solution_status", 0)) == 2
-    if status not in ("optimal", "user_limit") or not has_point:
+    if run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT) or not run.has_point:
         raise SolverError(
-            f"HiGHS returned status {status!r} without a feasible path (time_limit={time_limit})"
+            f"HiGHS returned status {run.solver_status!r} without a feasible path "
+            f"(time_limit={time_limit})"
         )
     order = decode(model)
-    objective = float(model.cost[order[:-1], order[1:]].sum())
-    bound = float(getattr(info, "mip_dual_bound", np.nan))
-    bound = min(bound, objective) if np.isfinite(bound) else None
+    objective = _check_path(model, order, precedences, run.objective)
+    bound = None if run.bound is None else min(run.bound, objective)
+    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
+    status, stopped_by = certify(objective, bound, run.stopped_by)
     return Solution(
         objective=objective,
-        status=OPTIMAL if status == "optimal" else TIME_LIMIT,
+        status=status,
         bound=bound,
         runtime=time.perf_counter() - began,
         method=f"exact-sop-{formulation}",
@@ -490,8 +524,10 @@ def solve_sop(
         info={
             "arcs": len(model.tails),
             "variables": sum(v.size for v in model.problem.variables()),
-            "solver_objective": float(model.problem.value),
-            "mip_gap": float(getattr(info, "mip_gap", np.nan)),
-            "nodes": int(getattr(info, "mip_node_count", -1)),
+            "solver_objective": run.objective,
+            "mip_gap": run.mip_gap,
+            "nodes": run.nodes,
+            "solver_status": run.solver_status,
+            "stopped_by": stopped_by,
         },
     )

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import taopt.heuristics
 
 import taopt
+import taopt.heuristics
 from taopt.routing import bounds, claims
 
 

@@ -7,7 +7,14 @@ import argparse
 import pandas as pd
 import pytest
 
-from taopt.delivery.study import delivery_study, register_cli, study_instance, summarize
+from taopt.delivery.study import (
+    COLUMNS,
+    delivery_study,
+    register_cli,
+    study_instance,
+    summarize,
+)
+from taopt.errors import InstanceError
 
 
 def test_study_instance_servable_at_the_smallest_ratio():
@@ -89,3 +96,82 @@ def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
     optimum = df[df.method == "DP"].set_index("ratio")["makespan"]
     mma = df[df.method == "MMA"].set_index("ratio")["makespan"]
     assert (mma >= optimum * (1 - 1e-9)).all()
+
+
+# -- the resumable CSV (taopt.studyio): method sets, settings, torn lines, order --------------
+STABLE = [c for c in COLUMNS if c != "runtime"]
+TINY = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
+
+
+def test_other_method_set_keeps_earlier_rows(tmp_path):
+    first = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path, **TINY)
+    only_mma = delivery_study("small", methods=("MMA",), out_dir=tmp_path, **TINY)
+    assert set(only_mma.method) == {"MMA"} and len(only_mma) == 4
+    on_disk = pd.read_csv(tmp_path / "delivery_small.csv")
+    assert len(on_disk) == 12 and (on_disk["complete"] == 1).all()
+    again = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path, **TINY)
+    pd.testing.assert_frame_equal(again, first)  # same runtimes too: nothing recomputed
+
+
+@pytest.mark.parametrize(
+    "change, key",
+    [
+        ({"seed": 4}, "seed"),
+        ({"vd_ratio": 1.4}, "vd_ratio"),
+        ({"method_options": {"GA": {"generations": 3}}}, "method_options"),
+        ({"exact_max_n": 0}, "exact_max_n"),
+    ],
+)
+def test_other_settings_refused_naming_the_key(tmp_path, change, key):
+    base = {**TINY, "instances": 0, "out_dir": tmp_path, "methods": ("NIA",)}
+    delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}})
+    with pytest.raises(InstanceError, match=rf"{key}=.* there, {key}=.* now"):
+        delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}, **change})
+    # the setup's own v_d / v_t given explicitly is the same setting
+    delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}, "vd_ratio": 1})
+
+
+def test_setups_share_a_folder(tmp_path):
+    kwargs = {**TINY, "instances": 0, "out_dir": tmp_path, "methods": ("NIA",)}
+    delivery_study("small", **kwargs)
+    delivery_study("dag40", **kwargs)
+    assert (tmp_path / "delivery_small.config.json").exists()
+    assert (tmp_path / "delivery_dag40.config.json").exists()
+
+
+@pytest.mark.parametrize("cut", ["mid-number", "after-field"])
+def test_torn_row_dropped_and_recomputed(tmp_path, cut):
+    reference = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path / "ref", **TINY)
+    folder = tmp_path / "torn"
+    delivery_study("small", methods=("NIA", "DP"), out_dir=folder, **TINY)
+    csv = folder / "delivery_small.csv"
+    text = csv.read_text()
+    last = text.splitlines()[-1]
+    fields = last.split(",")
+    at = COLUMNS.index("makespan")
+    if cut == "mid-number":  # a makespan cut short would be a wrong, smaller value
+        torn = ",".join(fields[:at]) + "," + fields[at][:3]
+    else:  # cut right after the makespan: q and the rest missing
+        torn = ",".join(fields[: at + 1]) + ","
+    csv.write_text(text[: len(text) - len(last) - 1] + torn)
+    resumed = delivery_study("small", methods=("NIA", "DP"), out_dir=folder, **TINY)
+    pd.testing.assert_frame_equal(resumed[STABLE], reference[STABLE])
+    more = delivery_study("small", methods=("NIA", "DP", "MMA"), out_dir=folder, **TINY)
+    lines = csv.read_text().splitlines()
+    assert len(lines) == 1 + 12 and len(more) == 12
+    assert all(len(line.split(",")) == len(COLUMNS) + 1 for line in lines[1:])
+    assert all(line.endswith(",1") for line in lines[1:])
+
+
+def test_interrupted_resume_and_parallel_give_the_same_table(tmp_path):
+    methods = ("NIA", "MMA", "DP")
+    whole = delivery_study("small", methods=methods, out_dir=tmp_path / "whole", **TINY)
+    # "interrupted" after the first instance, then resumed with jobs=2
+    part = delivery_study(
+        "small", methods=methods, out_dir=tmp_path / "part", **TINY | {"instances": 1}
+    )
+    assert len(part) == 6
+    resumed = delivery_study("small", methods=methods, out_dir=tmp_path / "part", jobs=2, **TINY)
+    pd.testing.assert_frame_equal(resumed[STABLE], whole[STABLE])
+    in_memory = delivery_study("small", methods=methods, out_dir=None, jobs=2, **TINY)
+    pd.testing.assert_frame_equal(in_memory[STABLE], whole[STABLE], check_dtype=False)

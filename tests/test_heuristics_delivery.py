@@ -13,6 +13,9 @@ import itertools
 import networkx as nx
 import numpy as np
 import pytest
+
+import taopt
+from taopt.errors import InstanceError
 from taopt.heuristics import run
 from taopt.heuristics.ga_delivery import ga_order, ga_search
 from taopt.heuristics.sequencing import (
@@ -22,9 +25,6 @@ from taopt.heuristics.sequencing import (
     path_cost,
     smma_order,
 )
-
-import taopt
-from taopt.errors import InstanceError
 
 # ---------------------------------------------------------------------------------------------
 # Reference problems
@@ -282,3 +282,31 @@ def test_delivery_ga_same_seed_same_result() -> None:
     first = run("GA", instance, seed=4, generations=25)
     again = run("GA", instance, seed=4, generations=25)
     assert first.plan == again.plan and first.objective == again.objective
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_delivery_objective_is_exactly_the_scorers(seed: int) -> None:
+    """Review item 5: every method's objective is taopt.evaluate's value (==, no tolerance),
+    on random instances with and without a landing time τ; the subset-DP optimum too."""
+    from taopt.delivery.schedule import optimal_plan
+
+    rng = np.random.default_rng(500 + seed)
+    n = int(rng.integers(5, 8))
+    pairs = tuple((2 * k, 2 * k + 1) for k in range(int(rng.integers(0, 3))))
+    instance = taopt.DeliveryInstance.grid(
+        rng.random((n, 2)) * 1000,
+        k=int(rng.integers(3, 6)),
+        side=1000,
+        v_drone=float(rng.uniform(1.0, 2.0)),
+        v_truck=1.0,
+        flight_range=float(rng.uniform(700, 1200)),
+        precedences=pairs,
+        service_time=float(rng.choice([0.0, 30.0])),
+    )
+    optimum = optimal_plan(instance)
+    assert optimum.objective == taopt.evaluate(instance, optimum.plan)
+    for name in METHODS:
+        options = {"generations": 15} if name == "GA" else {}
+        solution = run(name, instance, seed=seed, **options)
+        assert solution.objective == taopt.evaluate(instance, solution.plan)
+        assert solution.objective >= optimum.objective

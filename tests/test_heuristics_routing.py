@@ -11,11 +11,11 @@ import itertools
 
 import numpy as np
 import pytest
-import taopt.heuristics
-from taopt.heuristics import clustering, ga_routing
 
 import taopt
+import taopt.heuristics
 from taopt.errors import InstanceError
+from taopt.heuristics import clustering, ga_routing
 from taopt.routing.claims import exact_optimum
 
 ROUTING = ["VN", "VM", "EVN", "EVM", "MC", "GA"]

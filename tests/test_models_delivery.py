@@ -132,6 +132,26 @@ def test_time_limit_keeps_a_certified_gap():
     assert sol.bound <= expected * (1 + REL)
 
 
+@pytest.mark.parametrize("incumbent", [None, "auto"])
+def test_loose_mip_gap_is_not_called_optimal(incumbent):
+    """mip_gap=0.5 stops HiGHS early (review item 4): "optimal" only within 1e-6, else
+    "feasible" with a proven bound, and never worse than the incumbent."""
+    from taopt.models.highs import OPTIMALITY_TOLERANCE
+
+    inst = random_instance(2, n=6)
+    optimum = enumerate_optimum(inst)
+    sol = solve_delivery(inst, mip_gap=0.5, incumbent=incumbent)
+    assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=1e-9)
+    assert sol.bound <= optimum * (1 + REL) and sol.objective >= optimum * (1 - REL)
+    if sol.status == "optimal":
+        assert sol.gap <= OPTIMALITY_TOLERANCE
+    else:
+        assert sol.status == "feasible" and sol.info["stopped_by"] == "mip_gap"
+        assert OPTIMALITY_TOLERANCE < sol.gap <= 0.5 + 1e-9
+    if sol.info["cutoff"] is not None:
+        assert sol.objective <= sol.info["cutoff"] * (1 + 1e-9)
+
+
 def test_customer_leg_cuts_keep_the_optimum():
     inst = random_instance(2, n=5)
     plain = solve_delivery(inst)

@@ -314,3 +314,26 @@ def test_condition_3_5_alone_is_not_sufficient_when_drift_is_faster():
     assert np.all(roots.real < 0)
     assert np.isnan(net_speed(drift, upstream, 0.5))
     assert net_speed(drift, -upstream, 0.5) == pytest.approx(1.5)
+
+
+def test_shooting_matrix_retries_a_failed_pair_by_collocation(monkeypatch):
+    """A pair on which shooting fails is retried (collocation), not left wrong or raised raw."""
+    import taopt.navigation.shooting as shooting_module
+    from taopt.errors import ConvergenceError
+    from taopt.fields import thesis_field
+    from taopt.navigation import travel_time_matrix
+
+    field = thesis_field(1e-2)
+    points = np.array([[10.0, 20.0], [80.0, 70.0], [30.0, 90.0]])
+    reference = travel_time_matrix(field, points, method="collocation", jobs=1)
+    original = shooting_module.shooting_path
+
+    def flaky(field_, start, goal, speed=1.0, **kw):
+        if np.allclose(start, points[1]) and np.allclose(goal, points[2]):
+            raise ConvergenceError("forced failure for the test")
+        return original(field_, start, goal, speed, **kw)
+
+    monkeypatch.setattr(shooting_module, "shooting_path", flaky)
+    matrix, info = travel_time_matrix(field, points, method="shooting", return_info=True)
+    assert (1, 2) in info["retried"]
+    np.testing.assert_allclose(matrix, reference, rtol=1e-6)

@@ -11,8 +11,8 @@ import pytest
 import taopt
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.delivery.schedule import schedule
-from taopt.errors import FeasibilityError
+from taopt.delivery.schedule import optimal_plan, schedule
+from taopt.errors import FeasibilityError, SolverError
 
 
 def random_small_instance(seed: int, n: int = 3, s: int = 4) -> DeliveryInstance:
@@ -108,3 +108,58 @@ def test_schedule_is_deterministic():
     inst = random_small_instance(5, n=3, s=4)
     a, b = schedule(inst, [2, 0, 1]), schedule(inst, [2, 0, 1])
     assert a.plan == b.plan and a.objective == b.objective
+
+
+# ---------------------------------------------------------------------------------------------
+# Review items 5 and 14: the one scorer, the one DP step
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_objective_is_the_scorers_value(seed):
+    rng = np.random.default_rng(200 + seed)
+    n = int(rng.integers(1, 6))
+    inst = random_small_instance(300 + seed, n=n, s=int(rng.integers(2, 7)))
+    order = [int(x) for x in rng.permutation(n)]
+    sol = schedule(inst, order)
+    assert sol.objective == evaluate_plan(inst, sol.plan)
+    assert sol.info["dp_objective"] == pytest.approx(sol.objective, rel=1e-12, abs=0)
+    best = optimal_plan(inst)
+    assert best.status == "optimal" and best.objective == best.bound
+    assert best.objective == evaluate_plan(inst, best.plan)
+    assert best.info["dp_objective"] == pytest.approx(best.objective, rel=1e-12, abs=0)
+    # the subset DP and the fixed-order DP (same step) agree on the optimum over all orders
+    every = min(schedule(inst, list(o)).objective for o in itertools.permutations(range(n)))
+    assert best.objective == pytest.approx(every, rel=1e-12, abs=1e-12)
+    assert best.objective <= sol.objective + 1e-9
+
+
+def test_scorer_disagreement_raises_solver_error(monkeypatch):
+    import taopt.delivery.schedule as module
+
+    inst = random_small_instance(4, n=3, s=4)
+    good = schedule(inst, [0, 1, 2])
+    true_value = evaluate_plan(inst, good.plan)
+    # a disagreement within the tolerance is accepted, and the scorer's value is returned
+    monkeypatch.setattr(module, "evaluate_plan", lambda i, p: true_value * (1 + 1e-12))
+    assert schedule(inst, [0, 1, 2]).objective == true_value * (1 + 1e-12)
+    # beyond it, both DPs refuse to return a number the scorer does not confirm
+    monkeypatch.setattr(module, "evaluate_plan", lambda i, p: evaluate_plan(i, p) * (1 + 1e-6))
+    with pytest.raises(SolverError, match="differs from evaluate_plan"):
+        schedule(inst, [0, 1, 2])
+    with pytest.raises(SolverError, match="differs from evaluate_plan"):
+        optimal_plan(inst)
+
+
+def test_partial_order_keeps_the_dp_value():
+    """complete=False: a partial plan cannot be scored (evaluate rejects it); the objective
+    is the DP's makespan of the listed sorties, equal to the timeline of the partial plan."""
+    from taopt.delivery.evaluate import timeline
+
+    rng = np.random.default_rng(11)
+    inst = DeliveryInstance.grid(rng.uniform(0, 1000, (12, 2)), 5, 1000, 1.4, 1.0, 500)
+    partial = schedule(inst, [3, 7, 1, 0], complete=False)
+    assert partial.objective == partial.info["dp_objective"]
+    assert partial.objective == timeline(inst, partial.plan, check=False).makespan
+    with pytest.raises(FeasibilityError, match=r"\(5.2\)"):
+        evaluate_plan(inst, partial.plan)

@@ -15,7 +15,8 @@ import pytest
 from taopt.delivery.sop import KNOWN_OPTIMA, load_sop, path_cost, shipped_sop
 from taopt.errors import InstanceError, SolverError
 from taopt.models import solve_sop
-from taopt.models.sop import describe
+from taopt.models.highs import OPTIMALITY_TOLERANCE
+from taopt.models.sop import _check_path, build, describe
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -130,6 +131,37 @@ def test_time_limit_returns_a_certified_gap_or_fails_loudly():
     assert sol.status in ("time_limit", "optimal")
     assert sol.bound <= KNOWN_OPTIMA["br17.10"] + 1e-6 <= sol.objective + 2e-6
     assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+
+
+def test_loose_mip_gap_is_not_called_optimal():
+    """mip_gap=0.5 on ESC12 with the weak MTZ model: HiGHS stops early (review item 4).
+
+    "optimal" is only allowed with a gap within 1e-6; otherwise "feasible",
+    stopped by the gap, with a bound below and an incumbent above the TSPLIB optimum.
+    """
+    cost, precedences, start, end, _ = load_sop("ESC12")
+    optimum = KNOWN_OPTIMA["ESC12"]
+    for formulation in ("mtz", "flow"):
+        sol = solve_sop(cost, precedences, start, end, formulation=formulation, mip_gap=0.5)
+        assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+        assert sol.bound <= optimum + 1e-6 <= sol.objective + 2e-6
+        if sol.status == "optimal":
+            assert sol.gap <= OPTIMALITY_TOLERANCE
+            assert sol.objective == optimum
+        else:
+            assert sol.status == "feasible" and sol.info["stopped_by"] == "mip_gap"
+            assert OPTIMALITY_TOLERANCE < sol.gap <= 0.5 + 1e-9
+
+
+def test_decoded_path_is_checked_against_precedences_and_model_value():
+    """Review item 6: a decoded order is re-checked, never trusted."""
+    cost = np.array([[0, 1, 5, 9], [9, 0, 1, 5], [1, 9, 0, 1], [9, 9, 9, 0.0]])
+    model = build(cost, [(2, 1)], 0, 3)
+    assert _check_path(model, [0, 2, 1, 3], [(2, 1)], 19.0) == 19.0
+    with pytest.raises(SolverError, match=r"precedence \(2, 1\) violated"):
+        _check_path(model, [0, 1, 2, 3], [(2, 1)], 3.0)
+    with pytest.raises(SolverError, match="model's objective"):
+        _check_path(model, [0, 2, 1, 3], [(2, 1)], 19.5)
 
 
 # ----------------------------------------------------------------------------- random

@@ -150,3 +150,70 @@ def test_cli_and_plots(tmp_path, capsys):
     )
     assert len(ax.collections) >= 2
     assert np.isfinite(solution.objective)
+
+
+# -- the resumable CSV (taopt.studyio): method sets, settings, torn lines -----------------------
+def small(tmp, methods, scenarios=2, **kw):
+    return drift_study(5, 2, scenarios, methods=methods, seed=4, out_dir=tmp, progress=False, **kw)
+
+
+def test_other_method_set_keeps_earlier_rows(tmp_path):
+    first = small(tmp_path, "MC,EVN")
+    assert len(first) == 4
+    second = small(tmp_path, "MC,VN", scenarios=1)  # MC reused, VN computed, EVN kept on disk
+    assert list(second["method"]) == ["VN", "MC"]
+    on_disk = pd.read_csv(tmp_path / "results.csv")
+    assert len(on_disk) == 5 and (on_disk["complete"] == 1).all()
+    assert sorted(on_disk["method"]) == ["EVN", "EVN", "MC", "MC", "VN"]
+    pd.testing.assert_frame_equal(small(tmp_path, "MC,EVN"), first)  # nothing recomputed
+    mc = first[first.method == "MC"].iloc[[0]].reset_index(drop=True)
+    pd.testing.assert_frame_equal(second[second.method == "MC"].reset_index(drop=True), mc)
+
+
+def test_exact_added_later_fills_the_optimum(tmp_path):
+    """Scenario references are the same whether exact ran with the heuristics or later."""
+    small(tmp_path / "later", "MC")
+    later = small(tmp_path / "later", "MC,exact")
+    together = small(tmp_path / "together", "MC,exact")
+    pd.testing.assert_frame_equal(later[STABLE], together[STABLE])
+    assert later["optimum"].notna().all()
+
+
+@pytest.mark.parametrize(
+    "change, key",
+    [
+        ({"seed": 5}, "seed"),
+        ({"time_limit": 30.0}, "time_limit"),
+        ({"method_options": {"GA": {"generations": 3}}}, "method_options"),
+        ({"field": None}, "field"),
+    ],
+)
+def test_other_settings_refused_naming_the_key(tmp_path, change, key):
+    drift_study(5, 2, 0, methods="MC", seed=4, out_dir=tmp_path, progress=False)
+    kwargs = {"methods": "MC", "seed": 4, "out_dir": tmp_path, "progress": False, **change}
+    with pytest.raises(InstanceError, match=rf"{key}=.* there, {key}=.* now"):
+        drift_study(5, 2, 1, **kwargs)
+    assert not (tmp_path / "matrices").exists()  # refused before any work
+
+
+@pytest.mark.parametrize("cut", ["mid-number", "after-field"])
+def test_torn_last_line_recomputed(tmp_path, cut):
+    reference = small(tmp_path / "ref", "MC,EVN")
+    folder = tmp_path / "torn"
+    small(folder, "MC,EVN")
+    csv = folder / "results.csv"
+    text = csv.read_text()
+    last = text.splitlines()[-1]
+    fields = last.split(",")
+    if cut == "mid-number":  # inside the objective value
+        torn = ",".join(fields[:5]) + "," + fields[5][:4]
+    else:  # just after the status field and its comma
+        torn = ",".join(fields[:8]) + ","
+    csv.write_text(text[: len(text) - len(last) - 1] + torn)
+    resumed = small(folder, "MC,EVN")
+    pd.testing.assert_frame_equal(resumed[STABLE], reference[STABLE])
+    resumed = small(folder, "MC,EVN", scenarios=3)  # the next appended rows are intact
+    lines = csv.read_text().splitlines()
+    assert len(lines) == 1 + 6
+    assert all(len(line.split(",")) == 13 and line.endswith(",1") for line in lines[1:])
+    assert resumed["scenario"].nunique() == 3

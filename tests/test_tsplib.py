@@ -6,10 +6,10 @@ from itertools import permutations
 
 import numpy as np
 import pytest
-from taopt.models import solve_routing
 
 import taopt
 from taopt.errors import InstanceError
+from taopt.models import solve_routing
 from taopt.routing.tsplib import (
     KNOWN_OPTIMA,
     AtspInstance,

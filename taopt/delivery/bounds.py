@@ -6,89 +6,21 @@ precedences (:func:`taopt.delivery.costs.feasible_edges`) and the weights t* (5.
 plan is a Hamiltonian path w_0 -> c_π1 -> ... -> c_πn in G^d, which is an
 arborescence rooted at w_0, and its weight is at most the makespan because t*
 never exceeds the time between consecutive services. So the min-cost arborescence
-(Edmonds' algorithm, networkx) is a valid lower bound f_a <= f_o.
+(Edmonds' algorithm, :func:`taopt.arborescence.min_arborescence`) is a valid lower
+bound f_a <= f_o.
 """
 
 from __future__ import annotations
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import breadth_first_order
 
+from taopt.arborescence import min_arborescence
 from taopt.delivery.costs import drone_cost_matrix, feasible_edges
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError, SolverError
-
-
-def _find_cycles(pred: np.ndarray, root: int) -> list[list[int]]:
-    """Cycles of the functional graph v -> pred[v] (the root has no predecessor)."""
-    state = np.zeros(len(pred), dtype=np.int8)  # 0 new, 1 on the current walk, 2 done
-    state[root] = 2
-    cycles = []
-    for start in range(len(pred)):
-        walk = []
-        v = start
-        while state[v] == 0:
-            state[v] = 1
-            walk.append(v)
-            v = int(pred[v])
-        if state[v] == 1:  # closed a cycle on this walk
-            cycles.append(walk[walk.index(v) :])
-        for u in walk:
-            state[u] = 2
-    return cycles
-
-
-def min_arborescence_weight(weights: np.ndarray, root: int) -> float:
-    """Weight of a min-cost spanning arborescence rooted at ``root`` (Chu–Liu/Edmonds).
-
-    Dense numpy version of Edmonds' algorithm computing the value only: pick the
-    cheapest in-edge of every vertex; if they form no cycle that is optimal, otherwise
-    contract each cycle C, charging Σ_{v∈C} min-in(v) and re-weighting edges into C by
-    w(u, v) − min-in(v), and recurse. O(N³) worst case with N vectorised steps; the
-    tests check it against networkx's ``minimum_spanning_arborescence``.
-
-    Parameters
-    ----------
-    weights : (N, N) array
-        ``weights[u, v]`` the cost of edge u -> v; ``inf`` where there is no edge.
-    root : int
-
-    Raises
-    ------
-    SolverError
-        Some vertex cannot be reached from the root.
-    """
-    W = np.array(weights, dtype=float)
-    if W.ndim != 2 or W.shape[0] != W.shape[1]:
-        raise InstanceError(f"weights must be square, got shape {W.shape}")
-    total = 0.0
-    while True:
-        N = len(W)
-        np.fill_diagonal(W, np.inf)
-        W[:, root] = np.inf
-        pred = W.argmin(axis=0)
-        best = W[pred, np.arange(N)]
-        best[root] = 0.0
-        if not np.isfinite(best).all():
-            v = int(np.flatnonzero(~np.isfinite(best))[0])
-            raise SolverError(f"no arborescence: vertex {v} has no entering edge")
-        pred[root] = root
-        cycles = _find_cycles(pred, root)
-        if not cycles:
-            return total + float(best.sum())
-        label = np.full(N, -1, dtype=np.int64)
-        for c, cycle in enumerate(cycles):
-            label[cycle] = c
-            total += float(best[cycle].sum())
-        in_cycle = label >= 0
-        rest = np.flatnonzero(~in_cycle)
-        label[rest] = len(cycles) + np.arange(rest.size)
-        adjusted = W - np.where(in_cycle, best, 0.0)[None, :]
-        order = np.argsort(label, kind="stable")
-        starts = np.flatnonzero(np.r_[True, np.diff(label[order]) != 0])
-        packed = adjusted[np.ix_(order, order)]
-        W = np.minimum.reduceat(np.minimum.reduceat(packed, starts, axis=0), starts, axis=1)
-        root = int(label[root])
 
 
 def arborescence_bound(
@@ -113,7 +45,7 @@ def arborescence_bound(
     include_service : bool
         Include the landing times τ in t* (valid; no effect when τ = 0).
     method : {"numpy", "networkx"}
-        Edmonds' algorithm by :func:`min_arborescence_weight` (dense numpy, ~10 ms for
+        Edmonds' algorithm by :func:`taopt.arborescence.min_arborescence` (dense numpy, ~10 ms for
         120 customers) or by ``networkx.minimum_spanning_arborescence`` (the reference;
         pure Python, ~10 s for 120 customers). Both give the same value.
 
@@ -149,7 +81,16 @@ def arborescence_bound(
     edges = np.array(feasible_edges(instance, rule), dtype=np.int64).reshape(-1, 2)
     weights[edges[:, 0], edges[:, 1]] = D[edges[:, 0], edges[:, 1]]
     if method == "numpy":
-        return min_arborescence_weight(weights, root=n)
+        value = min_arborescence(weights, root=n)
+        if not np.isfinite(value):
+            reached = breadth_first_order(
+                csr_matrix(np.isfinite(weights)), n, return_predecessors=False
+            )
+            missing = int(np.setdiff1d(np.arange(n + 1), reached)[0])
+            raise SolverError(
+                f"no arborescence: customer {missing} cannot be reached from the depot"
+            )
+        return value
     if method != "networkx":
         raise InstanceError(f"method must be 'numpy' or 'networkx', got {method!r}")
     graph = nx.DiGraph()
@@ -164,4 +105,4 @@ def arborescence_bound(
     return float(sum(d["weight"] for _, _, d in tree.edges(data=True)))
 
 
-__all__ = ["arborescence_bound", "min_arborescence_weight"]
+__all__ = ["arborescence_bound"]

@@ -8,6 +8,12 @@ the past only through (R_{p-1}, landing stop of sortie p-1), and every later tim
 is non-decreasing in R_{p-1}. So for each sortie and each landing stop the
 earliest recovery time dominates every other partial schedule ending there, and
 the dynamic programme over (sortie, landing stop) states below is exact.
+
+Both dynamic programmes, :func:`schedule` (fixed order) and :func:`optimal_plan`
+(subsets of customers), make their transitions with the one vectorised step
+:func:`_sortie_step`, and both score the plan they return with the one scorer
+:func:`taopt.delivery.evaluate.evaluate_plan` (DESIGN invariant 1), checking that the
+DP's own value agrees (relative :data:`MATCH_TOLERANCE`).
 """
 
 from __future__ import annotations
@@ -15,12 +21,17 @@ from __future__ import annotations
 import time
 import weakref
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
+from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.errors import FeasibilityError
-from taopt.result import FEASIBLE, Solution
+from taopt.errors import FeasibilityError, SolverError
+from taopt.result import FEASIBLE, OPTIMAL, Solution
+
+#: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
+MATCH_TOLERANCE = 1e-9
 
 
 class _SortieData:
@@ -58,6 +69,91 @@ def _sortie_data(instance: DeliveryInstance) -> _SortieData:
     if data is None:
         data = _DATA[instance] = _SortieData(instance)
     return data
+
+
+def _sortie_step(
+    truck_time: np.ndarray,
+    service_time: float,
+    ready: np.ndarray,
+    prev_stops: np.ndarray,
+    sortie: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    final: bool = False,
+) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+    """One DP transition: launch, serve, recover at the cheapest landing (vectorised).
+
+    Shared by :func:`schedule` (fixed order) and :func:`optimal_plan` (subsets). From the
+    previous sortie's states (landing stop k', earliest recovery R_{p-1}(k')) and customer
+    j's data from :class:`_SortieData`, for every launch i and landing k in V_j::
+
+        S_p(i) = min_k' R_{p-1}(k') + truck_time[k', i]
+        t_p(i) = S_p(i) + flight_time[j, i] + τ
+        R_p(k) = min_{i: (5.6)} max(t_p(i) + flight_time[j, k], S_p(i) + truck_time[i, k]) + τ
+
+    with the floating-point operations of :func:`taopt.delivery.evaluate.timeline`, in
+    the same order, so the DP's values are the scorer's.
+
+    Parameters
+    ----------
+    truck_time : (s, s) array
+    service_time : float
+        τ.
+    ready : (a,) array
+        R_{p-1} at the stops ``prev_stops`` (finite).
+    prev_stops : (a,) int array
+        The possible landing stops of the previous sortie (the depot before the first).
+    sortie : tuple
+        ``_SortieData.get(j)``: V_j, flight_time[j, V_j], the (5.6) penalty (τ or +inf),
+        truck times on V_j x V_j.
+    final : bool
+        The last sortie: minimise t_p instead of R_p.
+
+    Returns
+    -------
+    prev_pos : (|V_j|,) int array
+        For each launch stop (position in V_j), the position in ``prev_stops`` of the
+        previous landing stop it is reached from.
+    served : (|V_j|,) array
+        t_p(i) for each launch stop.
+    launch_pos, recovery
+        If not ``final``: (|V_j|,) arrays, for each landing stop the position of its best
+        launch stop and R_p(k) (+inf if no launch stop reaches it within L).
+        If ``final``: two ints, the launch position with the earliest t_p and, for it, the
+        landing position with the earliest recovery (one satisfies (5.6): every launch stop
+        of V_j may land at the stop of V_j nearest to j).
+    """
+    viable, flight, penalty, carry = sortie
+    reach = ready[:, None] + truck_time[np.ix_(prev_stops, viable)]
+    prev_pos = reach.argmin(axis=0)
+    columns = np.arange(viable.size)
+    launch_time = reach[prev_pos, columns]
+    served = launch_time + flight + service_time
+    if final:
+        i_pos = int(served.argmin())
+        row = np.maximum(served[i_pos] + flight, launch_time[i_pos] + carry[i_pos])
+        row += penalty[i_pos]
+        return prev_pos, served, i_pos, int(row.argmin())
+    recovery = np.maximum(served[:, None] + flight[None, :], launch_time[:, None] + carry)
+    recovery += penalty  # + τ where (5.6) holds, +inf elsewhere
+    launch_pos = recovery.argmin(axis=0)
+    return prev_pos, served, launch_pos, recovery[launch_pos, columns]
+
+
+def _scored(instance: DeliveryInstance, plan: Plan, dp_value: float, who: str) -> float:
+    """The scorer's makespan of a complete plan, checked against the DP's own value.
+
+    Raises
+    ------
+    SolverError
+        The two differ by more than :data:`MATCH_TOLERANCE` relative (a bug: the DP and
+        :func:`taopt.delivery.evaluate.evaluate_plan` disagree on the timing semantics).
+    """
+    value = evaluate_plan(instance, plan)
+    if abs(value - dp_value) > MATCH_TOLERANCE * max(abs(value), abs(dp_value)):
+        raise SolverError(
+            f"{who}: the DP's makespan {dp_value!r} differs from evaluate_plan's {value!r} "
+            f"by more than {MATCH_TOLERANCE:g} relative (order {list(plan.order)})"
+        )
+    return value
 
 
 def _check_order(instance: DeliveryInstance, order: np.ndarray, complete: bool) -> None:
@@ -102,20 +198,25 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
     complete : bool
         If False, ``order`` may list a subset of the customers (used while building
         orders); precedences are then checked among the listed ones and every
-        listed customer's predecessors must be listed. The plan is then partial and
-        :func:`taopt.evaluate` will reject it.
+        listed customer's predecessors must be listed. The plan is then partial,
+        :func:`taopt.evaluate` would reject it, and ``.objective`` is the DP's own
+        makespan of the listed sorties (the same timing semantics, not re-scored).
 
     Returns
     -------
     Solution
         ``.plan`` the optimal :class:`Plan` for this order, ``.objective`` its makespan
-        (5.1) (equal to ``taopt.evaluate(instance, plan)``), ``.status`` "feasible",
-        ``.order``, ``.runtime``, ``.method`` "schedule".
+        (5.1) as scored by ``taopt.delivery.evaluate.evaluate_plan(instance, plan)`` (for
+        a complete order), ``.info["dp_objective"]`` the DP's own value, ``.status``
+        "feasible", ``.order``, ``.runtime``, ``.method`` "schedule".
 
     Raises
     ------
     FeasibilityError
         The order is not a permutation of the customers, or violates a precedence.
+    SolverError
+        The DP's makespan and the scorer's differ by more than :data:`MATCH_TOLERANCE`
+        relative (a bug, never expected).
 
     Notes
     -----
@@ -128,7 +229,8 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
         R_p(k)  = min_{i: d(i,j)+d(j,k) <= L} max(t_p(i) + flight_time[j, k],
                                                  S_p(i) + truck_time[i, k]) + τ
 
-    and the last sortie minimises t_p(i) instead. Time O(Σ_p |V_{p-1}| |V_p|) <= O(n s²),
+    (one call of :func:`_sortie_step` per sortie) and the last sortie minimises t_p(i)
+    instead. Time O(Σ_p |V_{p-1}| |V_p|) <= O(n s²),
     vectorised with numpy; memory O(n s) for the back-pointers.
 
     Example
@@ -143,60 +245,44 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
     start = time.perf_counter()
     order_arr = np.asarray(list(order), dtype=np.int64).reshape(-1)
     _check_order(instance, order_arr, complete)
-    if order_arr.size == 0:
-        return Solution(
-            0.0,
-            FEASIBLE,
-            runtime=time.perf_counter() - start,
-            method="schedule",
-            plan=Plan((), (), ()),
-            order=[],
-        )
-    tt = instance.truck_time
-    tau = instance.service_time
-    data = _sortie_data(instance)
-
-    prev_stops = np.array([instance.depot], dtype=np.int64)
-    ready = np.zeros(1)
-    stops_of: list[np.ndarray] = []
-    best_prev: list[np.ndarray] = []  # for each launch stop (position in V_p): position in V_{p-1}
-    best_launch: list[np.ndarray] = []  # for each landing stop (position in V_p): launch position
-    last = order_arr.size - 1
-    objective = np.inf
-    for p, j in enumerate(order_arr):
-        viable, flight, penalty, carry = data.get(int(j))
-        # launch times S_p(i): drive from the best previous landing stop
-        reach = ready[:, None] + tt[np.ix_(prev_stops, viable)]
-        arg = reach.argmin(axis=0)
-        launch_time = reach[arg, np.arange(viable.size)]
-        served = launch_time + flight + tau
-        # R_p(k) = max(t + flight to k, S + truck i -> k) + τ; + inf where (5.6) fails
-        recovery = np.maximum(served[:, None] + flight[None, :], launch_time[:, None] + carry)
-        recovery += penalty
-        if p == last:
-            i_pos = int(served.argmin())
-            objective = float(served[i_pos])
-            k_pos = int(recovery[i_pos].argmin())
-        else:
-            land_arg = recovery.argmin(axis=0)
-            ready = recovery[land_arg, np.arange(viable.size)]
-            best_launch.append(land_arg)
-        stops_of.append(viable)
-        best_prev.append(arg)
-        prev_stops = viable
-
-    # backtrack
     m = order_arr.size
     launch = np.empty(m, dtype=np.int64)
     landing = np.empty(m, dtype=np.int64)
-    launch[last] = stops_of[last][i_pos]
-    landing[last] = stops_of[last][k_pos]
-    for p in range(last, 0, -1):
-        k_pos = int(best_prev[p][i_pos])  # landing of sortie p-1, a position in V_{p-1}
-        i_pos = int(best_launch[p - 1][k_pos])
-        landing[p - 1] = stops_of[p - 1][k_pos]
-        launch[p - 1] = stops_of[p - 1][i_pos]
+    dp_value = 0.0
+    if m:
+        tt = instance.truck_time
+        tau = instance.service_time
+        data = _sortie_data(instance)
+        prev_stops = np.array([instance.depot], dtype=np.int64)
+        ready = np.zeros(1)
+        stops_of: list[np.ndarray] = []
+        from_prev: list[np.ndarray] = []  # per launch stop (position in V_p): position in V_{p-1}
+        from_launch: list[np.ndarray] = []  # per landing stop (position in V_p): launch position
+        last = m - 1
+        for p in range(last):
+            sortie = data.get(int(order_arr[p]))
+            prev_pos, _, launch_pos, ready = _sortie_step(tt, tau, ready, prev_stops, sortie)
+            stops_of.append(sortie[0])
+            from_prev.append(prev_pos)
+            from_launch.append(launch_pos)
+            prev_stops = sortie[0]
+        sortie = data.get(int(order_arr[last]))
+        prev_pos, served, i_pos, k_pos = _sortie_step(
+            tt, tau, ready, prev_stops, sortie, final=True
+        )
+        dp_value = float(served[i_pos])
+        stops_of.append(sortie[0])
+        from_prev.append(prev_pos)
+        # backtrack
+        launch[last] = stops_of[last][i_pos]
+        landing[last] = stops_of[last][k_pos]
+        for p in range(last, 0, -1):
+            k_pos = int(from_prev[p][i_pos])  # landing of sortie p-1, a position in V_{p-1}
+            i_pos = int(from_launch[p - 1][k_pos])
+            landing[p - 1] = stops_of[p - 1][k_pos]
+            launch[p - 1] = stops_of[p - 1][i_pos]
     plan = Plan(tuple(order_arr.tolist()), tuple(launch.tolist()), tuple(landing.tolist()))
+    objective = _scored(instance, plan, dp_value, "schedule") if complete else dp_value
     return Solution(
         objective=objective,
         status=FEASIBLE,
@@ -204,6 +290,7 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
         method="schedule",
         plan=plan,
         order=order_arr.tolist(),
+        info={"dp_objective": dp_value},
     )
 
 
@@ -214,8 +301,8 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
     landing stop of its last sortie and its recovery time, and every later time is
     non-decreasing in that recovery time. So the states (served set, landing stop)
     with value the earliest recovery time (Held–Karp style, the same transitions as
-    :func:`schedule`) give the optimum over all precedence-feasible orders and all
-    launch/landing choices at once.
+    :func:`schedule`, made by the same :func:`_sortie_step`) give the optimum over all
+    precedence-feasible orders and all launch/landing choices at once.
 
     Parameters
     ----------
@@ -226,36 +313,32 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
     Returns
     -------
     Solution
-        ``.status`` "optimal", ``.objective == .bound`` the optimal makespan,
-        ``.plan`` an optimal plan (scored by :func:`taopt.evaluate` to the same value),
-        ``.method`` "subset-dp".
+        ``.status`` "optimal", ``.objective == .bound`` the optimal makespan (5.1) as
+        scored by ``taopt.delivery.evaluate.evaluate_plan(instance, .plan)``,
+        ``.info["dp_objective"]`` the DP's own value (checked equal within
+        :data:`MATCH_TOLERANCE` relative), ``.plan`` an optimal plan, ``.method``
+        "subset-dp".
 
     Raises
     ------
     SolverError
-        n > max_customers.
+        n > max_customers, or the DP's makespan and the scorer's differ by more than
+        :data:`MATCH_TOLERANCE` relative (a bug, never expected).
 
     Notes
     -----
     O(2^n · n · s²) time, O(2^n · s) memory. About 0.1 s for n = 8, s = 121.
     """
-    from taopt.errors import SolverError
-    from taopt.result import OPTIMAL
-
     start = time.perf_counter()
     n, s = instance.n, instance.s
     if n > max_customers:
         raise SolverError(f"optimal_plan: n = {n} > max_customers = {max_customers}")
     tt = instance.truck_time
-    ft = instance.flight_time
-    fd = instance.flight_distance
     tau = instance.service_time
-    limit = instance.flight_limit
+    data = _sortie_data(instance)
     need = np.zeros(n, dtype=np.int64)  # bit mask of each customer's predecessors
     for r, j in instance.precedences:
         need[j] |= 1 << r
-    viable = [np.flatnonzero(fd[j] + fd[j].min() <= limit) for j in range(n)]
-    pair_ok = [fd[j, v][:, None] + fd[j, v][None, :] <= limit for j, v in enumerate(viable)]
     full = (1 << n) - 1
     ready = np.full((1 << n, s), np.inf)
     ready[0, instance.depot] = 0.0
@@ -268,49 +351,37 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
         alive = np.flatnonzero(np.isfinite(ready[mask]))
         if alive.size == 0:
             continue
+        values = ready[mask, alive]
         for j in range(n):
             if mask >> j & 1 or (need[j] & ~mask):
                 continue
-            v = viable[j]
-            reach = ready[mask, alive][:, None] + tt[np.ix_(alive, v)]
-            arg = reach.argmin(axis=0)
-            launch_time = reach[arg, np.arange(v.size)]
-            served = launch_time + ft[j, v] + tau
+            sortie = data.get(j)
+            v = sortie[0]
             new = mask | 1 << j
             if new == full:
-                i_pos = int(served.argmin())
+                prev_pos, served, i_pos, k_pos = _sortie_step(
+                    tt, tau, values, alive, sortie, final=True
+                )
                 if served[i_pos] < best[0]:
-                    recovery = (
-                        np.maximum(served[i_pos] + ft[j, v], launch_time[i_pos] + tt[v[i_pos], v])
-                        + tau
-                    )
-                    recovery[~pair_ok[j][i_pos]] = np.inf
-                    k_pos = int(recovery.argmin())
                     best = (
                         float(served[i_pos]),
                         j,
                         int(v[i_pos]),
                         int(v[k_pos]),
-                        int(alive[arg[i_pos]]),
+                        int(alive[prev_pos[i_pos]]),
                     )
                 continue
-            recovery = (
-                np.maximum(
-                    served[:, None] + ft[j, v][None, :], launch_time[:, None] + tt[np.ix_(v, v)]
-                )
-                + tau
-            )
-            recovery[~pair_ok[j]] = np.inf
-            land_arg = recovery.argmin(axis=0)
-            value = recovery[land_arg, np.arange(v.size)]
+            prev_pos, _, launch_pos, value = _sortie_step(tt, tau, values, alive, sortie)
             better = value < ready[new, v]
             if better.any():
                 k = v[better]
                 ready[new, k] = value[better]
                 back_customer[new, k] = j
-                back_launch[new, k] = v[land_arg[better]]
-                back_prev[new, k] = alive[arg[land_arg[better]]]
+                back_launch[new, k] = v[launch_pos[better]]
+                back_prev[new, k] = alive[prev_pos[launch_pos[better]]]
     makespan, j, i, k, prev = best
+    if j < 0:
+        raise SolverError("optimal_plan: no complete plan found (no customers?)")
     order, launch, landing = [j], [i], [k]
     mask = full & ~(1 << j)
     while mask:
@@ -321,14 +392,16 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
         prev = int(back_prev[mask, prev])
         mask &= ~(1 << j)
     plan = Plan(tuple(order[::-1]), tuple(launch[::-1]), tuple(landing[::-1]))
+    objective = _scored(instance, plan, makespan, "optimal_plan")
     return Solution(
-        objective=makespan,
+        objective=objective,
         status=OPTIMAL,
-        bound=makespan,
+        bound=objective,
         runtime=time.perf_counter() - start,
         method="subset-dp",
         plan=plan,
         order=list(plan.order),
+        info={"dp_objective": makespan},
     )
 
 

@@ -20,17 +20,24 @@ Measures per (instance, ratio, method): the makespan f (5.1) scored by
 from the sets S_r as printed (not a proven bound); the run time; and for n <=
 ``exact_max_n`` the optimum f_o and the gap f / f_o − 1.
 
-Rows are appended to ``out_dir/delivery_<setup>.csv`` as they finish; a re-run skips
-the (instance, ratio, method) rows already there (resumable).
+Rows are appended to ``out_dir/delivery_<setup>.csv`` as the tasks finish (in
+finishing order, one task's rows in one fsync'd write, each ending with ``complete``
+= 1) through :class:`taopt.studyio.ResultsStore`. The settings that change the numbers
+(setup, seed, v_d / v_t, exact_max_n, the MILP time limit, method_options) are kept in
+``out_dir/delivery_<setup>.config.json``; a re-run with other settings is refused with
+an error naming them. A re-run computes only the (instance, ratio, method) rows that
+are missing; rows of other methods, ratios or instances stay in the file; torn lines
+left by a crash are dropped and recomputed.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +48,7 @@ from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
+from taopt.studyio import ResultsStore, normalize_key
 
 L0 = 1000.0
 GRID_K = 11
@@ -70,6 +78,7 @@ COLUMNS = [
     "runtime",
     "tstar_cost",
 ]
+KEY = ["instance", "ratio", "method"]  # a row's identity in the resumable CSV
 
 
 def study_instance(
@@ -180,10 +189,6 @@ def _task(args: tuple) -> list[dict[str, Any]]:
     return rows
 
 
-def _key(row: Any) -> tuple[int, str, str]:
-    return (int(row["instance"]), f"{float(row['ratio']):.6g}", str(row["method"]))
-
-
 def delivery_study(
     setup: str = "dag40",
     instances: int = 10,
@@ -215,7 +220,8 @@ def delivery_study(
     seed : int
         Instances depend on (seed, index); randomised methods get seed·10007 + index.
     out_dir : path, optional
-        Folder of the resumable CSV ``delivery_<setup>.csv``; None keeps results in memory.
+        Folder of the resumable CSV ``delivery_<setup>.csv`` and its settings
+        ``delivery_<setup>.config.json``; None keeps results in memory.
     jobs : int
         Worker processes (one task = one instance at one ratio).
     progress : bool
@@ -229,56 +235,80 @@ def delivery_study(
 
     Returns
     -------
-    pandas.DataFrame with columns :data:`COLUMNS` (finished rows from earlier runs
-    included), sorted by instance, ratio, method.
+    pandas.DataFrame with columns :data:`COLUMNS`: the rows of the requested instances,
+    ratios and methods (those finished by earlier runs included), sorted by instance,
+    ratio, method.
+
+    Raises
+    ------
+    InstanceError
+        Unknown setup, no methods, or ``out_dir`` holds results of this setup computed
+        with other settings (the message names the keys).
     """
     if setup not in SETUPS:
         raise InstanceError(f"unknown setup {setup!r}; choose from {sorted(SETUPS)}")
-    methods = list(methods)
+    methods = list(dict.fromkeys(methods))
+    if not methods:
+        raise InstanceError("no methods given")
+    ratios = [float(r) for r in ratios]
+    instances = int(instances)
+    if instances < 0 or int(jobs) < 1:
+        raise InstanceError(f"need instances >= 0 and jobs >= 1; got {instances}, {jobs}")
     options = dict(method_options or {})
-    csv_path = None
-    done: set[tuple[int, str, str]] = set()
-    old = pd.DataFrame(columns=COLUMNS)
+    # everything that changes a row; instances, ratios and methods are the rows' key instead
+    settings = {
+        "setup": setup,
+        "seed": int(seed),
+        "vd_ratio": float(SETUPS[setup]["vd_ratio"] if vd_ratio is None else vd_ratio),
+        "exact_max_n": int(exact_max_n),
+        "exact_time_limit": EXACT_TIME_LIMIT,
+        "method_options": options,
+    }
+    store = None
+    done: set[tuple[Any, ...]] = set()
     if out_dir is not None:
-        Path(out_dir).mkdir(parents=True, exist_ok=True)
-        csv_path = Path(out_dir) / f"delivery_{setup}.csv"
-        if csv_path.exists() and csv_path.stat().st_size > 0:
-            old = pd.read_csv(csv_path)
-            done = {_key(row) for _, row in old.iterrows()}
+        store = ResultsStore(
+            out_dir,
+            f"delivery_{setup}.csv",
+            COLUMNS,
+            KEY,
+            settings,
+            config=f"delivery_{setup}.config.json",
+        )
+        done = store.done_keys()
     tasks = []
     for index in range(instances):
         for ratio in ratios:
-            pending = [m for m in methods if (index, f"{float(ratio):.6g}", m) not in done]
+            pending = [m for m in methods if normalize_key((index, ratio, m)) not in done]
             if pending:
-                tasks.append(
-                    (setup, index, float(ratio), seed, vd_ratio, pending, exact_max_n, options)
-                )
+                tasks.append((setup, index, ratio, seed, vd_ratio, pending, exact_max_n, options))
     new_rows: list[dict[str, Any]] = []
 
     def record(rows: list[dict[str, Any]]) -> None:
         new_rows.extend(rows)
-        if csv_path is not None:
-            frame = pd.DataFrame(rows, columns=COLUMNS)
-            header = not csv_path.exists() or csv_path.stat().st_size == 0
-            frame.to_csv(csv_path, mode="a", header=header, index=False)
+        if store is not None:
+            store.append(rows)  # one task's rows in one write, as soon as it finishes
 
     from tqdm.auto import tqdm
 
     bar = tqdm(total=len(tasks), disable=not progress, desc=f"delivery {setup}", unit="task")
     try:
-        if jobs <= 1:
+        if int(jobs) == 1 or len(tasks) <= 1:
             for task in tasks:
                 record(_task(task))
                 bar.update()
         else:
             with ProcessPoolExecutor(max_workers=int(jobs)) as pool:
-                for rows in pool.map(_task, tasks):
-                    record(rows)
+                futures = [pool.submit(_task, task) for task in tasks]
+                for future in as_completed(futures):  # write in finishing order
+                    record(future.result())
                     bar.update()
     finally:
         bar.close()
-    frames = [f for f in (old, pd.DataFrame(new_rows, columns=COLUMNS)) if len(f)]
-    result = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=COLUMNS)
+    result = store.read() if store is not None else pd.DataFrame(new_rows, columns=COLUMNS)
+    wanted = {normalize_key(k) for k in itertools.product(range(instances), ratios, methods)}
+    keys = zip(result["instance"], result["ratio"], result["method"], strict=True)
+    result = result.loc[np.array([normalize_key(k) in wanted for k in keys], dtype=bool)]
     return result.sort_values(["instance", "ratio", "method"], ignore_index=True)
 
 

@@ -161,7 +161,11 @@ def travel_time_matrix(
         from taopt.navigation.shooting import shooting_path
 
         for row, (i, j) in enumerate(_progress(pairs, progress)):
-            path = shooting_path(field, pts[i], pts[j], speed)
+            try:
+                path = shooting_path(field, pts[i], pts[j], speed)
+            except ConvergenceError:
+                results[row] = (np.nan, 0.0, 0.0)  # retried below by collocation
+                continue
             results[row] = (path.time, 1.0, path.iterations)
     else:
         jobs = default_jobs() if jobs is None else max(1, int(jobs))

@@ -26,6 +26,7 @@ from typing import Any
 import networkx as nx
 import numpy as np
 
+from taopt.arborescence import min_arborescence
 from taopt.errors import InstanceError
 from taopt.routing.problem import AssignmentProblem
 
@@ -151,72 +152,6 @@ def arborescence_graph(problem: AssignmentProblem) -> nx.DiGraph:
     return graph
 
 
-def min_arborescence_value(weight: np.ndarray, root: int) -> float:
-    """Weight of a minimum spanning arborescence of a dense digraph (Chu–Liu/Edmonds).
-
-    Parameters
-    ----------
-    weight : (V, V) array
-        ``weight[u, v]`` the cost of edge u -> v; ``inf`` where there is no edge.
-        The diagonal is ignored.
-    root : int
-
-    Returns
-    -------
-    float
-        ``inf`` if some vertex cannot be reached from ``root``.
-
-    Notes
-    -----
-    Dense contraction form: each round takes every vertex's cheapest incoming
-    edge, stops if they form no cycle, else contracts each cycle, with edge
-    weights into a cycle vertex v reduced by v's cheapest incoming weight.
-    At most V rounds of O(V^2) numpy work. Cross-checked against networkx's
-    ``minimum_spanning_arborescence`` in the tests.
-    """
-    weight = np.array(weight, dtype=float)
-    np.fill_diagonal(weight, np.inf)
-    total = 0.0
-    while True:
-        size = weight.shape[0]
-        weight[:, root] = np.inf
-        pre = np.argmin(weight, axis=0)
-        cheapest = weight[pre, np.arange(size)]
-        cheapest[root] = 0.0
-        if not np.all(np.isfinite(cheapest)):
-            return float("inf")
-        total += float(cheapest.sum())
-        # Find the cycles of the chosen in-edges (every non-root vertex has one).
-        label = np.full(size, -1)
-        seen_at = np.full(size, -1)
-        groups = 0
-        for start in range(size):
-            v = start
-            while v != root and seen_at[v] == -1 and label[v] == -1:
-                seen_at[v] = start
-                v = int(pre[v])
-            if v != root and label[v] == -1 and seen_at[v] == start:
-                u = v  # v lies on a new cycle: label it
-                while True:
-                    label[u] = groups
-                    u = int(pre[u])
-                    if u == v:
-                        break
-                groups += 1
-        if groups == 0:
-            return total
-        for v in range(size):
-            if label[v] == -1:
-                label[v] = groups
-                groups += 1
-        reduced = weight - cheapest[None, :]
-        contracted = np.full((groups, groups), np.inf)
-        np.minimum.at(contracted, (label[:, None], label[None, :]), reduced)
-        np.fill_diagonal(contracted, np.inf)
-        weight = contracted
-        root = int(label[root])
-
-
 def arborescence_bound(problem: AssignmentProblem, method: str = "dense") -> float:
     """Valid lower bound: minimum-cost spanning arborescence with a super-root.
 
@@ -231,7 +166,7 @@ def arborescence_bound(problem: AssignmentProblem, method: str = "dense") -> flo
     ----------
     problem : AssignmentProblem
     method : {"dense", "networkx"}
-        "dense" (default): :func:`min_arborescence_value` on the graph with
+        "dense" (default): :func:`taopt.arborescence.min_arborescence` on the graph with
         the vehicles merged into the super-root (the root's edge to target k
         costs ``min_j t(p_j, k)``; the same optimum, since root -> vehicle
         edges cost 0 and nothing else enters a vehicle). "networkx":
@@ -258,7 +193,7 @@ def arborescence_bound(problem: AssignmentProblem, method: str = "dense") -> flo
     weight = np.full((n + 1, n + 1), np.inf)
     weight[:n, :n] = problem.cost[:n, :n]
     weight[n, :n] = problem.cost[n:, :n].min(axis=0)
-    return min_arborescence_value(weight, root=n)
+    return min_arborescence(weight, root=n)
 
 
 def f_da(problem: AssignmentProblem, tree: str = "thesis") -> float:
@@ -325,7 +260,6 @@ __all__ = [
     "mcga_tree",
     "thesis_mcga",
     "arborescence_bound",
-    "min_arborescence_value",
     "arborescence_graph",
     "f_da",
     "lp_bound",

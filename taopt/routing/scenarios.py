@@ -27,7 +27,7 @@ import numpy as np
 
 from taopt.errors import InstanceError
 from taopt.fields import Field, field_from_dict, thesis_field
-from taopt.instance import Instance
+from taopt.instance import Instance, save_json
 from taopt.routing.problem import AssignmentProblem
 
 THESIS_SIDE = 1000.0
@@ -139,6 +139,6 @@ def drift_scenario(
             tmp = npy.with_name(npy.stem + ".tmp.npy")
             np.save(tmp, matrix, allow_pickle=False)
             os.replace(tmp, npy)
-            meta.write_text(json.dumps(description, sort_keys=True))
+            save_json(description, meta)  # atomic, written after the .npy it describes
     problem = AssignmentProblem(matrix, n_targets=n, name=f"n{n}m{m}-seed{seed}")
     return Scenario(instance=instance, problem=problem, seed=int(seed))

@@ -2,9 +2,15 @@
 
 For each random scenario (§2.5 setup, :mod:`taopt.routing.scenarios`) every
 method is run and one row per method is appended to ``<out>/results.csv`` as
-soon as the scenario finishes. A re-run skips finished scenarios, so an
-interrupted study resumes without losing anything; the same seed gives the
-same table.
+soon as the scenario finishes (a scenario's rows in one write), through
+:class:`taopt.studyio.ResultsStore`: the settings that change the numbers (n, m,
+seed, field, time_limit, method_options) are kept in ``<out>/config.json`` and a
+re-run with other settings is refused; torn lines are dropped. A re-run computes
+only the (scenario, method) rows that are missing: a scenario that lacks some
+requested methods is re-run for those methods only (its matrix comes from the
+cache, its heuristics use the same seed, so the rows are those of a full run).
+Rows of methods not asked for now are kept on disk. So an interrupted study
+resumes without losing anything, and the same seed gives the same table.
 
 Each row also carries, per scenario, the three reference values:
 
@@ -30,7 +36,6 @@ Example
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from collections.abc import Sequence
@@ -43,6 +48,7 @@ import numpy as np
 import pandas as pd
 
 from taopt.errors import InstanceError
+from taopt.studyio import ResultsStore
 
 METHODS = ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact")
 COLUMNS = [
@@ -147,40 +153,6 @@ def run_scenario(
     return rows
 
 
-def _read_rows(path: Path, methods: Sequence[str]) -> pd.DataFrame:
-    """Rows already on disk, keeping only scenarios with every method complete."""
-    if not path.exists() or path.stat().st_size == 0:
-        return pd.DataFrame(columns=COLUMNS)
-    try:
-        df = pd.read_csv(path, on_bad_lines="skip")
-    except pd.errors.EmptyDataError:
-        return pd.DataFrame(columns=COLUMNS)
-    if list(df.columns) != COLUMNS:
-        raise InstanceError(
-            f"{path}: unexpected columns {list(df.columns)}; not a drift study file"
-        )
-    df = df[df["complete"] == 1]
-    df = df.drop_duplicates(subset=["scenario", "method"], keep="last")
-    counts = df[df["method"].isin(methods)].groupby("scenario")["method"].nunique()
-    done = counts[counts == len(methods)].index
-    return df[df["scenario"].isin(done)].reset_index(drop=True)
-
-
-def _append(path: Path, rows: list[dict[str, Any]]) -> None:
-    """Append one scenario's rows with a single write (then fsync)."""
-    text = pd.DataFrame(rows, columns=COLUMNS).to_csv(header=False, index=False)
-    with open(path, "a") as handle:
-        handle.write(text)
-        handle.flush()
-        os.fsync(handle.fileno())
-
-
-def _rewrite(path: Path, df: pd.DataFrame) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    df.to_csv(tmp, index=False, columns=COLUMNS)
-    os.replace(tmp, path)
-
-
 def drift_study(
     n: int,
     m: int,
@@ -223,53 +195,52 @@ def drift_study(
     Returns
     -------
     pandas.DataFrame
-        One row per (scenario, method), columns :data:`COLUMNS`, sorted.
+        One row per (scenario, method) for the requested methods and the
+        scenarios ``0..scenarios-1`` that have all of them (rows finished by
+        earlier runs included), columns :data:`COLUMNS` without ``complete``,
+        sorted. ``optimum`` and ``exact_bound`` are filled from the scenario's
+        ``exact`` row whenever one is on disk.
 
     Raises
     ------
     InstanceError
-        Bad sizes or methods, or ``out_dir`` holds a study with other settings.
+        Bad sizes or methods, or ``out_dir`` holds a study with other settings
+        (the message names the differing keys).
     """
     methods = _parse_methods(methods)
     if int(n) < 1 or int(m) < 1 or int(scenarios) < 0:
         raise InstanceError(f"need n >= 1, m >= 1, scenarios >= 0; got {n}, {m}, {scenarios}")
     if int(jobs) < 1:
         raise InstanceError(f"jobs must be >= 1, got {jobs}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    scenarios = int(scenarios)
     field_description = field if isinstance(field, str) or field is None else field.to_dict()
-    config = {
+    # everything that changes a row; the methods and the number of scenarios are not here:
+    # they are the rows' key, so asking for other methods or more scenarios extends the file
+    settings = {
         "n": int(n),
         "m": int(m),
         "seed": int(seed),
         "field": field_description,
-        "time_limit": time_limit,
+        "time_limit": None if time_limit is None else float(time_limit),
         "method_options": method_options or {},
     }
-    config_path = out / CONFIG
-    if config_path.exists():
-        previous = json.loads(config_path.read_text())
-        for key in ("n", "m", "seed", "field"):
-            if previous.get(key) != config[key]:
-                raise InstanceError(
-                    f"{out} holds a study with {key}={previous.get(key)!r}, not {config[key]!r}; "
-                    "use another out_dir"
-                )
-    config_path.write_text(json.dumps(config, indent=1))
-
-    results_path = out / RESULTS
-    done = _read_rows(results_path, methods)
-    _rewrite(results_path, done)  # drop partial scenarios and torn lines before appending
-    finished = set(int(s) for s in done["scenario"].unique())
-    todo = [k for k in range(int(scenarios)) if k not in finished]
-    cache = str(out / "matrices")
-    arguments = [(n, m, k, seed, methods, cache, time_limit, method_options, field) for k in todo]
+    store = ResultsStore(out_dir, RESULTS, COLUMNS, ["scenario", "method"], settings, CONFIG)
+    done = store.done_keys()
+    todo = []  # (scenario, the requested methods it still lacks)
+    for k in range(scenarios):
+        missing = [name for name in methods if store.key(k, name) not in done]
+        if missing:
+            todo.append((k, missing))
+    cache = str(Path(out_dir) / "matrices")
+    arguments = [
+        (n, m, k, seed, missing, cache, time_limit, method_options, field) for k, missing in todo
+    ]
 
     from tqdm import tqdm
 
     bar = tqdm(
-        total=int(scenarios),
-        initial=len(finished & set(range(int(scenarios)))),
+        total=scenarios,
+        initial=scenarios - len(todo),
         disable=not progress,
         desc=f"drift n{n}m{m}",
         unit="scenario",
@@ -277,21 +248,38 @@ def drift_study(
     try:
         if jobs == 1 or len(todo) <= 1:
             for args in arguments:
-                _append(results_path, run_scenario(*args))
+                store.append(run_scenario(*args))  # a scenario's rows in one write
                 bar.update(1)
         else:
             with ProcessPoolExecutor(max_workers=int(jobs)) as pool:
                 futures = [pool.submit(run_scenario, *args) for args in arguments]
                 for future in as_completed(futures):
-                    _append(results_path, future.result())
+                    store.append(future.result())
                     bar.update(1)
     finally:
         bar.close()
-    df = _read_rows(results_path, methods)
-    df = df[df["scenario"] < int(scenarios)]
+    return _study_table(store.read(), methods, scenarios)
+
+
+def _study_table(df: pd.DataFrame, methods: Sequence[str], scenarios: int) -> pd.DataFrame:
+    """The rows of scenarios ``0..scenarios-1`` that have every method in ``methods``.
+
+    ``optimum`` and ``exact_bound`` are per-scenario references: they are taken
+    from the scenario's ``exact`` row whenever one is on disk, so rows written in
+    separate runs (a method added later) carry the same values.
+    """
+    df = df.copy()
+    exact = df[df["method"] == "exact"].set_index("scenario")
+    if len(exact):
+        has = df["scenario"].isin(exact.index)
+        for column in ("optimum", "exact_bound"):
+            df.loc[has, column] = df.loc[has, "scenario"].map(exact[column])
+    df = df[df["method"].isin(methods) & (df["scenario"] < scenarios)]
+    counts = df.groupby("scenario")["method"].nunique()
+    df = df[df["scenario"].isin(counts[counts == len(methods)].index)]
     order = {name: i for i, name in enumerate(METHODS)}
     df = df.assign(_order=df["method"].map(order)).sort_values(["scenario", "_order"])
-    return df.drop(columns=["_order", "complete"]).reset_index(drop=True)
+    return df.drop(columns=["_order"]).reset_index(drop=True)
 
 
 def _with_ratios(df: pd.DataFrame) -> pd.DataFrame:
