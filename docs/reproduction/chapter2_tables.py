@@ -1,6 +1,7 @@
 """Markdown tables of docs/reproduction/chapter2.md from `taopt study drift` output folders.
 
 Usage: python docs/reproduction/chapter2_tables.py RUNS/n50m10 RUNS/n100m10 ...
+(study folders, or their results CSVs such as docs/reproduction/data/chapter2/n50m10.csv)
 Prints Table 2.1 (q = f / f_a, thesis values in brackets), the true gaps f / f_o, Table 2.2
 (mean seconds), and per row: exact solves proven optimal, scenarios where the thesis's f_a
 exceeds the optimum (Lemma 2.4 fails), scenarios where f_MC > f_EVM (Theorem 2.7 fails), and
@@ -35,7 +36,8 @@ METHODS = ["VN", "VM", "EVN", "EVM", "MC", "GA", "exact"]
 def tables(folders: list[str]) -> str:
     q_rows, true_rows, time_rows, check_rows = [], [], [], []
     for folder in folders:
-        df = pd.read_csv(Path(folder) / "results.csv")
+        path = Path(folder)
+        df = pd.read_csv(path / "results.csv" if path.is_dir() else path)
         if "complete" in df:
             df = df[df["complete"] == 1]
         n, m = int(df.n.iloc[0]), int(df.m.iloc[0])
@@ -45,7 +47,7 @@ def tables(folders: list[str]) -> str:
         k = int(s["scenarios"].min())
         tq, tt = THESIS_Q.get((n, m)), THESIS_T.get((n, m))
 
-        def cell(method, column, fmt, thesis=None, i=None):
+        def cell(method, column, fmt, thesis=None, i=None, s=s):
             text = format(s.loc[method, column], fmt) if method in s.index else "–"
             return text + (f" ({thesis[i]:{fmt}})" if thesis and i is not None and i < 6 else "")
 
