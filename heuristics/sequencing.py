@@ -37,6 +37,7 @@ from typing import Any
 import networkx as nx
 import numpy as np
 
+from taopt.delivery.dags import cycle_path
 from taopt.errors import InstanceError
 from taopt.heuristics.registry import register
 from taopt.result import Solution
@@ -101,12 +102,8 @@ def _validate(
             continue  # always satisfied
         graph.add_edge(before, after)
         pairs.append((before, after))
-    try:
-        cycle = nx.find_cycle(graph)
-    except nx.NetworkXNoCycle:
-        cycle = None
-    if cycle:
-        names = " -> ".join(str(u) for u, _ in cycle) + f" -> {cycle[0][0]}"
+    names = cycle_path(graph)
+    if names:
         raise InstanceError(f"precedence cycle {names}")
     keep = np.ones(size, dtype=bool)
     keep[int(start)] = False

@@ -131,4 +131,17 @@ def residential_network(
     return np.array(customers), stops, graph
 
 
-__all__ = ["layered_dag", "paired_precedences", "residential_network"]
+def cycle_path(graph: nx.DiGraph) -> str | None:
+    """A directed cycle of ``graph`` written "a -> b -> a", or None if it is acyclic.
+
+    The one precedence-cycle check (5.7 has no feasible order on a cycle), shared by
+    :class:`taopt.delivery.instance.DeliveryInstance` and the sequencing heuristics.
+    """
+    try:
+        cycle = nx.find_cycle(graph)
+    except nx.NetworkXNoCycle:
+        return None
+    return " -> ".join(str(u) for u, _ in cycle) + f" -> {cycle[0][0]}"
+
+
+__all__ = ["cycle_path", "layered_dag", "paired_precedences", "residential_network"]

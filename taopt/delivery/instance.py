@@ -26,6 +26,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, shortest_path
 
+from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import check_schema, load_json, save_json
 
@@ -233,12 +234,8 @@ class DeliveryInstance:
         precedence_graph = nx.DiGraph()
         precedence_graph.add_nodes_from(range(n))
         precedence_graph.add_edges_from(pairs)
-        try:
-            cycle = nx.find_cycle(precedence_graph)
-        except nx.NetworkXNoCycle:
-            cycle = None
-        if cycle:
-            path = " -> ".join(str(u) for u, _ in cycle) + f" -> {cycle[0][0]}"
+        path = cycle_path(precedence_graph)
+        if path:
             raise InstanceError(
                 f"precedence cycle {path}: no order can serve these customers (5.7)"
             )
