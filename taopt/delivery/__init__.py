@@ -13,6 +13,30 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from taopt.delivery.bounds import arborescence_bound
+from taopt.delivery.evaluate import evaluate_plan
+from taopt.delivery.instance import DeliveryInstance, Plan
+from taopt.delivery.sop import SopProblem, evaluate_order, sop_arborescence_bound
+from taopt.registry import register_family
+from taopt.result import Order
+
+register_family(
+    DeliveryInstance,
+    kind="delivery_instance",
+    payload=Plan,
+    title="precedence-constrained truck-drone delivery (chapter 5)",
+    evaluate=evaluate_plan,
+    bounds={"arborescence": arborescence_bound},
+)
+register_family(
+    SopProblem,
+    kind="sop_problem",
+    payload=Order,
+    title="sequential ordering, TSPLIB SOP (chapter 5 certification)",
+    evaluate=evaluate_order,
+    bounds={"arborescence": sop_arborescence_bound},
+)
+
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 
 
@@ -51,4 +75,11 @@ def example_instance(L: float = 250.0) -> Any:
     return inst if L == inst.flight_range else inst.replace(flight_range=float(L))
 
 
-__all__ = ["example_instance", "build_example_instance", "EXAMPLE_PATH"]
+__all__ = [
+    "DeliveryInstance",
+    "Plan",
+    "SopProblem",
+    "example_instance",
+    "build_example_instance",
+    "EXAMPLE_PATH",
+]
