@@ -19,6 +19,7 @@ import numpy as np
 from taopt.errors import InstanceError
 from taopt.fields import Field
 from taopt.navigation.collocation import DEFAULT_DEGREE, DEFAULT_INTERVALS, collocation_path
+from taopt.navigation.grid import grid_travel_time_matrix
 from taopt.navigation.matrix import travel_time_matrix
 from taopt.navigation.path import Path, as_field, as_point, as_speed, check_drift
 from taopt.navigation.shooting import navigation_law, shooting_path
@@ -96,6 +97,7 @@ def min_time_path(
 __all__ = [
     "min_time_path",
     "travel_time_matrix",
+    "grid_travel_time_matrix",
     "Path",
     "uniform_travel_times",
     "navigation_law",
