@@ -4,6 +4,7 @@
 * :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7).
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
+* :func:`solve_capability` — chapter 3, (3.1)–(3.3) as printed, corrected per class, joint.
 
 Importing this package registers the exact methods in :mod:`taopt.registry`
 (``taopt.solve(problem, "exact")``). They never run a heuristic themselves: the registry's
@@ -15,8 +16,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
+from taopt.models.capability import solve_capability, solve_exact, solve_joint, solve_printed
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
@@ -48,5 +51,18 @@ register_method(
     default=False,
 )(solve_delivery)
 register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
+# chapter 3: the corrected model is "exact"; the joint MILP and the printed relaxation on request
+register_method(CapabilityProblem, "exact", category="exact", warm_start=("DTAA",))(solve_exact)
+register_method(CapabilityProblem, "joint", category="exact", warm_start=("DTAA",), default=False)(
+    solve_joint
+)
+register_method(CapabilityProblem, "printed", category="relaxation", default=False)(solve_printed)
 
-__all__ = ["solve_routing", "solve_delivery", "solve_sop", "solve_sop_problem", "lp_bound"]
+__all__ = [
+    "solve_capability",
+    "solve_routing",
+    "solve_delivery",
+    "solve_sop",
+    "solve_sop_problem",
+    "lp_bound",
+]

@@ -1,0 +1,823 @@
+"""Exact models of chapter 3: (3.1)–(3.3) as printed, corrected per class, and joint.
+
+Sets and data (thesis §3.2.1): targets ``T = {0..n-1}``, vehicle start points
+``V = {n..n+m-1}`` (vehicle k starts at ``n + k``), vehicle k has capability ``a_k``, the
+class ``R_q`` holds the vehicles of capability q, ``y_jq = 1`` when target j demands q,
+``T_q`` the targets demanding q; ``t_q(i, j)`` the travel time of class q's vehicles
+(one matrix, or one per capability).
+
+Three formulations (``solve_capability(problem, formulation=...)``):
+
+* ``"printed"`` — (3.1)–(3.3) literally. Binary ``σ_ijk`` for ``i ∈ T ∪ V``, ``j ∈ T``,
+  ``k ∈ R`` (``i ≠ j``, as chapter 2's ``σ_ii = 0``; arcs that cannot be travelled,
+  ``t = inf``, are left out, never given a big number):
+
+  - (3.1) ``min Σ t(i, j) σ_ijk``;
+  - (3.2) ``Σ_{i ∈ T∪V, k ∈ R_q} σ_ijk = y_jq`` for every target j and class q (when
+    ``y_jq = 0`` it fixes those σ to 0, so they are not created);
+  - (3.3) ``Σ_{j ∈ T, k ∈ R_q} σ_ijk <= 1`` for every point i and class q.
+
+  Nothing ties σ to routes: there is no subtour elimination (a class can serve a cluster
+  of targets by a cycle among them), no flow conservation (a vehicle may leave a target it
+  never entered, or another vehicle's start, or a target its class does not visit), and
+  nothing keeps the label k along a route (a route may "change vehicle" mid-way). Every
+  feasible routing satisfies (3.2)–(3.3), so the printed optimum is a **lower bound** on
+  the true optimum; :func:`decode_printed` shows what went wrong in its arcs.
+
+* ``"corrected"`` — the problem splits exactly by class (§3.4.2, §3.6: classes share no
+  vehicle and no (target, capability) demand, and (3.1) is the sum of the classes' totals),
+  so the optimum is the sum of one chapter 2 model (2.2)–(2.5) per class on ``T_q`` and
+  ``R_q``, each solved and certified by :func:`taopt.models.solve_routing`. In the
+  printed notation, class q's block is (3.2) restricted to ``i ∈ T_q ∪ V_q`` (the class's
+  own targets and starts), (3.3), and (2.5) ``Σ_{i,j∈S} σ_ijq <= |S| - 1`` for every
+  ``S ⊆ T_q``; the label k is dropped (a route belongs to the vehicle at its start). This
+  is what ``taopt.solve(problem, "exact")`` runs.
+
+* ``"joint"`` — the same corrected model written as ONE MILP over all classes (for
+  teaching): binary ``σ_ijq`` on class q's arcs, (3.1), (3.2) per (j, q), (3.3) per (i, q),
+  and (2.5) per class, by DFJ cuts added in a loop (``sec="dfj"``) or by MTZ order
+  variables (``sec="mtz"``).
+
+Example
+-------
+>>> import numpy as np
+>>> from taopt.capability import CapabilityProblem
+>>> x = np.array([10.0, 11.0, 0.0])                  # targets at 10, 11; one vehicle at 0
+>>> p = CapabilityProblem(abs(x[:, None] - x[None, :]), 2, ["a"], [{"a"}, {"a"}])
+>>> solve_capability(p, "printed").objective        # the 2-cycle 10 <-> 11 costs 2
+2.0
+>>> solve_capability(p, "corrected").objective      # 0 -> 10 -> 11
+11.0
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+from typing import Any
+
+import cvxpy as cp
+import networkx as nx
+import numpy as np
+import scipy.sparse as sp
+
+from taopt.capability.problem import CapabilityProblem, evaluate_capability
+from taopt.errors import InstanceError, SolverError
+from taopt.models.highs import certify, solve_highs
+from taopt.models.routing import solve_routing
+from taopt.result import OPTIMAL, RELAXATION, Routes, Solution
+
+FORMULATIONS = ("printed", "corrected", "joint")
+JOINT_SUBTOUR_ELIMINATIONS = ("dfj", "mtz")
+#: The printed model is meant for small instances (teaching); refuse to build beyond this.
+PRINTED_MAX_VARIABLES = 400_000
+
+__all__ = [
+    "FORMULATIONS",
+    "CapabilityModel",
+    "PrintedArcs",
+    "build_printed",
+    "build_joint",
+    "decode_printed",
+    "describe",
+    "solve_capability",
+    "solve_exact",
+    "class_incumbents",
+]
+
+
+@dataclass
+class CapabilityModel:
+    """A built chapter 3 model: the cvxpy problem and the meaning of each σ.
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+    arc_use : cvxpy.Variable
+        One binary per arc.
+    tails, heads : (A,) int arrays
+        Arc ``a`` runs from point ``tails[a]`` to target ``heads[a]``.
+    labels : (A,) int array
+        "printed": the vehicle k of ``σ_ijk``; "joint": the class index q (position in
+        ``problem.capabilities``).
+    formulation : str
+    order : cvxpy.Variable or None
+        MTZ positions (joint, ``sec="mtz"``).
+    cuts : list of (q, subset)
+        DFJ cuts present (joint, ``sec="dfj"``).
+    """
+
+    problem: cp.Problem
+    arc_use: cp.Variable
+    tails: np.ndarray
+    heads: np.ndarray
+    labels: np.ndarray
+    formulation: str
+    order: cp.Variable | None = None
+    cuts: list[tuple[int, tuple[int, ...]]] = field(default_factory=list)
+
+
+def _class_index(problem: CapabilityProblem) -> dict[Hashable, int]:
+    return {cap: q for q, cap in enumerate(problem.capabilities)}
+
+
+def _check(problem: Any) -> None:
+    if not isinstance(problem, CapabilityProblem):
+        raise InstanceError(
+            f"expected a CapabilityProblem, got {type(problem).__name__}; chapter 2 problems "
+            "are solved by taopt.models.solve_routing"
+        )
+
+
+# ----------------------------------------------------------------------------- printed
+def _printed_arcs(problem: CapabilityProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    n, m = problem.n, problem.m
+    size = n + m
+    tails, heads, vehicles = [], [], []
+    for k, cap in enumerate(problem.vehicle_capability):
+        cost = problem.cost_for(cap)
+        demanded = np.array([cap in problem.demands[j] for j in range(n)])
+        i, j = np.nonzero((~np.eye(size, n, dtype=bool)) & demanded[None, :])
+        keep = np.isfinite(cost[i, j])
+        tails.append(i[keep])
+        heads.append(j[keep])
+        vehicles.append(np.full(int(keep.sum()), k))
+    return np.concatenate(tails), np.concatenate(heads), np.concatenate(vehicles)
+
+
+def build_printed(problem: CapabilityProblem, relax: bool = False) -> CapabilityModel:
+    """Build (3.1)–(3.3) literally (see the module notes).
+
+    Parameters
+    ----------
+    problem : CapabilityProblem
+    relax : bool
+        ``0 <= σ <= 1`` instead of binary.
+
+    Returns
+    -------
+    CapabilityModel
+        ``labels`` are the vehicles k of ``σ_ijk``.
+
+    Raises
+    ------
+    InstanceError
+        More than :data:`PRINTED_MAX_VARIABLES` variables (the printed model has
+        ``(n + m - 1) n m`` of them at most; it is for small instances).
+    """
+    _check(problem)
+    n, m = problem.n, problem.m
+    size = n + m
+    tails, heads, vehicles = _printed_arcs(problem)
+    count = len(tails)
+    if count > PRINTED_MAX_VARIABLES:
+        raise InstanceError(
+            f"the printed model would have {count} variables (> {PRINTED_MAX_VARIABLES}); "
+            "it is meant for small instances"
+        )
+    index = _class_index(problem)
+    arc_class = np.array([index[problem.vehicle_capability[k]] for k in vehicles], dtype=int)
+    n_classes = len(problem.capabilities)
+    arcs = np.arange(count)
+    travel_time = np.array(
+        [
+            problem.cost_for(problem.vehicle_capability[k])[i, j]
+            for i, j, k in zip(tails, heads, vehicles, strict=True)
+        ]
+    )
+    sigma = (
+        cp.Variable(count, name="sigma_ijk", nonneg=True)
+        if relax
+        else cp.Variable(count, name="sigma_ijk", boolean=True)
+    )
+    # (3.2): one row per (j, q) with y_jq = 1 (rows with y_jq = 0 have no variable left).
+    demand_rows = {
+        (j, q): r
+        for r, (j, q) in enumerate(
+            (j, index[cap])
+            for j in range(n)
+            for cap in sorted(problem.demands[j], key=lambda c: index[c])
+        )
+    }
+    row = np.array([demand_rows[j, q] for j, q in zip(heads, arc_class, strict=True)])
+    into = sp.csr_matrix((np.ones(count), (row, arcs)), shape=(len(demand_rows), count))
+    # (3.3): one row per (i, q).
+    out_of = sp.csr_matrix(
+        (np.ones(count), (tails * n_classes + arc_class, arcs)), shape=(size * n_classes, count)
+    )
+    constraints = [
+        (into @ sigma == 1).set_label("(3.2) sum_{i, k in R_q} sigma_ijk = y_jq (y_jq = 1 rows)"),
+        (out_of @ sigma <= 1).set_label("(3.3) sum_{j, k in R_q} sigma_ijk <= 1 per point, class"),
+    ]
+    if relax:
+        constraints.append((sigma <= 1).set_label("0 <= sigma_ijk <= 1 (LP relaxation)"))
+    objective = cp.Minimize(travel_time @ sigma)  # (3.1)
+    return CapabilityModel(
+        problem=cp.Problem(objective, constraints),
+        arc_use=sigma,
+        tails=tails,
+        heads=heads,
+        labels=vehicles,
+        formulation="printed",
+    )
+
+
+@dataclass(frozen=True)
+class PrintedArcs:
+    """The arcs chosen by the printed model and what makes them not a routing.
+
+    Attributes
+    ----------
+    arcs : list of (i, j, k)
+        ``σ_ijk = 1``: "vehicle k travels from point i to target j".
+    subtours : list of (capability, [targets])
+        Cycles among targets in one class's arcs (no vehicle ever reaches them).
+    foreign_tails : list of (i, j, k)
+        Arcs leaving a point class ``a_k`` never visits: another class's start or a
+        target that does not demand ``a_k`` (no flow conservation).
+    vehicle_switches : list of (i, j, k, other)
+        Arcs whose label k differs from the vehicle ``other`` that is at i: the vehicle
+        whose start i is, or the vehicle that entered target i in the same class.
+    routes : Routes or None
+        When there are no subtours and no foreign tails, the arcs are routes from the
+        class starts (relabelled by the start's vehicle): the printed optimum is then
+        feasible, hence optimal.
+    """
+
+    arcs: list[tuple[int, int, int]]
+    subtours: list[tuple[Hashable, list[int]]]
+    foreign_tails: list[tuple[int, int, int]]
+    vehicle_switches: list[tuple[int, int, int, int]]
+    routes: Routes | None
+
+    @property
+    def is_routing(self) -> bool:
+        return self.routes is not None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "arcs": [list(a) for a in self.arcs],
+            "subtours": [[str(c), t] for c, t in self.subtours],
+            "foreign_tails": [list(a) for a in self.foreign_tails],
+            "vehicle_switches": [list(a) for a in self.vehicle_switches],
+        }
+
+
+def decode_printed(
+    problem: CapabilityProblem, model: CapabilityModel, values: np.ndarray | None = None
+) -> PrintedArcs:
+    """Read the printed model's arcs and name every way they fail to be routes."""
+    values = model.arc_use.value if values is None else values
+    if values is None:
+        raise SolverError("the printed model has no solution values to decode")
+    n = problem.n
+    used = np.flatnonzero(np.asarray(values) > 0.5)
+    arcs = [(int(model.tails[a]), int(model.heads[a]), int(model.labels[a])) for a in used]
+    subtours: list[tuple[Hashable, list[int]]] = []
+    foreign: list[tuple[int, int, int]] = []
+    switches: list[tuple[int, int, int, int]] = []
+    routes: list[list[int]] = [[] for _ in range(problem.m)]
+    clean = True
+    for cls in problem.classes:
+        cap = cls.capability
+        mine = [(i, j, k) for i, j, k in arcs if problem.vehicle_capability[k] == cap]
+        own = set(cls.targets) | {n + k for k in cls.vehicles}
+        entered_by = {j: k for _, j, k in mine}
+        successor = {}
+        for i, j, k in mine:
+            successor[i] = j
+            if i not in own:
+                foreign.append((i, j, k))
+            holder = i - n if i >= n else entered_by.get(i)
+            if holder is not None and holder != k:
+                switches.append((i, j, k, holder))
+        graph = nx.DiGraph(list(successor.items()))
+        for cycle in nx.simple_cycles(graph):
+            if all(c < n for c in cycle):
+                subtours.append((cap, sorted(cycle)))
+        if any(i not in own for i, _, _ in mine) or any(c for c_cap, c in subtours if c_cap == cap):
+            clean = False
+            continue
+        for k in cls.vehicles:
+            point, route = n + k, []
+            while point in successor:
+                point = successor[point]
+                route.append(point)
+            routes[k] = route
+    return PrintedArcs(
+        arcs=arcs,
+        subtours=subtours,
+        foreign_tails=foreign,
+        vehicle_switches=switches,
+        routes=Routes(routes) if clean else None,
+    )
+
+
+def _solve_printed(
+    problem: CapabilityProblem, time_limit: float | None, verbose: bool, start: float
+) -> Solution:
+    model = build_printed(problem)
+    run = solve_highs(model.problem, time_limit=time_limit, verbose=verbose)
+    if not run.has_point:
+        raise SolverError(f"HiGHS found no point of the printed model ({run.solver_status})")
+    decoded = decode_printed(problem, model)
+    value = float(run.objective)
+    bound = value if run.status == OPTIMAL else run.bound
+    info = {
+        "formulation": "printed",
+        "variables": len(model.tails),
+        "solver_status": run.solver_status,
+        "stopped_by": run.stopped_by,
+        **decoded.to_dict(),
+    }
+    if decoded.is_routing and run.status == OPTIMAL:
+        # the relaxation's optimum is a feasible routing: it is the true optimum
+        objective = evaluate_capability(problem, decoded.routes)
+        return _solution(objective, OPTIMAL, decoded.routes, objective, start, "printed", info)
+    return _solution(value, RELAXATION, None, bound, start, "printed", info)
+
+
+# --------------------------------------------------------------------------- corrected
+def class_incumbents(
+    problem: CapabilityProblem, incumbent: Any
+) -> dict[Hashable, list[list[int]] | None]:
+    """Restrict whole-problem routes (or a Solution carrying them) to each class's indexing."""
+    result: dict[Hashable, list[list[int]] | None] = {c.capability: None for c in problem.classes}
+    if incumbent is None:
+        return result
+    routes = getattr(incumbent, "solution", incumbent)
+    routes = Routes(routes).as_lists()
+    evaluate_capability(problem, routes)  # a bad incumbent is the caller's error, named
+    for cls in problem.classes:
+        if cls.problem is None:
+            continue
+        position = {t: p for p, t in enumerate(cls.targets)}
+        result[cls.capability] = [[position[t] for t in routes[k]] for k in cls.vehicles]
+    return result
+
+
+def _routing_takes_incumbent() -> bool:
+    return "incumbent" in inspect.signature(solve_routing).parameters
+
+
+def _solve_corrected(
+    problem: CapabilityProblem,
+    time_limit: float | None,
+    incumbent: Any,
+    sec: str,
+    mip_gap: float,
+    verbose: bool,
+    start: float,
+) -> Solution:
+    starts = class_incumbents(problem, incumbent)
+    class_routes: dict[Hashable, list[list[int]]] = {}
+    total = bound = 0.0
+    stopped_by = "optimal"
+    per_class = []
+    for cls in problem.classes:
+        if cls.problem is None:
+            per_class.append({"capability": str(cls.capability), "targets": 0})
+            continue
+        options: dict[str, Any] = {"sec": sec, "mip_gap": mip_gap, "verbose": verbose}
+        if time_limit is not None:
+            options["time_limit"] = max(time_limit - (time.perf_counter() - start), 0.01)
+        if starts[cls.capability] is not None and _routing_takes_incumbent():
+            options["incumbent"] = starts[cls.capability]
+        result = solve_routing(cls.problem, **options)
+        class_routes[cls.capability] = result.routes
+        total += result.objective
+        bound += result.bound if result.bound is not None else 0.0
+        if result.status != OPTIMAL and stopped_by == "optimal":
+            stopped_by = result.info.get("stopped_by", str(result.status))
+        per_class.append(
+            {
+                "capability": str(cls.capability),
+                "targets": len(cls.targets),
+                "vehicles": len(cls.vehicles),
+                "status": str(result.status),
+                "objective": result.objective,
+                "bound": result.bound,
+                "runtime": result.runtime,
+            }
+        )
+    routes = problem.join(class_routes)
+    objective = evaluate_capability(problem, routes)
+    bound = min(bound, objective)
+    status, stopped_by = certify(objective, bound, stopped_by)
+    info = {"formulation": "corrected", "sec": sec, "stopped_by": stopped_by, "classes": per_class}
+    return _solution(objective, status, Routes(routes), bound, start, "corrected", info)
+
+
+# ------------------------------------------------------------------------------- joint
+def _joint_arcs(problem: CapabilityProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    n = problem.n
+    tails, heads, classes = [], [], []
+    for q, cls in enumerate(problem.classes):
+        if cls.problem is None:
+            continue
+        points = list(cls.targets) + [n + k for k in cls.vehicles]
+        cost = problem.cost_for(cls.capability)
+        for i in points:
+            for j in cls.targets:
+                if i != j and math.isfinite(cost[i, j]):
+                    tails.append(i)
+                    heads.append(j)
+                    classes.append(q)
+    return np.array(tails, int), np.array(heads, int), np.array(classes, int)
+
+
+def build_joint(
+    problem: CapabilityProblem,
+    sec: str = "dfj",
+    cuts: list[tuple[int, tuple[int, ...]]] | None = None,
+    relax: bool = False,
+) -> CapabilityModel:
+    """Build the corrected model as one MILP over all classes (see the module notes).
+
+    Parameters
+    ----------
+    problem : CapabilityProblem
+    sec : {"dfj", "mtz"}
+        How (2.5) is written per class; for "dfj" only ``cuts`` are present.
+    cuts : list of (class index q, subset of targets), optional
+    relax : bool
+
+    Returns
+    -------
+    CapabilityModel
+        ``labels`` are class indices q.
+    """
+    _check(problem)
+    if sec not in JOINT_SUBTOUR_ELIMINATIONS:
+        raise InstanceError(f"sec must be one of {JOINT_SUBTOUR_ELIMINATIONS}, got {sec!r}")
+    n, m = problem.n, problem.m
+    size = n + m
+    n_classes = len(problem.capabilities)
+    tails, heads, classes = _joint_arcs(problem)
+    count = len(tails)
+    arcs = np.arange(count)
+    travel_time = np.array(
+        [
+            problem.cost_for(problem.capabilities[q])[i, j]
+            for i, j, q in zip(tails, heads, classes, strict=True)
+        ]
+    )
+    sigma = (
+        cp.Variable(count, name="sigma_ijq", nonneg=True)
+        if relax
+        else cp.Variable(count, name="sigma_ijq", boolean=True)
+    )
+    demand_keys = sorted({(int(j), int(q)) for j, q in zip(heads, classes, strict=True)})
+    demand_rows = {key: r for r, key in enumerate(demand_keys)}
+    row = np.array([demand_rows[int(j), int(q)] for j, q in zip(heads, classes, strict=True)])
+    into = sp.csr_matrix((np.ones(count), (row, arcs)), shape=(len(demand_rows), count))
+    out_of = sp.csr_matrix(
+        (np.ones(count), (tails * n_classes + classes, arcs)), shape=(size * n_classes, count)
+    )
+    constraints = [
+        (into @ sigma == 1).set_label("(3.2) every demanded (target, class) entered once"),
+        (out_of @ sigma <= 1).set_label("(3.3) every point left at most once per class"),
+    ]
+    if relax:
+        constraints.append((sigma <= 1).set_label("0 <= sigma_ijq <= 1 (LP relaxation)"))
+    order = None
+    cuts = list(cuts or [])
+    if sec == "dfj" and cuts:
+        rows, cols = [], []
+        for r, (q, subset) in enumerate(cuts):
+            inside = np.isin(tails, subset) & np.isin(heads, subset) & (classes == q)
+            cols.extend(np.flatnonzero(inside))
+            rows.extend([r] * int(inside.sum()))
+        lhs = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(cuts), count))
+        rhs = np.array([len(s) - 1 for _, s in cuts], dtype=float)
+        constraints.append(
+            (lhs @ sigma <= rhs).set_label("(2.5) DFJ per class: sum_{i,j in S} sigma_ijq <= |S|-1")
+        )
+    elif sec == "mtz":
+        # u[q, j] in [1, |T_q|]: target j's position on its class-q route. For a target arc
+        # i -> j of class q: u_qi - u_qj + |T_q| sigma_ijq <= |T_q| - 1. Big-M: sigma = 1
+        # forces u_qj >= u_qi + 1 (no cycle); sigma = 0 leaves u_qi - u_qj <= |T_q| - 1,
+        # always true for positions in [1, |T_q|], so M = |T_q| cuts no route.
+        order = cp.Variable(n_classes * n, name="u_qj")
+        sizes = np.array([len(c.targets) for c in problem.classes], dtype=float)
+        target_arcs = np.flatnonzero(tails < n)
+        k = len(target_arcs)
+        tail_of = sp.csr_matrix(
+            (np.ones(k), (np.arange(k), classes[target_arcs] * n + tails[target_arcs])),
+            shape=(k, n_classes * n),
+        )
+        head_of = sp.csr_matrix(
+            (np.ones(k), (np.arange(k), classes[target_arcs] * n + heads[target_arcs])),
+            shape=(k, n_classes * n),
+        )
+        big = sizes[classes[target_arcs]]
+        upper = np.repeat(np.maximum(sizes, 1.0), n)
+        constraints += [
+            (order >= 1).set_label("MTZ: 1 <= u_qj"),
+            (order <= upper).set_label("MTZ: u_qj <= |T_q|"),
+            (
+                tail_of @ order - head_of @ order + cp.multiply(big, sigma[target_arcs]) <= big - 1
+            ).set_label("(2.5) MTZ per class: u_qi - u_qj + |T_q| sigma_ijq <= |T_q| - 1"),
+        ]
+    objective = cp.Minimize(travel_time @ sigma)  # (3.1)
+    return CapabilityModel(
+        problem=cp.Problem(objective, constraints),
+        arc_use=sigma,
+        tails=tails,
+        heads=heads,
+        labels=classes,
+        formulation="joint",
+        order=order,
+        cuts=cuts,
+    )
+
+
+def _joint_decode(
+    problem: CapabilityProblem, model: CapabilityModel, values: np.ndarray
+) -> tuple[list[list[int]], list[tuple[int, tuple[int, ...]]]]:
+    """Routes from the class starts and the cycles among targets, per class."""
+    n = problem.n
+    used = np.flatnonzero(np.asarray(values) > 0.5)
+    routes: list[list[int]] = [[] for _ in range(problem.m)]
+    cycles: list[tuple[int, tuple[int, ...]]] = []
+    for q, cls in enumerate(problem.classes):
+        if cls.problem is None:
+            continue
+        successor = {int(model.tails[a]): int(model.heads[a]) for a in used if model.labels[a] == q}
+        seen: set[int] = set()
+        for k in cls.vehicles:
+            point, route = n + k, []
+            while point in successor:
+                point = successor[point]
+                route.append(point)
+            routes[k] = route
+            seen.update(route)
+        left = [t for t in cls.targets if t not in seen]
+        while left:
+            cycle, point = [], left[0]
+            while point not in cycle:
+                cycle.append(point)
+                point = successor[point]
+            cycles.append((q, tuple(sorted(cycle))))
+            left = [t for t in left if t not in cycle]
+    return routes, cycles
+
+
+def _repair(
+    problem: CapabilityProblem, routes: list[list[int]], cycles: list[tuple[int, tuple[int, ...]]]
+) -> list[list[int]]:
+    """A feasible solution from routes plus subtours: each cycle appended to a class route."""
+    routes = [list(r) for r in routes]
+    for q, cycle in cycles:
+        vehicle = problem.classes[q].vehicles[0]
+        routes[vehicle].extend(cycle)
+    return routes
+
+
+def _solve_joint(
+    problem: CapabilityProblem,
+    time_limit: float | None,
+    incumbent: Any,
+    sec: str,
+    mip_gap: float,
+    verbose: bool,
+    start: float,
+    max_rounds: int = 10_000,
+) -> Solution:
+    if sec not in JOINT_SUBTOUR_ELIMINATIONS:
+        raise InstanceError(f"sec must be one of {JOINT_SUBTOUR_ELIMINATIONS}, got {sec!r}")
+    best_routes: list[list[int]] | None = None
+    best_value = math.inf
+    if incumbent is not None:
+        best_routes = Routes(getattr(incumbent, "solution", incumbent)).as_lists()
+        best_value = evaluate_capability(problem, best_routes)
+    best_bound = 0.0
+    cuts: list[tuple[int, tuple[int, ...]]] = []
+    rounds = 0
+    stopped_by = "optimal"
+    solver_status = ""
+    while True:
+        rounds += 1
+        left = None if time_limit is None else time_limit - (time.perf_counter() - start)
+        if left is not None and left <= 0:
+            stopped_by = "time_limit"
+            break
+        model = build_joint(problem, sec, cuts)
+        run = solve_highs(model.problem, time_limit=left, mip_rel_gap=mip_gap, verbose=verbose)
+        solver_status = run.solver_status
+        if run.status in ("error", "infeasible"):
+            raise SolverError(f"HiGHS returned {run.solver_status!r} on the joint model")
+        if run.bound is not None:
+            best_bound = max(best_bound, run.bound)
+        if not run.has_point:
+            stopped_by = run.stopped_by
+            break
+        routes, cycles = _joint_decode(problem, model, model.arc_use.value)
+        candidate = _repair(problem, routes, cycles) if cycles else routes
+        value = evaluate_capability(problem, candidate)
+        if value < best_value:
+            best_routes, best_value = candidate, value
+        if cycles:
+            if sec != "dfj":
+                raise SolverError(f"the MTZ joint model returned a subtour {cycles[0]}")
+            cuts.extend(cycles)
+            if run.stopped_by == "time_limit" or rounds >= max_rounds:
+                stopped_by = "time_limit" if run.stopped_by == "time_limit" else "max_rounds"
+                break
+            continue
+        stopped_by = run.stopped_by
+        break
+    if best_routes is None:
+        raise SolverError("the joint model found no feasible solution within the time limit")
+    bound = min(best_bound, best_value)
+    status, stopped_by = certify(best_value, bound, stopped_by)
+    info = {
+        "formulation": "joint",
+        "sec": sec,
+        "rounds": rounds,
+        "cuts": len(cuts),
+        "solver_status": solver_status,
+        "stopped_by": stopped_by,
+    }
+    return _solution(best_value, status, Routes(best_routes), bound, start, "joint", info)
+
+
+# ------------------------------------------------------------------------------ public
+def _solution(
+    objective: float,
+    status: Any,
+    routes: Routes | None,
+    bound: float | None,
+    start: float,
+    formulation: str,
+    info: dict[str, Any],
+) -> Solution:
+    """The one place this module builds a Solution."""
+    return Solution(
+        objective=objective,
+        status=status,
+        solution=routes,
+        bound=bound,
+        runtime=time.perf_counter() - start,
+        method=f"exact-{formulation}",
+        info=info,
+    )
+
+
+def solve_capability(
+    problem: CapabilityProblem,
+    formulation: str = "corrected",
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    sec: str = "dfj",
+    mip_gap: float = 1e-6,
+    verbose: bool = False,
+) -> Solution:
+    """Solve chapter 3's problem (3.1)–(3.3) with one of three formulations.
+
+    Parameters
+    ----------
+    problem : CapabilityProblem
+    formulation : {"printed", "corrected", "joint"}
+        "printed": (3.1)–(3.3) literally, a relaxation (status "relaxation", no routes,
+        ``info`` lists its arcs, subtours, foreign tails and vehicle switches; status
+        "optimal" with routes in the rare case its arcs are a routing). "corrected": one
+        certified (2.2)–(2.5) per capability class (:func:`taopt.models.solve_routing`),
+        summed. "joint": the corrected model as one MILP.
+    time_limit : float, optional
+        Seconds for the whole solve; a limited run returns its best routes with status
+        "time_limit" and the proven bound.
+    incumbent : routes or Solution, optional
+        A feasible solution of the whole problem (e.g. DTAA's); passed on per class
+        ("corrected", when ``solve_routing`` takes one) or kept as the first incumbent
+        ("joint"). Never computed here: :func:`taopt.solve` supplies it.
+    sec : str
+        Subtour elimination: "dfj" (default), "mtz" (both formulations) or "flow"
+        ("corrected" only).
+    mip_gap : float
+        HiGHS ``mip_rel_gap``.
+    verbose : bool
+        HiGHS log.
+
+    Returns
+    -------
+    Solution
+        Routes (one per vehicle), objective = ``evaluate(routes)``, status by the one rule
+        of :func:`taopt.models.highs.certify`, ``bound`` the sum of the proven class bounds
+        (corrected) or the MIP bound (joint); ``info["classes"]`` has each class's status,
+        objective, bound and time (corrected).
+
+    Raises
+    ------
+    InstanceError
+        Not a CapabilityProblem, unknown formulation or ``sec``, a non-positive time limit.
+    FeasibilityError
+        An incumbent that is not a feasible solution (named by the scorer).
+    SolverError
+        HiGHS failed.
+
+    References
+    ----------
+    Thesis §3.2.1 (3.1)–(3.3), §3.4.2 and §3.6 (the split by class), §2.2.1 (2.2)–(2.5).
+    """
+    _check(problem)
+    if formulation not in FORMULATIONS:
+        raise InstanceError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}")
+    if time_limit is not None and not time_limit > 0:
+        raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    start = time.perf_counter()
+    if formulation == "printed":
+        return _solve_printed(problem, time_limit, verbose, start)
+    if formulation == "corrected":
+        return _solve_corrected(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
+    return _solve_joint(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
+
+
+def solve_exact(
+    problem: CapabilityProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    sec: str = "dfj",
+) -> Solution:
+    """Certified optimum of (3.1)–(3.3): the corrected model, one (2.2)–(2.5) per class."""
+    return solve_capability(
+        problem, "corrected", time_limit=time_limit, incumbent=incumbent, sec=sec
+    )
+
+
+def solve_joint(
+    problem: CapabilityProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    sec: str = "dfj",
+) -> Solution:
+    """The corrected model as one MILP over all classes (for teaching)."""
+    return solve_capability(problem, "joint", time_limit=time_limit, incumbent=incumbent, sec=sec)
+
+
+def solve_printed(problem: CapabilityProblem, time_limit: float | None = None) -> Solution:
+    """(3.1)–(3.3) as printed: a relaxation; its value is a lower bound, its arcs explained."""
+    return solve_capability(problem, "printed", time_limit=time_limit)
+
+
+def describe(
+    problem: CapabilityProblem, formulation: str = "joint", sec: str = "dfj", show: bool = True
+) -> list[dict[str, Any]]:
+    """Variable and constraint families of the printed or joint model, with equations.
+
+    Returns
+    -------
+    list of dict
+        ``family``, ``equation``, ``rows`` per family.
+    """
+    if formulation == "printed":
+        model = build_printed(problem)
+        families = [
+            {
+                "family": "variables sigma_ijk (binary)",
+                "equation": "(3.1)",
+                "rows": len(model.tails),
+            }
+        ]
+    elif formulation == "joint":
+        model = build_joint(problem, sec)
+        families = [
+            {
+                "family": "variables sigma_ijq (binary)",
+                "equation": "(3.1)",
+                "rows": len(model.tails),
+            }
+        ]
+        if model.order is not None:
+            families.append(
+                {
+                    "family": "variables u_qj (MTZ order)",
+                    "equation": "(2.5)",
+                    "rows": int(model.order.size),
+                }
+            )
+    else:
+        raise InstanceError("describe() shows the 'printed' or 'joint' model")
+    for constraint in model.problem.constraints:
+        label = constraint.label or str(constraint)
+        equation = label.split(" ")[0] if label.startswith("(") else "bounds"
+        families.append({"family": label, "equation": equation, "rows": int(constraint.size)})
+    if formulation == "joint" and sec == "dfj":
+        families.append(
+            {
+                "family": "(2.5) DFJ subtour cuts per class, added lazily",
+                "equation": "(2.5)",
+                "rows": 0,
+            }
+        )
+    if show:
+        print(
+            f"{formulation} model: n={problem.n} targets, m={problem.m} vehicles, "
+            f"|A|={len(problem.capabilities)}"
+        )
+        for family in families:
+            print(f"  {family['rows']:>8}  {family['family']}")
+    return families
