@@ -1,0 +1,194 @@
+"""Chapter 3 exact models: corrected = independent exact methods, printed <= corrected, joint."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import taopt
+from taopt import Instance
+from taopt.bounds import arborescence
+from taopt.capability import CapabilityProblem
+from taopt.capability.claims import exact_optimum, random_problem
+from taopt.capability.instances import capability_problem_from_instance, thesis_scenario
+from taopt.errors import InstanceError
+from taopt.models import solve_capability
+from taopt.models.capability import build_printed, decode_printed, describe
+
+EXAMPLE = (
+    Path(__file__).parent.parent
+    / "docs"
+    / "reproduction"
+    / "data"
+    / "chapter3"
+    / "printed_vs_corrected.json"
+)
+
+
+def brute_force(problem: CapabilityProblem) -> float:
+    """Optimum by enumerating every vehicle's ordered subset of servable targets (tiny n).
+
+    Independent of the class split: each vehicle picks any ordered subset of the targets
+    demanding its capability, and a combination counts when every (target, capability)
+    demand is served exactly once.
+    """
+    n = problem.n
+    options = []
+    for cap in problem.vehicle_capability:
+        servable = [j for j in range(n) if cap in problem.demands[j]]
+        mine = [()]
+        for size in range(1, len(servable) + 1):
+            mine += list(itertools.permutations(servable, size))
+        options.append(mine)
+    wanted = sorted((j, c) for j in range(n) for c in problem.demands[j])
+    best = np.inf
+    for combo in itertools.product(*options):
+        served = sorted((j, problem.vehicle_capability[k]) for k, r in enumerate(combo) for j in r)
+        if served != wanted:
+            continue
+        total = 0.0
+        for k, route in enumerate(combo):
+            cost = problem.cost_for(problem.vehicle_capability[k])
+            nodes = [n + k, *route]
+            total += sum(cost[a, b] for a, b in zip(nodes[:-1], nodes[1:], strict=True))
+        best = min(best, total)
+    return float(best)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_corrected_equals_brute_force_on_tiny_instances(seed):
+    """n <= 3, m <= 3: the certified optimum equals whole-problem enumeration."""
+    rng = np.random.default_rng(seed)
+    kind = ("metric", "euclidean")[seed % 2]
+    problem = random_problem(kind, int(rng.integers(1, 4)), int(rng.integers(1, 4)), 1, rng)
+    if seed >= 2:
+        problem = random_problem(kind, 3, 3, int(rng.integers(2, 4)), rng)
+    exact = solve_capability(problem)
+    assert exact.status == "optimal"
+    assert exact.objective == pytest.approx(brute_force(problem), rel=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_exact_on_obstacle_scenarios(seed):
+    """§3.7 scenarios (n <= 9, m <= 4, |A| <= 3, obstacles): every must-show property."""
+    rng = np.random.default_rng(100 + seed)
+    n, m = int(rng.integers(4, 10)), int(rng.integers(1, 5))
+    k = int(rng.integers(1, min(3, m) + 1))
+    problem = thesis_scenario(n, m, k, seed=seed).problem
+    exact = taopt.solve(problem, "exact")
+    dp = exact_optimum(problem)[0]
+    assert exact.status == "optimal"
+    assert exact.objective == pytest.approx(dp, rel=1e-6)
+    assert taopt.evaluate(problem, exact.routes) == pytest.approx(exact.objective, rel=1e-6)
+    assert exact.bound <= exact.objective * (1 + 1e-9)
+    assert solve_capability(problem, "printed").objective <= exact.objective * (1 + 1e-9)
+    assert arborescence(problem) <= exact.objective * (1 + 1e-9)
+    for method in ("DTAA", "GA", "MC"):
+        heuristic = taopt.solve(
+            problem, method, seed=seed, **({"generations": 60} if method == "GA" else {})
+        )
+        assert taopt.evaluate(problem, heuristic.routes) == pytest.approx(heuristic.objective)
+        assert heuristic.objective >= exact.objective * (1 - 1e-9)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(1, 7),
+    m=st.integers(1, 4),
+    k=st.integers(1, 3),
+    kind=st.sampled_from(["metric", "euclidean"]),
+)
+def test_three_formulations_agree(seed, n, m, k, kind):
+    """corrected = joint (DFJ and MTZ) = subset DP; printed is never above them."""
+    problem = random_problem(kind, n, m, min(k, m), np.random.default_rng(seed))
+    dp = exact_optimum(problem)[0]
+    corrected = solve_capability(problem, "corrected")
+    assert corrected.status == "optimal"
+    assert corrected.objective == pytest.approx(dp, rel=1e-6, abs=1e-9)
+    for sec in ("dfj", "mtz"):
+        joint = solve_capability(problem, "joint", sec=sec)
+        assert joint.status == "optimal"
+        assert joint.objective == pytest.approx(dp, rel=1e-6, abs=1e-9)
+    printed = solve_capability(problem, "printed")
+    assert printed.objective <= dp * (1 + 1e-9) + 1e-9
+    if printed.status == "optimal":  # its arcs happened to be routes
+        assert printed.objective == pytest.approx(dp, rel=1e-6, abs=1e-9)
+
+
+def test_shipped_example_printed_strictly_below():
+    """The shipped example: the printed model closes a subtour and switches vehicles."""
+    instance = Instance.load(EXAMPLE)
+    problem = capability_problem_from_instance(instance)
+    printed = solve_capability(problem, "printed")
+    corrected = solve_capability(problem, "corrected")
+    assert printed.status == "relaxation" and printed.routes is None
+    assert printed.objective == pytest.approx(14.0)  # 2 + 2 (cycle t0 <-> t1) + 5 + 5
+    assert corrected.objective == pytest.approx(exact_optimum(problem)[0])
+    assert corrected.objective > 10 * printed.objective
+    assert printed.info["subtours"] == [["a", [0, 1]]]
+    # vehicle A's class enters t2 from vehicle B's start: not its own point, not its label
+    assert printed.info["foreign_tails"] == [[4, 2, 0]]
+    assert printed.info["vehicle_switches"] == [[4, 2, 0, 1]]
+
+
+def test_printed_optimal_when_its_arcs_are_routes():
+    """One vehicle, targets in a row from it: the relaxation's arcs are the optimal route."""
+    x = np.array([1.0, 2.0, 3.0, 0.0])
+    cost = abs(x[:, None] - x[None, :]) + np.where(x[:, None] > x[None, :], 10.0, 0.0)
+    np.fill_diagonal(cost, 0)
+    p = CapabilityProblem(cost, 3, ["a"], [{"a"}] * 3)
+    printed = solve_capability(p, "printed")
+    assert printed.status == "optimal" and printed.routes == [[0, 1, 2]]
+    assert printed.objective == pytest.approx(3.0)
+
+
+def test_decode_printed_by_hand():
+    """decode_printed names a subtour, a foreign tail and a vehicle switch from given arcs."""
+    x = np.array([10.0, 11.0, 0.0, 20.0])
+    p = CapabilityProblem(abs(x[:, None] - x[None, :]), 2, ["a", "b"], [{"a"}, {"a"}])
+    model = build_printed(p)
+    values = np.zeros(len(model.tails))
+    for i, j, k in [(0, 1, 0), (1, 0, 0)]:
+        values[(model.tails == i) & (model.heads == j) & (model.labels == k)] = 1
+    decoded = decode_printed(p, model, values)
+    assert decoded.subtours == [("a", [0, 1])] and decoded.routes is None
+    values[:] = 0
+    for i, j, k in [(2, 0, 0), (0, 1, 0)]:
+        values[(model.tails == i) & (model.heads == j) & (model.labels == k)] = 1
+    decoded = decode_printed(p, model, values)
+    assert decoded.routes == [[0, 1], []] and not decoded.vehicle_switches
+
+
+def test_time_limit_and_incumbent():
+    """A time-limited solve keeps a proven bound; an incumbent is accepted and checked."""
+    problem = thesis_scenario(9, 2, 1, seed=4).problem
+    dtaa = taopt.solve(problem, "DTAA")
+    exact = taopt.solve(problem, "exact")
+    assert exact.info["warm_start"]["method"] == "DTAA"
+    again = solve_capability(problem, incumbent=dtaa)
+    assert again.objective == pytest.approx(exact.objective)
+    joint = solve_capability(problem, "joint", incumbent=dtaa.routes)
+    assert joint.objective == pytest.approx(exact.objective)
+    limited = solve_capability(problem, time_limit=0.05)
+    assert limited.status in ("optimal", "time_limit")
+    assert limited.bound <= limited.objective * (1 + 1e-9)
+    with pytest.raises(taopt.FeasibilityError):
+        solve_capability(problem, incumbent=[[0]] * problem.m)
+    with pytest.raises(InstanceError, match="formulation"):
+        solve_capability(problem, "dual")
+
+
+def test_describe_lists_labelled_constraints():
+    """describe() reads like the thesis: (3.2), (3.3) and (2.5) rows with their counts."""
+    problem = thesis_scenario(5, 3, 2, seed=1).problem
+    printed = describe(problem, "printed", show=False)
+    assert [f["equation"] for f in printed] == ["(3.1)", "(3.2)", "(3.3)"]
+    assert printed[1]["rows"] == problem.demand_pairs()
+    joint = describe(problem, "joint", sec="mtz", show=False)
+    assert "(2.5)" in [f["equation"] for f in joint]
