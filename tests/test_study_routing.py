@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 import taopt
+from taopt.cli import main
 from taopt.errors import InstanceError
 from taopt.routing.scenarios import drift_scenario, scenario_seed
-from taopt.cli import main
 from taopt.studies.drift import SPEC, drift_study, summarize, wilcoxon_pairs
 
 METHODS = "VN,VM,EVN,EVM,MC,GA,exact"
