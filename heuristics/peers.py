@@ -42,7 +42,9 @@ imports ``taopt.models`` (hence highspy) at the top would break OR-Tools in
 its own worker. The worker dies with its parent (Linux ``PR_SET_PDEATHSIG``,
 a ``getppid`` watch, end of file on its stdin); on Ctrl-C during a call the
 caller stops it and re-raises; a worker that crashes or cannot import its
-package becomes a :class:`taopt.SolverError` naming the peer.
+package becomes a :class:`taopt.SolverError` naming the peer, and so does a
+call that overruns its ``time_limit`` by :data:`GRACE` seconds (the worker is
+then stopped; a call without a time limit waits as long as it takes).
 :func:`shutdown` stops the workers (also done at exit).
 
 Determinism
@@ -117,7 +119,11 @@ class _Worker:
         )
         self.replies: queue.Queue = queue.Queue()
         threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
-        kind, payload = self._wait(STARTUP_TIMEOUT, "start")
+        try:
+            kind, payload = self._wait(STARTUP_TIMEOUT, "start")
+        except BaseException:  # Ctrl-C while it starts: do not leave it behind
+            self.stop()
+            raise
         if kind != "ready":
             self.stop()
             raise SolverError(
@@ -142,7 +148,7 @@ class _Worker:
         while True:
             left = 1.0 if deadline is None else min(1.0, deadline - time.monotonic())
             if left <= 0:
-                self.stop()
+                self.stop(wait=0.0)
                 raise SolverError(
                     f"{self.peer} worker did not answer ({what}) within {timeout:.0f} s; stopped it"
                 )
@@ -160,8 +166,14 @@ class _Worker:
         return self.owner == os.getpid() and self.process.poll() is None
 
     def call(self, request: dict[str, Any], timeout: float | None) -> dict[str, Any]:
-        """Send one request and wait for its reply; any interruption stops the worker."""
+        """Send one request and wait for its reply; any interruption stops the worker.
+
+        Raises :class:`_Stopped` when another thread stopped this worker while
+        the call waited for it (nothing was sent; the caller takes a new worker).
+        """
         with self.lock:
+            if not self.alive():
+                raise _Stopped(self.peer)
             try:
                 pickle.dump(request, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
                 self.process.stdin.flush()
@@ -170,7 +182,7 @@ class _Worker:
                 self.stop()
                 raise SolverError(f"{self.peer} worker process is gone ({exc})") from None
             except BaseException:  # Ctrl-C, a timeout: the reply would be stale
-                self.stop()
+                self.stop(wait=0.0)
                 raise
         if kind != "ok":
             raise SolverError(f"{self.peer} failed in its worker:\n{payload}")
@@ -189,6 +201,10 @@ class _Worker:
         except subprocess.TimeoutExpired:
             self.process.kill()
             self.process.wait()
+
+
+class _Stopped(Exception):
+    """The worker was stopped before a request could be sent to it."""
 
 
 _WORKERS: dict[str, _Worker] = {}
@@ -260,8 +276,8 @@ def _check(problem: Any, time_limit: float | None, seed: int, limit_name: str, l
         raise InstanceError(f"{limit_name} must be a positive integer, got {limit}")
     if time_limit is None and limit is None:
         raise InstanceError(f"give time_limit or {limit_name}, or the search never stops")
-    if isinstance(seed, bool) or int(seed) != seed or seed < 0:
-        raise InstanceError(f"seed must be a non-negative integer, got {seed}")
+    if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**32:
+        raise InstanceError(f"seed must be an integer in [0, 2**32), got {seed}")
 
 
 def _solve(
@@ -273,12 +289,19 @@ def _solve(
 ) -> Solution:
     """Run ``peer`` in its worker and turn its routes into a re-scored Solution."""
     cost, scale = integer_costs(problem, scale)
-    worker, startup = _worker(peer)
     time_limit = options.get("time_limit")
     timeout = None if time_limit is None else time_limit + GRACE
     request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
-    started = time.perf_counter()
-    reply = worker.call(request, timeout)
+    for _attempt in range(3):
+        worker, startup = _worker(peer)
+        started = time.perf_counter()
+        try:
+            reply = worker.call(request, timeout)
+            break
+        except _Stopped:  # stopped by another thread's failed call; take a fresh one
+            continue
+    else:
+        raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
     runtime = time.perf_counter() - started
     info = {
         "solver_objective": reply.pop("objective"),

@@ -253,6 +253,35 @@ def test_worker_crash_is_a_solver_error_and_worker_restarts():
     assert peers._WORKERS["ortools"].process.pid != pid
 
 
+def test_overrun_is_a_solver_error_and_worker_restarts(monkeypatch):
+    """A call that overruns time_limit + GRACE stops its worker and raises a SolverError."""
+    problem = uniform_current_problem(30, 4, 12)
+    ortools_solve(problem, time_limit=0.1)
+    pid = peers._WORKERS["ortools"].process.pid
+    monkeypatch.setattr(peers, "GRACE", -0.7)  # wait 0.3 s for a 1 s search
+    with pytest.raises(SolverError, match="ortools worker did not answer"):
+        ortools_solve(problem, time_limit=1.0)
+    assert wait_gone(pid, 5.0)
+    monkeypatch.undo()
+    assert ortools_solve(problem, time_limit=0.1).objective > 0
+
+
+def test_threads_share_a_worker():
+    """Calls from several threads are served one at a time and give the sequential results."""
+    problems = [uniform_current_problem(15, 3, seed) for seed in range(4)]
+    expected = [SOLVERS["pyvrp"](p).routes for p in problems]
+    found: dict[int, list] = {}
+    threads = [
+        threading.Thread(target=lambda k=k: found.update({k: SOLVERS["pyvrp"](problems[k]).routes}))
+        for k in range(4)
+    ]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert [found[k] for k in range(4)] == expected
+
+
 def test_solver_failure_names_the_peer():
     """An option the solver rejects comes back as a SolverError naming OR-Tools."""
     with pytest.raises(SolverError, match="(?s)ortools failed.*unknown metaheuristic 'NOPE'"):
