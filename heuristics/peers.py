@@ -80,7 +80,8 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import InstanceError, SolverError
-from taopt.result import FEASIBLE, Solution
+from taopt.registry import register_method
+from taopt.result import FEASIBLE, Routes, Solution
 from taopt.routing.problem import AssignmentProblem
 from taopt.scoring import evaluate
 
@@ -334,11 +335,12 @@ def _solution(
         runtime=runtime,
         method=method,
         seed=int(seed),
-        routes=routes,
+        solution=Routes(routes),
         info=info,
     )
 
 
+@register_method(AssignmentProblem, "pyvrp", category="peer")
 def pyvrp_solve(
     problem: AssignmentProblem,
     time_limit: float | None = 1.0,
@@ -403,6 +405,7 @@ def pyvrp_solve(
     return _solve("pyvrp", problem, seed, scale, options)
 
 
+@register_method(AssignmentProblem, "ortools", category="peer")
 def ortools_solve(
     problem: AssignmentProblem,
     time_limit: float | None = 1.0,
