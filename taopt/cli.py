@@ -195,6 +195,7 @@ def cmd_study_drift(args: argparse.Namespace) -> int:
         progress=not args.quiet,
         time_limit=args.time_limit,
         method_options=options,
+        field="thesis" if args.field == "thesis" else parse_field(args.field),
     )
     table = summarize(df)
     with pd.option_context("display.width", 160, "display.max_columns", 20):
@@ -412,6 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
     )
     drift.add_argument("--out", required=True, help="output folder (drift.csv; resumable)")
+    drift.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
     drift.add_argument(
         "--ga-generations", type=int, default=None, help="GA generations (thesis 350)"
     )
