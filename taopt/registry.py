@@ -268,9 +268,9 @@ def ensure_families() -> None:
                 raise
 
 
-def family_of(problem: Any) -> Family:
-    """The family of ``problem`` (by its class or a registered base class)."""
-    cls = problem if isinstance(problem, type) else type(problem)
+def family_of(item: Any) -> Family:
+    """The family of a problem, or of a problem class (or a registered base class of it)."""
+    cls = item if isinstance(item, type) else type(item)
     for base in cls.__mro__:
         if base in _FAMILIES:
             return _FAMILIES[base]
