@@ -1,0 +1,409 @@
+"""JSON Schemas of taopt's file formats, and the strict reader that applies them.
+
+Every file taopt reads is checked here before any object is built (DESIGN
+invariant 8): the text must be UTF-8 JSON without the ``NaN``/``Infinity``
+literals Python's :mod:`json` accepts, and the data must match the JSON Schema
+(draft 2020-12) of its kind, shipped beside this module as
+``<kind>.schema.json``. A failure is an :class:`~taopt.errors.InstanceError`
+whose message names the file, the JSON path and the value, e.g.
+``demo.json: targets[3].position: expected 2 numbers, got 5``. The
+constructors then run their own checks (duplicate ids, points outside the
+region, precedence cycles, ...), which a schema cannot express.
+
+Kinds: ``instance``, ``assignment_problem``, ``delivery_instance`` and
+``field`` (a drift field on its own; also the ``field`` of an instance). A
+new kind is one more ``<kind>.schema.json`` file in this folder. The formats
+are described field by field in ``docs/file-formats.md``.
+
+Strictness beyond plain JSON Schema: a "number" is a finite real number (not a
+string such as ``"1.0"``, not ``true``, not NaN or infinite, not an integer too
+large for a double), an "integer" is a number with no fractional part, and a
+non-finite number is an error anywhere in the data, free-form ``metadata``
+included.
+
+Example
+-------
+>>> from taopt.schemas import validate
+>>> validate({"kind": "uniform", "vx": 0.1, "vy": 0.0}, "field")
+>>> validate({"kind": "uniform", "vx": "0.1", "vy": 0.0}, "field")
+Traceback (most recent call last):
+    ...
+taopt.errors.InstanceError: field: vx: expected a number, got "0.1"
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import numbers
+import os
+from collections.abc import Iterable, Iterator
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from taopt.errors import InstanceError
+
+if TYPE_CHECKING:  # jsonschema is imported on first use: ~0.1 s that `import taopt` need not pay
+    from jsonschema.exceptions import ValidationError
+    from referencing import Registry
+
+#: Schema versions this taopt reads (the ``schema_version`` of every top-level file).
+SUPPORTED_VERSIONS = (1,)
+
+_SUFFIX = ".schema.json"
+
+
+# -- the schemas -------------------------------------------------------------------------------
+def _schema_files() -> dict[str, Any]:
+    folder = resources.files(__name__)
+    return {
+        entry.name[: -len(_SUFFIX)]: entry
+        for entry in folder.iterdir()
+        if entry.name.endswith(_SUFFIX)
+    }
+
+
+@functools.cache
+def _registry() -> Registry:
+    """All shipped schemas, keyed by file name, so ``"$ref": "field.schema.json"`` resolves
+    offline (a reference to anything else fails instead of being fetched)."""
+    from referencing import Registry, Resource
+
+    resources_ = [
+        (kind + _SUFFIX, Resource.from_contents(json.loads(entry.read_text(encoding="utf-8"))))
+        for kind, entry in sorted(_schema_files().items())
+    ]
+    return Registry().with_resources(resources_).crawl()
+
+
+def kinds() -> tuple[str, ...]:
+    """The file kinds that have a schema, e.g. ``('assignment_problem', ..., 'instance')``."""
+    return tuple(sorted(_schema_files()))
+
+
+def schema(kind: str) -> dict[str, Any]:
+    """The JSON Schema of ``kind`` (a fresh copy of the shipped ``<kind>.schema.json``).
+
+    Raises
+    ------
+    KeyError
+        ``kind`` has no schema (this is a programming error, not bad input).
+    """
+    uri = kind + _SUFFIX
+    try:
+        contents = _registry().contents(uri)
+    except LookupError:
+        raise KeyError(f"no schema for kind {kind!r}; known kinds: {', '.join(kinds())}") from None
+    return json.loads(json.dumps(contents))
+
+
+# -- strict types --------------------------------------------------------------------------------
+def _finite(value: Any) -> bool:
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int too large for a double
+        return False
+
+
+def _is_number(checker: Any, value: Any) -> bool:
+    """A finite real number: bool is not a number here, nor is NaN or an infinity."""
+    return not isinstance(value, bool) and isinstance(value, numbers.Real) and _finite(value)
+
+
+def _is_integer(checker: Any, value: Any) -> bool:
+    if not _is_number(checker, value):
+        return False
+    return isinstance(value, numbers.Integral) or float(value).is_integer()
+
+
+def _is_array(checker: Any, value: Any) -> bool:
+    """JSON arrays; Python callers may also pass tuples."""
+    return isinstance(value, (list, tuple))
+
+
+@functools.cache
+def strict_validator_class() -> Any:
+    """Draft 2020-12 with the strict ``number``, ``integer`` and ``array`` types above."""
+    import jsonschema
+
+    types = jsonschema.Draft202012Validator.TYPE_CHECKER.redefine_many(
+        {"number": _is_number, "integer": _is_integer, "array": _is_array}
+    )
+    return jsonschema.validators.extend(jsonschema.Draft202012Validator, type_checker=types)
+
+
+@functools.cache
+def _validator(kind: str) -> Any:
+    """The compiled validator of ``kind`` (built once per process)."""
+    contents = schema(kind)
+    cls = strict_validator_class()
+    cls.check_schema(contents)
+    return cls(contents, registry=_registry())
+
+
+# -- readable messages -------------------------------------------------------------------------
+def json_path(path: Iterable[Any]) -> str:
+    """``['targets', 3, 'position']`` -> ``'targets[3].position'``."""
+    out = ""
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif isinstance(part, str) and part.isidentifier():
+            out += f".{part}" if out else part
+        else:
+            out += f"[{part!r}]"
+    return out
+
+
+def show(value: Any) -> str:
+    """A short JSON-style rendering of ``value`` for an error message."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, dict):
+        return "an object" if value else "an empty object"
+    if isinstance(value, (list, tuple)):
+        count = len(value)
+        return f"a list of {count} item{'s' if count != 1 else ''}" if count else "an empty list"
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        text = (
+            str(int(value))
+            if abs(int(value)) < 10**30
+            else f"an integer of {len(str(value))} digits"
+        )
+        return text
+    try:
+        text = json.dumps(value, allow_nan=True)
+    except (TypeError, ValueError):
+        text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+_NOUNS = {
+    "number": ("a number", "numbers"),
+    "integer": ("an integer", "integers"),
+    "string": ("a string", "strings"),
+    "boolean": ("true or false", "booleans"),
+    "null": ("null", "nulls"),
+    "array": ("a list", "lists"),
+    "object": ("an object", "objects"),
+}
+_REF_NOUNS = {"point": "points [x, y]", "pair": "rows of 2 numbers", "index": "indices"}
+
+
+def _item_noun(subschema: Any) -> str:
+    items = subschema.get("items") if isinstance(subschema, dict) else None
+    if isinstance(items, dict):
+        if isinstance(items.get("type"), str):
+            return _NOUNS.get(items["type"], (None, "items"))[1]
+        ref = items.get("$ref")
+        if isinstance(ref, str):
+            return _REF_NOUNS.get(ref.rsplit("/", 1)[-1], "items")
+    return "items"
+
+
+def _expected_type(expected: Any, value: Any) -> str:
+    names = [expected] if isinstance(expected, str) else list(expected)
+    words = [_NOUNS.get(name, (name, name))[0] for name in names]
+    text = " or ".join(words)
+    numeric = {"number", "integer"} & set(names)
+    if numeric and isinstance(value, numbers.Real) and not isinstance(value, bool):
+        if not _finite(value):
+            text = "a finite number" if "number" in numeric else "a finite integer"
+    return text
+
+
+def reason(error: ValidationError) -> str:
+    """A short, plain-words reason for one schema violation."""
+    keyword, expected, value = error.validator, error.validator_value, error.instance
+    if keyword == "type":
+        return f"expected {_expected_type(expected, value)}, got {show(value)}"
+    if keyword in ("minItems", "maxItems"):
+        noun = _item_noun(error.schema)
+        low, high = error.schema.get("minItems"), error.schema.get("maxItems")
+        if low is not None and low == high:
+            return f"expected {low} {noun}, got {len(value)}"
+        bound = "at least" if keyword == "minItems" else "at most"
+        return f"expected {bound} {expected} {noun}, got {len(value)}"
+    if keyword == "required":
+        missing = [key for key in expected if key not in value]
+        return f"missing {missing[0]!r}" if missing else error.message
+    if keyword == "additionalProperties":
+        allowed = sorted(error.schema.get("properties", {}))
+        extra = sorted(str(key) for key in value if key not in allowed)
+        return f"unknown key {extra[0]!r} (allowed: {', '.join(allowed)})"
+    if keyword == "const":
+        return f"expected {show(expected)}, got {show(value)}"
+    if keyword == "enum":
+        return f"expected one of {', '.join(show(v) for v in expected)}, got {show(value)}"
+    if keyword == "minimum":
+        return f"must be >= {show(expected)}, got {show(value)}"
+    if keyword == "exclusiveMinimum":
+        return f"must be > {show(expected)}, got {show(value)}"
+    if keyword == "maximum":
+        return f"must be <= {show(expected)}, got {show(value)}"
+    if keyword == "exclusiveMaximum":
+        return f"must be < {show(expected)}, got {show(value)}"
+    return error.message
+
+
+def _message(source: str, path: Iterable[Any], text: str) -> str:
+    where = json_path(path)
+    return f"{source}: {where}: {text}" if where else f"{source}: {text}"
+
+
+def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
+    """Every non-finite number (NaN, an infinity, an int too large for a double) with its
+    path, walking iteratively so deep nesting cannot exhaust the stack."""
+    stack: list[tuple[list[Any], Any]] = [([], data)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, dict):
+            stack.extend((path + [key], item) for key, item in reversed(list(value.items())))
+        elif isinstance(value, (list, tuple)):
+            stack.extend((path + [k], item) for k, item in reversed(list(enumerate(value))))
+        elif isinstance(value, numbers.Real) and not isinstance(value, bool) and not _finite(value):
+            yield path, value
+
+
+# -- validation ---------------------------------------------------------------------------------
+def _check_header(data: dict[str, Any], kind: str, contents: dict[str, Any], source: str) -> None:
+    """The schema version and the kind first, with messages that say what to do."""
+    properties = contents.get("properties", {})
+    if "schema_version" in properties:
+        version = data.get("schema_version")
+        if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+            raise InstanceError(
+                f"{source}: unknown schema_version {show(version)} for {kind} "
+                f"(this taopt reads {list(SUPPORTED_VERSIONS)})"
+            )
+    if properties.get("kind", {}).get("const") == kind and "kind" in data:
+        if data["kind"] != kind:
+            raise InstanceError(
+                f"{source}: expected a {kind!r} file, got kind {show(data['kind'])}"
+            )
+
+
+def validate(data: Any, kind: str, source: str | None = None) -> None:
+    """Check ``data`` (parsed JSON) against the schema of ``kind``; raise on the first problem.
+
+    Parameters
+    ----------
+    data : Any
+        The parsed JSON (dicts, lists, str, numbers, bool, None; tuples are taken as lists).
+    kind : str
+        ``"instance"``, ``"assignment_problem"``, ``"delivery_instance"``, ``"field"``, or
+        any other kind with a ``<kind>.schema.json`` here.
+    source : str, optional
+        What to call the data in the message (a file path); default ``kind``.
+
+    Raises
+    ------
+    InstanceError
+        The data breaks the schema or holds a non-finite number. The message names the
+        source, the JSON path and the value, e.g.
+        ``instance: vehicles[0].speed: expected a number, got "1.0"``; of several
+        problems it reports the most relevant one (``jsonschema``'s ``best_match``).
+    """
+    source = kind if source is None else str(source)
+    validator = _validator(kind)
+    if not isinstance(data, dict) and validator.schema.get("type") == "object":
+        raise InstanceError(f"{source}: expected a JSON object, got {show(data)}")
+    if isinstance(data, dict):
+        _check_header(data, kind, validator.schema, source)
+    from jsonschema.exceptions import best_match
+
+    try:
+        error = best_match(validator.iter_errors(data))
+        if error is not None:
+            raise InstanceError(_message(source, error.absolute_path, reason(error)))
+        for path, value in _non_finite(data):
+            raise InstanceError(_message(source, path, f"non-finite number {show(value)}"))
+    except RecursionError:
+        raise InstanceError(f"{source}: the data is nested too deeply") from None
+
+
+# -- reading files ----------------------------------------------------------------------------------
+def parse_json(text: str, source: str = "JSON") -> Any:
+    """Parse JSON text strictly: no ``NaN``/``Infinity`` literals, no number that overflows
+    a double; every failure an :class:`InstanceError` naming ``source``."""
+
+    def constant(literal: str) -> Any:
+        raise InstanceError(
+            f"{source}: {literal} is not a number JSON allows (non-finite values are not accepted)"
+        )
+
+    def real(literal: str) -> float:
+        value = float(literal)
+        if not math.isfinite(value):
+            raise InstanceError(f"{source}: the number {literal[:40]} is too large for a double")
+        return value
+
+    def integer(literal: str) -> int:
+        if len(literal) > 400:
+            raise InstanceError(
+                f"{source}: an integer of {len(literal)} digits is too large for a double"
+            )
+        value = int(literal)
+        if not _finite(value):
+            raise InstanceError(
+                f"{source}: the integer {literal[:40]}... is too large for a double"
+            )
+        return value
+
+    try:
+        return json.loads(text, parse_constant=constant, parse_float=real, parse_int=integer)
+    except json.JSONDecodeError as exc:
+        raise InstanceError(f"{source}: not valid JSON ({exc})") from None
+    except RecursionError:
+        raise InstanceError(f"{source}: the JSON is nested too deeply") from None
+
+
+def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
+    """Read a JSON file strictly and, given ``kind``, validate it (:func:`validate`).
+
+    Raises
+    ------
+    InstanceError
+        The file does not exist or cannot be read, is not UTF-8, is not valid JSON,
+        holds ``NaN``/``Infinity`` or an overflowing number, or breaks the schema; the
+        message starts with the path.
+    """
+    try:
+        where = Path(path)
+    except TypeError:
+        raise InstanceError(f"not a file path: {path!r}") from None
+    try:
+        raw = where.read_bytes()
+    except FileNotFoundError:
+        raise InstanceError(f"{where}: no such file") from None
+    except IsADirectoryError:
+        raise InstanceError(f"{where}: is a folder, not a file") from None
+    except (OSError, ValueError) as exc:
+        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise InstanceError(f"{where}: cannot be read ({detail})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InstanceError(
+            f"{where}: not UTF-8 text (byte {exc.start} is {raw[exc.start : exc.start + 1]!r})"
+        ) from None
+    data = parse_json(text, str(where))
+    if kind is not None:
+        validate(data, kind, str(where))
+    return data
+
+
+__all__ = [
+    "SUPPORTED_VERSIONS",
+    "strict_validator_class",
+    "json_path",
+    "kinds",
+    "load_json",
+    "parse_json",
+    "reason",
+    "schema",
+    "show",
+    "validate",
+]
