@@ -312,6 +312,20 @@ def field_from_dict(data: dict[str, Any]) -> Field:
     if kind not in ("uniform", "linear", "gridded"):
         raise InstanceError(f"unknown field kind {kind!r} (expected uniform, linear or gridded)")
     validate(data, "field")
+    if kind == "gridded":
+        # the schema cannot relate lengths: vx, vy are len(x) rows of len(y) numbers
+        for name in ("vx", "vy"):
+            table = data[name]
+            if len(table) != len(data["x"]):
+                raise InstanceError(
+                    f"field: {name}: expected {len(data['x'])} rows (one per x), got {len(table)}"
+                )
+            for i, row in enumerate(table):
+                if len(row) != len(data["y"]):
+                    raise InstanceError(
+                        f"field: {name}[{i}]: expected {len(data['y'])} numbers (one per y), "
+                        f"got {len(row)}"
+                    )
     if kind == "uniform":
         return UniformField(data["vx"], data["vy"])
     if kind == "linear":

@@ -296,29 +296,30 @@ class Instance:
         """
         check_schema(data, "instance", source)
         field = data["field"]
-        return cls(
-            vehicles=tuple(
-                Vehicle(
-                    v["id"],
-                    tuple(v["start"]),
-                    float(v.get("speed", 1.0)),
-                    v.get("capability", "any"),
-                )
-                for v in data["vehicles"]
-            ),
-            targets=tuple(
-                Target(t["id"], tuple(t["position"]), tuple(t.get("demands", ["any"])))
-                for t in data["targets"]
-            ),
-            region=tuple(data["region"]),
-            field=None if field is None else field_from_dict(field),
-            obstacles=tuple(
-                Obstacle(tuple(tuple(p) for p in o["vertices"]), o.get("id", ""))
-                for o in data.get("obstacles", [])
-            ),
-            name=data.get("name", ""),
-            metadata=dict(data.get("metadata", {})),
-        )
+        with schemas.naming(source or "instance"):
+            return cls(
+                vehicles=tuple(
+                    Vehicle(
+                        v["id"],
+                        tuple(v["start"]),
+                        float(v.get("speed", 1.0)),
+                        v.get("capability", "any"),
+                    )
+                    for v in data["vehicles"]
+                ),
+                targets=tuple(
+                    Target(t["id"], tuple(t["position"]), tuple(t.get("demands", ["any"])))
+                    for t in data["targets"]
+                ),
+                region=tuple(data["region"]),
+                field=None if field is None else field_from_dict(field),
+                obstacles=tuple(
+                    Obstacle(tuple(tuple(p) for p in o["vertices"]), o.get("id", ""))
+                    for o in data.get("obstacles", [])
+                ),
+                name=data.get("name", ""),
+                metadata=dict(data.get("metadata", {})),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         save_json(self.to_dict(), path)

@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import check_schema, load_json, save_json
+from taopt.schemas import naming
 
 #: Relative tolerance on the flight-range constraint (5.6): a sortie with
 #: ``d(i, c) + d(c, k) <= L * (1 + FLIGHT_TOLERANCE)`` is within range.
@@ -409,18 +410,19 @@ class DeliveryInstance:
                 )
             first[key] = k
             graph.add_edge(int(u), int(v), length=length)
-        return cls(
-            customers=data["customers"],
-            stops=data["stops"],
-            graph=graph,
-            depot=data["depot"],
-            v_drone=data["v_drone"],
-            v_truck=data["v_truck"],
-            flight_range=data["flight_range"],
-            precedences=tuple(tuple(p) for p in data.get("precedences", [])),
-            service_time=data.get("service_time", 0.0),
-            name=data.get("name", ""),
-        )
+        with naming(source or "delivery_instance"):
+            return cls(
+                customers=data["customers"],
+                stops=data["stops"],
+                graph=graph,
+                depot=data["depot"],
+                v_drone=data["v_drone"],
+                v_truck=data["v_truck"],
+                flight_range=data["flight_range"],
+                precedences=tuple(tuple(p) for p in data.get("precedences", [])),
+                service_time=data.get("service_time", 0.0),
+                name=data.get("name", ""),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write JSON atomically."""

@@ -139,6 +139,7 @@ class AssignmentProblem:
             square (naming the row), or the constructor's own complaint.
         """
         from taopt.instance import check_schema
+        from taopt.schemas import naming
 
         check_schema(data, "assignment_problem", source)
         cost = data["cost"]
@@ -148,7 +149,8 @@ class AssignmentProblem:
                     f"{source or 'assignment_problem'}: cost[{i}]: expected {len(cost)} numbers "
                     f"(cost must be square), got {len(row)}"
                 )
-        return cls(np.array(cost, dtype=float), int(data["n_targets"]), data.get("name", ""))
+        with naming(source or "assignment_problem"):
+            return cls(np.array(cost, dtype=float), int(data["n_targets"]), data.get("name", ""))
 
     def save(self, path: Any) -> None:
         from taopt.instance import save_json

@@ -33,12 +33,13 @@ taopt.errors.InstanceError: field: vx: expected a number, got "0.1"
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import math
 import numbers
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -123,15 +124,96 @@ def _is_array(checker: Any, value: Any) -> bool:
     return isinstance(value, (list, tuple))
 
 
+# -- a fast path for long numeric arrays ------------------------------------------------------------
+# jsonschema checks every array element through its full machinery (~40 us each), which makes a
+# 140 x 140 cost matrix take most of a second. For "items" whose schema is a plain number,
+# integer or an array of them (the cost rows, the points, the edges), a compiled predicate first
+# tries the whole array; only if some element fails does the standard keyword run, so the
+# errors, and what is accepted, are exactly those of the schema.
+_PLAIN = {"description", "title", "$comment"}
+_NUMBER_KEYS = {"type", "minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"} | _PLAIN
+_ARRAY_KEYS = {"type", "minItems", "maxItems", "items", "prefixItems"} | _PLAIN
+
+
+def _compile(validator: Any, subschema: Any, depth: int = 0) -> Callable[[Any], bool] | None:
+    """A predicate that is True only for values ``subschema`` accepts, or None if the schema is
+    not one of the simple shapes handled here."""
+    if not isinstance(subschema, dict) or depth > 4:
+        return None
+    if set(subschema) <= {"$ref"} | _PLAIN and "$ref" in subschema:
+        try:  # referencing's resolver is private API; without it the fast path is just skipped
+            target = validator._resolver.lookup(subschema["$ref"]).contents
+        except Exception:
+            return None
+        return _compile(validator, target, depth + 1)
+    kind = subschema.get("type")
+    if kind in ("number", "integer") and set(subschema) <= _NUMBER_KEYS:
+        low = subschema.get("minimum", -math.inf)
+        above = subschema.get("exclusiveMinimum", -math.inf)
+        high = subschema.get("maximum", math.inf)
+        below = subschema.get("exclusiveMaximum", math.inf)
+        whole = kind == "integer"
+
+        def number(x: Any) -> bool:
+            if type(x) is float:  # exact types: bool, numpy scalars etc. take the full path
+                if whole and not x.is_integer():
+                    return False
+            elif type(x) is not int or not _finite(x):
+                return False
+            return low <= x <= high and above < x < below and math.isfinite(x)
+
+        return number
+    if kind == "array" and set(subschema) <= _ARRAY_KEYS:
+        items = None
+        if "items" in subschema:
+            items = _compile(validator, subschema["items"], depth + 1)
+            if items is None:
+                return None
+        prefix = [_compile(validator, part, depth + 1) for part in subschema.get("prefixItems", [])]
+        if any(part is None for part in prefix):
+            return None
+        shortest = subschema.get("minItems", 0)
+        longest = subschema.get("maxItems", math.inf)
+        start = len(prefix)
+
+        def array(x: Any) -> bool:
+            if type(x) not in (list, tuple) or not shortest <= len(x) <= longest:
+                return False
+            if not all(check(part) for check, part in zip(prefix, x, strict=False)):
+                return False
+            return items is None or all(map(items, x[start:]))
+
+        return array
+    return None
+
+
 @functools.cache
-def strict_validator_class() -> Any:
-    """Draft 2020-12 with the strict ``number``, ``integer`` and ``array`` types above."""
+def strict_validator_class(fast: bool = True) -> Any:
+    """Draft 2020-12 with the strict ``number``, ``integer`` and ``array`` types above, and
+    (``fast``) the fast path for long arrays of simple items (same verdicts, same errors)."""
     import jsonschema
 
     types = jsonschema.Draft202012Validator.TYPE_CHECKER.redefine_many(
         {"number": _is_number, "integer": _is_integer, "array": _is_array}
     )
-    return jsonschema.validators.extend(jsonschema.Draft202012Validator, type_checker=types)
+    if not fast:
+        return jsonschema.validators.extend(jsonschema.Draft202012Validator, type_checker=types)
+    standard_items = jsonschema.Draft202012Validator.VALIDATORS["items"]
+    compiled: dict[int, Callable[[Any], bool] | None] = {}
+
+    def items(validator: Any, subschema: Any, instance: Any, schema: Any) -> Iterator[Any]:
+        if type(instance) in (list, tuple) and "prefixItems" not in schema:
+            key = id(subschema)
+            if key not in compiled:
+                compiled[key] = _compile(validator, subschema)
+            check = compiled[key]
+            if check is not None and all(map(check, instance)):
+                return
+        yield from standard_items(validator, subschema, instance, schema)
+
+    return jsonschema.validators.extend(
+        jsonschema.Draft202012Validator, validators={"items": items}, type_checker=types
+    )
 
 
 @functools.cache
@@ -253,6 +335,19 @@ def _message(source: str, path: Iterable[Any], text: str) -> str:
     return f"{source}: {where}: {text}" if where else f"{source}: {text}"
 
 
+_SAFE_INT = 2**1000  # far inside the double range
+
+
+def _plain_leaf(value: Any) -> bool:
+    """A str, bool, None, finite float or moderate int (exact types: the quick test)."""
+    kind = type(value)
+    if kind is float:
+        return math.isfinite(value)
+    if kind is int:
+        return -_SAFE_INT < value < _SAFE_INT
+    return kind is str or kind is bool or value is None
+
+
 def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
     """Every non-finite number (NaN, an infinity, an int too large for a double) with its
     path, walking iteratively so deep nesting cannot exhaust the stack."""
@@ -262,6 +357,8 @@ def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
         if isinstance(value, dict):
             stack.extend((path + [key], item) for key, item in reversed(list(value.items())))
         elif isinstance(value, (list, tuple)):
+            if all(map(_plain_leaf, value)):  # the common case: a row of ordinary numbers
+                continue
             stack.extend((path + [k], item) for k, item in reversed(list(enumerate(value))))
         elif isinstance(value, numbers.Real) and not isinstance(value, bool) and not _finite(value):
             yield path, value
@@ -322,6 +419,16 @@ def validate(data: Any, kind: str, source: str | None = None) -> None:
             raise InstanceError(_message(source, path, f"non-finite number {show(value)}"))
     except RecursionError:
         raise InstanceError(f"{source}: the data is nested too deeply") from None
+
+
+@contextlib.contextmanager
+def naming(source: str) -> Iterator[None]:
+    """Prefix ``source`` (a file path, or the kind) to any :class:`InstanceError` raised inside,
+    so a constructor's complaint about loaded data names the file it came from."""
+    try:
+        yield
+    except InstanceError as exc:
+        raise InstanceError(f"{source}: {exc}") from None
 
 
 # -- reading files ----------------------------------------------------------------------------------
@@ -401,6 +508,7 @@ __all__ = [
     "json_path",
     "kinds",
     "load_json",
+    "naming",
     "parse_json",
     "reason",
     "schema",
