@@ -39,6 +39,7 @@ import json
 import math
 import numbers
 import os
+import re
 from collections.abc import Callable, Iterable, Iterator
 from importlib import resources
 from pathlib import Path
@@ -432,13 +433,27 @@ def naming(source: str) -> Iterator[None]:
 
 
 # -- reading files ----------------------------------------------------------------------------------
+_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|(-?Infinity|NaN)')
+
+
+def _position(text: str, literal: str) -> str:
+    """`` (line L, column C)`` of the first ``literal`` outside a string, or ``""``."""
+    for match in _TOKENS.finditer(text):
+        if match.group(1) == literal:
+            line = text.count("\n", 0, match.start()) + 1
+            column = match.start() - (text.rfind("\n", 0, match.start()) + 1) + 1
+            return f" (line {line}, column {column})"
+    return ""
+
+
 def parse_json(text: str, source: str = "JSON") -> Any:
     """Parse JSON text strictly: no ``NaN``/``Infinity`` literals, no number that overflows
     a double; every failure an :class:`InstanceError` naming ``source``."""
 
     def constant(literal: str) -> Any:
         raise InstanceError(
-            f"{source}: {literal} is not a number JSON allows (non-finite values are not accepted)"
+            f"{source}: {literal}{_position(text, literal)} is not a number JSON allows "
+            "(non-finite values are not accepted)"
         )
 
     def real(literal: str) -> float:
