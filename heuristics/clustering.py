@@ -39,8 +39,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.heuristics.registry import register
-from taopt.result import FEASIBLE, Solution
+from taopt.registry import register_method
+from taopt.result import FEASIBLE, Routes, Solution
 from taopt.routing.bounds import mcga_tree
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
@@ -208,8 +208,8 @@ def _solution(
         bound=None,
         runtime=time.perf_counter() - start,
         method=method,
-        seed=seed if isinstance(seed, (int, np.integer)) or seed is None else None,
-        routes=routes,
+        seed=seed,
+        solution=Routes(routes),
     )
 
 
@@ -221,7 +221,7 @@ def cluster_then_sequence(
     return [sequence(problem, j, np.flatnonzero(clusters == j).tolist()) for j in range(problem.m)]
 
 
-@register("VN", "routing")
+@register_method(AssignmentProblem, "VN")
 def vn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """VN: Voronoi clustering (2.11) + nearest inserting principle (2.16)–(2.17).
 
@@ -243,7 +243,7 @@ def vn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     )
 
 
-@register("VM", "routing")
+@register_method(AssignmentProblem, "VM")
 def vm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """VM: Voronoi clustering (2.11) + smallest marginal cost principle (2.18)–(2.19)."""
     start = time.perf_counter()
@@ -253,7 +253,7 @@ def vm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     )
 
 
-@register("EVN", "routing")
+@register_method(AssignmentProblem, "EVN")
 def evn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """EVN: extended Voronoi clustering (2.12)–(2.14) + nearest inserting (2.16)–(2.17).
 
@@ -266,7 +266,7 @@ def evn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     )
 
 
-@register("EVM", "routing")
+@register_method(AssignmentProblem, "EVM")
 def evm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """EVM: extended Voronoi clustering (2.12)–(2.14) + smallest marginal cost (2.18)–(2.19).
 
@@ -279,7 +279,7 @@ def evm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     )
 
 
-@register("MC", "routing")
+@register_method(AssignmentProblem, "MC")
 def mc(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """MC: marginal-cost-based clustering (2.15), a complete assignment by itself.
 

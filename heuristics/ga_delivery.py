@@ -38,9 +38,16 @@ from typing import Any
 
 import numpy as np
 
+from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError
-from taopt.heuristics.registry import register
-from taopt.heuristics.sequencing import _validate, delivery_cost_matrix, schedule_order
+from taopt.heuristics.sequencing import (
+    _validate,
+    delivery_cost_matrix,
+    schedule_order,
+    sop_solution,
+)
+from taopt.registry import register_method
 from taopt.result import Solution
 
 __all__ = ["ga_order", "ga_search"]
@@ -209,7 +216,7 @@ def ga_order(
     return path
 
 
-@register("GA", "delivery")
+@register_method(DeliveryInstance, "GA")
 def ga_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """GA order on t* (depot first), scheduled exactly by :func:`taopt.schedule`.
 
@@ -221,9 +228,20 @@ def ga_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     cost, start, pairs, customers = delivery_cost_matrix(instance)
     path, value, history = ga_search(cost, pairs, start, None, seed, **options)
     solution = schedule_order(instance, path, customers)
-    solution.method = "GA"
-    solution.seed = seed if isinstance(seed, int) else None
-    solution.runtime = time.perf_counter() - began
-    solution.info["tstar_cost"] = value
-    solution.info["history"] = history.tolist()
-    return solution
+    return solution.replace(
+        method="GA",
+        seed=seed,
+        runtime=time.perf_counter() - began,
+        info={**solution.info, "tstar_cost": value, "history": history.tolist()},
+    )
+
+
+@register_method(SopProblem, "GA")
+def ga_sop(problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
+    """The topological-sort GA of :func:`ga_order` on the SOP's own cost matrix."""
+    began = time.perf_counter()
+    path, _, history = ga_search(
+        problem.cost, problem.precedences, problem.start, problem.end, seed, **options
+    )
+    solution = sop_solution(problem, path, "GA", seed, began)
+    return solution.replace(info={"history": history.tolist()})

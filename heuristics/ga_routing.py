@@ -37,8 +37,8 @@ import time
 import numpy as np
 
 from taopt.errors import InstanceError
-from taopt.heuristics.registry import register
-from taopt.result import FEASIBLE, Solution
+from taopt.registry import register_method
+from taopt.result import FEASIBLE, Routes, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 
@@ -108,7 +108,7 @@ def inversion_mutation(genes: np.ndarray, rng: np.random.Generator) -> np.ndarra
     return np.take_along_axis(genes, source, axis=1)
 
 
-@register("GA", "routing")
+@register_method(AssignmentProblem, "GA")
 def genetic_algorithm(
     problem: AssignmentProblem,
     seed: int | np.random.Generator | None = 0,
@@ -193,8 +193,8 @@ def genetic_algorithm(
         status=FEASIBLE,
         runtime=time.perf_counter() - start,
         method="GA",
-        seed=seed if isinstance(seed, (int, np.integer)) or seed is None else None,
-        routes=routes,
+        seed=seed,
+        solution=Routes(routes),
         info={"history": history, "population": population, "generations": generations},
     )
 

@@ -1,43 +1,30 @@
-"""Name -> method registry for :func:`taopt.heuristics.run`."""
+"""``taopt.heuristics.run``: run a registered heuristic by name (a thin look-up).
+
+Heuristics register themselves with :func:`taopt.registry.register_method` where they are
+defined; :func:`taopt.solve` is the one entry point for every method. :func:`run` is kept
+for scripts written before it: it looks the heuristic up in the same registry.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
-from taopt.errors import InstanceError
+from taopt.registry import get_method
 from taopt.result import Solution
-
-# METHODS[kind][name] = callable(problem, seed=..., **options) -> Solution
-METHODS: dict[str, dict[str, Callable[..., Solution]]] = {"routing": {}, "delivery": {}}
-
-
-def register(name: str, kind: str) -> Callable[[Callable[..., Solution]], Callable[..., Solution]]:
-    """Decorator: register ``func`` as heuristic ``name`` for problems of ``kind``."""
-
-    def wrap(func: Callable[..., Solution]) -> Callable[..., Solution]:
-        METHODS.setdefault(kind, {})[name] = func
-        return func
-
-    return wrap
-
-
-def problem_kind(problem: Any) -> str:
-    from taopt.routing.problem import AssignmentProblem
-
-    if isinstance(problem, AssignmentProblem):
-        return "routing"
-    from taopt.delivery.instance import DeliveryInstance
-
-    if isinstance(problem, DeliveryInstance):
-        return "delivery"
-    raise InstanceError(f"no heuristics for problems of type {type(problem).__name__}")
 
 
 def run(name: str, problem: Any, seed: int = 0, **options: Any) -> Solution:
-    """Run heuristic ``name`` on ``problem``; the result is scored by ``taopt.evaluate``."""
-    kind = problem_kind(problem)
-    methods = METHODS.get(kind, {})
-    if name not in methods:
-        raise InstanceError(f"unknown {kind} heuristic {name!r}; choose from {sorted(methods)}")
-    return methods[name](problem, seed=seed, **options)
+    """Run heuristic ``name`` on ``problem``; the result is scored by ``taopt.evaluate``.
+
+    Raises
+    ------
+    InstanceError
+        No method ``name`` is registered for this problem's type (the message lists them),
+        or an option it does not take.
+    """
+    method = get_method(problem, name)
+    method.check_options({"seed": seed, **options})
+    return method.func(problem, seed=seed, **options)
+
+
+__all__ = ["run"]

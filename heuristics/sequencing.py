@@ -38,9 +38,11 @@ import networkx as nx
 import numpy as np
 
 from taopt.delivery.dags import cycle_path
+from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.sop import SopProblem, evaluate_order
 from taopt.errors import InstanceError
-from taopt.heuristics.registry import register
-from taopt.result import Solution
+from taopt.registry import register_method
+from taopt.result import FEASIBLE, Order, Solution
 
 __all__ = [
     "nia_order",
@@ -609,14 +611,15 @@ def _delivery_method(name: str, instance: Any, seed: int = 0, **options: Any) ->
     cost, start, pairs, customer_of = delivery_cost_matrix(instance)
     path = _RULES[name](cost, pairs, start, **options)
     solution = schedule_order(instance, path, customer_of)
-    solution.method = name
-    solution.seed = seed if isinstance(seed, int) else None
-    solution.runtime = time.perf_counter() - began
-    solution.info["tstar_cost"] = path_cost(cost, path)
-    return solution
+    return solution.replace(
+        method=name,
+        seed=seed,
+        runtime=time.perf_counter() - began,
+        info={**solution.info, "tstar_cost": path_cost(cost, path)},
+    )
 
 
-@register("NIA", "delivery")
+@register_method(DeliveryInstance, "NIA")
 def nia_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """NIA (5.12)–(5.13) on t* from the depot, then the exact schedule of the order.
 
@@ -627,16 +630,52 @@ def nia_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     return _delivery_method("NIA", instance, seed, **options)
 
 
-@register("MMA", "delivery")
+@register_method(DeliveryInstance, "MMA")
 def mma_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """MMA (5.14)–(5.16) on t* from the depot, then the exact schedule (see NIA)."""
     return _delivery_method("MMA", instance, seed, **options)
 
 
-@register("SMMA", "delivery")
+@register_method(DeliveryInstance, "SMMA")
 def smma_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """SMMA (5.17)–(5.18) on t* from the depot, then the exact schedule (see NIA).
 
     Option ``lookahead`` ("current" or "updated") as in :func:`smma_order`.
     """
     return _delivery_method("SMMA", instance, seed, **options)
+
+
+def sop_solution(problem: SopProblem, path: Sequence[int], name: str, seed: Any, began: float):
+    """A :class:`Solution` for an SOP order, scored by :func:`evaluate_order`."""
+    return Solution(
+        objective=evaluate_order(problem, path),
+        status=FEASIBLE,
+        solution=Order(path),
+        runtime=time.perf_counter() - began,
+        method=name,
+        seed=seed,
+    )
+
+
+def _sop_method(name: str, problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
+    began = time.perf_counter()
+    path = _RULES[name](problem.cost, problem.precedences, problem.start, problem.end, **options)
+    return sop_solution(problem, path, name, seed, began)
+
+
+@register_method(SopProblem, "NIA")
+def nia_sop(problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
+    """NIA (5.12)–(5.13) on the SOP's own cost matrix, from ``start`` to ``end``."""
+    return _sop_method("NIA", problem, seed, **options)
+
+
+@register_method(SopProblem, "MMA")
+def mma_sop(problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
+    """MMA (5.14)–(5.16) on the SOP's own cost matrix, from ``start`` to ``end``."""
+    return _sop_method("MMA", problem, seed, **options)
+
+
+@register_method(SopProblem, "SMMA")
+def smma_sop(problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
+    """SMMA (5.17)–(5.18) on the SOP's own cost matrix, from ``start`` to ``end``."""
+    return _sop_method("SMMA", problem, seed, **options)

@@ -3,10 +3,50 @@
 * :func:`solve_routing` — chapter 2, (2.2)–(2.5) with DFJ / MTZ / flow subtour elimination.
 * :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7).
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
+* :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
+
+Importing this package registers the exact methods in :mod:`taopt.registry`
+(``taopt.solve(problem, "exact")``). They never run a heuristic themselves: the registry's
+``warm_start`` names the heuristic(s) whose best result :func:`taopt.solve` passes in as
+``incumbent``.
 """
 
+from __future__ import annotations
+
+from typing import Any
+
+from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.sop import SopProblem
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
-from taopt.models.sop import solve_sop
+from taopt.models.sop import solve_sop, solve_sop_problem
+from taopt.registry import register_method
+from taopt.routing.problem import AssignmentProblem
 
-__all__ = ["solve_routing", "solve_delivery", "solve_sop"]
+
+def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> float:
+    """Valid lower bound from the LP relaxation of the exact model (2.2)–(2.5).
+
+    Calls ``solve_routing(problem, sec=sec, relax=True, **options)`` and returns its
+    objective (the relaxation's value). With "dfj" (all of (2.5)) the LP lies inside the
+    arborescence polytope (in-degree 1 plus the subtour constraints imply a cut into every
+    target set), so it is never below :func:`taopt.bounds.arborescence`; "mtz" and "flow"
+    give weaker LPs.
+    """
+    result = solve_routing(problem, sec=sec, relax=True, **options)
+    return float(result.bound if result.bound is not None else result.objective)
+
+
+register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",))(solve_routing)
+# the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
+# exact method `taopt solve` runs by default), so it runs only when asked for
+register_method(
+    DeliveryInstance,
+    "exact",
+    category="exact",
+    warm_start=("NIA", "MMA", "SMMA"),
+    default=False,
+)(solve_delivery)
+register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
+
+__all__ = ["solve_routing", "solve_delivery", "solve_sop", "solve_sop_problem", "lp_bound"]

@@ -577,23 +577,8 @@ def _cutoff(instance: DeliveryInstance, incumbent: Any) -> tuple[float, Plan] | 
     """Makespan and plan of the incumbent (see :func:`solve_delivery`), or None."""
     if incumbent is None:
         return None
-    if isinstance(incumbent, str):
-        if incumbent != "auto":
-            raise InstanceError(
-                f"incumbent must be 'auto', a Plan, a Solution or None, got {incumbent!r}"
-            )
-        try:
-            from taopt.heuristics import run
-        except ImportError:  # heuristics not installed: solve without a cut-off
-            return None
-        best = min((run(name, instance) for name in ("NIA", "MMA", "SMMA")), key=_objective)
-        return evaluate_plan(instance, best.plan), best.plan
     plan = incumbent.plan if hasattr(incumbent, "plan") else incumbent
     return evaluate_plan(instance, plan), plan
-
-
-def _objective(solution: Solution) -> float:
-    return solution.objective
 
 
 def solve_delivery(
@@ -602,7 +587,7 @@ def solve_delivery(
     mip_gap: float | None = None,
     verbose: bool = False,
     customer_legs: bool = False,
-    incumbent: Any = "auto",
+    incumbent: Any = None,
 ) -> Solution:
     """Exact optimum of (5.1)–(5.7) by the linear model of this module (HiGHS).
 
@@ -622,14 +607,15 @@ def solve_delivery(
         Print HiGHS's log.
     customer_legs : bool
         Add the customer-pair valid inequalities (see :func:`build`).
-    incumbent : "auto", Plan, Solution or None
+    incumbent : Plan, Solution or None
         A known feasible plan whose makespan f (scored by :func:`taopt.evaluate`)
         is given to HiGHS as an objective cut-off (``objective_bound`` =
         f·(1 + 1e-6)): nodes whose bound exceeds it are pruned. It only prunes, so
         the result is still proven by HiGHS's own bound, and the returned plan is
-        HiGHS's. "auto" (default) uses the best of the NIA, MMA and SMMA delivery
-        heuristics when :mod:`taopt.heuristics` is importable (cuts the 8-customer
-        benchmark times by about a third); None uses no cut-off.
+        HiGHS's. The model never runs a heuristic itself: the caller passes one
+        (``taopt.solve(instance, "exact")`` passes the best of NIA, MMA and SMMA,
+        which cuts the 8-customer benchmark times by about a third); None (default)
+        uses no cut-off.
 
     Returns
     -------
@@ -716,8 +702,7 @@ def solve_delivery(
         bound=bound,
         runtime=time.perf_counter() - began,
         method="exact-milp",
-        plan=plan,
-        order=list(plan.order),
+        solution=plan,
         info={
             "model_objective": model_objective,
             "binaries": int(model.sortie.size),

@@ -46,7 +46,7 @@ import scipy.sparse as sp
 
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import OPTIMALITY_TOLERANCE, certify, solve_highs
-from taopt.result import RELAXATION, Solution
+from taopt.result import RELAXATION, Routes, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
@@ -574,7 +574,7 @@ def solve_routing(
         bound=bound,
         runtime=time.perf_counter() - start,
         method=f"exact-{sec}",
-        routes=best_routes,
+        solution=Routes(best_routes),
         info={
             "rounds": rounds,
             "cuts": len(cuts),

@@ -64,66 +64,26 @@ import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 
+from taopt.delivery.sop import SopProblem, check_sop
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import certify, solve_highs
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution
 
 FORMULATIONS = ("flow", "mtz")
 
-__all__ = ["FORMULATIONS", "SopModel", "build", "decode", "describe", "solve_sop", "check_sop"]
+__all__ = [
+    "FORMULATIONS",
+    "SopModel",
+    "build",
+    "decode",
+    "describe",
+    "solve_sop",
+    "solve_sop_problem",
+    "check_sop",
+]
 
 
 # ----------------------------------------------------------------------------- data
-def check_sop(cost, precedences, start: int, end: int) -> tuple[np.ndarray, nx.DiGraph]:
-    """Validate SOP data; return the cost array and the closed precedence DAG.
-
-    The DAG holds every node, the given pairs, ``start -> v`` and ``v -> end``
-    for every other node, transitively closed.
-
-    Raises
-    ------
-    InstanceError
-        Non-square or NaN cost, bad indices, start == end (n > 1), a self or
-        cyclic precedence, a precedence putting something before start or
-        after end.
-    """
-    cost = np.array(cost, dtype=float)
-    if cost.ndim != 2 or cost.shape[0] != cost.shape[1] or cost.shape[0] < 2:
-        raise InstanceError(f"cost must be a square matrix with n >= 2, got shape {cost.shape}")
-    if np.isnan(cost).any():
-        i, j = np.argwhere(np.isnan(cost))[0]
-        raise InstanceError(f"cost[{i}, {j}] is NaN")
-    if np.isneginf(cost).any():
-        i, j = np.argwhere(np.isneginf(cost))[0]
-        raise InstanceError(f"cost[{i}, {j}] is -inf")
-    n = cost.shape[0]
-    for name, node in (("start", start), ("end", end)):
-        if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
-            raise InstanceError(f"{name} = {node!r} is not a node index in 0..{n - 1}")
-    if start == end:
-        raise InstanceError(f"start and end are the same node {start}")
-    graph = nx.DiGraph()
-    graph.add_nodes_from(range(n))
-    for pair in precedences:
-        r, j = (int(v) for v in pair)
-        if not (0 <= r < n and 0 <= j < n):
-            raise InstanceError(f"precedence ({r}, {j}) has a node outside 0..{n - 1}")
-        if r == j:
-            raise InstanceError(f"self-precedence ({r}, {j})")
-        if j == start or r == end:
-            raise InstanceError(f"precedence ({r}, {j}) puts a node before start or after end")
-        graph.add_edge(r, j)
-    for v in range(n):
-        if v != start:
-            graph.add_edge(start, v)
-        if v != end:
-            graph.add_edge(v, end)
-    if not nx.is_directed_acyclic_graph(graph):
-        cycle = [u for u, _ in nx.find_cycle(graph)]
-        raise InstanceError("precedence cycle " + " -> ".join(str(v) for v in cycle + [cycle[0]]))
-    return cost, nx.transitive_closure_dag(graph)
-
-
 def usable_arcs(cost: np.ndarray, closure: nx.DiGraph) -> tuple[np.ndarray, np.ndarray]:
     """Tails and heads of the arcs a path respecting ``closure`` can use.
 
@@ -520,7 +480,7 @@ def solve_sop(
         bound=bound,
         runtime=time.perf_counter() - began,
         method=f"exact-sop-{formulation}",
-        order=order,
+        solution=Order(order),
         info={
             "arcs": len(model.tails),
             "variables": sum(v.size for v in model.problem.variables()),
@@ -530,4 +490,24 @@ def solve_sop(
             "solver_status": run.solver_status,
             "stopped_by": stopped_by,
         },
+    )
+
+
+def solve_sop_problem(
+    problem: SopProblem,
+    time_limit: float | None = None,
+    formulation: str = "flow",
+    mip_gap: float = 1e-9,
+    verbose: bool = False,
+) -> Solution:
+    """:func:`solve_sop` on a :class:`taopt.SopProblem` (the registered "exact" method)."""
+    return solve_sop(
+        problem.cost,
+        problem.precedences,
+        problem.start,
+        problem.end,
+        time_limit=time_limit,
+        formulation=formulation,
+        mip_gap=mip_gap,
+        verbose=verbose,
     )

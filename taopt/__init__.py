@@ -11,6 +11,8 @@ Quick tour
 >>> problem = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
 >>> taopt.evaluate(problem, [[1, 0]])
 4.0
+>>> taopt.solve(problem, "exact").routes
+[[1, 0]]
 """
 
 from __future__ import annotations
@@ -26,21 +28,37 @@ from taopt.errors import (
 )
 from taopt.fields import GriddedField, LinearField, UniformField, thesis_field
 from taopt.instance import Instance, Obstacle, Target, Vehicle
-from taopt.result import Solution
+from taopt.result import Order, Routes, Solution, Status
 from taopt.routing.problem import AssignmentProblem
 from taopt.scoring import evaluate
 
 __version__ = "0.1.0"
 
 _LAZY = {
-    # chapter 5 objects live in taopt.delivery; imported on first use
-    "DeliveryInstance": ("taopt.delivery.instance", "DeliveryInstance"),
-    "Plan": ("taopt.delivery.instance", "Plan"),
+    # imported on first use, so `import taopt` stays light
+    "DeliveryInstance": ("taopt.delivery", "DeliveryInstance"),
+    "Plan": ("taopt.delivery", "Plan"),
+    "SopProblem": ("taopt.delivery", "SopProblem"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
+    "CapabilityProblem": ("taopt.capability", "CapabilityProblem"),
+    "CommProblem": ("taopt.comm", "CommProblem"),
+    # the orchestration layer: imports the method packages (cvxpy, HiGHS)
+    "solve": ("taopt.pipeline", "solve"),
 }
 
 
-_SUBMODULES = ("models", "heuristics", "bounds", "navigation", "routing", "delivery", "plot")
+_SUBMODULES = (
+    "models",
+    "heuristics",
+    "bounds",
+    "navigation",
+    "routing",
+    "delivery",
+    "plot",
+    "registry",
+    "capability",
+    "comm",
+)
 
 
 def __getattr__(name: str) -> Any:
@@ -61,9 +79,14 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
+    "solve",
     "AssignmentProblem",
     "DeliveryInstance",
+    "SopProblem",
     "Plan",
+    "Routes",
+    "Order",
+    "Status",
     "Instance",
     "Vehicle",
     "Target",

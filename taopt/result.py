@@ -1,70 +1,325 @@
-"""The one result type shared by exact models, heuristics and bounds.
+"""The one result type shared by every problem family and method, and its payloads.
 
-A :class:`Solution` carries the status, the objective (scored by the problem's
-one ``evaluate`` function), the best proven lower bound, the gap, the runtime,
-the seed and the domain solution itself (routes for chapter 2, a plan for
-chapter 5, an order for sequencing problems).
+A :class:`Solution` carries the status (a :class:`Status`), the objective (scored by the
+family's one :func:`taopt.evaluate`), the best proven lower bound, the gap, the runtime,
+the seed, method details (``info``) and ONE payload, :attr:`Solution.solution`: a domain
+object of the problem's family,
+
+* :class:`Routes` — one list of target indices per vehicle (chapters 2 and 3);
+* :class:`taopt.delivery.Plan` — sorties of a truck–drone plan (chapter 5);
+* :class:`Order` — a visiting order (sequential ordering, TSPLIB SOP);
+* the driven trajectories of a chapter 4 simulation.
+
+Each payload type has ``to_dict`` / ``from_dict`` and registers itself under a name with
+:func:`register_payload`, so a solution round-trips through JSON
+(:meth:`Solution.save` / :meth:`Solution.load`) and ``taopt verify`` re-scores it from
+the instance alone. ``.routes``, ``.plan`` and ``.order`` are read-only shortcuts to the
+payload where they apply (``None`` elsewhere).
+
+Example
+-------
+>>> s = Solution(objective=4.0, status="feasible", solution=Routes([[1, 0]]), method="MC")
+>>> s.routes, s.status
+([[1, 0]], <Status.FEASIBLE: 'feasible'>)
+>>> Solution.from_dict(s.to_dict()) == s
+True
 """
 
 from __future__ import annotations
 
+import dataclasses
+import enum
+import json
 import math
+import os
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-# Named statuses. Only a proven optimum is called OPTIMAL.
-OPTIMAL = "optimal"
-TIME_LIMIT = "time_limit"  # stopped by a limit; objective is the incumbent, bound is proven
-FEASIBLE = "feasible"  # a feasible solution with no optimality claim (heuristics)
-RELAXATION = "relaxation"  # the value of a relaxation: a bound, not a solution
-INFEASIBLE = "infeasible"
-ERROR = "error"
+import numpy as np
 
-STATUSES = (OPTIMAL, TIME_LIMIT, FEASIBLE, RELAXATION, INFEASIBLE, ERROR)
+from taopt.errors import FeasibilityError, InstanceError
 
 
-@dataclass
+class Status(str, enum.Enum):
+    """Named statuses. Only a proven optimum is called OPTIMAL."""
+
+    OPTIMAL = "optimal"
+    TIME_LIMIT = "time_limit"  # stopped by a limit: objective is the incumbent, bound is proven
+    FEASIBLE = "feasible"  # a feasible solution with no optimality claim (heuristics)
+    RELAXATION = "relaxation"  # the value of a relaxation: a bound, not a solution
+    INFEASIBLE = "infeasible"
+    ERROR = "error"
+
+    def __str__(self) -> str:
+        return self.value
+
+    def __format__(self, spec: str) -> str:
+        return format(self.value, spec)
+
+
+OPTIMAL = Status.OPTIMAL
+TIME_LIMIT = Status.TIME_LIMIT
+FEASIBLE = Status.FEASIBLE
+RELAXATION = Status.RELAXATION
+INFEASIBLE = Status.INFEASIBLE
+ERROR = Status.ERROR
+STATUSES = tuple(Status)
+
+# -- payloads ------------------------------------------------------------------------------
+
+_PAYLOADS: dict[str, type] = {}
+
+
+def register_payload(name: str) -> Callable[[type], type]:
+    """Class decorator: register a payload type under ``name`` for JSON round trips.
+
+    The class needs ``to_dict() -> dict`` and ``from_dict(dict)``; its ``payload_kind``
+    attribute is set to ``name``.
+    """
+
+    def wrap(cls: type) -> type:
+        if name in _PAYLOADS and _PAYLOADS[name] is not cls:
+            raise InstanceError(f"payload kind {name!r} is already registered")
+        _PAYLOADS[name] = cls
+        cls.payload_kind = name  # type: ignore[attr-defined]
+        return cls
+
+    return wrap
+
+
+def payload_type(name: str) -> type:
+    """The payload class registered under ``name`` (families register theirs on import)."""
+    from taopt.registry import ensure_families
+
+    ensure_families()
+    try:
+        return _PAYLOADS[name]
+    except KeyError:
+        raise InstanceError(f"unknown payload kind {name!r}; known: {sorted(_PAYLOADS)}") from None
+
+
+def _index_list(values: Any, what: str) -> tuple[int, ...]:
+    if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
+        raise FeasibilityError(f"{what} must be a list of integer indices, got {values!r}")
+    out = []
+    for k, value in enumerate(values):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            if not (isinstance(value, float) and value.is_integer()):
+                raise FeasibilityError(f"{what}[{k}] = {value!r} is not an integer index")
+        out.append(int(value))
+    return tuple(out)
+
+
+@register_payload("routes")
+@dataclass(frozen=True)
+class Routes:
+    """One route per vehicle, each a list of target indices in visiting order.
+
+    Iterates as lists (``for route in routes``), indexes as lists (``routes[j]``) and
+    compares equal to a list of lists, so code written for plain lists keeps working.
+
+    Example
+    -------
+    >>> r = Routes([[2, 0], [], [1]])
+    >>> len(r), r[0], r == [[2, 0], [], [1]]
+    (3, [2, 0], True)
+    """
+
+    routes: tuple[tuple[int, ...], ...]
+
+    def __init__(self, routes: Any) -> None:
+        if isinstance(routes, Routes):
+            routes = routes.routes
+        if isinstance(routes, (str, bytes)) or not isinstance(routes, (Sequence, np.ndarray)):
+            raise FeasibilityError(f"routes must be a list of lists, got {routes!r}")
+        clean = tuple(_index_list(r, f"route {j}") for j, r in enumerate(routes))
+        object.__setattr__(self, "routes", clean)
+
+    def __iter__(self) -> Iterator[list[int]]:
+        return (list(r) for r in self.routes)
+
+    def __len__(self) -> int:
+        return len(self.routes)
+
+    def __getitem__(self, j: int) -> list[int]:
+        return list(self.routes[j])
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Routes):
+            return self.routes == other.routes
+        if isinstance(other, (list, tuple)):
+            try:
+                return self.routes == tuple(tuple(int(t) for t in r) for r in other)
+            except (TypeError, ValueError):
+                return False
+        return NotImplemented
+
+    __hash__ = object.__hash__
+
+    def as_lists(self) -> list[list[int]]:
+        """The routes as a fresh list of lists."""
+        return [list(r) for r in self.routes]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"routes": self.as_lists()}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Routes:
+        if not isinstance(data, Mapping) or "routes" not in data:
+            raise InstanceError("a routes payload needs a 'routes' list")
+        return cls(data["routes"])
+
+    def __repr__(self) -> str:
+        return f"Routes({self.as_lists()!r})"
+
+
+@register_payload("order")
+@dataclass(frozen=True)
+class Order:
+    """A visiting order: the sequence of node indices of a Hamiltonian path (SOP)."""
+
+    sequence: tuple[int, ...]
+
+    def __init__(self, sequence: Any) -> None:
+        if isinstance(sequence, Order):
+            sequence = sequence.sequence
+        object.__setattr__(self, "sequence", _index_list(sequence, "order"))
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.sequence)
+
+    def __len__(self) -> int:
+        return len(self.sequence)
+
+    def __getitem__(self, k: int) -> int:
+        return self.sequence[k]
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Order):
+            return self.sequence == other.sequence
+        if isinstance(other, (list, tuple)):
+            return list(self.sequence) == list(other)
+        return NotImplemented
+
+    __hash__ = object.__hash__
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"order": list(self.sequence)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Order:
+        if not isinstance(data, Mapping) or "order" not in data:
+            raise InstanceError("an order payload needs an 'order' list")
+        return cls(data["order"])
+
+    def __repr__(self) -> str:
+        return f"Order({list(self.sequence)!r})"
+
+
+# -- the result ----------------------------------------------------------------------------
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as plain JSON data (numpy to lists/numbers, non-finite floats to None)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if value is None or isinstance(value, str):
+        return value
+    if hasattr(value, "to_dict"):
+        return _plain(value.to_dict())
+    return str(value)
+
+
+@dataclass(frozen=True)
 class Solution:
-    """Result of a method on a problem.
+    """Result of a method on a problem (one type for every family and method).
 
     Attributes
     ----------
     objective : float
-        Objective value (total travel time for chapter 2, makespan for chapter 5).
-    status : str
-        One of :data:`STATUSES`.
+        Objective value (total travel time for chapters 2–3, total distance for chapter 4,
+        makespan for chapter 5, path cost for SOP). For a relaxation, the relaxation's value.
+    status : Status
+        A :class:`Status` (a plain string such as ``"optimal"`` is accepted and converted).
+    solution : payload or None
+        The ONE domain solution: :class:`Routes`, a ``Plan``, an :class:`Order`, or
+        trajectories. None only for a relaxation or an error.
     bound : float or None
         Best proven lower bound on the optimum, or None when the method proves none.
     runtime : float
         Wall-clock seconds spent by the method.
     method : str
-        Name of the method that produced it ("exact-dfj", "MC", "GA", ...).
+        Name of the method that produced it (as registered: "exact", "MC", "GA", ...).
     seed : int or None
         Seed of a randomised method.
-    routes : list of list of int, optional
-        Chapter 2: one list of target indices per vehicle, in visiting order.
-    plan : object, optional
-        Chapter 5: a :class:`taopt.delivery.Plan`.
-    order : list of int, optional
-        Sequencing problems (SOP): the visiting order.
     info : dict
-        Method-specific details (iterations, cuts, solver messages).
+        Method-specific details (iterations, cuts, solver messages, bytes exchanged).
     """
 
     objective: float
-    status: str
+    status: Status
+    solution: Any = None
     bound: float | None = None
     runtime: float = 0.0
     method: str = ""
     seed: int | None = None
-    routes: list[list[int]] | None = None
-    plan: Any = None
-    order: list[int] | None = None
     info: dict[str, Any] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        try:
+            set_(self, "status", Status(self.status))
+        except ValueError:
+            raise InstanceError(
+                f"unknown status {self.status!r}; one of {[s.value for s in Status]}"
+            ) from None
+        set_(self, "objective", float(self.objective))
+        if self.bound is not None:
+            set_(self, "bound", float(self.bound))
+        set_(self, "runtime", float(self.runtime))
+        if self.seed is not None:
+            if isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool):
+                set_(self, "seed", int(self.seed))
+            else:  # a Generator or other non-integer seed is not recorded
+                set_(self, "seed", None)
+        set_(self, "info", dict(self.info))
+
+    # -- shortcuts to the payload ------------------------------------------------------------
+    @property
+    def routes(self) -> list[list[int]] | None:
+        """The routes (a fresh list of lists) when the payload is :class:`Routes`."""
+        payload = self.solution
+        return payload.as_lists() if isinstance(payload, Routes) else None
+
+    @property
+    def plan(self) -> Any:
+        """The chapter 5 ``Plan`` when the payload is one."""
+        return self.solution if getattr(self.solution, "payload_kind", None) == "plan" else None
+
+    @property
+    def order(self) -> list[int] | None:
+        """The visiting order (a fresh list): an :class:`Order` payload, or a plan's order."""
+        payload = self.solution
+        if isinstance(payload, Order):
+            return list(payload)
+        order = getattr(payload, "order", None)
+        return None if order is None else [int(k) for k in order]
+
+    # -- derived -------------------------------------------------------------------------------
     @property
     def gap(self) -> float | None:
-        """Relative gap ``(objective - bound) / objective``; None without a bound."""
+        """Relative gap ``(objective - bound) / |objective|``; None without a bound."""
         if self.bound is None or not math.isfinite(self.objective):
             return None
         if self.objective == 0:
@@ -73,7 +328,11 @@ class Solution:
 
     @property
     def is_optimal(self) -> bool:
-        return self.status == OPTIMAL
+        return self.status is Status.OPTIMAL
+
+    def replace(self, **changes: Any) -> Solution:
+        """A copy with some fields changed (the solution itself is frozen)."""
+        return dataclasses.replace(self, **changes)
 
     def summary(self) -> str:
         """One line: method, status, objective, bound, gap and runtime."""
@@ -88,5 +347,86 @@ class Solution:
             parts.append(f"seed={self.seed}")
         return ", ".join(parts)
 
-    def __str__(self) -> str:  # pragma: no cover - cosmetic
+    def __str__(self) -> str:
         return self.summary()
+
+    # -- JSON --------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data (schema_version 1, kind "solution")."""
+        payload = self.solution
+        kind = getattr(payload, "payload_kind", None)
+        if payload is not None and kind is None:
+            raise InstanceError(f"payload of type {type(payload).__name__} is not registered")
+        return {
+            "schema_version": 1,
+            "kind": "solution",
+            "method": self.method,
+            "status": self.status.value,
+            "objective": _plain(self.objective),
+            "bound": _plain(self.bound),
+            "runtime": self.runtime,
+            "seed": self.seed,
+            "payload_kind": kind,
+            "payload": None if payload is None else _plain(payload.to_dict()),
+            "info": _plain(self.info),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Solution:
+        """Inverse of :meth:`to_dict` (validated against the solution schema first)."""
+        from taopt.schemas import validate
+
+        validate(data, "solution")
+        kind = data.get("payload_kind")
+        payload = None
+        if kind is not None:
+            payload = payload_type(kind).from_dict(data["payload"])
+        objective = data["objective"]
+        return cls(
+            objective=math.nan if objective is None else objective,
+            status=data["status"],
+            solution=payload,
+            bound=data.get("bound"),
+            runtime=data.get("runtime", 0.0),
+            method=data.get("method", ""),
+            seed=data.get("seed"),
+            info=dict(data.get("info") or {}),
+        )
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the solution as JSON, atomically."""
+        from taopt.instance import save_json
+
+        save_json(self.to_dict(), path)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Solution:
+        """Read a solution written by :meth:`save`."""
+        from taopt.instance import load_json
+
+        return cls.from_dict(load_json(path))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Solution):
+            return NotImplemented
+        mine, theirs = self.to_dict(), other.to_dict()
+        return json.dumps(mine, sort_keys=True) == json.dumps(theirs, sort_keys=True)
+
+    __hash__ = object.__hash__
+
+
+__all__ = [
+    "Status",
+    "Solution",
+    "Routes",
+    "Order",
+    "register_payload",
+    "payload_type",
+    "OPTIMAL",
+    "TIME_LIMIT",
+    "FEASIBLE",
+    "RELAXATION",
+    "INFEASIBLE",
+    "ERROR",
+    "STATUSES",
+]

@@ -1,43 +1,46 @@
-"""``taopt.evaluate``: the one scorer per problem (DESIGN invariant 1)."""
+"""``taopt.evaluate``: the one scorer per problem family (DESIGN invariant 1).
+
+:func:`evaluate` is a ``functools.singledispatch`` function on the problem's class; each
+family hooks its scorer in with :func:`taopt.registry.register_family`. The scorer checks
+feasibility first and raises :class:`~taopt.errors.FeasibilityError` naming the violated
+constraint and the item.
+"""
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 from taopt.errors import InstanceError
 
 
+@functools.singledispatch
 def evaluate(problem: Any, solution: Any) -> float:
-    """Score a solution after checking its feasibility.
+    """Score a solution of ``problem`` after checking its feasibility.
 
     Parameters
     ----------
-    problem : AssignmentProblem or DeliveryInstance
-    solution : routes (list of lists), a Plan, or a :class:`~taopt.result.Solution`
+    problem : a registered problem (AssignmentProblem, DeliveryInstance, SopProblem, ...)
+    solution : its payload (routes as a list of lists or ``Routes``, a ``Plan``, an
+        ``Order``, ...) or a :class:`~taopt.result.Solution` carrying one
 
     Returns
     -------
     float
-        Chapter 2: total travel time (2.2). Chapter 5: the makespan (5.1).
+        The family's objective: total travel time (2.2) / (3.1), total distance (4.1),
+        the makespan (5.1), the path cost of an SOP order.
 
     Raises
     ------
     FeasibilityError
         Naming the violated constraint and the item.
+    InstanceError
+        ``problem`` is not of a registered type.
     """
-    from taopt.routing.problem import AssignmentProblem, evaluate_routes
+    raise InstanceError(
+        f"evaluate() does not know problems of type {type(problem).__name__} "
+        "(no family registered for it)"
+    )
 
-    if isinstance(problem, AssignmentProblem):
-        routes = getattr(solution, "routes", solution)
-        if routes is None:
-            raise InstanceError("this solution carries no routes to evaluate")
-        return evaluate_routes(problem, routes)
-    from taopt.delivery.evaluate import evaluate_plan
-    from taopt.delivery.instance import DeliveryInstance
 
-    if isinstance(problem, DeliveryInstance):
-        plan = getattr(solution, "plan", None) if hasattr(solution, "objective") else solution
-        if plan is None:
-            raise InstanceError("this solution carries no plan to evaluate")
-        return evaluate_plan(problem, plan)
-    raise InstanceError(f"evaluate() does not know problems of type {type(problem).__name__}")
+__all__ = ["evaluate"]

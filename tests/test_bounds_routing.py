@@ -10,7 +10,7 @@ import taopt.bounds
 import taopt.heuristics
 from taopt.errors import InstanceError
 from taopt.routing import bounds
-from taopt.routing.claims import exact_optimum
+from taopt.studies.routing_claims import exact_optimum
 
 
 def small_problems(count: int, seed: int, symmetric: bool | None = None, max_n: int = 7):
@@ -121,6 +121,6 @@ def test_f_da_rejects_unknown_tree():
 def test_lp_bound_is_valid():
     """The LP relaxation of helper-2's model is a lower bound (fails loudly if missing)."""
     for problem in small_problems(4, seed=6, max_n=6):
-        lp = bounds.lp_bound(problem)  # DFJ: all of (2.5)
+        lp = taopt.models.lp_bound(problem)  # DFJ: all of (2.5)
         assert lp <= exact_optimum(problem)[0] + 1e-6
         assert lp >= bounds.arborescence_bound(problem) - 1e-6

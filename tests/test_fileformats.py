@@ -245,6 +245,36 @@ def test_saved_instances_match_the_schema(seed, n, m):
     assert Instance.from_dict(inst.to_dict()) == inst
 
 
+def test_other_kinds_round_trip_through_their_schemas():
+    """CapabilityProblem (one matrix with an untravellable pair, or one per capability),
+    SopProblem and Solution: to_dict is valid and from_dict rebuilds the same data."""
+    from taopt.capability.problem import CapabilityProblem
+    from taopt.delivery.sop import SopProblem
+
+    cost = np.full((5, 5), 3.0)
+    cost[0, 2] = np.inf  # written as null
+    demands = (frozenset({"a"}), frozenset({"a", "b"}), frozenset({"b"}))
+    for matrices in (cost, {"a": cost, "b": 2 * cost}):
+        data = CapabilityProblem(matrices, 3, ("a", "b"), demands).to_dict()
+        schemas.validate(data, "capability_problem")
+        assert CapabilityProblem.from_dict(data).to_dict() == data
+    data["cost"]["a"][1][2] = "x"
+    with pytest.raises(
+        InstanceError, match=r'cost\.a\[1\]\[2\]: expected a number or null, got "x"'
+    ):
+        CapabilityProblem.from_dict(data)
+    data["cost"] = {}
+    with pytest.raises(InstanceError, match=r"cost: expected at least 1 key, got 0"):
+        CapabilityProblem.from_dict(data)
+    data = SopProblem(np.ones((4, 4)), ((1, 2),), 0, 3).to_dict()
+    schemas.validate(data, "sop_problem")
+    assert SopProblem.from_dict(data).to_dict() == data
+    solution = taopt.solve(AssignmentProblem(np.ones((4, 4)), 2), "MC")
+    data = solution.to_dict()
+    schemas.validate(data, "solution")
+    assert type(solution).from_dict(data).to_dict() == data
+
+
 # -- the problems a user measured (issue 7, item 6) ----------------------------------------------------
 def test_null_region_names_the_item():
     """A null region is an InstanceError naming 'region', not a TypeError."""

@@ -16,7 +16,7 @@ import taopt
 import taopt.heuristics
 from taopt.errors import InstanceError
 from taopt.heuristics import clustering, ga_routing
-from taopt.routing.claims import exact_optimum
+from taopt.studies.routing_claims import exact_optimum
 
 ROUTING = ["VN", "VM", "EVN", "EVM", "MC", "GA"]
 GA_SMALL = {"population": 30, "generations": 40}
@@ -247,7 +247,8 @@ def test_ga_rejects_bad_options():
 
 
 def test_unknown_heuristic_is_an_instance_error():
-    with pytest.raises(InstanceError, match="unknown"):
+    """An unregistered name is an InstanceError naming it and listing the methods."""
+    with pytest.raises(InstanceError, match="no method 'XYZ'.*MC"):
         taopt.heuristics.run("XYZ", line_problem([1, 0], 1))
 
 

@@ -122,17 +122,18 @@ def test_without_incumbent_cutoff_and_with_a_given_plan():
 
 
 def test_time_limit_keeps_a_certified_gap():
-    """A tiny limit: never a fake optimum; the bound stays below the true optimum."""
+    """A tiny limit: never a fake optimum; the bound stays below the true optimum (the
+    registry's warm start gives the MILP its incumbent)."""
     inst = random_instance(1, n=7)
     expected = enumerate_optimum(inst)
-    sol = solve_delivery(inst, time_limit=0.05)
+    sol = taopt.solve(inst, "exact", time_limit=0.05)
     assert sol.status in ("time_limit", "optimal")
     assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=REL)
     assert sol.objective >= expected * (1 - REL)
     assert sol.bound <= expected * (1 + REL)
 
 
-@pytest.mark.parametrize("incumbent", [None, "auto"])
+@pytest.mark.parametrize("incumbent", [None, "heuristic"])
 def test_loose_mip_gap_is_not_called_optimal(incumbent):
     """mip_gap=0.5 stops HiGHS early (review item 4): "optimal" only within 1e-6, else
     "feasible" with a proven bound, and never worse than the incumbent."""
@@ -140,7 +141,10 @@ def test_loose_mip_gap_is_not_called_optimal(incumbent):
 
     inst = random_instance(2, n=6)
     optimum = enumerate_optimum(inst)
-    sol = solve_delivery(inst, mip_gap=0.5, incumbent=incumbent)
+    if incumbent == "heuristic":  # taopt.solve passes the best of NIA, MMA and SMMA
+        sol = taopt.solve(inst, "exact", mip_gap=0.5)
+    else:
+        sol = solve_delivery(inst, mip_gap=0.5, incumbent=None)
     assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=1e-9)
     assert sol.bound <= optimum * (1 + REL) and sol.objective >= optimum * (1 - REL)
     if sol.status == "optimal":
@@ -188,10 +192,10 @@ def test_time_limited_run_on_many_stops_is_no_worse_than_the_heuristics():
     plan (never worse than NIA/MMA/SMMA) with a bound below the subset-DP optimum."""
     import taopt.heuristics
     from taopt.delivery.schedule import optimal_plan
-    from taopt.delivery.study import study_instance
+    from taopt.studies.delivery import study_instance
 
     inst = study_instance("small", 0, seed=3, ratio=0.3)
-    sol = solve_delivery(inst, time_limit=2.0)
+    sol = taopt.solve(inst, "exact", time_limit=2.0)
     best_heuristic = min(
         taopt.heuristics.run(name, inst).objective for name in ("NIA", "MMA", "SMMA")
     )

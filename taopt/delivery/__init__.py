@@ -5,13 +5,53 @@ Modules: :mod:`~taopt.delivery.instance` (DeliveryInstance, Plan),
 :mod:`~taopt.delivery.schedule` (exact DP for a fixed order),
 :mod:`~taopt.delivery.costs` (t* of (5.8)–(5.11), E^d),
 :mod:`~taopt.delivery.bounds` (Proposition 5.3), :mod:`~taopt.delivery.dags`
-(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.delivery.study`.
+(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.studies.delivery`.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+
+from taopt.delivery.bounds import arborescence_bound
+from taopt.delivery.evaluate import evaluate_plan
+from taopt.delivery.instance import DeliveryInstance, Plan
+from taopt.delivery.sop import SopProblem, evaluate_order, sop_arborescence_bound
+from taopt.registry import register_family
+from taopt.result import Order
+
+
+def _plot_plan(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+    """The truck path and drone sorties on the street network."""
+    from taopt.delivery.plot import plot_plan
+
+    plot_plan(problem, plan).figure.savefig(path, dpi=120)
+
+
+def _plot_gantt(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+    """The truck's and the drone's timelines (Gantt chart)."""
+    from taopt.delivery.plot import plot_gantt
+
+    plot_gantt(problem, plan).figure.savefig(path, dpi=120)
+
+
+register_family(
+    DeliveryInstance,
+    kind="delivery_instance",
+    payload=Plan,
+    title="precedence-constrained truck-drone delivery (chapter 5)",
+    evaluate=evaluate_plan,
+    bounds={"arborescence": arborescence_bound},
+    plots={"plan": _plot_plan, "gantt": _plot_gantt},
+)
+register_family(
+    SopProblem,
+    kind="sop_problem",
+    payload=Order,
+    title="sequential ordering, TSPLIB SOP (chapter 5 certification)",
+    evaluate=evaluate_order,
+    bounds={"arborescence": sop_arborescence_bound},
+)
 
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 
@@ -51,4 +91,11 @@ def example_instance(L: float = 250.0) -> Any:
     return inst if L == inst.flight_range else inst.replace(flight_range=float(L))
 
 
-__all__ = ["example_instance", "build_example_instance", "EXAMPLE_PATH"]
+__all__ = [
+    "DeliveryInstance",
+    "Plan",
+    "SopProblem",
+    "example_instance",
+    "build_example_instance",
+    "EXAMPLE_PATH",
+]

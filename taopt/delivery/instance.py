@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import check_schema, load_json, save_json
+from taopt.result import register_payload
 from taopt.schemas import naming
 
 #: Relative tolerance on the flight-range constraint (5.6): a sortie with
@@ -435,6 +436,7 @@ class DeliveryInstance:
         return cls.from_dict(load_json(path, "delivery_instance"), source=str(path))
 
 
+@register_payload("plan")
 @dataclass(frozen=True)
 class Plan:
     """A chapter 5 solution: one drone sortie per customer, in serving order.

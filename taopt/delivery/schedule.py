@@ -28,6 +28,7 @@ import numpy as np
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, SolverError
+from taopt.registry import register_method
 from taopt.result import FEASIBLE, OPTIMAL, Solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
@@ -288,12 +289,12 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
         status=FEASIBLE,
         runtime=time.perf_counter() - start,
         method="schedule",
-        plan=plan,
-        order=order_arr.tolist(),
+        solution=plan,
         info={"dp_objective": dp_value},
     )
 
 
+@register_method(DeliveryInstance, "DP", category="exact", default=lambda inst: inst.n <= 12)
 def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solution:
     """Exact optimum of (5.1)–(5.7) for small n by dynamic programming over subsets.
 
@@ -398,9 +399,8 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
         status=OPTIMAL,
         bound=objective,
         runtime=time.perf_counter() - start,
-        method="subset-dp",
-        plan=plan,
-        order=list(plan.order),
+        method="DP",
+        solution=plan,
         info={"dp_objective": makespan},
     )
 

@@ -32,14 +32,30 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
+import networkx as nx
 import numpy as np
 
-from taopt.errors import InstanceError
+from taopt.errors import FeasibilityError, InstanceError
+from taopt.result import Order
 
-__all__ = ["KNOWN_OPTIMA", "load_sop", "shipped_sop", "sop_path", "path_cost"]
+__all__ = [
+    "KNOWN_OPTIMA",
+    "SopProblem",
+    "check_sop",
+    "evaluate_order",
+    "load_sop",
+    "shipped_sop",
+    "sop_path",
+    "path_cost",
+]
 
 #: Proven optima of the shipped .sop files (TSPLIB95 DOC.PS Table 3; confirmed by
 #: xgillard/ddo and IsaacRudich/ImprovedPnB, and by a Held–Karp DP for all but ESC25).
@@ -153,3 +169,217 @@ def path_cost(cost: np.ndarray, order) -> float:
     """Length of the path ``order[0] -> order[1] -> ...`` on ``cost`` (no return arc)."""
     order = np.asarray(order, dtype=int)
     return float(np.asarray(cost)[order[:-1], order[1:]].sum())
+
+
+def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.ndarray, nx.DiGraph]:
+    """Validate SOP data; return the cost array and the closed precedence DAG.
+
+    The DAG holds every node, the given pairs, ``start -> v`` and ``v -> end``
+    for every other node, transitively closed.
+
+    Raises
+    ------
+    InstanceError
+        Non-square or NaN cost, bad indices, start == end (n > 1), a self or
+        cyclic precedence, a precedence putting something before start or
+        after end.
+    """
+    try:
+        cost = np.array(cost, dtype=float)
+    except (TypeError, ValueError):
+        raise InstanceError("cost must be a square matrix of numbers") from None
+    if cost.ndim != 2 or cost.shape[0] != cost.shape[1] or cost.shape[0] < 2:
+        raise InstanceError(f"cost must be a square matrix with n >= 2, got shape {cost.shape}")
+    if np.isnan(cost).any():
+        i, j = np.argwhere(np.isnan(cost))[0]
+        raise InstanceError(f"cost[{i}, {j}] is NaN")
+    if np.isneginf(cost).any():
+        i, j = np.argwhere(np.isneginf(cost))[0]
+        raise InstanceError(f"cost[{i}, {j}] is -inf")
+    n = cost.shape[0]
+    for label, node in (("start", start), ("end", end)):
+        if isinstance(node, bool) or not (isinstance(node, (int, np.integer)) and 0 <= node < n):
+            raise InstanceError(f"{label} = {node!r} is not a node index in 0..{n - 1}")
+    if start == end:
+        raise InstanceError(f"start and end are the same node {start}")
+    graph = nx.DiGraph()
+    graph.add_nodes_from(range(n))
+    for pair in precedences:
+        try:
+            r, j = (int(v) for v in pair)
+        except (TypeError, ValueError, OverflowError):
+            raise InstanceError(f"precedence {pair!r} is not a pair of node indices") from None
+        if not (0 <= r < n and 0 <= j < n):
+            raise InstanceError(f"precedence ({r}, {j}) has a node outside 0..{n - 1}")
+        if r == j:
+            raise InstanceError(f"self-precedence ({r}, {j})")
+        if j == start or r == end:
+            raise InstanceError(f"precedence ({r}, {j}) puts a node before start or after end")
+        graph.add_edge(r, j)
+    for v in range(n):
+        if v != start:
+            graph.add_edge(start, v)
+        if v != end:
+            graph.add_edge(v, end)
+    if not nx.is_directed_acyclic_graph(graph):
+        cycle = [u for u, _ in nx.find_cycle(graph)]
+        raise InstanceError("precedence cycle " + " -> ".join(str(v) for v in cycle + [cycle[0]]))
+    return cost, nx.transitive_closure_dag(graph)
+
+
+@dataclass(frozen=True, eq=False)
+class SopProblem:
+    """Sequential ordering: the cheapest precedence-respecting Hamiltonian path.
+
+    Parameters
+    ----------
+    cost : (n, n) array_like
+        Arc costs (asymmetric allowed; ``inf`` forbids an arc; diagonal ignored).
+    precedences : iterable of (r, j)
+        r must be visited before j (as (5.7)).
+    start, end : int
+        The path's first and last nodes.
+    name : str
+
+    Raises
+    ------
+    InstanceError
+        Bad data (see :func:`check_sop`), naming the item.
+
+    Example
+    -------
+    >>> p = SopProblem.load("ESC07")
+    >>> p.n, p.start, p.end
+    (9, 0, 8)
+    """
+
+    cost: np.ndarray
+    precedences: tuple[tuple[int, int], ...]
+    start: int
+    end: int
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        cost, closure = check_sop(self.cost, self.precedences, self.start, self.end)
+        cost.setflags(write=False)
+        object.__setattr__(self, "cost", cost)
+        pairs = tuple((int(r), int(j)) for r, j in self.precedences)
+        object.__setattr__(self, "precedences", pairs)
+        object.__setattr__(self, "start", int(self.start))
+        object.__setattr__(self, "end", int(self.end))
+        object.__setattr__(self, "name", str(self.name))
+        object.__setattr__(self, "_closure", closure)
+
+    @property
+    def n(self) -> int:
+        """Number of nodes."""
+        return self.cost.shape[0]
+
+    @property
+    def closure(self) -> nx.DiGraph:
+        """Transitively closed precedence DAG (start before and end after every node)."""
+        return self._closure  # type: ignore[attr-defined]
+
+    def replace(self, **changes: Any) -> SopProblem:
+        return dataclasses.replace(self, **changes)
+
+    @classmethod
+    def load(cls, name_or_path: str | os.PathLike[str]) -> SopProblem:
+        """A TSPLIB ``.sop`` file (a path or a shipped name such as "ESC07"), or a JSON
+        file of kind "sop_problem"."""
+        path = Path(name_or_path)
+        if path.suffix.lower() == ".json":
+            from taopt.instance import load_json
+
+            return cls.from_dict(load_json(path))
+        cost, precedences, start, end, name = load_sop(name_or_path)
+        return cls(cost, tuple(precedences), start, end, name)
+
+    def to_dict(self) -> dict[str, Any]:
+        finite = np.where(np.isfinite(self.cost), self.cost, -1.0)
+        return {
+            "schema_version": 1,
+            "kind": "sop_problem",
+            "name": self.name,
+            "cost": finite.tolist(),
+            "precedences": [list(p) for p in self.precedences],
+            "start": self.start,
+            "end": self.end,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> SopProblem:
+        """From JSON data; a cost of -1 marks a forbidden arc (as in TSPLIB)."""
+        from taopt.schemas import validate
+
+        validate(data, "sop_problem")
+        cost = np.array(data["cost"], dtype=float)
+        cost[cost == -1] = np.inf
+        return cls(
+            cost,
+            tuple(tuple(p) for p in data.get("precedences", [])),
+            data["start"],
+            data["end"],
+            data.get("name", ""),
+        )
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        from taopt.instance import save_json
+
+        save_json(self.to_dict(), path)
+
+    def __repr__(self) -> str:
+        label = f" {self.name!r}" if self.name else ""
+        return f"SopProblem{label}(n={self.n}, precedences={len(self.precedences)})"
+
+
+def evaluate_order(problem: SopProblem, order: Iterable[int]) -> float:
+    """The one scorer of the SOP: check the order, then return its path cost.
+
+    Raises
+    ------
+    FeasibilityError
+        The order does not start at ``start``, end at ``end`` or visit every node once,
+        uses a forbidden arc, or breaks a precedence (each named).
+    """
+    order = list(Order(order))
+    n = problem.n
+    if sorted(order) != list(range(n)):
+        missing = sorted(set(range(n)) - set(order))
+        twice = sorted({v for v in order if order.count(v) > 1})
+        raise FeasibilityError(
+            f"order must visit every node 0..{n - 1} once: missing {missing[:10]}, "
+            f"repeated {twice[:10]}"
+        )
+    if order[0] != problem.start or order[-1] != problem.end:
+        raise FeasibilityError(
+            f"order runs {order[0]} -> ... -> {order[-1]}, not start {problem.start} -> "
+            f"end {problem.end}"
+        )
+    where = np.empty(n, dtype=np.int64)
+    where[order] = np.arange(n)
+    for r, j in problem.precedences:
+        if where[r] > where[j]:
+            raise FeasibilityError(f"precedence ({r}, {j}) violated: {j} is visited before {r}")
+    legs = problem.cost[order[:-1], order[1:]]
+    if not np.isfinite(legs).all():
+        leg = int(np.flatnonzero(~np.isfinite(legs))[0])
+        raise FeasibilityError(f"order uses forbidden arc {order[leg]} -> {order[leg + 1]}")
+    return float(legs.sum())
+
+
+def sop_arborescence_bound(problem: SopProblem) -> float:
+    """Valid lower bound: a min-cost arborescence rooted at ``start`` on the usable arcs.
+
+    A feasible order is a Hamiltonian path from ``start``, i.e. a spanning arborescence in
+    which each node has one parent; arcs ``i -> j`` with ``j`` required before ``i`` can
+    never be used and are dropped, so the minimum over all arborescences is never above the
+    optimum.
+    """
+    from taopt.arborescence import min_arborescence
+
+    weights = problem.cost.copy()
+    for r, j in problem.closure.edges:
+        weights[j, r] = np.inf  # j -> r would put r after j
+    weights[problem.end, :] = np.inf  # nothing leaves the end of the path
+    return float(min_arborescence(weights, problem.start))

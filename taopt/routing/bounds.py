@@ -11,17 +11,17 @@ Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
   the vehicle set. On a symmetric matrix it is a minimum spanning forest
   rooted at the vehicles, hence valid (Lemma 2.4). On an asymmetric matrix
   Prim's greedy growth is *not* a minimum-cost arborescence, and its value can
-  exceed f_o (Lemma 2.4 fails there; :mod:`taopt.routing.claims` finds such
+  exceed f_o (Lemma 2.4 fails there; :mod:`taopt.studies.routing_claims` finds such
   instances). Kept because the thesis's quality ratio q = f / f_a (2.26) uses it.
 * :func:`f_da` — Lemma 2.5's upper bound: the MCGA with every edge duplicated
   in the opposite direction.
-* :func:`lp_bound` — the LP relaxation of the exact model (valid).
+* ``taopt.models.lp_bound`` — the LP relaxation of the exact model (valid; in the
+  models layer, since it solves a model).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import networkx as nx
 import numpy as np
@@ -240,21 +240,6 @@ def f_da(problem: AssignmentProblem, tree: str = "thesis") -> float:
     return float((cost[parent, targets] + cost[targets, parent]).sum())
 
 
-def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> float:
-    """Valid lower bound from the LP relaxation of the exact model (2.2)–(2.5).
-
-    Calls ``taopt.models.solve_routing(problem, sec=sec, relax=True, **options)``
-    and returns its objective (the relaxation's value). With "dfj" (all of
-    (2.5)) the LP lies inside the arborescence polytope (in-degree 1 plus the
-    subtour constraints imply a cut into every target set), so it is never
-    below :func:`arborescence_bound`; "mtz" and "flow" give weaker LPs.
-    """
-    from taopt.models import solve_routing
-
-    result = solve_routing(problem, sec=sec, relax=True, **options)
-    return float(result.bound if result.bound is not None else result.objective)
-
-
 __all__ = [
     "GrowthTree",
     "mcga_tree",
@@ -262,5 +247,4 @@ __all__ = [
     "arborescence_bound",
     "arborescence_graph",
     "f_da",
-    "lp_bound",
 ]

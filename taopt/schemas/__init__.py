@@ -148,6 +148,9 @@ def _compile(validator: Any, subschema: Any, depth: int = 0) -> Callable[[Any], 
             return None
         return _compile(validator, target, depth + 1)
     kind = subschema.get("type")
+    nullable = False
+    if isinstance(kind, list) and len(kind) == 2 and "null" in kind:  # e.g. ["number", "null"]
+        nullable, kind = True, next(k for k in kind if k != "null")
     if kind in ("number", "integer") and set(subschema) <= _NUMBER_KEYS:
         low = subschema.get("minimum", -math.inf)
         above = subschema.get("exclusiveMinimum", -math.inf)
@@ -156,6 +159,8 @@ def _compile(validator: Any, subschema: Any, depth: int = 0) -> Callable[[Any], 
         whole = kind == "integer"
 
         def number(x: Any) -> bool:
+            if x is None:
+                return nullable
             if type(x) is float:  # exact types: bool, numpy scalars etc. take the full path
                 if whole and not x.is_integer():
                     return False
@@ -164,7 +169,7 @@ def _compile(validator: Any, subschema: Any, depth: int = 0) -> Callable[[Any], 
             return low <= x <= high and above < x < below and math.isfinite(x)
 
         return number
-    if kind == "array" and set(subschema) <= _ARRAY_KEYS:
+    if kind == "array" and set(subschema) <= _ARRAY_KEYS and not nullable:
         items = None
         if "items" in subschema:
             items = _compile(validator, subschema["items"], depth + 1)
@@ -200,14 +205,15 @@ def strict_validator_class(fast: bool = True) -> Any:
     if not fast:
         return jsonschema.validators.extend(jsonschema.Draft202012Validator, type_checker=types)
     standard_items = jsonschema.Draft202012Validator.VALIDATORS["items"]
-    compiled: dict[int, Callable[[Any], bool] | None] = {}
+    # id -> (the subschema itself, its predicate); holding the subschema keeps its id unique
+    compiled: dict[int, tuple[Any, Callable[[Any], bool] | None]] = {}
 
     def items(validator: Any, subschema: Any, instance: Any, schema: Any) -> Iterator[Any]:
         if type(instance) in (list, tuple) and "prefixItems" not in schema:
-            key = id(subschema)
-            if key not in compiled:
-                compiled[key] = _compile(validator, subschema)
-            check = compiled[key]
+            entry = compiled.get(id(subschema))
+            if entry is None or entry[0] is not subschema:
+                entry = compiled[id(subschema)] = (subschema, _compile(validator, subschema))
+            check = entry[1]
             if check is not None and all(map(check, instance)):
                 return
         yield from standard_items(validator, subschema, instance, schema)
@@ -309,6 +315,8 @@ def reason(error: ValidationError) -> str:
             return f"expected {low} {noun}, got {len(value)}"
         bound = "at least" if keyword == "minItems" else "at most"
         return f"expected {bound} {expected} {noun}, got {len(value)}"
+    if keyword == "minProperties":
+        return f"expected at least {expected} key{'s' if expected != 1 else ''}, got {len(value)}"
     if keyword == "required":
         missing = [key for key in expected if key not in value]
         return f"missing {missing[0]!r}" if missing else error.message

@@ -1,0 +1,148 @@
+"""``taopt.solve``: the one entry point for every problem family and method.
+
+It only wires (as PyVRP's ``solve.py``): it looks the method up in :mod:`taopt.registry`,
+passes the options the method takes, gives an exact model its incumbent from the
+registered warm-start heuristics (the models never run heuristics themselves), and
+re-scores the payload with the family's one scorer :func:`taopt.evaluate` before returning.
+
+This module is the orchestration layer: it imports the method packages (which register
+their methods on import).
+
+Example
+-------
+>>> import numpy as np, taopt
+>>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+>>> taopt.solve(p, "exact").routes, taopt.solve(p, "MC").objective
+([[1, 0]], 4.0)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import taopt.heuristics  # noqa: F401  (registers the heuristics)
+import taopt.models  # noqa: F401  (registers the exact models)
+from taopt.errors import InstanceError, SolverError
+from taopt.registry import ensure_families, family_of, get_method, methods
+from taopt.result import ERROR, INFEASIBLE, RELAXATION, Solution
+from taopt.scoring import evaluate
+
+#: Relative tolerance between a method's reported objective and the scorer's value.
+SCORE_TOLERANCE = 1e-6
+
+
+def solve(
+    problem: Any,
+    method: str = "exact",
+    *,
+    seed: int | None = None,
+    time_limit: float | None = None,
+    **options: Any,
+) -> Solution:
+    """Solve ``problem`` with the registered ``method``.
+
+    Parameters
+    ----------
+    problem : a registered problem (AssignmentProblem, DeliveryInstance, SopProblem, ...)
+    method : str
+        A registered name: "exact", "MC", "GA", "SMMA", "pyvrp", ... (see
+        :func:`available_methods`).
+    seed : int, optional
+        Passed to methods that take one (randomised ones); ignored by the others.
+    time_limit : float, optional
+        Seconds, passed to methods that take one (exact models, peers); ignored by the
+        others. An exact model stopped by it returns its incumbent with status
+        "time_limit" and a proven bound.
+    **options
+        Method-specific keyword options (an unknown one is an error naming it).
+        ``incumbent=None`` switches off the warm start of an exact model.
+
+    Returns
+    -------
+    Solution
+        ``method`` is the registered name; ``runtime`` includes a warm start, which is
+        recorded in ``info["warm_start"]``.
+
+    Raises
+    ------
+    InstanceError
+        Unknown method or option, or a bad ``time_limit``.
+    SolverError
+        The method's objective differs from the scorer's value of its payload.
+    """
+    if time_limit is not None:
+        if not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit)):
+            raise InstanceError(f"time_limit must be a number of seconds, got {time_limit!r}")
+        if time_limit <= 0:
+            raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    spec = get_method(problem, method)
+    kwargs = dict(options)
+    if seed is not None and spec.accepts("seed"):
+        kwargs["seed"] = seed
+    if time_limit is not None and spec.accepts("time_limit"):
+        kwargs["time_limit"] = time_limit
+    spec.check_options(kwargs)
+    began = time.perf_counter()
+    warm_info = None
+    if spec.warm_start and spec.accepts("incumbent") and "incumbent" not in kwargs:
+        warm = [solve(problem, name, seed=seed) for name in spec.warm_start]
+        best = min(warm, key=lambda s: s.objective)
+        kwargs["incumbent"] = best.solution
+        warm_info = {
+            "method": best.method,
+            "objective": best.objective,
+            "runtime": time.perf_counter() - began,
+        }
+    result = spec.func(problem, **kwargs)
+    if not isinstance(result, Solution):
+        raise SolverError(f"method {method!r} returned {type(result).__name__}, not a Solution")
+    runtime = time.perf_counter() - began
+    if result.solution is not None and result.status not in (RELAXATION, ERROR, INFEASIBLE):
+        value = evaluate(problem, result.solution)  # the one scorer, never the method's word
+        if abs(value - result.objective) > SCORE_TOLERANCE * max(1.0, abs(value)):
+            raise SolverError(
+                f"method {method!r} reported objective {result.objective!r} but evaluate gives "
+                f"{value!r}"
+            )
+    info = dict(result.info)
+    if result.method and result.method != method:
+        info.setdefault("variant", result.method)
+    if warm_info is not None:
+        info["warm_start"] = warm_info
+    return result.replace(method=method, runtime=runtime, info=info)
+
+
+def available_methods(problem: Any, category: str | None = None) -> list[str]:
+    """Names of the methods registered for ``problem``'s type (optionally of one category)."""
+    return list(methods(problem, category))
+
+
+def default_methods(problem: Any) -> list[str]:
+    """The methods ``taopt solve`` runs when none are named: exact first, then heuristics.
+
+    Peers (optional extras) and relaxations are left out; a method registered with a
+    ``default`` predicate (e.g. a DP only for small instances) is included when it holds.
+    """
+    found = methods(problem)
+    order = ("exact", "heuristic", "simulation")
+    return [
+        name
+        for category in order
+        for name, spec in found.items()
+        if spec.category == category and spec.is_default_for(problem)
+    ]
+
+
+def load_problem(data: Any) -> Any:
+    """Build the problem of a JSON document by its ``kind`` (the registry's loaders)."""
+    ensure_families()
+    if not isinstance(data, dict):
+        raise InstanceError("a problem file must hold a JSON object")
+    from taopt.registry import family_for_kind
+
+    return family_for_kind(data.get("kind")).load(data)
+
+
+__all__ = ["solve", "available_methods", "default_methods", "load_problem", "family_of"]

@@ -1,0 +1,348 @@
+"""The problem registry: one place that knows every problem family and its methods.
+
+A *family* (chapter 2's :class:`~taopt.AssignmentProblem`, chapter 5's
+:class:`~taopt.DeliveryInstance`, the SOP, ...) registers once, from its own core package,
+with :func:`register_family`: its problem class, the ``kind`` of its JSON files, its payload
+type, its one scorer and its bounds. The scorer and bounds are hooked into the
+``functools.singledispatch`` functions :func:`taopt.evaluate` and ``taopt.bounds.*``, so
+nothing else ever asks "which type of problem is this?".
+
+A *method* (an exact model, a heuristic, a peer, a simulation policy) registers with the
+:func:`register_method` decorator where it is defined (``taopt.models``,
+``taopt.heuristics``); :func:`taopt.solve` looks it up by (problem class, name). A method is
+a callable ``method(problem, **options) -> Solution``.
+
+Adding a family touches its own modules and one line of :data:`FAMILY_PACKAGES`.
+
+Example
+-------
+>>> import numpy as np, taopt
+>>> from taopt.registry import family_of, method_names
+>>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
+>>> family_of(p).kind
+'assignment_problem'
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from taopt.errors import InstanceError
+
+#: Core packages whose import registers a family (imported on demand by kind look-ups).
+FAMILY_PACKAGES = (
+    "taopt.routing",
+    "taopt.delivery",
+    "taopt.capability",
+    "taopt.comm",
+)
+
+#: Method categories: how a method's result may be read.
+CATEGORIES = ("exact", "heuristic", "peer", "simulation", "relaxation")
+
+
+@dataclass(frozen=True)
+class Family:
+    """A registered problem family.
+
+    Attributes
+    ----------
+    problem_type : type
+        The problem class (instances of subclasses belong to it too).
+    kind : str
+        The ``kind`` of its JSON files (``"assignment_problem"``, ...).
+    payload : type
+        The class of its solutions' payload (``Routes``, ``Plan``, ``Order``, ...).
+    title : str
+        A short human name ("open multi-vehicle routing, chapter 2").
+    load : callable
+        ``load(dict) -> problem``: build a validated problem from JSON data.
+    bounds : tuple of str
+        Names of the generic bounds of :mod:`taopt.bounds` it implements.
+    plots : dict
+        ``name -> plot(problem, payload, path, instance=None)`` writing a PNG (the first
+        one is what ``taopt solve --plot`` draws; ``instance`` gives positions and the field
+        when the problem came from an instance file).
+    """
+
+    problem_type: type
+    kind: str
+    payload: type
+    title: str
+    load: Callable[[Mapping[str, Any]], Any]
+    bounds: tuple[str, ...] = ()
+    plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Method:
+    """A registered method of a family.
+
+    Attributes
+    ----------
+    name : str
+        As the user types it ("exact", "MC", "DAA", "pyvrp", ...).
+    problem_type : type
+    func : callable
+        ``func(problem, **options) -> Solution``.
+    category : str
+        One of :data:`CATEGORIES`. Only "exact" methods may return status "optimal".
+    warm_start : tuple of str
+        Methods whose best payload :func:`taopt.solve` passes as ``incumbent=`` (the exact
+        models take an incumbent, they never call heuristics themselves).
+    description : str
+        First line of the function's docstring.
+    options : frozenset of str
+        Keyword options the function names explicitly.
+    takes_any : bool
+        The function also takes arbitrary ``**options``.
+    default : bool or callable
+        Whether the method is in the default set of ``taopt solve`` (a callable gets the
+        problem, e.g. an exact DP only for small instances).
+    """
+
+    name: str
+    problem_type: type
+    func: Callable[..., Any]
+    category: str = "heuristic"
+    warm_start: tuple[str, ...] = ()
+    description: str = ""
+    options: frozenset[str] = frozenset()
+    takes_any: bool = False
+    default: bool | Callable[[Any], bool] = True
+
+    def is_default_for(self, problem: Any) -> bool:
+        """Whether ``taopt solve`` runs this method on ``problem`` when none are named."""
+        return bool(self.default(problem) if callable(self.default) else self.default)
+
+    @property
+    def exact(self) -> bool:
+        return self.category == "exact"
+
+    def accepts(self, option: str) -> bool:
+        """Whether the method names keyword ``option`` (``seed``, ``time_limit``, ...)."""
+        return option in self.options
+
+    def check_options(self, options: Mapping[str, Any]) -> None:
+        """Raise InstanceError naming an option this method does not take."""
+        if self.takes_any:
+            return
+        unknown = sorted(set(options) - self.options)
+        if unknown:
+            raise InstanceError(
+                f"method {self.name!r} does not take option(s) {unknown}; "
+                f"it takes {sorted(self.options)}"
+            )
+
+
+_FAMILIES: dict[type, Family] = {}
+_METHODS: dict[type, dict[str, Method]] = {}
+
+
+def register_family(
+    problem_type: type,
+    *,
+    kind: str,
+    payload: type,
+    title: str,
+    evaluate: Callable[[Any, Any], float],
+    bounds: Mapping[str, Callable[[Any], float]] | None = None,
+    load: Callable[[Mapping[str, Any]], Any] | None = None,
+    plots: Mapping[str, Callable[..., Any]] | None = None,
+) -> Family:
+    """Register a problem family: its scorer, bounds, file kind and payload.
+
+    Parameters
+    ----------
+    problem_type : type
+    kind : str
+        The JSON ``kind`` of the family's files.
+    payload : type
+        Its solutions' payload class.
+    title : str
+    evaluate : callable
+        ``evaluate(problem, payload) -> float``: the ONE scorer, which checks feasibility.
+    bounds : dict, optional
+        ``name -> bound(problem)`` for names of the generic functions in
+        :mod:`taopt.bounds` ("arborescence", "thesis_mcga", ...).
+    load : callable, optional
+        ``load(dict) -> problem`` (default ``problem_type.from_dict``).
+    plots : dict, optional
+        ``name -> plot(problem, payload, path, instance=None)`` (see :class:`Family`).
+    """
+    from taopt import bounds as bound_functions
+    from taopt.scoring import evaluate as generic_evaluate
+
+    for other in _FAMILIES.values():
+        if other.kind == kind and other.problem_type is not problem_type:
+            raise InstanceError(f"file kind {kind!r} is already registered")
+    family = Family(
+        problem_type=problem_type,
+        kind=kind,
+        payload=payload,
+        title=title,
+        load=load or problem_type.from_dict,
+        bounds=tuple(bounds or {}),
+        plots=dict(plots or {}),
+    )
+    _FAMILIES[problem_type] = family
+    _METHODS.setdefault(problem_type, {})
+    generic_evaluate.register(problem_type)(_scorer(evaluate, payload))
+    for name, func in (bounds or {}).items():
+        generic = getattr(bound_functions, name, None)
+        if generic is None or not hasattr(generic, "register"):
+            raise InstanceError(f"taopt.bounds has no generic bound {name!r}")
+        generic.register(problem_type)(func)
+    return family
+
+
+def _scorer(evaluate: Callable[[Any, Any], float], payload: type) -> Callable[[Any, Any], float]:
+    def score(problem: Any, solution: Any) -> float:
+        from taopt.result import Solution
+
+        if isinstance(solution, Solution):
+            solution = solution.solution
+            if solution is None:
+                raise InstanceError("this solution carries no payload to evaluate")
+        return float(evaluate(problem, solution))
+
+    score.__doc__ = evaluate.__doc__
+    return score
+
+
+def register_method(
+    problem_type: type,
+    name: str,
+    *,
+    category: str = "heuristic",
+    warm_start: tuple[str, ...] | str = (),
+    default: bool | Callable[[Any], bool] = True,
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Decorator: register ``func(problem, **options) -> Solution`` as method ``name``.
+
+    Example
+    -------
+    >>> @register_method(AssignmentProblem, "MC")          # doctest: +SKIP
+    ... def mc(problem, seed=0): ...
+    """
+    if category not in CATEGORIES:
+        raise InstanceError(f"unknown method category {category!r}; one of {CATEGORIES}")
+
+    def wrap(func: Callable[..., Any]) -> Callable[..., Any]:
+        signature = inspect.signature(func)
+        params = list(signature.parameters.values())[1:]
+        takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params)
+        options = frozenset(
+            p.name
+            for p in params
+            if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+        )
+        doc = (inspect.getdoc(func) or "").strip().splitlines()
+        _METHODS.setdefault(problem_type, {})[name] = Method(
+            name=name,
+            problem_type=problem_type,
+            func=func,
+            category=category,
+            warm_start=(warm_start,) if isinstance(warm_start, str) else tuple(warm_start),
+            description=doc[0] if doc else "",
+            options=options,
+            takes_any=takes_any,
+            default=default,
+        )
+        return func
+
+    return wrap
+
+
+def ensure_families() -> None:
+    """Import every package of :data:`FAMILY_PACKAGES` (each registers its family)."""
+    for package in FAMILY_PACKAGES:
+        try:
+            importlib.import_module(package)
+        except ModuleNotFoundError as exc:  # a family not built in this version
+            if exc.name != package:
+                raise
+
+
+def family_of(problem: Any) -> Family:
+    """The family of ``problem`` (by its class or a registered base class)."""
+    cls = problem if isinstance(problem, type) else type(problem)
+    for base in cls.__mro__:
+        if base in _FAMILIES:
+            return _FAMILIES[base]
+    raise InstanceError(
+        f"{cls.__name__} is not a registered problem type; "
+        f"known: {sorted(c.__name__ for c in _FAMILIES)}"
+    )
+
+
+def family_for_kind(kind: Any) -> Family:
+    """The family whose files have ``"kind": kind``."""
+    ensure_families()
+    for family in _FAMILIES.values():
+        if family.kind == kind:
+            return family
+    raise InstanceError(f"unknown file kind {kind!r}; known: {sorted(file_kinds())}")
+
+
+def file_kinds() -> list[str]:
+    """Every registered file kind."""
+    ensure_families()
+    return [f.kind for f in _FAMILIES.values()]
+
+
+def families() -> list[Family]:
+    """Every registered family."""
+    ensure_families()
+    return list(_FAMILIES.values())
+
+
+def methods(problem: Any, category: str | None = None) -> dict[str, Method]:
+    """Registered methods for ``problem`` (or its class), optionally of one category.
+
+    Only methods whose modules are imported are listed: :func:`taopt.solve` imports
+    ``taopt.models``, ``taopt.heuristics`` and the peers first.
+    """
+    family = family_of(problem)
+    found = dict(_METHODS.get(family.problem_type, {}))
+    if category is not None:
+        found = {k: v for k, v in found.items() if v.category == category}
+    return found
+
+
+def method_names(problem: Any, category: str | None = None) -> list[str]:
+    """Names of :func:`methods`, in registration order."""
+    return list(methods(problem, category))
+
+
+def get_method(problem: Any, name: str) -> Method:
+    """The method ``name`` for ``problem``, or InstanceError listing what exists."""
+    found = methods(problem)
+    if name not in found:
+        family = family_of(problem)
+        raise InstanceError(
+            f"no method {name!r} for {family.problem_type.__name__}; choose from {sorted(found)}"
+        )
+    return found[name]
+
+
+__all__ = [
+    "FAMILY_PACKAGES",
+    "CATEGORIES",
+    "Family",
+    "Method",
+    "register_family",
+    "register_method",
+    "ensure_families",
+    "family_of",
+    "family_for_kind",
+    "file_kinds",
+    "families",
+    "methods",
+    "method_names",
+    "get_method",
+]
