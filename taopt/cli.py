@@ -449,6 +449,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
     from taopt.study import StudyInterrupted
 
+    # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
+    # multiprocessing resource tracker (started with these warning options) would print a
+    # warning about it after our one-line message.
+    sys.warnoptions.append("ignore:resource_tracker:UserWarning")
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -278,7 +278,9 @@ def _executor(
             for process in list(getattr(pool, "_processes", {}).values()):
                 with contextlib.suppress(Exception):
                     process.kill()
-            pool.shutdown(wait=False, cancel_futures=True)
+            # the pool sees its workers die, marks itself broken and releases its queues
+            with contextlib.suppress(Exception):
+                pool.shutdown(wait=True, cancel_futures=True)
 
         return pool, lambda: None, kill
     try:
@@ -306,7 +308,17 @@ def _executor(
             with contextlib.suppress(Exception):
                 cluster.close(timeout=5)
 
+    # a local cluster's processes are ours: on Ctrl-C they are killed outright (a graceful
+    # close would cancel the task threads mid-solve and let native code complain on stderr)
+    local = []
+    if cluster is not None:
+        pids = {*client.run(os.getpid).values(), *client.run(os.getpid, nanny=True).values()}
+        local = sorted(pids - {os.getpid()})  # a LocalCluster's nannies live in this process
+
     def kill() -> None:
+        for pid in local:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
         with contextlib.suppress(Exception):
             client.close(timeout=1)
         if cluster is not None:
