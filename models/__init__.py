@@ -19,7 +19,7 @@ from typing import Any
 from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
-from taopt.models.capability import solve_capability, solve_exact, solve_joint, solve_printed
+from taopt.models.capability import solve_capability, solve_exact, solve_joint
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
@@ -51,12 +51,12 @@ register_method(
     default=False,
 )(solve_delivery)
 register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
-# chapter 3: the corrected model is "exact"; the joint MILP and the printed relaxation on request
+# chapter 3: the corrected model is "exact"; the joint MILP on request. The printed model
+# (a relaxation without routes) is solve_capability(problem, "printed").
 register_method(CapabilityProblem, "exact", category="exact", warm_start=("DTAA",))(solve_exact)
 register_method(CapabilityProblem, "joint", category="exact", warm_start=("DTAA",), default=False)(
     solve_joint
 )
-register_method(CapabilityProblem, "printed", category="relaxation", default=False)(solve_printed)
 
 __all__ = [
     "solve_capability",

@@ -160,7 +160,7 @@ def test_json_round_trip_and_schema():
 
 def test_bounds_order_on_a_metric_instance():
     """arborescence <= optimum <= f^da; f^da = 2 f^a on symmetric costs."""
-    from taopt.capability.claims import exact_optimum
+    from taopt.studies.capability_claims import exact_optimum
 
     x = np.random.default_rng(3).uniform(0, 100, (9, 2))
     cost = np.linalg.norm(x[:, None] - x[None], axis=2)

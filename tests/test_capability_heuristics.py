@@ -8,7 +8,6 @@ import pytest
 
 import taopt
 from taopt.capability import CapabilityProblem
-from taopt.capability.claims import communication_graphs, random_problem, split_graph
 from taopt.capability.instances import thesis_scenario
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import evm, marginal_cost_sequence
@@ -21,6 +20,7 @@ from taopt.heuristics.dtaa import (
 )
 from taopt.routing.bounds import mcga_tree
 from taopt.routing.problem import AssignmentProblem
+from taopt.studies.capability_claims import communication_graphs, random_problem, split_graph
 
 
 def algorithm1_clusters(problem: CapabilityProblem) -> dict:

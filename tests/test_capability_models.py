@@ -14,11 +14,11 @@ import taopt
 from taopt import Instance
 from taopt.bounds import arborescence
 from taopt.capability import CapabilityProblem
-from taopt.capability.claims import exact_optimum, random_problem
 from taopt.capability.instances import capability_problem_from_instance, thesis_scenario
 from taopt.errors import InstanceError
 from taopt.models import solve_capability
 from taopt.models.capability import build_printed, decode_printed, describe
+from taopt.studies.capability_claims import exact_optimum, random_problem
 
 EXAMPLE = (
     Path(__file__).parent.parent

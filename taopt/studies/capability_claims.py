@@ -44,8 +44,8 @@ from taopt.capability.instances import random_demands, thesis_scenario
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.routing.bounds import mcga_tree
-from taopt.routing.claims import euclidean_costs, metric_costs
-from taopt.routing.claims import exact_optimum as routing_optimum
+from taopt.studies.routing_claims import euclidean_costs, metric_costs
+from taopt.studies.routing_claims import exact_optimum as routing_optimum
 
 CLASSES = ("euclidean", "metric", "grid-drift")
 CLASS_NOTES = {
