@@ -249,6 +249,77 @@ def cmd_study_delivery(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- taopt study capability (chapter 3) -----------------------------------------------------------
+
+
+def add_capability_study(studies: Any) -> argparse.ArgumentParser:
+    """``taopt study capability``: the §3.7 study (Figs. 3.4-3.6, Tables 3.1-3.2)."""
+
+    def run(args: argparse.Namespace) -> int:
+        import pandas as pd
+
+        from taopt.studies.capability import (
+            capability_study,
+            plot_figures,
+            summarize,
+            thesis_comparison,
+        )
+
+        options = {"GA": {"generations": args.ga_generations}} if args.ga_generations else None
+        df = capability_study(
+            instances=[i.strip() for i in args.instances.split(",") if i.strip()],
+            capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
+            scenarios=args.scenarios,
+            methods=args.methods,
+            seed=args.seed,
+            out_dir=args.out,
+            jobs=args.jobs,
+            dask=args.dask,
+            time_limit=args.time_limit,
+            method_options=options,
+            cell=args.cell,
+            neighbours=args.neighbours,
+            first_scenario=args.first_scenario,
+            progress=not args.quiet,
+        )
+        table = summarize(df)
+        shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
+        with pd.option_context("display.width", 160, "display.max_columns", 20):
+            print(table[shown].round(4).to_string())
+            for name in ("3.1", "3.2"):
+                print(f"\nTable {name}, thesis beside taopt:")
+                print(thesis_comparison(df, name).round(4).to_string())
+        table.to_csv(FilePath(args.out) / "summary.csv")
+        if args.plot:
+            plot_figures(df, path=args.plot)
+            print(f"plot written to {args.plot}")
+        return 0
+
+    parser = add_subcommand(
+        studies,
+        "capability",
+        run,
+        "chapter 3 (§3.7, Figs. 3.4-3.6, Tables 3.1-3.2): DTAA and GA vs f^a, a valid bound "
+        "and the certified optimum",
+    )
+    parser.add_argument(
+        "--instances", default="n50m10,n70m10,n90m10", help="comma-separated nNmM sizes"
+    )
+    parser.add_argument("--capabilities", default="1,3,5,7,10", help="comma-separated |A|")
+    parser.add_argument("--scenarios", type=int, default=50, help="scenarios per (size, |A|)")
+    parser.add_argument("--first-scenario", type=int, default=0, help="index of the first one")
+    parser.add_argument(
+        "--methods", default="DTAA,GA,exact", help="comma-separated: DTAA,GA,exact,MC,joint"
+    )
+    parser.add_argument("--out", required=True, help="output folder (capability.csv; resumable)")
+    parser.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
+    parser.add_argument("--neighbours", type=int, choices=[8, 16], default=16, help="grid moves")
+    parser.add_argument("--ga-generations", type=int, default=None, help="GA generations (350)")
+    parser.add_argument("--seed", type=int, default=1, help="study seed")
+    _common(parser, "time-limit", "jobs", "plot", "quiet")
+    return parser
+
+
 # -- the parser ---------------------------------------------------------------------------------
 
 
@@ -444,6 +515,7 @@ def build_parser() -> argparse.ArgumentParser:
     delivery.add_argument("--ga-generations", type=int, default=None, help="GA generations")
     delivery.add_argument("--seed", type=int, default=1, help="study seed")
     _common(delivery, "time-limit", "jobs", "plot", "quiet")
+    add_capability_study(studies)
     return parser
 
 

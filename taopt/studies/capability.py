@@ -1,0 +1,338 @@
+"""The chapter 3 study (§3.7, Figs. 3.4–3.6, Tables 3.1–3.2) on the one study runner.
+
+Scenarios: n50m10, n70m10 and n90m10 (10 vehicles; 50, 70 or 90 targets) × |A| in
+{1, 3, 5, 7, 10}, 50 scenarios each in the thesis, drawn by
+:func:`taopt.capability.instances.thesis_scenario` (the 1000 m square, the thesis field, the
+three obstacles, travel times by the grid planner with 10 m cells and 16 moves; demands
+uniform over the non-empty subsets of A). Scenario ``(n, m, A, k)`` has the seed
+:func:`~taopt.capability.instances.scenario_seed` of ``(study seed, n, m, A, k)``, so it does
+not depend on which other scenarios run or in which order.
+
+Methods: "DTAA" (§3.5), "GA" (§3.7's GA per class), "exact" (the certified corrected model),
+optionally "MC" (chapter 2's MC per class) and "joint". Chapter 2's peers (PyVRP, OR-Tools)
+are registered for :class:`~taopt.AssignmentProblem` only, so they do not run here.
+
+Each row carries per-scenario reference values: ``f_a`` (Theorem 3.4's Algorithm 1 value, the
+denominator of the thesis's q (3.15); not a valid bound on these asymmetric matrices),
+``valid_bound`` (Edmonds per class), ``f_da`` (Lemma 3.6), ``demands`` (Σ_j |demands_j|), and
+DTAA's ``rounds``, ``messages`` and ``bytes``.
+
+:func:`summarize` gives per (instance, |A|, method) the mean and the variance of
+``q_thesis = f / f^a`` (Fig. 3.4–3.6, Table 3.1), the mean ``q_valid = f / valid bound``, the
+mean true ratio ``q_exact = f / f^o`` where the optimum is certified, and the mean runtime
+(Table 3.2); :func:`thesis_table` lays one measure out as the thesis's tables;
+:func:`plot_figures` draws Figs. 3.4–3.6.
+
+Example
+-------
+>>> df = capability_study(instances=("n12m3",), capabilities=(1, 2), scenarios=2,
+...                       out_dir=tmp)  # doctest: +SKIP
+>>> thesis_table(df, "q_thesis")  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from taopt.bounds import arborescence, doubled_arborescence, thesis_mcga
+from taopt.capability.instances import (
+    STUDY_CELL,
+    STUDY_NEIGHBOURS,
+    scenario_seed,
+    thesis_scenario,
+)
+from taopt.capability.problem import CapabilityProblem
+from taopt.errors import InstanceError
+from taopt.study import Scenario, StudySpec, run_study, with_optimum
+
+INSTANCES = ("n50m10", "n70m10", "n90m10")
+CAPABILITIES = (1, 3, 5, 7, 10)
+METHODS = ("DTAA", "GA", "exact")
+
+#: Table 3.1 of the thesis: average variance of q over 50 scenarios (GA, DTAA) per |A|.
+#: The thesis prints five values per row under a header of four (|A| = 10 is missing from
+#: the header); the columns are read here as |A| = 1, 3, 5, 7, 10, as in Table 3.2.
+THESIS_TABLE_3_1 = {
+    ("n50m10", "GA"): (0.4975, 0.0210, 0.0036, 0.0025, 0.0015),
+    ("n50m10", "DTAA"): (0.0035, 0.0030, 0.0024, 0.0024, 0.0014),
+    ("n70m10", "GA"): (0.0515, 0.1015, 0.0453, 0.0257, 0.0018),
+    ("n70m10", "DTAA"): (0.0026, 0.0017, 0.0012, 0.0013, 0.0009),
+    ("n90m10", "GA"): (0.0297, 0.1086, 0.0700, 0.0570, 0.0262),
+    ("n90m10", "DTAA"): (0.0025, 0.0013, 0.0011, 0.0009, 0.0013),
+}
+#: Table 3.2 of the thesis: average computation time (s), Matlab on an Intel i5-4590.
+THESIS_TABLE_3_2 = {
+    ("n50m10", "GA"): (37.04, 41.12, 49.66, 58.27, 72.74),
+    ("n50m10", "DTAA"): (0.19, 0.32, 0.46, 0.60, 0.82),
+    ("n70m10", "GA"): (65.06, 81.63, 105.94, 128.53, 156.09),
+    ("n70m10", "DTAA"): (0.29, 0.48, 0.71, 0.93, 1.25),
+    ("n90m10", "GA"): (104.55, 134.19, 172.45, 213.34, 273.92),
+    ("n90m10", "DTAA"): (0.38, 1.19, 2.29, 3.20, 4.40),
+}
+
+__all__ = [
+    "INSTANCES",
+    "CAPABILITIES",
+    "METHODS",
+    "SPEC",
+    "THESIS_TABLE_3_1",
+    "THESIS_TABLE_3_2",
+    "parse_instance",
+    "make_scenario",
+    "capability_study",
+    "summarize",
+    "thesis_table",
+    "thesis_comparison",
+    "plot_figures",
+]
+
+
+def parse_instance(name: str) -> tuple[int, int]:
+    """``"n50m10"`` -> ``(50, 10)``."""
+    match = re.fullmatch(r"n(\d+)m(\d+)", str(name).strip())
+    if not match:
+        raise InstanceError(f"an instance is written nNmM (e.g. n50m10), got {name!r}")
+    n, m = int(match[1]), int(match[2])
+    if n < 1 or m < 1:
+        raise InstanceError(f"instance {name!r} needs n >= 1 and m >= 1")
+    return n, m
+
+
+def _seed(key: dict, settings: dict) -> int:
+    return scenario_seed(settings["seed"], key["n"], key["m"], key["A"], key["scenario"])
+
+
+def make_scenario(key: dict, settings: dict) -> Scenario:
+    """Scenario ``(n, m, A, scenario)`` of the §3.7 study (module notes)."""
+    seed = _seed(key, settings)
+    problem = thesis_scenario(
+        key["n"], key["m"], key["A"], seed, settings["cell"], settings["neighbours"]
+    ).problem
+    return Scenario(
+        problem,
+        columns={"seed": seed, "demands": problem.demand_pairs()},
+        references={
+            "f_a": thesis_mcga(problem),
+            "valid_bound": arborescence(problem),
+            "f_da": doubled_arborescence(problem),
+        },
+    )
+
+
+def method_seed(key: dict, settings: dict) -> int:
+    """Randomised methods of a scenario get the scenario's own seed."""
+    return _seed(key, settings)
+
+
+SPEC = StudySpec(
+    name="capability",
+    problem_type=CapabilityProblem,
+    key_columns=("n", "m", "A", "scenario"),
+    make_scenario=make_scenario,
+    scenario_columns=("seed", "demands"),
+    reference_columns=("f_a", "valid_bound", "f_da"),
+    info_columns=("rounds", "messages", "bytes"),
+    method_seed=method_seed,
+)
+
+
+def capability_study(
+    instances: Sequence[str] = INSTANCES,
+    capabilities: Sequence[int] = CAPABILITIES,
+    scenarios: int = 50,
+    methods: str | Sequence[str] = METHODS,
+    seed: int = 1,
+    out_dir: str | os.PathLike = "capability-study",
+    jobs: int = 1,
+    dask: str | None = None,
+    time_limit: float | None = None,
+    method_options: dict[str, dict] | None = None,
+    cell: float = STUDY_CELL,
+    neighbours: int = STUDY_NEIGHBOURS,
+    first_scenario: int = 0,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """Run the §3.7 study: instances × |A| × scenarios × methods, resumable.
+
+    Parameters
+    ----------
+    instances : sequence of str
+        "nNmM" names (the thesis: n50m10, n70m10, n90m10).
+    capabilities : sequence of int
+        |A| values, each at most m (the thesis: 1, 3, 5, 7, 10).
+    scenarios : int
+        Scenarios per (instance, |A|) (the thesis: 50).
+    methods : str or sequence of str
+        Registered methods of CapabilityProblem ("DTAA", "GA", "exact", "MC", "joint").
+    seed : int
+        Study seed.
+    out_dir : path
+        Folder of ``capability.csv`` and its settings.
+    jobs, dask : see :func:`taopt.study.run_study`
+    time_limit : float, optional
+        Seconds per exact solve; a stopped solve leaves ``optimum`` NaN for its scenario.
+    method_options : dict, optional
+        ``{"GA": {"generations": 100}}`` etc.
+    cell, neighbours : float, int
+        Grid planner settings of the travel times.
+    first_scenario : int
+        Index of the first scenario (run scenarios ``first_scenario ..`` in chunks).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The runner's rows plus ``instance``, ``optimum`` and ``exact_bound``.
+    """
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    methods = list(dict.fromkeys(methods))
+    for label, value, low in (("scenarios", scenarios, 1), ("first_scenario", first_scenario, 0)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+            raise InstanceError(f"{label} must be an integer >= {low}, got {value!r}")
+    keys = []
+    for name in instances:
+        n, m = parse_instance(name)
+        for k in capabilities:
+            if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= m:
+                raise InstanceError(f"|A| must be an integer in 1..m = {m} for {name}, got {k!r}")
+            keys += [
+                {"n": n, "m": m, "A": int(k), "scenario": s}
+                for s in range(first_scenario, first_scenario + scenarios)
+            ]
+    settings = {"seed": int(seed), "cell": float(cell), "neighbours": int(neighbours)}
+    df = run_study(
+        SPEC,
+        keys,
+        methods,
+        settings,
+        out_dir,
+        jobs=jobs,
+        dask=dask,
+        time_limit=time_limit,
+        method_options=method_options,
+        progress=progress,
+    )
+    return _with_ratios(with_optimum(df, SPEC))
+
+
+def _with_ratios(df: pd.DataFrame) -> pd.DataFrame:
+    if "optimum" not in df.columns:
+        df = with_optimum(df, SPEC)
+    return df.assign(
+        instance=[f"n{n}m{m}" for n, m in zip(df["n"], df["m"], strict=True)],
+        q_thesis=df["objective"] / df["f_a"],
+        q_valid=df["objective"] / df["valid_bound"],
+        q_exact=df["objective"] / df["optimum"],
+    )
+
+
+def summarize(df: pd.DataFrame) -> pd.DataFrame:
+    """Per (instance, |A|, method): the measures of Figs. 3.4–3.6 and Tables 3.1–3.2.
+
+    Columns: ``scenarios``; ``q_thesis`` and ``var_q_thesis`` (mean and variance, ddof 1, of
+    f / f^a: the thesis's q (3.15) and Table 3.1); ``q_valid`` (mean f / valid bound);
+    ``q_exact`` (mean f / f^o over scenarios with a certified optimum) and ``var_q_exact``;
+    ``worst_q_exact``; ``optimum_over_f_a`` (mean f^o / f^a: where the optimum lies on the
+    thesis's scale); ``time_s`` (mean runtime, Table 3.2); ``optimal`` (runs proven
+    optimal); ``rounds``, ``messages``, ``bytes`` (mean, DTAA).
+    """
+    data = _with_ratios(df)
+    data = data.assign(optimum_over_f_a=data["optimum"] / data["f_a"])
+    keys = ["instance", "A", "method"]
+    grouped = data.groupby(keys, sort=False)
+    table = pd.DataFrame(
+        {
+            "scenarios": grouped["scenario"].nunique(),
+            "q_thesis": grouped["q_thesis"].mean(),
+            "var_q_thesis": grouped["q_thesis"].var(ddof=1),
+            "q_valid": grouped["q_valid"].mean(),
+            "q_exact": grouped["q_exact"].mean(),
+            "var_q_exact": grouped["q_exact"].var(ddof=1),
+            "worst_q_exact": grouped["q_exact"].max(),
+            "optimum_over_f_a": grouped["optimum_over_f_a"].mean(),
+            "time_s": grouped["runtime"].mean(),
+            "optimal": grouped["status"].apply(lambda s: int((s == "optimal").sum())),
+            "rounds": grouped["rounds"].mean(),
+            "messages": grouped["messages"].mean(),
+            "bytes": grouped["bytes"].mean(),
+        }
+    )
+    order = {name: k for k, name in enumerate(METHODS)}
+    table = table.reset_index()
+    table["_order"] = table["method"].map(lambda m: order.get(m, len(order)))
+    table = table.sort_values(["instance", "_order", "A"]).drop(columns="_order")
+    return table.set_index(keys)
+
+
+def thesis_table(df: pd.DataFrame, column: str = "q_thesis", how: str = "mean") -> pd.DataFrame:
+    """One measure laid out as the thesis's tables: rows (instance, method), columns |A|.
+
+    ``how`` is "mean" (Fig. 3.4–3.6's q, Table 3.2's time with ``column="runtime"``) or
+    "var" (Table 3.1's variance of q).
+    """
+    data = _with_ratios(df)
+    if how not in ("mean", "var"):
+        raise InstanceError(f"how must be 'mean' or 'var', got {how!r}")
+    grouped = data.groupby(["instance", "method", "A"])[column]
+    values = grouped.mean() if how == "mean" else grouped.var(ddof=1)
+    return values.unstack("A")
+
+
+def thesis_comparison(df: pd.DataFrame, table: str = "3.1") -> pd.DataFrame:
+    """Our Table 3.1 (variance of q) or 3.2 (mean time) beside the thesis's, per |A|.
+
+    Returns rows (instance, method, source) with source "thesis" or "taopt".
+    """
+    if table == "3.1":
+        ours, printed = thesis_table(df, "q_thesis", "var"), THESIS_TABLE_3_1
+    elif table == "3.2":
+        ours, printed = thesis_table(df, "runtime", "mean"), THESIS_TABLE_3_2
+    else:
+        raise InstanceError(f"table must be '3.1' or '3.2', got {table!r}")
+    rows = []
+    for (instance, method), values in printed.items():
+        thesis_row = dict(zip(CAPABILITIES, values, strict=True))
+        rows.append({"instance": instance, "method": method, "source": "thesis", **thesis_row})
+        if (instance, method) in ours.index:
+            mine = ours.loc[(instance, method)]
+            rows.append(
+                {
+                    "instance": instance,
+                    "method": method,
+                    "source": "taopt",
+                    **{k: mine.get(k, np.nan) for k in CAPABILITIES},
+                }
+            )
+    return pd.DataFrame(rows).set_index(["instance", "method", "source"])
+
+
+def plot_figures(df: pd.DataFrame, column: str = "q_thesis", path: str | None = None) -> Any:
+    """Figs. 3.4–3.6: mean ``column`` against |A|, one panel per instance.
+
+    The exact method's line on the ``q_thesis`` scale is ``f^o / f^a``: the thesis's q of
+    the optimum itself, the floor no method can go below.
+
+    Returns
+    -------
+    matplotlib Figure
+    """
+    from matplotlib.figure import Figure
+
+    from taopt.capability.plot import plot_quality
+
+    table = summarize(df).reset_index()
+    names = [i for i in INSTANCES if i in set(table["instance"])] or sorted(set(table["instance"]))
+    figure = Figure(figsize=(4.5 * len(names), 4.0))
+    axes = np.atleast_1d(figure.subplots(1, len(names)))
+    for ax, name in zip(axes, names, strict=True):
+        plot_quality(table, column, instance=name, ax=ax)
+    if path:
+        figure.tight_layout()
+        figure.savefig(path, dpi=120)
+    return figure
