@@ -11,10 +11,30 @@ scorer :func:`evaluate_capability`, bounds ``arborescence``, ``thesis_mcga`` and
 * :mod:`taopt.capability.plot` — field, obstacles, grid paths, routes by capability.
 """
 
+from typing import Any
+
 from taopt.capability.bounds import arborescence_bound, doubled_arborescence, thesis_mcga
 from taopt.capability.problem import CapabilityClass, CapabilityProblem, evaluate_capability
+from taopt.errors import InstanceError
 from taopt.registry import register_family
 from taopt.result import Routes
+
+
+def _plot_routes(problem: CapabilityProblem, routes: Any, path: str, instance: Any = None) -> None:
+    """Routes coloured by capability over the field and obstacles (needs an instance file)."""
+    from taopt.capability.plot import plot_routes
+
+    if instance is None:
+        raise InstanceError("a route plot needs positions: give an 'instance' file, not a matrix")
+    total = problem.evaluate(list(routes))
+    plot_routes(
+        instance,
+        problem,
+        list(routes),
+        title=f"{problem.name or 'routes'}: total travel time {total:.1f} s",
+        path=path,
+    )
+
 
 register_family(
     CapabilityProblem,
@@ -27,6 +47,7 @@ register_family(
         "thesis_mcga": thesis_mcga,
         "doubled_arborescence": doubled_arborescence,
     },
+    plots={"routes": _plot_routes},
 )
 
 __all__ = ["CapabilityProblem", "CapabilityClass", "evaluate_capability"]
