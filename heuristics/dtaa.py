@@ -185,7 +185,12 @@ def _depth(graph: nx.Graph, nodes: list[int]) -> int:
 
 
 def _auction(
-    problem: CapabilityProblem, cls: Any, heard: np.ndarray, degree: np.ndarray, depth: int
+    problem: CapabilityProblem,
+    cls: Any,
+    heard: np.ndarray,
+    degree: np.ndarray,
+    depth: int,
+    shortcut: bool = True,
 ) -> ClassAuction:
     """Algorithm 2 for class ``cls``, simulated vehicle by vehicle.
 
@@ -210,7 +215,24 @@ def _auction(
     won_log = np.zeros((size, m), dtype=bool)
     computed = min(depth, m)
     heard_ids = np.broadcast_to(heard[:, :, None], heard.shape + (size,))
-    for step in range(size):
+    if shortcut and computed == 1 and heard.shape[1] == m:
+        # every vehicle hears every vehicle (complete graph): after one round of (3.7) all
+        # hold the same smallest (c, beta) pairs, computed here once for all of them
+        for step in range(size):
+            best = own.min(axis=0)
+            who = own.argmin(axis=0)  # the lowest vehicle on equal bids
+            r = int(np.argmin(best))  # the lowest open target on ties
+            finite = bool(np.isfinite(best[r]))
+            if not finite:
+                r = int(np.argmax(open_[0]))
+            chosen_log[step], winner_log[step] = r, who[r]
+            open_[:, r] = False
+            own[:, r] = np.inf
+            if finite:
+                winner = int(who[r])
+                won_log[step, winner] = True
+                own[winner] = np.where(open_[winner], np.minimum(own[winner], between[r]), np.inf)
+    for step in range(size if not (shortcut and computed == 1 and heard.shape[1] == m) else 0):
         # own[j] is inf outside j's T_q^u: within a component every vehicle holds the same
         # T_q^u, so a vehicle never hears a bid for a target it has closed
         bid, bidder, bidder_heard = own, self_bidder, heard_ids
@@ -257,7 +279,9 @@ def _auction(
     )
 
 
-def distributed_auction(problem: CapabilityProblem, graph: Any = None) -> AuctionResult:
+def distributed_auction(
+    problem: CapabilityProblem, graph: Any = None, shortcut: bool = True
+) -> AuctionResult:
     """Algorithm 2 for every class on the communication graph (connected or not).
 
     Parameters
@@ -265,6 +289,10 @@ def distributed_auction(problem: CapabilityProblem, graph: Any = None) -> Auctio
     problem : CapabilityProblem
     graph : networkx graph on vehicles ``0..m-1``, optional
         Default: complete. A directed graph means "j receives from its in-neighbours".
+    shortcut : bool
+        On a complete graph every vehicle holds the same state after one round; compute it
+        once instead of per vehicle (the same result, message for message; False forces the
+        per-vehicle simulation, for tests).
 
     Returns
     -------
@@ -285,7 +313,9 @@ def distributed_auction(problem: CapabilityProblem, graph: Any = None) -> Auctio
         components = [sorted(c) for c in nx.connected_components(graph)]
     depth = max(_depth(graph, c) for c in components)
     classes = tuple(
-        _auction(problem, cls, heard, degree, depth) for cls in problem.classes if cls.targets
+        _auction(problem, cls, heard, degree, depth, shortcut)
+        for cls in problem.classes
+        if cls.targets
     )
     return AuctionResult(classes=classes, connected=connected, components=sorted(components))
 
@@ -325,28 +355,31 @@ def ordering_principle(cost: np.ndarray, start: int, targets: list[int]) -> list
     nodes = np.concatenate([[start], order])
     local = cost[np.ix_(nodes, nodes)]  # point 0 is the start, point p + 1 target order[p]
     size = len(order)
-    columns = np.arange(1, size + 1)
     # rows: the gaps of the route in route order; the last row is the open end
-    gaps = local[0:1, columns].copy()
+    # table[k, g]: the cost of inserting target k + 1 into gap g of the route (gaps in route
+    # order, the last one the open end); rows of inserted targets hold inf
+    table = np.empty((size, size + 1))
+    table[:, 0] = local[0, 1:]
     route = [0]
-    inserted = np.zeros(size, dtype=bool)
-    for _ in range(size):
-        masked = np.where(inserted[None, :], np.inf, gaps)
-        flat = int(np.argmin(masked.T))  # target-major: lowest target, then earliest gap
-        pick, gap = divmod(flat, masked.shape[0])
+    dead = np.zeros(size, dtype=bool)
+    for length in range(1, size + 1):  # `length` gaps so far
+        flat = int(np.argmin(table[:, :length]))  # target-major: lowest target, earliest gap
+        pick, gap = divmod(flat, length)
         point = pick + 1
         before = route[gap]
-        if gap + 1 < len(route):  # between before and after: two new gaps replace one
+        dead[pick] = True
+        # insertion cost through a gap (a, b): t(a, k) + t(k, b) - t(a, b)
+        into = local[before, 1:] + local[1:, point] - local[before, point]
+        if gap + 1 < length:  # between before and after: two new gaps replace one
             after = route[gap + 1]
-            # insertion cost through a gap (a, b): t(a, k) + t(k, b) - t(a, b)
-            into = local[before, columns] + local[columns, point] - local[before, point]
-            out = local[point, columns] + local[columns, after] - local[point, after]
-            gaps = np.vstack([gaps[:gap], into, out, gaps[gap + 1 :]])
+            out = local[point, 1:] + local[1:, after] - local[point, after]
+            table[:, gap + 2 : length + 1] = table[:, gap + 1 : length]
         else:  # at the open end: the old end becomes a gap, the new point the end
-            into = local[before, columns] + local[columns, point] - local[before, point]
-            gaps = np.vstack([gaps[:gap], into, local[point, columns]])
+            out = local[point, 1:]
+        table[:, gap] = np.where(dead, np.inf, into)
+        table[:, gap + 1] = np.where(dead, np.inf, out)
+        table[pick, : length + 1] = np.inf
         route.insert(gap + 1, point)
-        inserted[pick] = True
     return [int(order[p - 1]) for p in route[1:]]
 
 

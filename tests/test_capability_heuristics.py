@@ -162,3 +162,19 @@ def test_mc_per_class_sums_chapter_2_mc():
     problem = thesis_scenario(20, 5, 3, seed=9).problem
     total = sum(mc(c.problem).objective for c in problem.classes if c.problem)
     assert taopt.solve(problem, "MC").objective == pytest.approx(total, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_complete_graph_shortcut_is_the_simulation(seed):
+    """The complete-graph shortcut gives the per-vehicle simulation's result, pick for pick."""
+    rng = np.random.default_rng(seed)
+    problem = random_problem("metric", int(rng.integers(1, 14)), int(rng.integers(1, 6)), 1, rng)
+    fast = distributed_auction(problem)
+    slow = distributed_auction(problem, shortcut=False)
+    for a, b in zip(fast.classes, slow.classes, strict=True):
+        assert (a.assigned, a.picks, a.bytes, a.messages) == (
+            b.assigned,
+            b.picks,
+            b.bytes,
+            b.messages,
+        )
