@@ -138,3 +138,14 @@ def test_cli_runs_the_study(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "Table 3.1, thesis beside taopt" in out and "DTAA" in out
     assert (tmp_path / "capability.csv").exists() and (tmp_path / "summary.csv").exists()
+
+
+def test_markdown_report(study):
+    """The doc's tables render from the rows: every section, thesis rows beside ours."""
+    from taopt.studies.capability import markdown_report
+
+    _, df = study
+    text = markdown_report(df)
+    for title in ("Mean q = f / f^a", "true ratio f / f^o", "Table 3.1", "Table 3.2", "DTAA"):
+        assert title in text
+    assert "| n7m3 | DTAA |" in text and "| n50m10 | GA | thesis |" in text

@@ -90,6 +90,7 @@ __all__ = [
     "thesis_table",
     "thesis_comparison",
     "plot_figures",
+    "markdown_report",
 ]
 
 
@@ -336,3 +337,88 @@ def plot_figures(df: pd.DataFrame, column: str = "q_thesis", path: str | None = 
         figure.tight_layout()
         figure.savefig(path, dpi=120)
     return figure
+
+
+def _markdown(frame: pd.DataFrame, digits: int = 4) -> str:
+    """A small pipe table (no extra dependency)."""
+    header = "| " + " | ".join(str(c) for c in frame.columns) + " |"
+    rule = "|" + "---|" * len(frame.columns)
+    rows = []
+    for values in frame.itertuples(index=False):
+        cells = []
+        for v in values:
+            if isinstance(v, (float, np.floating)):
+                cells.append("–" if not np.isfinite(v) else f"{v:.{digits}f}")
+            else:
+                cells.append(str(v))
+        rows.append("| " + " | ".join(cells) + " |")
+    return "\n".join([header, rule, *rows])
+
+
+def markdown_report(df: pd.DataFrame) -> str:
+    """The tables of ``docs/reproduction/chapter3.md`` from a study's rows.
+
+    Mean q = f / f^a (Figs. 3.4–3.6), the true ratio f / f^o over certified scenarios with
+    its worst case, f^o / f^a, Tables 3.1 (variance of q) and 3.2 (mean time) beside the
+    thesis's, certification counts and DTAA's communication.
+    """
+    data = _with_ratios(df)
+    table = summarize(data).reset_index()
+    parts = []
+
+    def wide(column: str, methods: Sequence[str]) -> pd.DataFrame:
+        rows = table[table["method"].isin(methods)]
+        out = rows.pivot_table(index=["instance", "method"], columns="A", values=column)
+        out = out.reindex(sorted(out.index, key=lambda im: (im[0], list(methods).index(im[1]))))
+        out.columns = [f"A={k}" for k in out.columns]
+        return out.reset_index()
+
+    methods = [m for m in ("DTAA", "GA", "MC", "exact") if m in set(table["method"])]
+    counts = table.pivot_table(index="instance", columns="A", values="scenarios", aggfunc="max")
+    counts.columns = [f"A={k}" for k in counts.columns]
+    parts.append("#### Scenarios per cell\n\n" + _markdown(counts.reset_index(), 0))
+    parts.append(
+        "#### Mean q = f / f^a (3.15), Figs. 3.4–3.6 (the exact row is f^o / f^a)\n\n"
+        + _markdown(wide("q_thesis", methods))
+    )
+    heuristics = [m for m in methods if m != "exact"]
+    parts.append(
+        "#### Mean true ratio f / f^o over certified scenarios\n\n"
+        + _markdown(wide("q_exact", heuristics))
+    )
+    parts.append(
+        "#### Worst f / f^o over certified scenarios\n\n"
+        + _markdown(wide("worst_q_exact", heuristics))
+    )
+    parts.append(
+        "#### Mean f / valid bound (Edmonds per class); the exact row is f^o / bound\n\n"
+        + _markdown(wide("q_valid", methods))
+    )
+    exact = table[table["method"] == "exact"]
+    if len(exact):
+        certified = exact.pivot_table(index="instance", columns="A", values="optimal")
+        certified.columns = [f"A={k}" for k in certified.columns]
+        parts.append(
+            "#### Scenarios certified optimal (exact)\n\n" + _markdown(certified.reset_index(), 0)
+        )
+    for name, how in (("3.1", "variance of q"), ("3.2", "mean time (s)")):
+        comparison = thesis_comparison(data, name).reset_index()
+        comparison.columns = [
+            f"A={c}" if isinstance(c, (int, np.integer)) else c for c in comparison.columns
+        ]
+        parts.append(f"#### Table {name}: {how}, thesis beside taopt\n\n" + _markdown(comparison))
+    times = wide("time_s", methods)
+    parts.append("#### Mean run time (s), every method\n\n" + _markdown(times))
+    dtaa = table[table["method"] == "DTAA"]
+    if len(dtaa):
+        comm = dtaa[["instance", "A", "rounds", "messages", "bytes"]].copy()
+        comm["MB"] = comm.pop("bytes") / 1e6
+        parts.append("#### DTAA communication (complete graph; means)\n\n" + _markdown(comm, 1))
+    return "\n\n".join(parts) + "\n"
+
+
+if __name__ == "__main__":  # pragma: no cover
+    import sys
+
+    frames = [pd.read_csv(path) for path in sys.argv[1:]]
+    print(markdown_report(pd.concat(frames, ignore_index=True)))
