@@ -60,8 +60,9 @@ def test_scenarios_are_deterministic():
     np.testing.assert_array_equal(a.problem.cost, b.problem.cost)
     assert a.references == b.references and a.columns == b.columns
     other = make_scenario({**key, "scenario": 5}, settings)
-    assert other.columns["seed"] != a.columns["seed"]
+    assert other.columns["scenario_seed"] != a.columns["scenario_seed"]
     assert SPEC.key_columns == ("n", "m", "A", "scenario")
+    assert len(set(SPEC.columns)) == len(SPEC.columns)  # no scenario column shadows "seed"
 
 
 def test_resume_adds_nothing_and_refuses_other_settings(study):
