@@ -132,8 +132,10 @@ def travel_time_matrix(
         IPOPT iterations, or Newton iterations for "pmp"); ``retried`` (pairs
         collocation re-solved on a finer grid or by shooting); and for "pmp"
         ``fallback`` (the ``(i, j)`` re-solved by collocation), ``fallback_reason``
-        (why, aligned with ``fallback``) and ``suspect`` (entries still violating
-        the triangle inequality after the fallback; also warned about).
+        (why, aligned with ``fallback``), ``restarted`` (pairs accepted only after
+        PMP's restarts from other headings) and ``suspect`` (entries that may
+        still not be minimal: collocation did no better than a rejected extremal,
+        or the triangle inequality still fails; also warned about).
     pmp_options : mapping, optional
         Keyword arguments for :func:`taopt.navigation.pmp.pmp_travel_times`
         (``tol``, ``max_iter``, ``max_steps``).
@@ -195,7 +197,7 @@ def travel_time_matrix(
     grid = {"intervals": intervals, "degree": degree}
     fallback = np.zeros(0, dtype=int)
     if method == "pmp":
-        info.update(fallback=[], fallback_reason=[], suspect=[])
+        info.update(fallback=[], fallback_reason=[], suspect=[], restarted=[])
         bar = _bar(len(pairs), progress)
         out = pmp_travel_times(
             field,
@@ -208,6 +210,7 @@ def travel_time_matrix(
         )
         bar.close()
         results[:, 0], results[:, 1], results[:, 2] = out.time, out.accepted, out.iterations
+        info["restarted"] = [(int(i), int(j)) for i, j in pairs[out.restarted]]
         fallback = out.failed
         info["fallback_reason"] = [str(out.reason[row]) for row in fallback]
         if fallback.size:
@@ -226,6 +229,8 @@ def travel_time_matrix(
         results = _collocation_rows(field, pts, pairs, speed, jobs, grid, progress)
 
     _retry_failed(field, pts, pairs, speed, results, grid, info)
+    if method == "pmp" and fallback.size:
+        _check_fallback(pairs, fallback, results, out, info)
     matrix = np.zeros((n, n))
     matrix[pairs[:, 0], pairs[:, 1]] = results[:, 0]
     if method == "pmp":
@@ -297,6 +302,35 @@ def _retry_failed(
         raise ConvergenceError(f"travel time did not converge for pairs (i, j) = {shown}{more}")
 
 
+def _check_fallback(
+    pairs: np.ndarray, fallback: np.ndarray, results: np.ndarray, out: Any, info: dict[str, Any]
+) -> None:
+    """Flag collocation fallbacks that did no better than the extremal PMP rejected.
+
+    Collocation is a local method too: on a pair whose extremal was rejected as
+    not locally optimal (or slower than the straight line) it may converge to the
+    same stationary path. Such entries are kept but listed in ``info["suspect"]``
+    and warned about; an entry above the straight-line time (a feasible time,
+    check 3 of :mod:`taopt.navigation.pmp`) is replaced by it.
+    """
+    rejected = out.extremal_time[fallback]
+    line = out.line_time[fallback]
+    times = results[fallback, 0]
+    no_better = np.isfinite(rejected) & (times >= rejected * (1.0 - 1e-9))
+    above_line = times > line * (1.0 + 1e-9)
+    results[fallback[above_line], 0] = line[above_line]
+    flagged = [(int(i), int(j)) for i, j in pairs[fallback[no_better | above_line]]]
+    if flagged:
+        info["suspect"] = sorted(set(info["suspect"]) | set(flagged))
+        shown = ", ".join(str(p) for p in flagged[:10])
+        warnings.warn(
+            "collocation did not improve on the rejected extremal (its time may not be the "
+            f"minimum) at (i, j) = {shown}{' ...' if len(flagged) > 10 else ''}",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+
+
 def _triangle_guard(
     field: Field,
     pts: np.ndarray,
@@ -333,7 +367,7 @@ def _triangle_guard(
         info["fallback_reason"] += ["triangle inequality (Lemma 2.3) violated"] * fresh.size
     remaining = triangle_violations(matrix, TRIANGLE_RTOL) if suspects else []
     if remaining:
-        info["suspect"] = remaining
+        info["suspect"] = sorted(set(info["suspect"]) | set(remaining))
         shown = ", ".join(str(p) for p in remaining[:10])
         warnings.warn(
             f"travel times still break the triangle inequality (Lemma 2.3) after re-solving by "

@@ -97,6 +97,7 @@ MAX_ITER = 30  # Newton iterations (integrations) per step count
 MAX_STEPS = 256  # Runge-Kutta steps per pair before giving up
 STEP_REACH = 0.5  # at most this much of T * max |grad v_c| per step
 LINE_NODES = 32  # Gauss-Legendre nodes of the straight-line bound
+RESTART_OFFSETS = (0.5, -0.5, 1.0, -1.0, 1.5, -1.5)  # rad added to psi(0) for restarts
 CHUNK = 2048  # pairs per vectorised batch (cache-friendly; the unit of thread parallelism)
 
 # Dormand-Prince order-8 tableau (scipy's DOP853 carries it), used with fixed steps.
@@ -128,19 +129,24 @@ class DriftModel:
         (2, 2, 2, P or 1), else None. None also stands for a zero Hessian.
     velocity : callable
         ``velocity(xy)`` (2, P) -> (2, P), the drift alone.
-    gradient_bound : callable
-        ``gradient_bound(lo, hi)``: the largest spectral norm of the Jacobian over
-        the box ``[lo, hi]`` (sampled for non-linear fields); it only sets the
-        initial step count, accuracy is verified separately.
+    rate_bound : callable
+        ``rate_bound(lo, hi, speed)``: the largest local rate scale (1/s) of the
+        flow over the box ``[lo, hi]``: the spectral norm of a constant Jacobian,
+        else ``max(|J|, sqrt(|H| (v + |v_c|)))`` sampled on a 41 x 41 grid (see
+        :func:`_local_rate`). It only sets the first step count; the rates met
+        along each extremal and the end point's accuracy are checked afterwards.
     thread_safe : bool
         Whether ``evaluate`` may run in several threads at once (numpy: yes;
         CasADi functions share work memory: no).
+    constant_jacobian : bool
+        The drift is affine (its Jacobian is the same everywhere).
     """
 
     evaluate: Callable[[np.ndarray, bool], tuple[np.ndarray, np.ndarray, np.ndarray | None]]
     velocity: Callable[[np.ndarray], np.ndarray]
-    gradient_bound: Callable[[np.ndarray, np.ndarray], float]
+    rate_bound: Callable[[np.ndarray, np.ndarray, float], float]
     thread_safe: bool = True
+    constant_jacobian: bool = False
 
 
 @functools.singledispatch
@@ -237,10 +243,10 @@ def drift_model(field: Field) -> DriftModel:
     def drift(xy: np.ndarray) -> np.ndarray:
         return np.asarray(mapped("velocity", only_velocity, xy.shape[1])(xy))
 
-    def bound(lo: np.ndarray, hi: np.ndarray) -> float:
+    def bound(lo: np.ndarray, hi: np.ndarray, speed: float) -> float:
         gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], 41), np.linspace(lo[1], hi[1], 41))
-        _, jac, _ = evaluate(np.vstack([gx.ravel(), gy.ravel()]), False)
-        return float(np.max(np.linalg.norm(np.moveaxis(jac, -1, 0), ord=2, axis=(1, 2))))
+        vel, jac, hess = evaluate(np.vstack([gx.ravel(), gy.ravel()]), True)
+        return float(np.max(_local_rate(vel, jac, hess, speed)))
 
     return DriftModel(evaluate, drift, bound, thread_safe=False)
 
@@ -260,7 +266,7 @@ def _(field: LinearField) -> DriftModel:
     def evaluate(xy: np.ndarray, want_second: bool) -> tuple[np.ndarray, np.ndarray, None]:
         return drift(xy), jac, None  # the Hessian of an affine field is zero
 
-    return DriftModel(evaluate, drift, lambda lo, hi: norm)
+    return DriftModel(evaluate, drift, lambda lo, hi, speed: norm, constant_jacobian=True)
 
 
 @drift_model.register
@@ -274,14 +280,35 @@ def _(field: UniformField) -> DriftModel:
     def evaluate(xy: np.ndarray, want_second: bool) -> tuple[np.ndarray, np.ndarray, None]:
         return drift(xy), jac, None
 
-    return DriftModel(evaluate, drift, lambda lo, hi: 0.0)
+    return DriftModel(evaluate, drift, lambda lo, hi, speed: 0.0, constant_jacobian=True)
 
 
 # -------------------------------------------------------------------- the flow
 
 
+def _local_rate(
+    vel: np.ndarray, jac: np.ndarray, hess: np.ndarray | None, speed: float
+) -> np.ndarray:
+    """Local rate scale ``max(|J|, sqrt(|H| (v + |v_c|)))`` (1/s, Frobenius norms) per point.
+
+    ``|J|`` is how fast (2.1) and (2.6) change the state; ``sqrt(|H| v_net)`` is
+    how fast the variational equations can rotate (focusing towards a conjugate
+    point, even where ``J = 0``).
+    """
+    local = np.sqrt(np.sum(jac * jac, axis=(0, 1)))
+    if hess is not None:
+        curvature = np.sqrt(np.sum(hess * hess, axis=(0, 1, 2)))
+        local = np.maximum(local, np.sqrt(curvature * (speed + np.hypot(vel[0], vel[1]))))
+    return local
+
+
 def _rates(
-    model: DriftModel, speed: float, start: np.ndarray, state: np.ndarray, out: np.ndarray
+    model: DriftModel,
+    speed: float,
+    start: np.ndarray,
+    state: np.ndarray,
+    out: np.ndarray,
+    stiffness: np.ndarray,
 ) -> None:
     """``out = d state / dt``: (2.1), (2.6) and, for 6 rows, their variational equations.
 
@@ -289,9 +316,15 @@ def _rates(
     dpsi/dpsi0``; positions are relative to the start ``a`` (so round-off scales
     with the trip, not with the coordinates). With ``c2 = cos 2 psi`` and
     ``s2 = sin 2 psi``, (2.6) reads ``((J10 - J01) + (J00 - J11) s2 - (J01 + J10) c2) / 2``.
+
+    For a drift whose Jacobian varies, ``stiffness`` (P,) is raised to the local
+    rate scale ``max(|J|, sqrt(|H| (v + |v_c|)))`` (1/s; Frobenius norms), which
+    sets how many steps the state and its variational equations need.
     """
     variational = state.shape[0] == 6
     vel, jac, hess = model.evaluate(state[:2] + start, variational)
+    if not model.constant_jacobian:
+        np.maximum(stiffness, _local_rate(vel, jac, hess, speed), out=stiffness)
     c, s = np.cos(state[2]), np.sin(state[2])
     s2 = 2.0 * s * c
     c2 = c * c - s * s
@@ -341,6 +374,7 @@ class _Flow:
     end: np.ndarray  # (rows, P) state at t = T
     velocity: np.ndarray  # (2, P) (2.1) at the end
     worst_det: np.ndarray  # (P,) max over step ends of det[dx/dpsi0, x_dot] (variational only)
+    stiffness: np.ndarray  # (P,) largest local rate scale met (see _rates; 0 if J is constant)
     samples: np.ndarray | None = None  # (steps + 1, rows, P) if recorded
 
 
@@ -365,12 +399,13 @@ def _integrate(
     stage, scratch = np.empty_like(state), np.empty_like(state)
     scale = duration / steps
     worst = np.full(size, -np.inf)
+    stiffness = np.zeros(size)
     samples = [state.copy()] if record else None
     for n in range(steps):
         for i in range(_RK_STAGES):
             if i:
                 _combine(stage, state, scale, _RK_A[i, :i], k, scratch)
-            _rates(model, speed, start, state if i == 0 else stage, k[i])
+            _rates(model, speed, start, state if i == 0 else stage, k[i], stiffness)
         if variational and n > 0:  # det at this step's start, from its first stage
             np.maximum(worst, state[3] * k[0, 1] - state[4] * k[0, 0], out=worst)
         _combine(stage, state, scale, _RK_B, k, scratch)
@@ -378,11 +413,11 @@ def _integrate(
         if record:
             samples.append(state.copy())
     end_rate = np.empty((rows, size))
-    _rates(model, speed, start, state, end_rate)
+    _rates(model, speed, start, state, end_rate, stiffness)
     velocity = end_rate[:2]
     if variational:
         np.maximum(worst, state[3] * velocity[1] - state[4] * velocity[0], out=worst)
-    return _Flow(state, velocity, worst, np.array(samples) if record else None)
+    return _Flow(state, velocity, worst, stiffness, np.array(samples) if record else None)
 
 
 # -------------------------------------------------------------------- Newton
@@ -399,8 +434,12 @@ def _newton(
     steps: int,
     tol: float,
     max_iter: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Damped Newton on (2.10) for all pairs; returns psi0, T, converged, worst det, iterations.
+) -> tuple[np.ndarray, ...]:
+    """Damped Newton on (2.10) for all pairs.
+
+    Returns ``psi0, T, converged, worst det, stiffness, iterations``: the det of
+    the converged integration and the largest local rate met in any iteration
+    (see :func:`_integrate`).
 
     ``offset = b - a`` (2, P), ``dist = |b - a|``. Each iteration integrates the
     pairs still running once (with their variational equations); a trial whose
@@ -414,6 +453,7 @@ def _newton(
     base_miss = np.full(size, np.inf)
     converged = np.zeros(size, dtype=bool)
     worst_det = np.full(size, np.nan)
+    stiffness = np.zeros(size)
     iterations = np.zeros(size, dtype=int)
     running = np.arange(size)
     for _ in range(max_iter):
@@ -433,6 +473,8 @@ def _newton(
         base_psi[acc], base_T[acc], base_miss[acc] = trial_psi[acc], trial_T[acc], miss[accept]
         converged[running[done]] = True
         worst_det[running[done]] = flow.worst_det[done]
+        np.maximum(stiffness[running], flow.stiffness, out=flow.stiffness)
+        stiffness[running] = flow.stiffness
         # a new Newton step where accepted but not yet converged
         new = accept & ~done
         rx, ry = miss_vec[0, new], miss_vec[1, new]
@@ -460,7 +502,7 @@ def _newton(
             & (trial_T[nxt] > 0)
         )
         running = nxt[alive]
-    return base_psi, base_T, converged, worst_det, iterations
+    return base_psi, base_T, converged, worst_det, stiffness, iterations
 
 
 # -------------------------------------------------------------------- bounds and warm start
@@ -529,6 +571,11 @@ class PairTimes:
         Relative miss ``|x(T) - b| / |b - a|`` re-integrated with twice the steps.
     line_time : (P,) ndarray
         The straight-line upper bound (check 3).
+    extremal_time : (P,) ndarray
+        ``T`` of the extremal Newton converged to, also where it was rejected
+        (``nan`` where Newton did not converge).
+    restarted : (P,) bool ndarray
+        Accepted only after the restarts from other initial headings.
     """
 
     time: np.ndarray
@@ -539,6 +586,8 @@ class PairTimes:
     steps: np.ndarray
     miss: np.ndarray
     line_time: np.ndarray
+    extremal_time: np.ndarray
+    restarted: np.ndarray
 
     @property
     def failed(self) -> np.ndarray:
@@ -566,6 +615,7 @@ def _solve_chunk(
     speed: float,
     start: np.ndarray,
     goal: np.ndarray,
+    first: tuple[np.ndarray, np.ndarray],
     bound: float,
     tol: float,
     max_iter: int,
@@ -578,7 +628,8 @@ def _solve_chunk(
     """
     offset = goal - start
     dist = np.hypot(offset[0], offset[1])
-    psi, duration = warm_start(model, start, goal, speed)
+    psi, duration = first
+    first_psi, first_T = psi.copy(), duration.copy()
     steps = np.clip(np.ceil(bound * duration / STEP_REACH), 1, max_steps).astype(int)
     newton_tol = tol / 100.0
 
@@ -592,7 +643,7 @@ def _solve_chunk(
     while not done.all():
         n_steps = int(steps[~done].min())
         group = np.flatnonzero(~done & (steps == n_steps))
-        g_psi, g_T, conv, g_det, g_iter = _newton(
+        g_psi, g_T, conv, g_det, g_stiff, g_iter = _newton(
             model,
             speed,
             start[:, group],
@@ -606,9 +657,20 @@ def _solve_chunk(
         )
         psi[group], duration[group], iters[group] = g_psi, g_T, iters[group] + g_iter
         det[group] = g_det
-        failed = group[~conv]
-        done[failed] = True  # why stays NOT_CONVERGED
-        conv_idx = group[conv]
+        # enough steps for the rates met on the way? If not, try again with more
+        # (a pair that did not converge starts again from its first guess)
+        needed = np.ceil(np.maximum(bound, g_stiff) * g_T / STEP_REACH)
+        coarse = np.isfinite(needed) & (needed > n_steps)
+        if n_steps < max_steps:
+            redo = group[coarse]
+            steps[redo] = np.minimum(np.maximum(needed[coarse], 2 * n_steps), max_steps)
+            restart = group[coarse & ~conv]
+            psi[restart], duration[restart] = first_psi[restart], first_T[restart]
+        else:
+            done[group[coarse]] = True
+            why[group[coarse & conv]] = INACCURATE
+        done[group[~conv & ~coarse]] = True  # why stays NOT_CONVERGED
+        conv_idx = group[conv & ~coarse]
         if conv_idx.size:
             # accuracy check: the true flow (estimated with twice the steps) must also hit b
             check = _integrate(
@@ -654,6 +716,8 @@ def pmp_travel_times(
     max_steps: int = MAX_STEPS,
     callback: Callable[[int], None] | None = None,
     jobs: int = 1,
+    initial: tuple[Any, Any] | None = None,
+    restarts: bool = True,
 ) -> PairTimes:
     """Minimum travel times of many pairs by vectorised shooting on (2.10).
 
@@ -678,6 +742,14 @@ def pmp_travel_times(
         Threads. The pairs are cut into fixed chunks of ``CHUNK`` (so the result
         does not depend on ``jobs``); numpy releases the GIL inside its array
         loops, so chunks run in parallel. Fields evaluated by CasADi use one thread.
+    initial : (psi0, T) pair of (P,) array_like, optional
+        Newton's starting points instead of :func:`warm_start` (for multi-start
+        studies of the extremals).
+    restarts : bool
+        Re-solve each pair that was not accepted from ``RESTART_OFFSETS`` added to
+        its rejected extremal's initial heading (or the first guess's), keeping the
+        fastest accepted solution (``restarted``). Never triggers on an affine
+        field, where every extremal is the optimum (module docstring).
 
     Returns
     -------
@@ -721,63 +793,101 @@ def pmp_travel_times(
     if not (tol > 0 and max_iter >= 1 and max_steps >= 1):
         raise InstanceError("tol, max_iter and max_steps must be positive")
     size = len(a)
-    time = np.zeros(size)
-    heading = np.zeros(size)
-    accepted = np.ones(size, dtype=bool)
-    reason = np.full(size, OK, dtype=object)
-    iterations = np.zeros(size, dtype=int)
-    steps_used = np.zeros(size, dtype=int)
-    miss_out = np.zeros(size)
-    line_out = np.zeros(size)
+    guess = None
+    if initial is not None:
+        try:
+            guess = np.array(
+                [np.broadcast_to(np.asarray(x, dtype=float), (size,)) for x in initial]
+            )
+        except (TypeError, ValueError):
+            guess = np.zeros(0)
+        if guess.shape != (2, size) or not np.isfinite(guess).all() or (guess[1] <= 0).any():
+            raise InstanceError(f"initial must be two finite (P,) arrays with T > 0, P = {size}")
+    out = {
+        "time": np.zeros(size),
+        "heading": np.zeros(size),
+        "accepted": np.ones(size, dtype=bool),
+        "reason": np.full(size, OK, dtype=object),
+        "iterations": np.zeros(size, dtype=int),
+        "steps": np.zeros(size, dtype=int),
+        "miss": np.zeros(size),
+        "line_time": np.zeros(size),
+        "extremal_time": np.zeros(size),
+        "restarted": np.zeros(size, dtype=bool),
+    }
     moving = np.flatnonzero(np.any(a != b, axis=1))
     if callback is not None and size - moving.size:
         callback(size - moving.size)
     if moving.size == 0:
-        return PairTimes(
-            time, heading, accepted, reason, iterations, steps_used, miss_out, line_out
-        )
+        return PairTimes(**out)
 
     model = drift_model(field)
     lo = np.minimum(a[moving].min(axis=0), b[moving].min(axis=0))
     hi = np.maximum(a[moving].max(axis=0), b[moving].max(axis=0))
-    bound = model.gradient_bound(lo, hi)
-    # fixed chunks (independent of jobs, so the result is too), solved in threads:
-    # numpy releases the GIL inside its array loops
-    n_chunks = -(-moving.size // CHUNK)
-    chunks = np.array_split(moving, n_chunks)
-
-    def solve(rows: np.ndarray) -> tuple[np.ndarray, ...]:
-        return _solve_chunk(
-            model,
-            speed,
-            a[rows].T.copy(),
-            b[rows].T.copy(),
-            bound,
-            tol,
-            max_iter,
-            max_steps,
-            callback,
-        )
-
-    jobs = max(1, min(int(jobs), n_chunks)) if model.thread_safe else 1
-    if jobs == 1:
-        parts = [solve(rows) for rows in chunks]
+    margin = 0.25 * np.max(hi - lo)  # extremals bend out of the points' box
+    bound = model.rate_bound(lo - margin, hi + margin, speed)
+    if guess is None:
+        first_psi, first_T = warm_start(model, a[moving].T.copy(), b[moving].T.copy(), speed)
     else:
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            parts = list(pool.map(solve, chunks))
-    duration, psi, ok, why, iters, steps, miss2, line = (
-        np.concatenate(column) for column in zip(*parts, strict=True)
-    )
+        first_psi, first_T = guess[0, moving], guess[1, moving]
+    threads = max(1, int(jobs)) if model.thread_safe else 1
 
-    time[moving] = np.where(ok, duration, np.nan)
-    heading[moving] = psi
-    accepted[moving] = ok
-    reason[moving] = why
-    iterations[moving] = iters
-    steps_used[moving] = steps
-    miss_out[moving] = miss2
-    line_out[moving] = line
-    return PairTimes(time, heading, accepted, reason, iterations, steps_used, miss_out, line_out)
+    def run(rows: np.ndarray, psi0: np.ndarray, T0: np.ndarray, report: Any) -> list[np.ndarray]:
+        # fixed chunks (independent of jobs, so the result is too), solved in threads:
+        # numpy releases the GIL inside its array loops
+        pieces = np.array_split(np.arange(rows.size), -(-rows.size // CHUNK))
+
+        def solve(piece: np.ndarray) -> tuple[np.ndarray, ...]:
+            r = rows[piece]
+            first = (psi0[piece].copy(), T0[piece].copy())
+            start, goal = a[r].T.copy(), b[r].T.copy()
+            limits = (bound, tol, max_iter, max_steps)
+            return _solve_chunk(model, speed, start, goal, first, *limits, report)
+
+        if threads == 1 or len(pieces) == 1:
+            parts = [solve(piece) for piece in pieces]
+        else:
+            with ThreadPoolExecutor(max_workers=min(threads, len(pieces))) as pool:
+                parts = list(pool.map(solve, pieces))
+        return [np.concatenate(column) for column in zip(*parts, strict=True)]
+
+    duration, psi, ok, why, iters, steps, miss2, line = run(moving, first_psi, first_T, callback)
+    extremal = np.where(why != NOT_CONVERGED, duration, np.nan)
+    restarted = np.zeros(moving.size, dtype=bool)
+    bad = np.flatnonzero(~ok)
+    if restarts and bad.size:
+        # other initial headings around the rejected extremal (or the first guess)
+        offsets = np.asarray(RESTART_OFFSETS)
+        converged = why[bad] != NOT_CONVERGED
+        base_psi = np.where(converged, psi[bad], first_psi[bad])
+        base_T = np.where(converged, duration[bad], first_T[bad])
+        r_T, r_psi, r_ok, _, r_iter, r_steps, r_miss, _ = run(
+            np.repeat(moving[bad], offsets.size),
+            (base_psi[:, None] + offsets).ravel(),
+            np.repeat(base_T, offsets.size),
+            None,
+        )
+        times = np.where(r_ok, r_T, np.inf).reshape(bad.size, offsets.size)
+        pick = np.argmin(times, axis=1)
+        flat = np.arange(bad.size) * offsets.size + pick
+        found = np.isfinite(times[np.arange(bad.size), pick])
+        iters[bad] += r_iter.reshape(bad.size, offsets.size).sum(axis=1)
+        win, flat = bad[found], flat[found]
+        duration[win], psi[win] = r_T[flat], r_psi[flat]
+        steps[win], miss2[win], extremal[win] = r_steps[flat], r_miss[flat], r_T[flat]
+        ok[win], why[win], restarted[win] = True, OK, True
+
+    out["time"][moving] = np.where(ok, duration, np.nan)
+    out["heading"][moving] = psi
+    out["accepted"][moving] = ok
+    out["reason"][moving] = why
+    out["iterations"][moving] = iters
+    out["steps"][moving] = steps
+    out["miss"][moving] = miss2
+    out["line_time"][moving] = line
+    out["extremal_time"][moving] = extremal
+    out["restarted"][moving] = restarted
+    return PairTimes(**out)
 
 
 def triangle_violations(matrix: np.ndarray, rtol: float = 1e-9) -> list[tuple[int, int]]:
