@@ -5,75 +5,94 @@ path from ``a`` to ``b`` is therefore fixed by two numbers, its initial heading
 ``psi(0)`` and its duration ``T``, which solve the two-point boundary problem
 (2.10): integrate (2.1) with (2.6) from ``(a, psi(0))`` for ``T`` seconds and
 end at ``b``. This module solves (2.10) for *every* pair of a travel-time matrix
-simultaneously: all states are numpy arrays over pairs, one Runge-Kutta step
+simultaneously: all states are numpy arrays over pairs, one Runge-Kutta stage
 advances all pairs, and Newton updates all ``(psi(0), T)`` together.
 
 Method chosen, and why
 ----------------------
 *Integrator.* The 12-stage, order-8 Runge-Kutta tableau of Dormand and Prince
 (carried by :class:`scipy.integrate.DOP853`) used with a *fixed* number of
-steps per pair on the scaled time ``tau = t / T in [0, 1]``. Fields of interest
-are smooth and weak on the scale of one trip (``T * max |grad v_c| ~ 1`` for the
-thesis's field on its 1000 m square), so one or two order-8 steps give the end
-point to about 1e-12 relative; a fixed step count keeps every pair in the
-same array operation, which an adaptive per-pair step could not. The number of
-steps per pair is picked from ``T * max |grad v_c|`` (at most ``STEP_REACH`` per
-step) and then *verified*: the converged solution is re-integrated with twice
-the steps and the new miss distance (an estimate of the true integration error,
-order 8 makes it 256 times smaller) must be below ``tol * |b - a|``; pairs that
-fail it are re-solved with twice the steps. So the accuracy is measured, not
-assumed.
+equal steps per pair. Fields of interest are smooth and weak on the scale of one
+trip (``T |grad v_c| <= 1`` for the thesis's field on its 1000 m square), so one
+or two order-8 steps give the end point to about 1e-12 relative; a fixed step
+count keeps every pair in the same array operation, which an adaptive per-pair
+step could not. The step count keeps ``T * rate / steps <= STEP_REACH``, where
+``rate`` is the local rate scale of the flow (:func:`_local_rate`: the drift's
+Jacobian, and its Hessian, which drives the variational equations). It is
+picked from a bound over the points' box, re-checked against the rates met along
+each extremal, and the end point is then *verified*: the converged solution is
+re-integrated with twice the steps and the new miss distance (an estimate of the
+true integration error; order 8 makes it about 256 times smaller) must be below
+``tol * |b - a|``; pairs that fail are re-solved with more steps. The accuracy
+is measured, not assumed.
 
 *Jacobian.* Newton on the miss ``r(psi0, T) = x(T) - b`` needs ``dr/dpsi0`` and
 ``dr/dT``. The first comes from the variational equations of (2.1)+(2.6)
-integrated alongside the state by the same Runge-Kutta steps (so it is the
+integrated alongside the state by the same Runge-Kutta stages (so it is the
 exact derivative of the discrete flow); the second is the velocity (2.1) at the
 end point. Newton steps are capped (``|dpsi| <= 1`` rad, ``T`` at most halved)
 and backtracked per pair until the miss decreases.
 
 *Warm start.* The uniform-field closed form (3.4) with the drift at the
 segment's midpoint (:mod:`taopt.navigation.uniform`); on the thesis's field
-Newton then converges in about five iterations.
+Newton then converges in four or five iterations.
 
 *Why not the alternatives.* Batched collocation (the reference) solves an NLP
-per pair; even batched it costs milliseconds per pair. Per-pair CVODES shooting
+per pair: even batched, milliseconds per pair. Per-pair CVODES shooting
 (:mod:`taopt.navigation.shooting`) pays Python and CasADi overhead per pair.
-The linear field would even allow a closed-form costate and a quadrature, but
+An affine field would even allow a closed-form costate and a quadrature, but
 one integrator for every smooth field is simpler to trust and fast enough.
 
-Guards against a wrong or slower extremal
------------------------------------------
+Which extremal: guards, and why affine fields need none
+-------------------------------------------------------
 Newton returns *an* extremal: a path satisfying Pontryagin's necessary
-conditions, not necessarily the fastest. Every solution is checked before it is
-accepted; a pair that fails any check is marked with its reason (and
-:func:`taopt.navigation.travel_time_matrix` re-solves it by collocation and
-reports its ``(i, j)``):
+conditions, not necessarily the fastest.
 
-1. *Converged and accurate*: Newton's relative miss below ``tol / 100`` and the
-   doubled-step miss below ``tol``; a finite, positive ``T``.
-2. *No conjugate point (Jacobi condition)*: along an extremal the wavefront
-   sensitivity ``dx/dpsi0`` is orthogonal to the costate while the velocity is
-   not (``H = 0``), so ``det[dx/dpsi0, x_dot]`` is negative for small ``t`` and
-   vanishes only at a conjugate point, beyond which the extremal is no longer
-   even locally optimal. The determinant is checked at every step end and at
-   ``T`` (where it is also Newton's Jacobian).
+*Affine fields* (``v_c = A x + c``, uniform and linear, the thesis's case):
+every extremal is the minimum. The dynamics are linear with a convex control
+set, so the reachable set ``R(T)`` is convex, and a path following (2.6) is
+thrust along ``n(t)`` with ``n' = -A^T n`` (test_navigation's costate check),
+which is exactly the control that maximises ``<n(T), x(T)>`` over ``R(T)``: its
+end point lies on the boundary of ``R(T)``. If ``b`` were reachable at some
+``t < T``, the vehicle could hold station there (``|v_c(b)| < v``, Assumption
+2.1) with thrust to spare, which puts ``b`` in the *interior* of ``R(T)``.
+So ``T`` is the minimum time, whichever extremal Newton found.
+
+*Other smooth fields* (a B-spline :class:`~taopt.fields.GriddedField`) can have
+several extremals. Every solution is checked before it is accepted; a pair that
+fails a check is restarted from other initial headings (``RESTART_OFFSETS``
+around the rejected one, fastest accepted solution wins); if it still fails it
+is marked with its reason, and :func:`taopt.navigation.travel_time_matrix`
+re-solves it by collocation and reports its ``(i, j)``:
+
+1. *Converged and accurate*: Newton's relative miss below ``tol / 100``, enough
+   steps for the rates met, and the doubled-step miss below ``tol``.
+2. *No conjugate point (Jacobi condition)*: along an extremal ``dx/dpsi0`` is
+   orthogonal to the costate while the velocity is not (``H = 0``), so
+   ``det[dx/dpsi0, x_dot]`` is negative for small ``t`` and vanishes only where
+   the extremals from ``a`` focus (a conjugate point); beyond it the extremal is
+   not even locally optimal. The determinant is checked at every step end and at
+   ``T`` (where it is also Newton's Jacobian). Example: against a jet current,
+   the straight path on the jet's axis is an extremal past its conjugate point;
+   collocation converges to it too, the restarts find the faster path that
+   leaves the axis (tests/test_navigation_pmp.py).
 3. *Not slower than the straight line*: flying the segment ``a -> b`` with the
    heading that keeps the net velocity on it (3.4) is feasible under Assumption
-   2.1; its time (a 32-point Gauss-Legendre quadrature of ``1 / v_net``) is an
-   upper bound on the optimum, and a longer extremal is rejected.
+   2.1; its time (a 32-point Gauss-Legendre quadrature of ``1 / v_net``) bounds
+   the optimum from above, and a longer extremal is rejected.
 4. *Triangle inequality* (in :func:`taopt.navigation.travel_time_matrix`): a
    solution of (2.10) is a real trajectory, so its time is never below the
    optimum; if ``t(i, k) > t(i, j) + t(j, k)`` the entry ``(i, k)`` must be a
    slower extremal, and it is re-solved by collocation.
 
-Checks 2-4 do not prove global optimality (nothing cheap does), but a slower
-extremal would have to pass a local-optimality test, beat the straight line and
-be consistent with every detour through the other points.
+Outside affine fields checks 2-4 do not prove global optimality (nothing cheap
+does), but a slower extremal would have to be locally optimal, beat the straight
+line and be consistent with every detour through the other points.
 
 References
 ----------
-Thesis §2.3.2, Lemma 2.2, (2.1), (2.6)-(2.10), (3.4); Lemma 2.3 (the triangle
-inequality).
+Thesis §2.3.2, Lemma 2.2, (2.1), (2.6)-(2.10), (3.4), Assumption 2.1; Lemma 2.3
+(the triangle inequality).
 """
 
 from __future__ import annotations
