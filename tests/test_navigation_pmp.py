@@ -261,7 +261,7 @@ def test_unconverged_pairs_fall_back_to_collocation_and_are_named():
     collocation, listed by (i, j), and their entries equal collocation's."""
     field = thesis_field(1e-2)
     points = np.random.default_rng(9).uniform(0, 100, (6, 2))
-    options = {"max_iter": 4, "restarts": False}
+    options = {"max_iter": 3, "restarts": False}
     rows, cols = all_pairs(len(points))
     direct = pmp_travel_times(field, points[rows], points[cols], **options)
     expected = [(int(rows[r]), int(cols[r])) for r in direct.failed]

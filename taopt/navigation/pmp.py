@@ -453,6 +453,7 @@ def _newton(
     steps: int,
     tol: float,
     max_iter: int,
+    final: float = 0.0,
 ) -> tuple[np.ndarray, ...]:
     """Damped Newton on (2.10) for all pairs.
 
@@ -462,7 +463,11 @@ def _newton(
 
     ``offset = b - a`` (2, P), ``dist = |b - a|``. Each iteration integrates the
     pairs still running once (with their variational equations); a trial whose
-    miss does not decrease is halved back towards the last accepted point.
+    miss does not decrease is halved back towards the last accepted point. A
+    pair converges when its relative miss is at most ``tol``, or, once it is at
+    most ``final``, after one more full Newton step without integrating again
+    (Newton converges quadratically: the next miss is about the square of this
+    one); the caller then measures the miss of that last step itself.
     """
     size = psi.shape[0]
     base_psi, base_T = psi.copy(), duration.copy()
@@ -507,11 +512,18 @@ def _newton(
             cap = np.minimum(cap, np.where(d_T < 0, 0.5 * base_T[running[new]] / -d_T, 1.0))
         idx = running[new]
         step_psi[idx], step_T[idx], alpha[idx] = d_psi, d_T, cap
+        last = np.zeros(running.size, dtype=bool)
+        last[new] = (miss[new] <= final) & (cap == 1.0)
+        fin = running[last]
+        base_psi[fin] += step_psi[fin]
+        base_T[fin] += step_T[fin]
+        converged[fin] = True
+        worst_det[fin] = flow.worst_det[last]
         # rejected trials: halve the step from the base point
         rej = running[~accept]
         alpha[rej] *= 0.5
         # next trial points; give up on pairs whose step vanished or is not finite
-        nxt = running[~done]
+        nxt = running[~done & ~last]
         trial_psi[nxt] = base_psi[nxt] + alpha[nxt] * step_psi[nxt]
         trial_T[nxt] = base_T[nxt] + alpha[nxt] * step_T[nxt]
         alive = (
@@ -673,6 +685,7 @@ def _solve_chunk(
             n_steps,
             newton_tol,
             max_iter,
+            0.1 * np.sqrt(newton_tol),
         )
         psi[group], duration[group], iters[group] = g_psi, g_T, iters[group] + g_iter
         det[group] = g_det
