@@ -277,9 +277,9 @@ def test_unconverged_pairs_fall_back_to_collocation_and_are_named():
 
 
 def test_result_does_not_depend_on_jobs():
-    """Fixed chunks: one thread and two threads give the same matrix, bit for bit."""
+    """Fixed batches: one thread and two threads give the same matrix, bit for bit."""
     field = thesis_field(1e-3)
-    points = thesis_points(45, 5, seed=10)  # 2450 pairs: two chunks
+    points = thesis_points(45, 5, seed=10)  # 2450 pairs in two batches
     one = travel_time_matrix(field, points, jobs=1)
     two = travel_time_matrix(field, points, jobs=2)
     np.testing.assert_array_equal(one, two)
