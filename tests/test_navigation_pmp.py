@@ -6,10 +6,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from taopt.errors import InstanceError
-from taopt.fields import Field, GriddedField, UniformField, thesis_field
+from taopt.fields import Field, GriddedField, LinearField, UniformField, thesis_field
 from taopt.navigation import min_time_path, navigation_law, pmp, travel_time_matrix
 from taopt.navigation.checks import matrix_report
 from taopt.navigation.collocation import CollocationSolver
@@ -158,6 +160,27 @@ def test_affine_field_every_extremal_is_the_minimum():
     expected = np.repeat(best.time, reps)
     found = out.accepted
     np.testing.assert_allclose(out.time[found], expected[found], rtol=1e-9)
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(
+    entries=st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+    strength=st.sampled_from([1e-3, 1e-2, 5e-2]),
+    margin=st.sampled_from([1.02, 1.5]),
+    seed=st.integers(0, 2**16),
+)
+def test_random_affine_fields_agree_with_shooting(entries, strength, margin, seed):
+    """Random affine drifts v_c = A x + c on a 100 m square, v just above the strongest drift:
+    every pair is accepted and equals CVODES shooting to 1e-8."""
+    field = LinearField(strength * np.reshape(entries[:4], (2, 2)), 0.2 * np.array(entries[4:]))
+    corners = np.array([[0, 0], [0, 100], [100, 0], [100, 100]], dtype=float)
+    speed = max(0.05, margin * float(np.max(np.linalg.norm(field.velocity(corners), axis=1))))
+    pairs = np.random.default_rng(seed).uniform(0, 100, (3, 2, 2))
+    out = pmp_travel_times(field, pairs[:, 0], pairs[:, 1], speed)
+    assert out.accepted.all() and not out.restarted.any()
+    for k, (a, b) in enumerate(pairs):
+        shoot = min_time_path(field, a, b, speed, method="shooting").time
+        assert out.time[k] == pytest.approx(shoot, rel=1e-8)
 
 
 # -- closed forms ---------------------------------------------------------------------------------
