@@ -138,7 +138,7 @@ def travel_time_matrix(
         or the triangle inequality still fails; also warned about).
     pmp_options : mapping, optional
         Keyword arguments for :func:`taopt.navigation.pmp.pmp_travel_times`
-        (``tol``, ``max_iter``, ``max_steps``).
+        (``tol``, ``max_iter``, ``max_steps``, ``restarts``).
 
     Returns
     -------
