@@ -65,8 +65,10 @@ around the rejected one, fastest accepted solution wins); if it still fails it
 is marked with its reason, and :func:`taopt.navigation.travel_time_matrix`
 re-solves it by collocation and reports its ``(i, j)``:
 
-1. *Converged and accurate*: Newton's relative miss below ``tol / 100``, enough
-   steps for the rates met, and the doubled-step miss below ``tol``.
+1. *Converged and accurate*: Newton converged (relative miss below ``tol / 100``,
+   or below ``sqrt(tol / 100) / 10`` followed by one last full step, whose miss
+   quadratic convergence puts far below ``tol``), enough steps for the rates
+   met, and the miss re-integrated with twice the steps below ``tol``.
 2. *No conjugate point (Jacobi condition)*: along an extremal ``dx/dpsi0`` is
    orthogonal to the costate while the velocity is not (``H = 0``), so
    ``det[dx/dpsi0, x_dot]`` is negative for small ``t`` and vanishes only where
