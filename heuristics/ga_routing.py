@@ -100,6 +100,8 @@ class OperatorSet:
         A child identical to an earlier chromosome of its generation is mutated
         (by one of ``mutations``) before it is evaluated, so the population does
         not collapse onto copies of its best member.
+    tournament : int
+        Tournament size used when :func:`genetic_algorithm` is not given one.
     """
 
     markers: str = "vehicle"
@@ -108,6 +110,7 @@ class OperatorSet:
     polish: int = 2
     max_moves: int = 1000
     distinct: bool = True
+    tournament: int = 4
 
     def __post_init__(self) -> None:
         if self.markers not in MARKERS:
@@ -123,6 +126,8 @@ class OperatorSet:
             raise InstanceError(
                 f"polish and max_moves must be >= 0, got {self.polish}, {self.max_moves}"
             )
+        if self.tournament < 1:
+            raise InstanceError(f"tournament must be >= 1, got {self.tournament}")
         if self.polish and self.markers != "vehicle":
             raise InstanceError('local search (polish > 0) needs markers="vehicle"')
 
@@ -510,7 +515,7 @@ def genetic_algorithm(
     generations: int = 350,
     crossover_rate: float = 0.9,
     mutation_rate: float = 0.1,
-    tournament: int = 4,
+    tournament: int | None = None,
     operators: str | OperatorSet = "memetic",
 ) -> Solution:
     """GA of §2.5 with marker-gene encoding (operators in the module docstring).
@@ -529,8 +534,9 @@ def genetic_algorithm(
         Iterations (thesis: 350); the run stops on this count, not on time.
     crossover_rate, mutation_rate : float
         Per pair / per child probabilities (thesis: 0.9 and 0.1).
-    tournament : int
-        Tournament size (the thesis does not give it).
+    tournament : int, optional
+        Tournament size (the thesis does not give it); default: the operator
+        set's (``OperatorSet.tournament``).
     operators : str or OperatorSet
         A name from :data:`OPERATOR_SETS` -- "memetic" (default) or
         "ox-inversion" (the first version) -- or an :class:`OperatorSet`.
@@ -566,6 +572,9 @@ def genetic_algorithm(
     ----------
     Thesis §2.5 (population 120, rates 0.9 / 0.1, 350 generations).
     """
+    ops = _operator_set(operators)
+    if tournament is None:
+        tournament = ops.tournament
     if population < 2 or generations < 0 or tournament < 1:
         raise InstanceError(
             "need population >= 2, generations >= 0 and tournament >= 1, "
@@ -574,7 +583,6 @@ def genetic_algorithm(
     for label, rate in (("crossover_rate", crossover_rate), ("mutation_rate", mutation_rate)):
         if not 0.0 <= rate <= 1.0:
             raise InstanceError(f"{label} must be in [0, 1], got {rate}")
-    ops = _operator_set(operators)
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     length = problem.n + problem.m - 1
