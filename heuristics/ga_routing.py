@@ -63,6 +63,7 @@ moves priced), so runs with and without it can be compared on work done.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 
@@ -76,6 +77,7 @@ from taopt.routing.problem import AssignmentProblem, evaluate_routes
 MARKERS = ("position", "vehicle")
 CROSSOVERS = ("ox", "obx")
 MUTATIONS = ("inversion", "swap", "slide")
+NEIGHBOURHOOD = ("reverse", "relocate", "tails", "exchange")
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,8 @@ class OperatorSet:
         not collapse onto copies of its best member.
     tournament : int
         Tournament size used when :func:`genetic_algorithm` is not given one.
+    neighbourhood : tuple of {"reverse", "relocate", "tails", "exchange"}
+        Local-search moves (see :func:`local_search`).
     """
 
     markers: str = "vehicle"
@@ -109,8 +113,9 @@ class OperatorSet:
     mutations: tuple[str, ...] = MUTATIONS
     polish: int = 2
     max_moves: int = 1000
-    distinct: bool = True
-    tournament: int = 4
+    distinct: bool = False
+    tournament: int = 2
+    neighbourhood: tuple[str, ...] = NEIGHBOURHOOD
 
     def __post_init__(self) -> None:
         if self.markers not in MARKERS:
@@ -126,6 +131,11 @@ class OperatorSet:
             raise InstanceError(
                 f"polish and max_moves must be >= 0, got {self.polish}, {self.max_moves}"
             )
+        unknown = [name for name in self.neighbourhood if name not in NEIGHBOURHOOD]
+        if unknown:
+            raise InstanceError(
+                f"neighbourhood must be a subset of {NEIGHBOURHOOD}, got {self.neighbourhood!r}"
+            )
         if self.tournament < 1:
             raise InstanceError(f"tournament must be >= 1, got {self.tournament}")
         if self.polish and self.markers != "vehicle":
@@ -135,7 +145,7 @@ class OperatorSet:
 OPERATOR_SETS: dict[str, OperatorSet] = {
     "memetic": OperatorSet(),
     "ox-inversion": OperatorSet(
-        markers="position", mutations=("inversion",), polish=0, distinct=False
+        markers="position", mutations=("inversion",), polish=0, distinct=False, tournament=4
     ),
 }
 
@@ -326,7 +336,10 @@ MUTATION = {"inversion": inversion_mutation, "swap": swap_mutation, "slide": sli
 
 
 def local_search(
-    matrix: np.ndarray, nodes: np.ndarray, max_moves: int = 1000
+    matrix: np.ndarray,
+    nodes: np.ndarray,
+    max_moves: int = 1000,
+    neighbourhood: tuple[str, ...] = NEIGHBOURHOOD,
 ) -> tuple[np.ndarray, int, int]:
     """Best-improvement reversal + or-opt descent of one path (2-opt / or-opt).
 
@@ -363,10 +376,116 @@ def local_search(
     moves = evaluations = 0
     if inner < 2:
         return nodes, moves, evaluations
-    # Forbidden moves priced +inf once: reversal needs j > i; a segment i..i+length-1
-    # cannot go between p and p + 1 for p in i-1..i+length-1 (that is where it is).
+    unknown = set(neighbourhood) - set(NEIGHBOURHOOD)
+    if unknown:
+        raise InstanceError(f"unknown local-search moves {sorted(unknown)}; use {NEIGHBOURHOOD}")
+    reverse_block, relocate_block, exchange_block, later = _move_masks(inner)
+    position = np.arange(1, inner + 1)
+    per_iteration = {
+        "reverse": inner * (inner - 1) // 2,
+        "relocate": sum(block.shape[0] * (inner - size) for size, block in relocate_block.items()),
+        "tails": inner * (inner + 1) // 2,  # pairs of cuts, same-route pairs included
+        "exchange": (inner - 1) * (inner - 2) // 2,
+    }
+    while moves < max_moves:
+        cost = matrix[nodes][:, nodes]
+        forward = np.diagonal(cost, 1)  # a[k], k = 0..L
+        tolerance = 1e-10 * max(float(forward.sum()), 1.0)
+        best_delta, best_move = 0.0, None
+        candidates = []
+        if "reverse" in neighbourhood:
+            # Reversal of i..j: rows i, columns j (1..L).
+            backward = np.diagonal(cost, -1)  # b[k] = M[k + 1, k]
+            fsum = np.concatenate(([0.0], np.cumsum(forward)))[1 : inner + 1]  # F[1..L]
+            bsum = np.concatenate(([0.0], np.cumsum(backward)))[1 : inner + 1]  # B[1..L]
+            delta = cost[0:inner, 1 : inner + 1] + cost[1 : inner + 1, 2 : inner + 2]
+            delta += (bsum - fsum - forward[1 : inner + 1])[None, :]
+            delta += (fsum - bsum - forward[0:inner])[:, None]
+            delta += reverse_block
+            candidates.append(("reverse", 0, delta))
+        if "relocate" in neighbourhood:
+            # Segment i..i+length-1 between p and p + 1: rows i (1..), columns p (0..L).
+            insertion = cost.T[1 : inner + 1, 0 : inner + 1] - forward[None, 0 : inner + 1]
+            for length, block in relocate_block.items():
+                count = block.shape[0]
+                first = position[:count]
+                delta = insertion[:count] + cost[length : inner + 1, 1 : inner + 2]
+                removal = (
+                    cost[first - 1, first + length]
+                    - forward[first - 1]
+                    - forward[first + length - 1]
+                )
+                delta += removal[:, None]
+                delta += block
+                candidates.append(("relocate", length, delta))
+        if "tails" in neighbourhood:
+            # Cut before positions c (row) and d (column), c < d in different routes, and
+            # swap what follows each cut up to its route's end (2-opt*).
+            route = np.cumsum(nodes[: inner + 1] >= nodes[0]) - 1  # route of position c - 1
+            half = cost[0 : inner + 1, 1 : inner + 2] - forward[0 : inner + 1, None]
+            delta = half + half.T
+            delta[later | (route[:, None] == route[None, :])] = np.inf
+            candidates.append(("tails", 0, delta))
+        if "exchange" in neighbourhood:
+            # Swap the genes at positions i < j - 1: rows i, columns j (1..L).
+            pair = cost[0:inner, 1 : inner + 1] + cost[1 : inner + 1, 2 : inner + 2]
+            around = forward[0:inner] + forward[1 : inner + 1]
+            delta = pair + pair.T
+            delta -= around[:, None]
+            delta -= around[None, :]
+            delta += exchange_block
+            candidates.append(("exchange", 0, delta))
+        evaluations += sum(per_iteration[kind] for kind in neighbourhood)
+        for kind, length, delta in candidates:
+            flat = int(np.argmin(delta))
+            if delta.flat[flat] < best_delta:
+                row, column = divmod(flat, delta.shape[1])
+                best_delta, best_move = float(delta.flat[flat]), (kind, row, column, length)
+        if best_move is None or not best_delta < -tolerance:
+            break
+        nodes = _apply(nodes, *best_move)
+        moves += 1
+    return nodes, moves, evaluations
+
+
+def _apply(nodes: np.ndarray, kind: str, row: int, column: int, length: int) -> np.ndarray:
+    """The path after one move found by :func:`local_search` (row/column of its delta table)."""
+    if kind == "reverse":
+        i, j = row + 1, column + 1
+        nodes[i : j + 1] = nodes[i : j + 1][::-1]
+        return nodes
+    if kind == "exchange":
+        i, j = row + 1, column + 1
+        nodes[[i, j]] = nodes[[j, i]]
+        return nodes
+    if kind == "relocate":
+        i, p = row + 1, column
+        segment = nodes[i : i + length].copy()
+        rest = np.concatenate((nodes[:i], nodes[i + length :]))
+        at = p + 1 if p < i else p + 1 - length
+        return np.concatenate((rest[:at], segment, rest[at:]))
+    # tails: cuts before c < d; each tail runs to the position before the next route start
+    c, d = row + 1, column + 1
+    is_start = nodes >= nodes[0]
+    end_c = c + int(np.argmax(is_start[c:]))  # first start (or the end point) at or after c
+    end_d = d + int(np.argmax(is_start[d:]))
+    return np.concatenate(
+        (nodes[:c], nodes[d:end_d], nodes[end_c:d], nodes[c:end_c], nodes[end_d:])
+    )
+
+
+@functools.lru_cache(maxsize=64)
+def _move_masks(inner: int) -> tuple[np.ndarray, dict[int, np.ndarray], np.ndarray, np.ndarray]:
+    """+inf at the moves a path with ``inner`` free genes cannot make, per move type.
+
+    Reversal needs j > i; a segment i..i+length-1 cannot go between p and p + 1
+    for p in i-1..i+length-1 (that is where it already is); an exchange needs
+    j > i + 1 (neighbours are a relocation). The last array is True where a
+    tails move is not counted (c >= d; it is symmetric).
+    """
     position = np.arange(1, inner + 1)
     reverse_block = np.where(position[None, :] > position[:, None], 0.0, np.inf)
+    exchange_block = np.where(position[None, :] > position[:, None] + 1, 0.0, np.inf)
     place = np.arange(inner + 1)[None, :]
     relocate_block = {
         length: np.where(
@@ -378,51 +497,10 @@ def local_search(
         for length in (1, 2, 3)
         if inner - length + 1 >= 1
     }
-    per_move = inner * (inner - 1) // 2 + sum(
-        block.shape[0] * (inner - length) for length, block in relocate_block.items()
-    )
-    while moves < max_moves:
-        cost = matrix[nodes][:, nodes]
-        forward = np.diagonal(cost, 1)  # a[k], k = 0..L
-        backward = np.diagonal(cost, -1)  # b[k] = M[k + 1, k]
-        tolerance = 1e-10 * max(float(forward.sum()), 1.0)
-        fsum = np.concatenate(([0.0], np.cumsum(forward)))[1 : inner + 1]  # F[1..L]
-        bsum = np.concatenate(([0.0], np.cumsum(backward)))[1 : inner + 1]  # B[1..L]
-        # Reversal of i..j: rows i, columns j (1..L).
-        reverse = cost[0:inner, 1 : inner + 1] + cost[1 : inner + 1, 2 : inner + 2]
-        reverse += (bsum - fsum - forward[1 : inner + 1])[None, :]
-        reverse += (fsum - bsum - forward[0:inner])[:, None]
-        reverse += reverse_block
-        evaluations += per_move
-        flat = int(np.argmin(reverse))
-        best_delta = float(reverse.flat[flat])
-        best_move = ("reverse", flat // inner + 1, flat % inner + 1, 0)
-        # Relocation of i..i+length-1 between p and p + 1: rows i (1..), columns p (0..L).
-        for length, block in relocate_block.items():
-            count = block.shape[0]
-            first = position[:count]
-            delta = cost.T[1 : count + 1, 0 : inner + 1] + cost[length : inner + 1, 1 : inner + 2]
-            delta += (
-                cost[first - 1, first + length] - forward[first - 1] - forward[first + length - 1]
-            )[:, None]
-            delta -= forward[None, 0 : inner + 1]
-            delta += block
-            flat = int(np.argmin(delta))
-            if delta.flat[flat] < best_delta:
-                best_delta = float(delta.flat[flat])
-                best_move = ("relocate", flat // (inner + 1) + 1, length, flat % (inner + 1))
-        if not best_delta < -tolerance:
-            break
-        kind, i, j_or_length, p = best_move
-        if kind == "reverse":
-            nodes[i : j_or_length + 1] = nodes[i : j_or_length + 1][::-1]
-        else:
-            segment = nodes[i : i + j_or_length].copy()
-            rest = np.concatenate((nodes[:i], nodes[i + j_or_length :]))
-            at = p + 1 if p < i else p + 1 - j_or_length
-            nodes = np.concatenate((rest[:at], segment, rest[at:]))
-        moves += 1
-    return nodes, moves, evaluations
+    later = ~np.triu(np.ones((inner + 1, inner + 1), dtype=bool), 1)
+    for block in (reverse_block, exchange_block, later, *relocate_block.values()):
+        block.setflags(write=False)
+    return reverse_block, relocate_block, exchange_block, later
 
 
 def nodes_to_genes(problem: AssignmentProblem, nodes: np.ndarray) -> np.ndarray:
@@ -475,9 +553,16 @@ def _mutate(
     return children
 
 
-def _separate_clones(children: np.ndarray, ops: OperatorSet, rng: np.random.Generator) -> None:
-    """Mutate (in place) every row equal to an earlier row; row 0, the elite, is kept."""
-    _, first = np.unique(children, axis=0, return_index=True)
+def _separate_clones(
+    children: np.ndarray, weights: np.ndarray, ops: OperatorSet, rng: np.random.Generator
+) -> None:
+    """Mutate (in place) every row equal to an earlier row; row 0, the elite, is kept.
+
+    Rows are compared by a fingerprint, their dot product with fixed random 64-bit
+    ``weights`` (wrapping); two different rows sharing one is astronomically rare
+    and would only cost one extra mutation.
+    """
+    _, first = np.unique(children @ weights, return_index=True)
     clone = np.ones(children.shape[0], dtype=bool)
     clone[first] = False
     if clone.any():
@@ -498,7 +583,7 @@ def _polish(
     chosen = [int(row) for value, row in zip(values, first, strict=True) if value != skip]
     for row in chosen[: ops.polish]:
         nodes, moves, evaluations = local_search(
-            matrix, path_nodes(problem, genes[row])[0], ops.max_moves
+            matrix, path_nodes(problem, genes[row])[0], ops.max_moves, ops.neighbourhood
         )
         counters["moves"] += moves
         counters["move_evaluations"] += evaluations
@@ -588,6 +673,8 @@ def genetic_algorithm(
     length = problem.n + problem.m - 1
     matrix = path_matrix(problem) if ops.polish else None
     counters = {"moves": 0, "move_evaluations": 0}
+    # Fingerprint weights for clone detection: fixed, so they draw nothing from ``rng``.
+    weights = np.random.default_rng(0x6A).integers(1, 2**62, size=length, dtype=np.int64)
     genes = rng.permuted(np.tile(np.arange(length), (population, 1)), axis=1)
     fitness = population_cost(problem, genes, ops.markers)
     best = int(np.argmin(fitness))
@@ -608,7 +695,7 @@ def genetic_algorithm(
         children = _mutate(children[:population], ops, mutation_rate, rng)
         children[0] = best_genes  # elitism
         if ops.distinct:
-            _separate_clones(children, ops, rng)
+            _separate_clones(children, weights, ops, rng)
         genes = children
         fitness = population_cost(problem, genes, ops.markers)
         if ops.polish:

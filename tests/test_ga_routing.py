@@ -7,6 +7,8 @@ local optimality is checked by enumerating every move.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -138,32 +140,54 @@ def test_swap_and_slide_by_hand():
 # -- local search ---------------------------------------------------------------------
 
 
-def every_neighbour(nodes: np.ndarray):
-    """Every path one reversal or one 1-3-gene relocation away (start and end fixed)."""
-    inner = len(nodes) - 2
+def every_neighbour(nodes: np.ndarray, moves: tuple[str, ...]):
+    """Every path one move away (start and end fixed), enumerated from the move's definition."""
+    inner, start = len(nodes) - 2, nodes[0]
     for i in range(1, inner + 1):
         for j in range(i + 1, inner + 1):
-            other = nodes.copy()
-            other[i : j + 1] = other[i : j + 1][::-1]
-            yield other
-        for length in (1, 2, 3):
+            if "reverse" in moves:
+                other = nodes.copy()
+                other[i : j + 1] = other[i : j + 1][::-1]
+                yield other
+            if "exchange" in moves and j > i + 1:
+                other = nodes.copy()
+                other[[i, j]] = other[[j, i]]
+                yield other
+        for length in (1, 2, 3) if "relocate" in moves else ():
             if i + length - 1 > inner:
                 break
             segment = nodes[i : i + length]
             rest = np.concatenate((nodes[:i], nodes[i + length :]))
             for at in range(1, len(rest)):
                 yield np.concatenate((rest[:at], segment, rest[at:]))
+    if "tails" in moves:  # 2-opt*: routes a and b swap what follows a cut in each
+        routes = [[start]]
+        for node in nodes[1:-1]:
+            if node >= start:
+                routes.append([node])
+            else:
+                routes[-1].append(node)
+        for a, b in itertools.combinations(range(len(routes)), 2):
+            for cut_a in range(1, len(routes[a]) + 1):
+                for cut_b in range(1, len(routes[b]) + 1):
+                    swapped = list(routes)
+                    swapped[a] = routes[a][:cut_a] + routes[b][cut_b:]
+                    swapped[b] = routes[b][:cut_b] + routes[a][cut_a:]
+                    yield np.array([x for route in swapped for x in route] + [nodes[-1]])
 
 
-def test_local_search_ends_in_a_local_optimum():
-    """No reversal or relocation improves the result, which is never worse and scores right."""
+@pytest.mark.parametrize(
+    "moves", [ga_routing.NEIGHBOURHOOD, ("reverse", "relocate"), ("tails",), ("exchange",)]
+)
+def test_local_search_ends_in_a_local_optimum(moves):
+    """No move of the neighbourhood improves the result, which is never worse and scores right."""
     rng = np.random.default_rng(3)
     for trial in range(12):
-        n, m = int(rng.integers(1, 11)), int(rng.integers(1, 4))
+        n, m = int(rng.integers(1, 11)), int(rng.integers(1, 5))
         problem = random_problem(n, m, trial)
         matrix = ga_routing.path_matrix(problem)
         nodes = ga_routing.path_nodes(problem, rng.permutation(n + m - 1))[0]
-        improved, moves, _ = ga_routing.local_search(matrix, nodes)
+        improved, _, _ = ga_routing.local_search(matrix, nodes, neighbourhood=moves)
         value = path_length(matrix, improved)
         assert value <= path_length(matrix, nodes) + 1e-9
         assert improved[0] == n and improved[-1] == n + m and sorted(improved) == sorted(nodes)
@@ -171,9 +195,19 @@ def test_local_search_ends_in_a_local_optimum():
         assert value == pytest.approx(
             problem.evaluate(ga_routing.decode(problem, genes, "vehicle"))
         )
-        assert (
-            min(path_length(matrix, other) for other in every_neighbour(improved)) >= value - 1e-9
-        )
+        neighbours = [path_length(matrix, other) for other in every_neighbour(improved, moves)]
+        assert min(neighbours, default=value) >= value - 1e-9
+
+
+def test_tails_move_by_hand():
+    """2-opt* on routes 3 -> 0 -> 1 and 4 -> 2 (starts 3, 4; end 5): swapping the tails after
+    target 0 and after start 4 exchanges targets 1 and 2; an empty tail after target 1 hands
+    target 2 to vehicle 0."""
+    nodes = np.array([3, 0, 1, 4, 2, 5])
+    swapped = ga_routing._apply(nodes.copy(), "tails", 1, 3, 0)  # cuts before positions 2, 4
+    assert swapped.tolist() == [3, 0, 2, 4, 1, 5]
+    moved = ga_routing._apply(nodes.copy(), "tails", 2, 3, 0)  # cuts before positions 3, 4
+    assert moved.tolist() == [3, 0, 1, 2, 4, 5]
 
 
 # -- the algorithm --------------------------------------------------------------------
