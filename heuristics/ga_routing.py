@@ -3,8 +3,9 @@
 The thesis fixes the encoding (the n targets as genes plus m - 1 marker genes),
 tournament selection, crossover rate 0.9, mutation rate 0.1, population 120 and
 350 generations, and names no operators. Two operator sets are offered (see
-:data:`OPERATOR_SETS`); the choice and the measurements behind it are in
-``docs/ga-operators.md`` (``benchmarks/ga_sweep.py`` regenerates them).
+:data:`OPERATOR_SETS`): a competent default and the first version; the choice
+and the measurements behind it are in ``docs/ga-operators.md``
+(``benchmarks/ga_sweep.py`` regenerates them).
 
 Encoding
 --------
@@ -21,44 +22,50 @@ genes ``n..n+m-2``. Two readings of the markers are used:
   The chromosome is then a path through the points of the cost matrix from
   vehicle 0's start in which every arc into a vehicle start costs 0 (the
   vehicles do not return), so the total travel time (2.2) is a plain path
-  length and every permutation move (reversal, relocation) has an exact O(1)
-  cost change. This is the usual reduction of the multiple travelling
-  salesman problem to a single one.
+  length and every permutation move (reversal, relocation, exchange) has an
+  exact O(1) cost change. This is the usual reduction of the multiple
+  travelling salesman problem to a single one.
 
 Operator sets
 -------------
-``"memetic"`` (the default):
+``"memetic"`` (the default; a genetic algorithm whose best children get a
+local search, as in the memetic algorithms for vehicle routing):
 
-* selection: tournament of size ``tournament`` (drawn with replacement; the
-  smallest total travel time wins);
+* selection: binary tournament (``tournament=2``: two individuals drawn with
+  replacement, the smaller total travel time wins);
 * crossover: order crossover OX1 (Davis) with probability ``crossover_rate``
   per pair, otherwise copies of the parents;
 * mutation: with probability ``mutation_rate`` per child one of inversion
   (reverse a random slice), swap (exchange two genes) or slide (move one gene
   to another position), chosen uniformly;
-* elitism: the best individual of each generation is copied into the next;
-* local improvement: each generation the ``polish`` best distinct new
-  children are improved by local search on the decoded path -- segment
-  reversal (2-opt for asymmetric costs, the reversed segment re-priced
-  exactly) and relocation of segments of 1-3 genes (or-opt, which includes
-  moving targets between vehicles) -- best improvement until no move improves
-  or ``max_moves`` moves were made;
+* elitism: the best individual found so far is copied into every generation;
+* local improvement: each generation the ``polish = 2`` best new children with
+  distinct costs are improved by best-improvement local search on the path
+  (:func:`local_search`): segment reversal (2-opt, the reversed segment
+  re-priced exactly since the costs are asymmetric), relocation of 1-3
+  consecutive genes (or-opt; moves targets within and between vehicles),
+  exchange of two genes, and exchange of two routes' tails (2-opt*), until no
+  move improves or ``max_moves`` moves were made;
 * initial population: uniform random permutations.
 
 ``"ox-inversion"`` (the first version, kept so earlier results stay
 reproducible bit for bit): position markers, OX1, inversion mutation,
-tournament 4, elitism of one, no local search. It is weak: q = f / f_a about
-2.1 at n50m10 and 4.1-4.3 at n120m20 on the uniform-current harness of
-``benchmarks/ga_sweep.py`` (MC: about 1.15).
+tournament of 4, elitism, no local search. It is a weak baseline: q = f / f_a
+about 2.2 at n50m10 and 4.3-4.6 at n120m20 where MC has about 1.15.
+
+The measurements behind these choices (operator sets, tournament sizes, local
+search on or off, its neighbourhood and how many children get it) are in
+``docs/ga-operators.md``.
 
 Budget
 ------
 ``population * (generations + 1)`` chromosomes are evaluated in full (42 120
 with the thesis's 120 and 350), whatever the operator set. Local search adds
-no full evaluation: it prices candidate moves by their O(1) cost change, about
-``2 L**2`` per move made for a chromosome of ``L = n + m - 1`` genes, and
-``info`` reports ``moves`` (moves made) and ``move_evaluations`` (candidate
-moves priced), so runs with and without it can be compared on work done.
+no full evaluation: it prices candidate moves by their O(1) cost change,
+about ``4.5 L**2`` candidates per move made for a chromosome of
+``L = n + m - 1`` genes, on ``polish`` chromosomes per generation; ``info``
+reports ``moves`` (moves made) and ``move_evaluations`` (candidates priced),
+so runs with and without it can be compared on work done as well as on time.
 """
 
 from __future__ import annotations
@@ -341,35 +348,53 @@ def local_search(
     max_moves: int = 1000,
     neighbourhood: tuple[str, ...] = NEIGHBOURHOOD,
 ) -> tuple[np.ndarray, int, int]:
-    """Best-improvement reversal + or-opt descent of one path (2-opt / or-opt).
+    """Best-improvement descent of one path: 2-opt, or-opt, exchange and 2-opt* moves.
 
     Parameters
     ----------
     matrix : ndarray
         :func:`path_matrix` of the problem.
     nodes : (L + 2,) int array
-        The path: vehicle 0's start first, the end point last (both stay put).
+        The path (:func:`path_nodes`): vehicle 0's start first, the end point
+        last (both stay put); a point ``>= nodes[0]`` starts a route.
     max_moves : int
         Stop after this many improving moves.
+    neighbourhood : tuple of str
+        Moves tried, a subset of :data:`NEIGHBOURHOOD`: "reverse" (reverse
+        positions i..j), "relocate" (move 1-3 consecutive genes elsewhere),
+        "exchange" (swap two non-adjacent genes), "tails" (2-opt*: two routes
+        swap what follows a cut in each, possibly nothing).
 
     Returns
     -------
     nodes : ndarray
-        The improved path (a new array).
+        The improved path (a new array), never longer than the input.
     moves : int
         Improving moves made.
     evaluations : int
         Candidate moves priced.
 
+    Raises
+    ------
+    InstanceError
+        An unknown move name.
+
     Notes
     -----
-    Per move, O(L^2) numpy work: with ``M = matrix[nodes][:, nodes]``,
+    Per move, O(L^2) numpy work. With ``M = matrix[nodes][:, nodes]``,
     ``a[k] = M[k, k + 1]`` the path's arcs and ``F``, ``B`` prefix sums of the
-    forward and backward arcs, reversing positions ``i..j`` changes the length
-    by ``M[i-1, j] + M[i, j+1] - a[i-1] - a[j] + (B[j] - B[i]) - (F[j] - F[i])``
-    (the reversed segment is re-priced exactly, as the costs are asymmetric),
-    and moving the segment ``i..j`` (1-3 genes) between positions p and p + 1
-    by ``M[i-1, j+1] - a[i-1] - a[j] + M[p, i] + M[j, p+1] - a[p]``.
+    forward and backward arcs, the length (2.2) changes by
+
+    * reverse i..j: ``M[i-1, j] + M[i, j+1] - a[i-1] - a[j] + (B[j] - B[i]) -
+      (F[j] - F[i])`` (the reversed segment is re-priced exactly, as the costs
+      are asymmetric);
+    * relocate i..j between p and p + 1: ``M[i-1, j+1] - a[i-1] - a[j] +
+      M[p, i] + M[j, p+1] - a[p]``;
+    * exchange i < j - 1: ``M[i-1, j] + M[j, i+1] + M[j-1, i] + M[i, j+1] -
+      a[i-1] - a[i] - a[j-1] - a[j]``;
+    * tails, cuts before c < d in different routes: ``M[c-1, d] + M[d-1, c] -
+      a[c-1] - a[d-1]`` (a tail's last arc leads into a route start or the
+      end, which costs 0 either way).
     """
     nodes = np.array(nodes, dtype=np.intp)
     inner = nodes.size - 2  # L genes between the fixed start and end
