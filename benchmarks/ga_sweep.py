@@ -150,7 +150,7 @@ def run_sweep(args: argparse.Namespace, labels: list[str]) -> list[dict]:
                     "f": solution.objective,
                     "q": solution.objective / f_a,
                     "f_mc": solution.objective / mc.objective,
-                    "f_o": "" if f_o is None else solution.objective / f_o,
+                    "f_o": None if f_o is None else solution.objective / f_o,
                     "time": wall,
                     "cpu": cpu,
                     "moves": solution.info.get("moves", 0),
