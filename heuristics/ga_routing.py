@@ -48,6 +48,9 @@ local search, as in the memetic algorithms for vehicle routing):
   move improves or ``max_moves`` moves were made;
 * initial population: uniform random permutations.
 
+On the sweep's instances it is within 0.3 % of the optimum on average at
+n50m10 and n120m20 (q = f / f_a about 1.05-1.07) and 6-9 % better than MC.
+
 ``"ox-inversion"`` (the first version, kept so earlier results stay
 reproducible bit for bit): position markers, OX1, inversion mutation,
 tournament of 4, elitism, no local search. It is a weak baseline: q = f / f_a
