@@ -446,6 +446,8 @@ def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
 
 
 # ------------------------------------------------------------- separation of (2.5)
+#: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
+CORE_SIZE = 4
 #: A DFJ row (2.5) counts as violated when it is off by more than this.
 CUT_TOLERANCE = 1e-6
 #: Fixed-point scale of σ for scipy's integer maximum flow (errors below 2**-25 per arc).
@@ -960,7 +962,6 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     def remaining() -> float | None:
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
 
-    import os
     n, m = problem.n, problem.m
     dfj = DfjModel(problem, verbose=verbose)
     best_routes, best_value = _first_incumbent(problem, given)
@@ -972,18 +973,10 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     best_bound = max(best_bound, root.bound)
     # 2. core of small reduced costs (all arcs if the root LP did not finish)
     if np.isfinite(root.bound):
-        core = _core_arcs(root, best_value, dfj.route_arcs(best_routes), int(float(os.environ.get('DFJ_CORE', 6)) * (n + m)))
+        core = _core_arcs(root, best_value, dfj.route_arcs(best_routes), CORE_SIZE * (n + m))
     else:
         core = np.ones(len(dfj.arcs), dtype=bool)
     dfj.model.set_upper(dfj.arcs[~core], 0.0)
-    import os
-    if os.environ.get("DFJ_PAIRS"):
-        pairs = [
-            (int(i), int(j))
-            for i, j in zip(dfj.tails[core], dfj.heads[core], strict=True)
-            if i < j < n and core[dfj.arc_index[j, i]]
-        ]
-        dfj.add_cuts(pairs)
 
     def outside_bound() -> float:
         """Proven bound on every solution using an arc outside the core."""
@@ -1006,7 +999,21 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
             routes = repair(problem, routes, subtours)
         candidates.append((evaluate_routes(problem, routes), routes))
 
-    rounds, widened = 0, 0
+    def resize_core() -> bool:
+        """Core := every arc that can improve on the incumbent, plus its arcs. Changed?"""
+        if not np.isfinite(root.bound):
+            return False
+        slack = 1e-9 * max(1.0, abs(best_value))
+        wanted = root.reduced_costs <= best_value - root.bound + slack
+        wanted[dfj.route_arcs(best_routes)] = True
+        on, off = wanted & ~core, core & ~wanted
+        dfj.model.set_upper(dfj.arcs[on], 1.0)
+        dfj.model.set_upper(dfj.arcs[off], 0.0)
+        core[:] = wanted
+        return bool(on.any() or off.any())
+
+    target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
+    rounds = 0
     solver_status, stopped_by = "", "time_limit"
     while True:
         left = remaining()
@@ -1021,45 +1028,31 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         solver_status = run.solver_status
         if solver_status not in ("optimal", "user_limit"):
             raise SolverError(f"HiGHS returned status {solver_status!r} on the DFJ model")
+        # every solution stays in the core (cost >= HiGHS's bound) or leaves it
         core_bound = run.bound if run.bound is not None else -np.inf
         best_bound = max(best_bound, min(core_bound, outside_bound()))
         for value, routes in candidates:
             if value < best_value:
                 best_routes, best_value = routes, value
-        if not run.has_point:
-            stopped_by = run.stopped_by  # a limit before any point: the incumbent stands
-            break
-        routes, subtours = decode(problem, dfj.formulation, dfj.arc_values())
-        candidate = repair(problem, routes, subtours) if subtours else routes
-        value = evaluate_routes(problem, candidate)
-        if value < best_value:
-            best_routes, best_value = candidate, value
+        subtours: list[list[int]] = []
+        if run.has_point:
+            routes, subtours = decode(problem, dfj.formulation, dfj.arc_values())
+            candidate = repair(problem, routes, subtours) if subtours else routes
+            value = evaluate_routes(problem, candidate)
+            if value < best_value:
+                best_routes, best_value = candidate, value
         dfj.add_cuts([*map(tuple, subtours), *harvested])
-        if subtours:
-            if run.stopped_by == "time_limit":
-                stopped_by = "time_limit"
-                break
-            if rounds >= max_rounds:
-                stopped_by = "max_rounds"
-                break
-            continue
-        stopped_by = run.stopped_by  # "optimal", "mip_gap" or "time_limit"
-        if stopped_by == "time_limit":
-            break
-        # the core's optimum (to mip_gap): widen the core if an outside arc may still help
-        target = max(float(mip_gap), OPTIMALITY_TOLERANCE)
-        if relative_gap(best_value, min(best_bound, best_value)) <= target or core.all():
-            break
+        stopped_by = run.stopped_by
+        if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
+            break  # proven: "optimal", or "mip_gap" for a loose gap
+        if not run.has_point or run.stopped_by in ("time_limit", "solver_limit"):
+            break  # a limit: the incumbent stands with the bound proven so far
         if rounds >= max_rounds:
             stopped_by = "max_rounds"
             break
-        slack = 1e-9 * max(1.0, abs(best_value))
-        more = ~core & (root.reduced_costs <= best_value - root.bound + slack)
-        if not more.any():
-            break
-        core |= more
-        widened += 1
-        dfj.model.set_upper(dfj.arcs[more], 1.0)
+        # only arcs that can still improve on the incumbent stay in the model
+        if not resize_core() and not subtours:
+            break  # nothing left to learn (cannot happen with a closed core)
     bound = min(best_bound, best_value)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(best_value, bound, stopped_by)
@@ -1071,7 +1064,6 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         "lp_bound": root.bound,
         "core_arcs": int(core.sum()),
         "arcs": len(dfj.arcs),
-        "widened": widened,
         "solver_status": solver_status,
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
