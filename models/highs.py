@@ -493,6 +493,7 @@ class HighsModel:
         time_limit: float | None = None,
         mip_rel_gap: float | None = None,
         on_solution: Any = None,
+        options: dict[str, Any] | None = None,
     ) -> HighsRun:
         """Run HiGHS on the model as it stands; never raises for a solver outcome.
 
@@ -505,6 +506,8 @@ class HighsModel:
         on_solution : callable, optional
             Called with the full column vector (a numpy array) of every
             solution HiGHS's MIP search finds (``kCallbackMipSolution``).
+        options : dict, optional
+            Further HiGHS options for this and later runs (name -> value).
 
         Returns
         -------
@@ -516,6 +519,9 @@ class HighsModel:
         highs.setOptionValue("time_limit", limit)
         highs.setOptionValue("mip_rel_gap", 1e-4 if mip_rel_gap is None else float(mip_rel_gap))
         is_mip = self.is_mip and not self._relaxed
+        for name, value in (options or {}).items():
+            if highs.setOptionValue(name, value) == highspy.HighsStatus.kError:
+                raise SolverError(f"HiGHS refused option {name} = {value!r}")
 
         def forward(event: Any) -> None:
             on_solution(np.array(event.data_out.mip_solution, dtype=float))
