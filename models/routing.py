@@ -17,7 +17,11 @@ per arc.
   - ``"dfj"`` — the thesis's own (2.5), Dantzig–Fulkerson–Johnson. It has one
     constraint per subset, so it is added lazily: solve, find every cycle
     among targets in the incumbent, add ``Σ_{i,j∈S} σ_ij ≤ |S| − 1`` for each,
-    re-solve, until no cycle is left.
+    re-solve, until no cycle is left. The loop runs on ONE live HiGHS model
+    (:class:`DfjModel`): the cvxpy model is compiled once, rows are added in
+    place, rows violated by the root LP are separated exactly first, arcs that
+    cannot improve on the incumbent (by LP reduced cost) are switched off, and
+    every round starts from the best solution known (see :func:`solve_routing`).
   - ``"mtz"`` — Miller–Tucker–Zemlin order variables (compact).
   - ``"flow"`` — single-commodity flow from the vehicles (compact).
 
@@ -898,23 +902,26 @@ def solve_routing(
 
     1. Root: the LP of (2.2)–(2.4) is solved and (2.5) rows violated by its
        point are separated exactly (:func:`separate_subtours`) and added, until
-       none is left. Its dual gives a proven bound L and arc reduced costs d.
-    2. Core: a solution that uses arc a costs at least ``L + d_a``, so only
-       arcs with ``d_a ≤ UB − L`` (UB the incumbent's value) can improve on
-       the incumbent. The MIP rounds run on a core of small-d arcs (all other
-       σ fixed to 0 through their bounds) plus the incumbent's arcs.
+       none is left. Its duals give a proven bound L and arc reduced costs d
+       (:meth:`taopt.models.highs.HighsModel.lagrangian_bound`).
+    2. Core: a solution that uses arc a costs at least ``L + d_a``, so an arc
+       with ``d_a > UB − L`` (UB the incumbent's value) cannot be in a better
+       solution. The MIP rounds run on a core, every other σ fixed to 0
+       through its bound: the arcs with ``d_a ≤ min(UB − L, cap)`` plus the
+       incumbent's, ``cap`` being the :data:`CORE_SIZE` ``(n + m)``-th smallest
+       d until the core's own optimum has no cycle, then infinite.
     3. Rounds: each MIP round is a relaxation of (2.2)–(2.5) on the core; the
        cycles among targets of its answer, and of every solution HiGHS finds
-       on the way (``kCallbackMipSolution``), become new (2.5) rows, and the
-       next round starts from the best repaired solution. A round with no
-       cycle is the core's optimum V. If some arc outside the core has
-       ``d_a < V − L``, the core is widened to every such arc and the loop
-       goes on; otherwise V is optimal.
+       on the way (``kCallbackMipSolution``), become new (2.5) rows; every
+       solution, its cycles patched in (:func:`repair`), may improve the
+       incumbent, which is the next round's MIP start, and the core is
+       resized to the new UB.
 
-    Every round proves ``min(B, L + min_{a ∉ core} d_a)``, with B HiGHS's bound
+    Each round proves ``min(B, L + min_{a ∉ core} d_a)``, with B HiGHS's bound
     on the core: a solution either stays in the core (cost at least B) or
     uses an arc outside it. The reported bound is the largest of these, L, and
-    ``Σ_j min_i t(i, j)`` (:func:`entry_bound`).
+    ``Σ_j min_i t(i, j)`` (:func:`entry_bound`); the loop stops as soon as it
+    is within ``max(mip_gap, 1e-6)`` of the incumbent.
 
     MTZ and flow are compact: one solve on a compiled model, with the
     incumbent as MIP start.
@@ -948,20 +955,6 @@ def _first_incumbent(
     return best_routes, best_value
 
 
-def _core_arcs(
-    root: RootRelaxation, upper: float, incumbent_arcs: np.ndarray, size: int
-) -> np.ndarray:
-    """Mask of the first core: every arc that can improve on ``upper`` if that is small,
-    else the ``size`` arcs of smallest reduced cost; always the incumbent's arcs."""
-    reduced = root.reduced_costs
-    useful = reduced <= upper - root.bound + 1e-9 * max(1.0, abs(upper))
-    if useful.sum() > size:
-        threshold = np.partition(reduced, size - 1)[size - 1]
-        useful = reduced <= threshold
-    useful[incumbent_arcs] = True
-    return useful
-
-
 def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started) -> Solution:
     def remaining() -> float | None:
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
@@ -975,12 +968,33 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
     root_cuts = len(dfj.cuts)
     best_bound = max(best_bound, root.bound)
-    # 2. core of small reduced costs (all arcs if the root LP did not finish)
+    # 2. the core: arcs of small reduced cost, at most CORE_SIZE per point at first
+    # (all arcs if the root LP did not finish)
     if np.isfinite(root.bound):
-        core = _core_arcs(root, best_value, dfj.route_arcs(best_routes), CORE_SIZE * (n + m))
+        size = min(CORE_SIZE * (n + m), len(dfj.arcs))
+        cap = float(np.partition(root.reduced_costs, size - 1)[size - 1])
     else:
-        core = np.ones(len(dfj.arcs), dtype=bool)
-    dfj.model.set_upper(dfj.arcs[~core], 0.0)
+        cap = np.inf
+    core = np.ones(len(dfj.arcs), dtype=bool)
+
+    def resize_core() -> bool:
+        """Core := arcs with ``d_a <= min(UB − L, cap)``, plus the incumbent's. Changed?
+
+        Arcs with ``d_a > UB − L`` cannot be in a solution better than the incumbent
+        (``UB``); ``cap`` keeps the first rounds small while UB is still poor.
+        """
+        if not np.isfinite(root.bound):
+            return False
+        slack = 1e-9 * max(1.0, abs(best_value))
+        wanted = root.reduced_costs <= min(best_value - root.bound + slack, cap)
+        wanted[dfj.route_arcs(best_routes)] = True
+        on, off = wanted & ~core, core & ~wanted
+        dfj.model.set_upper(dfj.arcs[on], 1.0)
+        dfj.model.set_upper(dfj.arcs[off], 0.0)
+        core[:] = wanted
+        return bool(on.any() or off.any())
+
+    resize_core()
 
     def outside_bound() -> float:
         """Proven bound on every solution using an arc outside the core."""
@@ -1002,19 +1016,6 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
             harvested.extend(tuple(sorted(c)) for c in subtours)
             routes = repair(problem, routes, subtours)
         candidates.append((evaluate_routes(problem, routes), routes))
-
-    def resize_core() -> bool:
-        """Core := every arc that can improve on the incumbent, plus its arcs. Changed?"""
-        if not np.isfinite(root.bound):
-            return False
-        slack = 1e-9 * max(1.0, abs(best_value))
-        wanted = root.reduced_costs <= best_value - root.bound + slack
-        wanted[dfj.route_arcs(best_routes)] = True
-        on, off = wanted & ~core, core & ~wanted
-        dfj.model.set_upper(dfj.arcs[on], 1.0)
-        dfj.model.set_upper(dfj.arcs[off], 0.0)
-        core[:] = wanted
-        return bool(on.any() or off.any())
 
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
     rounds = 0
@@ -1056,7 +1057,10 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         if rounds >= max_rounds:
             stopped_by = "max_rounds"
             break
-        # only arcs that can still improve on the incumbent stay in the model
+        # only arcs that can still improve on the incumbent stay in the model; once
+        # the core's own optimum has no cycle, every such arc comes in
+        if not subtours:
+            cap = np.inf
         if not resize_core() and not subtours:
             break  # nothing left to learn (cannot happen with a closed core)
     bound = min(best_bound, best_value)
