@@ -596,7 +596,7 @@ def separate_subtours(
     # targets in breadth-first order from the start points: a proven one proves its
     # strong successors
     order = _visit_order(graph, np.arange(n, size))
-    order = order[order < n]
+    order = np.concatenate([order[order < n], unreached])  # (unreached only off (2.3))
     covered = np.zeros(n, dtype=bool)
     for target in (int(v) for v in order):
         if covered[target] or safe[target]:
