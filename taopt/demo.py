@@ -44,7 +44,7 @@ def format_matrix(matrix: np.ndarray, names: list[str], digits: int = 1) -> str:
 
 def run_demo(
     plot: str | None = None,
-    out: IO[str] = sys.stdout,
+    out: IO[str] | None = None,
     progress: bool = True,
     methods: tuple[str, ...] | None = None,
     seed: int = 0,
@@ -69,6 +69,7 @@ def run_demo(
     from taopt.navigation import travel_time_matrix
     from taopt.navigation.checks import matrix_report
 
+    out = out or sys.stdout
     methods = DEMO_METHODS if methods is None else tuple(methods)
     instance = load_demo_instance()
     speed = float(instance.speeds.min())
