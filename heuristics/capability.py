@@ -6,9 +6,12 @@ vehicles R_q) and joined gives a solution of (3.1)–(3.3) whose value is the su
 classes' values.
 
 * "GA" (§3.7): chapter 2's GA (:func:`taopt.heuristics.ga_routing.genetic_algorithm`,
-  marker-gene encoding, tournament selection; its operators are documented there) on each
-  class with population ``3 (|T_q| + |R_q|)``, crossover rate 0.9, mutation rate 0.1 and
-  350 generations, as §3.7 prescribes. Class q's seed is drawn from ``(seed, q)`` by
+  marker-gene encoding, tournament selection; its operators are documented there and in
+  ``docs/ga-operators.md``) on each class with population ``3 (|T_q| + |R_q|)``, crossover
+  rate 0.9, mutation rate 0.1 and 350 generations, as §3.7 prescribes. ``operators`` picks
+  the chapter 2 GA's operator set: its default ("memetic", with local search) or
+  "ox-inversion" (OX1, inversion, no local search: the plain GA the thesis describes, used
+  for the reproduction in ``docs/reproduction/chapter3.md``). Class q's seed is drawn from ``(seed, q)`` by
   ``numpy.random.SeedSequence``, so the same seed gives the same routes.
 * "MC": chapter 2's marginal-cost clustering (2.15) per class (a cheap, strong baseline the
   thesis does not run in chapter 3).
@@ -88,8 +91,7 @@ def ga_per_class(
     tournament : int, optional
         Tournament size (the thesis gives none; default: the chapter 2 GA's).
     operators : str, optional
-        The chapter 2 GA's operator set, when its version offers a choice (default: its
-        default).
+        The chapter 2 GA's operator set ("memetic", "ox-inversion"; default: its default).
 
     Returns
     -------

@@ -265,7 +265,10 @@ def add_capability_study(studies: Any) -> argparse.ArgumentParser:
             thesis_comparison,
         )
 
-        options = {"GA": {"generations": args.ga_generations}} if args.ga_generations else None
+        ga = {"operators": args.ga_operators} if args.ga_operators != "default" else {}
+        if args.ga_generations:
+            ga["generations"] = args.ga_generations
+        options = {"GA": ga} if ga else None
         df = capability_study(
             instances=[i.strip() for i in args.instances.split(",") if i.strip()],
             capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
@@ -315,6 +318,12 @@ def add_capability_study(studies: Any) -> argparse.ArgumentParser:
     parser.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
     parser.add_argument("--neighbours", type=int, choices=[8, 16], default=16, help="grid moves")
     parser.add_argument("--ga-generations", type=int, default=None, help="GA generations (350)")
+    parser.add_argument(
+        "--ga-operators",
+        default="ox-inversion",
+        help="chapter 2 GA operator set: 'ox-inversion' (the thesis's plain GA, as in "
+        "docs/reproduction/chapter3.md), 'memetic', or 'default' (the GA's own default)",
+    )
     parser.add_argument("--seed", type=int, default=1, help="study seed")
     _common(parser, "time-limit", "jobs", "plot", "quiet")
     return parser
