@@ -365,7 +365,7 @@ def plot_quality(
     """
     data = table if instance is None else table[table["instance"] == instance]
     ax = _axes(ax, (5.0, 4.0))
-    styles = {"DTAA": "o-", "GA": "s-", "exact": "k--", "MC": "^:"}
+    styles = {"DTAA": "o-", "GA": "s-", "GA-memetic": "s--", "exact": "k--", "MC": "^:"}
     for (name, method), rows in data.groupby(["instance", "method"], sort=True):
         rows = rows.sort_values("A")
         label = method if instance is not None else f"{name} {method}"

@@ -384,7 +384,8 @@ def markdown_report(df: pd.DataFrame) -> str:
         out.columns = [f"A={k}" for k in out.columns]
         return out.reset_index()
 
-    methods = [m for m in ("DTAA", "GA", "MC", "exact") if m in set(table["method"])]
+    known = ("DTAA", "GA", "GA-memetic", "MC", "exact")
+    methods = [m for m in known if m in set(table["method"])]
     counts = table.pivot_table(index="instance", columns="A", values="scenarios", aggfunc="max")
     counts.columns = [f"A={k}" for k in counts.columns]
     parts.append("#### Scenarios per cell\n\n" + _markdown(counts.reset_index(), 0))
