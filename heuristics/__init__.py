@@ -5,6 +5,7 @@ Importing this package registers every heuristic in :mod:`taopt.registry`:
 * :class:`taopt.AssignmentProblem` (chapter 2): "VN", "VM", "EVN", "EVM", "MC", "GA".
 * :class:`taopt.DeliveryInstance` (chapter 5): "NIA", "MMA", "SMMA", "GA".
 * :class:`taopt.SopProblem` (sequential ordering): "NIA", "MMA", "SMMA", "GA".
+* :class:`taopt.CommProblem` (chapter 4, simulations): "CAA", "DAA", "HDA".
 
 Run one with :func:`taopt.solve` (or :func:`run`, kept for older scripts).
 """
@@ -13,5 +14,6 @@ from taopt.heuristics.registry import run  # noqa: I001
 
 # Importing the modules registers their methods.
 from taopt.heuristics import clustering, ga_routing, sequencing, ga_delivery  # noqa: F401, E402
+from taopt.heuristics import comm  # noqa: F401, E402
 
 __all__ = ["run"]
