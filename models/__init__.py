@@ -4,6 +4,7 @@
 * :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7).
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
+* :func:`solve_comm` — chapter 4's f_o: (4.1)–(4.2) without communication limits, per class.
 
 Importing this package registers the exact methods in :mod:`taopt.registry`
 (``taopt.solve(problem, "exact")``). They never run a heuristic themselves: the registry's
@@ -17,6 +18,7 @@ from typing import Any
 
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
+from taopt.models.comm import solve_comm
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
@@ -49,4 +51,11 @@ register_method(
 )(solve_delivery)
 register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
 
-__all__ = ["solve_routing", "solve_delivery", "solve_sop", "solve_sop_problem", "lp_bound"]
+__all__ = [
+    "solve_routing",
+    "solve_delivery",
+    "solve_sop",
+    "solve_sop_problem",
+    "lp_bound",
+    "solve_comm",
+]
