@@ -54,6 +54,8 @@ Decisions where the thesis is ambiguous (kept in this one place)
 * **Ties.** The smallest marginal cost wins; among equal costs the lowest target index,
   then the lowest vehicle index (CAA and DAA alike, so they agree to the bit); insertion at
   the earliest position.
+* **Phase 1 length.** n rounds as printed, or m when there are fewer targets than vehicles
+  (the thesis assumes n > m; n rounds could then leave a long group without consensus).
 * **Messages** and their sizes: :mod:`taopt.comm.bytes`.
 """
 
@@ -141,18 +143,22 @@ def _own_targets(problem: CommProblem, vehicle: int) -> np.ndarray:
 
 
 def merge_knowledge(group: Group, kind: str) -> np.ndarray:
-    """(4.5)–(4.6): flood s_j and R^c_j for n rounds; every member drops known-visited targets.
+    """(4.5)–(4.6): flood s_j and R^c_j; every member drops the targets known to be visited.
+
+    The printed loops (Alg. 3 l. 2, Alg. 4 l. 2) run n rounds, enough because the thesis
+    assumes n > m (§4.2); with fewer targets than vehicles n rounds may not cross the
+    group, so ``max(n, m)`` rounds are run (m, the fleet size, bounds every group).
 
     Returns the members' projected distances d(o_j) after the deletion.
 
     Raises
     ------
     ConvergenceError
-        A member did not learn every other member (cannot happen: n rounds >= |R_i|).
+        A member did not learn every other member (cannot happen: max(n, m) >= |R_i|).
     """
     n, k = group.problem.n, group.size
     rows = np.hstack([group.knowledge, np.eye(k, dtype=bool)])
-    merged = group.flood_or(rows, n, kind)
+    merged = group.flood_or(rows, max(n, group.problem.m), kind)
     if not merged[:, n:].all():
         raise ConvergenceError(
             f"group {group.members.tolist()}: membership did not reach consensus"

@@ -9,14 +9,15 @@ instance of the family.
 
 Contracting the zero-weight vehicle edges gives the same tree weight: one root node joined
 to each target at its distance from the nearest vehicle of the class. That is what is
-computed, with :func:`scipy.sparse.csgraph.minimum_spanning_tree` (which reads an exact
-zero as "no edge", so coincident points get the smallest positive weight instead; the
-error is below 1e-300 m per edge).
+computed, with :func:`scipy.sparse.csgraph.minimum_spanning_tree` on a sparse matrix that
+lists every edge explicitly (a dense matrix would read a zero distance — coincident points —
+as "no edge").
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import minimum_spanning_tree
 
 from taopt.comm.problem import CommProblem
@@ -34,11 +35,9 @@ def class_mst(problem: CommProblem, code: int) -> float:
     weights = np.zeros((size, size))
     weights[0, 1:] = dist[np.ix_(n + vehicles, targets)].min(axis=0)
     weights[1:, 1:] = dist[np.ix_(targets, targets)]
-    weights = np.triu(weights, k=1)
-    upper = np.triu(np.ones((size, size), dtype=bool), k=1)
-    weights[upper & (weights == 0)] = np.finfo(float).tiny
-    tree = minimum_spanning_tree(weights)
-    return float(tree.sum())
+    rows, cols = np.triu_indices(size, k=1)
+    edges = coo_matrix((weights[rows, cols], (rows, cols)), shape=(size, size)).tocsr()
+    return float(minimum_spanning_tree(edges).sum())
 
 
 def mst_bound(problem: CommProblem) -> float:

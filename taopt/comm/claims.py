@@ -13,7 +13,8 @@ Claims checked
 * Proposition 4.4 — every run ends with all targets visited.
 * Theorem 4.5(i) — DAA's assignment equals CAA's for every newly connected group (the whole
   trajectories are compared).
-* Theorem 4.5(ii) — at most ``n + 3m + nm`` synchronous rounds per newly connected group.
+* Theorem 4.5(ii) — at most ``n + 3m + nm`` synchronous rounds per newly connected group
+  (where n > m, as §4.2 assumes).
 * Lemma 4.7 — the projected total distance never grows at an update (CAA, DAA, HDA).
 * Lemma 4.8 — ``f_MST <= f_o``.
 * Theorem 4.9 — ``f_DAA <= 2 f_o`` when the vehicles are initially connected.
@@ -98,7 +99,8 @@ def claim_values(
     }
     budget = n + 3 * m + n * m
     out["Theorem 4.5(ii) (rounds <= n + 3m + nm)"] = {
-        "holds": daa.info["max_group_rounds"] <= budget,
+        # the theorem, like §4.2, assumes n > m (Phase 1 floods n rounds)
+        "holds": daa.info["max_group_rounds"] <= budget if n > m else None,
         "lhs": daa.info["max_group_rounds"],
         "rhs": budget,
     }
