@@ -308,6 +308,74 @@ def save_remark_4_6(hit: dict[str, Any], out_dir: str | Path) -> tuple[Path, Pat
     return short, long
 
 
+def search_one_metre(
+    samples: int = 2000,
+    seed: int = 0,
+    n_range: tuple[int, int] = (2, 6),
+    m_range: tuple[int, int] = (2, 3),
+    side: float = 100.0,
+) -> dict[str, Any] | None:
+    """Search for §4.4.2's "HDA = DAA when r = 1 m" failing; the smallest hit (n + m, then n).
+
+    Instances have integer coordinates in a ``side`` square and fewer abilities than vehicles
+    (|A| = m is the other case of the statement, which holds by construction). Returns
+    {"problem", "daa", "hda"} or None.
+    """
+    from taopt.pipeline import solve
+
+    rng = np.random.default_rng(seed)
+    best: dict[str, Any] | None = None
+    for _ in range(samples):
+        n = int(rng.integers(n_range[0], n_range[1] + 1))
+        m = int(rng.integers(m_range[0], m_range[1] + 1))
+        k = int(rng.integers(1, min(n, m - 1) + 1)) if m > 1 else 1
+        drawn = random_problem(n, m, k, 1.0, seed=rng, side=side)
+        problem = CommProblem(
+            np.round(drawn.targets),
+            np.round(drawn.vehicles),
+            drawn.target_attribute,
+            drawn.vehicle_ability,
+            1.0,
+        )
+        daa = solve(problem, "DAA").objective
+        hda = solve(problem, "HDA").objective
+        if math.isclose(daa, hda, rel_tol=1e-9):
+            continue
+        if best is None or (n + m, n) < (best["problem"].n + best["problem"].m, best["problem"].n):
+            best = {"problem": problem, "daa": daa, "hda": hda}
+    return best
+
+
+def write_counterexamples(
+    out_dir: str | Path, samples: int = 1500, seed: int = 0
+) -> dict[str, Path]:
+    """Search and save the chapter 4 instances shipped in docs/reproduction/counterexamples.
+
+    * ``remark-4-6-short.json`` / ``remark-4-6-long.json``: the smallest Remark 4.6 instance
+      found by :func:`search_remark_4_6` (of its hits on that instance, the closest ranges);
+    * ``section-4-4-2-hda-daa-one-metre.json``: the smallest instance where HDA and DAA
+      drive different totals at r = 1 m (:func:`search_one_metre`).
+    """
+    out = Path(out_dir)
+    written: dict[str, Path] = {}
+    hits = search_remark_4_6(samples=samples, seed=seed)
+    if hits:
+        first = hits[0]["problem"].replace(comm_range=0.0).to_dict()
+        same = [h for h in hits if h["problem"].replace(comm_range=0.0).to_dict() == first]
+        hit = min(same, key=lambda h: (h["r2"] - h["r1"], -h["r1"]))
+        written["remark-4-6-short"], written["remark-4-6-long"] = save_remark_4_6(hit, out)
+    one = search_one_metre(samples=samples, seed=seed)
+    if one is not None:
+        path = out / "section-4-4-2-hda-daa-one-metre.json"
+        label = (
+            f"4.4.2: at r = 1 m DAA drives {one['daa']:.4f} m but HDA {one['hda']:.4f} m "
+            "(the thesis: identical)"
+        )
+        one["problem"].replace(name=label).save(path)
+        written["section-4-4-2-hda-daa-one-metre"] = path
+    return written
+
+
 def connectivity_probability(
     m: int, comm_range: float, samples: int = 100_000, seed: int = 0, side: float = 1000.0
 ) -> float:
@@ -345,4 +413,6 @@ __all__ = [
     "search_remark_4_6",
     "save_remark_4_6",
     "connectivity_probability",
+    "search_one_metre",
+    "write_counterexamples",
 ]
