@@ -1,8 +1,12 @@
-"""Command line: ``taopt navigate``, ``taopt demo`` (more subcommands are added by other areas).
+"""The ``taopt`` command line (the only module that uses argparse).
 
-Each subcommand is registered in :func:`build_parser` with its own handler
-``handler(args) -> int``; :func:`main` turns any :class:`~taopt.errors.TaoptError`
-or bad value into a one-line error on stderr and exit code 2.
+Subcommands: ``navigate``, ``demo``, ``solve``, ``verify``, ``claims``, ``study drift``,
+``study delivery`` (and the chapter 3 and 4 commands when installed). The same flag names
+mean the same everywhere: ``--seed``, ``--jobs``, ``--dask``, ``--time-limit``,
+``--methods``, ``--out``, ``--plot``, ``--quiet``; every option's help shows its default.
+
+:func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
+on stderr and exit code 2; Ctrl-C in a study prints one line and exits with 130.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path as FilePath
+from typing import Any
 
 import numpy as np
 
@@ -98,8 +103,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
         f"[{backward.status}]"
     )
     if forward.time > 0:
-        ratio = backward.time / forward.time
-        print(f"asymmetry t(j, i) / t(i, j) = {ratio:.6f}")
+        print(f"asymmetry t(j, i) / t(i, j) = {backward.time / forward.time:.6f}")
     if args.plot:
         from taopt.plot import plot_paths, save
 
@@ -114,100 +118,53 @@ def cmd_navigate(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Travel-time matrix of the embedded default instance and its Lemma 2.3 report."""
+    """The embedded instance: matrix, exact optimum and every chapter 2 heuristic."""
     from taopt.demo import run_demo
 
-    run_demo(plot=args.plot, progress=not args.quiet)
+    run_demo(plot=args.plot, progress=not args.quiet, seed=args.seed)
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``taopt`` parser; add subcommands with ``parser._subcommands.add_parser`` or
-    :func:`add_subcommand`."""
-    parser = argparse.ArgumentParser(
-        prog="taopt",
-        description="Cooperative multi-vehicle task assignment in drift fields (thesis toolkit).",
-    )
-    from taopt import __version__
-
-    parser.add_argument("--version", action="version", version=f"taopt {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    sub.required = True
-    parser._subcommands = sub  # type: ignore[attr-defined]
-
-    nav = add_subcommand(
-        parser, "navigate", cmd_navigate, "minimum travel times t(i, j) and t(j, i)"
-    )
-    nav.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
-    nav.add_argument("--from", dest="start", required=True, metavar="X,Y", help="point i")
-    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j")
-    nav.add_argument("--speed", type=float, default=1.0, help="vehicle speed v (default 1)")
-    nav.add_argument(
-        "--method",
-        choices=["collocation", "shooting", "closed_form"],
-        default="collocation",
-        help="solver",
-    )
-    nav.add_argument("--plot", metavar="PNG", help="draw both paths to this PNG file")
-
-    demo = add_subcommand(parser, "demo", cmd_demo, "run the embedded default instance")
-    demo.add_argument("--plot", metavar="PNG", help="draw the instance to this PNG file")
-    demo.add_argument("--quiet", action="store_true", help="no progress bar")
-
-    add_study_subcommands(parser)
-
-    solve = add_subcommand(
-        parser, "solve", cmd_solve, "solve an instance file exactly and with every heuristic"
-    )
-    solve.add_argument(
-        "file", help="JSON: an instance, an assignment_problem or a delivery_instance"
-    )
-    solve.add_argument("--methods", default=None, help="comma list (default: all that apply)")
-    solve.add_argument("--seed", type=int, default=0)
-    solve.add_argument("--time-limit", type=float, default=60.0, help="seconds for a MILP")
-    solve.add_argument("--plot", metavar="PNG", help="draw the best solution")
-    solve.add_argument("--gantt", metavar="PNG", help="chapter 5: truck and drone timelines")
-    solve.add_argument("--quiet", action="store_true", help="no progress bar")
-
-    claims = add_subcommand(
-        parser, "claims", cmd_claims, "check chapter 2's lemmas and theorems on random instances"
-    )
-    claims.add_argument("--samples", type=int, default=200, help="instances per class")
-    claims.add_argument("--seed", type=int, default=0)
-    claims.add_argument(
-        "--out", default=None, help="folder for the smallest counterexamples (JSON)"
-    )
-    claims.add_argument(
-        "--classes",
-        default="euclidean,uniform-drift,drift,metric",
-        help="comma list of instance classes",
-    )
-    return parser
+def _methods(text: str | None) -> tuple[str, ...] | None:
+    if not text:
+        return None
+    methods = tuple(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
+    if not methods:
+        raise InstanceError(f"--methods: no method names in {text!r}")
+    return methods
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    """Solve an instance file (chapter 2 or chapter 5) and print the gap table."""
-    from taopt.solve import solve_file
+    """Solve a problem file with every (or the named) method and print the gap table."""
+    from taopt.solving import solve_file
 
-    methods = None
-    if args.methods:
-        methods = tuple(m.strip() for m in args.methods.split(",") if m.strip())
     solve_file(
         args.file,
-        methods=methods,
+        methods=_methods(args.methods),
         seed=args.seed,
         time_limit=args.time_limit,
         plot=args.plot,
         gantt=args.gantt,
+        save=args.save,
         progress=not args.quiet,
     )
     return 0
 
 
-def cmd_claims(args: argparse.Namespace) -> int:
-    """Run :func:`taopt.routing.claims.check_claims` and print how often each claim holds."""
-    from taopt.routing.claims import check_claims
+def cmd_verify(args: argparse.Namespace) -> int:
+    """Re-score a saved solution from the problem file alone; exit 1 when a check fails."""
+    from taopt.solving import verify_file
 
+    ok = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
+    return 0 if ok else 1
+
+
+def cmd_claims(args: argparse.Namespace) -> int:
+    """Check chapter 2's lemmas and theorems on random instances."""
+    from taopt.studies.routing_claims import check_claims
+
+    if args.samples < 1:
+        raise InstanceError(f"--samples must be >= 1, got {args.samples}")
     table = check_claims(
         samples=args.samples,
         seed=args.seed,
@@ -219,32 +176,285 @@ def cmd_claims(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_study_subcommands(parser: argparse.ArgumentParser) -> None:
-    """``taopt study drift`` (chapter 2, §2.5) and ``taopt study delivery`` (chapter 5, §5.5)."""
-    from taopt.delivery.study import register_cli as register_delivery
-    from taopt.routing.study import register_cli as register_drift
+def cmd_study_drift(args: argparse.Namespace) -> int:
+    """Body of ``taopt study drift``: run, print the summary and the tests, plot."""
+    import pandas as pd
 
-    study = add_subcommand(parser, "study", None, "run a thesis study (chapter 2 or chapter 5)")
-    group = study.add_subparsers(dest="study", metavar="STUDY")
-    group.required = True
-    drift = register_drift(group)
-    drift.set_defaults(handler=lambda args: args.func(args))
-    # The delivery study finds the "study" group created above and adds itself to it.
-    register_delivery(parser._subcommands)  # type: ignore[attr-defined]
+    from taopt.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
+
+    options = {"GA": {"generations": args.ga_generations}} if args.ga_generations else None
+    df = drift_study(
+        args.n,
+        args.m,
+        args.scenarios,
+        methods=args.methods,
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        progress=not args.quiet,
+        time_limit=args.time_limit,
+        method_options=options,
+        field="thesis" if args.field == "thesis" else parse_field(args.field),
+    )
+    table = summarize(df)
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(table.round(4).to_string())
+        print()
+        print(wilcoxon_pairs(df).round(4).to_string(index=False))
+    table.to_csv(FilePath(args.out) / "summary.csv")
+    if args.plot:
+        plot_gaps(df, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
 
 
-def add_subcommand(
-    parser: argparse.ArgumentParser, name: str, handler, help_text: str
-) -> argparse.ArgumentParser:
-    """Register subcommand ``name`` handled by ``handler(args) -> int``; returns its parser."""
-    sub = parser._subcommands  # type: ignore[attr-defined]
-    child = sub.add_parser(name, help=help_text, description=help_text)
+def cmd_study_delivery(args: argparse.Namespace) -> int:
+    """Body of ``taopt study delivery``: run, print Tables 5.1-5.7's averages, plot."""
+    import pandas as pd
+
+    from taopt.studies.delivery import delivery_study, plot_study, thesis_table
+
+    ratios = tuple(parse_numbers(args.ratios, len(args.ratios.split(",")), "--ratios"))
+    options = {"GA": {"generations": args.ga_generations}} if args.ga_generations else None
+    df = delivery_study(
+        setup=args.setup,
+        instances=args.instances,
+        ratios=ratios,
+        methods=_methods(args.methods) or (),
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        progress=not args.quiet,
+        exact_max_n=args.exact_max_n,
+        vd_ratio=args.vd_ratio,
+        method_options=options,
+        time_limit=args.time_limit,
+    )
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print("average makespan f (5.1):")
+        print(thesis_table(df, "makespan").round(1).to_string())
+        print("\naverage q = f / f_a (5.19):")
+        print(thesis_table(df, "q").round(4).to_string())
+        print("\naverage run time (s):")
+        print(thesis_table(df, "runtime").round(3).to_string())
+        if df["optimum"].notna().any():
+            print("\naverage gap to the optimum f / f_o - 1:")
+            print(thesis_table(df, "gap_to_optimum").round(4).to_string())
+    print(f"\nrows: {FilePath(args.out) / f'delivery_{args.setup}.csv'}")
+    if args.plot:
+        plot_study(df, "q", path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+# -- the parser ---------------------------------------------------------------------------------
+
+
+class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Shows every option's default and keeps descriptions' line breaks."""
+
+
+def add_subcommand(parent: Any, name: str, handler: Any, help_text: str) -> argparse.ArgumentParser:
+    """A subcommand of ``parent`` (a subparsers group) handled by ``handler(args) -> int``."""
+    child = parent.add_parser(
+        name, help=help_text, description=help_text, formatter_class=_Formatter
+    )
     child.set_defaults(handler=handler)
     return child
 
 
+def _common(parser: argparse.ArgumentParser, *names: str) -> None:
+    """The shared flags, with the same names, meanings and help everywhere."""
+    if "seed" in names:
+        parser.add_argument("--seed", type=int, default=0, help="seed of randomised methods")
+    if "methods" in names:
+        parser.add_argument(
+            "--methods",
+            default=None,
+            help="comma-separated method names; unset: every method that applies",
+        )
+    if "time-limit" in names:
+        parser.add_argument(
+            "--time-limit",
+            type=float,
+            default=None,
+            metavar="SECONDS",
+            help="per exact model (or peer) run; a stopped model reports its proven gap",
+        )
+    if "jobs" in names:
+        parser.add_argument("--jobs", type=int, default=1, help="worker processes")
+        parser.add_argument(
+            "--dask",
+            default=None,
+            metavar="ADDRESS",
+            help="run on a Dask cluster: 'local' (a LocalCluster of --jobs workers) or a "
+            "scheduler address (needs taopt[dask])",
+        )
+    if "plot" in names:
+        parser.add_argument("--plot", default=None, metavar="PNG", help="write a plot to this PNG")
+    if "quiet" in names:
+        parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``taopt`` parser with every subcommand."""
+    from taopt import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="taopt",
+        description="Cooperative multi-vehicle task assignment (thesis toolkit): navigation, "
+        "exact models and heuristics, side by side.",
+        formatter_class=_Formatter,
+    )
+    parser.add_argument("--version", action="version", version=f"taopt {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    nav = add_subcommand(sub, "navigate", cmd_navigate, "minimum travel times t(i, j) and t(j, i)")
+    nav.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
+    nav.add_argument("--from", dest="start", required=True, metavar="X,Y", help="point i")
+    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j")
+    nav.add_argument("--speed", type=float, default=1.0, help="vehicle speed v (m/s)")
+    nav.add_argument(
+        "--method",
+        choices=["collocation", "shooting", "closed_form"],
+        default="collocation",
+        help="solver",
+    )
+    _common(nav, "plot")
+
+    demo = add_subcommand(
+        sub, "demo", cmd_demo, "the embedded instance solved exactly and by every heuristic"
+    )
+    _common(demo, "seed", "plot", "quiet")
+
+    solve = add_subcommand(
+        sub,
+        "solve",
+        cmd_solve,
+        "solve a problem file exactly and with every heuristic, with certified gaps",
+    )
+    solve.description = (
+        "Solve a JSON problem file with every registered method that applies (or --methods)\n"
+        "and print one table: status, objective, proven bound and gap, true gap to a certified\n"
+        "optimum, ratio to a valid bound.\n\n"
+        "File kinds (docs/file-formats.md; schemas in taopt/schemas/): 'instance' (positions,\n"
+        "field, obstacles: travel times by navigation), 'assignment_problem' (a travel-time\n"
+        "matrix), 'delivery_instance' (truck-drone, chapter 5), 'sop_problem', and the\n"
+        "chapter 3/4 kinds. Examples ship with the package: taopt/data/demo.json (an instance,\n"
+        "10 targets, 3 vehicles), taopt/data/delivery_example_20.json (20 customers) and\n"
+        "taopt/data/examples/*.json (one small file of each kind)."
+    )
+    solve.add_argument("file", help="a JSON problem file")
+    _common(solve, "methods", "seed", "plot", "quiet")
+    solve.add_argument(
+        "--time-limit",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="per exact model (or peer) run; a stopped model reports its proven gap",
+    )
+    solve.add_argument(
+        "--gantt", default=None, metavar="PNG", help="delivery files: truck and drone timelines"
+    )
+    solve.add_argument(
+        "--save", default=None, metavar="DIR", help="write each solution as DIR/<method>.json"
+    )
+
+    verify = add_subcommand(
+        sub,
+        "verify",
+        cmd_verify,
+        "re-score a saved solution from the problem file alone and check every constraint",
+    )
+    verify.add_argument("solution", help="a solution JSON (taopt solve --save, Solution.save)")
+    verify.add_argument("problem", help="the problem file it solves")
+    verify.add_argument(
+        "--exact",
+        action="store_true",
+        help="also re-solve exactly here and compare (small problems)",
+    )
+    _common(verify, "time-limit")
+
+    claims = add_subcommand(
+        sub, "claims", cmd_claims, "check chapter 2's lemmas and theorems on random instances"
+    )
+    claims.add_argument("--samples", type=int, default=200, help="instances per class")
+    claims.add_argument(
+        "--out", default=None, help="folder for the smallest counterexamples (JSON)"
+    )
+    claims.add_argument(
+        "--classes",
+        default="euclidean,uniform-drift,drift,metric",
+        help="comma list of instance classes",
+    )
+    _common(claims, "seed")
+
+    study = sub.add_parser(
+        "study", help="run a thesis study (resumable, parallel)", formatter_class=_Formatter
+    )
+    studies = study.add_subparsers(dest="study", metavar="STUDY")
+    studies.required = True
+
+    drift = add_subcommand(
+        studies,
+        "drift",
+        cmd_study_drift,
+        "chapter 2 (§2.5, Tables 2.1-2.2): heuristics vs f_a, a valid bound and the optimum",
+    )
+    drift.add_argument("--n", type=int, required=True, help="number of targets")
+    drift.add_argument("--m", type=int, required=True, help="number of vehicles")
+    drift.add_argument("--scenarios", type=int, default=400, help="random scenarios")
+    drift.add_argument(
+        "--methods",
+        default="VN,VM,EVN,EVM,MC,GA,exact",
+        help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
+    )
+    drift.add_argument("--out", required=True, help="output folder (drift.csv; resumable)")
+    drift.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
+    drift.add_argument(
+        "--ga-generations", type=int, default=None, help="GA generations (thesis 350)"
+    )
+    drift.add_argument("--seed", type=int, default=1, help="study seed")
+    _common(drift, "time-limit", "jobs", "plot", "quiet")
+
+    delivery = add_subcommand(
+        studies,
+        "delivery",
+        cmd_study_delivery,
+        "chapter 5 (§5.5, Tables 5.1-5.7): truck-drone heuristics vs the bound",
+    )
+    delivery.add_argument(
+        "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
+    )
+    delivery.add_argument("--instances", type=int, default=10, help="random instances")
+    delivery.add_argument(
+        "--methods", default="NIA,MMA,SMMA,GA", help="comma-separated: NIA,MMA,SMMA,GA,DP,exact"
+    )
+    delivery.add_argument(
+        "--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9", help="comma-separated L/L0 values"
+    )
+    delivery.add_argument("--out", required=True, help="output folder (resumable CSV)")
+    delivery.add_argument("--vd-ratio", type=float, default=None, help="override v_d / v_t")
+    delivery.add_argument(
+        "--exact-max-n", type=int, default=8, help="compute optima (subset DP) when n <= this"
+    )
+    delivery.add_argument("--ga-generations", type=int, default=None, help="GA generations")
+    delivery.add_argument("--seed", type=int, default=1, help="study seed")
+    _common(delivery, "time-limit", "jobs", "plot", "quiet")
+    return parser
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
+    from taopt.study import StudyInterrupted
+
+    # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
+    # multiprocessing resource tracker (started with these warning options) would print a
+    # warning about it after our one-line message.
+    sys.warnoptions.append("ignore:resource_tracker:UserWarning")
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -252,6 +462,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         return int(args.handler(args) or 0)
+    except StudyInterrupted as exc:
+        print(f"taopt {args.command}: {exc}", file=sys.stderr)
+        return 130
     except (TaoptError, ValueError, OSError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         print(f"taopt {args.command}: error: {message}", file=sys.stderr)

@@ -13,11 +13,10 @@ from importlib import resources
 from typing import IO, Any
 
 import numpy as np
-import pandas as pd
 
 from taopt.instance import Instance
-from taopt.result import OPTIMAL, Solution
 from taopt.routing.problem import AssignmentProblem
+from taopt.solving import method_table
 
 
 def load_demo_instance() -> Instance:
@@ -92,7 +91,7 @@ def run_demo(
     print(f"Lemma 2.3 triangle inequality within 1e-6: {report.triangle_holds(1e-6)}", file=out)
 
     problem = AssignmentProblem(matrix, n_targets=instance.n_targets, name=instance.name)
-    table, solutions = gap_table(problem, methods=methods, seed=seed)
+    table, solutions = method_table(problem, methods=methods, seed=seed)
     print(
         "\nexact optimum against the thesis's heuristics (objective = total travel time, s):",
         file=out,
@@ -132,44 +131,3 @@ def run_demo(
 
 
 DEMO_METHODS = ("exact", "VN", "VM", "EVN", "EVM", "MC", "GA")
-
-
-def gap_table(
-    problem: AssignmentProblem, methods: tuple[str, ...] = DEMO_METHODS, seed: int = 0
-) -> tuple[pd.DataFrame, dict[str, Solution]]:
-    """Solve ``problem`` with each method; a table of objectives, true gaps and bound ratios.
-
-    Columns: method, status, objective, ``gap_to_exact`` (f / f_o - 1, the true gap the thesis
-    could not measure), ``q_thesis`` (f / f_a with the thesis's Algorithm 1 value, as Table 2.1;
-    not a valid bound on asymmetric costs), ``q_valid`` (f / Edmonds' arborescence bound) and
-    ``seconds``.
-    """
-    import taopt.heuristics as heuristics
-    from taopt.bounds import arborescence, thesis_mcga
-    from taopt.models import solve_routing
-
-    solutions: dict[str, Solution] = {}
-    for method in methods:
-        if method == "exact":
-            solutions[method] = solve_routing(problem, sec="dfj")
-        else:
-            solutions[method] = heuristics.run(method, problem, seed=seed)
-    f_a = thesis_mcga(problem)
-    f_valid = arborescence(problem)
-    exact = solutions.get("exact")
-    f_o = exact.objective if exact is not None and exact.status == OPTIMAL else None
-    rows = []
-    for method, sol in solutions.items():
-        rows.append(
-            {
-                "method": method,
-                "status": sol.status,
-                "objective": sol.objective,
-                "gap_to_exact": (sol.objective / f_o - 1.0) if f_o else float("nan"),
-                "q_thesis": sol.objective / f_a,
-                "q_valid": sol.objective / f_valid,
-                "seconds": sol.runtime,
-            }
-        )
-    table = pd.DataFrame(rows)
-    return table, solutions

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import InstanceError
+from taopt.schemas import validate
 
 Region = tuple[float, float, float, float]  # (xmin, xmax, ymin, ymax)
 
@@ -291,22 +292,45 @@ def thesis_field(scale: float = 1e-3) -> LinearField:
 
 
 def field_from_dict(data: dict[str, Any]) -> Field:
-    """Inverse of ``Field.to_dict``; raises :class:`InstanceError` on an unknown kind."""
+    """Inverse of ``Field.to_dict``, checked against ``field.schema.json`` first.
+
+    Raises
+    ------
+    InstanceError
+        Not an object with a known ``kind``, a missing or misspelt key, a value of the
+        wrong type or shape (the message names the key and the value), or the field
+        constructor's own complaint (e.g. a grid that is not strictly increasing).
+
+    Example
+    -------
+    >>> field_from_dict({"kind": "uniform", "vx": 0.2, "vy": 0.0})
+    UniformField(0.2, 0.0)
+    """
     if not isinstance(data, dict) or "kind" not in data:
         raise InstanceError("field must be an object with a 'kind'")
     kind = data["kind"]
-    try:
-        if kind == "uniform":
-            return UniformField(data["vx"], data["vy"])
-        if kind == "linear":
-            return LinearField(data["A"], data.get("b", (0.0, 0.0)))
-        if kind == "gridded":
-            return GriddedField(
-                data["x"], data["y"], data["vx"], data["vy"], data.get("method", "bspline")
-            )
-    except KeyError as exc:
-        raise InstanceError(f"field of kind {kind!r} is missing {exc.args[0]!r}") from None
-    raise InstanceError(f"unknown field kind {kind!r} (expected uniform, linear or gridded)")
+    if kind not in ("uniform", "linear", "gridded"):
+        raise InstanceError(f"unknown field kind {kind!r} (expected uniform, linear or gridded)")
+    validate(data, "field")
+    if kind == "gridded":
+        # the schema cannot relate lengths: vx, vy are len(x) rows of len(y) numbers
+        for name in ("vx", "vy"):
+            table = data[name]
+            if len(table) != len(data["x"]):
+                raise InstanceError(
+                    f"field: {name}: expected {len(data['x'])} rows (one per x), got {len(table)}"
+                )
+            for i, row in enumerate(table):
+                if len(row) != len(data["y"]):
+                    raise InstanceError(
+                        f"field: {name}[{i}]: expected {len(data['y'])} numbers (one per y), "
+                        f"got {len(row)}"
+                    )
+    if kind == "uniform":
+        return UniformField(data["vx"], data["vy"])
+    if kind == "linear":
+        return LinearField(data["A"], data.get("b", (0.0, 0.0)))
+    return GriddedField(data["x"], data["y"], data["vx"], data["vy"], data.get("method", "bspline"))
 
 
 __all__ = [

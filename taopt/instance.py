@@ -23,11 +23,11 @@ from typing import Any
 
 import numpy as np
 
+from taopt import schemas
 from taopt.errors import InstanceError
 from taopt.fields import Field, field_from_dict
 
 SCHEMA_VERSION = 1
-_SUPPORTED_SCHEMAS = (1,)
 
 
 def _xy(value: Any, what: str) -> tuple[float, float]:
@@ -275,58 +275,70 @@ class Instance:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Instance:
-        check_schema(data, "instance")
-        try:
+    def from_dict(cls, data: dict[str, Any], source: str | None = None) -> Instance:
+        """Inverse of :meth:`to_dict`: the data is checked against ``instance.schema.json``
+        first, then by the constructor.
+
+        Parameters
+        ----------
+        data : dict
+            Parsed JSON (see ``docs/file-formats.md``). ``field`` is required (``None``
+            for still water); ``speed`` defaults to 1, ``capability`` and ``demands`` to
+            ``"any"``, ``obstacles`` to none.
+        source : str, optional
+            What to call the data in error messages (the file path); default "instance".
+
+        Raises
+        ------
+        InstanceError
+            The first schema violation (naming the JSON path and the value), or the
+            constructor's own complaint.
+        """
+        check_schema(data, "instance", source)
+        field = data["field"]
+        with schemas.naming(source or "instance"):
             return cls(
                 vehicles=tuple(
                     Vehicle(
-                        str(v["id"]),
+                        v["id"],
                         tuple(v["start"]),
                         float(v.get("speed", 1.0)),
-                        str(v.get("capability", "any")),
+                        v.get("capability", "any"),
                     )
                     for v in data["vehicles"]
                 ),
                 targets=tuple(
-                    Target(
-                        str(t["id"]),
-                        tuple(t["position"]),
-                        tuple(str(c) for c in t.get("demands", ["any"])),
-                    )
+                    Target(t["id"], tuple(t["position"]), tuple(t.get("demands", ["any"])))
                     for t in data["targets"]
                 ),
                 region=tuple(data["region"]),
-                field=None if data.get("field") is None else field_from_dict(data["field"]),
+                field=None if field is None else field_from_dict(field),
                 obstacles=tuple(
-                    Obstacle(tuple(tuple(p) for p in o["vertices"]), str(o.get("id", "")))
+                    Obstacle(tuple(tuple(p) for p in o["vertices"]), o.get("id", ""))
                     for o in data.get("obstacles", [])
                 ),
-                name=str(data.get("name", "")),
+                name=data.get("name", ""),
                 metadata=dict(data.get("metadata", {})),
             )
-        except KeyError as exc:
-            raise InstanceError(f"instance JSON is missing {exc.args[0]!r}") from None
 
     def save(self, path: str | os.PathLike[str]) -> None:
         save_json(self.to_dict(), path)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Instance:
-        return cls.from_dict(load_json(path))
+        """Read an instance file (strict JSON, validated; every failure an InstanceError
+        naming the path)."""
+        return cls.from_dict(load_json(path, "instance"), source=str(path))
 
 
-def check_schema(data: Any, kind: str) -> None:
-    """Raise :class:`InstanceError` unless ``data`` is a dict of a supported schema version."""
-    if not isinstance(data, dict):
-        raise InstanceError(f"{kind} JSON must be an object")
-    version = data.get("schema_version")
-    if version not in _SUPPORTED_SCHEMAS:
-        raise InstanceError(
-            f"unknown schema_version {version!r} for {kind} (this taopt reads {list(_SUPPORTED_SCHEMAS)})"
-        )
-    if data.get("kind", kind) != kind:
-        raise InstanceError(f"expected a {kind!r} file, got kind {data.get('kind')!r}")
+def check_schema(data: Any, kind: str, source: str | None = None) -> None:
+    """Raise :class:`InstanceError` unless ``data`` matches the JSON Schema of ``kind``.
+
+    The schema version and kind are checked first, then the whole schema
+    (:func:`taopt.schemas.validate`); the message names ``source`` (default ``kind``),
+    the JSON path and the value.
+    """
+    schemas.validate(data, kind, source)
 
 
 def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
@@ -334,15 +346,21 @@ def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
     path = Path(path)
     text = json.dumps(data, indent=1, allow_nan=False)
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
+    tmp.write_text(text, encoding="utf-8")
     os.replace(tmp, path)
 
 
-def load_json(path: str | os.PathLike[str]) -> dict[str, Any]:
-    try:
-        return json.loads(Path(path).read_text())
-    except json.JSONDecodeError as exc:
-        raise InstanceError(f"{path}: not valid JSON ({exc})") from None
+def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
+    """Read a JSON file strictly and, given ``kind``, check it against that kind's schema.
+
+    Raises
+    ------
+    InstanceError
+        Missing or unreadable file, not UTF-8, invalid JSON, a ``NaN``/``Infinity``
+        literal or an overflowing number, or (given ``kind``) a schema violation; the
+        message starts with the path. See :func:`taopt.schemas.load_json`.
+    """
+    return schemas.load_json(path, kind)
 
 
 def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") -> tuple[Target, ...]:

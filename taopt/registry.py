@@ -63,6 +63,10 @@ class Family:
         ``load(dict) -> problem``: build a validated problem from JSON data.
     bounds : tuple of str
         Names of the generic bounds of :mod:`taopt.bounds` it implements.
+    plots : dict
+        ``name -> plot(problem, payload, path, instance=None)`` writing a PNG (the first
+        one is what ``taopt solve --plot`` draws; ``instance`` gives positions and the field
+        when the problem came from an instance file).
     """
 
     problem_type: type
@@ -71,6 +75,7 @@ class Family:
     title: str
     load: Callable[[Mapping[str, Any]], Any]
     bounds: tuple[str, ...] = ()
+    plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -92,7 +97,9 @@ class Method:
     description : str
         First line of the function's docstring.
     options : frozenset of str
-        Keyword options the function accepts (``None``: any).
+        Keyword options the function names explicitly.
+    takes_any : bool
+        The function also takes arbitrary ``**options``.
     default : bool or callable
         Whether the method is in the default set of ``taopt solve`` (a callable gets the
         problem, e.g. an exact DP only for small instances).
@@ -104,7 +111,8 @@ class Method:
     category: str = "heuristic"
     warm_start: tuple[str, ...] = ()
     description: str = ""
-    options: frozenset[str] | None = field(default=None)
+    options: frozenset[str] = frozenset()
+    takes_any: bool = False
     default: bool | Callable[[Any], bool] = True
 
     def is_default_for(self, problem: Any) -> bool:
@@ -116,12 +124,12 @@ class Method:
         return self.category == "exact"
 
     def accepts(self, option: str) -> bool:
-        """Whether the method takes keyword ``option``."""
-        return self.options is None or option in self.options
+        """Whether the method names keyword ``option`` (``seed``, ``time_limit``, ...)."""
+        return option in self.options
 
     def check_options(self, options: Mapping[str, Any]) -> None:
         """Raise InstanceError naming an option this method does not take."""
-        if self.options is None:
+        if self.takes_any:
             return
         unknown = sorted(set(options) - self.options)
         if unknown:
@@ -144,6 +152,7 @@ def register_family(
     evaluate: Callable[[Any, Any], float],
     bounds: Mapping[str, Callable[[Any], float]] | None = None,
     load: Callable[[Mapping[str, Any]], Any] | None = None,
+    plots: Mapping[str, Callable[..., Any]] | None = None,
 ) -> Family:
     """Register a problem family: its scorer, bounds, file kind and payload.
 
@@ -162,6 +171,8 @@ def register_family(
         :mod:`taopt.bounds` ("arborescence", "thesis_mcga", ...).
     load : callable, optional
         ``load(dict) -> problem`` (default ``problem_type.from_dict``).
+    plots : dict, optional
+        ``name -> plot(problem, payload, path, instance=None)`` (see :class:`Family`).
     """
     from taopt import bounds as bound_functions
     from taopt.scoring import evaluate as generic_evaluate
@@ -176,6 +187,7 @@ def register_family(
         title=title,
         load=load or problem_type.from_dict,
         bounds=tuple(bounds or {}),
+        plots=dict(plots or {}),
     )
     _FAMILIES[problem_type] = family
     _METHODS.setdefault(problem_type, {})
@@ -224,7 +236,11 @@ def register_method(
         signature = inspect.signature(func)
         params = list(signature.parameters.values())[1:]
         takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params)
-        options = None if takes_any else frozenset(p.name for p in params)
+        options = frozenset(
+            p.name
+            for p in params
+            if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+        )
         doc = (inspect.getdoc(func) or "").strip().splitlines()
         _METHODS.setdefault(problem_type, {})[name] = Method(
             name=name,
@@ -234,6 +250,7 @@ def register_method(
             warm_start=(warm_start,) if isinstance(warm_start, str) else tuple(warm_start),
             description=doc[0] if doc else "",
             options=options,
+            takes_any=takes_any,
             default=default,
         )
         return func
@@ -251,9 +268,9 @@ def ensure_families() -> None:
                 raise
 
 
-def family_of(problem: Any) -> Family:
-    """The family of ``problem`` (by its class or a registered base class)."""
-    cls = problem if isinstance(problem, type) else type(problem)
+def family_of(item: Any) -> Family:
+    """The family of a problem, or of a problem class (or a registered base class of it)."""
+    cls = item if isinstance(item, type) else type(item)
     for base in cls.__mro__:
         if base in _FAMILIES:
             return _FAMILIES[base]

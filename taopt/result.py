@@ -20,7 +20,7 @@ Example
 -------
 >>> s = Solution(objective=4.0, status="feasible", solution=Routes([[1, 0]]), method="MC")
 >>> s.routes, s.status
-([[1, 0]], <Status.FEASIBLE: 'feasible'>)
+([[1, 0]], 'feasible')
 >>> Solution.from_dict(s.to_dict()) == s
 True
 """
@@ -53,6 +53,9 @@ class Status(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+    def __repr__(self) -> str:  # a str enum: shown as the string it equals
+        return repr(self.value)
 
     def __format__(self, spec: str) -> str:
         return format(self.value, spec)

@@ -8,7 +8,8 @@ keeps them in one CSV file so that a re-run computes only what is missing:
   limits, per-method options, ...) is a JSON dict saved next to the rows
   (``config.json`` by default, written atomically). Opening the folder again with
   other settings raises :class:`~taopt.errors.InstanceError` naming the keys that
-  differ, so rows of two different studies are never mixed. What identifies a row
+  differ, so rows of two different studies are never mixed. A folder that holds no
+  rows yet takes the new settings. What identifies a row
   (the method, the scenario, the ratio) is its *key*, not a setting: asking for
   other methods or more scenarios extends the same file.
 * **Rows.** Each row ends with a ``complete`` column equal to 1 and is appended
@@ -136,6 +137,8 @@ class ResultsStore:
                     "settings are unknown; use another folder"
                 )
             return
+        if not has_rows:
+            return  # no results yet: the new settings simply replace the saved ones
         saved = load_json(self.config_path)
         if not isinstance(saved, dict):
             raise InstanceError(f"{self.config_path}: not a settings dict")

@@ -10,7 +10,7 @@ import taopt.bounds
 import taopt.heuristics
 from taopt.errors import InstanceError
 from taopt.routing import bounds
-from taopt.routing.claims import exact_optimum
+from taopt.studies.routing_claims import exact_optimum
 
 
 def small_problems(count: int, seed: int, symmetric: bool | None = None, max_n: int = 7):

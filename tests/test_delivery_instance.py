@@ -69,6 +69,22 @@ def test_disconnected_network_and_bad_edges():
         base.replace(graph=graph)
 
 
+def test_street_shorter_than_straight_line_is_refused():
+    """A Python-built street shorter than the straight line between its stops is named, with
+    both lengths; equal to it (within 1e-9 relative) is fine."""
+    base = small()
+    graph = nx.Graph(base.graph)
+    graph.edges[0, 1]["length"] = 49.0  # stops 0 and 1 are 50 m apart
+    with pytest.raises(InstanceError, match=r"street edge \(0, 1\) has length 49, .* line 50 "):
+        base.replace(graph=graph)
+    graph.edges[0, 1]["length"] = 50.0 * (1 - 1e-12)
+    assert base.replace(graph=graph).truck_distance[0, 1] == pytest.approx(50.0)
+    stops = base.stops.copy()
+    stops[4] = [5000.0, 50.0]  # the centre stop moved 5 km away from its 50 m streets
+    with pytest.raises(InstanceError, match=r"street edge \(1, 4\) .* shorter than the straight"):
+        base.replace(stops=stops)
+
+
 def test_immutable_and_validated_copies():
     inst = small()
     with pytest.raises(ValueError):

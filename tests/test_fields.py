@@ -99,7 +99,7 @@ def test_thesis_field_values():
         ({"kind": "linear"}, "missing 'A'"),
         ({"kind": "uniform", "vx": 1.0}, "missing 'vy'"),
         ({"vx": 1.0}, "'kind'"),
-        ({"kind": "linear", "A": [[1, 2, 3]]}, r"A \(2, 2\)"),
+        ({"kind": "linear", "A": [[1, 2, 3]]}, r"A: expected 2 rows of 2 numbers, got 1"),
         ({"kind": "uniform", "vx": float("nan"), "vy": 0}, "finite"),
     ],
 )

@@ -117,3 +117,21 @@ def test_replace_revalidates():
 def test_obstacle_contains():
     obs = Obstacle(((0, 0), (2, 0), (2, 2), (0, 2)))
     np.testing.assert_array_equal(obs.contains([[1, 1], [3, 1]]), [True, False])
+
+
+def test_load_errors_name_the_file(tmp_path):
+    """Schema and constructor errors of Instance.load both start with the file's path."""
+    data = small().to_dict()
+    data["vehicles"][0]["start"] = ["0", 0]
+    path = tmp_path / "bad-start.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(
+        InstanceError, match=r"bad-start\.json: vehicles\[0\]\.start\[0\]: expected"
+    ):
+        Instance.load(path)
+    data = small().to_dict()
+    data["targets"][0]["position"] = [50.0, 5.0]
+    path = tmp_path / "outside.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InstanceError, match=r"outside\.json: target 't1': position .* outside"):
+        Instance.load(path)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from taopt.routing.study import summarize, wilcoxon_pairs
+from taopt.studies.drift import summarize, wilcoxon_pairs
 
 # Thesis Table 2.1 / 2.2 rows printed in our copy (VN, VM, EVN, EVM, MC, GA).
 THESIS_Q = {

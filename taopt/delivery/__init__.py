@@ -5,7 +5,7 @@ Modules: :mod:`~taopt.delivery.instance` (DeliveryInstance, Plan),
 :mod:`~taopt.delivery.schedule` (exact DP for a fixed order),
 :mod:`~taopt.delivery.costs` (t* of (5.8)–(5.11), E^d),
 :mod:`~taopt.delivery.bounds` (Proposition 5.3), :mod:`~taopt.delivery.dags`
-(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.delivery.study`.
+(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.studies.delivery`.
 """
 
 from __future__ import annotations
@@ -20,6 +20,21 @@ from taopt.delivery.sop import SopProblem, evaluate_order, sop_arborescence_boun
 from taopt.registry import register_family
 from taopt.result import Order
 
+
+def _plot_plan(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+    """The truck path and drone sorties on the street network."""
+    from taopt.delivery.plot import plot_plan
+
+    plot_plan(problem, plan).figure.savefig(path, dpi=120)
+
+
+def _plot_gantt(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+    """The truck's and the drone's timelines (Gantt chart)."""
+    from taopt.delivery.plot import plot_gantt
+
+    plot_gantt(problem, plan).figure.savefig(path, dpi=120)
+
+
 register_family(
     DeliveryInstance,
     kind="delivery_instance",
@@ -27,6 +42,7 @@ register_family(
     title="precedence-constrained truck-drone delivery (chapter 5)",
     evaluate=evaluate_plan,
     bounds={"arborescence": arborescence_bound},
+    plots={"plan": _plot_plan, "gantt": _plot_gantt},
 )
 register_family(
     SopProblem,

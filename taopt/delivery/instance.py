@@ -30,10 +30,15 @@ from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import check_schema, load_json, save_json
 from taopt.result import register_payload
+from taopt.schemas import naming
 
 #: Relative tolerance on the flight-range constraint (5.6): a sortie with
 #: ``d(i, c) + d(c, k) <= L * (1 + FLIGHT_TOLERANCE)`` is within range.
 FLIGHT_TOLERANCE = 1e-9
+
+#: Relative tolerance on street lengths: an edge may not be shorter than the straight
+#: line between its stops, ``length >= dist * (1 - STREET_TOLERANCE)``.
+STREET_TOLERANCE = 1e-9
 
 
 def _points(value: Any, what: str) -> np.ndarray:
@@ -90,7 +95,9 @@ class DeliveryInstance:
         Stopping-point positions (the street-network vertices), indices 0..s-1.
     graph : networkx.Graph
         Street network on the stop indices 0..s-1; every edge has a ``"length"``
-        attribute (street length, >= 0). Must be connected. It is copied and frozen.
+        attribute (street length, at least the straight-line distance between its two
+        stops, up to a relative ``STREET_TOLERANCE``). Must be connected. It is copied
+        and frozen.
     depot : int
         The stop w_0 where the truck and the drone start.
     v_drone, v_truck : float
@@ -119,7 +126,8 @@ class DeliveryInstance:
     InstanceError
         Non-finite or negative data, bad indices, a self-precedence, a precedence
         cycle (named, e.g. ``precedence cycle 3 -> 5 -> 3``), a disconnected street
-        network, a depot that is not a stop, a customer no stop can serve within L
+        network, a street shorter than the straight line between its stops (named, with
+        both lengths), a depot that is not a stop, a customer no stop can serve within L
         (named, with its nearest stop distance).
 
     Example
@@ -179,6 +187,12 @@ class DeliveryInstance:
             length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
             if a == b:
                 continue
+            straight = float(np.hypot(*(stops[a] - stops[b])))
+            if length < straight * (1.0 - STREET_TOLERANCE):
+                raise InstanceError(
+                    f"street edge ({a}, {b}) has length {length:.9g}, shorter than the straight "
+                    f"line {straight:.9g} between stops {a} and {b}"
+                )
             graph.add_edge(a, b, length=length)
             rows += [a, b]
             cols += [b, a]
@@ -373,15 +387,31 @@ class DeliveryInstance:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> DeliveryInstance:
-        """Inverse of :meth:`to_dict` (validates)."""
-        check_schema(data, "delivery_instance")
-        try:
-            graph = nx.Graph()
-            graph.add_nodes_from(range(len(data["stops"])))
-            for edge in data["edges"]:
-                u, v, length = edge
-                graph.add_edge(u, v, length=length)
+    def from_dict(cls, data: dict[str, Any], source: str | None = None) -> DeliveryInstance:
+        """Inverse of :meth:`to_dict`: checked against ``delivery_instance.schema.json``
+        first (``source`` names the data in messages), then by the constructor.
+
+        Raises
+        ------
+        InstanceError
+            A schema violation (naming the JSON path and the value), a street listed
+            twice, or the constructor's own complaint (bad index, a street shorter than
+            the straight line, a disconnected network, a precedence cycle, ...).
+        """
+        check_schema(data, "delivery_instance", source)
+        graph = nx.Graph()
+        graph.add_nodes_from(range(len(data["stops"])))
+        first: dict[frozenset[int], int] = {}
+        for k, (u, v, length) in enumerate(data["edges"]):
+            key = frozenset((int(u), int(v)))
+            if key in first:
+                raise InstanceError(
+                    f"{source or 'delivery_instance'}: edges[{k}]: the street ({int(u)}, "
+                    f"{int(v)}) is already edges[{first[key]}]"
+                )
+            first[key] = k
+            graph.add_edge(int(u), int(v), length=length)
+        with naming(source or "delivery_instance"):
             return cls(
                 customers=data["customers"],
                 stops=data["stops"],
@@ -394,12 +424,6 @@ class DeliveryInstance:
                 service_time=data.get("service_time", 0.0),
                 name=data.get("name", ""),
             )
-        except KeyError as exc:
-            raise InstanceError(f"delivery_instance JSON is missing {exc.args[0]!r}") from None
-        except (TypeError, ValueError) as exc:
-            if isinstance(exc, InstanceError):
-                raise
-            raise InstanceError(f"delivery_instance JSON is malformed: {exc}") from None
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write JSON atomically."""
@@ -407,8 +431,9 @@ class DeliveryInstance:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> DeliveryInstance:
-        """Read and validate a JSON file written by :meth:`save`."""
-        return cls.from_dict(load_json(path))
+        """Read a JSON file written by :meth:`save` (strict JSON, validated; every failure
+        an InstanceError naming the path)."""
+        return cls.from_dict(load_json(path, "delivery_instance"), source=str(path))
 
 
 @register_payload("plan")
@@ -469,4 +494,4 @@ class Plan:
         return cls(tuple(data["order"]), tuple(data["launch"]), tuple(data["landing"]))
 
 
-__all__ = ["DeliveryInstance", "Plan", "FLIGHT_TOLERANCE"]
+__all__ = ["DeliveryInstance", "Plan", "FLIGHT_TOLERANCE", "STREET_TOLERANCE"]

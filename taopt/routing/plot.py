@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_routes", "plot_gaps"]
+__all__ = ["plot_routes"]
 
 
 def plot_routes(
@@ -111,50 +111,3 @@ def plot_routes(
     if path:
         ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     return ax
-
-
-def plot_gaps(df: Any, column: str = "q_thesis", ax: Any = None, path: str | None = None) -> Any:
-    """Boxplot of a quality ratio per method from a :func:`drift_study` table.
-
-    Parameters
-    ----------
-    df : pandas.DataFrame
-        Rows of :func:`taopt.routing.study.drift_study`.
-    column : {"q_thesis", "q_valid", "q_exact"}
-        ``f / f_a`` (Table 2.1's q), ``f / valid bound`` or ``f / optimum``.
-    ax : matplotlib Axes, optional
-    path : str, optional
-        Save the figure as PNG there.
-    """
-    import matplotlib.pyplot as plt
-
-    from taopt.routing.study import METHODS, _with_ratios
-
-    data = _with_ratios(df)
-    methods = [m for m in METHODS if m in set(data["method"])]
-    values = [data.loc[data["method"] == m, column].dropna().to_numpy() for m in methods]
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4))
-    ax.boxplot(values, tick_labels=methods) if _has_tick_labels() else ax.boxplot(
-        values, labels=methods
-    )
-    ax.axhline(1.0, color="0.5", lw=0.8, ls="--")
-    labels = {
-        "q_thesis": "q = f / f_a (2.26)",
-        "q_valid": "f / arborescence bound",
-        "q_exact": "f / optimum",
-    }
-    ax.set_ylabel(labels.get(column, column))
-    n = int(data["n"].iloc[0]) if len(data) else 0
-    m = int(data["m"].iloc[0]) if len(data) else 0
-    ax.set_title(f"n{n}m{m}: {data['scenario'].nunique()} scenarios")
-    if path:
-        ax.figure.savefig(path, dpi=120, bbox_inches="tight")
-    return ax
-
-
-def _has_tick_labels() -> bool:
-    import matplotlib
-
-    major, minor = (int(x) for x in matplotlib.__version__.split(".")[:2])
-    return (major, minor) >= (3, 9)

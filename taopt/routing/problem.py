@@ -128,18 +128,29 @@ class AssignmentProblem:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> AssignmentProblem:
-        from taopt.instance import check_schema
+    def from_dict(cls, data: dict[str, Any], source: str | None = None) -> AssignmentProblem:
+        """Inverse of :meth:`to_dict`: checked against ``assignment_problem.schema.json``
+        first (``source`` names the data in messages), then by the constructor.
 
-        check_schema(data, "assignment_problem")
-        try:
-            return cls(
-                np.array(data["cost"], dtype=float),
-                int(data["n_targets"]),
-                str(data.get("name", "")),
-            )
-        except KeyError as exc:
-            raise InstanceError(f"assignment_problem JSON is missing {exc.args[0]!r}") from None
+        Raises
+        ------
+        InstanceError
+            A schema violation (naming the JSON path and the value), a matrix that is not
+            square (naming the row), or the constructor's own complaint.
+        """
+        from taopt.instance import check_schema
+        from taopt.schemas import naming
+
+        check_schema(data, "assignment_problem", source)
+        cost = data["cost"]
+        for i, row in enumerate(cost):
+            if len(row) != len(cost):
+                raise InstanceError(
+                    f"{source or 'assignment_problem'}: cost[{i}]: expected {len(cost)} numbers "
+                    f"(cost must be square), got {len(row)}"
+                )
+        with naming(source or "assignment_problem"):
+            return cls(np.array(cost, dtype=float), int(data["n_targets"]), data.get("name", ""))
 
     def save(self, path: Any) -> None:
         from taopt.instance import save_json
@@ -148,9 +159,11 @@ class AssignmentProblem:
 
     @classmethod
     def load(cls, path: Any) -> AssignmentProblem:
+        """Read a file written by :meth:`save` (strict JSON, validated; every failure an
+        InstanceError naming the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path))
+        return cls.from_dict(load_json(path, "assignment_problem"), source=str(path))
 
     def __repr__(self) -> str:
         label = f" {self.name!r}" if self.name else ""

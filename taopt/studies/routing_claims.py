@@ -50,7 +50,8 @@ from typing import Any
 
 import numpy as np
 
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, SolverError
+from taopt.pipeline import solve
 from taopt.routing.bounds import f_da, thesis_mcga
 from taopt.routing.problem import AssignmentProblem
 
@@ -132,10 +133,7 @@ def optimum(problem: AssignmentProblem, method: str = "auto") -> float:
         raise InstanceError(f"exact must be 'auto', 'dp' or 'milp', got {method!r}")
     if method == "dp" or (method == "auto" and problem.n <= 10):
         return exact_optimum(problem)[0]
-    from taopt.errors import SolverError
-    from taopt.models import solve_routing
-
-    result = solve_routing(problem)
+    result = solve(problem, "exact")
     if result.status != "optimal":
         raise SolverError(f"solve_routing did not prove optimality (status {result.status!r})")
     return float(result.objective)
@@ -282,13 +280,11 @@ def claim_values(
     dict
         claim name -> {"holds": bool or None (not applicable), "lhs", "rhs"}.
     """
-    from taopt.heuristics import run
-
     f_a = thesis_mcga(problem)
     f_double = f_da(problem)
     f_o = optimum(problem, exact)
-    f_evm = run("EVM", problem).objective
-    f_mc = run("MC", problem).objective
+    f_evm = solve(problem, "EVM").objective
+    f_mc = solve(problem, "MC").objective
     tri = triangle_violation(problem.cost)
     scale = float(problem.cost.max()) or 1.0
     out: dict[str, dict[str, Any]] = {

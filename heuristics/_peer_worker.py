@@ -1,0 +1,242 @@
+"""Worker process that runs one peer solver (PyVRP or OR-Tools) for :mod:`taopt.heuristics.peers`.
+
+This file is started as a script (``python _peer_worker.py <peer> <parent pid>
+<die with parent>``) in a fresh interpreter, never imported into a process
+that uses the exact models: the ``ortools`` and ``highspy`` wheels ship
+incompatible ``libhighs`` libraries with one soname, so whichever is imported
+second fails to load. It imports only the standard library, numpy and its
+peer; it never imports taopt, which is why the caller sends it an integer
+matrix and re-scores the routes it returns.
+
+Protocol (pickle frames; the parent is the only peer on the pipes)
+
+* worker -> parent, once at start: ``("ready", {"peer": ..., "version": ...})``
+  or ``("error", message)`` when the peer package cannot be imported;
+* parent -> worker: ``{"cost": int64 (n+m, n+m) array, "n": n, "m": m,
+  "options": {...}}``; worker -> parent: ``("ok", {"routes": [[...], ...],
+  "objective": int, ...})`` or ``("error", traceback text)``;
+* end of file on stdin: the worker exits.
+
+The worker dies with its parent: it ignores Ctrl-C (the parent handles it and
+stops the worker), asks Linux for SIGKILL when the parent dies
+(``PR_SET_PDEATHSIG``, when the parent says the spawning thread is its main
+thread), watches ``os.getppid()`` from a thread, and exits on end of file.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+import traceback
+from typing import Any
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def open_routes_matrix(cost: Any) -> Any:
+    """The ``(n+m+1)``-square integer matrix with a free dummy end point ``n+m``.
+
+    Rows and columns ``0..n+m-1`` are ``cost``; the last column is 0, so any
+    route may finish anywhere at no cost (open routes, thesis §2.2); the last
+    row is never used by a route and is 0 too.
+    """
+    import numpy as np
+
+    size = cost.shape[0] + 1
+    matrix = np.zeros((size, size), dtype=np.int64)
+    matrix[:-1, :-1] = cost
+    return matrix
+
+
+def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
+    """Solve with PyVRP's iterated local search: one depot per vehicle start, one free end depot.
+
+    Locations ``0..n-1`` are the clients (targets), ``n..n+m-1`` the start
+    depots, ``n+m`` the shared end depot; vehicle type ``k`` (one vehicle)
+    starts at depot ``k`` and ends at depot ``m``. The distance and duration
+    matrices are both the scaled travel times; only distance is charged.
+    """
+    import pyvrp
+    from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria
+
+    matrix = open_routes_matrix(cost)
+    locations = [pyvrp.Location(0, 0, name=f"point {i}") for i in range(n + m + 1)]
+    clients = [pyvrp.Client(location=j, name=f"target {j}") for j in range(n)]
+    depots = [pyvrp.Depot(location=n + k, name=f"start {k}") for k in range(m)]
+    depots.append(pyvrp.Depot(location=n + m, name="free end"))
+    vehicle_types = [
+        pyvrp.VehicleType(num_available=1, start_depot=k, end_depot=m, name=f"vehicle {k}")
+        for k in range(m)
+    ]
+    data = pyvrp.ProblemData(locations, clients, depots, vehicle_types, [matrix], [matrix])
+    criteria = []
+    if options.get("time_limit") is not None:
+        criteria.append(MaxRuntime(float(options["time_limit"])))
+    if options.get("max_iterations") is not None:
+        criteria.append(MaxIterations(int(options["max_iterations"])))
+    stop = criteria[0] if len(criteria) == 1 else MultipleCriteria(criteria)
+    started = time.perf_counter()
+    result = pyvrp.solve(data, stop, seed=int(options["seed"]), collect_stats=False, display=False)
+    runtime = time.perf_counter() - started
+    best = result.best
+    if not best.is_feasible() or not best.is_complete():
+        raise RuntimeError(f"PyVRP returned an incomplete or infeasible solution: {best!r}")
+    routes: list[list[int]] = [[] for _ in range(m)]
+    for route in best.routes():
+        routes[route.vehicle_type()] = [int(act.idx) for act in route if act.is_client()]
+    return {
+        "routes": routes,
+        "objective": int(result.cost()),
+        "iterations": int(result.num_iterations),
+        "solver_runtime": runtime,
+    }
+
+
+def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
+    """Solve with the OR-Tools routing library: per-vehicle starts, one free dummy end node.
+
+    Nodes ``0..n-1`` are targets, ``n..n+m-1`` the vehicle starts, ``n+m`` the
+    dummy end shared by every vehicle (zero-cost arcs into it, so routes are
+    open and a vehicle may go straight from its start to the end: idle).
+    """
+    from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+
+    strategies = routing_enums_pb2.FirstSolutionStrategy.Value  # name <-> number
+    metaheuristics = routing_enums_pb2.LocalSearchMetaheuristic.Value
+    first = options["first_solution"]
+    meta = options["metaheuristic"]
+    if first not in strategies.keys():
+        raise ValueError(
+            f"unknown first_solution {first!r}; OR-Tools has {list(strategies.keys())}"
+        )
+    if meta not in metaheuristics.keys():
+        raise ValueError(
+            f"unknown metaheuristic {meta!r}; OR-Tools has {list(metaheuristics.keys())}"
+        )
+    matrix = open_routes_matrix(cost)
+    end = n + m
+    manager = pywrapcp.RoutingIndexManager(n + m + 1, m, [n + k for k in range(m)], [end] * m)
+    routing = pywrapcp.RoutingModel(manager)
+    transit = routing.RegisterTransitMatrix(matrix.tolist())
+    routing.SetArcCostEvaluatorOfAllVehicles(transit)
+    params = pywrapcp.DefaultRoutingSearchParameters()
+    params.first_solution_strategy = strategies.Value(first)
+    params.local_search_metaheuristic = metaheuristics.Value(meta)
+    if options.get("time_limit") is not None:
+        params.time_limit.FromNanoseconds(int(round(float(options["time_limit"]) * 1e9)))
+    if options.get("solution_limit") is not None:
+        params.solution_limit = int(options["solution_limit"])
+    started = time.perf_counter()
+    assignment = routing.SolveWithParameters(params)
+    runtime = time.perf_counter() - started
+    if assignment is None:
+        raise RuntimeError(f"OR-Tools found no solution (routing status {routing.status()})")
+    routes = []
+    for vehicle in range(m):
+        index = routing.Start(vehicle)
+        route = []
+        while not routing.IsEnd(index):
+            node = manager.IndexToNode(index)
+            if node < n:
+                route.append(int(node))
+            index = assignment.Value(routing.NextVar(index))
+        routes.append(route)
+    return {
+        "routes": routes,
+        "objective": int(assignment.ObjectiveValue()),
+        "routing_status": int(routing.status()),
+        "solver_runtime": runtime,
+    }
+
+
+SOLVERS = {"pyvrp": solve_pyvrp, "ortools": solve_ortools}
+PACKAGES = {"pyvrp": "pyvrp", "ortools": "ortools"}
+
+
+def _load(peer: str) -> str:
+    """Import the peer's package (the slow part of starting); return its version."""
+    from importlib.metadata import version
+
+    if peer == "pyvrp":
+        import pyvrp  # noqa: F401
+    else:
+        from ortools.constraint_solver import pywrapcp  # noqa: F401
+    return version(PACKAGES[peer])
+
+
+def _die_with_parent(parent_pid: int, use_pdeathsig: bool) -> None:
+    """Exit as soon as the parent is gone, even if it was killed."""
+    if use_pdeathsig and sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+        except (OSError, AttributeError):  # pragma: no cover - exotic libc
+            pass
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(0)
+            time.sleep(0.5)
+
+    if os.getppid() != parent_pid:  # the parent died before we could watch it
+        os._exit(0)
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def serve(peer: str, parent_pid: int, use_pdeathsig: bool) -> None:
+    """Answer requests on stdin/stdout until end of file (see the module docstring)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    _die_with_parent(parent_pid, use_pdeathsig)
+    # The channel is the original stdout; anything else written to fd 1 (a C
+    # library's log, a stray print) goes to stderr so it cannot corrupt a frame.
+    channel_out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    channel_in = sys.stdin.buffer
+
+    def send(message: Any) -> None:
+        pickle.dump(message, channel_out, protocol=pickle.HIGHEST_PROTOCOL)
+        channel_out.flush()
+
+    try:
+        send(("ready", {"peer": peer, "version": _load(peer), "pid": os.getpid()}))
+    except ImportError as exc:
+        send(("error", f"{type(exc).__name__}: {exc}"))
+        return
+    solver = SOLVERS[peer]
+    while True:
+        try:
+            request = pickle.load(channel_in)
+        except EOFError:
+            return
+        try:
+            reply = ("ok", solver(request["cost"], request["n"], request["m"], request["options"]))
+        except Exception:
+            reply = ("error", traceback.format_exc(limit=6))
+        try:
+            send(reply)
+        except (BrokenPipeError, OSError):
+            return
+
+
+def main(argv: list[str]) -> None:
+    """Entry point: ``<peer> <parent pid> <1 to ask for SIGKILL when the parent dies, else 0>``."""
+    peer, parent_pid, use_pdeathsig = argv[0], int(argv[1]), argv[2] == "1"
+    if peer not in SOLVERS:
+        raise SystemExit(f"unknown peer {peer!r}; choose from {sorted(SOLVERS)}")
+    serve(peer, parent_pid, use_pdeathsig)
+
+
+if __name__ == "__main__":
+    # Run as a script, this folder is sys.path[0]; drop it so its modules
+    # (registry.py, peers.py, ...) cannot shadow anything the peers import.
+    if sys.path and os.path.abspath(sys.path[0] or os.curdir) == _HERE:
+        del sys.path[0]
+    main(sys.argv[1:])

@@ -1,0 +1,479 @@
+"""PyVRP and OR-Tools on the chapter 2 problem, side by side with the thesis's methods.
+
+Users compare the thesis's heuristics with the general vehicle-routing
+solvers they would otherwise reach for. :func:`pyvrp_solve` and
+:func:`ortools_solve` hand a :class:`taopt.AssignmentProblem` (thesis §2.2:
+open routes from each vehicle's own start point, objective (2.2) = total
+travel time) to `PyVRP <https://pyvrp.org>`_ or the `OR-Tools
+<https://developers.google.com/optimization/routing>`_ routing library and
+return a :class:`taopt.Solution` whose objective is the float total travel
+time re-scored by :func:`taopt.evaluate` (the one scorer), not the solver's
+own integer objective (kept in ``info``).
+
+Modelling
+---------
+Both solvers get the ``(n+m+1)``-point model: targets ``0..n-1``, vehicle
+starts ``n..n+m-1`` and one dummy end point ``n+m`` reachable from every point
+at cost 0, so a route ends after its last target at no cost (an open route)
+and a vehicle that goes straight from its start to the end is idle. PyVRP:
+one start depot per vehicle and the free end as every vehicle's end depot;
+OR-Tools: a ``RoutingIndexManager`` with per-vehicle starts and the dummy end.
+
+Both solvers take integer arc costs. The travel times are multiplied by
+``scale`` (default: the largest entry becomes :data:`LARGEST_ENTRY` = 1e7)
+and rounded, so each arc is off by at most ``0.5 / scale`` time units and a
+solution's integer objective by at most ``(n + m) * 0.5 / scale``, i.e. a
+relative ``5e-8 (n + m)`` of the largest entry. Route sums stay below
+``(n + m) * 1e7``, far inside both solvers' int64 limits (PyVRP's
+``MAX_VALUE`` is about 1.8e13). Rounding can only make a peer prefer one of
+two solutions whose float values differ by less than that.
+
+Worker processes
+----------------
+The ``ortools`` and ``highspy`` wheels ship incompatible ``libhighs``
+libraries with the same soname: whichever is imported second fails to load
+(and cvxpy then silently loses its HIGHS solver). So each peer runs in its own
+worker process, started on first use and kept alive for later calls (starting
+costs about a second), and this module imports neither package. The worker is
+the script ``_peer_worker.py`` run by a fresh interpreter (``subprocess``),
+not a :mod:`multiprocessing` "spawn" child: a spawn child re-runs the
+top-level imports of the caller's ``__main__`` script, so a script that
+imports ``taopt.models`` (hence highspy) at the top would break OR-Tools in
+its own worker. The worker dies with its parent (Linux ``PR_SET_PDEATHSIG``,
+a ``getppid`` watch, end of file on its stdin); on Ctrl-C during a call the
+caller stops it and re-raises; a worker that crashes or cannot import its
+package becomes a :class:`taopt.SolverError` naming the peer, and so does a
+call that overruns its ``time_limit`` by :data:`GRACE` seconds (the worker is
+then stopped; a call without a time limit waits as long as it takes).
+:func:`shutdown` stops the workers (also done at exit).
+
+Determinism
+-----------
+PyVRP is deterministic for a given ``seed`` when it stops on
+``max_iterations`` (pass ``time_limit=None``); stopped by time it is not (the
+number of iterations done in the time varies). OR-Tools' routing search has
+no random seed: ``seed`` is recorded but changes nothing; it is deterministic
+when it stops on ``solution_limit`` (pass ``time_limit=None``), not when it
+stops on time.
+
+References
+----------
+Thesis §2.2.1, (2.2)–(2.5). Wouda, Lan and Kool, "PyVRP: a high-performance
+VRP solver package", INFORMS J. Computing 36(4), 2024. Perron and Didier,
+OR-Tools routing, Google.
+"""
+
+from __future__ import annotations
+
+import atexit
+import importlib.util
+import os
+import pickle
+import queue
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from taopt.errors import InstanceError, SolverError
+from taopt.registry import register_method
+from taopt.result import FEASIBLE, Routes, Solution
+from taopt.routing.problem import AssignmentProblem
+from taopt.scoring import evaluate
+
+__all__ = ["LARGEST_ENTRY", "PEERS", "pyvrp_solve", "ortools_solve", "shutdown"]
+
+#: The largest travel time becomes this integer when ``scale`` is not given.
+LARGEST_ENTRY = 10**7
+#: Integer entries above this are refused (a route of n + m arcs must stay far below 2**63).
+MAX_ENTRY = 10**12
+#: Peer name -> the package its worker imports.
+PEERS = {"pyvrp": "pyvrp", "ortools": "ortools"}
+INSTALL_HINT = 'pip install "taopt[peers]"'
+WORKER_SCRIPT = Path(__file__).with_name("_peer_worker.py")
+#: Seconds a worker may take to import its package and say it is ready.
+STARTUP_TIMEOUT = 120.0
+#: Extra seconds allowed beyond a call's time limit before the worker is declared hung.
+GRACE = 60.0
+
+
+class _Worker:
+    """One live worker process for one peer, with its reply queue."""
+
+    def __init__(self, peer: str) -> None:
+        self.peer = peer
+        self.owner = os.getpid()
+        self.lock = threading.Lock()
+        started = time.perf_counter()
+        # PR_SET_PDEATHSIG fires when the *thread* that started the worker ends,
+        # so it is only asked for from the main thread (which lives as long as us).
+        main = "1" if threading.current_thread() is threading.main_thread() else "0"
+        self.process = subprocess.Popen(
+            [sys.executable, str(WORKER_SCRIPT), peer, str(os.getpid()), main],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            start_new_session=os.name == "posix",  # the terminal's Ctrl-C is ours, not its
+        )
+        self.replies: queue.Queue = queue.Queue()
+        threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
+        try:
+            kind, payload = self._wait(STARTUP_TIMEOUT, "start")
+        except BaseException:  # Ctrl-C while it starts: do not leave it behind
+            self.stop()
+            raise
+        if kind != "ready":
+            self.stop()
+            raise SolverError(
+                f"{peer} could not be imported in its worker process ({payload.strip()}); "
+                f"install the peers with {INSTALL_HINT}"
+            )
+        self.version = payload["version"]
+        self.startup = time.perf_counter() - started
+
+    def _read(self) -> None:
+        """Reader thread: every frame from the worker goes to the queue; None at end of file."""
+        stream = self.process.stdout
+        while True:
+            try:
+                self.replies.put(pickle.load(stream))
+            except (EOFError, OSError, pickle.UnpicklingError, ValueError):
+                self.replies.put(None)
+                return
+
+    def _wait(self, timeout: float | None, what: str) -> tuple[str, Any]:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            left = 1.0 if deadline is None else min(1.0, deadline - time.monotonic())
+            if left <= 0:
+                self.stop(wait=0.0)
+                raise SolverError(
+                    f"{self.peer} worker did not answer ({what}) within {timeout:.0f} s; stopped it"
+                )
+            try:
+                reply = self.replies.get(timeout=left)
+            except queue.Empty:
+                continue
+            if reply is None:
+                code = self.process.wait()
+                how = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
+                raise SolverError(f"{self.peer} worker process died ({how}) during {what}")
+            return reply
+
+    def alive(self) -> bool:
+        return self.owner == os.getpid() and self.process.poll() is None
+
+    def call(self, request: dict[str, Any], timeout: float | None) -> dict[str, Any]:
+        """Send one request and wait for its reply; any interruption stops the worker.
+
+        Raises :class:`_Stopped` when another thread stopped this worker while
+        the call waited for it (nothing was sent; the caller takes a new worker).
+        """
+        with self.lock:
+            if not self.alive():
+                raise _Stopped(self.peer)
+            try:
+                pickle.dump(request, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                self.process.stdin.flush()
+                kind, payload = self._wait(timeout, "a solve")
+            except (BrokenPipeError, OSError) as exc:
+                self.stop()
+                raise SolverError(f"{self.peer} worker process is gone ({exc})") from None
+            except BaseException:  # Ctrl-C, a timeout: the reply would be stale
+                self.stop(wait=0.0)
+                raise
+        if kind != "ok":
+            raise SolverError(f"{self.peer} failed in its worker:\n{payload}")
+        return payload
+
+    def stop(self, wait: float = 2.0) -> None:
+        """Close the worker's stdin (it exits), then kill it if it lingers."""
+        if self.owner != os.getpid():  # inherited through fork: not ours to stop
+            return
+        try:
+            self.process.stdin.close()
+        except OSError:
+            pass
+        try:
+            self.process.wait(timeout=wait)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+
+
+class _Stopped(Exception):
+    """The worker was stopped before a request could be sent to it."""
+
+
+_WORKERS: dict[str, _Worker] = {}
+_WORKERS_LOCK = threading.Lock()
+
+
+def _find_spec(name: str) -> Any:
+    """``importlib.util.find_spec`` without importing the package (patched by the tests)."""
+    return importlib.util.find_spec(name)
+
+
+def _worker(peer: str) -> tuple[_Worker, float]:
+    """The live worker of ``peer`` (started if needed) and the seconds spent starting it."""
+    if _find_spec(PEERS[peer]) is None:
+        raise SolverError(f"{peer} is not installed; install the peers with {INSTALL_HINT}")
+    with _WORKERS_LOCK:
+        worker = _WORKERS.get(peer)
+        if worker is not None and worker.alive():
+            return worker, 0.0
+        worker = _Worker(peer)
+        _WORKERS[peer] = worker
+        return worker, worker.startup
+
+
+def shutdown() -> None:
+    """Stop every peer worker of this process (they restart on the next call)."""
+    with _WORKERS_LOCK:
+        for worker in _WORKERS.values():
+            worker.stop()
+        _WORKERS.clear()
+
+
+atexit.register(shutdown)
+
+
+def integer_costs(problem: AssignmentProblem, scale: float | None) -> tuple[np.ndarray, float]:
+    """The travel times as int64 (``rint(cost * scale)``) and the scale used.
+
+    The default ``scale`` maps the largest entry to :data:`LARGEST_ENTRY`.
+
+    Raises
+    ------
+    InstanceError
+        ``scale`` not positive, or a scaled entry above :data:`MAX_ENTRY`.
+    """
+    cost = problem.cost
+    largest = float(cost.max())
+    if scale is None:
+        scale = LARGEST_ENTRY / largest if largest > 0 else 1.0
+    scale = float(scale)
+    if not np.isfinite(scale) or scale <= 0:
+        raise InstanceError(f"scale must be a positive number, got {scale}")
+    if largest * scale > MAX_ENTRY:
+        raise InstanceError(
+            f"scale {scale:g} makes the largest travel time {largest:g} into "
+            f"{largest * scale:.3g} > {MAX_ENTRY:.0e} integer units"
+        )
+    return np.rint(cost * scale).astype(np.int64), scale
+
+
+def _check(problem: Any, time_limit: float | None, seed: int, limit_name: str, limit: Any) -> None:
+    if not isinstance(problem, AssignmentProblem):
+        raise InstanceError(
+            f"the peers solve taopt.AssignmentProblem, got {type(problem).__name__}"
+        )
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
+        raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
+    if limit is not None and (isinstance(limit, bool) or int(limit) != limit or limit < 1):
+        raise InstanceError(f"{limit_name} must be a positive integer, got {limit}")
+    if time_limit is None and limit is None:
+        raise InstanceError(f"give time_limit or {limit_name}, or the search never stops")
+    if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**32:
+        raise InstanceError(f"seed must be an integer in [0, 2**32), got {seed}")
+
+
+def _solve(
+    peer: str,
+    problem: AssignmentProblem,
+    seed: int,
+    scale: float | None,
+    options: dict[str, Any],
+) -> Solution:
+    """Run ``peer`` in its worker and turn its routes into a re-scored Solution."""
+    cost, scale = integer_costs(problem, scale)
+    time_limit = options.get("time_limit")
+    timeout = None if time_limit is None else time_limit + GRACE
+    request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
+    for _attempt in range(3):
+        worker, startup = _worker(peer)
+        started = time.perf_counter()
+        try:
+            reply = worker.call(request, timeout)
+            break
+        except _Stopped:  # stopped by another thread's failed call; take a fresh one
+            continue
+    else:
+        raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
+    runtime = time.perf_counter() - started
+    info = {
+        "solver_objective": reply.pop("objective"),
+        "scale": scale,
+        "version": worker.version,
+        "startup": startup,
+        **{key: value for key, value in options.items() if key != "seed"},
+        **{key: value for key, value in reply.items() if key != "routes"},
+    }
+    return _solution(problem, reply["routes"], peer, seed, runtime, info)
+
+
+def _solution(
+    problem: AssignmentProblem,
+    routes: list[list[int]],
+    method: str,
+    seed: int,
+    runtime: float,
+    info: dict[str, Any],
+) -> Solution:
+    """The one place this module builds a Solution; the objective is ``taopt.evaluate``'s."""
+    try:
+        objective = evaluate(problem, routes)
+    except Exception as exc:
+        raise SolverError(f"{method} returned routes that fail the check: {exc}") from None
+    return Solution(
+        objective=objective,
+        status=FEASIBLE,
+        bound=None,
+        runtime=runtime,
+        method=method,
+        seed=int(seed),
+        solution=Routes(routes),
+        info=info,
+    )
+
+
+@register_method(AssignmentProblem, "pyvrp", category="peer")
+def pyvrp_solve(
+    problem: AssignmentProblem,
+    time_limit: float | None = 1.0,
+    seed: int = 0,
+    *,
+    max_iterations: int | None = None,
+    scale: float | None = None,
+) -> Solution:
+    """Solve the open multi-vehicle routing problem (2.2)–(2.5) with PyVRP.
+
+    PyVRP's iterated local search on the model described in the module
+    docstring (one start depot per vehicle, a free end depot), run in its
+    worker process.
+
+    Parameters
+    ----------
+    problem : AssignmentProblem
+    time_limit : float or None
+        Seconds of search (PyVRP's ``MaxRuntime``); None for no time limit.
+    seed : int
+        PyVRP's random seed.
+    max_iterations : int, optional
+        Stop after this many iterations (``MaxIterations``). The search stops
+        at whichever limit comes first; with ``time_limit=None`` the result is
+        the same for the same seed, bit for bit.
+    scale : float, optional
+        Integer units per unit of travel time (default: largest entry -> 1e7).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" (no optimality claim, no bound), method "pyvrp",
+        ``routes`` one list per vehicle, ``objective = taopt.evaluate(routes)``;
+        ``info`` has ``solver_objective`` (PyVRP's integer cost, about
+        ``objective * scale``), ``scale``, ``iterations``, ``solver_runtime``,
+        ``startup`` (seconds spent starting the worker in this call) and
+        ``version``. ``runtime`` is the call's wall time, without ``startup``.
+
+    Raises
+    ------
+    InstanceError
+        Not an AssignmentProblem, or bad limits, seed or scale.
+    SolverError
+        PyVRP missing (the message says ``pip install "taopt[peers]"``), or
+        failed or crashed in its worker.
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> from taopt.heuristics.peers import pyvrp_solve
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
+    >>> s = pyvrp_solve(p, time_limit=None, max_iterations=50)
+    >>> s.routes, s.objective
+    ([[1, 0]], 4.0)
+
+    References
+    ----------
+    Thesis §2.2.1; Wouda, Lan and Kool (2024), PyVRP.
+    """
+    _check(problem, time_limit, seed, "max_iterations", max_iterations)
+    options = {"time_limit": time_limit, "max_iterations": max_iterations, "seed": int(seed)}
+    return _solve("pyvrp", problem, seed, scale, options)
+
+
+@register_method(AssignmentProblem, "ortools", category="peer")
+def ortools_solve(
+    problem: AssignmentProblem,
+    time_limit: float | None = 1.0,
+    seed: int = 0,
+    *,
+    solution_limit: int | None = None,
+    first_solution: str = "PATH_CHEAPEST_ARC",
+    metaheuristic: str = "GUIDED_LOCAL_SEARCH",
+    scale: float | None = None,
+) -> Solution:
+    """Solve the open multi-vehicle routing problem (2.2)–(2.5) with OR-Tools routing.
+
+    A first solution by ``first_solution``, improved by guided local search
+    (by default) until a limit, on the model of the module docstring
+    (per-vehicle starts, a dummy end node with zero-cost arcs into it), run in
+    its worker process.
+
+    Parameters
+    ----------
+    problem : AssignmentProblem
+    time_limit : float or None
+        Seconds of search; None for no time limit. Guided local search only
+        stops at a limit.
+    seed : int
+        Recorded only: OR-Tools' routing search has no random seed.
+    solution_limit : int, optional
+        Stop after this many solutions. With ``time_limit=None`` the result
+        is the same on every run; stopped by time it may differ.
+    first_solution, metaheuristic : str
+        Names from OR-Tools' ``FirstSolutionStrategy`` and
+        ``LocalSearchMetaheuristic`` enums.
+    scale : float, optional
+        Integer units per unit of travel time (default: largest entry -> 1e7).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" (no bound), method "ortools", ``routes``,
+        ``objective = taopt.evaluate(routes)``; ``info`` has
+        ``solver_objective``, ``scale``, ``routing_status``,
+        ``solver_runtime``, ``startup`` and ``version``.
+
+    Raises
+    ------
+    InstanceError
+        Not an AssignmentProblem, or bad limits, seed or scale.
+    SolverError
+        OR-Tools missing (the message says ``pip install "taopt[peers]"``),
+        an unknown strategy name, or a failure or crash in its worker.
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> from taopt.heuristics.peers import ortools_solve
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
+    >>> ortools_solve(p, time_limit=0.2).objective
+    4.0
+
+    References
+    ----------
+    Thesis §2.2.1; OR-Tools routing library (Google).
+    """
+    _check(problem, time_limit, seed, "solution_limit", solution_limit)
+    options = {
+        "time_limit": time_limit,
+        "solution_limit": solution_limit,
+        "first_solution": str(first_solution),
+        "metaheuristic": str(metaheuristic),
+        "seed": int(seed),
+    }
+    return _solve("ortools", problem, seed, scale, options)

@@ -1,0 +1,310 @@
+"""The chapter 5 study (§5.5): heuristics versus the bound (and the optimum when small).
+
+Setups (all: 1000 m square, 121 stops on an 11×11 street grid with 100 m blocks,
+depot at (0, 0), unit truck speed, τ = 0, customers uniform in the square, the same
+customers for every flight range L = ratio · L0 with L0 = 1000 m):
+
+* ``dag40`` — 40 customers under a layered precedence DAG
+  (:func:`taopt.delivery.dags.layered_dag`, 8 layers, density 0.1; Fig. 5.5 is not
+  printed), v_d / v_t = 1: Tables 5.1–5.2.
+* ``pairs120`` — 120 customers in dial-a-ride pairs
+  (:func:`taopt.delivery.dags.paired_precedences`), v_d / v_t = 1.4: Tables 5.5–5.7
+  (``vd_ratio=1.0`` gives the setting of the withheld Tables 5.3–5.4).
+* ``small`` — 7 customers, layered DAG of 3 layers, v_d / v_t = 1: small enough for
+  the exact optimum (:func:`taopt.delivery.schedule.optimal_plan`), so the true gaps of
+  the heuristics and of the bound can be measured.
+
+Measures per (instance, ratio, method): the makespan f (5.1) scored by
+:func:`taopt.evaluate`; f_a the valid arborescence bound (Proposition 5.3, rule
+"precede") and q = f / f_a (5.19); ``bound_thesis_rule`` the arborescence on E^d built
+from the sets S_r as printed (not a proven bound); the run time; and for n <=
+``exact_max_n`` the optimum f_o and the gap f / f_o − 1.
+
+Rows go through the one study runner (:func:`taopt.study.run_study`) into
+``out_dir/delivery_<setup>.csv`` (settings in ``delivery_<setup>.config.json``): resumable,
+one writer, any executor (process pool or Dask). A re-run computes only the missing
+(instance, ratio, method) rows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from taopt.delivery.bounds import arborescence_bound
+from taopt.delivery.dags import layered_dag, paired_precedences
+from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.schedule import optimal_plan
+from taopt.errors import InstanceError
+from taopt.study import Scenario, StudySpec, run_study
+
+L0 = 1000.0
+GRID_K = 11
+SETUPS: dict[str, dict[str, Any]] = {
+    "dag40": {"n": 40, "precedences": "layered", "layers": 8, "density": 0.1, "vd_ratio": 1.0},
+    "pairs120": {"n": 120, "precedences": "pairs", "vd_ratio": 1.4},
+    "small": {"n": 7, "precedences": "layered", "layers": 3, "density": 0.2, "vd_ratio": 1.0},
+}
+DEFAULT_RATIOS = (0.15, 0.30, 0.45, 0.60, 0.75, 0.90)
+DEFAULT_METHODS = ("NIA", "MMA", "SMMA", "GA")
+#: MILP seconds per solve in a study unless ``time_limit`` says otherwise.
+EXACT_TIME_LIMIT = 60.0
+
+
+def study_instance(
+    setup: str, index: int, seed: int = 1, ratio: float = 0.3, vd_ratio: float | None = None
+) -> DeliveryInstance:
+    """Instance ``index`` of a §5.5 setup at flight range L = ratio · 1000 m.
+
+    The customers and precedences depend on (seed, index) only, so the ratios of one
+    instance share them, as in the thesis.
+    """
+    if setup not in SETUPS:
+        raise InstanceError(f"unknown setup {setup!r}; choose from {sorted(SETUPS)}")
+    spec = SETUPS[setup]
+    rng = np.random.default_rng([int(seed), int(index)])
+    n = spec["n"]
+    customers = rng.uniform(0.0, L0, size=(n, 2))
+    if spec["precedences"] == "pairs":
+        pairs = paired_precedences(n, seed=rng)
+    else:
+        pairs = layered_dag(n, layers=spec["layers"], density=spec["density"], seed=rng)
+    v_ratio = spec["vd_ratio"] if vd_ratio is None else float(vd_ratio)
+    return DeliveryInstance.grid(
+        customers,
+        GRID_K,
+        L0,
+        v_drone=v_ratio,
+        v_truck=1.0,
+        flight_range=float(ratio) * L0,
+        precedences=pairs,
+        name=f"{setup}-{index}-L{ratio:g}",
+    )
+
+
+def _method_seed(key: dict, settings: dict) -> int:
+    """Randomised methods of instance i get seed·10007 + i (the same at every ratio)."""
+    return int(settings["seed"]) * 10_007 + int(key["instance"])
+
+
+def make_scenario(key: dict, settings: dict) -> Scenario:
+    """Instance ``key["instance"]`` at ``key["ratio"]`` with its bounds (and optimum if small)."""
+    inst = study_instance(
+        settings["setup"], key["instance"], settings["seed"], key["ratio"], settings["vd_ratio"]
+    )
+    try:
+        thesis_bound = arborescence_bound(inst, rule="thesis")
+    except Exception:  # the printed E^d may have no arborescence
+        thesis_bound = math.nan
+    optimum = optimal_plan(inst).objective if inst.n <= settings["exact_max_n"] else math.nan
+    return Scenario(
+        inst,
+        columns={
+            "setup": settings["setup"],
+            "L": inst.flight_range,
+            "vd_ratio": inst.v_drone / inst.v_truck,
+            "n": inst.n,
+        },
+        references={
+            "valid_bound": arborescence_bound(inst),
+            "bound_thesis_rule": thesis_bound,
+            "optimum": optimum,
+        },
+    )
+
+
+SPEC = StudySpec(
+    name="delivery",
+    problem_type=DeliveryInstance,
+    key_columns=("instance", "ratio"),
+    make_scenario=make_scenario,
+    scenario_columns=("setup", "L", "vd_ratio", "n"),
+    reference_columns=("valid_bound", "bound_thesis_rule", "optimum"),
+    info_columns=("tstar_cost",),
+    method_seed=_method_seed,
+)
+
+
+def delivery_study(
+    setup: str = "dag40",
+    instances: int = 10,
+    ratios: Sequence[float] = DEFAULT_RATIOS,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    seed: int = 1,
+    out_dir: str | Path = "delivery-study",
+    jobs: int = 1,
+    progress: bool = True,
+    exact_max_n: int = 8,
+    vd_ratio: float | None = None,
+    method_options: dict[str, dict[str, Any]] | None = None,
+    time_limit: float | None = None,
+    dask: str | None = None,
+) -> pd.DataFrame:
+    """Run the §5.5 experiment and return one row per (instance, ratio, method).
+
+    Parameters
+    ----------
+    setup : {"dag40", "pairs120", "small"}
+        See the module docstring.
+    instances : int
+        Number of random instances (10 in the thesis).
+    ratios : sequence of float
+        L / L0 values (Tables 5.1–5.6: 0.15 ... 0.90).
+    methods : sequence of str
+        Registered methods of DeliveryInstance: "NIA", "MMA", "SMMA", "GA", "DP" (exact
+        subset DP, n <= 14) or "exact" (the MILP, stopped after ``time_limit``, default
+        :data:`EXACT_TIME_LIMIT` s when "exact" is asked for; a stopped run is recorded with
+        status "time_limit" and its proven gap).
+    seed : int
+        Instances depend on (seed, index); randomised methods get seed·10007 + index.
+    out_dir : path
+        Folder of the resumable ``delivery_<setup>.csv``.
+    jobs : int
+        Worker processes (or Dask workers with ``dask="local"``).
+    progress : bool
+        tqdm progress bar.
+    exact_max_n : int
+        Compute the optimum (subset DP) and the true gaps when n <= this.
+    vd_ratio : float, optional
+        Override the setup's v_d / v_t (e.g. 1.0 for Tables 5.3–5.4's setting).
+    method_options : dict, optional
+        Per-method keyword options, e.g. ``{"GA": {"generations": 200}}``.
+    time_limit : float, optional
+        Seconds per MILP solve.
+    dask : str, optional
+        "local" or a scheduler address.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The runner's columns plus ``makespan`` (= objective), ``q`` = f / valid bound
+        (5.19) and ``gap_to_optimum`` = f / f_o − 1.
+
+    Raises
+    ------
+    InstanceError
+        Unknown setup, bad arguments (nothing is written), or ``out_dir`` holds results of
+        this setup computed with other settings (the message names the keys).
+    """
+    if setup not in SETUPS:
+        raise InstanceError(f"unknown setup {setup!r}; choose from {sorted(SETUPS)}")
+    if isinstance(instances, bool) or not isinstance(instances, (int, np.integer)):
+        raise InstanceError(f"instances must be an integer, got {instances!r}")
+    try:
+        ratios = [float(r) for r in ratios]
+    except (TypeError, ValueError):
+        raise InstanceError(f"ratios must be numbers, got {ratios!r}") from None
+    if not ratios or not all(0 < r < math.inf for r in ratios):
+        raise InstanceError(f"ratios must be positive and finite, got {ratios}")
+    if time_limit is None and "exact" in methods:
+        time_limit = EXACT_TIME_LIMIT
+    settings = {
+        "setup": setup,
+        "seed": int(seed),
+        "vd_ratio": float(SETUPS[setup]["vd_ratio"] if vd_ratio is None else vd_ratio),
+        "exact_max_n": int(exact_max_n),
+    }
+    keys = [{"instance": i, "ratio": r} for i in range(int(instances)) for r in ratios]
+    df = run_study(
+        dataclasses.replace(SPEC, name=f"delivery_{setup}"),
+        keys,
+        list(methods),
+        settings,
+        out_dir,
+        jobs=jobs,
+        dask=dask,
+        time_limit=time_limit,
+        method_options=method_options,
+        progress=progress,
+    )
+    return with_measures(df)
+
+
+def with_measures(df: pd.DataFrame) -> pd.DataFrame:
+    """Add ``makespan`` (f), ``q`` = f / f_a (5.19, the valid bound) and ``gap_to_optimum``."""
+    return df.assign(
+        makespan=df["objective"],
+        q=df["objective"] / df["valid_bound"],
+        gap_to_optimum=df["objective"] / df["optimum"] - 1.0,
+    )
+
+
+def summarize(df: pd.DataFrame) -> pd.DataFrame:
+    """Averages per (method, ratio), the thesis's way of reporting (Tables 5.1–5.7).
+
+    Returns
+    -------
+    DataFrame indexed by (method, ratio) with the mean makespan, mean q (5.19), mean
+    run time, the number of instances, and when optima are known the mean and max gap
+    to the optimum and the mean bound / optimum ratio.
+    """
+    if df.empty:
+        return pd.DataFrame()
+    grouped = df.groupby(["method", "ratio"])
+    out = pd.DataFrame(
+        {
+            "makespan": grouped["makespan"].mean(),
+            "q": grouped["q"].mean(),
+            "runtime": grouped["runtime"].mean(),
+            "instances": grouped["instance"].nunique(),
+        }
+    )
+    if df["optimum"].notna().any():
+        out["gap_mean"] = grouped["gap_to_optimum"].mean()
+        out["gap_max"] = grouped["gap_to_optimum"].max()
+        out["bound_over_optimum"] = (
+            (df["valid_bound"] / df["optimum"]).groupby([df["method"], df["ratio"]]).mean()
+        )
+    return out
+
+
+def thesis_table(df: pd.DataFrame, value: str = "makespan") -> pd.DataFrame:
+    """Method × L/L0 table of the mean ``value`` ("makespan", "q", "runtime", ...)."""
+    return df.pivot_table(index="method", columns="ratio", values=value, aggfunc="mean")
+
+
+def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | None = None) -> Any:
+    """Mean ``value`` ("q", "makespan", "gap_to_optimum", ...) per method against L/L0.
+
+    The picture of Tables 5.1–5.6: one line per method. Saves a PNG when ``path`` is given.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    from matplotlib.figure import Figure
+
+    if ax is None:
+        ax = Figure(figsize=(6, 4)).add_subplot()
+    table = thesis_table(df, value)
+    for method, row in table.iterrows():
+        ax.plot(row.index.astype(float), row.to_numpy(dtype=float), marker="o", label=str(method))
+    ax.set_xlabel("L / L0")
+    ax.set_ylabel(
+        {"q": "mean q = f / f_a (5.19)", "makespan": "mean makespan (s)"}.get(value, value)
+    )
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    if path is not None:
+        ax.figure.tight_layout()
+        ax.figure.savefig(path, dpi=120)
+    return ax
+
+
+__all__ = [
+    "SPEC",
+    "SETUPS",
+    "delivery_study",
+    "make_scenario",
+    "summarize",
+    "thesis_table",
+    "study_instance",
+    "plot_study",
+    "with_measures",
+]

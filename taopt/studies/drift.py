@@ -1,0 +1,283 @@
+"""The chapter 2 gap study (§2.5, Tables 2.1–2.2) on the one study runner.
+
+For each random scenario (§2.5 setup, :mod:`taopt.routing.scenarios`) every requested
+method is run through :func:`taopt.solve` and one row per method is appended to
+``<out>/drift.csv`` by :func:`taopt.study.run_study` (resumable, any executor). Each row
+carries the scenario's reference values:
+
+* ``f_a`` — the thesis's Algorithm 1 value ("MCGA", :func:`taopt.bounds.thesis_mcga`), the
+  denominator of the thesis's quality ratio ``q = f / f_a`` (2.26). On an asymmetric matrix
+  it is *not* a valid lower bound, so q can dip below 1.
+* ``valid_bound`` — the minimum-cost arborescence (Edmonds), a valid bound.
+
+:func:`summarize` adds the per-scenario ``optimum`` (the exact row's objective where proven
+optimal) and gives, per method, the mean of ``q_thesis = f / f_a`` (Table 2.1's measure),
+``q_valid = f / valid_bound``, the true gap ``q_exact = f / optimum`` and the mean runtime
+(Table 2.2); :func:`wilcoxon_pairs` the pairwise two-tailed Wilcoxon signed-rank tests at
+5 % (§2.5).
+
+Example
+-------
+>>> df = drift_study(6, 2, 3, methods=["MC", "exact"], seed=1, out_dir=tmp)  # doctest: +SKIP
+>>> summarize(df)  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from itertools import combinations
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from taopt.bounds import arborescence, thesis_mcga
+from taopt.errors import InstanceError
+from taopt.routing.problem import AssignmentProblem
+from taopt.routing.scenarios import drift_scenario, scenario_seed
+from taopt.study import Scenario, StudySpec, run_study, with_optimum
+
+METHODS = ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact")
+
+__all__ = [
+    "METHODS",
+    "SPEC",
+    "drift_study",
+    "make_scenario",
+    "summarize",
+    "wilcoxon_pairs",
+    "plot_gaps",
+]
+
+
+def make_scenario(key: dict, settings: dict) -> Scenario:
+    """Scenario ``key["scenario"]`` of a study with ``settings`` (n, m, seed, field)."""
+    seed = scenario_seed(settings["seed"], key["scenario"])
+    cache = settings.get("context", {}).get("cache_dir")
+    scenario = drift_scenario(
+        settings["n"], settings["m"], seed, field=settings["field"], cache_dir=cache, jobs=1
+    )
+    problem = scenario.problem
+    return Scenario(
+        problem,
+        columns={"n": settings["n"], "m": settings["m"]},
+        references={"f_a": thesis_mcga(problem), "valid_bound": arborescence(problem)},
+    )
+
+
+def method_seed(key: dict, settings: dict) -> int:
+    """Heuristics of scenario k get the scenario's own seed (as the thesis's study)."""
+    return scenario_seed(settings["seed"], key["scenario"])
+
+
+SPEC = StudySpec(
+    name="drift",
+    problem_type=AssignmentProblem,
+    key_columns=("scenario",),
+    make_scenario=make_scenario,
+    scenario_columns=("n", "m"),
+    reference_columns=("f_a", "valid_bound"),
+    method_seed=method_seed,
+)
+
+
+def drift_study(
+    n: int,
+    m: int,
+    scenarios: int,
+    methods: str | Sequence[str] = METHODS,
+    seed: int = 1,
+    out_dir: str | os.PathLike = "drift-study",
+    jobs: int = 1,
+    progress: bool = True,
+    time_limit: float | None = None,
+    method_options: dict[str, dict] | None = None,
+    field: Any = "thesis",
+    dask: str | None = None,
+) -> pd.DataFrame:
+    """Run the §2.5 study: ``scenarios`` random scenarios × ``methods``.
+
+    Parameters
+    ----------
+    n, m : int
+        Targets and vehicles (the thesis's "n50m10" is n=50, m=10).
+    scenarios : int
+        Number of scenarios (the thesis: 400); scenario k has seed ``scenario_seed(seed, k)``.
+    methods : str or list of str
+        Registered methods of AssignmentProblem ("VN", ..., "GA", "exact", "pyvrp", ...;
+        a comma-separated string is allowed).
+    seed : int
+        Study seed.
+    out_dir : path
+        Folder for ``drift.csv``, its settings and the cached matrices.
+    jobs : int
+        Worker processes (or Dask workers with ``dask="local"``).
+    progress : bool
+        A tqdm progress bar over scenarios.
+    time_limit : float, optional
+        Seconds per exact (or peer) solve; a limit leaves ``optimum`` NaN for that scenario.
+    method_options : dict, optional
+        Keyword options per method, e.g. ``{"GA": {"generations": 50}}``.
+    field : Field, None or "thesis"
+        The drift (default: the thesis's §2.5 field).
+    dask : str, optional
+        "local" or a scheduler address (see :func:`taopt.study.run_study`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (scenario, method): the runner's columns plus ``optimum`` and
+        ``exact_bound`` (from the scenario's exact row, when there is one).
+
+    Raises
+    ------
+    InstanceError
+        Bad sizes or methods (nothing is written), or ``out_dir`` holds a study with other
+        settings (the message names the differing keys).
+    """
+    methods = parse_methods(methods)
+    for label, value, low in (("n", n, 1), ("m", m, 1), ("scenarios", scenarios, 1)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+            raise InstanceError(f"{label} must be an integer >= {low}, got {value!r}")
+    field_description = field if isinstance(field, str) or field is None else field.to_dict()
+    settings = {"n": int(n), "m": int(m), "seed": int(seed), "field": field_description}
+    df = run_study(
+        SPEC,
+        [{"scenario": k} for k in range(int(scenarios))],
+        methods,
+        settings,
+        out_dir,
+        jobs=jobs,
+        dask=dask,
+        time_limit=time_limit,
+        method_options=method_options,
+        context={"cache_dir": str(Path(out_dir) / "matrices")},
+        progress=progress,
+    )
+    return with_optimum(df, SPEC)
+
+
+def parse_methods(methods: str | Sequence[str]) -> list[str]:
+    """A comma-separated string or a list of method names, deduplicated, non-empty."""
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    methods = list(dict.fromkeys(methods))
+    if not methods:
+        raise InstanceError("no methods given")
+    return methods
+
+
+def _with_ratios(df: pd.DataFrame) -> pd.DataFrame:
+    if "optimum" not in df.columns:
+        df = with_optimum(df, SPEC)
+    return df.assign(
+        q_thesis=df["objective"] / df["f_a"],
+        q_valid=df["objective"] / df["valid_bound"],
+        q_exact=df["objective"] / df["optimum"],
+    )
+
+
+def _method_order(names: Any) -> list[str]:
+    present = list(dict.fromkeys(names))
+    return [m for m in METHODS if m in present] + [m for m in present if m not in METHODS]
+
+
+def summarize(df: pd.DataFrame) -> pd.DataFrame:
+    """Per method: mean ratios and runtime (Tables 2.1 and 2.2, plus the true gap).
+
+    Columns: ``scenarios``, ``q_thesis`` (mean f / f_a, Table 2.1's q), ``q_valid`` (mean
+    f / arborescence bound), ``q_exact`` (mean f / optimum over scenarios with a proven
+    optimum), ``gap_exact_pct`` (mean ``100 (f − f_o) / f_o``), ``below_f_a`` (scenarios where
+    f < f_a, i.e. the thesis's bound is exceeded by a real solution), ``time_s`` (mean
+    runtime), ``optimal`` (how many runs were proven optimal).
+    """
+    data = _with_ratios(df)
+    grouped = data.groupby("method", sort=False)
+    table = pd.DataFrame(
+        {
+            "scenarios": grouped["scenario"].nunique(),
+            "q_thesis": grouped["q_thesis"].mean(),
+            "q_valid": grouped["q_valid"].mean(),
+            "q_exact": grouped["q_exact"].mean(),
+            "gap_exact_pct": grouped["q_exact"].apply(lambda q: 100 * (q - 1).mean()),
+            "below_f_a": grouped.apply(
+                lambda g: int((g["objective"] < g["f_a"] * (1 - 1e-9)).sum()), include_groups=False
+            ),
+            "time_s": grouped["runtime"].mean(),
+            "optimal": grouped["status"].apply(lambda s: int((s == "optimal").sum())),
+        }
+    )
+    return table.loc[_method_order(table.index)]
+
+
+def wilcoxon_pairs(df: pd.DataFrame, column: str = "q_thesis", alpha: float = 0.05) -> pd.DataFrame:
+    """Pairwise two-tailed Wilcoxon signed-rank tests on paired scenarios (§2.5).
+
+    Returns one row per pair (a, b): the p-value, whether the difference is significant at
+    ``alpha``, and which method is better (lower mean) when it is (``"same"`` otherwise).
+    """
+    from scipy.stats import wilcoxon
+
+    data = _with_ratios(df)
+    wide = data.pivot(index="scenario", columns="method", values=column)
+    methods = _method_order(wide.columns)
+    rows = []
+    for a, b in combinations(methods, 2):
+        pair = wide[[a, b]].dropna()
+        diff = (pair[a] - pair[b]).to_numpy()
+        if len(diff) == 0 or np.allclose(diff, 0.0, rtol=0, atol=1e-12):
+            p_value = 1.0
+        else:
+            p_value = float(wilcoxon(pair[a], pair[b], alternative="two-sided").pvalue)
+        significant = p_value < alpha
+        better = (a if pair[a].mean() < pair[b].mean() else b) if significant else "same"
+        rows.append(
+            {
+                "a": a,
+                "b": b,
+                "n": len(diff),
+                "p_value": p_value,
+                "significant": significant,
+                "better": better,
+            }
+        )
+    return pd.DataFrame(rows, columns=["a", "b", "n", "p_value", "significant", "better"])
+
+
+def plot_gaps(df: Any, column: str = "q_thesis", ax: Any = None, path: str | None = None) -> Any:
+    """Boxplot of a quality ratio per method from a :func:`drift_study` table.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Rows of :func:`drift_study`.
+    column : {"q_thesis", "q_valid", "q_exact"}
+        ``f / f_a`` (Table 2.1's q), ``f / valid bound`` or ``f / optimum``.
+    ax : matplotlib Axes, optional
+    path : str, optional
+        Save the figure as PNG there.
+    """
+    from matplotlib.figure import Figure
+
+    data = _with_ratios(df)
+    methods = _method_order(data["method"])
+    values = [data.loc[data["method"] == m, column].dropna().to_numpy() for m in methods]
+    if ax is None:
+        ax = Figure(figsize=(7, 4)).add_subplot()
+    ax.boxplot(values, tick_labels=methods)
+    ax.axhline(1.0, color="0.5", lw=0.8, ls="--")
+    labels = {
+        "q_thesis": "q = f / f_a (2.26)",
+        "q_valid": "f / arborescence bound",
+        "q_exact": "f / optimum",
+    }
+    ax.set_xlabel("method")
+    ax.set_ylabel(labels.get(column, column))
+    n = int(data["n"].iloc[0]) if len(data) else 0
+    m = int(data["m"].iloc[0]) if len(data) else 0
+    ax.set_title(f"n{n}m{m}: {data['scenario'].nunique()} scenarios")
+    if path:
+        ax.figure.savefig(path, dpi=120, bbox_inches="tight")
+    return ax

@@ -1,0 +1,504 @@
+"""The one study runner: scenarios × registered methods → a resumable CSV, on any executor.
+
+A study is described by a :class:`StudySpec`: which columns identify a scenario (its *key*),
+a module-level ``make_scenario(key, settings) -> Scenario`` that builds the problem (and its
+per-scenario data and reference values, e.g. a bound) deterministically from the key and the
+settings, and which ``Solution.info`` entries to keep. :func:`run_study` runs every
+(scenario, method) pair that the output folder does not hold yet, through
+:func:`taopt.solve`, and appends one row per pair to ``<out>/<name>.csv`` through
+:class:`taopt.studyio.ResultsStore` (settings checked, torn lines dropped, resumable).
+
+Execution
+---------
+* Tasks (one scenario with its missing methods) run in worker processes — a process pool of
+  ``jobs`` workers (``jobs=1`` too, so that Ctrl-C is never swallowed by a solver's own
+  signal handler), or a Dask cluster through ``Client.get_executor()`` (``dask="local"`` for
+  a ``LocalCluster`` of ``jobs`` single-threaded workers, or a scheduler address), or any
+  ``concurrent.futures.Executor`` given as ``executor``.
+* Only this (the client) process writes rows, so resuming stays trivial.
+* Solver threads are 1 inside tasks (``OMP_NUM_THREADS`` & co., and HiGHS's ``threads``
+  through ``TAOPT_SOLVER_THREADS``).
+* Every argument is validated before anything is written: an invalid call leaves the output
+  folder as it was.
+* Ctrl-C (SIGINT) stops the study at once: pending tasks are cancelled, worker processes are
+  killed (pool workers also die with their parent if it is killed: ``PR_SET_PDEATHSIG`` on
+  Linux, plus a watchdog thread), finished rows stay on disk, and :class:`StudyInterrupted`
+  is raised; running the same call again resumes.
+
+Rows: the key columns, the scenario columns, ``method, objective, status, bound, runtime,
+seed``, the reference columns and the info columns. The same (key, settings) give the same
+rows (timing aside) whatever the executor.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import json
+import math
+import os
+import signal
+import sys
+import threading
+import time
+import zlib
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from taopt.errors import InstanceError, TaoptError
+from taopt.pipeline import solve
+from taopt.registry import get_method
+from taopt.studyio import ResultsStore, normalize_key
+
+RESULT_COLUMNS = ("method", "objective", "status", "bound", "runtime", "seed")
+#: Environment for worker processes: one solver / BLAS thread per task.
+THREAD_ENV = {
+    "OMP_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "TAOPT_SOLVER_THREADS": "1",
+}
+
+__all__ = [
+    "Scenario",
+    "StudySpec",
+    "StudyInterrupted",
+    "run_study",
+    "with_optimum",
+    "RESULT_COLUMNS",
+]
+
+
+class StudyInterrupted(TaoptError, KeyboardInterrupt):
+    """A study stopped by Ctrl-C; the rows finished so far are on disk."""
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One scenario of a study: the problem, its data columns and its reference values."""
+
+    problem: Any
+    columns: Mapping[str, Any] = field(default_factory=dict)
+    references: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """What a study is: its key, its scenario factory and the columns it keeps.
+
+    Attributes
+    ----------
+    name : str
+        The CSV is ``<out>/<name>.csv``, its settings ``<out>/<name>.config.json``.
+    problem_type : type
+        The registered problem class the scenarios build (methods are checked against it
+        before anything runs).
+    key_columns : tuple of str
+        The columns that identify a scenario (the method is added to make a row's key).
+    make_scenario : callable
+        Module-level ``make_scenario(key: dict, settings: dict) -> Scenario``; deterministic.
+        ``settings["context"]`` holds run-time context that does not change the numbers
+        (e.g. a cache folder) and is not saved.
+    scenario_columns, reference_columns, info_columns : tuple of str
+        Columns taken from ``Scenario.columns``, ``Scenario.references`` and each
+        ``Solution.info`` (NaN when absent).
+    method_seed : callable, optional
+        Module-level ``method_seed(key, settings) -> int``; default: a hash of the key and the
+        settings' ``seed``.
+    """
+
+    name: str
+    problem_type: type
+    key_columns: tuple[str, ...]
+    make_scenario: Callable[[dict, dict], Scenario]
+    scenario_columns: tuple[str, ...] = ()
+    reference_columns: tuple[str, ...] = ()
+    info_columns: tuple[str, ...] = ()
+    method_seed: Callable[[dict, dict], int] | None = None
+
+    @property
+    def columns(self) -> list[str]:
+        return [
+            *self.key_columns,
+            *self.scenario_columns,
+            *RESULT_COLUMNS,
+            *self.reference_columns,
+            *self.info_columns,
+        ]
+
+    @property
+    def row_key(self) -> list[str]:
+        return [*self.key_columns, "method"]
+
+
+def _default_seed(key: Mapping[str, Any], settings: Mapping[str, Any]) -> int:
+    text = json.dumps({"key": dict(key), "seed": settings.get("seed", 0)}, sort_keys=True)
+    return zlib.crc32(text.encode())
+
+
+# -- the task (runs in a worker) ---------------------------------------------------------------
+
+
+def _configure_worker() -> None:
+    """One thread per solver; ignore Ctrl-C (the client handles it); die with the parent."""
+    os.environ.update(THREAD_ENV)
+    if threading.current_thread() is threading.main_thread():
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _pool_worker_init(parent: int) -> None:
+    _configure_worker()
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL("libc.so.6", use_errno=True)
+            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG: killed when the parent dies
+    watchdog = threading.Thread(target=_watch_parent, args=(parent,), daemon=True)
+    watchdog.start()
+
+
+def _watch_parent(parent: int) -> None:  # pragma: no cover - runs in workers
+    while True:
+        time.sleep(0.5)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def run_task(
+    spec: StudySpec,
+    key: Mapping[str, Any],
+    methods: Sequence[str],
+    settings: Mapping[str, Any],
+    time_limit: float | None,
+    method_options: Mapping[str, Mapping[str, Any]],
+) -> list[dict[str, Any]]:
+    """Build scenario ``key`` and run ``methods`` on it; return its rows (one per method)."""
+    os.environ.update(THREAD_ENV)
+    key, settings = dict(key), dict(settings)
+    scenario = spec.make_scenario(key, settings)
+    seed = (spec.method_seed or _default_seed)(key, settings)
+    rows = []
+    for name in methods:
+        solution = solve(
+            scenario.problem,
+            name,
+            seed=seed,
+            time_limit=time_limit,
+            **dict(method_options.get(name, {})),
+        )
+        row: dict[str, Any] = {c: key[c] for c in spec.key_columns}
+        row.update({c: scenario.columns.get(c, math.nan) for c in spec.scenario_columns})
+        row.update(
+            method=name,
+            objective=solution.objective,
+            status=solution.status.value,
+            bound=math.nan if solution.bound is None else solution.bound,
+            runtime=solution.runtime,
+            seed=solution.seed if solution.seed is not None else seed,
+        )
+        row.update({c: scenario.references.get(c, math.nan) for c in spec.reference_columns})
+        row.update({c: _scalar(solution.info.get(c)) for c in spec.info_columns})
+        rows.append(row)
+    return rows
+
+
+def _scalar(value: Any) -> Any:
+    if value is None:
+        return math.nan
+    if isinstance(value, (bool, int, float, str, np.integer, np.floating)):
+        return value
+    return json.dumps(value)
+
+
+# -- the runner ---------------------------------------------------------------------------------
+
+
+def _check_arguments(
+    spec: StudySpec,
+    keys: Sequence[Mapping[str, Any]],
+    methods: Sequence[str],
+    jobs: int,
+    time_limit: float | None,
+    method_options: Mapping[str, Mapping[str, Any]],
+) -> None:
+    if not keys:
+        raise InstanceError("the study has no scenarios (need at least 1)")
+    for key in keys:
+        missing = [c for c in spec.key_columns if c not in key]
+        if missing:
+            raise InstanceError(f"scenario key {dict(key)} lacks {missing}")
+    if not methods:
+        raise InstanceError("no methods given")
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise InstanceError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if time_limit is not None and not (
+        isinstance(time_limit, (int, float)) and math.isfinite(time_limit) and time_limit > 0
+    ):
+        raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+    for name in dict.fromkeys([*methods, *method_options]):
+        method = get_method(spec.problem_type, name)
+        method.check_options(dict(method_options.get(name, {})))
+
+
+_POOLS: dict[int, ProcessPoolExecutor] = {}
+
+
+def _pool(jobs: int) -> ProcessPoolExecutor:
+    """A spawned pool of ``jobs`` workers, kept for the next study of this process."""
+    import atexit
+    import multiprocessing
+
+    pool = _POOLS.get(jobs)
+    if pool is None or getattr(pool, "_broken", False) or getattr(pool, "_shutdown_thread", False):
+        pool = ProcessPoolExecutor(
+            max_workers=int(jobs),
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_pool_worker_init,
+            initargs=(os.getpid(),),
+        )
+        _POOLS[jobs] = pool
+        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
+    return pool
+
+
+def _executor(
+    jobs: int, dask: str | None
+) -> tuple[Executor, Callable[[], None], Callable[[], None]]:
+    """(executor, close, kill) for a process pool or a Dask cluster."""
+    if dask is None:
+        pool = _pool(int(jobs))
+
+        def kill() -> None:
+            _POOLS.pop(int(jobs), None)
+            for process in list(getattr(pool, "_processes", {}).values()):
+                with contextlib.suppress(Exception):
+                    process.kill()
+            # the pool sees its workers die, marks itself broken and releases its queues
+            with contextlib.suppress(Exception):
+                pool.shutdown(wait=True, cancel_futures=True)
+
+        return pool, lambda: None, kill
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise InstanceError('Dask is not installed: pip install "taopt[dask]"') from None
+    if dask == "local":
+        cluster = LocalCluster(
+            n_workers=int(jobs),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=50,
+        )
+        client = Client(cluster)
+    else:
+        cluster = None
+        client = Client(dask)
+    client.run(_configure_worker)
+
+    def close() -> None:
+        with contextlib.suppress(Exception):
+            client.close(timeout=5)
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                cluster.close(timeout=5)
+
+    # a local cluster's processes are ours: on Ctrl-C they are killed outright (a graceful
+    # close would cancel the task threads mid-solve and let native code complain on stderr)
+    local = []
+    if cluster is not None:
+        pids = {*client.run(os.getpid).values(), *client.run(os.getpid, nanny=True).values()}
+        local = sorted(pids - {os.getpid()})  # a LocalCluster's nannies live in this process
+
+    def kill() -> None:
+        for pid in local:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        with contextlib.suppress(Exception):
+            client.close(timeout=1)
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                cluster.close(timeout=1)
+
+    return client.get_executor(), close, kill
+
+
+@contextlib.contextmanager
+def _thread_environment() -> Iterable[None]:
+    """Set :data:`THREAD_ENV` while workers are started (they inherit it), then restore."""
+    saved = {k: os.environ.get(k) for k in THREAD_ENV}
+    os.environ.update(THREAD_ENV)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def run_study(
+    spec: StudySpec,
+    keys: Sequence[Mapping[str, Any]],
+    methods: Sequence[str],
+    settings: Mapping[str, Any],
+    out_dir: str | os.PathLike[str],
+    *,
+    jobs: int = 1,
+    dask: str | None = None,
+    executor: Executor | None = None,
+    time_limit: float | None = None,
+    method_options: Mapping[str, Mapping[str, Any]] | None = None,
+    context: Mapping[str, Any] | None = None,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """Run every missing (scenario, method) pair of a study and return its rows.
+
+    Parameters
+    ----------
+    spec : StudySpec
+    keys : sequence of dict
+        One dict per scenario, holding every key column.
+    methods : sequence of str
+        Registered methods of ``spec.problem_type`` (checked before anything runs).
+    settings : dict
+        JSON data that changes the numbers (sizes, seed, field, ...); saved next to the rows
+        and compared on resume. ``time_limit`` and ``method_options`` are added to it.
+    out_dir : path
+        Folder of ``<name>.csv`` and ``<name>.config.json``.
+    jobs : int
+        Worker processes (a process pool) or Dask workers (``dask="local"``).
+    dask : str, optional
+        ``"local"`` for a LocalCluster, or a scheduler address (``tcp://host:8786``).
+    executor : concurrent.futures.Executor, optional
+        Any executor instead (its tasks must be able to import taopt); not shut down here.
+    time_limit : float, optional
+        Seconds per method run (exact models and peers take it).
+    method_options : dict, optional
+        ``{method: {option: value}}``.
+    context : dict, optional
+        Run-time context handed to ``make_scenario`` as ``settings["context"]`` (not saved,
+        not compared: e.g. a cache folder).
+    progress : bool
+        A tqdm bar over scenarios.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of the requested keys and methods on disk (earlier runs included), sorted by
+        key, methods in the requested order.
+
+    Raises
+    ------
+    InstanceError
+        A bad argument (nothing is written), or the folder holds rows of other settings.
+    StudyInterrupted
+        Ctrl-C; the finished rows are on disk and a re-run resumes.
+    """
+    keys = [dict(k) for k in keys]
+    methods = list(dict.fromkeys(methods))
+    options = {k: dict(v) for k, v in (method_options or {}).items()}
+    _check_arguments(spec, keys, methods, jobs, time_limit, options)
+    if dask is not None and executor is not None:
+        raise InstanceError("give either dask or executor, not both")
+    saved = {
+        **dict(settings),
+        "time_limit": None if time_limit is None else float(time_limit),
+        "method_options": options,
+    }
+    store = ResultsStore(
+        out_dir,
+        f"{spec.name}.csv",
+        spec.columns,
+        spec.row_key,
+        saved,
+        config=f"{spec.name}.config.json",
+    )
+    done = store.done_keys()
+    tasks = []
+    for key in keys:
+        base = [key[c] for c in spec.key_columns]
+        missing = [m for m in methods if normalize_key([*base, m]) not in done]
+        if missing:
+            tasks.append((key, missing))
+    worker_settings = {**saved, "context": dict(context or {})}
+
+    from tqdm.auto import tqdm
+
+    bar = tqdm(
+        total=len(keys),
+        initial=len(keys) - len(tasks),
+        disable=not progress,
+        desc=spec.name,
+        unit="scenario",
+    )
+    close = kill = None
+    try:
+        if tasks:
+            if executor is None:
+                with _thread_environment():
+                    executor, close, kill = _executor(jobs, dask)
+            futures: list[Future] = [
+                executor.submit(run_task, spec, key, todo, worker_settings, time_limit, options)
+                for key, todo in tasks
+            ]
+            for future in as_completed(futures):
+                store.append(future.result())  # one scenario's rows in one write
+                bar.update(1)
+    except KeyboardInterrupt:
+        bar.close()
+        if kill is not None:
+            kill()
+        rows = len(store.done_keys())
+        raise StudyInterrupted(
+            f"interrupted: {rows} rows are saved in {store.path}; run the same command again "
+            "to resume"
+        ) from None
+    else:
+        bar.close()
+        if close is not None:
+            close()
+    return _table(store.read(), spec, keys, methods)
+
+
+def _table(
+    df: pd.DataFrame, spec: StudySpec, keys: Sequence[Mapping[str, Any]], methods: Sequence[str]
+) -> pd.DataFrame:
+    wanted = {normalize_key([k[c] for c in spec.key_columns]) for k in keys}
+    key_values = zip(*(df[c] for c in spec.key_columns), strict=True)
+    mask = np.array([normalize_key(v) in wanted for v in key_values], dtype=bool)
+    df = df.loc[mask] if len(df) else df
+    df = df[df["method"].isin(methods)]
+    order = {name: i for i, name in enumerate(methods)}
+    df = df.assign(_order=df["method"].map(order)).sort_values([*spec.key_columns, "_order"])
+    return df.drop(columns=["_order"]).reset_index(drop=True)
+
+
+def with_optimum(
+    df: pd.DataFrame, spec: StudySpec, exact: Sequence[str] = ("exact",)
+) -> pd.DataFrame:
+    """Add per-scenario ``optimum`` (a proven optimum from an exact row) and ``exact_bound``.
+
+    A scenario's ``optimum`` is the objective of one of its ``exact`` rows whose status is
+    "optimal" (NaN otherwise; an existing ``optimum`` reference column is kept where set);
+    ``exact_bound`` is the largest proven bound of its exact rows.
+    """
+    df = df.copy()
+    keys = list(spec.key_columns)
+    rows = df[df["method"].isin(exact)]
+    proven = rows[rows["status"] == "optimal"].groupby(keys)["objective"].min()
+    bound = rows.groupby(keys)["bound"].max()
+    index = pd.MultiIndex.from_frame(df[keys]) if len(keys) > 1 else pd.Index(df[keys[0]])
+    found = proven.reindex(index).to_numpy(dtype=float)
+    if "optimum" in df.columns:
+        df["optimum"] = np.where(np.isfinite(df["optimum"].to_numpy(float)), df["optimum"], found)
+    else:
+        df["optimum"] = found
+    df["exact_bound"] = bound.reindex(index).to_numpy(dtype=float)
+    return df

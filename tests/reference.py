@@ -1,0 +1,158 @@
+"""Reference problems of every registered family, each with its known optimum.
+
+In the style of cvxpy's ``solver_test_helpers``: each function returns a :class:`Reference`
+(the problem, its optimum and where that number comes from); :func:`check_method` runs one
+registered method on it and checks the property that method promises — an exact method hits
+the optimum and proves it, a heuristic, peer or simulation is feasible (re-scored by
+``taopt.evaluate``) and never below the optimum, a bound is never above it.
+
+Optima come from hand computation or from an independent brute force written here (never
+from the solvers under test).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import networkx as nx
+import numpy as np
+
+import taopt
+from taopt.registry import family_of, methods
+
+REL = 1e-6
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A problem with its known optimum."""
+
+    name: str
+    problem: Any
+    optimum: float
+    source: str
+    options: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+# -- independent brute force ----------------------------------------------------------------
+
+
+def brute_force_routing(cost: np.ndarray, n: int) -> float:
+    """Optimum of (2.2)–(2.5) by enumerating every assignment and every visiting order."""
+    m = len(cost) - n
+    best = np.inf
+    for owners in itertools.product(range(m), repeat=n):
+        total = 0.0
+        for vehicle in range(m):
+            mine = [t for t in range(n) if owners[t] == vehicle]
+            route_best = np.inf
+            for order in itertools.permutations(mine):
+                nodes = [n + vehicle, *order]
+                route_best = min(route_best, sum(cost[a, b] for a, b in itertools.pairwise(nodes)))
+            total += route_best
+        best = min(best, total)
+    return float(best)
+
+
+def brute_force_delivery(instance: Any) -> float:
+    """Best makespan over all precedence-feasible orders, each scheduled by the exact DP."""
+    orders = nx.all_topological_sorts(instance.precedence_graph)
+    return min(taopt.schedule(instance, list(order)).objective for order in orders)
+
+
+# -- the references ----------------------------------------------------------------------------
+
+
+def routing_line() -> Reference:
+    """Targets at 1, 2, 4 and vehicles at 0 and 5 on a line: 0→1→2 and 5→4, total 3."""
+    x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    problem = taopt.AssignmentProblem(abs(x[:, None] - x[None, :]), n_targets=3, name="line")
+    return Reference("routing-line", problem, 3.0, "by hand")
+
+
+def routing_asymmetric() -> Reference:
+    """A random asymmetric 5-target, 2-vehicle matrix (brute force over all routes)."""
+    rng = np.random.default_rng(11)
+    cost = rng.uniform(1.0, 20.0, size=(7, 7))
+    problem = taopt.AssignmentProblem(cost, n_targets=5, name="asym-5-2")
+    return Reference(
+        "routing-asymmetric", problem, brute_force_routing(problem.cost, 5), "brute force"
+    )
+
+
+def delivery_small() -> Reference:
+    """Five customers on a 3×3 street grid with two precedences (brute force over orders)."""
+    rng = np.random.default_rng(5)
+    inst = taopt.DeliveryInstance.grid(
+        rng.uniform(0, 600, size=(5, 2)), 3, 600.0, 1.0, 1.0, 700.0, precedences=[(0, 1), (2, 3)]
+    )
+    return Reference(
+        "delivery-small",
+        inst,
+        brute_force_delivery(inst),
+        "every topological order scheduled exactly",
+        options={"GA": {"population": 8, "generations": 20}},
+    )
+
+
+def sop_esc07() -> Reference:
+    """TSPLIB's ESC07 sequential ordering instance, optimum 2125 (TSPLIB95)."""
+    return Reference("sop-ESC07", taopt.SopProblem.load("ESC07"), 2125.0, "TSPLIB95")
+
+
+def capability_small() -> Reference:
+    """Two capabilities, 4 targets (one demanding both), 3 vehicles; per-class brute force."""
+    rng = np.random.default_rng(3)
+    points = rng.uniform(0, 100, size=(7, 2))
+    cost = np.linalg.norm(points[:, None] - points[None, :], axis=2)
+    problem = taopt.CapabilityProblem(
+        cost, 4, ["a", "a", "b"], [{"a"}, {"a", "b"}, {"b"}, {"a"}], name="cap-4-3"
+    )
+    optimum = sum(
+        brute_force_routing(c.problem.cost, c.problem.n) for c in problem.classes if c.problem
+    )
+    return Reference("capability-small", problem, optimum, "brute force per class (§3.6 split)")
+
+
+REFERENCES: list[Callable[[], Reference]] = [
+    routing_line,
+    routing_asymmetric,
+    delivery_small,
+    sop_esc07,
+    capability_small,
+]
+
+
+def cases() -> list[tuple[Callable[[], Reference], str]]:
+    """Every (reference, registered method) pair."""
+    import taopt.pipeline  # noqa: F401  (registers every method)
+
+    out = []
+    for make in REFERENCES:
+        problem_type = family_of(make().problem).problem_type
+        for name in methods(problem_type):
+            out.append((make, name))
+    return out
+
+
+def check_method(reference: Reference, method: str) -> taopt.Solution:
+    """Run ``method`` on the reference and check what its category promises."""
+    spec = methods(reference.problem)[method]
+    options = dict(reference.options.get(method, {}))
+    limit = 30.0 if spec.exact else 1.0  # peers stop on it; exact models must finish first
+    solution = taopt.solve(reference.problem, method, seed=0, time_limit=limit, **options)
+    value = taopt.evaluate(reference.problem, solution.solution)
+    assert abs(value - solution.objective) <= REL * max(1.0, abs(value)), (method, value)
+    optimum = reference.optimum
+    assert solution.objective >= optimum * (1 - REL) - 1e-9, (method, solution.objective, optimum)
+    if solution.bound is not None:
+        assert solution.bound <= optimum * (1 + REL) + 1e-9, (method, solution.bound, optimum)
+    if spec.exact:
+        assert solution.status == "optimal", (method, solution.summary())
+        assert abs(solution.objective - optimum) <= REL * max(1.0, optimum), (method, optimum)
+    else:
+        assert solution.status == "feasible", (method, solution.summary())
+    return solution

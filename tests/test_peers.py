@@ -1,0 +1,366 @@
+"""PyVRP and OR-Tools peers: feasible, never below the certified optimum, run out of process.
+
+The exact optimum comes from ``taopt.models.solve_routing`` in this process
+(which imports highspy); the peers run in worker processes, so the checks also
+show that the two never meet in one process.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import taopt
+from taopt.errors import InstanceError, SolverError
+from taopt.heuristics import peers
+from taopt.heuristics.peers import ortools_solve, pyvrp_solve
+from taopt.models import solve_routing
+from taopt.navigation import uniform_travel_times
+
+# Deterministic limits (iterations / solutions, not time) for everything but the n50m10 check.
+SOLVERS = {
+    "pyvrp": lambda p, **kw: pyvrp_solve(p, time_limit=None, max_iterations=300, **kw),
+    "ortools": lambda p, **kw: ortools_solve(p, time_limit=None, solution_limit=300, **kw),
+}
+RELATIVE = 1e-6  # exact optimum certified to this gap; scaling error is ~5e-8 (n + m) relative
+
+
+def uniform_current_problem(n: int, m: int, seed: int) -> taopt.AssignmentProblem:
+    """Harness: n targets then m vehicles uniform in a 1000 m square, current (0.3, 0.1), v = 1."""
+    rng = np.random.default_rng(seed)
+    points = np.vstack([rng.uniform(0, 1000, (n, 2)), rng.uniform(0, 1000, (m, 2))])
+    times = uniform_travel_times((0.3, 0.1), points[:, None], points[None, :], speed=1.0)
+    return taopt.AssignmentProblem(times, n, name=f"uniform-n{n}m{m}-seed{seed}")
+
+
+def one_way_problem() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
+    """One vehicle, two targets: 0 -> 1 costs 1 but 1 -> 0 costs 100; optimum 2 via [0, 1]."""
+    cost = np.array([[0, 1, 50], [100, 0, 50], [1, 1, 0]], dtype=float)
+    return taopt.AssignmentProblem(cost, 2), 2.0, [[0, 1]]
+
+
+def idle_vehicle_problem() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
+    """Targets on a line at 1, 2, 3; vehicles at 0 and 100: the far one stays idle; optimum 3."""
+    x = np.array([1.0, 2.0, 3.0, 0.0, 100.0])
+    return taopt.AssignmentProblem(np.abs(x[:, None] - x[None, :]), 3), 3.0, [[0, 1, 2], []]
+
+
+def thesis_quick_tour() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
+    """The package docstring's 2-target example: optimum 4 by [1, 0]."""
+    cost = np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]], dtype=float)
+    return taopt.AssignmentProblem(cost, 2), 4.0, [[1, 0]]
+
+
+REFERENCES = [one_way_problem, idle_vehicle_problem, thesis_quick_tour]
+
+
+def assert_not_below(solution: taopt.Solution, exact: taopt.Solution) -> None:
+    """The peer's re-scored objective is at least the proven lower bound of the exact model."""
+    assert solution.objective >= exact.bound * (1 - 1e-9) - 1e-9, (solution.objective, exact.bound)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def stop_workers():
+    """Stop the peer workers after this module, so no test leaves processes behind."""
+    yield
+    peers.shutdown()
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+@pytest.mark.parametrize("reference", REFERENCES, ids=lambda f: f.__name__)
+def test_reference_problems_hit_known_optimum(peer, reference):
+    """Each peer returns the known optimum and routes of the hand-made reference problems."""
+    problem, optimum, routes = reference()
+    solution = SOLVERS[peer](problem)
+    assert solution.status == "feasible" and solution.method == peer and solution.bound is None
+    assert solution.objective == pytest.approx(optimum, rel=RELATIVE)
+    assert solution.routes == routes
+    assert solution.objective == taopt.evaluate(problem, solution.routes)
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+def test_direction_matters(peer):
+    """On an asymmetric matrix and its transpose the peers find the two different optima."""
+    rng = np.random.default_rng(11)
+    cost = rng.uniform(1, 10, (8, 8))
+    cost[np.triu_indices(8, 1)] *= 20  # forward arcs between low indices are dear, backward cheap
+    problem, reverse = taopt.AssignmentProblem(cost, 6), taopt.AssignmentProblem(cost.T, 6)
+    for case in (problem, reverse):
+        exact = solve_routing(case)
+        solution = SOLVERS[peer](case)
+        assert exact.status == "optimal"
+        assert solution.objective == pytest.approx(exact.objective, rel=RELATIVE)
+    assert solve_routing(problem).objective != pytest.approx(solve_routing(reverse).objective)
+
+
+SMALL = [(4, 2, 0), (6, 1, 1), (7, 3, 2), (8, 2, 3), (9, 3, 4), (9, 1, 5), (5, 5, 6)]
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+@pytest.mark.parametrize("n, m, seed", SMALL)
+def test_small_instances_feasible_and_not_below_optimum(peer, n, m, seed):
+    """n <= 9: feasible, re-scored, never below the certified optimum; equal to it when m = 1 or n <= 4."""
+    problem = uniform_current_problem(n, m, seed)
+    exact = solve_routing(problem)
+    assert exact.status == "optimal"
+    solution = SOLVERS[peer](problem)
+    assert solution.objective == taopt.evaluate(problem, solution.routes)
+    assert_not_below(solution, exact)
+    if m == 1 or n <= 4:
+        assert solution.objective == pytest.approx(exact.objective, rel=RELATIVE)
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(
+    n=st.integers(1, 6),
+    m=st.integers(1, 3),
+    seed=st.integers(0, 2**16),
+    peer=st.sampled_from(sorted(SOLVERS)),
+)
+def test_random_asymmetric_matrices_never_below_optimum(n, m, seed, peer):
+    """Random non-metric asymmetric costs (with zeros): feasible and never below the optimum."""
+    rng = np.random.default_rng(seed)
+    cost = rng.integers(0, 50, (n + m, n + m)).astype(float)
+    problem = taopt.AssignmentProblem(cost, n)
+    exact = solve_routing(problem)
+    solution = SOLVERS[peer](problem)
+    assert solution.objective == taopt.evaluate(problem, solution.routes)
+    assert_not_below(solution, exact)
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+def test_same_seed_same_result(peer):
+    """Stopped by iterations (PyVRP) or solutions (OR-Tools), two runs agree bit for bit."""
+    problem = uniform_current_problem(20, 4, 7)
+    first, second = SOLVERS[peer](problem, seed=3), SOLVERS[peer](problem, seed=3)
+    assert first.routes == second.routes and first.objective == second.objective
+    assert first.info["solver_objective"] == second.info["solver_objective"]
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+def test_integer_objective_matches_float_within_rounding(peer):
+    """The solver's integer objective is objective * scale within (n + m)/2 units (rounding)."""
+    problem = uniform_current_problem(12, 3, 8)
+    solution = SOLVERS[peer](problem)
+    scale = solution.info["scale"]
+    assert scale * problem.cost.max() == pytest.approx(peers.LARGEST_ENTRY)
+    error = abs(solution.info["solver_objective"] - solution.objective * scale)
+    assert error <= 0.5 * (problem.n + problem.m)
+
+
+def test_highs_survives_peer_calls():
+    """After both peers ran, this process (which imports taopt.models) still has HIGHS in cvxpy."""
+    import cvxpy
+
+    import taopt.models  # noqa: F401  (imports highspy)
+
+    problem = uniform_current_problem(6, 2, 9)
+    for solve in SOLVERS.values():
+        solve(problem)
+    assert "HIGHS" in cvxpy.installed_solvers()
+    # (import cvxpy imports the bare ``ortools`` package; its native libraries stay out)
+    assert "ortools.constraint_solver.pywrapcp" not in sys.modules and "pyvrp" not in sys.modules
+    assert solve_routing(problem).status == "optimal"
+
+
+def run_script(code: str, **kwargs) -> subprocess.Popen:
+    """Start ``python -c code`` with this interpreter, its stdout piped."""
+    return subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kwargs,
+    )
+
+
+def test_script_importing_models_at_top_can_use_ortools(tmp_path: Path):
+    """A script that imports taopt.models (highspy) at its top still gets OR-Tools results."""
+    script = tmp_path / "study.py"
+    script.write_text(
+        textwrap.dedent(
+            """
+            import numpy as np
+            import taopt
+            import taopt.models
+            from taopt.heuristics.peers import ortools_solve
+
+            if __name__ == "__main__":
+                cost = np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]], dtype=float)
+                problem = taopt.AssignmentProblem(cost, 2)
+                exact = taopt.models.solve_routing(problem).objective
+                print(ortools_solve(problem, time_limit=None, solution_limit=20).objective, exact)
+            """
+        )
+    )
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["4.0", "4.0"]
+
+
+def missing_package_message(monkeypatch, peer: str) -> str:
+    monkeypatch.setattr(peers, "_find_spec", lambda name: None if name == peer else object())
+    with pytest.raises(SolverError) as info:
+        SOLVERS[peer](thesis_quick_tour()[0])
+    return str(info.value)
+
+
+@pytest.mark.parametrize("peer", sorted(SOLVERS))
+def test_missing_package_says_how_to_install(monkeypatch, peer):
+    """A peer package that is not installed gives a SolverError with the pip command."""
+    message = missing_package_message(monkeypatch, peer)
+    assert peer in message and 'pip install "taopt[peers]"' in message
+
+
+def test_broken_package_in_worker_says_how_to_install(monkeypatch, tmp_path: Path):
+    """A peer package that fails to import inside the worker gives the same pip hint."""
+    fake = tmp_path / "pyvrp"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("raise ImportError('this pyvrp is broken')\n")
+    peers.shutdown()
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    try:
+        with pytest.raises(SolverError, match=r'pyvrp.*broken.*pip install "taopt\[peers\]"'):
+            SOLVERS["pyvrp"](thesis_quick_tour()[0])
+    finally:
+        monkeypatch.delenv("PYTHONPATH")
+        peers.shutdown()
+    assert SOLVERS["pyvrp"](thesis_quick_tour()[0]).objective == 4.0
+
+
+def test_worker_crash_is_a_solver_error_and_worker_restarts():
+    """Killing the OR-Tools worker mid-solve raises a SolverError naming it; the next call works."""
+    problem = uniform_current_problem(40, 5, 10)
+    ortools_solve(problem, time_limit=0.1)  # the worker is up
+    pid = peers._WORKERS["ortools"].process.pid
+    threading.Timer(1.0, os.kill, (pid, signal.SIGKILL)).start()
+    with pytest.raises(SolverError, match="ortools worker process died"):
+        ortools_solve(problem, time_limit=30)
+    assert ortools_solve(problem, time_limit=0.1).objective > 0
+    assert peers._WORKERS["ortools"].process.pid != pid
+
+
+def test_overrun_is_a_solver_error_and_worker_restarts(monkeypatch):
+    """A call that overruns time_limit + GRACE stops its worker and raises a SolverError."""
+    problem = uniform_current_problem(30, 4, 12)
+    ortools_solve(problem, time_limit=0.1)
+    pid = peers._WORKERS["ortools"].process.pid
+    monkeypatch.setattr(peers, "GRACE", -0.7)  # wait 0.3 s for a 1 s search
+    with pytest.raises(SolverError, match="ortools worker did not answer"):
+        ortools_solve(problem, time_limit=1.0)
+    assert wait_gone(pid, 5.0)
+    monkeypatch.undo()
+    assert ortools_solve(problem, time_limit=0.1).objective > 0
+
+
+def test_threads_share_a_worker():
+    """Calls from several threads are served one at a time and give the sequential results."""
+    problems = [uniform_current_problem(15, 3, seed) for seed in range(4)]
+    expected = [SOLVERS["pyvrp"](p).routes for p in problems]
+    found: dict[int, list] = {}
+    threads = [
+        threading.Thread(target=lambda k=k: found.update({k: SOLVERS["pyvrp"](problems[k]).routes}))
+        for k in range(4)
+    ]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert [found[k] for k in range(4)] == expected
+
+
+def test_solver_failure_names_the_peer():
+    """An option the solver rejects comes back as a SolverError naming OR-Tools."""
+    with pytest.raises(SolverError, match="(?s)ortools failed.*unknown metaheuristic 'NOPE'"):
+        ortools_solve(thesis_quick_tour()[0], metaheuristic="NOPE")
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda p: pyvrp_solve(p, time_limit=0), "time_limit"),
+        (lambda p: pyvrp_solve(p, time_limit=None), "never stops"),
+        (lambda p: ortools_solve(p, time_limit=None, solution_limit=0), "solution_limit"),
+        (lambda p: pyvrp_solve(p, seed=-1), "seed"),
+        (lambda p: ortools_solve(p, scale=-1.0), "scale"),
+        (lambda p: ortools_solve(p, scale=1e15), "integer units"),
+        (lambda p: pyvrp_solve(p.cost), "AssignmentProblem"),
+    ],
+)
+def test_bad_arguments_are_clear(call, match):
+    """Bad limits, seed, scale or problem type raise InstanceError before any worker runs."""
+    with pytest.raises(InstanceError, match=match):
+        call(thesis_quick_tour()[0])
+
+
+def process_gone(pid: int) -> bool:
+    """True when ``pid`` no longer runs (absent, or a zombie waiting to be reaped)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return True
+    return state in ("Z", "X")
+
+
+def wait_gone(pid: int, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if process_gone(pid):
+            return True
+        time.sleep(0.1)
+    return process_gone(pid)
+
+
+PARENT = """
+    import sys
+    import numpy as np
+    import taopt
+    from taopt.heuristics import peers
+    from taopt.heuristics.peers import ortools_solve
+
+    rng = np.random.default_rng(0)
+    problem = taopt.AssignmentProblem(rng.uniform(1, 100, (45, 45)), 40)
+    ortools_solve(problem, time_limit=0.1)
+    print(peers._WORKERS["ortools"].process.pid, flush=True)
+    ortools_solve(problem, time_limit=60)  # busy when the parent is stopped
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGINT], ids=["killed", "ctrl-c"])
+def test_worker_dies_with_its_parent(how):
+    """A busy worker does not outlive a parent that is killed or interrupted (no orphans)."""
+    parent = run_script(PARENT)
+    worker_pid = int(parent.stdout.readline())
+    time.sleep(1.0)  # the 60 s solve is running
+    assert not process_gone(worker_pid)
+    parent.send_signal(how)
+    parent.wait(timeout=30)
+    assert wait_gone(worker_pid, 10.0)
+    if how == signal.SIGINT:
+        assert "KeyboardInterrupt" in parent.stderr.read()
+
+
+@pytest.mark.parametrize("seed", range(5))  # ~3 s each (exact + 2 x 1 s)
+def test_n50m10_one_second_not_below_certified_optimum(seed):
+    """Harness n50m10, time_limit = 1 s: both peers feasible and never below the certified optimum."""
+    problem = uniform_current_problem(50, 10, seed)
+    exact = solve_routing(problem)
+    assert exact.status == "optimal"
+    for solve in (pyvrp_solve, ortools_solve):
+        solution = solve(problem, time_limit=1.0, seed=seed)
+        assert solution.objective == taopt.evaluate(problem, solution.routes)
+        assert_not_below(solution, exact)

@@ -1,0 +1,146 @@
+"""The one study runner: executors agree, bad arguments write nothing, Ctrl-C leaves nothing."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from taopt.errors import InstanceError
+from taopt.fields import UniformField
+from taopt.studies.drift import drift_study
+
+FIELD = UniformField(0.3, 0.1)  # closed-form travel times: scenarios are cheap
+METHODS = "MC,EVM,GA,exact"
+OPTIONS = {"GA": {"generations": 10, "population": 12}}
+
+
+def small(out: Path, **kw) -> pd.DataFrame:
+    args = dict(methods=METHODS, seed=2, out_dir=out, progress=False, field=FIELD)
+    args.update(method_options=OPTIONS)
+    args.update(kw)
+    return drift_study(7, 2, 3, **args)
+
+
+def stable(df: pd.DataFrame) -> pd.DataFrame:
+    return df.drop(columns=["runtime"]).reset_index(drop=True)
+
+
+def test_jobs_and_dask_give_identical_rows(tmp_path):
+    """--jobs 1, --jobs 2 and a local Dask cluster give the same rows, timing aside."""
+    one = small(tmp_path / "one", jobs=1)
+    two = small(tmp_path / "two", jobs=2)
+    dask = small(tmp_path / "dask", jobs=2, dask="local")
+    pd.testing.assert_frame_equal(stable(one), stable(two))
+    pd.testing.assert_frame_equal(stable(one), stable(dask))
+    assert (one.loc[one.method == "exact", "status"] == "optimal").all()
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"time_limit": -1.0}, "time_limit must be a positive"),
+        ({"jobs": 0}, "jobs must be an integer >= 1"),
+        ({"methods": "MC,NOPE"}, "no method 'NOPE'"),
+        ({"method_options": {"GA": {"colour": "red"}}}, "does not take option"),
+    ],
+)
+def test_invalid_arguments_write_nothing(tmp_path, change, message):
+    """A refused call leaves no folder behind (issue: a config was written first)."""
+    out = tmp_path / "study"
+    with pytest.raises(InstanceError, match=message):
+        small(out, **change)
+    assert not out.exists()
+
+
+def test_zero_scenarios_is_a_clear_error(tmp_path):
+    """--scenarios 0 is refused by name, before anything is written."""
+    out = tmp_path / "study"
+    with pytest.raises(InstanceError, match="scenarios must be an integer >= 1"):
+        drift_study(7, 2, 0, methods="MC", out_dir=out, progress=False, field=FIELD)
+    assert not out.exists()
+
+
+def test_settings_of_an_empty_folder_are_replaced(tmp_path):
+    """A folder holding a config but no rows takes the new settings."""
+    out = tmp_path / "study"
+    out.mkdir()
+    (out / "drift.config.json").write_text('{"n": 99}')
+    df = small(out, methods="MC")
+    assert len(df) == 3
+
+
+def _descendants(pid: int) -> set[int]:
+    found, todo = set(), [pid]
+    while todo:
+        parent = todo.pop()
+        for task in Path(f"/proc/{parent}/task").glob("*"):
+            children = (
+                (task / "children").read_text().split() if (task / "children").exists() else []
+            )
+            for child in map(int, children):
+                if child not in found:
+                    found.add(child)
+                    todo.append(child)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize(
+    "mode", [["--jobs", "1"], ["--jobs", "2"], ["--jobs", "2", "--dask", "local"]]
+)
+def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
+    """Ctrl-C stops the study (one line, exit 130), leaves no process, and a re-run resumes.
+
+    The stop latency is measured in benchmarks/bench_study.py; here a generous bound only
+    separates "stopped" from "ran on to the end".
+    """
+    out = tmp_path / "study"
+    argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "30", "--m", "4"]
+    argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
+    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    csv = out / "drift.csv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:  # wait for the first finished rows
+        if csv.exists() and len(csv.read_text().splitlines()) > 2:
+            break
+        assert process.poll() is None, process.communicate()
+        time.sleep(0.2)
+    children = _descendants(process.pid)
+    assert children, "the study runs its tasks in worker processes"
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    stopped = time.monotonic() - sent
+    assert process.returncode == 130, err
+    assert stopped < 30  # 400 GA scenarios would take minutes
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and "interrupted" in lines[0] and "resume" in lines[0], err
+    time.sleep(1.0)
+    left = [pid for pid in children if _alive(pid)]
+    for pid in left:  # do not leak them into the rest of the test run
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"processes left behind: {left}"
+    done = pd.read_csv(csv)
+    assert 0 < len(done) < 400 and (done["complete"] == 1).all()
+    # the same command resumes: here with a smaller count, so that it finishes quickly
+    total = len(done) + 1
+    rerun = argv[: argv.index("--scenarios") + 1] + [str(total)] + argv[argv.index("400") + 1 :]
+    finished = subprocess.run(rerun, capture_output=True, text=True, timeout=300)
+    assert finished.returncode == 0, finished.stderr
+    again = pd.read_csv(csv)
+    assert sorted(again["scenario"]) == list(range(total))  # finished rows kept, one added
