@@ -84,6 +84,13 @@ def components(linked: np.ndarray) -> np.ndarray:
         labels = spread
 
 
+def initially_connected(problem: CommProblem) -> bool:
+    """Whether the vehicles' communication graph (4.3) is connected at t = 0."""
+    gap = problem.vehicles[:, None, :] - problem.vehicles[None, :, :]
+    linked = np.hypot(gap[..., 0], gap[..., 1]) <= problem.comm_range
+    return bool((components(linked) == 0).all())
+
+
 class Policy(Protocol):
     """A chapter 4 algorithm, as the engine sees it."""
 
@@ -669,4 +676,13 @@ def simulate(
     return Simulation(problem, policy, seed=seed, check=check, strict=strict).run()
 
 
-__all__ = ["Policy", "Group", "Run", "Simulation", "simulate", "TIME_TOLERANCE"]
+__all__ = [
+    "Policy",
+    "Group",
+    "Run",
+    "Simulation",
+    "simulate",
+    "components",
+    "initially_connected",
+    "TIME_TOLERANCE",
+]

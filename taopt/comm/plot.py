@@ -136,26 +136,29 @@ def plot_run(
 
 def plot_pair(
     short: CommProblem,
+    short_solution: Any,
     long: CommProblem,
-    algorithm: str = "DAA",
+    long_solution: Any,
     path: str | os.PathLike[str] | None = None,
 ) -> Any:
-    """Remark 4.6 as Figs. 4.3–4.4: the same instance at two ranges, side by side."""
+    """Remark 4.6 as Figs. 4.3–4.4: one instance run at two ranges, side by side.
+
+    ``short_solution`` / ``long_solution`` are the runs (``taopt.solve(short, "DAA")``, ...).
+    """
     from matplotlib.figure import Figure
 
-    from taopt.pipeline import solve
-
     fig = Figure(figsize=(12, 5.8))
-    for k, problem in enumerate((short, long)):
+    for k, (problem, result) in enumerate(((short, short_solution), (long, long_solution))):
         ax = fig.add_subplot(1, 2, k + 1)
-        result = solve(problem, algorithm)
-        lengths = ", ".join(f"{d:.1f}" for d in result.solution.lengths())
+        tr = _payload(result)
+        lengths = ", ".join(f"{d:.1f}" for d in tr.lengths())
+        name = getattr(result, "method", "") or "run"
         plot_run(
             problem,
             result,
             ax=ax,
             title=(
-                f"{algorithm}, r = {problem.comm_range:g} m: f = {result.objective:.1f} m\n"
+                f"{name}, r = {problem.comm_range:g} m: f = {tr.lengths().sum():.1f} m\n"
                 f"(vehicles: {lengths} m)"
             ),
         )

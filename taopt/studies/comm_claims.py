@@ -26,6 +26,11 @@ Remark 4.6 ("a longer range does not necessarily give a shorter total") is an ex
 claim: :func:`search_remark_4_6` looks for instances where it shows and keeps the smallest.
 
 This module is orchestration (it runs the registered methods through :func:`taopt.solve`).
+
+Example
+-------
+>>> from taopt.studies.comm_claims import check_claims
+>>> table = check_claims(samples=2, seed=0)  # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -38,23 +43,16 @@ from typing import Any
 import numpy as np
 
 from taopt.comm.bounds import mst_bound
+from taopt.comm.engine import components, initially_connected
 from taopt.comm.problem import CommProblem, random_problem
 from taopt.errors import ConvergenceError, InstanceError
+from taopt.pipeline import solve
 
 ALGORITHMS = ("CAA", "DAA", "HDA")
 
 
 def _leq(lhs: float, rhs: float, rtol: float = 1e-9) -> bool:
     return lhs <= rhs + rtol * max(1.0, abs(rhs))
-
-
-def initially_connected(problem: CommProblem) -> bool:
-    """Whether the vehicles' communication graph (4.3) is connected at t = 0."""
-    from taopt.comm.engine import components
-
-    gap = problem.vehicles[:, None, :] - problem.vehicles[None, :, :]
-    linked = np.hypot(gap[..., 0], gap[..., 1]) <= problem.comm_range
-    return bool((components(linked) == 0).all())
 
 
 def claim_values(
@@ -67,8 +65,6 @@ def claim_values(
     dict
         claim name -> {"holds": bool or None (not applicable), "lhs", "rhs"}.
     """
-    from taopt.pipeline import solve
-
     runs: dict[str, Any] = {}
     stuck: dict[str, str] = {}
     for name in ALGORITHMS:
@@ -238,8 +234,6 @@ def range_effect(
     problem: CommProblem, ranges: Sequence[float], algorithm: str = "DAA", seed: int = 0
 ) -> list[float]:
     """(4.1) of ``algorithm`` on ``problem`` at each communication range."""
-    from taopt.pipeline import solve
-
     return [solve(problem.replace(comm_range=r), algorithm, seed=seed).objective for r in ranges]
 
 
@@ -321,8 +315,6 @@ def search_one_metre(
     (|A| = m is the other case of the statement, which holds by construction). Returns
     {"problem", "daa", "hda"} or None.
     """
-    from taopt.pipeline import solve
-
     rng = np.random.default_rng(seed)
     best: dict[str, Any] | None = None
     for _ in range(samples):
@@ -389,8 +381,6 @@ def connectivity_probability(
     rng = np.random.default_rng(seed)
     connected = 0
     chunk = 5000
-    from taopt.comm.engine import components
-
     done = 0
     while done < samples:
         size = min(chunk, samples - done)
