@@ -1,0 +1,355 @@
+"""Chapter 4's studies (§4.4) on the one study runner: Tables 4.1–4.4, Figs. 4.5–4.8, gaps.
+
+One :data:`SPEC` serves every experiment: a scenario is identified by ``(n, m, A, r,
+scenario)``; its positions and labels depend on ``(n, m, A, scenario)`` and the study seed
+only (:func:`scenario_seed`), so the seven ranges of a table see the same scenarios (common
+random numbers) and a range's rows can be compared pairwise. Each row carries the Lemma 4.8
+bound ``f_mst`` (the thesis's denominator, q = f / f_MST (4.21)) and the simulation's
+``Solution.info`` counts (bytes, messages, rounds, re-plans, ...).
+
+The certified optimum f_o does not depend on r: the exact model is run once per scenario
+(at the largest range of a preset) and :func:`with_optimum` joins it to every range, giving
+the true gap ``f / f_o`` the thesis could not report.
+
+Presets (:data:`PRESETS`, the thesis's setups; 1000 m square, 500 scenarios each):
+
+* ``table`` — Tables 4.1–4.2: m = 6, n = 30, |A| in 2..6, r in {1 m, r_c/6, ..., r_c},
+  r_c = 600 m; DAA, HDA, CAA.
+* ``table100`` — Tables 4.3–4.4 (withheld from our copy): m = 10, n = 100, |A| in
+  {2, 4, 6, 8, 10}, r_c = 482 m.
+* ``homogeneous15`` / ``homogeneous30`` — Figs. 4.5–4.6: |A| = 1, n15m4 (r_c = 712.8 m) and
+  n30m6 (r_c = 600 m); DAA (the figures' RBA / STSTC / Greedy baselines of [5] are not
+  defined in the thesis and are left out).
+* ``scalability`` — Figs. 4.7–4.8: m = 10, n = 100..600, |A| in {2, 4, 6, 8, 10}, always
+  connected (r = the square's diagonal + 1 m); DAA; its run time.
+
+Example
+-------
+>>> df = comm_study("table", scenarios=2, out_dir=tmp)  # doctest: +SKIP
+>>> q_table(summary(df))  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from taopt.comm.bounds import mst_bound
+from taopt.comm.engine import initially_connected
+from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
+from taopt.errors import InstanceError
+from taopt.study import Scenario, StudySpec, run_study
+
+ALGORITHMS = ("DAA", "HDA", "CAA")
+INFO_COLUMNS = (
+    "bytes",
+    "numbers",
+    "messages",
+    "rounds",
+    "max_group_rounds",
+    "group_events",
+    "replans",
+    "events",
+    "invariant_violations",
+    "projected_increases",
+    "initial_total",
+)
+
+__all__ = [
+    "SPEC",
+    "PRESETS",
+    "Preset",
+    "ALGORITHMS",
+    "scenario_seed",
+    "make_scenario",
+    "ranges",
+    "preset_keys",
+    "comm_study",
+    "with_optimum",
+    "summary",
+    "q_table",
+    "bytes_table",
+    "plot_study",
+]
+
+
+def scenario_seed(seed: int, n: int, m: int, attributes: int, scenario: int) -> int:
+    """Seed of a scenario's data: from the study seed and (n, m, |A|, scenario), not r."""
+    values = [int(seed), int(n), int(m), int(attributes), int(scenario)]
+    if min(values) < 0:
+        raise InstanceError(f"seed and scenario numbers must be >= 0, got {values}")
+    return int(np.random.SeedSequence(values[0], spawn_key=tuple(values[1:])).generate_state(1)[0])
+
+
+def make_scenario(key: dict, settings: dict) -> Scenario:
+    """The scenario of ``key`` (n, m, A, r, scenario) in a ``settings["side"]`` square."""
+    n, m, attributes = int(key["n"]), int(key["m"]), int(key["A"])
+    seed = scenario_seed(settings["seed"], n, m, attributes, int(key["scenario"]))
+    problem = random_problem(
+        n,
+        m,
+        attributes,
+        float(key["r"]),
+        seed=seed,
+        side=float(settings.get("side", THESIS_SIDE)),
+        name=f"n{n}m{m}A{attributes}s{key['scenario']}",
+    )
+    return Scenario(
+        problem,
+        columns={"connected": initially_connected(problem)},
+        references={"f_mst": mst_bound(problem)},
+    )
+
+
+SPEC = StudySpec(
+    name="comm",
+    problem_type=CommProblem,
+    key_columns=("n", "m", "A", "r", "scenario"),
+    make_scenario=make_scenario,
+    scenario_columns=("connected",),
+    reference_columns=("f_mst",),
+    info_columns=INFO_COLUMNS,
+)
+
+
+@dataclass(frozen=True)
+class Preset:
+    """One experiment of §4.4: sizes, heterogeneities, ranges and methods."""
+
+    title: str
+    sizes: tuple[tuple[int, int], ...]  # (n, m)
+    attributes: tuple[int, ...]
+    ranges: tuple[float, ...]
+    methods: tuple[str, ...]
+
+
+def ranges(r_c: float, steps: int = 6) -> tuple[float, ...]:
+    """The thesis's ranges: ``{1 m, r_c/6, 2 r_c/6, ..., r_c}`` (rounded to 1 mm)."""
+    return (1.0, *(round(k * r_c / steps, 3) for k in range(1, steps + 1)))
+
+
+DIAGONAL_PLUS = round(THESIS_SIDE * math.sqrt(2.0) + 1.0, 3)
+
+PRESETS = {
+    "table": Preset(
+        "Tables 4.1-4.2: m = 6, n = 30, r_c = 600 m",
+        ((30, 6),),
+        (2, 3, 4, 5, 6),
+        ranges(600.0),
+        ALGORITHMS,
+    ),
+    "table100": Preset(
+        "Tables 4.3-4.4: m = 10, n = 100, r_c = 482 m",
+        ((100, 10),),
+        (2, 4, 6, 8, 10),
+        ranges(482.0),
+        ALGORITHMS,
+    ),
+    "homogeneous15": Preset(
+        "Fig. 4.5: n = 15, m = 4, |A| = 1, r_c = 712.8 m",
+        ((15, 4),),
+        (1,),
+        ranges(712.8),
+        ("DAA",),
+    ),
+    "homogeneous30": Preset(
+        "Fig. 4.6: n = 30, m = 6, |A| = 1, r_c = 600 m",
+        ((30, 6),),
+        (1,),
+        ranges(600.0),
+        ("DAA",),
+    ),
+    "scalability": Preset(
+        "Figs. 4.7-4.8: m = 10, n = 100..600, always connected",
+        tuple((n, 10) for n in range(100, 601, 100)),
+        (2, 4, 6, 8, 10),
+        (DIAGONAL_PLUS,),
+        ("DAA",),
+    ),
+}
+
+
+def preset_keys(preset: Preset, scenarios: int, first: int = 0) -> list[dict[str, Any]]:
+    """Every (n, m, A, r, scenario) key of a preset, scenarios ``first .. first+scenarios-1``."""
+    return [
+        {"n": n, "m": m, "A": a, "r": r, "scenario": s}
+        for n, m in preset.sizes
+        for a in preset.attributes
+        for r in preset.ranges
+        for s in range(first, first + scenarios)
+        if a <= m
+    ]
+
+
+def comm_study(
+    preset: str | Preset,
+    scenarios: int = 500,
+    out_dir: str | Path = "comm-study",
+    *,
+    methods: Sequence[str] | None = None,
+    exact: bool = False,
+    seed: int = 0,
+    jobs: int = 1,
+    dask: str | None = None,
+    time_limit: float | None = 60.0,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """Run a preset of §4.4 (resumable; one CSV ``<out>/comm.csv`` for every preset).
+
+    Parameters
+    ----------
+    preset : str or Preset
+        A key of :data:`PRESETS`.
+    scenarios : int
+        Scenarios per (n, m, |A|) (the thesis: 500).
+    methods : sequence of str, optional
+        Default: the preset's.
+    exact : bool
+        Also certify f_o with the exact model, once per scenario (at the preset's largest
+        range), with ``time_limit`` seconds each.
+    seed : int
+        Study seed (scenario data: :func:`scenario_seed`).
+    jobs, dask :
+        Worker processes or a Dask cluster (:func:`taopt.study.run_study`).
+    time_limit : float
+        Seconds per exact solve (the simulations take none).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows (every range, every method; the exact rows at the largest range), with
+        ``optimum`` joined by :func:`with_optimum` and ``q = objective / f_mst``.
+    """
+    spec = PRESETS[preset] if isinstance(preset, str) else preset
+    settings = {"seed": int(seed), "side": THESIS_SIDE}
+    keys = preset_keys(spec, scenarios)
+    chosen = list(methods) if methods is not None else list(spec.methods)
+    frames = [
+        run_study(
+            SPEC,
+            keys,
+            chosen,
+            settings,
+            out_dir,
+            jobs=jobs,
+            dask=dask,
+            time_limit=time_limit,
+            progress=progress,
+        )
+    ]
+    if exact:
+        top = max(spec.ranges)
+        exact_keys = [k for k in keys if k["r"] == top]
+        frames.append(
+            run_study(
+                SPEC,
+                exact_keys,
+                ["exact"],
+                settings,
+                out_dir,
+                jobs=jobs,
+                dask=dask,
+                time_limit=time_limit,
+                progress=progress,
+            )
+        )
+    return with_optimum(pd.concat(frames, ignore_index=True))
+
+
+def with_optimum(df: pd.DataFrame) -> pd.DataFrame:
+    """Join each scenario's certified f_o (from its exact row, at any range) to every row.
+
+    Adds ``optimum`` (NaN where no exact row is "optimal"), ``q = objective / f_mst``
+    (4.21) and ``gap = objective / optimum``.
+    """
+    df = df.copy()
+    scenario = ["n", "m", "A", "scenario"]
+    exact = df[(df["method"] == "exact") & (df["status"] == "optimal")]
+    best = exact.groupby(scenario)["objective"].min().rename("optimum")
+    df = df.drop(columns=["optimum"], errors="ignore").join(best, on=scenario)
+    df["q"] = df["objective"] / df["f_mst"]
+    df["gap"] = df["objective"] / df["optimum"]
+    return df
+
+
+def summary(df: pd.DataFrame) -> pd.DataFrame:
+    """Means per (n, m, A, r, method): q, true gap, bytes, messages, rounds, re-plans, time.
+
+    ``gap`` is averaged over the scenarios whose optimum is certified (``certified`` counts
+    them); ``scenarios`` counts all.
+    """
+    if "q" not in df.columns:
+        df = with_optimum(df)
+    runs = df[df["method"] != "exact"]
+    grouped = runs.groupby(["n", "m", "A", "r", "method"], sort=True)
+    table = grouped.agg(
+        scenarios=("objective", "size"),
+        q=("q", "mean"),
+        gap=("gap", "mean"),
+        certified=("gap", "count"),
+        f=("objective", "mean"),
+        bytes=("bytes", "mean"),
+        messages=("messages", "mean"),
+        rounds=("rounds", "mean"),
+        replans=("replans", "mean"),
+        connected=("connected", "mean"),
+        violations=("invariant_violations", "sum"),
+        runtime=("runtime", "mean"),
+    )
+    return table.reset_index()
+
+
+def _pivot(table: pd.DataFrame, value: str, n: int, m: int, methods: Sequence[str]) -> Any:
+    part = table[(table["n"] == n) & (table["m"] == m) & table["method"].isin(methods)]
+    pivot = part.pivot_table(index=["r", "method"], columns="A", values=value)
+    order = {name: k for k, name in enumerate(methods)}
+    pivot = pivot.reset_index()
+    pivot["_order"] = pivot["method"].map(order)
+    pivot = pivot.sort_values(["r", "_order"]).drop(columns="_order").set_index(["r", "method"])
+    pivot.columns = [f"|A|={a}" for a in pivot.columns]
+    return pivot
+
+
+def q_table(table: pd.DataFrame, n: int = 30, m: int = 6, value: str = "q") -> pd.DataFrame:
+    """Table 4.1's layout: mean ``value`` (q, or the true gap) by r and algorithm, per |A|."""
+    return _pivot(table, value, n, m, ("HDA", "DAA"))
+
+
+def bytes_table(table: pd.DataFrame, n: int = 30, m: int = 6, scale: float = 1e5) -> pd.DataFrame:
+    """Table 4.2's layout: mean bytes relayed / ``scale`` by r and algorithm, per |A|."""
+    scaled = table.assign(bytes=table["bytes"] / scale)
+    return _pivot(scaled, "bytes", n, m, ("HDA", "DAA", "CAA"))
+
+
+def plot_study(
+    table: pd.DataFrame,
+    n: int = 30,
+    m: int = 6,
+    path: str | Path | None = None,
+) -> Any:
+    """q and bytes against r, one line per |A| and algorithm (the tables as curves)."""
+    from matplotlib.figure import Figure
+
+    from taopt.comm.plot import plot_range_curves
+
+    part = table[(table["n"] == n) & (table["m"] == m)]
+    fig = Figure(figsize=(13, 4.8))
+    plot_range_curves(part, "q", ("DAA", "HDA"), ax=fig.add_subplot(1, 2, 1), ylabel="mean q")
+    plot_range_curves(
+        part,
+        "bytes",
+        ("DAA", "HDA", "CAA"),
+        ax=fig.add_subplot(1, 2, 2),
+        ylabel="mean bytes relayed",
+    )
+    fig.suptitle(f"n = {n}, m = {m}")
+    if path is not None:
+        fig.tight_layout()
+        fig.savefig(str(path), dpi=120)
+    return fig
