@@ -23,13 +23,14 @@ model of :mod:`taopt.comm.bytes`) and setting routes. None of them advances time
   same Phase 1; then, starting from the members' current routes restricted to T_i, every
   member computes the *significance* of each target on its route (distance saved by
   removing it) and the *marginal significance* of each other target of its ability (its
-  cheapest insertion); the smallest (cost, id) per target is flooded; a member releases a
-  target when another member's marginal significance (or, for a target two members hold,
-  the other holder's significance) is smaller than its own significance; per class, the
-  release with the largest saving is agreed by a second flood and carried out (the target
-  moves to the best bidder, or is dropped when the bidder already holds it). Repeat until
-  no release saves distance. Every release lowers the projected total, so HDA needs no
-  Phase 3.
+  cheapest insertion); the smallest of each per target (with the vehicle naming it) is
+  flooded. A target on several routes (fresh vehicles all hold every target of their
+  ability) stays with the holder of the smallest significance, the others drop it; a
+  member releases a target when another member's marginal significance is smaller than its
+  significance, and that member takes it over. Releases are agreed by a second flood and
+  made largest saving first, each member in at most one per iteration; repeat until no
+  release saves distance. Every iteration lowers the projected total, so HDA needs no
+  Phase 3 (see :meth:`HDA.release_loop`).
 
 Decisions where the thesis is ambiguous (kept in this one place)
 ----------------------------------------------------------------
@@ -69,7 +70,13 @@ import numpy as np
 
 from taopt.comm.engine import Group, Run, simulate
 from taopt.comm.problem import CommProblem
-from taopt.comm.routes import insert, insertion_costs, removal_savings, route_length
+from taopt.comm.routes import (
+    InsertionTable,
+    insert,
+    insertion_costs,
+    removal_savings,
+    route_length,
+)
 from taopt.errors import ConvergenceError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Solution
@@ -111,8 +118,11 @@ def central_auction(
         return routes
     dist = problem.distances[: problem.n, : problem.n]
     own = np.asarray(abilities)[:, None] == problem.target_code[targets][None, :]
-    costs = np.where(own, starts[:, targets], np.inf)  # (4.9) with o'_j empty: d(p_j, q)
+    tables = [InsertionTable(starts[i], targets[own[i]], dist) for i in range(k)]
+    costs = np.full((k, targets.size), np.inf)  # (4.9) for every vehicle and target
     where = np.zeros((k, targets.size), dtype=np.int64)
+    for i in range(k):
+        costs[i, own[i]], where[i, own[i]] = tables[i].cost, tables[i].position
     active = np.ones(targets.size, dtype=bool)
     for _ in range(targets.size):
         columns = np.flatnonzero(active)
@@ -125,14 +135,10 @@ def central_auction(
                 f"no vehicle of the group can visit target {targets[columns[pick]]}"
             )
         q, j = int(columns[pick]), int(best_vehicle[pick])
-        routes[j] = insert(routes[j], int(targets[q]), int(where[j, q]))
-        active[q] = False
-        cand = np.flatnonzero(own[j] & active)
-        if cand.size:
-            costs[j, cand], where[j, cand] = insertion_costs(
-                starts[j], routes[j], targets[cand], dist
-            )
-    return routes
+        tables[j].insert(int(targets[q]), int(where[j, q]))  # (4.12)
+        active[q] = False  # (4.13)
+        costs[j, own[j]], where[j, own[j]] = tables[j].cost, tables[j].position
+    return [table.route for table in tables]
 
 
 def _own_targets(problem: CommProblem, vehicle: int) -> np.ndarray:
@@ -312,28 +318,28 @@ class DAA(_Auction):
         dist = group.target_distances
         starts = group.start_distances
         own = group.abilities[:, None] == problem.target_code[targets][None, :]
-        costs = np.where(own, starts[:, targets], np.inf)  # (4.9), o'_j empty: d(p_j, q)
+        tables = [InsertionTable(starts[i], targets[own[i]], dist) for i in range(k)]
+        costs = np.full((k, targets.size), np.inf)  # member i's own bids c_j (4.9)
         where = np.zeros((k, targets.size), dtype=np.int64)
+        for i in range(k):
+            costs[i, own[i]], where[i, own[i]] = tables[i].cost, tables[i].position
         me = np.arange(k)[:, None]
         active = np.ones(targets.size, dtype=bool)
         for _ in range(targets.size):
             columns = np.flatnonzero(active)
             bids = costs[:, columns]
-            seen_cost, seen_bidder = group.flood_min(bids, me, k, "bid")
-            picks = np.argmin(seen_cost, axis=1)  # each member's own q*, lowest on ties
+            seen_cost, seen_bidder = group.flood_min(bids, me, k, "bid")  # l. 15-25
+            picks = np.argmin(seen_cost, axis=1)  # each member's own q* (l. 26), lowest on ties
             winners = seen_bidder[np.arange(k), picks]
             if not ((picks == picks[0]).all() and (winners == winners[0]).all()):
                 raise ConvergenceError(
                     f"group {group.members.tolist()}: members disagree on the next target"
                 )
             q, j = int(columns[picks[0]]), int(winners[0])
-            routes[j] = insert(routes[j], int(targets[q]), int(where[j, q]))
+            tables[j].insert(int(targets[q]), int(where[j, q]))  # only j builds o'_j (l. 27-33)
             active[q] = False
-            cand = np.flatnonzero(own[j] & active)
-            if cand.size:
-                costs[j, cand], where[j, cand] = insertion_costs(
-                    starts[j], routes[j], targets[cand], dist
-                )
+            costs[j, own[j]], where[j, own[j]] = tables[j].cost, tables[j].position
+        routes = [table.route for table in tables]
         return routes
 
 
@@ -359,80 +365,93 @@ class HDA(_Auction):
     def release_loop(group: Group, targets: Sequence[int]) -> tuple[list[list[int]], int]:
         """Release targets by significance until no release saves distance.
 
-        Returns the new routes and the number of iterations (each two floods of |R_i|
-        rounds: significances, then the agreed release per class).
+        Each iteration every member computes, for each cooperative target of its ability,
+        its significance (if on its route) and its marginal significance (if not), and the
+        smallest of each with the vehicle naming it are flooded (|R_i| rounds). Then
+
+        * a target on several routes stays with the holder of the smallest significance and
+          every other holder drops it (all at once: dropping targets never lengthens a route);
+        * otherwise each member proposes its best release — the target whose significance
+          exceeds the smallest marginal significance of another member by the most — the
+          proposals are flooded (|R_i| rounds), and the releases are carried out greedily,
+          largest saving first, each member in at most one release (as releaser or taker) so
+          that every saving is exactly the one bid.
+
+        Returns the new routes and the number of iterations.
         """
         problem = group.problem
         k = group.size
-        keep = set(int(q) for q in targets)
+        keep = {int(q) for q in targets}
         routes = [[q for q in r if q in keep] for r in group.routes]
         targets = np.array(sorted(keep), dtype=np.int64)
         if targets.size == 0:
             return routes, 0
+        size = targets.size
         column = {int(q): c for c, q in enumerate(targets)}
         dist = group.target_distances
         starts = group.start_distances
-        abilities = group.abilities
-        own = abilities[:, None] == problem.target_code[targets][None, :]
-        codes = np.unique(abilities)
-        class_column = {int(c): x for x, c in enumerate(codes)}
+        own = group.abilities[:, None] == problem.target_code[targets][None, :]
         me = np.arange(k)[:, None]
-        limit = 10 * (targets.size + 1) * k + 100
+        limit = 10 * (size + 1) * k + 100
         for iteration in range(1, limit + 1):
-            bids = np.full((k, targets.size), np.inf)
+            bids = np.full((k, 2 * size), np.inf)  # [significance | marginal significance]
             savings: list[np.ndarray] = []
+            holders = np.zeros(size, dtype=np.int64)
             for i in range(k):
                 held = np.array([column[q] for q in routes[i]], dtype=np.int64)
                 saving = removal_savings(starts[i], routes[i], dist)
                 savings.append(saving)
                 bids[i, held] = saving
-                others = np.flatnonzero(own[i])
-                others = others[~np.isin(others, held)]
+                holders[held] += 1
+                others = own[i].copy()
+                others[held] = False
+                others = np.flatnonzero(others)
                 if others.size:
-                    bids[i, others] = insertion_costs(starts[i], routes[i], targets[others], dist)[
-                        0
-                    ]
-            best, bidder = group.flood_min(bids, me, k, "significance")
-            if not ((best == best[0]).all() and (bidder == bidder[0]).all()):
+                    bids[i, size + others] = insertion_costs(
+                        starts[i], routes[i], targets[others], dist
+                    )[0]
+            best, who = group.flood_min(bids, me, k, "significance")
+            if not ((best == best[0]).all() and (who == who[0]).all()):
                 raise ConvergenceError(
                     f"group {group.members.tolist()}: significances did not reach consensus"
                 )
-            best, bidder = best[0], bidder[0]
-            proposal = np.full((k, codes.size), np.inf)
-            code_of = np.zeros((k, codes.size), dtype=np.int64)
+            keeper, taker = who[0, :size], who[0, size:]
+            marginal = best[0, size:]
+            drops = [
+                (i, q)
+                for i in range(k)
+                for q in routes[i]
+                if holders[column[q]] > 1 and keeper[column[q]] != i
+            ]
+            proposals = []
             for i in range(k):
+                best_gain, best_target = SAVING_TOLERANCE, -1
                 for position, q in enumerate(routes[i]):
                     c = column[q]
-                    if bidder[c] == i:
+                    if holders[c] > 1:
                         continue
-                    gain = savings[i][position] - best[c]
-                    key = -gain
-                    x = class_column[int(abilities[i])]
-                    code = c * k + i
-                    if gain > SAVING_TOLERANCE and (
-                        key < proposal[i, x] or (key == proposal[i, x] and code < code_of[i, x])
-                    ):
-                        proposal[i, x], code_of[i, x] = key, code
-            agreed, agreed_code = group.flood_min(proposal, code_of, k, "release")
-            if not ((agreed == agreed[0]).all() and (agreed_code == agreed_code[0]).all()):
-                raise ConvergenceError(
-                    f"group {group.members.tolist()}: releases did not reach consensus"
-                )
-            moved = False
-            for x in range(codes.size):
-                if not math.isfinite(agreed[0, x]):
-                    continue
-                c, i = divmod(int(agreed_code[0, x]), k)
-                q, taker = int(targets[c]), int(bidder[c])
-                routes[i] = [t for t in routes[i] if t != q]
-                if q not in routes[taker]:
-                    _, where = insertion_costs(
-                        starts[taker], routes[taker], targets[c : c + 1], dist
-                    )
-                    routes[taker] = insert(routes[taker], q, int(where[0]))
-                moved = True
-            if not moved:
+                    gain = savings[i][position] - marginal[c]
+                    if gain > best_gain or (gain == best_gain and 0 <= c < best_target):
+                        best_gain, best_target = gain, c
+                if best_target >= 0:
+                    proposals.append((-best_gain, best_target, i))
+            group.send("release", k)
+            if drops:
+                for i, q in drops:
+                    routes[i].remove(q)
+                continue
+            if not proposals:
                 return routes, iteration
+            busy: set[int] = set()
+            for _, c, i in sorted(proposals):
+                j = int(taker[c])
+                if i in busy or j in busy:
+                    continue
+                q = int(targets[c])
+                routes[i].remove(q)
+                _, where = insertion_costs(starts[j], routes[j], targets[c : c + 1], dist)
+                routes[j] = insert(routes[j], q, int(where[0]))
+                busy.update((i, j))
         raise ConvergenceError(f"HDA did not settle within {limit} iterations")
 
 

@@ -25,17 +25,18 @@ kind                content (algorithm line)                     numbers per mes
 ``collect``         X_s, R^c_s (Alg. 3 l. 3)                     n(3n + 3) + n
 ``distribute``      X_j (Alg. 3 l. 37)                           n(3n + 3)
 ``keep``            "keep your route" (Alg. 3 l. 33)             1
-``significance``    HDA: (significance or marginal               2 n_a
-                    significance, vehicle id) for each of the
-                    n_a targets of the sender's ability a
-``release``         HDA: the best release (gain, target,         3
-                    vehicle) of the sender's class
+``significance``    HDA: (significance, vehicle id) and          4 n_a
+                    (marginal significance, vehicle id) for
+                    each of the n_a targets of the sender's
+                    ability a
+``release``         HDA: the release proposals known to the      3m
+                    sender (gain, target, vehicle per vehicle)
 ==================  ==========================================  ======================
 
 HDA is not written out in the thesis (§4.1, §4.4.2 describe Zhao, Meng & Chung 2016): its
-rows are our reading — a fixed-size bid vector over the targets the sender can visit (the
+rows are our reading — fixed-size vectors over the targets the sender can visit (the
 thesis: HDA exchanges bids "only on the targets that can be visited by the vehicles"), and
-one release proposal per round.
+the table of release proposals (one per vehicle, fixed size m).
 
 What a number costs
 -------------------
@@ -54,17 +55,17 @@ import numpy as np
 #: Bytes per number sent (an IEEE double).
 NUMBER_BYTES = 8
 
-_SIZES: dict[str, Callable[[int, np.ndarray], int | np.ndarray]] = {
-    "consensus": lambda n, per_class: n * (n + 2) + 2 * n,
-    "positions": lambda n, per_class: 2 * n,
-    "cooperative": lambda n, per_class: n,
-    "bid": lambda n, per_class: 2 * n,
-    "check": lambda n, per_class: n,
-    "collect": lambda n, per_class: n * (3 * n + 3) + n,
-    "distribute": lambda n, per_class: n * (3 * n + 3),
-    "keep": lambda n, per_class: 1,
-    "significance": lambda n, per_class: 2 * per_class,
-    "release": lambda n, per_class: 3,
+_SIZES: dict[str, Callable[[int, int, np.ndarray], int | np.ndarray]] = {
+    "consensus": lambda n, m, per_class: n * (n + 2) + 2 * n,
+    "positions": lambda n, m, per_class: 2 * n,
+    "cooperative": lambda n, m, per_class: n,
+    "bid": lambda n, m, per_class: 2 * n,
+    "check": lambda n, m, per_class: n,
+    "collect": lambda n, m, per_class: n * (3 * n + 3) + n,
+    "distribute": lambda n, m, per_class: n * (3 * n + 3),
+    "keep": lambda n, m, per_class: 1,
+    "significance": lambda n, m, per_class: 4 * per_class,
+    "release": lambda n, m, per_class: 3 * m,
 }
 
 #: Message kinds and their algorithm lines (for reports).
@@ -77,12 +78,12 @@ MESSAGE_KINDS = {
     "collect": "CAA Alg. 3 l. 3: X_s, R^c_s",
     "distribute": "CAA Alg. 3 l. 37: X_j",
     "keep": "CAA Alg. 3 l. 33: keep the previous route",
-    "significance": "HDA: (significance, id) per target of the sender's ability",
-    "release": "HDA: best release (gain, target, vehicle)",
+    "significance": "HDA: (significance, id), (marginal significance, id) per target of its ability",
+    "release": "HDA: release proposals (gain, target, vehicle) of every vehicle",
 }
 
 
-def message_numbers(kind: str, n: int, targets_of_ability: np.ndarray) -> int | np.ndarray:
+def message_numbers(kind: str, n: int, m: int, targets_of_ability: np.ndarray) -> int | np.ndarray:
     """Numbers in one message of ``kind`` sent by each vehicle of a group.
 
     Parameters
@@ -91,6 +92,8 @@ def message_numbers(kind: str, n: int, targets_of_ability: np.ndarray) -> int | 
         One of :data:`MESSAGE_KINDS`.
     n : int
         Number of targets of the problem.
+    m : int
+        Number of vehicles of the problem.
     targets_of_ability : (k,) int array
         For each sender, how many targets have its ability (used by HDA's ``significance``).
 
@@ -104,7 +107,7 @@ def message_numbers(kind: str, n: int, targets_of_ability: np.ndarray) -> int | 
     KeyError
         An unknown kind (a policy bug, never user input).
     """
-    return _SIZES[kind](int(n), np.asarray(targets_of_ability, dtype=np.int64))
+    return _SIZES[kind](int(n), int(m), np.asarray(targets_of_ability, dtype=np.int64))
 
 
 __all__ = ["NUMBER_BYTES", "MESSAGE_KINDS", "message_numbers"]

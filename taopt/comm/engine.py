@@ -232,7 +232,10 @@ class Group:
         rounds = int(rounds)
         if rounds <= 0:
             return
-        per_sender = message_numbers(kind, self.problem.n, self._sim.class_size[self.abilities])
+        problem = self.problem
+        per_sender = message_numbers(
+            kind, problem.n, problem.m, self._sim.class_size[self.abilities]
+        )
         numbers = int(np.sum(self._degree * per_sender)) * rounds
         self._tally.add(kind, int(self._degree.sum()) * rounds, numbers, rounds)
 
