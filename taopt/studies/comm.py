@@ -76,7 +76,53 @@ __all__ = [
     "q_table",
     "bytes_table",
     "plot_study",
+    "THESIS_TABLE_4_1",
+    "THESIS_TABLE_4_2",
+    "compare_with_thesis",
+    "report",
 ]
+
+#: Table 4.1 as printed: mean q of HDA and DAA, n = 30, m = 6; rows r = k r_c / 6 (k = 0 is
+#: r = 1 m), columns |A| = 2..6.
+THESIS_TABLE_4_1 = {
+    (0, "HDA"): (3.4717, 2.3407, 1.7132, 1.3638, 1.1351),
+    (0, "DAA"): (3.4717, 2.3407, 1.7132, 1.3638, 1.1351),
+    (1, "HDA"): (1.9504, 1.6221, 1.4022, 1.2495, 1.1351),
+    (1, "DAA"): (1.9274, 1.6009, 1.3919, 1.2474, 1.1351),
+    (2, "HDA"): (1.5582, 1.4016, 1.2855, 1.2048, 1.1351),
+    (2, "DAA"): (1.5170, 1.3682, 1.2578, 1.1942, 1.1351),
+    (3, "HDA"): (1.3126, 1.2393, 1.1990, 1.1658, 1.1351),
+    (3, "DAA"): (1.2624, 1.2111, 1.1744, 1.1555, 1.1351),
+    (4, "HDA"): (1.1878, 1.1727, 1.1565, 1.1453, 1.1351),
+    (4, "DAA"): (1.1631, 1.1601, 1.1495, 1.1435, 1.1351),
+    (5, "HDA"): (1.1507, 1.1529, 1.1442, 1.1406, 1.1351),
+    (5, "DAA"): (1.1467, 1.1493, 1.1427, 1.1404, 1.1351),
+    (6, "HDA"): (1.1453, 1.1492, 1.1417, 1.1398, 1.1351),
+    (6, "DAA"): (1.1437, 1.1483, 1.1415, 1.1399, 1.1351),
+}
+
+#: Table 4.2 as printed: mean data relayed (10^5 bytes), n = 30, m = 6 (no r = 1 m row).
+#: The row k = 5 is illegible in our copy ("Hyyyyy"); it is the one between 4 r_c/6 and r_c.
+THESIS_TABLE_4_2 = {
+    (1, "HDA"): (2.6525, 1.7352, 1.0261, 0.4747, 4.3152),
+    (1, "DAA"): (4.7297, 4.8322, 4.5819, 4.4393, 4.3152),
+    (1, "CAA"): (12.8744, 13.2027, 12.5462, 12.1706, 11.9303),
+    (2, "HDA"): (2.8770, 1.9481, 1.1728, 0.5635, 6.4860),
+    (2, "DAA"): (5.9341, 6.5702, 6.9101, 7.1652, 6.4860),
+    (2, "CAA"): (16.0655, 17.8692, 18.8337, 19.5528, 17.9318),
+    (3, "HDA"): (3.2648, 2.1329, 1.3397, 0.7086, 4.7002),
+    (3, "DAA"): (6.1134, 6.5526, 6.5935, 6.7829, 4.7002),
+    (3, "CAA"): (16.3616, 17.6188, 17.7728, 18.3142, 12.9946),
+    (4, "HDA"): (3.4039, 2.2532, 1.5286, 1.0182, 2.3446),
+    (4, "DAA"): (4.6646, 4.6149, 4.5518, 4.4915, 2.3446),
+    (4, "CAA"): (12.2805, 12.1993, 12.0843, 11.9489, 6.4821),
+    (5, "HDA"): (2.8228, 2.1607, 1.6917, 1.3769, 0.9829),
+    (5, "DAA"): (3.0691, 3.0310, 2.9442, 2.9699, 0.9829),
+    (5, "CAA"): (7.9659, 7.8915, 7.6851, 7.7764, 2.7174),
+    (6, "HDA"): (2.2226, 1.9920, 1.8188, 1.7053, 0.2772),
+    (6, "DAA"): (2.2593, 2.2576, 2.2699, 2.2590, 0.2772),
+    (6, "CAA"): (5.8137, 5.8171, 5.8611, 5.8391, 0.7665),
+}
 
 
 def scenario_seed(seed: int, n: int, m: int, attributes: int, scenario: int) -> int:
@@ -353,3 +399,54 @@ def plot_study(
         fig.tight_layout()
         fig.savefig(str(path), dpi=120)
     return fig
+
+
+def compare_with_thesis(
+    table: pd.DataFrame,
+    value: str = "q",
+    n: int = 30,
+    m: int = 6,
+    digits: int = 4,
+) -> str:
+    """A markdown table of ours beside the thesis's: "ours (thesis)" per r, algorithm, |A|.
+
+    ``value`` is "q" (Table 4.1), "bytes" (Table 4.2, in 10^5 bytes) or "gap" (ours only).
+    Rows are labelled by r as a multiple of r_c / 6 (the thesis's rows).
+    """
+    if value == "bytes":
+        ours, thesis = bytes_table(table, n, m), THESIS_TABLE_4_2
+    else:
+        ours, thesis = q_table(table, n, m, value=value), THESIS_TABLE_4_1
+    if (n, m) != (30, 6) or value == "gap":
+        thesis = {}
+    rs = sorted({r for r, _ in ours.index})
+    names = [c.replace("|", "\\|") for c in ours.columns]  # a pipe would end the cell
+    header = "| r | algorithm | " + " | ".join(names) + " |"
+    lines = [header, "|" + "---|" * (2 + len(ours.columns))]
+    for (r, method), row in ours.iterrows():
+        k = rs.index(r)
+        label = "1 m" if r == 1.0 else f"{k} r_c/6 = {r:g} m"
+        printed = thesis.get((k, method))
+        cells = []
+        for c, v in enumerate(row):
+            text = "–" if pd.isna(v) else f"{v:.{digits}f}"
+            if printed is not None:
+                text += f" ({printed[c]:.{digits}f})"
+            cells.append(text)
+        lines.append(f"| {label} | {method} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def report(csv: str | Path | pd.DataFrame, n: int = 30, m: int = 6) -> str:
+    """The markdown tables of docs/reproduction/chapter4.md from a study's rows (CSV or frame)."""
+    df = csv if isinstance(csv, pd.DataFrame) else pd.read_csv(csv)
+    table = summary(with_optimum(df))
+    part = table[(table["n"] == n) & (table["m"] == m)]
+    counts = part.groupby("A")["scenarios"].max().to_dict()
+    out = [f"scenarios per |A|: {counts}", ""]
+    out += ["mean q = f / f_MST (thesis in brackets):", "", compare_with_thesis(part, "q", n, m)]
+    if part["certified"].sum():
+        out += ["", "mean true gap f / f_o:", "", compare_with_thesis(part, "gap", n, m)]
+    out += ["", "mean bytes relayed, 10^5 bytes (thesis in brackets):", ""]
+    out += [compare_with_thesis(part, "bytes", n, m, digits=3)]
+    return "\n".join(out)
