@@ -70,13 +70,7 @@ import numpy as np
 
 from taopt.comm.engine import Group, Run, simulate
 from taopt.comm.problem import CommProblem
-from taopt.comm.routes import (
-    InsertionTable,
-    insert,
-    insertion_costs,
-    removal_savings,
-    route_length,
-)
+from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Solution
@@ -508,5 +502,4 @@ __all__ = [
     "cooperative_targets",
     "agree_on_targets",
     "adopt_per_class",
-    "route_length",
 ]
