@@ -312,7 +312,8 @@ def with_optimum(df: pd.DataFrame) -> pd.DataFrame:
     """Join each scenario's certified f_o (from its exact row, at any range) to every row.
 
     Adds ``optimum`` (NaN where no exact row is "optimal"), ``q = objective / f_mst``
-    (4.21) and ``gap = objective / optimum``.
+    (4.21), ``gap = objective / optimum`` and ``q_alone = initial_total / f_mst`` (every
+    vehicle driving the whole route it planned alone at t = 0: Proposition 4.10's bound).
     """
     df = df.copy()
     scenario = ["n", "m", "A", "scenario"]
@@ -321,11 +322,12 @@ def with_optimum(df: pd.DataFrame) -> pd.DataFrame:
     df = df.drop(columns=["optimum"], errors="ignore").join(best, on=scenario)
     df["q"] = df["objective"] / df["f_mst"]
     df["gap"] = df["objective"] / df["optimum"]
+    df["q_alone"] = df["initial_total"] / df["f_mst"]
     return df
 
 
 def summary(df: pd.DataFrame) -> pd.DataFrame:
-    """Means per (n, m, A, r, method): q, true gap, bytes, messages, rounds, re-plans, time.
+    """Means per (n, m, A, r, method): q, q_alone, true gap, bytes, messages, rounds, re-plans.
 
     ``gap`` is averaged over the scenarios whose optimum is certified (``certified`` counts
     them); ``scenarios`` counts all.
@@ -337,6 +339,7 @@ def summary(df: pd.DataFrame) -> pd.DataFrame:
     table = grouped.agg(
         scenarios=("objective", "size"),
         q=("q", "mean"),
+        q_alone=("q_alone", "mean"),
         gap=("gap", "mean"),
         certified=("gap", "count"),
         f=("objective", "mean"),
