@@ -110,12 +110,14 @@ class _Tally:
     messages: int = 0
     numbers: int = 0
     rounds: int = 0
+    broadcast: int = 0  # numbers if each round's message were one broadcast per sender
     by_kind: dict[str, int] = field(default_factory=dict)
 
-    def add(self, kind: str, messages: int, numbers: int, rounds: int) -> None:
+    def add(self, kind: str, messages: int, numbers: int, rounds: int, broadcast: int) -> None:
         self.messages += messages
         self.numbers += numbers
         self.rounds += rounds
+        self.broadcast += broadcast
         self.by_kind[kind] = self.by_kind.get(kind, 0) + numbers
 
 
@@ -237,7 +239,9 @@ class Group:
             kind, problem.n, problem.m, self._sim.class_size[self.abilities]
         )
         numbers = int(np.sum(self._degree * per_sender)) * rounds
-        self._tally.add(kind, int(self._degree.sum()) * rounds, numbers, rounds)
+        speakers = np.broadcast_to(per_sender, self._degree.shape)[self._degree > 0]
+        broadcast = int(np.sum(speakers)) * rounds
+        self._tally.add(kind, int(self._degree.sum()) * rounds, numbers, rounds, broadcast)
 
     def flood_or(self, values: np.ndarray, rounds: int, kind: str) -> np.ndarray:
         """``rounds`` rounds in which every member ORs its neighbours' boolean rows into its own.
@@ -384,6 +388,7 @@ class Simulation:
         self.violations = 0
         self.first_violation: str | None = None
         self.max_group_rounds = 0
+        self.numbers_at_start = 0
 
     # -- the loop ------------------------------------------------------------------------------
     def run(self) -> Run:
@@ -536,6 +541,9 @@ class Simulation:
         self.tally.messages += tally.messages
         self.tally.numbers += tally.numbers
         self.tally.rounds += tally.rounds
+        self.tally.broadcast += tally.broadcast
+        if self.time == 0.0:
+            self.numbers_at_start += tally.numbers
         for kind, value in tally.by_kind.items():
             self.tally.by_kind[kind] = self.tally.by_kind.get(kind, 0) + value
         self.max_group_rounds = max(self.max_group_rounds, tally.rounds)
@@ -628,6 +636,10 @@ class Simulation:
             "invariant_violations": self.violations,
             "first_violation": self.first_violation,
             "numbers_by_kind": dict(self.tally.by_kind),
+            # the same messages counted two other ways (for comparisons, not the model):
+            # once per sender and round (a radio broadcast), and without the groups at t = 0
+            "broadcast_bytes": self.tally.broadcast * NUMBER_BYTES,
+            "bytes_after_start": (self.tally.numbers - self.numbers_at_start) * NUMBER_BYTES,
             "groups": self.group_log,
         }
         return Run(trajectories, objective, info)
@@ -661,6 +673,9 @@ def simulate(
         ``trajectories`` (the payload), ``objective`` (4.1) from
         :func:`~taopt.comm.trajectories.evaluate_trajectories`, and ``info``: ``bytes``,
         ``numbers``, ``messages``, ``rounds`` (synchronous rounds, all groups),
+        ``broadcast_bytes`` (each round's message counted once per sender, as one radio
+        broadcast) and ``bytes_after_start`` (without the groups connected at t = 0) — the
+        same messages counted differently, for comparisons —
         ``max_group_rounds`` (the most in one newly connected group, Theorem 4.5(ii)),
         ``group_events``, ``replans`` (groups that adopted a reassignment), ``events``,
         ``projected`` (Lemma 4.7's projected total after each update; the first is
