@@ -80,6 +80,8 @@ __all__ = [
     "THESIS_TABLE_4_2",
     "compare_with_thesis",
     "report",
+    "plot_homogeneous",
+    "plot_scalability",
 ]
 
 #: Table 4.1 as printed: mean q of HDA and DAA, n = 30, m = 6; rows r = k r_c / 6 (k = 0 is
@@ -453,3 +455,50 @@ def report(csv: str | Path | pd.DataFrame, n: int = 30, m: int = 6) -> str:
     out += ["", "mean bytes relayed, 10^5 bytes (thesis in brackets):", ""]
     out += [compare_with_thesis(part, "bytes", n, m, digits=3)]
     return "\n".join(out)
+
+
+def plot_homogeneous(tables: Sequence[pd.DataFrame], path: str | Path | None = None) -> Any:
+    """Figs. 4.5–4.6: DAA's mean q (and true gap, where certified) against r, |A| = 1."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.5 * len(tables), 4.5))
+    for k, table in enumerate(tables):
+        ax = fig.add_subplot(1, len(tables), k + 1)
+        rows = table[(table["A"] == 1) & (table["method"] == "DAA")].sort_values("r")
+        n, m = int(rows["n"].iloc[0]), int(rows["m"].iloc[0])
+        ax.plot(rows["r"], rows["q"], "o-", label="q = f / f_MST")
+        if rows["certified"].sum():
+            ax.plot(rows["r"], rows["gap"], "s--", label="f / f_o (certified)")
+        ax.axhline(2.0, color="0.6", lw=0.8, ls=":")
+        ax.set_xlabel("communication range r (m)")
+        ax.set_ylabel("mean ratio")
+        ax.set_title(f"DAA, n = {n}, m = {m}, |A| = 1")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    if path is not None:
+        fig.tight_layout()
+        fig.savefig(str(path), dpi=120)
+    return fig
+
+
+def plot_scalability(table: pd.DataFrame, path: str | Path | None = None) -> Any:
+    """Figs. 4.7–4.8: DAA's mean q and run time against n, one line per |A| (always connected)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(12, 4.5))
+    q_ax, time_ax = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    rows = table[table["method"] == "DAA"]
+    for attributes, part in rows.groupby("A"):
+        part = part.sort_values("n")
+        q_ax.plot(part["n"], part["q"], "o-", label=f"|A| = {attributes}")
+        time_ax.plot(part["n"], part["runtime"], "o-", label=f"|A| = {attributes}")
+    q_ax.set_ylabel("mean q = f / f_MST")
+    time_ax.set_ylabel("mean run time of a simulation (s)")
+    for ax in (q_ax, time_ax):
+        ax.set_xlabel("targets n (m = 10)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    if path is not None:
+        fig.tight_layout()
+        fig.savefig(str(path), dpi=120)
+    return fig
