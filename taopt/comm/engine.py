@@ -389,6 +389,7 @@ class Simulation:
         self.first_violation: str | None = None
         self.max_group_rounds = 0
         self.numbers_at_start = 0
+        self.broadcast_at_start = 0
 
     # -- the loop ------------------------------------------------------------------------------
     def run(self) -> Run:
@@ -544,6 +545,7 @@ class Simulation:
         self.tally.broadcast += tally.broadcast
         if self.time == 0.0:
             self.numbers_at_start += tally.numbers
+            self.broadcast_at_start += tally.broadcast
         for kind, value in tally.by_kind.items():
             self.tally.by_kind[kind] = self.tally.by_kind.get(kind, 0) + value
         self.max_group_rounds = max(self.max_group_rounds, tally.rounds)
@@ -640,6 +642,8 @@ class Simulation:
             # once per sender and round (a radio broadcast), and without the groups at t = 0
             "broadcast_bytes": self.tally.broadcast * NUMBER_BYTES,
             "bytes_after_start": (self.tally.numbers - self.numbers_at_start) * NUMBER_BYTES,
+            "broadcast_bytes_after_start": (self.tally.broadcast - self.broadcast_at_start)
+            * NUMBER_BYTES,
             "groups": self.group_log,
         }
         return Run(trajectories, objective, info)
