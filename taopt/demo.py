@@ -44,7 +44,7 @@ def format_matrix(matrix: np.ndarray, names: list[str], digits: int = 1) -> str:
 
 def run_demo(
     plot: str | None = None,
-    out: IO[str] = sys.stdout,
+    out: IO[str] | None = None,
     progress: bool = True,
     methods: tuple[str, ...] | None = None,
     seed: int = 0,
@@ -66,6 +66,7 @@ def run_demo(
         ``instance``, ``matrix`` (N, N), ``report`` (MatrixReport), ``seconds`` (matrix time),
         ``problem`` (AssignmentProblem), ``table`` (gap table, DataFrame), ``solutions``.
     """
+    out = sys.stdout if out is None else out  # resolved per call, not at import
     from taopt.navigation import travel_time_matrix
     from taopt.navigation.checks import matrix_report
 

@@ -136,7 +136,7 @@ def solve_file(
     plot: str | None = None,
     gantt: str | None = None,
     save: str | Path | None = None,
-    out: IO[str] = sys.stdout,
+    out: IO[str] | None = None,
     progress: bool = True,
 ) -> dict[str, Any]:
     """Load ``path``, solve it with ``methods`` and print the gap table.
@@ -165,6 +165,7 @@ def solve_file(
     -------
     dict with ``problem``, ``instance``, ``table`` (DataFrame) and ``solutions``.
     """
+    out = sys.stdout if out is None else out  # resolved per call, not at import
     tic = time.perf_counter()
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
@@ -200,7 +201,7 @@ def verify_file(
     problem_path: str | Path,
     exact: bool = False,
     time_limit: float | None = None,
-    out: IO[str] = sys.stdout,
+    out: IO[str] | None = None,
     progress: bool = False,
 ) -> bool:
     """Re-score a saved solution from the problem file alone and check every constraint.
@@ -216,6 +217,7 @@ def verify_file(
     bool
         True when every check passes (each check is printed).
     """
+    out = sys.stdout if out is None else out  # resolved per call, not at import
     problem, _ = load_problem_file(problem_path, progress=progress)
     solution = Solution.load(solution_path)
     family = family_of(problem)

@@ -15,7 +15,9 @@ from taopt.comm.engine import initially_connected, simulate
 from taopt.heuristics.comm import CAA, DAA, HDA, central_auction
 
 ALGORITHMS = ("CAA", "DAA", "HDA")
-COUNTEREXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "counterexamples"
+COUNTEREXAMPLES = (
+    Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "counterexamples" / "chapter4"
+)
 DIAGONAL = 1000.0 * math.sqrt(2.0)
 
 

@@ -341,7 +341,7 @@ def search_one_metre(
 def write_counterexamples(
     out_dir: str | Path, samples: int = 1500, seed: int = 0
 ) -> dict[str, Path]:
-    """Search and save the chapter 4 instances shipped in docs/reproduction/counterexamples.
+    """Search and save the chapter 4 instances shipped in docs/reproduction/counterexamples/chapter4.
 
     * ``remark-4-6-short.json`` / ``remark-4-6-long.json``: the smallest Remark 4.6 instance
       found by :func:`search_remark_4_6` (of its hits on that instance, the closest ranges);
