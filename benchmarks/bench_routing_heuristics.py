@@ -16,6 +16,7 @@ Usage::
     python benchmarks/bench_routing_heuristics.py                 # n120m20, 5 scenarios
     python benchmarks/bench_routing_heuristics.py --costs uniform # no navigation (fast)
     python benchmarks/bench_routing_heuristics.py --n 50 --m 10 --scenarios 3 --no-ga
+    python benchmarks/bench_routing_heuristics.py --ga-operators ox-inversion  # first GA
 """
 
 from __future__ import annotations
@@ -69,6 +70,9 @@ def main() -> None:
     parser.add_argument("--no-ga", action="store_true")
     parser.add_argument("--generations", type=int, default=350)
     parser.add_argument("--population", type=int, default=120)
+    parser.add_argument(
+        "--ga-operators", default="memetic", help='GA operator set ("memetic", "ox-inversion")'
+    )
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
 
@@ -82,7 +86,11 @@ def main() -> None:
         lower = arborescence_bound(problem)
         for name in methods:
             options = (
-                {"generations": args.generations, "population": args.population}
+                {
+                    "generations": args.generations,
+                    "population": args.population,
+                    "operators": args.ga_operators,
+                }
                 if name == "GA"
                 else {}
             )

@@ -53,7 +53,9 @@ def one(mode: list[str]) -> tuple[float, int, int]:
         out = Path(tmp) / "study"
         argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "30", "--m", "4"]
         argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
-        process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        process = subprocess.Popen(
+            argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=tmp
+        )
         csv = out / "drift.csv"
         while not (csv.exists() and len(csv.read_text().splitlines()) > 2):
             time.sleep(0.05)

@@ -137,7 +137,7 @@ def insertion_costs(cost: np.ndarray, nodes: np.ndarray, candidates: np.ndarray)
 
 
 def marginal_cost_sequence(
-    problem: AssignmentProblem, vehicle: int, targets: Sequence[int]
+    problem: AssignmentProblem, vehicle: int, targets: Sequence[int], transposed: bool = False
 ) -> list[int]:
     """Smallest marginal cost principle (2.18)–(2.19) for one vehicle.
 
@@ -145,11 +145,17 @@ def marginal_cost_sequence(
     of the route's travel time; positions ``1 < q <= |o_j| + 1`` (after the
     start). Ties: lowest target index, then earliest position.
     O(|T_j|^3) numpy work.
+
+    ``transposed=True`` is a reproduction option, never the default: the insertion costs
+    are computed on the transposed matrix (``t(k, i)`` where (2.18) has ``t(i, k)``), as if
+    the travel times had been stored the other way round; the route is still scored on the
+    true matrix. See :func:`vm_transposed`.
     """
     remaining = np.array(sorted(int(k) for k in targets), dtype=int)
     nodes = np.array([problem.n + vehicle], dtype=int)
+    matrix = problem.cost.T if transposed else problem.cost
     while remaining.size:
-        costs = insertion_costs(problem.cost, nodes, remaining)  # (L, K)
+        costs = insertion_costs(matrix, nodes, remaining)  # (L, K)
         # Flatten column-major so argmin's first hit is the lowest target, then earliest q.
         flat = int(np.argmin(costs.T))
         pick, gap = divmod(flat, costs.shape[0])
@@ -216,9 +222,18 @@ def _solution(
 def cluster_then_sequence(
     problem: AssignmentProblem, clusters: np.ndarray, metric: str
 ) -> list[list[int]]:
-    """Sequence each vehicle's cluster with ``metric`` "nearest" (2.16) or "marginal" (2.18)."""
-    sequence = nearest_sequence if metric == "nearest" else marginal_cost_sequence
-    return [sequence(problem, j, np.flatnonzero(clusters == j).tolist()) for j in range(problem.m)]
+    """Sequence each vehicle's cluster with ``metric`` "nearest" (2.16), "marginal" (2.18)
+    or "marginal-transposed" (2.18 on the transposed matrix, a reproduction option)."""
+    if metric == "nearest":
+        return [
+            nearest_sequence(problem, j, np.flatnonzero(clusters == j).tolist())
+            for j in range(problem.m)
+        ]
+    transposed = metric == "marginal-transposed"
+    return [
+        marginal_cost_sequence(problem, j, np.flatnonzero(clusters == j).tolist(), transposed)
+        for j in range(problem.m)
+    ]
 
 
 @register_method(AssignmentProblem, "VN")
@@ -279,6 +294,35 @@ def evm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     )
 
 
+@register_method(AssignmentProblem, "VM-transposed", default=False)
+def vm_transposed(
+    problem: AssignmentProblem, seed: int | np.random.Generator | None = 0
+) -> Solution:
+    """VM with its insertion step (2.18)–(2.19) on the transposed matrix (reproduction option).
+
+    Not a method of the thesis and never a default: it reads ``t(k, i)`` where (2.18) reads
+    ``t(i, k)``, as if the travel-time matrix had been stored the other way round. It is kept
+    because it reproduces the thesis's VM column of Table 2.1 far better than VM does (see
+    docs/reproduction/chapter2.md); the route is scored on the true matrix.
+    """
+    start = time.perf_counter()
+    clusters = voronoi_clusters(problem, seed)
+    routes = cluster_then_sequence(problem, clusters, "marginal-transposed")
+    return _solution(problem, routes, "VM-transposed", seed, start)
+
+
+@register_method(AssignmentProblem, "EVM-transposed", default=False)
+def evm_transposed(
+    problem: AssignmentProblem, seed: int | np.random.Generator | None = 0
+) -> Solution:
+    """EVM with its insertion step on the transposed matrix (reproduction option; see
+    :func:`vm_transposed`)."""
+    start = time.perf_counter()
+    clusters = extended_voronoi_clusters(problem)
+    routes = cluster_then_sequence(problem, clusters, "marginal-transposed")
+    return _solution(problem, routes, "EVM-transposed", seed, start)
+
+
 @register_method(AssignmentProblem, "MC")
 def mc(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """MC: marginal-cost-based clustering (2.15), a complete assignment by itself.
@@ -316,5 +360,7 @@ __all__ = [
     "vm",
     "evn",
     "evm",
+    "vm_transposed",
+    "evm_transposed",
     "mc",
 ]

@@ -16,6 +16,15 @@ The same rule, :func:`certify`, is what the models apply to their final
 answer, after they combine the solver's bound with their own valid bounds
 and re-score the decoded solution.
 
+Two ways to solve. :func:`solve_highs` hands a cvxpy problem to cvxpy's HiGHS
+interface (one solve, values written back into the cvxpy variables).
+:class:`HighsModel` compiles a cvxpy problem ONCE (``get_problem_data``) into a
+``highspy.Highs`` object that stays alive, so a loop can add rows
+(:meth:`HighsModel.add_rows`), fix columns, switch integrality off and on, give
+a MIP start (``Highs.setSolution``) and watch the MIP's solutions (HiGHS's
+``kCallbackMipSolution``) without ever rebuilding: the DFJ loop of
+:mod:`taopt.models.routing` runs on one such model.
+
 cvxpy maps HiGHS's ``kOptimal`` to "optimal" and ``kTimeLimit`` (and the other
 limits) to "user_limit"; ``problem.solver_stats.extra_stats`` is HiGHS's
 ``HighsInfo``: ``primal_solution_status`` (2 = a feasible point exists),
@@ -34,18 +43,30 @@ Example
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import cvxpy as cp
+import highspy
+import numpy as np
+import scipy.sparse as sp
 
+from taopt.errors import SolverError
 from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
 
 #: "optimal" only when (objective − bound) / |objective| is at most this.
 OPTIMALITY_TOLERANCE = 1e-6
 
-__all__ = ["OPTIMALITY_TOLERANCE", "HighsRun", "certify", "relative_gap", "solve_highs"]
+__all__ = [
+    "OPTIMALITY_TOLERANCE",
+    "HighsModel",
+    "HighsRun",
+    "certify",
+    "relative_gap",
+    "solve_highs",
+]
 
 
 @dataclass(frozen=True)
@@ -138,6 +159,13 @@ def _number(info: Any, name: str, default: float = math.nan) -> float:
     return float(value)
 
 
+def thread_options() -> dict[str, Any]:
+    """HiGHS's ``threads`` from ``TAOPT_SOLVER_THREADS`` (the study runner sets 1 in its tasks,
+    so parallel scenarios do not compete for cores); empty when unset."""
+    threads = os.environ.get("TAOPT_SOLVER_THREADS")
+    return {"threads": int(threads)} if threads and threads.isdigit() else {}
+
+
 def solve_highs(
     problem: cp.Problem,
     time_limit: float | None = None,
@@ -170,7 +198,7 @@ def solve_highs(
         decides what to do with every outcome.
     """
     is_mip = bool(problem.is_mixed_integer())
-    options: dict[str, Any] = {}
+    options: dict[str, Any] = dict(thread_options())
     if time_limit is not None:
         options["time_limit"] = max(float(time_limit), 1e-3)
     if is_mip and mip_rel_gap is not None:
@@ -229,3 +257,339 @@ def solve_highs(
         is_mip=is_mip,
         info=info,
     )
+
+
+# ------------------------------------------------------------------ persistent model
+#: HiGHS model statuses, in cvxpy's words (as cvxpy's own HiGHS interface maps them),
+#: so a run of :class:`HighsModel` and one of :func:`solve_highs` read alike.
+_SOLVER_STATUS = {
+    "kOptimal": "optimal",
+    "kInfeasible": "infeasible",
+    "kUnboundedOrInfeasible": "infeasible_or_unbounded",
+    "kUnbounded": "unbounded",
+    "kObjectiveBound": "user_limit",
+    "kObjectiveTarget": "user_limit",
+    "kTimeLimit": "user_limit",
+    "kIterationLimit": "user_limit",
+    "kSolutionLimit": "user_limit",
+    "kInterrupt": "user_limit",
+    "kHighsInterrupt": "user_limit",
+}
+
+
+def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> HighsRun:
+    """:class:`HighsRun` of the last ``highs.run()``: the rules of :func:`solve_highs`."""
+    model_status = highs.getModelStatus()
+    solver_status = _SOLVER_STATUS.get(model_status.name, "solver_error")
+    info = highs.getInfo()
+    has_point = int(info.primal_solution_status) == 2
+    objective = float(info.objective_function_value) if has_point else None
+    bound = None
+    if is_mip:
+        dual_bound = float(info.mip_dual_bound)
+        bound = dual_bound if math.isfinite(dual_bound) else None
+    elif solver_status == "optimal" and has_point:
+        bound = objective  # an LP at its optimum
+    if solver_status in ("infeasible", "infeasible_or_unbounded"):
+        status, stopped_by = INFEASIBLE, "infeasible"
+    elif solver_status in ("optimal", "user_limit") and has_point:
+        if solver_status == "user_limit":
+            reason = "time_limit" if time_limit is not None else "solver_limit"
+        else:
+            reason = "mip_gap"
+        status, stopped_by = certify(objective, bound, reason)
+    elif solver_status == "user_limit":  # a limit before any feasible point
+        status, stopped_by = TIME_LIMIT, "time_limit" if time_limit is not None else "solver_limit"
+    else:
+        status, stopped_by = ERROR, "error"
+    return HighsRun(
+        status=status,
+        stopped_by=stopped_by,
+        solver_status=solver_status,
+        has_point=has_point,
+        objective=objective,
+        bound=bound,
+        mip_gap=float(info.mip_gap) if is_mip else math.nan,
+        nodes=int(info.mip_node_count) if is_mip else -1,
+        is_mip=is_mip,
+        message="" if solver_status != "solver_error" else f"HiGHS status {model_status.name}",
+        info=info,
+    )
+
+
+class HighsModel:
+    """A cvxpy LP/MILP compiled once into a ``highspy.Highs`` that stays alive.
+
+    cvxpy stays the modelling layer: the problem is written (and labelled) in
+    cvxpy, compiled once by ``problem.get_problem_data(cp.HIGHS)`` into the same
+    rows cvxpy's own HiGHS interface would pass, and from then on changed in
+    place: rows added, column bounds changed, integrality switched, a MIP start
+    given. Nothing is rebuilt between solves, and an LP re-solve after new rows
+    starts from the previous basis (dual simplex).
+
+    Parameters
+    ----------
+    problem : cvxpy.Problem
+        A minimisation LP or MILP (affine objective and constraints).
+    verbose : bool
+        HiGHS log.
+
+    Attributes
+    ----------
+    highs : highspy.Highs
+        The live solver object.
+    n_columns : int
+    is_mip : bool
+        The compiled problem has integer columns (whatever :meth:`relax` says).
+    offset : float
+        Constant term of the objective (added to HiGHS's objective by HiGHS).
+
+    Example
+    -------
+    >>> import cvxpy as cp, numpy as np, scipy.sparse as sp
+    >>> x = cp.Variable(2, integer=True)
+    >>> model = HighsModel(cp.Problem(cp.Minimize(x.sum()), [x >= 0.5]))
+    >>> model.solve().objective
+    2.0
+    >>> model.add_rows(sp.csr_matrix(np.array([[1.0, 0.0]])), lower=[2.5])  # x0 >= 2.5
+    >>> float(model.solve().objective), model.values(x).tolist()
+    (4.0, [3.0, 1.0])
+    """
+
+    def __init__(self, problem: cp.Problem, verbose: bool = False) -> None:
+        data, _, inverse = problem.get_problem_data(cp.HIGHS)
+        program = data["param_prob"]
+        self._columns = {
+            var.id: (program.var_id_to_col[var.id], int(var.size)) for var in program.variables
+        }
+        dims = data["dims"]
+        cost = np.asarray(data["c"], dtype=float)
+        matrix = sp.csr_matrix(data["A"])
+        upper = np.asarray(data["b"], dtype=float)
+        equalities = int(dims.zero)
+        # cvxpy's cone form: rows [0, zero) are A x = b, the rest A x <= b
+        lower = np.concatenate([upper[:equalities], np.full(len(upper) - equalities, -np.inf)])
+        n_columns = len(cost)
+        column_lower = data["lower_bounds"]
+        column_upper = data["upper_bounds"]
+        column_lower = np.full(n_columns, -np.inf) if column_lower is None else column_lower.copy()
+        column_upper = np.full(n_columns, np.inf) if column_upper is None else column_upper.copy()
+        booleans = np.asarray(data["bool_vars_idx"], dtype=np.int64)
+        integers = np.asarray(
+            sorted({*data["bool_vars_idx"], *data["int_vars_idx"]}), dtype=np.int64
+        )
+        column_lower[booleans] = np.maximum(column_lower[booleans], 0.0)
+        column_upper[booleans] = np.minimum(column_upper[booleans], 1.0)
+        self.offset = float(inverse[-1][cp.settings.OFFSET]) if inverse else 0.0
+        self.n_columns = n_columns
+        self.is_mip = len(integers) > 0
+        self._integers = integers.astype(np.int32)
+        self._relaxed = False
+        self.cost = cost
+        # the rows as kept here too (for Lagrangian bounds): matrix, lower, upper
+        self._row_blocks: list[tuple[sp.csr_matrix, np.ndarray, np.ndarray]] = [
+            (matrix, lower, upper)
+        ]
+
+        lp = highspy.HighsLp()
+        lp.num_col_ = n_columns
+        lp.num_row_ = matrix.shape[0]
+        lp.offset_ = self.offset
+        lp.col_cost_ = cost
+        lp.col_lower_ = column_lower
+        lp.col_upper_ = column_upper
+        lp.row_lower_ = lower
+        lp.row_upper_ = upper
+        by_column = matrix.tocsc()
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = by_column.indptr
+        lp.a_matrix_.index_ = by_column.indices
+        lp.a_matrix_.value_ = by_column.data
+        if self.is_mip:
+            integrality = [highspy.HighsVarType.kContinuous] * n_columns
+            for column in integers:
+                integrality[column] = highspy.HighsVarType.kInteger
+            lp.integrality_ = integrality
+        self.highs = highspy.Highs()
+        self.highs.setOptionValue("output_flag", bool(verbose))
+        for name, value in thread_options().items():
+            self.highs.setOptionValue(name, value)
+        if self.highs.passModel(lp) == highspy.HighsStatus.kError:
+            raise SolverError("HiGHS rejected the compiled model")
+        self.column_lower = column_lower
+        self.column_upper = column_upper
+
+    # ------------------------------------------------------------------ columns
+    def columns(self, variable: cp.Variable) -> np.ndarray:
+        """Column indices of a cvxpy variable (flattened in cvxpy's column-major order)."""
+        if variable.id not in self._columns:
+            raise SolverError(f"variable {variable.name()} is not in the compiled model")
+        start, size = self._columns[variable.id]
+        return np.arange(start, start + size)
+
+    def values(self, variable: cp.Variable, solution: Any = None) -> np.ndarray:
+        """The variable's values in the last solution (or in ``solution``, a full column vector)."""
+        if solution is None:
+            solution = self.highs.getSolution().col_value
+        return np.asarray(solution, dtype=float)[self.columns(variable)]
+
+    def set_upper(self, columns: Any, upper: Any) -> None:
+        """Change the upper bounds of some columns (e.g. 0 to fix a binary off)."""
+        columns = np.asarray(columns, dtype=np.int32)
+        if len(columns) == 0:
+            return
+        upper = np.broadcast_to(np.asarray(upper, dtype=float), columns.shape).copy()
+        self.column_upper[columns] = upper
+        self.highs.changeColsBounds(len(columns), columns, self.column_lower[columns], upper)
+
+    def relax(self, relaxed: bool = True) -> None:
+        """Switch the integer columns to continuous (the LP relaxation) or back."""
+        if not self.is_mip or relaxed == self._relaxed:
+            return
+        kind = highspy.HighsVarType.kContinuous if relaxed else highspy.HighsVarType.kInteger
+        flags = np.full(len(self._integers), int(kind), dtype=np.uint8)
+        self.highs.changeColsIntegrality(len(self._integers), self._integers, flags)
+        self._relaxed = relaxed
+
+    # --------------------------------------------------------------------- rows
+    def add_rows(self, matrix: sp.spmatrix, lower: Any = None, upper: Any = None) -> None:
+        """Add rows ``lower <= matrix @ x <= upper`` (over ALL columns) to the live model.
+
+        ``None`` for a side means unbounded on that side.
+        """
+        matrix = sp.csr_matrix(matrix)
+        count = matrix.shape[0]
+        if count == 0:
+            return
+        if matrix.shape[1] != self.n_columns:
+            raise SolverError(f"rows have {matrix.shape[1]} columns, the model {self.n_columns}")
+        lower = np.full(count, -np.inf) if lower is None else np.asarray(lower, dtype=float)
+        upper = np.full(count, np.inf) if upper is None else np.asarray(upper, dtype=float)
+        lower = np.broadcast_to(lower, (count,)).copy()
+        upper = np.broadcast_to(upper, (count,)).copy()
+        matrix.sort_indices()
+        self.highs.addRows(
+            count,
+            lower,
+            upper,
+            matrix.nnz,
+            matrix.indptr[:-1].astype(np.int32),
+            matrix.indices.astype(np.int32),
+            matrix.data.astype(float),
+        )
+        self._row_blocks.append((matrix, lower, upper))
+
+    @property
+    def n_rows(self) -> int:
+        return sum(block[0].shape[0] for block in self._row_blocks)
+
+    # -------------------------------------------------------------------- solve
+    def set_start(self, solution: np.ndarray) -> bool:
+        """Give HiGHS a full column vector as a MIP start (``Highs.setSolution``).
+
+        HiGHS checks it and keeps it as its first incumbent if it is feasible.
+        Returns False if HiGHS rejected the call.
+        """
+        solution = np.asarray(solution, dtype=float)
+        if solution.shape != (self.n_columns,):
+            raise SolverError(f"a start needs {self.n_columns} values, got {solution.shape}")
+        status = self.highs.setSolution(
+            self.n_columns, np.arange(self.n_columns, dtype=np.int32), solution
+        )
+        return status != highspy.HighsStatus.kError
+
+    def solve(
+        self,
+        time_limit: float | None = None,
+        mip_rel_gap: float | None = None,
+        on_solution: Any = None,
+        options: dict[str, Any] | None = None,
+    ) -> HighsRun:
+        """Run HiGHS on the model as it stands; never raises for a solver outcome.
+
+        Parameters
+        ----------
+        time_limit : float, optional
+            Seconds (at least 1 ms is passed); None for no limit.
+        mip_rel_gap : float, optional
+            HiGHS ``mip_rel_gap`` (HiGHS's default 1e-4 when None).
+        on_solution : callable, optional
+            Called with the full column vector (a numpy array) of every
+            solution HiGHS's MIP search finds (``kCallbackMipSolution``).
+        options : dict, optional
+            Further HiGHS options for this and later runs (name -> value).
+
+        Returns
+        -------
+        HighsRun
+            With the status rules of :func:`solve_highs`.
+        """
+        highs = self.highs
+        limit = math.inf if time_limit is None else max(float(time_limit), 1e-3)
+        highs.setOptionValue("time_limit", limit)
+        highs.setOptionValue("mip_rel_gap", 1e-4 if mip_rel_gap is None else float(mip_rel_gap))
+        is_mip = self.is_mip and not self._relaxed
+        for name, value in (options or {}).items():
+            if highs.setOptionValue(name, value) == highspy.HighsStatus.kError:
+                raise SolverError(f"HiGHS refused option {name} = {value!r}")
+
+        def forward(event: Any) -> None:
+            on_solution(np.array(event.data_out.mip_solution, dtype=float))
+
+        if on_solution is not None and is_mip:
+            highs.cbMipSolution.subscribe(forward)
+        try:
+            highs.run()
+        finally:
+            if on_solution is not None and is_mip:
+                highs.cbMipSolution.unsubscribe(forward)
+        return _highs_run(highs, is_mip, time_limit)
+
+    def lagrangian_bound(self) -> tuple[float, np.ndarray]:
+        """A proven lower bound and reduced costs from the last LP's row duals.
+
+        For any row duals y of the right signs (free on equalities, ``<= 0`` on
+        ``A x <= u`` rows, ``>= 0`` on ``A x >= l`` rows) and reduced costs
+        ``d = c - A^T y``, every x in the column bounds that satisfies the rows
+        has ``c x >= y·b + Σ_j min(d_j l_j, d_j u_j) =: L``. HiGHS's duals are
+        clipped to those signs and L is computed here, so the bound holds
+        whatever the solver's tolerances. Moreover a point with ``x_j = u_j``
+        for a column at its lower bound in the LP (``d_j > 0``, ``l_j = 0``)
+        costs at least ``L + d_j u_j``: the basis of reduced-cost fixing.
+
+        Returns
+        -------
+        bound : float
+            L plus the objective's offset (``-inf`` without a dual solution).
+        reduced_costs : ndarray
+            d, one per column.
+        """
+        solution = self.highs.getSolution()
+        if not solution.dual_valid:
+            return -math.inf, np.zeros(self.n_columns)
+        duals = np.asarray(solution.row_dual, dtype=float)
+        bound = self.offset
+        reduced = self.cost.copy()
+        start = 0
+        for matrix, lower, upper in self._row_blocks:
+            y = duals[start : start + matrix.shape[0]].copy()
+            start += matrix.shape[0]
+            finite_lower, finite_upper = np.isfinite(lower), np.isfinite(upper)
+            equal = finite_lower & finite_upper & (lower == upper)
+            # a <= row can only have y <= 0, a >= row y >= 0; a ranged row takes the side
+            # its sign points to
+            y = np.where(~finite_lower & (y > 0), 0.0, y)
+            y = np.where(~finite_upper & (y < 0), 0.0, y)
+            rhs = np.where(y > 0, np.where(finite_lower, lower, 0.0), 0.0)
+            rhs = np.where(y < 0, np.where(finite_upper, upper, 0.0), rhs)
+            rhs = np.where(equal, lower, rhs)
+            bound += float(y @ rhs)
+            reduced -= matrix.T @ y
+        low = np.where(np.isfinite(self.column_lower), self.column_lower, 0.0)
+        high = np.where(np.isfinite(self.column_upper), self.column_upper, 0.0)
+        if np.any((reduced > 0) & ~np.isfinite(self.column_lower)) or np.any(
+            (reduced < 0) & ~np.isfinite(self.column_upper)
+        ):
+            return -math.inf, reduced  # an unbounded column direction: no bound from y
+        bound += float(np.minimum(reduced * low, reduced * high).sum())
+        return bound, reduced

@@ -17,7 +17,11 @@ per arc.
   - ``"dfj"`` — the thesis's own (2.5), Dantzig–Fulkerson–Johnson. It has one
     constraint per subset, so it is added lazily: solve, find every cycle
     among targets in the incumbent, add ``Σ_{i,j∈S} σ_ij ≤ |S| − 1`` for each,
-    re-solve, until no cycle is left.
+    re-solve, until no cycle is left. The loop runs on ONE live HiGHS model
+    (:class:`DfjModel`): the cvxpy model is compiled once, rows are added in
+    place, rows violated by the root LP are separated exactly first, arcs that
+    cannot improve on the incumbent (by LP reduced cost) are switched off, and
+    every round starts from the best solution known (see :func:`solve_routing`).
   - ``"mtz"`` — Miller–Tucker–Zemlin order variables (compact).
   - ``"flow"`` — single-commodity flow from the vehicles (compact).
 
@@ -40,28 +44,34 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import cvxpy as cp
-import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
 from taopt.errors import InstanceError, SolverError
-from taopt.models.highs import OPTIMALITY_TOLERANCE, certify, solve_highs
+from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
 from taopt.result import RELAXATION, Routes, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
 
 __all__ = [
+    "CUT_TOLERANCE",
     "OPTIMALITY_TOLERANCE",
     "SUBTOUR_ELIMINATIONS",
+    "DfjModel",
+    "RootRelaxation",
     "RoutingModel",
     "build",
+    "cut_rows",
     "decode",
     "describe",
+    "dfj_root",
     "entry_bound",
     "find_subtours",
     "greedy_routes",
     "repair",
+    "separate_subtours",
     "solve_routing",
 ]
 
@@ -186,8 +196,9 @@ def build(
     travel_time = problem.cost[tails, heads]
 
     if relax:
-        arc_use = cp.Variable(n_arcs, name="sigma", nonneg=True)
-        bounds = [(arc_use <= 1).set_label("0 <= sigma_ij <= 1 (LP relaxation of binary sigma)")]
+        # 0 <= sigma_ij <= 1: the LP relaxation of binary sigma (column bounds)
+        arc_use = cp.Variable(n_arcs, name="sigma", bounds=[0, 1])
+        bounds = []
     else:
         arc_use = cp.Variable(n_arcs, name="sigma", boolean=True)
         bounds = []
@@ -375,23 +386,38 @@ def find_subtours(problem: AssignmentProblem, model: RoutingModel) -> list[list[
 def repair(
     problem: AssignmentProblem, routes: list[list[int]], subtours: list[list[int]]
 ) -> list[list[int]]:
-    """Make routes feasible: open each subtour at its best arc and append it to a route.
+    """Make routes feasible: patch each subtour into the routes where it costs least.
 
-    For each cycle, every way to open it (drop arc a -> b, keep the path b ... a)
-    and every route to append it to is priced; the cheapest is taken. Used for
-    a feasible incumbent when the DFJ loop stops at a limit.
+    A cycle ``c_0 -> ... -> c_{L-1} -> c_0`` is opened by dropping one of its
+    arcs ``c_{p-1} -> c_p`` and the path ``c_p ... c_{p-1}`` is spliced between a
+    point a on a route and its successor b (or after the route's last point):
+    the change of cost is ``t(a, c_p) + t(c_{p-1}, b) − t(a, b) − t(c_{p-1}, c_p)``
+    (without the b terms at a route's end). Every opening and every place is
+    priced at once and the cheapest is taken, cycle after cycle (Karp's
+    patching). Used to turn a DFJ round's answer into a feasible incumbent.
     """
     cost = problem.cost
+    n = problem.n
     routes = [list(r) for r in routes]
     for cycle in subtours:
-        cycle = list(cycle)
-        # opening at position p drops arc cycle[p-1] -> cycle[p]; the path starts at cycle[p]
-        prev = np.roll(cycle, 1)
-        ends = np.array([r[-1] if r else problem.n + k for k, r in enumerate(routes)])
-        # price[k, p] = t(end of route k, cycle[p]) - t(cycle[p-1], cycle[p])
-        price = cost[ends][:, cycle] - cost[prev, cycle][None, :]
-        k, p = np.unravel_index(int(np.argmin(price)), price.shape)
-        routes[k].extend(cycle[p:] + cycle[:p])
+        cycle = np.asarray(list(cycle), dtype=np.int64)
+        before = np.roll(cycle, 1)  # opening at p drops before[p] -> cycle[p]
+        # every place: after point a = points[k][q], before b (-1 at a route's end)
+        places_a, places_b, where = [], [], []
+        for k, route in enumerate(routes):
+            points = [n + k, *route]
+            places_a.extend(points)
+            places_b.extend([*route, -1])
+            where.extend((k, q) for q in range(len(points)))
+        a = np.asarray(places_a, dtype=np.int64)
+        b = np.asarray(places_b, dtype=np.int64)
+        inner = b >= 0
+        price = cost[a][:, cycle] - cost[before, cycle][None, :]
+        price[inner] += cost[before][:, b[inner]].T - cost[a[inner], b[inner]][:, None]
+        place, p = np.unravel_index(int(np.argmin(price)), price.shape)
+        k, q = where[place]
+        path = [int(v) for v in np.roll(cycle, -p)]
+        routes[k][q:q] = path
     return routes
 
 
@@ -423,24 +449,389 @@ def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
     return routes
 
 
-# --------------------------------------------------------------------------- solving
-def _run(model: RoutingModel, time_limit: float | None, mip_gap: float, verbose: bool):
-    """Solve once with :func:`taopt.models.highs.solve_highs`; return the run and σ's values.
+# ------------------------------------------------------------- separation of (2.5)
+#: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
+CORE_SIZE = 4
+#: HiGHS options of the DFJ rounds. A smaller cut pool than HiGHS's default (10000)
+#: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
+#: bench_routing_exact.py); the optimum and its proof do not depend on it.
+MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+#: A DFJ row (2.5) counts as violated when it is off by more than this.
+CUT_TOLERANCE = 1e-6
+#: Fixed-point scale of σ for scipy's integer maximum flow (errors below 2**-25 per arc).
+_FLOW_SCALE = 2**24
 
-    The values are None when HiGHS holds no feasible point (a limit came first,
-    or cvxpy raised). Any other outcome than optimal / a limit / a cvxpy error
-    (e.g. "infeasible", impossible for (2.2)–(2.5) with a vehicle) raises.
+
+def cut_rows(
+    problem: AssignmentProblem,
+    cuts: list[tuple[int, ...]],
+    tails: np.ndarray,
+    heads: np.ndarray,
+) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """(2.5) rows for the subsets ``cuts``, each in its sparser equivalent form.
+
+    For a subset S of targets, (2.5) reads ``Σ_{i,j∈S} σ_ij ≤ |S| − 1``
+    (``|S|(|S| − 1)`` coefficients). Summing (2.3) over S gives
+    ``Σ_{i,j∈S} σ_ij + Σ_{i∉S, j∈S} σ_ij = |S|``, so under (2.3) the same row is
+    the cut ``Σ_{i∉S, j∈S} σ_ij ≥ 1`` (``(n + m − |S|) |S|`` coefficients). Each
+    subset gets whichever form has fewer coefficients; both cut off exactly the
+    same points of (2.3).
+
+    Returns
+    -------
+    matrix : (len(cuts), arcs) csr_matrix
+    lower, upper : arrays
+        Row bounds (``-inf`` / ``inf`` for an open side).
     """
-    run = solve_highs(
-        model.problem,
-        time_limit=time_limit,
-        mip_rel_gap=None if model.relax else mip_gap,
-        verbose=verbose,
+    size = problem.n + problem.m
+    rows, columns = [], []
+    lower = np.empty(len(cuts))
+    upper = np.empty(len(cuts))
+    for r, subset in enumerate(cuts):
+        inside = np.zeros(size, dtype=bool)
+        inside[list(subset)] = True
+        k = len(subset)
+        if k * (k - 1) <= (size - k) * k:
+            arcs = np.flatnonzero(inside[tails] & inside[heads])
+            lower[r], upper[r] = -np.inf, k - 1  # (2.5) as printed
+        else:
+            arcs = np.flatnonzero(~inside[tails] & inside[heads])
+            lower[r], upper[r] = 1.0, np.inf  # (2.5) in cut form, by (2.3)
+        rows.append(np.full(len(arcs), r))
+        columns.append(arcs)
+    matrix = sp.csr_matrix(
+        (
+            np.ones(sum(len(c) for c in columns)),
+            (np.concatenate(rows) if rows else [], np.concatenate(columns) if columns else []),
+        ),
+        shape=(len(cuts), len(tails)),
     )
-    if run.solver_status not in ("optimal", "user_limit", "solver_error"):
-        raise SolverError(f"HiGHS returned status {run.solver_status!r} {run.message}".strip())
-    values = model.arc_use.value if run.has_point else None
-    return run, values
+    return matrix, lower, upper
+
+
+def separate_subtours(
+    problem: AssignmentProblem,
+    tails: np.ndarray,
+    heads: np.ndarray,
+    values: np.ndarray,
+    tolerance: float = CUT_TOLERANCE,
+) -> list[tuple[int, ...]]:
+    """Subsets S of targets whose (2.5) row is violated by σ = ``values`` (exact separation).
+
+    Under (2.3), (2.5) for S is the cut condition ``σ(into S) ≥ 1`` (see
+    :func:`cut_rows`). Two stages:
+
+    1. Targets not reachable from any start point along arcs with σ > 0:
+       every strongly connected component of them that nothing outside
+       enters has ``σ(into S) = 0`` (the subtours of an integral σ are such
+       components). They are returned if there are any.
+    2. Otherwise, for every target j, a maximum flow from a super-source
+       (joined to every start point) to j gives the most violated S that
+       contains j (the smallest sink side of a minimum cut). Targets already
+       inside a found S are skipped.
+
+    Returns an empty list only if no S has ``σ(into S) < 1 − tolerance``
+    (up to the ``2**-24`` fixed-point rounding of σ for scipy's integer
+    maximum flow; every returned S is checked in floating point).
+
+    Notes
+    -----
+    O(n) maximum flows on the support of σ (scipy's Dinic) per call.
+
+    References
+    ----------
+    Thesis (2.5); Padberg and Rinaldi's exact separation of subtour constraints.
+    """
+    n, m = problem.n, problem.m
+    size = n + m
+    source = size
+    values = np.asarray(values, dtype=float)
+    support = np.flatnonzero(values > 1e-9)
+
+    def inflow(members: np.ndarray) -> float:
+        inside = np.zeros(size, dtype=bool)
+        inside[members] = True
+        arcs = support[~inside[tails[support]] & inside[heads[support]]]
+        return float(values[arcs].sum())
+
+    graph = sp.csr_matrix(
+        (np.ones(len(support)), (tails[support], heads[support])), shape=(size, size)
+    )
+    reached = _reachable(graph, np.arange(n, size))
+    unreached = np.flatnonzero(~reached[:n])
+    found: list[tuple[int, ...]] = []
+    if len(unreached):
+        sub = graph[unreached][:, unreached]
+        count, label = connected_components(sub, directed=True, connection="strong")
+        for component in range(count):
+            members = unreached[label == component]
+            if len(members) >= 2 and inflow(members) < 1 - tolerance:
+                found.append(tuple(sorted(int(v) for v in members)))
+        if found:
+            return sorted(found)
+    # stage 2: a minimum cut per target on the fixed-point capacities
+    capacity = np.round(values[support] * _FLOW_SCALE)
+    keep = capacity > 0
+    flow_graph = sp.csr_matrix(
+        (
+            np.concatenate([capacity[keep], np.full(m, _FLOW_SCALE)]).astype(np.int32),
+            (
+                np.concatenate([tails[support][keep], np.full(m, source)]),
+                np.concatenate([heads[support][keep], np.arange(n, size)]),
+            ),
+        ),
+        shape=(size + 1, size + 1),
+    )
+    # a violated S has true inflow < 1 - tolerance, so a rounded cut below this
+    slack = 0.5 * len(support) + 1.0
+    threshold = (1 - tolerance) * _FLOW_SCALE + slack
+    # Every cut separating the source from j meets every path to j, so a path of
+    # arcs with σ >= 1 - tolerance from a start point, or from a target whose own
+    # cut is >= 1, proves j's cut >= 1 - tolerance: such targets need no flow.
+    strong = support[values[support] >= 1 - tolerance]
+    strong_graph = sp.csr_matrix(
+        (np.ones(len(strong)), (tails[strong], heads[strong])), shape=(size, size)
+    )
+    safe = _reachable(strong_graph, np.arange(n, size))
+    # targets in breadth-first order from the start points: a proven one proves its
+    # strong successors
+    order = _visit_order(graph, np.arange(n, size))
+    order = np.concatenate([order[order < n], unreached])  # (unreached only off (2.3))
+    covered = np.zeros(n, dtype=bool)
+    for target in (int(v) for v in order):
+        if covered[target] or safe[target]:
+            continue
+        result = maximum_flow(flow_graph, source, target)
+        if result.flow_value >= threshold:
+            safe |= _reachable(strong_graph, np.array([target]))
+            continue
+        residual = (flow_graph - result.flow).tocsr()
+        residual.data[residual.data < 0] = 0
+        residual.eliminate_zeros()
+        # the smallest sink side: every point that can still push flow to the target
+        sink_side = breadth_first_order(
+            residual.T.tocsr(), target, directed=True, return_predecessors=False
+        )
+        members = np.sort(sink_side[sink_side < n])
+        if len(members) >= 2 and inflow(members) < 1 - tolerance:
+            found.append(tuple(int(v) for v in members))
+            covered[members] = True
+    return sorted(set(found))
+
+
+def _visit_order(graph: sp.csr_matrix, sources: np.ndarray) -> np.ndarray:
+    """Points reachable from any of ``sources`` in ``graph``, in breadth-first order."""
+    size = graph.shape[0]
+    hub = sp.csr_matrix(
+        (np.ones(len(sources)), (np.zeros(len(sources), dtype=int), sources)), shape=(1, size + 1)
+    )
+    extended = sp.vstack([sp.hstack([graph, sp.csr_matrix((size, 1))]), hub]).tocsr()
+    order = breadth_first_order(extended, size, directed=True, return_predecessors=False)
+    return order[1:]
+
+
+def _reachable(graph: sp.csr_matrix, sources: np.ndarray) -> np.ndarray:
+    """Boolean mask of the points reachable from any of ``sources`` in ``graph``."""
+    mask = np.zeros(graph.shape[0], dtype=bool)
+    mask[_visit_order(graph, sources)] = True
+    mask[sources] = True
+    return mask
+
+
+# ------------------------------------------------------------- the persistent model
+@dataclass
+class RootRelaxation:
+    """The DFJ LP relaxation at the root: (2.2)–(2.4) plus separated (2.5) rows.
+
+    Attributes
+    ----------
+    cuts : list of tuple
+        The subsets S whose (2.5) rows were added (every one a valid row).
+    value : float
+        HiGHS's LP value with those rows (``-inf`` if no LP finished).
+    bound : float
+        A proven lower bound on the optimum of (2.2)–(2.5) from the LP's row
+        duals (:meth:`taopt.models.highs.HighsModel.lagrangian_bound`); equal
+        to ``value`` up to solver tolerances.
+    reduced_costs : ndarray
+        Reduced cost ``d_a`` of every arc: a solution that uses arc a costs at
+        least ``bound + d_a``.
+    values : ndarray or None
+        σ at the LP optimum.
+    rounds : int
+        LPs solved.
+    complete : bool
+        The last separation found no violated (2.5) row: ``value`` is the LP
+        bound of the full (2.2)–(2.5).
+    """
+
+    cuts: list[tuple[int, ...]]
+    value: float
+    bound: float
+    reduced_costs: np.ndarray
+    values: np.ndarray | None
+    rounds: int
+    complete: bool
+
+
+class DfjModel:
+    """(2.2)–(2.4) compiled once into one live HiGHS model; (2.5) rows added in place.
+
+    The cvxpy model of :func:`build` (no cuts) is compiled once by
+    :class:`taopt.models.highs.HighsModel`. Afterwards every (2.5) row found,
+    at the root LP or in a MIP round, is added to the same ``highspy.Highs``
+    object; arcs are switched off and on through their upper bounds, and a MIP
+    start is passed with ``Highs.setSolution``.
+    """
+
+    def __init__(self, problem: AssignmentProblem, verbose: bool = False) -> None:
+        self.problem = problem
+        self.formulation = build(problem, "dfj")
+        self.model = HighsModel(self.formulation.problem, verbose=verbose)
+        self.arcs = self.model.columns(self.formulation.arc_use)
+        self.tails, self.heads = self.formulation.tails, self.formulation.heads
+        self.cuts: list[tuple[int, ...]] = []
+        self._known: set[tuple[int, ...]] = set()
+        n, size = problem.n, problem.n + problem.m
+        self.arc_index = np.full((size, n), -1, dtype=np.int64)
+        self.arc_index[self.tails, self.heads] = np.arange(len(self.tails))
+
+    def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
+        """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
+        new = []
+        for subset in cuts:
+            subset = tuple(sorted(int(v) for v in subset))
+            if len(subset) >= 2 and subset not in self._known:
+                self._known.add(subset)
+                new.append(subset)
+        if new:
+            rows, lower, upper = cut_rows(self.problem, new, self.tails, self.heads)
+            full = sp.csr_matrix(
+                (rows.data, self.arcs[rows.indices], rows.indptr),
+                shape=(rows.shape[0], self.model.n_columns),
+            )
+            self.model.add_rows(full, lower, upper)
+            self.cuts.extend(new)
+        return len(new)
+
+    def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
+        return self.model.values(self.formulation.arc_use, solution)
+
+    def start_vector(self, routes: list[list[int]]) -> np.ndarray:
+        """The full column vector of σ for ``routes`` (a MIP start)."""
+        vector = np.zeros(self.model.n_columns)
+        vector[self.arcs[self.route_arcs(routes)]] = 1.0
+        return vector
+
+    def route_arcs(self, routes: list[list[int]]) -> np.ndarray:
+        """Arc indices used by ``routes``."""
+        n = self.problem.n
+        arcs = []
+        for k, route in enumerate(routes):
+            points = [n + k, *route]
+            arcs.extend(self.arc_index[points[:-1], points[1:]])
+        return np.asarray(arcs, dtype=np.int64)
+
+    def root(
+        self,
+        budget: float | None = None,
+        max_rounds: int | None = None,
+    ) -> RootRelaxation:
+        """Solve the DFJ LP, separating (2.5) exactly (:func:`separate_subtours`) until none is left.
+
+        The model is switched to its LP relaxation for the loop and back to
+        binary σ at the end. Each re-solve after new rows starts from the last
+        basis. Stops early after ``budget`` seconds or ``max_rounds`` LPs
+        (``complete`` False).
+        """
+        began = time.perf_counter()
+        self.model.relax(True)
+        rounds, value, complete = 0, -np.inf, False
+        bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
+        try:
+            while max_rounds is None or rounds < max_rounds:
+                left = None if budget is None else budget - (time.perf_counter() - began)
+                if left is not None and left <= 0:
+                    break
+                rounds += 1
+                run = self.model.solve(time_limit=left)
+                if run.solver_status != "optimal" or run.objective is None:
+                    if run.solver_status not in ("user_limit",):
+                        raise SolverError(
+                            f"the DFJ LP relaxation ended with status {run.solver_status!r}"
+                        )
+                    break
+                value = run.objective
+                values = self.arc_values()
+                bound, full_reduced = self.model.lagrangian_bound()
+                reduced = full_reduced[self.arcs]
+                found = separate_subtours(self.problem, self.tails, self.heads, values)
+                if not self.add_cuts(found):
+                    complete = True
+                    break
+        finally:
+            self.model.relax(False)
+        return RootRelaxation(
+            cuts=list(self.cuts),
+            value=value,
+            bound=bound,
+            reduced_costs=reduced,
+            values=values,
+            rounds=rounds,
+            complete=complete,
+        )
+
+
+def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> RootRelaxation:
+    """The root DFJ LP of (2.2)–(2.5) with its exactly separated (2.5) rows.
+
+    Every returned subset S is a row of (2.5), so any feasible solution
+    satisfies ``Σ_{i,j∈S} σ_ij ≤ |S| − 1``.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt import AssignmentProblem
+    >>> cost = np.array([[0, 1, 9], [1, 0, 9], [5, 6, 0.0]])
+    >>> root = dfj_root(AssignmentProblem(cost, 2))
+    >>> root.cuts, root.value
+    ([(0, 1)], 6.0)
+    """
+    _check(problem, "dfj")
+    return DfjModel(problem).root(budget=time_limit)
+
+
+# --------------------------------------------------------------------------- solving
+def _as_routes(problem: AssignmentProblem, incumbent: Any) -> list[list[int]] | None:
+    """The incumbent's routes (a list of routes or anything with ``.routes``), checked."""
+    if incumbent is None:
+        return None
+    routes = getattr(incumbent, "routes", incumbent)
+    routes = [[int(t) for t in route] for route in routes]
+    evaluate_routes(problem, routes)  # raises FeasibilityError naming what is wrong
+    return routes
+
+
+def _solution(
+    problem: AssignmentProblem,
+    objective: float,
+    status: str,
+    bound: float | None,
+    started: float,
+    method: str,
+    routes: list[list[int]] | None,
+    info: dict[str, Any],
+) -> Solution:
+    """The one place this module builds a :class:`taopt.Solution`."""
+    return Solution(
+        objective=objective,
+        status=status,
+        bound=bound,
+        runtime=time.perf_counter() - started,
+        method=method,
+        solution=None if routes is None else Routes(routes),
+        info=info,
+    )
 
 
 def solve_routing(
@@ -451,6 +842,7 @@ def solve_routing(
     relax: bool = False,
     verbose: bool = False,
     max_rounds: int = 10_000,
+    incumbent: Any = None,
 ) -> Solution:
     """Solve (2.2)–(2.5) exactly with HiGHS (or its LP relaxation).
 
@@ -474,9 +866,15 @@ def solve_routing(
     verbose : bool
         HiGHS log.
     max_rounds : int
-        Cap on DFJ rounds. A loop stopped by it returns the best repaired
+        Cap on DFJ MIP rounds. A loop stopped by it returns the best repaired
         incumbent with status "feasible" (``info["stopped_by"] ==
         "max_rounds"``) unless its gap is already closed.
+    incumbent : list of routes or Solution, optional
+        A feasible solution (one route per vehicle, or anything with
+        ``.routes``), e.g. a heuristic's. It is the first incumbent and is
+        given to HiGHS as a MIP start (``Highs.setSolution``). The models
+        never call a heuristic themselves; without one, a greedy start
+        (:func:`greedy_routes`) is used.
 
     Returns
     -------
@@ -485,183 +883,269 @@ def solve_routing(
         ``status`` by :func:`taopt.models.highs.certify`: "optimal" (gap at
         most 1e-6), "time_limit", or "feasible" (loose ``mip_gap`` or
         ``max_rounds``; ``info["stopped_by"]`` says which),
-        ``bound`` a proven lower bound (HiGHS's MIP dual bound, the DFJ LP
-        value, or Σ_j min_i t(i, j), whichever is largest).
-        ``info`` holds rounds, cuts and the solver status.
+        ``bound`` a proven lower bound, never above ``objective``.
+        ``info`` holds the MIP rounds, the (2.5) rows added, the root LP and
+        the solver status.
 
     Raises
     ------
     InstanceError
         Not an AssignmentProblem or unknown ``sec``.
+    FeasibilityError
+        ``incumbent`` is not a feasible solution.
     SolverError
         HiGHS returned an unexpected status (e.g. "infeasible").
 
     Notes
     -----
-    DFJ loop: every round is a MIP with the cuts found so far; it is a
-    relaxation of (2.2)–(2.5), so its proven bound is valid for the full
-    problem. A solution with no cycle among targets is feasible, hence optimal.
-    Cuts found in the LP relaxation (minimum-cut separation) are added before
-    the first MIP round, which usually saves rounds.
+    DFJ (``sec="dfj"``), on ONE live HiGHS model (:class:`DfjModel`):
+
+    1. Root: the LP of (2.2)–(2.4) is solved and (2.5) rows violated by its
+       point are separated exactly (:func:`separate_subtours`) and added, until
+       none is left. Its duals give a proven bound L and arc reduced costs d
+       (:meth:`taopt.models.highs.HighsModel.lagrangian_bound`).
+    2. Core: a solution that uses arc a costs at least ``L + d_a``, so an arc
+       with ``d_a > UB − L`` (UB the incumbent's value) cannot be in a better
+       solution. The MIP rounds run on a core, every other σ fixed to 0
+       through its bound: the arcs with ``d_a ≤ min(UB − L, cap)`` plus the
+       incumbent's, ``cap`` being the :data:`CORE_SIZE` ``(n + m)``-th smallest
+       d until the core's own optimum has no cycle, then infinite.
+    3. Rounds: each MIP round is a relaxation of (2.2)–(2.5) on the core; the
+       cycles among targets of its answer, and of every solution HiGHS finds
+       on the way (``kCallbackMipSolution``), become new (2.5) rows; every
+       solution, its cycles patched in (:func:`repair`), may improve the
+       incumbent, which is the next round's MIP start, and the core is
+       resized to the new UB.
+
+    Each round proves ``min(B, L + min_{a ∉ core} d_a)``, with B HiGHS's bound
+    on the core: a solution either stays in the core (cost at least B) or
+    uses an arc outside it. The reported bound is the largest of these, L, and
+    ``Σ_j min_i t(i, j)`` (:func:`entry_bound`); the loop stops as soon as it
+    is within ``max(mip_gap, 1e-6)`` of the incumbent.
+
+    MTZ and flow are compact: one solve on a compiled model, with the
+    incumbent as MIP start.
 
     References
     ----------
     Thesis §2.2.1, (2.2)–(2.5).
     """
     _check(problem, sec)
-    start = time.perf_counter()
+    started = time.perf_counter()
     if relax:
-        return _solve_relaxation(problem, sec, start, verbose)
+        return _solve_relaxation(problem, sec, started, verbose)
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    given = _as_routes(problem, incumbent)
+    if sec == "dfj":
+        return _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started)
+    return _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started)
 
-    def remaining() -> float | None:
-        return None if time_limit is None else time_limit - (time.perf_counter() - start)
 
-    cuts: list[tuple[int, ...]] = []
-    rounds = 0
-    # Start from a greedy incumbent and the trivial bound of (2.3): every target is
-    # entered once, so the optimum is at least Σ_j min_i t(i, j).
+def _first_incumbent(
+    problem: AssignmentProblem, given: list[list[int]] | None
+) -> tuple[list[list[int]], float]:
+    """The better of the given routes and the greedy start, with its value."""
     best_routes = greedy_routes(problem)
     best_value = evaluate_routes(problem, best_routes)
+    if given is not None:
+        value = evaluate_routes(problem, given)
+        if value <= best_value:
+            best_routes, best_value = given, value
+    return best_routes, best_value
+
+
+def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started) -> Solution:
+    def remaining() -> float | None:
+        return None if time_limit is None else time_limit - (time.perf_counter() - started)
+
+    n, m = problem.n, problem.m
+    dfj = DfjModel(problem, verbose=verbose)
+    best_routes, best_value = _first_incumbent(problem, given)
     best_bound = entry_bound(problem)
-    if sec == "dfj":
-        cuts, lp_bound = _lp_subtour_cuts(problem, verbose, budget=remaining())
-        best_bound = max(best_bound, lp_bound)
-    solver_status = ""
-    stopped_by = "time_limit"
-    message = ""
+    # 1. root LP with exact separation; at most half of a time limit
+    budget = remaining()
+    root = dfj.root(budget=None if budget is None else 0.5 * budget)
+    root_cuts = len(dfj.cuts)
+    best_bound = max(best_bound, root.bound)
+    # 2. the core: arcs of small reduced cost, at most CORE_SIZE per point at first
+    # (all arcs if the root LP did not finish)
+    if np.isfinite(root.bound):
+        size = min(CORE_SIZE * (n + m), len(dfj.arcs))
+        cap = float(np.partition(root.reduced_costs, size - 1)[size - 1])
+    else:
+        cap = np.inf
+    core = np.ones(len(dfj.arcs), dtype=bool)
+
+    def resize_core() -> bool:
+        """Core := arcs with ``d_a <= min(UB − L, cap)``, plus the incumbent's. Changed?
+
+        Arcs with ``d_a > UB − L`` cannot be in a solution better than the incumbent
+        (``UB``); ``cap`` keeps the first rounds small while UB is still poor.
+        """
+        if not np.isfinite(root.bound):
+            return False
+        slack = 1e-9 * max(1.0, abs(best_value))
+        wanted = root.reduced_costs <= min(best_value - root.bound + slack, cap)
+        wanted[dfj.route_arcs(best_routes)] = True
+        on, off = wanted & ~core, core & ~wanted
+        dfj.model.set_upper(dfj.arcs[on], 1.0)
+        dfj.model.set_upper(dfj.arcs[off], 0.0)
+        core[:] = wanted
+        return bool(on.any() or off.any())
+
+    resize_core()
+
+    def outside_bound() -> float:
+        """Proven bound on every solution using an arc outside the core."""
+        if core.all():
+            return np.inf
+        return root.bound + float(root.reduced_costs[~core].min())
+
+    # 3. MIP rounds on the core, (2.5) rows from every solution HiGHS reports
+    harvested: list[tuple[int, ...]] = []
+    candidates: list[tuple[float, list[list[int]]]] = []
+
+    def harvest(solution: np.ndarray) -> None:
+        values = dfj.arc_values(solution)
+        try:
+            routes, subtours = decode(problem, dfj.formulation, values)
+        except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
+            return
+        if subtours:
+            harvested.extend(tuple(sorted(c)) for c in subtours)
+            routes = repair(problem, routes, subtours)
+        candidates.append((evaluate_routes(problem, routes), routes))
+
+    target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
+    rounds = 0
+    solver_status, stopped_by = "", "time_limit"
     while True:
-        rounds += 1
         left = remaining()
         if left is not None and left <= 0:
             stopped_by = "time_limit"
             break
-        model = build(problem, sec, cuts=cuts)
-        run, values = _run(model, left, mip_gap, verbose)
-        solver_status, message = run.solver_status, run.message
-        if run.bound is not None:
-            best_bound = max(best_bound, run.bound)
-        if values is None:
-            # no point: a limit came first (or cvxpy raised); the greedy/earlier
-            # incumbent stands with the bound proven so far
-            stopped_by = run.stopped_by
+        rounds += 1
+        dfj.model.set_start(dfj.start_vector(best_routes))
+        harvested.clear()
+        candidates.clear()
+        run = dfj.model.solve(
+            time_limit=left, mip_rel_gap=mip_gap, on_solution=harvest, options=MIP_OPTIONS
+        )
+        solver_status = run.solver_status
+        if solver_status not in ("optimal", "user_limit"):
+            raise SolverError(f"HiGHS returned status {solver_status!r} on the DFJ model")
+        # every solution stays in the core (cost >= HiGHS's bound) or leaves it
+        core_bound = run.bound if run.bound is not None else -np.inf
+        best_bound = max(best_bound, min(core_bound, outside_bound()))
+        for value, routes in candidates:
+            if value < best_value:
+                best_routes, best_value = routes, value
+        subtours: list[list[int]] = []
+        if run.has_point:
+            routes, subtours = decode(problem, dfj.formulation, dfj.arc_values())
+            candidate = repair(problem, routes, subtours) if subtours else routes
+            value = evaluate_routes(problem, candidate)
+            if value < best_value:
+                best_routes, best_value = candidate, value
+        dfj.add_cuts([*map(tuple, subtours), *harvested])
+        stopped_by = run.stopped_by
+        if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
+            break  # proven: "optimal", or "mip_gap" for a loose gap
+        if not run.has_point or run.stopped_by in ("time_limit", "solver_limit"):
+            break  # a limit: the incumbent stands with the bound proven so far
+        if rounds >= max_rounds:
+            stopped_by = "max_rounds"
             break
-        routes, subtours = decode(problem, model, values)
-        candidate = repair(problem, routes, subtours) if subtours else routes
-        value = evaluate_routes(problem, candidate)
-        if value < best_value:
-            best_routes, best_value = candidate, value
-        if subtours:
-            if sec != "dfj":
-                raise SolverError(f"{sec} model returned a subtour {subtours[0]}; (2.5) violated")
-            cuts.extend(tuple(sorted(c)) for c in subtours)
-            if run.stopped_by == "time_limit":
-                stopped_by = "time_limit"
-                break
-            if rounds >= max_rounds:
-                stopped_by = "max_rounds"
-                break
-            continue
-        stopped_by = run.stopped_by  # "optimal", "mip_gap" or "time_limit"
-        break
+        # only arcs that can still improve on the incumbent stay in the model; once
+        # the core's own optimum has no cycle, every such arc comes in
+        if not subtours:
+            cap = np.inf
+        if not resize_core() and not subtours:
+            break  # nothing left to learn (cannot happen with a closed core)
     bound = min(best_bound, best_value)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(best_value, bound, stopped_by)
-    return Solution(
-        objective=best_value,
-        status=status,
-        bound=bound,
-        runtime=time.perf_counter() - start,
-        method=f"exact-{sec}",
-        solution=Routes(best_routes),
-        info={
-            "rounds": rounds,
-            "cuts": len(cuts),
-            "solver_status": solver_status,
-            "mip_gap": mip_gap,
-            "stopped_by": stopped_by,
-            **({"solver_message": message} if message else {}),
-        },
-    )
+    info = {
+        "rounds": rounds,
+        "cuts": len(dfj.cuts),
+        "root_cuts": root_cuts,
+        "root_rounds": root.rounds,
+        "lp_bound": root.bound,
+        "core_arcs": int(core.sum()),
+        "arcs": len(dfj.arcs),
+        "solver_status": solver_status,
+        "mip_gap": mip_gap,
+        "stopped_by": stopped_by,
+    }
+    return _solution(problem, best_value, status, bound, started, "exact-dfj", best_routes, info)
+
+
+def _start_vector(problem, model: HighsModel, formulation: RoutingModel, routes) -> np.ndarray:
+    """σ, and MTZ positions u or single-commodity flows f, of ``routes`` as a MIP start."""
+    n = problem.n
+    vector = np.zeros(model.n_columns)
+    arc_index = np.full((n + problem.m, n), -1, dtype=np.int64)
+    arc_index[formulation.tails, formulation.heads] = np.arange(len(formulation.tails))
+    arc_columns = model.columns(formulation.arc_use)
+    for k, route in enumerate(routes):
+        points = np.array([n + k, *route], dtype=np.int64)
+        arcs = arc_index[points[:-1], points[1:]]
+        vector[arc_columns[arcs]] = 1.0
+        if formulation.order is not None:  # u_j = position of j on its route
+            vector[model.columns(formulation.order)[points[1:]]] = np.arange(1, len(route) + 1)
+        if formulation.flow is not None:  # f on the arc into j = targets from j to the end
+            vector[model.columns(formulation.flow)[arcs]] = np.arange(len(route), 0, -1)
+    return vector
+
+
+def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -> Solution:
+    """MTZ or flow: one solve of the compiled model, the incumbent as MIP start."""
+    formulation = build(problem, sec)
+    model = HighsModel(formulation.problem, verbose=verbose)
+    best_routes, best_value = _first_incumbent(problem, given)
+    best_bound = entry_bound(problem)
+    left = None if time_limit is None else time_limit - (time.perf_counter() - started)
+    model.set_start(_start_vector(problem, model, formulation, best_routes))
+    run = model.solve(time_limit=left, mip_rel_gap=mip_gap)
+    if run.solver_status not in ("optimal", "user_limit"):
+        raise SolverError(f"HiGHS returned status {run.solver_status!r} on the {sec} model")
+    if run.bound is not None:
+        best_bound = max(best_bound, run.bound)
+    stopped_by = run.stopped_by
+    if run.has_point:
+        routes, subtours = decode(problem, formulation, model.values(formulation.arc_use))
+        if subtours:
+            raise SolverError(f"{sec} model returned a subtour {subtours[0]}; (2.5) violated")
+        value = evaluate_routes(problem, routes)
+        if value < best_value:
+            best_routes, best_value = routes, value
+    bound = min(best_bound, best_value)
+    status, stopped_by = certify(best_value, bound, stopped_by)
+    info = {
+        "rounds": 1,
+        "cuts": 0,
+        "nodes": run.nodes,
+        "solver_status": run.solver_status,
+        "mip_gap": mip_gap,
+        "stopped_by": stopped_by,
+    }
+    return _solution(problem, best_value, status, bound, started, f"exact-{sec}", best_routes, info)
 
 
 # ------------------------------------------------------------------ LP relaxations
-def _violated_subsets(problem: AssignmentProblem, model: RoutingModel, values) -> list[tuple]:
-    """Exact separation of (2.5) for a fractional σ by minimum cuts.
-
-    With (2.3), ``Σ_{i,j∈S} σ_ij = |S| − Σ_{i∉S, j∈S} σ_ij``, so (2.5) for S is
-    the cut condition ``σ(into S) ≥ 1``. For every target j, a minimum cut from
-    a super-source (joined to all start points) to j finds the most violated S
-    containing j.
-    """
-    n = problem.n
-    graph = nx.DiGraph()
-    source = "source"
-    for vehicle in range(problem.m):
-        graph.add_edge(source, n + vehicle, capacity=float(n))
-    support = np.flatnonzero(values > 1e-9)
-    for arc in support:
-        graph.add_edge(int(model.tails[arc]), int(model.heads[arc]), capacity=float(values[arc]))
-    found: set[tuple[int, ...]] = set()
-    for target in range(n):
-        if target not in graph:
-            continue
-        value, (_, sink_side) = nx.minimum_cut(graph, source, target)
-        if value < 1 - 1e-6:
-            subset = tuple(sorted(int(v) for v in sink_side if v != source and v < n))
-            if len(subset) >= 2:
-                found.add(subset)
-    return sorted(found)
-
-
-def _lp_subtour_cuts(problem, verbose, budget=None, max_rounds=50) -> tuple[list, float]:
-    """Solve the DFJ LP with cuts separated by minimum cut.
-
-    Returns the cuts and the last LP value (a valid lower bound: every LP
-    solved is a relaxation of (2.2)–(2.5)); ``-inf`` if no LP finished. Stops
-    after half of ``budget`` seconds so the MIP rounds keep the rest.
-    """
-    start = time.perf_counter()
-    cuts: list[tuple[int, ...]] = []
-    bound = -np.inf
-    for _ in range(max_rounds):
-        left = None if budget is None else 0.5 * budget - (time.perf_counter() - start)
-        if left is not None and left <= 0:
-            break
-        model = build(problem, "dfj", relax=True, cuts=cuts)
-        run, values = _run(model, left, 0.0, verbose)
-        if values is None or run.solver_status != "optimal" or run.bound is None:
-            break
-        bound = max(bound, run.bound)
-        new = [c for c in _violated_subsets(problem, model, np.asarray(values)) if c not in cuts]
-        if not new:
-            break
-        cuts.extend(new)
-    return cuts, bound
-
-
-def _solve_relaxation(problem, sec, start, verbose) -> Solution:
-    cuts: list[tuple[int, ...]] = []
-    rounds = 0
-    while True:
-        rounds += 1
-        model = build(problem, sec, relax=True, cuts=cuts)
-        run, values = _run(model, None, 0.0, verbose)
+def _solve_relaxation(problem, sec, started, verbose) -> Solution:
+    """LP value of (2.2)–(2.5): DFJ with all of (2.5) (exact separation), or MTZ / flow."""
+    if sec == "dfj":
+        root = DfjModel(problem, verbose=verbose).root()
+        if not root.complete:
+            raise SolverError("the DFJ LP relaxation did not finish")
+        value, rounds, cuts = float(root.value), root.rounds, len(root.cuts)
+    else:
+        model = HighsModel(build(problem, sec, relax=True).problem, verbose=verbose)
+        run = model.solve()
         if run.solver_status != "optimal" or run.bound is None:
             raise SolverError(f"LP relaxation ended with status {run.solver_status!r}")
-        if sec != "dfj":
-            break
-        new = [c for c in _violated_subsets(problem, model, np.asarray(values)) if c not in cuts]
-        if not new:
-            break
-        cuts.extend(new)
-    value = float(run.bound)
-    return Solution(
-        objective=value,
-        status=RELAXATION,
-        bound=value,
-        runtime=time.perf_counter() - start,
-        method=f"lp-{sec}",
-        info={"rounds": rounds, "cuts": len(cuts)},
-    )
+        value, rounds, cuts = float(run.bound), 1, 0
+    info = {"rounds": rounds, "cuts": cuts}
+    return _solution(problem, value, RELAXATION, value, started, f"lp-{sec}", None, info)

@@ -429,7 +429,7 @@ def build_parser() -> argparse.ArgumentParser:
     nav.add_argument("--speed", type=float, default=1.0, help="vehicle speed v (m/s)")
     nav.add_argument(
         "--method",
-        choices=["collocation", "shooting", "closed_form"],
+        choices=["collocation", "pmp", "shooting", "closed_form"],
         default="collocation",
         help="solver",
     )

@@ -66,10 +66,10 @@ def run_demo(
         ``instance``, ``matrix`` (N, N), ``report`` (MatrixReport), ``seconds`` (matrix time),
         ``problem`` (AssignmentProblem), ``table`` (gap table, DataFrame), ``solutions``.
     """
-    out = sys.stdout if out is None else out  # resolved per call, not at import
     from taopt.navigation import travel_time_matrix
     from taopt.navigation.checks import matrix_report
 
+    out = out or sys.stdout
     methods = DEMO_METHODS if methods is None else tuple(methods)
     instance = load_demo_instance()
     speed = float(instance.speeds.min())

@@ -36,6 +36,7 @@ from taopt.pipeline import default_methods, solve
 from taopt.registry import family_for_kind, family_of
 from taopt.result import OPTIMAL, Solution
 from taopt.routing.problem import AssignmentProblem
+from taopt.schemas import naming
 from taopt.scoring import evaluate
 
 __all__ = [
@@ -78,9 +79,11 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
     if not isinstance(data, dict):
         raise InstanceError(f"{path}: a problem file holds a JSON object")
     if data.get("kind") == "instance":
-        instance = Instance.from_dict(data)
+        instance = Instance.from_dict(data, source=str(path))
         return problem_from_instance(instance, progress=progress), instance
-    return family_for_kind(data.get("kind")).load(data), None
+    family = family_for_kind(data.get("kind"))
+    with naming(str(path)):  # the schema's and the constructor's errors name the file
+        return family.load(data), None
 
 
 def _bound(name: str, problem: Any) -> float:
@@ -165,7 +168,7 @@ def solve_file(
     -------
     dict with ``problem``, ``instance``, ``table`` (DataFrame) and ``solutions``.
     """
-    out = sys.stdout if out is None else out  # resolved per call, not at import
+    out = out or sys.stdout
     tic = time.perf_counter()
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
@@ -217,7 +220,7 @@ def verify_file(
     bool
         True when every check passes (each check is printed).
     """
-    out = sys.stdout if out is None else out  # resolved per call, not at import
+    out = out or sys.stdout
     problem, _ = load_problem_file(problem_path, progress=progress)
     solution = Solution.load(solution_path)
     family = family_of(problem)

@@ -78,12 +78,14 @@ def check_exact(instance: DeliveryInstance, heuristics: bool = True) -> None:
 
 @pytest.mark.parametrize("seed", range(5))
 def test_exact_matches_enumeration_small(seed):
+    """The MILP optimum equals brute-force enumeration on small random instances."""
     check_exact(random_instance(seed))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(5, 20))
 def test_exact_matches_enumeration_sweep(seed):
+    """The same check on 15 more random instances."""
     check_exact(random_instance(seed))
 
 
@@ -110,6 +112,7 @@ def test_dominance_reduction_is_safe():
 
 
 def test_without_incumbent_cutoff_and_with_a_given_plan():
+    """No cut-off and an optimal given plan both give the enumerated optimum."""
     inst = random_instance(4)
     expected = enumerate_optimum(inst)
     plain = solve_delivery(inst, incumbent=None)
@@ -157,6 +160,7 @@ def test_loose_mip_gap_is_not_called_optimal(incumbent):
 
 
 def test_customer_leg_cuts_keep_the_optimum():
+    """The customer-pair valid inequalities do not change the optimum."""
     inst = random_instance(2, n=5)
     plain = solve_delivery(inst)
     strong = solve_delivery(inst, customer_legs=True)
@@ -164,6 +168,7 @@ def test_customer_leg_cuts_keep_the_optimum():
 
 
 def test_single_customer_and_no_precedences():
+    """One customer: the MILP equals enumeration and the one scorer."""
     inst = DeliveryInstance.grid(
         [[100, 300]], k=2, side=400, v_drone=2.0, v_truck=1.0, flight_range=700
     )
@@ -173,6 +178,7 @@ def test_single_customer_and_no_precedences():
 
 
 def test_describe_maps_families_to_printed_equations():
+    """describe() maps the families to every printed equation (5.1)-(5.7)."""
     table = describe(random_instance(0), show=False)
     text = " ".join(row["label"] + " " + row["implements"] for row in table)
     for eq in ("(5.1)", "(5.2)", "(5.3)", "(5.4)", "(5.5)", "(5.6)", "(5.7)"):
@@ -181,6 +187,7 @@ def test_describe_maps_families_to_printed_equations():
 
 
 def test_bad_input():
+    """A non-instance and a negative time limit raise InstanceError."""
     with pytest.raises(InstanceError):
         solve_delivery("not an instance")
     with pytest.raises(InstanceError, match="time_limit"):

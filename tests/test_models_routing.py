@@ -13,7 +13,7 @@ import taopt
 from taopt import AssignmentProblem
 from taopt.errors import InstanceError
 from taopt.models import solve_routing
-from taopt.models.routing import build, decode, describe, entry_bound, repair
+from taopt.models.routing import build, decode, describe, entry_bound, greedy_routes, repair
 from taopt.navigation import uniform_travel_times
 
 SECS = ("dfj", "mtz", "flow")
@@ -86,6 +86,7 @@ def make(kind, n, m, seed):
 
 @pytest.mark.parametrize("kind,n,m,seed", CASES)
 def test_all_formulations_match_dp(kind, n, m, seed):
+    """Every SEC certifies the subset-DP optimum; its LP relaxation lies below it."""
     problem = make(kind, n, m, seed)
     optimum = dp_optimum(problem)
     for sec in SECS:
@@ -116,6 +117,7 @@ def test_lp_bounds_ordered_on_larger_instance():
 
 
 def test_formulations_agree_on_medium_instance():
+    """DFJ, MTZ and flow certify the same optimum at n = 14 (beyond the DP's reach in tests)."""
     problem = metric_problem(14, 3, seed=7)
     values = [solve_routing(problem, sec=sec).objective for sec in SECS]
     assert values == pytest.approx([values[0]] * 3, rel=1e-6)
@@ -141,6 +143,7 @@ def test_time_limit_returns_incumbent_and_valid_bound():
 
 
 def test_decode_and_repair_subtours():
+    """decode separates routes from cycles; repair splices a cycle in at its cheapest place."""
     problem = metric_problem(5, 1, seed=0)
     model = build(problem, "dfj")
     # hand-made σ: vehicle -> 0 -> 1, cycle 2 -> 3 -> 4 -> 2
@@ -151,11 +154,19 @@ def test_decode_and_repair_subtours():
     assert routes == [[0, 1]]
     assert sorted(subtours[0]) == [2, 3, 4]
     fixed = repair(problem, routes, subtours)
-    assert sorted(fixed[0]) == [0, 1, 2, 3, 4] and fixed[0][:2] == [0, 1]
-    taopt.evaluate(problem, fixed)
+    assert sorted(fixed[0]) == [0, 1, 2, 3, 4]
+    # brute force: every opening of the cycle spliced into every place of the route
+    cycle = subtours[0]
+    best = min(
+        problem.evaluate([[0, 1][:q] + cycle[p:] + cycle[:p] + [0, 1][q:]])
+        for p in range(len(cycle))
+        for q in range(3)
+    )
+    assert taopt.evaluate(problem, fixed) == pytest.approx(best)
 
 
 def test_describe_and_labels():
+    """describe() counts every labelled family; the printed model names (2.3)-(2.5)."""
     problem = drift_problem(6, 2, seed=0)
     families = describe(problem, "mtz", show=False)
     rows = {f["family"]: f["rows"] for f in families}
@@ -192,11 +203,13 @@ def test_dfj_cuts_are_thesis_25():
     ],
 )
 def test_bad_input_is_clear(cost, n, match):
+    """Malformed matrices raise InstanceError naming the problem."""
     with pytest.raises(InstanceError, match=match):
         solve_routing(AssignmentProblem(cost, n))
 
 
 def test_bad_arguments():
+    """Unknown sec, a non-problem and a non-positive time limit are refused."""
     problem = drift_problem(4, 1, seed=0)
     with pytest.raises(InstanceError, match="sec"):
         solve_routing(problem, sec="nope")
@@ -207,6 +220,7 @@ def test_bad_arguments():
 
 
 def test_loose_mip_gap_is_not_called_optimal():
+    """A loose mip_gap gives 'feasible' with a valid bound, never an unproven 'optimal'."""
     problem = drift_problem(25, 3, seed=3)
     optimum = solve_routing(problem).objective
     loose = solve_routing(problem, sec="mtz", mip_gap=0.5)
@@ -285,3 +299,157 @@ def test_one_status_rule_for_every_model():
     assert certify(0.0, 0.0, "mip_gap") == ("optimal", "optimal")
     assert relative_gap(0.0, -1.0) == float("inf")
     assert relative_gap(10.0, 12.0) == 0.0
+
+
+# ------------------------------------------------------- the persistent DFJ model (issue 8)
+def used_arcs(problem: AssignmentProblem, routes) -> list[tuple[int, int]]:
+    """Arcs (i, j) of a solution, start points included."""
+    arcs = []
+    for k, route in enumerate(routes):
+        points = [problem.n + k, *route]
+        arcs.extend(zip(points[:-1], points[1:], strict=False))
+    return arcs
+
+
+def test_highs_model_adds_rows_and_relaxes_in_place():
+    """HighsModel: rows added to the live model change the optimum; relax() gives the LP."""
+    import cvxpy as cp
+    import scipy.sparse as sp
+
+    from taopt.models.highs import HighsModel
+
+    x = cp.Variable(3, integer=True, name="x")
+    problem = cp.Problem(cp.Minimize(cp.sum(x) + 5), [x >= 0.5, x <= 3])
+    model = HighsModel(problem)
+    assert model.solve().objective == pytest.approx(8.0)  # x = (1, 1, 1), offset 5
+    model.add_rows(sp.csr_matrix(np.array([[1.0, 1.0, 0.0]])), lower=[3.5])
+    run = model.solve()
+    assert run.status == "optimal" and run.objective == pytest.approx(10.0)  # x0 + x1 = 4
+    assert model.values(x).sum() == pytest.approx(5.0)
+    model.relax(True)
+    lp = model.solve()
+    assert lp.objective == pytest.approx(9.0)  # x0 + x1 = 3.5, x2 = 0.5
+    bound, _ = model.lagrangian_bound()
+    assert bound == pytest.approx(9.0) and bound <= lp.objective + 1e-9
+    problem.solve(solver=cp.HIGHS)  # the same model through cvxpy's own interface
+    assert problem.value == pytest.approx(8.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_separation_is_exact_on_random_fractional_points(seed):
+    """separate_subtours finds a violated (2.5) row iff brute force over all subsets does."""
+    from taopt.models.routing import CUT_TOLERANCE, arc_list, separate_subtours
+
+    rng = np.random.default_rng(seed)
+    n, m = 7, 2
+    problem = metric_problem(n, m, seed)
+    tails, heads = arc_list(problem)
+    values = np.zeros(len(tails))
+    for j in range(n):  # (2.3): the arcs into every target sum to one, sparse weights
+        into = np.flatnonzero(heads == j)
+        chosen = rng.choice(into, size=rng.integers(1, 4), replace=False)
+        weights = rng.dirichlet(np.ones(len(chosen)))
+        values[chosen] = np.round(weights, 3)
+        values[chosen[0]] += 1.0 - values[chosen].sum()
+    violated = []
+    for size in range(2, n + 1):
+        for subset in combinations(range(n), size):
+            inside = np.zeros(n + m, dtype=bool)
+            inside[list(subset)] = True
+            if values[~inside[tails] & inside[heads]].sum() < 1 - CUT_TOLERANCE:
+                violated.append(subset)
+    found = separate_subtours(problem, tails, heads, values)
+    assert bool(found) == bool(violated)
+    assert set(found) <= set(violated)
+
+
+@pytest.mark.parametrize("kind,n,m,seed", [("drift", 12, 2, 9), ("metric", 10, 3, 1)])
+def test_root_cuts_are_valid_and_root_bound_is_below_optimum(kind, n, m, seed):
+    """Every root cut is a (2.5) row the optimum satisfies; the root LP bounds the optimum."""
+    from taopt.models.routing import dfj_root
+
+    problem = make(kind, n, m, seed)
+    optimum = dp_optimum(problem)
+    solution = solve_routing(problem, sec="dfj")
+    assert solution.objective == pytest.approx(optimum, rel=1e-9)
+    root = dfj_root(problem)
+    assert root.complete and root.cuts
+    arcs = used_arcs(problem, solution.routes)
+    for subset in root.cuts:
+        inside = sum(1 for a, b in arcs if a in subset and b in subset)
+        assert inside <= len(subset) - 1
+    assert root.bound <= optimum * (1 + 1e-9)
+    assert root.bound == pytest.approx(root.value, rel=1e-7)
+    assert root.value == pytest.approx(solve_routing(problem, relax=True).objective, rel=1e-9)
+
+
+def test_reduced_costs_bound_every_solution():
+    """The rule behind the core: a solution costs at least L + Σ max(d_a, 0) over its arcs."""
+    import taopt.heuristics
+    from taopt.models.routing import DfjModel
+
+    problem = drift_problem(30, 4, seed=2)
+    dfj = DfjModel(problem)
+    root = dfj.root()
+    optimum = solve_routing(problem, sec="dfj")
+    solutions = [optimum.routes, greedy_routes(problem)]
+    solutions += [taopt.heuristics.run(name, problem, seed=0).routes for name in ("MC", "VN")]
+    for routes in solutions:
+        arcs = dfj.route_arcs(routes)
+        floor = root.bound + np.maximum(root.reduced_costs[arcs], 0.0).sum()
+        assert taopt.evaluate(problem, routes) >= floor - 1e-6 * abs(floor)
+
+
+@pytest.mark.parametrize("sec", SECS)
+def test_incumbent_gives_the_same_optimum(sec):
+    """A MIP start (a heuristic's routes, or a poor greedy one) never changes the optimum."""
+    import taopt.heuristics
+
+    problem = drift_problem(18, 3, seed=4)
+    plain = solve_routing(problem, sec=sec)
+    mc = taopt.heuristics.run("MC", problem)
+    for incumbent in (mc, mc.routes, greedy_routes(problem)):
+        started = solve_routing(problem, sec=sec, incumbent=incumbent)
+        assert started.status == "optimal"
+        assert started.objective == pytest.approx(plain.objective, rel=1e-6)
+        assert started.objective <= taopt.evaluate(problem, getattr(incumbent, "routes", incumbent))
+        assert taopt.evaluate(problem, started.routes) == pytest.approx(started.objective)
+
+
+def test_bad_incumbent_is_refused():
+    """An incumbent that is not a feasible solution raises FeasibilityError naming it."""
+    from taopt.errors import FeasibilityError
+
+    problem = drift_problem(6, 2, seed=0)
+    with pytest.raises(FeasibilityError):
+        solve_routing(problem, incumbent=[[0, 1, 2], [2, 3, 4, 5]])
+    with pytest.raises(FeasibilityError):
+        solve_routing(problem, incumbent=[[0, 1, 2]])
+
+
+def test_time_limit_mid_loop_keeps_incumbent_and_proven_bound():
+    """A limit that strikes during the MIP rounds: status time_limit, bound below the optimum."""
+    problem = drift_problem(60, 3, seed=1)
+    optimum = solve_routing(problem, sec="dfj")
+    assert optimum.status == "optimal"
+    limited = solve_routing(problem, sec="dfj", time_limit=0.2, incumbent=greedy_routes(problem))
+    assert taopt.evaluate(problem, limited.routes) == pytest.approx(limited.objective, rel=1e-9)
+    assert limited.bound <= optimum.objective * (1 + 1e-9)
+    assert limited.objective >= optimum.objective * (1 - 1e-9)
+    if limited.status != "optimal":  # a fast machine may prove it in time
+        assert limited.status == "time_limit" and limited.info["stopped_by"] == "time_limit"
+        assert limited.gap > 1e-6
+
+
+@pytest.mark.parametrize("name", ["br17", "ftv33"])
+def test_tsplib_optimum_with_incumbent(name):
+    """TSPLIB optima (br17 = 39, ftv33 = 1286) through the reduction, with a MIP start."""
+    import taopt.heuristics
+    from taopt.routing.tsplib import KNOWN_OPTIMA, atsp_to_assignment, load_atsp
+
+    problem = atsp_to_assignment(load_atsp(name))
+    incumbent = taopt.heuristics.run("MC", problem).routes
+    solution = solve_routing(problem, sec="dfj", incumbent=incumbent)
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(KNOWN_OPTIMA[name], abs=1e-6)
+    assert solution.bound == pytest.approx(KNOWN_OPTIMA[name], rel=1e-6)

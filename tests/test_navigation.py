@@ -194,7 +194,7 @@ def test_matrix_reports_unconverged_pairs(monkeypatch):
     monkeypatch.setattr(shooting, "shooting_path", never)
     pts = [[0, 0], [10, 0], [0, 10]]
     with pytest.raises(ConvergenceError, match=r"\(0, 2\)"):
-        travel_time_matrix(thesis_field(1e-2), pts, jobs=1)
+        travel_time_matrix(thesis_field(1e-2), pts, method="collocation", jobs=1)
 
 
 # -- bad input --------------------------------------------------------------------------------

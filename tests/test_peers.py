@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
 import threading
 import time
@@ -175,7 +176,11 @@ def test_highs_survives_peer_calls():
 
 
 def run_script(code: str, **kwargs) -> subprocess.Popen:
-    """Start ``python -c code`` with this interpreter, its stdout piped."""
+    """Start ``python -c code`` with this interpreter, its stdout piped.
+
+    It runs outside the checkout (``python -c`` puts the working folder first on sys.path,
+    where the source tree would shadow the installed package)."""
+    kwargs.setdefault("cwd", tempfile.gettempdir())
     return subprocess.Popen(
         [sys.executable, "-c", textwrap.dedent(code)],
         stdout=subprocess.PIPE,

@@ -77,6 +77,7 @@ def assert_valid_order(order, cost, precedences, start, end, objective):
 
 # ----------------------------------------------------------------------------- loader
 def test_shipped_files_parse_with_the_tsplib_convention():
+    """The shipped SOP files parse with TSPLIB's convention (first token skipped, -1 = precedence)."""
     assert {"ESC07", "ESC11", "ESC12", "br17.10", "br17.12"} <= set(shipped_sop())
     expected = {"ESC07": (9, 7), "ESC11": (13, 5), "ESC12": (14, 11), "br17.10": (18, 15)}
     for name, (n, n_prec) in expected.items():
@@ -91,6 +92,7 @@ def test_shipped_files_parse_with_the_tsplib_convention():
 
 
 def test_loader_rejects_a_non_sop_file(tmp_path):
+    """A non-SOP file or an unknown name raises InstanceError."""
     bad = tmp_path / "x.sop"
     bad.write_text("NAME: x\nTYPE: ATSP\nDIMENSION: 2\nEDGE_WEIGHT_FORMAT: FULL_MATRIX\n")
     with pytest.raises(InstanceError, match="SOP"):
@@ -102,6 +104,7 @@ def test_loader_rejects_a_non_sop_file(tmp_path):
 # ----------------------------------------------------------------------------- TSPLIB
 @pytest.mark.parametrize("name", ["ESC07", "ESC11"])
 def test_tsplib_optimum_is_certified(name):
+    """The flow model certifies TSPLIB's optimum of ESC07 and ESC11."""
     cost, precedences, start, end, _ = load_sop(name)
     sol = solve_sop(cost, precedences, start, end)
     assert sol.status == "optimal"
@@ -117,12 +120,14 @@ def test_held_karp_reproduces_esc07():
 
 
 def test_mtz_formulation_agrees_on_esc07():
+    """The MTZ model certifies the same ESC07 optimum as the flow model."""
     cost, precedences, start, end, _ = load_sop("ESC07")
     sol = solve_sop(cost, precedences, start, end, formulation="mtz")
     assert sol.status == "optimal" and sol.objective == KNOWN_OPTIMA["ESC07"]
 
 
 def test_time_limit_returns_a_certified_gap_or_fails_loudly():
+    """A time limit gives a valid path with a proven bound, or a SolverError, never a fake optimum."""
     cost, precedences, start, end, _ = load_sop("br17.10")
     try:
         sol = solve_sop(cost, precedences, start, end, time_limit=1.0)
@@ -168,6 +173,7 @@ def test_decoded_path_is_checked_against_precedences_and_model_value():
 @pytest.mark.parametrize("formulation", ["flow", "mtz"])
 @pytest.mark.parametrize("seed", range(6))
 def test_random_sop_matches_held_karp(seed, formulation):
+    """Random SOPs: the MILP equals an independent Held-Karp DP (or both find none)."""
     cost, precedences, start, end = random_sop(seed, n=5 + seed % 4)
     expected = held_karp_sop(cost, precedences, start, end)
     if not np.isfinite(expected):
@@ -190,6 +196,7 @@ def test_precedences_change_the_answer():
 
 # ----------------------------------------------------------------------------- input
 def test_bad_input_is_rejected_before_solving():
+    """Precedence cycles, bad endpoints, shapes and formulations are refused with named errors."""
     cost = np.zeros((4, 4))
     with pytest.raises(InstanceError, match="precedence cycle"):
         solve_sop(cost, [(1, 2), (2, 1)], 0, 3)
@@ -206,6 +213,7 @@ def test_bad_input_is_rejected_before_solving():
 
 
 def test_describe_lists_labelled_families():
+    """describe() lists every labelled constraint family with its row count."""
     cost, precedences, start, end, _ = load_sop("ESC07")
     table = describe(cost, precedences, start, end, show=False)
     labels = " ".join(row["label"] for row in table)

@@ -112,7 +112,10 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     out = tmp_path / "study"
     argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "30", "--m", "4"]
     argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
-    process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # outside the checkout: `python -m` puts the working folder first on sys.path
+    process = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+    )
     csv = out / "drift.csv"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:  # wait for the first finished rows
@@ -140,7 +143,7 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     # the same command resumes: here with a smaller count, so that it finishes quickly
     total = len(done) + 1
     rerun = argv[: argv.index("--scenarios") + 1] + [str(total)] + argv[argv.index("400") + 1 :]
-    finished = subprocess.run(rerun, capture_output=True, text=True, timeout=300)
+    finished = subprocess.run(rerun, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert finished.returncode == 0, finished.stderr
     again = pd.read_csv(csv)
     assert sorted(again["scenario"]) == list(range(total))  # finished rows kept, one added

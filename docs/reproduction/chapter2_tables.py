@@ -1,7 +1,7 @@
 """Markdown tables of docs/reproduction/chapter2.md from `taopt study drift` output folders.
 
 Usage: python docs/reproduction/chapter2_tables.py RUNS/n50m10 RUNS/n100m10 ...
-(study folders, or their results CSVs such as docs/reproduction/data/chapter2/n50m10.csv)
+(study folders, or their CSVs such as docs/reproduction/data/chapter2/n50m10.csv)
 Prints Table 2.1 (q = f / f_a, thesis values in brackets), the true gaps f / f_o, Table 2.2
 (mean seconds), and per row: exact solves proven optimal, scenarios where the thesis's f_a
 exceeds the optimum (Lemma 2.4 fails), scenarios where f_MC > f_EVM (Theorem 2.7 fails), and
@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from taopt.studies.drift import summarize, wilcoxon_pairs
+from taopt.studies.drift import SPEC, summarize, wilcoxon_pairs
+from taopt.study import with_optimum
 
 # Thesis Table 2.1 / 2.2 rows printed in our copy (VN, VM, EVN, EVM, MC, GA).
 THESIS_Q = {
@@ -31,15 +32,21 @@ THESIS_T = {
     (120, 10): [0.2381, 0.2424, 0.3665, 0.4288, 0.2493, 163.2563],
 }
 METHODS = ["VN", "VM", "EVN", "EVM", "MC", "GA", "exact"]
+#: the reproduction option (never a default): (2.18) on the transposed matrix
+TRANSPOSED = ["VM-transposed", "EVM-transposed"]
 
 
 def tables(folders: list[str]) -> str:
-    q_rows, true_rows, time_rows, check_rows = [], [], [], []
+    q_rows, true_rows, time_rows, check_rows, transposed_rows = [], [], [], [], []
     for folder in folders:
         path = Path(folder)
-        df = pd.read_csv(path / "results.csv" if path.is_dir() else path)
+        df = pd.read_csv(path / "drift.csv" if path.is_dir() else path)
         if "complete" in df:
             df = df[df["complete"] == 1]
+        if "optimum" not in df:
+            df = with_optimum(df, SPEC)
+        extra = df[df.method.isin(TRANSPOSED)]
+        df = df[df.method.isin(METHODS)]
         n, m = int(df.n.iloc[0]), int(df.m.iloc[0])
         per_scenario = df.groupby("scenario")["method"].nunique()
         df = df[df.scenario.isin(per_scenario[per_scenario == len(METHODS)].index)]
@@ -78,6 +85,21 @@ def tables(folders: list[str]) -> str:
             for a, b, p, sig in zip(tests.a, tests.b, tests.p_value, tests.significant, strict=True)
             if not sig
         ]
+        if len(extra):
+            both = pd.concat([df[df.method.isin(["VM", "EVM"])], extra])
+            t = summarize(both[both.scenario.isin(df.scenario.unique())])
+
+            def tcell(method, i=None, t=t, tq=tq):
+                text = format(t.loc[method, "q_thesis"], ".4f") if method in t.index else "–"
+                if method not in t.index or not tq or i is None:
+                    return text
+                return f"{text} ({100 * (t.loc[method, 'q_thesis'] / tq[i] - 1):+.1f} %)"
+
+            transposed_rows.append(
+                f"| n{n}m{m} | {int(t['scenarios'].min())} | {tcell('VM', 1)} | "
+                f"{tcell('VM-transposed', 1)} | {tq[1] if tq else '–'} | {tcell('EVM', 3)} | "
+                f"{tcell('EVM-transposed', 3)} | {tq[3] if tq else '–'} |"
+            )
         check_rows.append(
             f"| n{n}m{m} | {k} | {int(proven.sum())} | {fa_above} | {mc_worse} | "
             f"{', '.join(same) or 'none'} |"
@@ -109,6 +131,14 @@ def tables(folders: list[str]) -> str:
             "| f_MC > f_EVM (Theorem 2.7 fails) | Wilcoxon: not different at 5 % |",
             "|---|---|---|---|---|---|",
             *check_rows,
+            "",
+            "### The transposed insertion step (a reproduction option): q = f / f_a, "
+            "difference to the thesis in brackets",
+            "",
+            "| instance | scenarios | VM | VM-transposed | thesis VM | EVM | EVM-transposed "
+            "| thesis EVM |",
+            "|---|---|---|---|---|---|---|---|",
+            *transposed_rows,
         ]
     )
 

@@ -5,9 +5,12 @@ Public entry points
 ``min_time_path(field, start, goal, speed=1.0, method="collocation") -> Path``
 ``travel_time_matrix(field, points, speed=1.0, ...) -> (N, N) ndarray``
 
-Methods: direct collocation with IPOPT (default, the reference), shooting on
-the navigation law (2.6)/(2.10) (the thesis's route, an independent check),
-and the closed form (3.4) for a uniform drift.
+Methods: direct collocation with IPOPT (the reference, and the default of
+``min_time_path``), shooting on the navigation law (2.6)/(2.10) (the thesis's
+route, an independent check), vectorised Pontryagin shooting of all pairs at
+once (``"pmp"``, :mod:`taopt.navigation.pmp`; the default of
+``travel_time_matrix`` for linear fields), and the closed form (3.4) for a
+uniform drift.
 """
 
 from __future__ import annotations
@@ -21,10 +24,11 @@ from taopt.fields import Field
 from taopt.navigation.collocation import DEFAULT_DEGREE, DEFAULT_INTERVALS, collocation_path
 from taopt.navigation.matrix import travel_time_matrix
 from taopt.navigation.path import Path, as_field, as_point, as_speed, check_drift
+from taopt.navigation.pmp import PairTimes, is_analytic, is_smooth, pmp_path, pmp_travel_times
 from taopt.navigation.shooting import navigation_law, shooting_path
 from taopt.navigation.uniform import closed_form_path, uniform_travel_times
 
-METHODS = ("collocation", "shooting", "closed_form")
+METHODS = ("collocation", "shooting", "pmp", "closed_form")
 
 
 def min_time_path(
@@ -47,9 +51,11 @@ def min_time_path(
         End points.
     speed : float
         Speed ``v`` relative to the field; Assumption 2.1 needs ``v > |v_c|``.
-    method : {"collocation", "shooting", "closed_form"}
+    method : {"collocation", "shooting", "pmp", "closed_form"}
         "collocation" (default): CasADi direct collocation solved by IPOPT.
         "shooting": Newton on the two-point problem (2.10) with the law (2.6).
+        "pmp": the vectorised shooting of :mod:`taopt.navigation.pmp` for one
+        pair, with its accuracy and optimality checks (smooth fields only).
         "closed_form": the straight line of (3.4); only for uniform fields.
     intervals, degree : int
         Collocation grid (ignored by the other methods).
@@ -63,7 +69,8 @@ def min_time_path(
     ------
     InstanceError
         Bad points or speed, an unknown method, "closed_form" on a non-uniform
-        field, or Assumption 2.1 failing on the segment's bounding box.
+        field, "pmp" on a field that is not smooth, or Assumption 2.1 failing on
+        the segment's bounding box.
     ConvergenceError
         The method (with its retry) did not converge.
 
@@ -90,6 +97,8 @@ def min_time_path(
         return closed_form_path(field.velocity(start)[0], start, goal, speed)
     if method == "shooting":
         return shooting_path(field, start, goal, speed)
+    if method == "pmp":
+        return pmp_path(field, start, goal, speed)
     return collocation_path(field, start, goal, speed, intervals, degree)
 
 
@@ -99,5 +108,10 @@ __all__ = [
     "Path",
     "uniform_travel_times",
     "navigation_law",
+    "pmp_travel_times",
+    "pmp_path",
+    "PairTimes",
+    "is_smooth",
+    "is_analytic",
     "METHODS",
 ]

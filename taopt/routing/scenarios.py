@@ -76,7 +76,7 @@ def drift_scenario(
     speed: float = THESIS_SPEED,
     cache_dir: str | os.PathLike | None = None,
     jobs: int | None = 1,
-    method: str = "collocation",
+    method: str = "auto",
 ) -> Scenario:
     """Build the §2.5 scenario with seed ``seed``.
 
