@@ -6,6 +6,7 @@ Importing this package registers every heuristic in :mod:`taopt.registry`:
 * :class:`taopt.DeliveryInstance` (chapter 5): "NIA", "MMA", "SMMA", "GA".
 * :class:`taopt.SopProblem` (sequential ordering): "NIA", "MMA", "SMMA", "GA".
 * :class:`taopt.CapabilityProblem` (chapter 3): "DTAA", "GA" (per class), "MC" (per class).
+* :class:`taopt.CommProblem` (chapter 4, simulations): "CAA", "DAA", "HDA".
 * Peers for :class:`taopt.AssignmentProblem`: "pyvrp" and "ortools" (extra ``taopt[peers]``;
   each runs in its own worker process, see :mod:`taopt.heuristics.peers`).
 
@@ -16,6 +17,7 @@ from taopt.heuristics.registry import run  # noqa: I001
 
 # Importing the modules registers their methods.
 from taopt.heuristics import clustering, ga_routing, sequencing, ga_delivery  # noqa: F401, E402
+from taopt.heuristics import comm  # noqa: F401, E402
 from taopt.heuristics import peers  # noqa: F401, E402  (PyVRP, OR-Tools: run in worker processes)
 from taopt.heuristics import dtaa, capability  # noqa: F401, E402  (chapter 3)
 

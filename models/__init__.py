@@ -5,6 +5,7 @@
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
 * :func:`solve_capability` — chapter 3, (3.1)–(3.3) as printed, corrected per class, joint.
+* :func:`solve_comm` — chapter 4's f_o: (4.1)–(4.2) without communication limits, per class.
 
 Importing this package registers the exact methods in :mod:`taopt.registry`
 (``taopt.solve(problem, "exact")``). They never run a heuristic themselves: the registry's
@@ -20,6 +21,7 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
 from taopt.models.capability import solve_capability, solve_exact, solve_joint
+from taopt.models.comm import solve_comm
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
@@ -65,4 +67,5 @@ __all__ = [
     "solve_sop",
     "solve_sop_problem",
     "lp_bound",
+    "solve_comm",
 ]

@@ -329,6 +329,116 @@ def add_capability_study(studies: Any) -> argparse.ArgumentParser:
     return parser
 
 
+# -- chapter 4 (limited communication): `taopt simulate` and `taopt study comm` ----------------
+
+
+def add_comm_commands(sub: Any, studies: Any) -> None:
+    """Chapter 4's commands: ``taopt simulate FILE`` and ``taopt study comm`` (§4.4)."""
+
+    def simulate(args: argparse.Namespace) -> int:
+        from taopt.comm import CommProblem
+        from taopt.comm.plot import animate_run, plot_run
+        from taopt.pipeline import solve
+
+        problem = CommProblem.load(args.file)
+        if args.range is not None:
+            problem = problem.replace(comm_range=args.range)
+        result = solve(problem, args.algorithm, seed=args.seed)
+        info = result.info
+        print(result.summary())
+        print(
+            f"r = {problem.comm_range:g} m, bytes relayed {info['bytes']:.6g} "
+            f"({info['numbers']} numbers, {info['messages']} messages, {info['rounds']} rounds), "
+            f"{info['group_events']} newly connected groups, {info['replans']} reassignments"
+        )
+        for j, d in enumerate(result.solution.lengths()):
+            print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
+        if args.save:
+            result.save(args.save)
+            print(f"solution written to {args.save}")
+        if args.plot:
+            plot_run(problem, result, path=args.plot)
+            print(f"plot written to {args.plot}")
+        if args.animate:
+            animate_run(problem, result, args.animate, frames=args.frames)
+            print(f"animation written to {args.animate}")
+        return 0
+
+    def study(args: argparse.Namespace) -> int:
+        import pandas as pd
+
+        from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
+        from taopt.studies.comm import summary as summarize
+
+        preset = PRESETS[args.preset]
+        df = comm_study(
+            args.preset,
+            args.scenarios,
+            args.out,
+            methods=_methods(args.methods),
+            exact=args.exact,
+            seed=args.seed,
+            jobs=args.jobs,
+            dask=args.dask,
+            time_limit=args.time_limit,
+            progress=not args.quiet,
+        )
+        table = summarize(df)
+        table.to_csv(FilePath(args.out) / f"summary_{args.preset}.csv", index=False)
+        with pd.option_context("display.width", 160, "display.max_columns", 20):
+            print(preset.title)
+            for n, m in preset.sizes:
+                print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
+                print(q_table(table, n, m).round(4).to_string())
+                if table["certified"].sum():
+                    print("\nmean true gap f / f_o (certified scenarios)")
+                    print(q_table(table, n, m, value="gap").round(4).to_string())
+                print("\nmean bytes relayed (10^5 bytes)")
+                print(bytes_table(table, n, m).round(4).to_string())
+        if args.plot:
+            n, m = preset.sizes[0]
+            plot_study(table, n, m, path=args.plot)
+            print(f"plot written to {args.plot}")
+        return 0
+
+    run = add_subcommand(
+        sub,
+        "simulate",
+        simulate,
+        "chapter 4: simulate CAA, DAA or HDA on a comm_problem file (limited range)",
+    )
+    run.add_argument("file", help="a comm_problem JSON file")
+    run.add_argument("--algorithm", choices=["DAA", "CAA", "HDA"], default="DAA")
+    run.add_argument(
+        "--range", type=float, default=None, metavar="METRES", help="override r of the file"
+    )
+    run.add_argument("--animate", default=None, metavar="GIF", help="write an animation")
+    run.add_argument("--frames", type=int, default=120, help="frames of the animation")
+    run.add_argument("--save", default=None, metavar="JSON", help="write the solution")
+    _common(run, "seed", "plot")
+
+    comm = add_subcommand(
+        studies,
+        "comm",
+        study,
+        "chapter 4 (§4.4, Tables 4.1-4.4, Figs. 4.5-4.8): CAA/DAA/HDA, q, bytes, true gap",
+    )
+    comm.add_argument(
+        "--preset",
+        choices=["table", "table100", "homogeneous15", "homogeneous30", "scalability"],
+        default="table",
+        help="the experiment (table: Tables 4.1-4.2; table100: 4.3-4.4; homogeneous15/30: "
+        "Figs. 4.5/4.6; scalability: Figs. 4.7-4.8)",
+    )
+    comm.add_argument("--scenarios", type=int, default=500, help="scenarios per (n, m, |A|)")
+    comm.add_argument("--out", required=True, help="output folder (comm.csv; resumable)")
+    comm.add_argument(
+        "--exact", action="store_true", help="also certify f_o once per scenario (true gap)"
+    )
+    comm.add_argument("--seed", type=int, default=0, help="study seed")
+    _common(comm, "methods", "time-limit", "jobs", "plot", "quiet")
+
+
 # -- the parser ---------------------------------------------------------------------------------
 
 
@@ -525,6 +635,7 @@ def build_parser() -> argparse.ArgumentParser:
     delivery.add_argument("--seed", type=int, default=1, help="study seed")
     _common(delivery, "time-limit", "jobs", "plot", "quiet")
     add_capability_study(studies)
+    add_comm_commands(sub, studies)
     return parser
 
 

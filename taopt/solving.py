@@ -243,7 +243,7 @@ def verify_file(
     except FeasibilityError as exc:
         report(False, f"infeasible: {exc}")
         return False
-    report(True, f"feasible: every constraint of a {family.kind} holds")
+    report(True, f"feasible: every constraint of this {family.kind} holds")
     close = abs(value - solution.objective) <= 1e-6 * max(1.0, abs(value))
     report(
         close,

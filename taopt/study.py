@@ -20,7 +20,7 @@ Execution
   through ``TAOPT_SOLVER_THREADS``).
 * Every argument is validated before anything is written: an invalid call leaves the output
   folder as it was.
-* Ctrl-C (SIGINT) stops the study at once: pending tasks are cancelled, worker processes are
+* Ctrl-C (SIGINT) or SIGTERM stops the study at once: pending tasks are cancelled, worker processes are
   killed (pool workers also die with their parent if it is killed: ``PR_SET_PDEATHSIG`` on
   Linux, plus a watchdog thread), finished rows stay on disk, and :class:`StudyInterrupted`
   is raised; running the same call again resumes.
@@ -439,6 +439,7 @@ def run_study(
         unit="scenario",
     )
     close = kill = None
+    previous = _stop_on_sigterm()
     try:
         if tasks:
             if executor is None:
@@ -464,7 +465,21 @@ def run_study(
         bar.close()
         if close is not None:
             close()
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return _table(store.read(), spec, keys, methods)
+
+
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def _stop_on_sigterm() -> Any:
+    """Make SIGTERM (a job scheduler's stop) end a study as Ctrl-C does; return the old handler."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGTERM, _interrupt)
 
 
 def _table(

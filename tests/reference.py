@@ -117,12 +117,33 @@ def capability_small() -> Reference:
     return Reference("capability-small", problem, optimum, "brute force per class (§3.6 split)")
 
 
+def comm_small() -> Reference:
+    """Chapter 4: 5 targets of two attributes, 3 vehicles, r = 30 m; f_o by brute force per
+    class of ``full_information()`` (any simulation drives at least f_o)."""
+    rng = np.random.default_rng(4)
+    problem = taopt.CommProblem(
+        rng.uniform(0, 100, size=(5, 2)),
+        rng.uniform(0, 100, size=(3, 2)),
+        ["a", "b", "a", "b", "a"],
+        ["a", "b", "a"],
+        30.0,
+        name="comm-5-3",
+    )
+    optimum = sum(
+        brute_force_routing(c.problem.cost, c.problem.n)
+        for c in problem.full_information().classes
+        if c.problem
+    )
+    return Reference("comm-small", problem, optimum, "brute force per attribute class")
+
+
 REFERENCES: list[Callable[[], Reference]] = [
     routing_line,
     routing_asymmetric,
     delivery_small,
     sop_esc07,
     capability_small,
+    comm_small,
 ]
 
 
