@@ -302,8 +302,18 @@ def plot_printed_arcs(
     return ax
 
 
-def figure_printed_vs_corrected(instance: Any, path: str | None = None) -> Any:
+def figure_printed_vs_corrected(
+    instance: Any, printed: Any, corrected: Any, path: str | None = None
+) -> Any:
     """Two panels: the printed model's arcs (left) and the corrected optimum (right).
+
+    Parameters
+    ----------
+    instance : Instance
+        Positions and field of the problem.
+    printed, corrected : Solution
+        ``taopt.models.solve_capability(problem, "printed")`` and ``(..., "corrected")`` on
+        ``capability_problem_from_instance(instance)`` (the caller solves; plots never do).
 
     Returns
     -------
@@ -312,11 +322,8 @@ def figure_printed_vs_corrected(instance: Any, path: str | None = None) -> Any:
     from matplotlib.figure import Figure
 
     from taopt.capability.instances import capability_problem_from_instance
-    from taopt.models import solve_capability
 
     problem = capability_problem_from_instance(instance)
-    printed = solve_capability(problem, "printed")
-    corrected = solve_capability(problem, "corrected")
     figure = Figure(figsize=(12.0, 5.0))
     left, right = figure.subplots(1, 2)
     plot_printed_arcs(
