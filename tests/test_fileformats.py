@@ -21,8 +21,11 @@ from hypothesis import strategies as st
 
 import taopt
 from taopt import schemas
+from taopt.capability.problem import CapabilityProblem
+from taopt.comm.problem import CommProblem
 from taopt.delivery import EXAMPLE_PATH
 from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
 from taopt.instance import Instance, load_json
@@ -57,6 +60,13 @@ LOADERS: dict[str, tuple[Callable[[Any], Any], Callable[[Path], Any], Path]] = {
         lambda p: field_from_dict(load_json(p, "field")),
         EXAMPLES / "field.json",
     ),
+    "capability_problem": (
+        CapabilityProblem.from_dict,
+        CapabilityProblem.load,
+        EXAMPLES / "capability_problem.json",
+    ),
+    "comm_problem": (CommProblem.from_dict, CommProblem.load, EXAMPLES / "comm_problem.json"),
+    "sop_problem": (SopProblem.from_dict, SopProblem.load, EXAMPLES / "sop_problem.json"),
 }
 
 
@@ -217,7 +227,7 @@ def test_validators_are_compiled_once():
     assert schemas._validator("instance") is schemas._validator("instance")
 
 
-@pytest.mark.parametrize("kind", ["instance", "assignment_problem", "delivery_instance", "field"])
+@pytest.mark.parametrize("kind", sorted(LOADERS))
 def test_shipped_examples_load_and_round_trip(kind):
     """Each small example in taopt/data/examples loads with its loader and reloads equal."""
     path = EXAMPLES / f"{kind}.json"

@@ -279,24 +279,43 @@ class CapabilityProblem:
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> CapabilityProblem:
-        """From JSON data; ``null`` in a cost matrix means the pair cannot be travelled."""
-        from taopt.schemas import validate
+    def from_dict(cls, data: Mapping[str, Any], source: str | None = None) -> CapabilityProblem:
+        """From JSON data; ``null`` in a cost matrix means the pair cannot be travelled.
 
-        validate(data, "capability_problem")
+        Raises
+        ------
+        InstanceError
+            A schema violation (naming the JSON path and the value), a matrix that is not
+            square (naming the matrix and the row), or the constructor's own complaint.
+        """
+        from taopt.instance import check_schema
+        from taopt.schemas import naming
 
-        def decode(rows: Any) -> np.ndarray:
+        label = source or "capability_problem"
+        check_schema(data, "capability_problem", source)
+
+        def decode(rows: Any, where: str) -> np.ndarray:
+            for i, row in enumerate(rows):
+                if len(row) != len(rows):
+                    raise InstanceError(
+                        f"{label}: {where}[{i}]: expected {len(rows)} numbers "
+                        f"(cost must be square), got {len(row)}"
+                    )
             return np.array([[np.inf if v is None else v for v in row] for row in rows], float)
 
         cost = data["cost"]
-        cost = {k: decode(v) for k, v in cost.items()} if isinstance(cost, dict) else decode(cost)
-        return cls(
-            cost,
-            data["n_targets"],
-            tuple(data["vehicle_capability"]),
-            tuple(frozenset(d) for d in data["demands"]),
-            data.get("name", ""),
-        )
+        if isinstance(cost, dict):
+            cost = {k: decode(v, f"cost.{k}") for k, v in cost.items()}
+        else:
+            cost = decode(cost, "cost")
+        with naming(label):
+            return cls(
+                cost,
+                data["n_targets"],
+                tuple(data["vehicle_capability"]),
+                tuple(frozenset(d) for d in data["demands"]),
+                data.get("name", ""),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         from taopt.instance import save_json
@@ -305,9 +324,11 @@ class CapabilityProblem:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> CapabilityProblem:
+        """Read a file written by :meth:`save` (strict JSON, validated; every failure an
+        InstanceError naming the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path))
+        return cls.from_dict(load_json(path, "capability_problem"), source=str(path))
 
     def __repr__(self) -> str:
         label = f" {self.name!r}" if self.name else ""
