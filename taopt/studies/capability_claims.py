@@ -44,7 +44,7 @@ from taopt.capability.instances import random_demands, thesis_scenario
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.routing.bounds import mcga_tree
-from taopt.studies.routing_claims import euclidean_costs, metric_costs
+from taopt.studies.routing_claims import claims_table, euclidean_costs, metric_costs
 from taopt.studies.routing_claims import exact_optimum as routing_optimum
 
 CLASSES = ("euclidean", "metric", "grid-drift")
@@ -329,7 +329,6 @@ def check_claims(
         ``smallest_n``, ``smallest_m``, ``smallest_A``, ``lhs``, ``rhs``, ``path``,
         ``instance``, ``costs``.
     """
-    import pandas as pd
 
     rng = np.random.default_rng(seed)
     rows: dict[tuple[str, str], dict[str, Any]] = {}
@@ -379,21 +378,7 @@ def check_claims(
                     )
             if progress is not None:
                 progress(sample)
-    if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        for row in rows.values():
-            if row["instance"] is not None:
-                path = out / f"{_slug(row['claim'])}-{row['instance_class']}.json"
-                row["instance"].save(path)
-                row["path"] = str(path)
-    return pd.DataFrame([row for row in rows.values() if row["total"] > 0])
-
-
-def _slug(claim: str) -> str:
-    """ "Theorem 3.4 (f^a <= f^o)" -> "theorem-3-4-f-a-f-o"."""
-    words = "".join(c if c.isalnum() else "-" for c in claim.lower())
-    return "-".join(w for w in words.split("-") if w)[:60]
+    return claims_table(rows, out_dir)
 
 
 def still_violates(problem: CapabilityProblem, claim: str, exact: str = "auto") -> bool:

@@ -47,6 +47,7 @@ from taopt.comm.engine import components, initially_connected
 from taopt.comm.problem import CommProblem, random_problem
 from taopt.errors import ConvergenceError, InstanceError
 from taopt.pipeline import solve
+from taopt.studies.routing_claims import claims_table
 
 ALGORITHMS = ("CAA", "DAA", "HDA")
 
@@ -173,7 +174,6 @@ def check_claims(
     Columns: claim, holds, total (scenarios where it applied), smallest_n, smallest_m, lhs,
     rhs (of the smallest counterexample), path (its JSON file when ``out_dir`` is given).
     """
-    import pandas as pd
 
     rng = np.random.default_rng(seed)
     rows: dict[str, dict[str, Any]] = {}
@@ -211,20 +211,7 @@ def check_claims(
                 )
         if progress is not None:
             progress(sample)
-    if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        for row in rows.values():
-            if row["instance"] is not None:
-                path = out / f"{_slug(row['claim'])}.json"
-                row["instance"].save(path)
-                row["path"] = str(path)
-    return pd.DataFrame([row for row in rows.values() if row["total"] > 0])
-
-
-def _slug(claim: str) -> str:
-    words = "".join(c if c.isalnum() else "-" for c in claim.lower())
-    return "-".join(w for w in words.split("-") if w)[:60]
+    return claims_table(rows, out_dir)
 
 
 # -- Remark 4.6 --------------------------------------------------------------------------------

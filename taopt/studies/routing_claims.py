@@ -364,7 +364,6 @@ def check_claims(
         its JSON (None without ``out_dir``), ``instance`` (the problem
         itself), and ``costs`` (how the matrices were made).
     """
-    import pandas as pd
 
     rng = np.random.default_rng(seed)
     rows: dict[tuple[str, str], dict[str, Any]] = {}
@@ -408,15 +407,25 @@ def check_claims(
                     )
             if progress is not None:
                 progress(sample)
+    # Rows whose claim never applied (f_da = 2 f_a on asymmetric classes) are dropped.
+    return claims_table(rows, out_dir)
+
+
+def claims_table(rows: dict[Any, dict[str, Any]], out_dir: str | Path | None) -> Any:
+    """The claims' DataFrame (rows that applied at least once), after saving each row's
+    smallest counterexample to ``out_dir`` as ``<claim-slug>[-<instance_class>].json``
+    (the path goes in the row's ``path``). Shared by the chapter 2, 3 and 4 claim checks."""
+    import pandas as pd
+
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         for row in rows.values():
             if row["instance"] is not None:
-                path = out / f"{_slug(row['claim'])}-{row['instance_class']}.json"
+                suffix = f"-{row['instance_class']}" if "instance_class" in row else ""
+                path = out / f"{_slug(row['claim'])}{suffix}.json"
                 row["instance"].save(path)
                 row["path"] = str(path)
-    # Rows whose claim never applied (f_da = 2 f_a on asymmetric classes) are dropped.
     return pd.DataFrame([row for row in rows.values() if row["total"] > 0])
 
 
