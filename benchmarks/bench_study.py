@@ -54,7 +54,13 @@ def one(mode: list[str]) -> tuple[float, int, int]:
         argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "30", "--m", "4"]
         argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
         process = subprocess.Popen(
-            argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=tmp
+            argv,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            cwd=tmp,
+            # as from a terminal: a benchmark started in the background (nohup, `&` in a
+            # script) inherits an ignored SIGINT, and a study keeps what it inherits
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
         )
         csv = out / "drift.csv"
         while not (csv.exists() and len(csv.read_text().splitlines()) > 2):

@@ -319,11 +319,11 @@ def _executor(
         for pid in local:
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
+        if cluster is not None:
+            # its workers are gone: Dask's exit hook would otherwise wait 10 s to close it
+            cluster.shutdown_on_close = False
         with contextlib.suppress(Exception):
             client.close(timeout=1)
-        if cluster is not None:
-            with contextlib.suppress(Exception):
-                cluster.close(timeout=1)
 
     return client.get_executor(), close, kill
 

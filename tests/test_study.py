@@ -114,7 +114,14 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
     # outside the checkout: `python -m` puts the working folder first on sys.path
     process = subprocess.Popen(
-        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+        argv,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
+        # as from a terminal, even when pytest itself runs in the background with SIGINT
+        # ignored (a study keeps an inherited SIG_IGN, as `nohup ... &` users expect)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     csv = out / "drift.csv"
     deadline = time.monotonic() + 120
