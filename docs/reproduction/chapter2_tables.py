@@ -1,7 +1,7 @@
 """Markdown tables of docs/reproduction/chapter2.md from `taopt study drift` output folders.
 
 Usage: python docs/reproduction/chapter2_tables.py RUNS/n50m10 RUNS/n100m10 ...
-(study folders, or their CSVs such as docs/reproduction/data/chapter2/n50m10.csv)
+(study folders, or their CSVs such as docs/reproduction/data/chapter2/n50m10.csv.gz)
 Prints Table 2.1 (q = f / f_a, thesis values in brackets), the true gaps f / f_o, Table 2.2
 (mean seconds), and per row: exact solves proven optimal, scenarios where the thesis's f_a
 exceeds the optimum (Lemma 2.4 fails), scenarios where f_MC > f_EVM (Theorem 2.7 fails), and
