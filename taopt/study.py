@@ -316,6 +316,10 @@ def _executor(
         local = sorted(pids - {os.getpid()})  # a LocalCluster's nannies live in this process
 
     def kill() -> None:
+        if cluster is not None:
+            for nanny in list(getattr(cluster, "workers", {}).values()):
+                with contextlib.suppress(Exception):
+                    nanny.close_gracefully()  # do not restart the worker it is about to lose
         for pid in local:
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
