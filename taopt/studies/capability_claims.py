@@ -43,6 +43,8 @@ from taopt.capability.bounds import doubled_arborescence, thesis_mcga
 from taopt.capability.instances import random_demands, thesis_scenario
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError, SolverError
+from taopt.heuristics.dtaa import distributed_auction, dtaa
+from taopt.models import solve_capability
 from taopt.routing.bounds import mcga_tree
 from taopt.studies.routing_claims import claims_table, euclidean_costs, metric_costs
 from taopt.studies.routing_claims import exact_optimum as routing_optimum
@@ -94,7 +96,6 @@ def optimum(problem: CapabilityProblem, method: str = "auto") -> float:
     small = all(len(c.targets) <= 10 for c in problem.classes)
     if method == "dp" or (method == "auto" and small):
         return exact_optimum(problem)[0]
-    from taopt.models import solve_capability
 
     result = solve_capability(problem, "corrected")
     if result.status != "optimal":
@@ -240,7 +241,6 @@ def claim_values(
     dict
         claim name -> {"holds": bool or None (not applicable), "lhs", "rhs"}.
     """
-    from taopt.heuristics.dtaa import distributed_auction, dtaa
 
     rng = np.random.default_rng(0) if rng is None else rng
     f_a = thesis_mcga(problem)
