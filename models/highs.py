@@ -42,8 +42,11 @@ Example
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import math
 import os
+import sys
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -64,9 +67,66 @@ __all__ = [
     "HighsModel",
     "HighsRun",
     "certify",
+    "new_highs",
     "relative_gap",
     "solve_highs",
 ]
+
+
+def _flush_c_stdout() -> None:
+    """Flush the C library's ``stdout`` buffer (HiGHS prints through it)."""
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # no libc symbol table (not on Linux/macOS)
+        pass
+
+
+@contextlib.contextmanager
+def _stdout_discarded():
+    """Send file descriptor 1 to the null device for the duration of the block.
+
+    HiGHS writes its banner from C++ straight to the process's standard output,
+    before any option can be set, so ``output_flag`` cannot stop it; only the
+    file descriptor can. Python's and C's buffers are flushed on both sides so
+    no line of anybody else's is lost or moved.
+    """
+    try:
+        sys.stdout.flush()
+    except (AttributeError, ValueError, OSError):
+        pass
+    _flush_c_stdout()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no standard output at all: nothing to protect
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        _flush_c_stdout()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def new_highs(verbose: bool = False) -> highspy.Highs:
+    """A ``highspy.Highs`` object created with its output off from the start.
+
+    highspy 1.16 prints "Running HiGHS ... Copyright" on standard output the
+    moment the first ``Highs()`` of a process is built, before ``output_flag``
+    can be switched off; older versions print nothing. Every HiGHS object of
+    taopt is made here, so no version's banner reaches a user's table.
+    """
+    with _stdout_discarded():
+        highs = highspy.Highs()
+        highs.setOptionValue("output_flag", bool(verbose))
+    return highs
+
+
+# The banner is printed once per process, by whichever Highs() comes first:
+# cvxpy's HiGHS interface builds its own, so take the first one here, quietly.
+new_highs()
 
 
 @dataclass(frozen=True)
@@ -410,8 +470,7 @@ class HighsModel:
             for column in integers:
                 integrality[column] = highspy.HighsVarType.kInteger
             lp.integrality_ = integrality
-        self.highs = highspy.Highs()
-        self.highs.setOptionValue("output_flag", bool(verbose))
+        self.highs = new_highs(verbose)
         for name, value in thread_options().items():
             self.highs.setOptionValue(name, value)
         if self.highs.passModel(lp) == highspy.HighsStatus.kError:

@@ -19,6 +19,47 @@ from __future__ import annotations
 
 from typing import Any
 
+
+def _map_source_tree_packages() -> None:
+    """Make ``taopt.models`` and ``taopt.heuristics`` importable from a checkout.
+
+    pyproject.toml installs the top-level folders ``models/`` and
+    ``heuristics/`` as ``taopt.models`` and ``taopt.heuristics``
+    (``package-dir``). Python started in the checkout root imports the local
+    ``taopt/`` folder instead of the installed package, and that folder has
+    no such subpackages; this finder maps them exactly as ``package-dir``
+    does, so the checkout imports the same package as the installation. It
+    does nothing in an installed package (the subpackages are real folders).
+    """
+    import importlib.abc
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent
+    root = here.parent
+    mapped = {
+        f"taopt.{name}": root / name
+        for name in ("models", "heuristics")
+        if not (here / name).is_dir() and (root / name / "__init__.py").is_file()
+    }
+    if not mapped or not (root / "pyproject.toml").is_file():
+        return
+
+    class _SourceTreeFinder(importlib.abc.MetaPathFinder):
+        def find_spec(self, fullname, path=None, target=None):
+            folder = mapped.get(fullname)
+            if folder is None:
+                return None
+            return importlib.util.spec_from_file_location(
+                fullname, folder / "__init__.py", submodule_search_locations=[str(folder)]
+            )
+
+    sys.meta_path.append(_SourceTreeFinder())
+
+
+_map_source_tree_packages()
+
 from taopt.errors import (
     ConvergenceError,
     FeasibilityError,
