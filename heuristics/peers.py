@@ -340,7 +340,7 @@ def _solution(
     )
 
 
-@register_method(AssignmentProblem, "pyvrp", category="peer")
+@register_method(AssignmentProblem, "pyvrp", category="peer", requires="pyvrp")
 def pyvrp_solve(
     problem: AssignmentProblem,
     time_limit: float | None = 1.0,
@@ -405,7 +405,7 @@ def pyvrp_solve(
     return _solve("pyvrp", problem, seed, scale, options)
 
 
-@register_method(AssignmentProblem, "ortools", category="peer")
+@register_method(AssignmentProblem, "ortools", category="peer", requires="ortools")
 def ortools_solve(
     problem: AssignmentProblem,
     time_limit: float | None = 1.0,

@@ -6,9 +6,12 @@
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
 * :func:`solve_capability` — chapter 3, (3.1)–(3.3) as printed, corrected per class, joint.
 * :func:`solve_comm` — chapter 4's f_o: (4.1)–(4.2) without communication limits, per class.
+* ``"DP"`` — chapter 5's exact optimum by dynamic programming over order ideals
+  (:func:`taopt.delivery.schedule.optimal_plan`, core code because every ordering heuristic
+  is scored through the same DP; registered here with the other exact methods).
 
-Importing this package registers the exact methods in :mod:`taopt.registry`
-(``taopt.solve(problem, "exact")``). They never run a heuristic themselves: the registry's
+Importing this package registers every exact method in :mod:`taopt.registry`
+(``taopt.solve(problem, "exact")``); no other import is needed for any of them. They never run a heuristic themselves: the registry's
 ``warm_start`` names the heuristic(s) whose best result :func:`taopt.solve` passes in as
 ``incumbent``.
 """
@@ -19,9 +22,10 @@ from typing import Any
 
 from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
+from taopt.delivery.schedule import optimal_plan
 from taopt.delivery.sop import SopProblem
 from taopt.models.capability import solve_capability, solve_exact, solve_joint
-from taopt.models.comm import solve_comm
+from taopt.models.comm import solve_comm  # registers CommProblem "exact"
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
@@ -43,22 +47,47 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
 
 
 register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",))(solve_routing)
-# the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
-# exact method `taopt solve` runs by default), so it runs only when asked for
+#: Largest delivery instance on which `taopt solve` runs the exact DP by default.
+DP_DEFAULT_MAX_N = 12
+
+
+def _dp_too_large(instance: DeliveryInstance) -> str:
+    return (
+        f"DP not run: n = {instance.n} customers > {DP_DEFAULT_MAX_N} (its states grow as 2^n; "
+        f"name it with --methods DP to try, it refuses n > 14)"
+    )
+
+
+# chapter 5's certified optimum: the DP over order ideals, by default while it is affordable
+register_method(
+    DeliveryInstance,
+    "DP",
+    category="exact",
+    default=lambda instance: instance.n <= DP_DEFAULT_MAX_N,
+    not_default=_dp_too_large,
+)(optimal_plan)
+# the delivery MILP does not scale past a handful of customers (the DP above is the exact
+# method `taopt solve` runs by default), so it runs only when asked for
 register_method(
     DeliveryInstance,
     "exact",
     category="exact",
     warm_start=("NIA", "MMA", "SMMA"),
     default=False,
+    not_default="the MILP (5.1)-(5.7) runs only when named (--methods exact): DP is faster",
 )(solve_delivery)
 register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
 # chapter 3: the corrected model is "exact"; the joint MILP on request. The printed model
 # (a relaxation without routes) is solve_capability(problem, "printed").
 register_method(CapabilityProblem, "exact", category="exact", warm_start=("DTAA",))(solve_exact)
-register_method(CapabilityProblem, "joint", category="exact", warm_start=("DTAA",), default=False)(
-    solve_joint
-)
+register_method(
+    CapabilityProblem,
+    "joint",
+    category="exact",
+    warm_start=("DTAA",),
+    default=False,
+    not_default="the joint MILP runs only when named (--methods joint): 'exact' is faster",
+)(solve_joint)
 
 __all__ = [
     "solve_capability",

@@ -115,8 +115,30 @@ def solve(
 
 
 def available_methods(problem: Any, category: str | None = None) -> list[str]:
-    """Names of the methods registered for ``problem``'s type (optionally of one category)."""
-    return list(methods(problem, category))
+    """Names of the methods usable on ``problem`` here, in registration order.
+
+    Every registered method of ``problem``'s family (optionally of one ``category``: "exact",
+    "heuristic", "peer", "simulation", "relaxation") whose packages are installed: a peer
+    such as "pyvrp" or "ortools" is listed only when its package is (found with
+    ``importlib.util.find_spec``, never imported here).
+
+    Parameters
+    ----------
+    problem : a registered problem, or its class
+    category : str, optional
+
+    Returns
+    -------
+    list of str
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    >>> taopt.available_methods(p, "exact")
+    ['exact']
+    """
+    return [name for name, spec in methods(problem, category).items() if spec.available]
 
 
 def default_methods(problem: Any) -> list[str]:
@@ -131,8 +153,21 @@ def default_methods(problem: Any) -> list[str]:
         name
         for category in order
         for name, spec in found.items()
-        if spec.category == category and spec.is_default_for(problem)
+        if spec.category == category and spec.is_default_for(problem) and spec.available
     ]
+
+
+def no_optimum_note(problem: Any) -> str:
+    """Why the default methods compute no certified optimum of ``problem`` ("" when they do).
+
+    One line naming the exact method left out and why (e.g. the delivery DP beyond 12
+    customers); ``taopt solve`` prints it under its table.
+    """
+    exact = methods(problem, "exact")
+    if not exact or any(spec.is_default_for(problem) for spec in exact.values()):
+        return ""
+    first = next(iter(exact.values()))
+    return f"no certified optimum by default: {first.why_not_default(problem)}"
 
 
 def load_problem(data: Any) -> Any:
@@ -145,4 +180,11 @@ def load_problem(data: Any) -> Any:
     return family_for_kind(data.get("kind")).load(data)
 
 
-__all__ = ["solve", "available_methods", "default_methods", "load_problem", "family_of"]
+__all__ = [
+    "solve",
+    "available_methods",
+    "default_methods",
+    "no_optimum_note",
+    "load_problem",
+    "family_of",
+]

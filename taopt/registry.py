@@ -25,7 +25,9 @@ Example
 
 from __future__ import annotations
 
+import functools
 import importlib
+import importlib.util
 import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -103,6 +105,12 @@ class Method:
     default : bool or callable
         Whether the method is in the default set of ``taopt solve`` (a callable gets the
         problem, e.g. an exact DP only for small instances).
+    not_default : str or callable
+        Why the method is not in the default set when ``default`` says no (a callable gets
+        the problem): ``taopt solve`` prints it when no certified optimum is computed.
+    requires : tuple of str
+        Top-level packages the method needs (an optional extra such as ``pyvrp``); the
+        method is :attr:`available` only when every one is installed.
     """
 
     name: str
@@ -114,10 +122,24 @@ class Method:
     options: frozenset[str] = frozenset()
     takes_any: bool = False
     default: bool | Callable[[Any], bool] = True
+    not_default: str | Callable[[Any], str] = ""
+    requires: tuple[str, ...] = ()
 
     def is_default_for(self, problem: Any) -> bool:
         """Whether ``taopt solve`` runs this method on ``problem`` when none are named."""
         return bool(self.default(problem) if callable(self.default) else self.default)
+
+    def why_not_default(self, problem: Any) -> str:
+        """Why ``taopt solve`` leaves this method out on ``problem`` ("" when it runs it)."""
+        if self.is_default_for(problem):
+            return ""
+        reason = self.not_default(problem) if callable(self.not_default) else self.not_default
+        return reason or f"{self.name} runs only when named (--methods {self.name})"
+
+    @property
+    def available(self) -> bool:
+        """Whether every package in :attr:`requires` is installed (none is imported)."""
+        return all(_installed(package) for package in self.requires)
 
     @property
     def exact(self) -> bool:
@@ -137,6 +159,16 @@ class Method:
                 f"method {self.name!r} does not take option(s) {unknown}; "
                 f"it takes {sorted(self.options)}"
             )
+
+
+@functools.lru_cache(maxsize=None)
+def _installed(package: str) -> bool:
+    """Whether top-level ``package`` can be imported, found without importing it.
+
+    ``importlib.util.find_spec`` only locates the package: importing ``ortools`` into a
+    process that uses HiGHS would break cvxpy's HiGHS (DESIGN.md, "Known trap").
+    """
+    return importlib.util.find_spec(package) is not None
 
 
 _FAMILIES: dict[type, Family] = {}
@@ -221,8 +253,27 @@ def register_method(
     category: str = "heuristic",
     warm_start: tuple[str, ...] | str = (),
     default: bool | Callable[[Any], bool] = True,
+    not_default: str | Callable[[Any], str] = "",
+    requires: tuple[str, ...] | str = (),
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Decorator: register ``func(problem, **options) -> Solution`` as method ``name``.
+
+    Parameters
+    ----------
+    problem_type : type
+        The family's problem class.
+    name : str
+        As the user types it.
+    category : str
+        One of :data:`CATEGORIES`.
+    warm_start : str or tuple of str
+        Methods whose best payload :func:`taopt.solve` passes as ``incumbent=``.
+    default : bool or callable
+        Whether ``taopt solve`` runs it when no method is named (a callable gets the problem).
+    not_default : str or callable
+        The one line ``taopt solve`` prints when an exact method is left out.
+    requires : str or tuple of str
+        Top-level packages it needs (optional extras); see :attr:`Method.available`.
 
     Example
     -------
@@ -252,6 +303,8 @@ def register_method(
             options=options,
             takes_any=takes_any,
             default=default,
+            not_default=not_default,
+            requires=(requires,) if isinstance(requires, str) else tuple(requires),
         )
         return func
 
@@ -259,13 +312,13 @@ def register_method(
 
 
 def ensure_families() -> None:
-    """Import every package of :data:`FAMILY_PACKAGES` (each registers its family)."""
+    """Import every package of :data:`FAMILY_PACKAGES` (each registers its family).
+
+    A family that fails to import fails loudly: its ImportError is raised as it is, never
+    skipped (a family silently missing would make its file kind "unknown").
+    """
     for package in FAMILY_PACKAGES:
-        try:
-            importlib.import_module(package)
-        except ModuleNotFoundError as exc:  # a family not built in this version
-            if exc.name != package:
-                raise
+        importlib.import_module(package)
 
 
 def family_of(item: Any) -> Family:
@@ -304,8 +357,12 @@ def families() -> list[Family]:
 def methods(problem: Any, category: str | None = None) -> dict[str, Method]:
     """Registered methods for ``problem`` (or its class), optionally of one category.
 
-    Only methods whose modules are imported are listed: :func:`taopt.solve` imports
-    ``taopt.models``, ``taopt.heuristics`` and the peers first.
+    Methods register where they are defined, in ``taopt.models`` (every exact method) and
+    ``taopt.heuristics`` (heuristics, peers, simulation policies); the core never imports
+    those packages, so this lists what has been imported. The orchestration imports both
+    (:mod:`taopt.pipeline`), so :func:`taopt.available_methods` and :func:`taopt.solve`
+    always see every method. Peers whose package is missing are listed here but not by
+    :func:`taopt.available_methods`.
     """
     family = family_of(problem)
     found = dict(_METHODS.get(family.problem_type, {}))

@@ -32,7 +32,7 @@ import pandas as pd
 from taopt import bounds as bound_functions
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import Instance, load_json
-from taopt.pipeline import default_methods, solve
+from taopt.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import family_for_kind, family_of
 from taopt.result import OPTIMAL, Solution
 from taopt.routing.problem import AssignmentProblem
@@ -181,6 +181,9 @@ def solve_file(
     table, solutions = method_table(problem, methods, seed=seed, time_limit=time_limit)
     print(f"{problem!r} from {path}", file=out)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
+    note = "" if methods else no_optimum_note(problem)
+    if note:
+        print(note, file=out)
     best = min(solutions.values(), key=lambda s: s.objective)
     if save:
         folder = Path(save)

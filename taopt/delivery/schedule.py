@@ -28,7 +28,6 @@ import numpy as np
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, SolverError
-from taopt.registry import register_method
 from taopt.result import FEASIBLE, OPTIMAL, Solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
@@ -294,7 +293,6 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
     )
 
 
-@register_method(DeliveryInstance, "DP", category="exact", default=lambda inst: inst.n <= 12)
 def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solution:
     """Exact optimum of (5.1)–(5.7) for small n by dynamic programming over subsets.
 
