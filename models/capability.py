@@ -53,6 +53,7 @@ Example
 from __future__ import annotations
 
 import inspect
+import logging
 import math
 import time
 from collections.abc import Hashable
@@ -69,6 +70,8 @@ from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import certify, solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, Routes, Solution
+
+logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
 FORMULATIONS = ("printed", "corrected", "joint")
 JOINT_SUBTOUR_ELIMINATIONS = ("dfj", "mtz")
@@ -798,6 +801,8 @@ def describe(
 ) -> list[dict[str, Any]]:
     """Variable and constraint families of the printed or joint model, with equations.
 
+    With ``show`` the table is logged at INFO on the ``taopt`` logger too.
+
     Returns
     -------
     list of dict
@@ -844,10 +849,10 @@ def describe(
             }
         )
     if show:
-        print(
+        lines = [
             f"{formulation} model: n={problem.n} targets, m={problem.m} vehicles, "
             f"|A|={len(problem.capabilities)}"
-        )
-        for family in families:
-            print(f"  {family['rows']:>8}  {family['family']}")
+        ]
+        lines += [f"  {family['rows']:>8}  {family['family']}" for family in families]
+        logger.info("\n".join(lines))
     return families

@@ -90,6 +90,7 @@ Example
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -105,6 +106,8 @@ from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import certify, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution
+
+logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
 __all__ = [
     "DeliveryModel",
@@ -529,7 +532,8 @@ def describe(instance: DeliveryInstance, show: bool = True) -> list[dict[str, An
     """Constraint families of the model for ``instance``: label, row count, printed equation.
 
     Returns a list of ``{"label", "rows", "implements"}`` (one per family; the
-    LP-relaxation bounds are not listed). Prints a table when ``show``.
+    LP-relaxation bounds are not listed). Logs a table at INFO on the ``taopt`` logger when
+    ``show``.
     """
     model = build(instance)
     merged: dict[str, dict[str, Any]] = {}
@@ -539,12 +543,15 @@ def describe(instance: DeliveryInstance, show: bool = True) -> list[dict[str, An
     table = list(merged.values())
     if show:
         n_w = 0 if model.truck_leg is None else model.truck_leg.size
-        print(
+        lines = [
             f"truck-drone MILP: {model.sortie.size} binary y, {n_w} continuous w, "
             f"{3 * instance.n} times"
-        )
-        for row in table:
-            print(f"  {row['rows']:>6}  {row['label']}\n          implements {row['implements']}")
+        ]
+        lines += [
+            f"  {row['rows']:>6}  {row['label']}\n          implements {row['implements']}"
+            for row in table
+        ]
+        logger.info("\n".join(lines))
     return table
 
 

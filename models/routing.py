@@ -39,6 +39,7 @@ Example
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -52,6 +53,8 @@ from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
 from taopt.result import RELAXATION, Routes, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+
+logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
 
@@ -284,7 +287,8 @@ def describe(problem: AssignmentProblem, sec: str = "dfj", show: bool = True) ->
     problem : AssignmentProblem
     sec : {"dfj", "mtz", "flow"}
     show : bool
-        Print a small table too.
+        Log a small table too, at INFO on the ``taopt`` logger (the command line shows it;
+        elsewhere ``pandas.DataFrame(describe(...))`` displays the families).
 
     Returns
     -------
@@ -316,9 +320,9 @@ def describe(problem: AssignmentProblem, sec: str = "dfj", show: bool = True) ->
             }
         )
     if show:
-        print(f"(2.2)-(2.5) with sec={sec!r}: n={n} targets, m={problem.m} vehicles")
-        for family in families:
-            print(f"  {family['rows']:>8}  {family['family']}")
+        lines = [f"(2.2)-(2.5) with sec={sec!r}: n={n} targets, m={problem.m} vehicles"]
+        lines += [f"  {family['rows']:>8}  {family['family']}" for family in families]
+        logger.info("\n".join(lines))
     return families
 
 

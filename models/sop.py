@@ -56,6 +56,7 @@ Example
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 
@@ -68,6 +69,8 @@ from taopt.delivery.sop import SopProblem, check_sop
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import certify, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution
+
+logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
 FORMULATIONS = ("flow", "mtz")
 
@@ -325,7 +328,8 @@ def describe(
 ) -> list[dict]:
     """Constraint families of the built model, with their row counts.
 
-    Returns a list of ``{"label", "rows"}``; prints a table when ``show``.
+    Returns a list of ``{"label", "rows"}``; logs a table at INFO on the ``taopt`` logger
+    when ``show``.
     """
     model = build(cost, precedences, start, end, formulation)
     families: dict[str, int] = {}
@@ -334,9 +338,9 @@ def describe(
     table = [{"label": k, "rows": v} for k, v in families.items()]
     if show:
         n_vars = sum(v.size for v in model.problem.variables())
-        print(f"SOP ({formulation}): {len(model.tails)} arcs, {n_vars} variables")
-        for row in table:
-            print(f"  {row['rows']:>7}  {row['label']}")
+        lines = [f"SOP ({formulation}): {len(model.tails)} arcs, {n_vars} variables"]
+        lines += [f"  {row['rows']:>7}  {row['label']}" for row in table]
+        logger.info("\n".join(lines))
     return table
 
 

@@ -13,6 +13,11 @@ Quick tour
 4.0
 >>> taopt.solve(problem, "exact").routes
 [[1, 0]]
+>>> taopt.available_methods(problem)[:3]
+['exact', 'VN', 'VM']
+
+Every public name is imported on first use: ``import taopt`` is light, and
+``taopt.__all__`` lists the problem types, payloads, entry points and errors.
 """
 
 from __future__ import annotations
@@ -31,7 +36,6 @@ def _map_source_tree_packages() -> None:
     does, so the checkout imports the same package as the installation. It
     does nothing in an installed package (the subpackages are real folders).
     """
-    import importlib.abc
     import importlib.util
     import sys
     from pathlib import Path
@@ -46,7 +50,7 @@ def _map_source_tree_packages() -> None:
     if not mapped or not (root / "pyproject.toml").is_file():
         return
 
-    class _SourceTreeFinder(importlib.abc.MetaPathFinder):
+    class _SourceTreeFinder:  # a meta path finder (importlib.abc is not imported: it is slow)
         def find_spec(self, fullname, path=None, target=None):
             folder = mapped.get(fullname)
             if folder is None:
@@ -60,88 +64,124 @@ def _map_source_tree_packages() -> None:
 
 _map_source_tree_packages()
 
-from taopt.errors import (
-    ConvergenceError,
-    FeasibilityError,
-    InstanceError,
-    SolverError,
-    TaoptError,
-)
-from taopt.fields import GriddedField, LinearField, UniformField, thesis_field
-from taopt.instance import Instance, Obstacle, Target, Vehicle
-from taopt.result import Order, Routes, Solution, Status
-from taopt.routing.problem import AssignmentProblem
-from taopt.scoring import evaluate
-
 __version__ = "0.1.0"
 
-_LAZY = {
-    # imported on first use, so `import taopt` stays light
-    "DeliveryInstance": ("taopt.delivery", "DeliveryInstance"),
-    "Plan": ("taopt.delivery", "Plan"),
-    "SopProblem": ("taopt.delivery", "SopProblem"),
+#: Public name -> (module, attribute): imported on first use, so ``import taopt`` (and
+#: ``taopt --version``) loads no numpy, cvxpy or matplotlib.
+_LAZY: dict[str, tuple[str, str]] = {
+    # the one entry point (the orchestration layer: imports taopt.models, taopt.heuristics)
+    "solve": ("taopt.pipeline", "solve"),
+    "available_methods": ("taopt.pipeline", "available_methods"),
+    "evaluate": ("taopt.scoring", "evaluate"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
+    # problem types, one per family (DESIGN.md), and the instance file's parts
+    "AssignmentProblem": ("taopt.routing.problem", "AssignmentProblem"),
     "CapabilityProblem": ("taopt.capability", "CapabilityProblem"),
     "CommProblem": ("taopt.comm", "CommProblem"),
-    # the orchestration layer: imports the method packages (cvxpy, HiGHS)
-    "solve": ("taopt.pipeline", "solve"),
+    "DeliveryInstance": ("taopt.delivery", "DeliveryInstance"),
+    "SopProblem": ("taopt.delivery", "SopProblem"),
+    "Instance": ("taopt.instance", "Instance"),
+    "Vehicle": ("taopt.instance", "Vehicle"),
+    "Target": ("taopt.instance", "Target"),
+    "Obstacle": ("taopt.instance", "Obstacle"),
+    # results and their payloads
+    "Solution": ("taopt.result", "Solution"),
+    "Status": ("taopt.result", "Status"),
+    "Routes": ("taopt.result", "Routes"),
+    "Order": ("taopt.result", "Order"),
+    "Plan": ("taopt.delivery", "Plan"),
+    "Trajectories": ("taopt.comm", "Trajectories"),
+    # drift fields
+    "UniformField": ("taopt.fields", "UniformField"),
+    "LinearField": ("taopt.fields", "LinearField"),
+    "GriddedField": ("taopt.fields", "GriddedField"),
+    "thesis_field": ("taopt.fields", "thesis_field"),
+    # errors
+    "TaoptError": ("taopt.errors", "TaoptError"),
+    "InstanceError": ("taopt.errors", "InstanceError"),
+    "FeasibilityError": ("taopt.errors", "FeasibilityError"),
+    "SolverError": ("taopt.errors", "SolverError"),
+    "ConvergenceError": ("taopt.errors", "ConvergenceError"),
 }
 
-
+#: Subpackages reachable as attributes (``taopt.bounds.arborescence(problem)``).
 _SUBMODULES = (
-    "models",
-    "heuristics",
     "bounds",
     "navigation",
+    "registry",
+    "models",
+    "heuristics",
     "routing",
     "delivery",
-    "plot",
-    "registry",
     "capability",
     "comm",
+    "plot",
+    "fields",
+    "instance",
+    "result",
+    "errors",
+    "scoring",
+    "schemas",
+    "pipeline",
+    "solving",
+    "studies",
 )
 
 
 def __getattr__(name: str) -> Any:
-    if name in _SUBMODULES:
-        import importlib
+    import importlib
 
-        module = importlib.import_module(f"taopt.{name}")
-        globals()[name] = module
-        return module
     if name in _LAZY:
-        import importlib
-
         module, attr = _LAZY[name]
         value = getattr(importlib.import_module(module), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'taopt' has no attribute {name!r}")
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"taopt.{name}")
+    else:
+        raise AttributeError(f"module 'taopt' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))
 
 
 __all__ = [
+    # entry points
     "solve",
+    "available_methods",
+    "evaluate",
+    "schedule",
+    # problem types
     "AssignmentProblem",
+    "CapabilityProblem",
+    "CommProblem",
     "DeliveryInstance",
     "SopProblem",
-    "Plan",
-    "Routes",
-    "Order",
-    "Status",
     "Instance",
     "Vehicle",
     "Target",
     "Obstacle",
+    # results and payloads
     "Solution",
-    "evaluate",
-    "schedule",
+    "Status",
+    "Routes",
+    "Order",
+    "Plan",
+    "Trajectories",
+    # fields
     "UniformField",
     "LinearField",
     "GriddedField",
     "thesis_field",
+    # errors
     "TaoptError",
     "InstanceError",
     "FeasibilityError",
     "SolverError",
     "ConvergenceError",
+    # subpackages used as namespaces
+    "bounds",
+    "navigation",
+    "__version__",
 ]

@@ -1,27 +1,43 @@
 """The ``taopt`` command line (the only module that uses argparse).
 
-Subcommands: ``navigate``, ``demo``, ``solve``, ``verify``, ``claims``, ``study drift``,
-``study delivery`` (and the chapter 3 and 4 commands when installed). The same flag names
-mean the same everywhere: ``--seed``, ``--jobs``, ``--dask``, ``--time-limit``,
-``--methods``, ``--out``, ``--plot``, ``--quiet``; every option's help shows its default.
+Subcommands: ``navigate``, ``demo``, ``solve``, ``verify``, ``claims``, ``simulate``, and
+``study drift | delivery | capability | comm``. One grammar: the same flag means the same
+thing, with the same default, in every command that has it:
+
+``--seed`` (default 0), ``--methods`` (a comma list; ``exact`` is a method),
+``--time-limit`` (seconds per exact or peer run, default :data:`TIME_LIMIT`), ``--out`` (the
+output folder), ``--jobs`` and ``--dask`` (parallel work), ``--plot`` (a PNG), ``--quiet``
+and ``-v`` (log level), ``--instances`` (a count; study sizes are ``--sizes``). Every
+option's help shows its default. Old spellings (``solve --save``, ``study comm --exact``,
+``study capability --instances SIZES``, ``simulate --save``) still work for one release and
+print a deprecation line on stderr.
+
+This module imports only the standard library and :mod:`taopt.errors` at the top, so
+``taopt --version`` and ``taopt --help`` load no numpy, cvxpy or matplotlib; every handler
+imports what it needs.
 
 :func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
-on stderr and exit code 2; Ctrl-C in a study prints one line and exits with 130.
+on stderr and exit code 2; Ctrl-C in a study prints one line and exits with 130. Library
+messages go through the ``taopt`` logger, which :func:`main` sends to stderr.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path as FilePath
 from typing import Any
 
-import numpy as np
-
 from taopt.errors import InstanceError, TaoptError
-from taopt.fields import Field, LinearField, UniformField, field_from_dict, thesis_field
+
+#: Seconds per exact model (or peer) run in ``solve``, ``verify`` and every study.
+TIME_LIMIT = 60.0
+#: Seed of randomised methods, in every command.
+SEED = 0
 
 FIELD_HELP = (
     "drift field: 'thesis' (1e-3 [0.3x+0.2y, -0.2x+0.3y]), 'fig21' (the same at 1e-2), "
@@ -39,15 +55,19 @@ def parse_numbers(text: str, count: int, what: str) -> list[float]:
         raise InstanceError(
             f"{what}: expected {count} comma-separated numbers, got {text!r}"
         ) from None
-    if len(values) != count or not all(np.isfinite(values)):
+    if len(values) != count or not all(math.isfinite(v) for v in values):
         raise InstanceError(
             f"{what}: expected {count} comma-separated finite numbers, got {text!r}"
         )
     return values
 
 
-def parse_field(spec: str) -> Field | None:
-    """Field from a command-line SPEC (see ``FIELD_HELP``)."""
+def parse_field(spec: str) -> Any:
+    """Field from a command-line SPEC (see ``FIELD_HELP``); None for a still medium."""
+    import numpy as np
+
+    from taopt.fields import LinearField, UniformField, field_from_dict, thesis_field
+
     key = spec.strip()
     lower = key.lower()
     if lower == "thesis":
@@ -145,7 +165,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         time_limit=args.time_limit,
         plot=args.plot,
         gantt=args.gantt,
-        save=args.save,
+        save=args.out,
         progress=not args.quiet,
     )
     return 0
@@ -249,247 +269,279 @@ def cmd_study_delivery(args: argparse.Namespace) -> int:
     return 0
 
 
-# -- taopt study capability (chapter 3) -----------------------------------------------------------
+def cmd_study_capability(args: argparse.Namespace) -> int:
+    """Body of ``taopt study capability``: run, print Tables 3.1-3.2 beside taopt's, plot."""
+    import pandas as pd
 
-
-def add_capability_study(studies: Any) -> argparse.ArgumentParser:
-    """``taopt study capability``: the §3.7 study (Figs. 3.4-3.6, Tables 3.1-3.2)."""
-
-    def run(args: argparse.Namespace) -> int:
-        import pandas as pd
-
-        from taopt.studies.capability import (
-            capability_study,
-            plot_figures,
-            summarize,
-            thesis_comparison,
-        )
-
-        ga = {"operators": args.ga_operators} if args.ga_operators != "default" else {}
-        if args.ga_generations:
-            ga["generations"] = args.ga_generations
-        options = {"GA": ga} if ga else None
-        df = capability_study(
-            instances=[i.strip() for i in args.instances.split(",") if i.strip()],
-            capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
-            scenarios=args.scenarios,
-            methods=args.methods,
-            seed=args.seed,
-            out_dir=args.out,
-            jobs=args.jobs,
-            dask=args.dask,
-            time_limit=args.time_limit,
-            method_options=options,
-            cell=args.cell,
-            neighbours=args.neighbours,
-            first_scenario=args.first_scenario,
-            progress=not args.quiet,
-        )
-        table = summarize(df)
-        shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
-        with pd.option_context("display.width", 160, "display.max_columns", 20):
-            print(table[shown].round(4).to_string())
-            for name in ("3.1", "3.2"):
-                print(f"\nTable {name}, thesis beside taopt:")
-                print(thesis_comparison(df, name).round(4).to_string())
-        table.to_csv(FilePath(args.out) / "summary.csv")
-        if args.plot:
-            plot_figures(df, path=args.plot)
-            print(f"plot written to {args.plot}")
-        return 0
-
-    parser = add_subcommand(
-        studies,
-        "capability",
-        run,
-        "chapter 3 (§3.7, Figs. 3.4-3.6, Tables 3.1-3.2): DTAA and GA vs f^a, a valid bound "
-        "and the certified optimum",
+    from taopt.studies.capability import (
+        capability_study,
+        plot_figures,
+        summarize,
+        thesis_comparison,
     )
-    parser.add_argument(
-        "--instances", default="n50m10,n70m10,n90m10", help="comma-separated nNmM sizes"
+
+    ga = {"operators": args.ga_operators} if args.ga_operators != "default" else {}
+    if args.ga_generations:
+        ga["generations"] = args.ga_generations
+    options = {"GA": ga} if ga else None
+    df = capability_study(
+        instances=[i.strip() for i in args.sizes.split(",") if i.strip()],
+        capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
+        scenarios=args.scenarios,
+        methods=args.methods,
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        time_limit=args.time_limit,
+        method_options=options,
+        cell=args.cell,
+        neighbours=args.neighbours,
+        first_scenario=args.first_scenario,
+        progress=not args.quiet,
     )
-    parser.add_argument("--capabilities", default="1,3,5,7,10", help="comma-separated |A|")
-    parser.add_argument("--scenarios", type=int, default=50, help="scenarios per (size, |A|)")
-    parser.add_argument("--first-scenario", type=int, default=0, help="index of the first one")
-    parser.add_argument(
-        "--methods", default="DTAA,GA,exact", help="comma-separated: DTAA,GA,exact,MC,joint"
+    table = summarize(df)
+    shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(table[shown].round(4).to_string())
+        for name in ("3.1", "3.2"):
+            print(f"\nTable {name}, thesis beside taopt:")
+            print(thesis_comparison(df, name).round(4).to_string())
+    table.to_csv(FilePath(args.out) / "summary.csv")
+    if args.plot:
+        plot_figures(df, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    """Body of ``taopt simulate FILE``: one chapter 4 run, its bytes, routes and pictures."""
+    from taopt.comm import CommProblem
+    from taopt.comm.plot import animate_run, plot_run
+    from taopt.pipeline import solve
+
+    problem = CommProblem.load(args.file)
+    if args.range is not None:
+        problem = problem.replace(comm_range=args.range)
+    result = solve(problem, args.algorithm, seed=args.seed)
+    info = result.info
+    print(result.summary())
+    print(
+        f"r = {problem.comm_range:g} m, bytes relayed {info['bytes']:.6g} "
+        f"({info['numbers']} numbers, {info['messages']} messages, {info['rounds']} rounds), "
+        f"{info['group_events']} newly connected groups, {info['replans']} reassignments"
     )
-    parser.add_argument("--out", required=True, help="output folder (capability.csv; resumable)")
-    parser.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
-    parser.add_argument("--neighbours", type=int, choices=[8, 16], default=16, help="grid moves")
-    parser.add_argument("--ga-generations", type=int, default=None, help="GA generations (350)")
-    parser.add_argument(
-        "--ga-operators",
-        default="ox-inversion",
-        help="chapter 2 GA operator set: 'ox-inversion' (the thesis's plain GA, as in "
-        "docs/reproduction/chapter3.md), 'memetic', or 'default' (the GA's own default)",
+    for j, d in enumerate(result.solution.lengths()):
+        print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
+    if args.out:
+        folder = FilePath(args.out)
+        folder.mkdir(parents=True, exist_ok=True)
+        result.save(folder / f"{args.algorithm}.json")
+        print(f"solution written to {folder / f'{args.algorithm}.json'}")
+    if args.save_file:
+        result.save(args.save_file)
+        print(f"solution written to {args.save_file}")
+    if args.plot:
+        plot_run(problem, result, path=args.plot)
+        print(f"plot written to {args.plot}")
+    if args.animate:
+        animate_run(problem, result, args.animate, frames=args.frames)
+        print(f"animation written to {args.animate}")
+    return 0
+
+
+def cmd_study_comm(args: argparse.Namespace) -> int:
+    """Body of ``taopt study comm``: run a §4.4 preset, print q, bytes and the true gap."""
+    import pandas as pd
+
+    from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
+    from taopt.studies.comm import summary as summarize
+
+    preset = PRESETS[args.preset]
+    named = list(_methods(args.methods) or preset.methods)
+    exact = "exact" in named or args.exact_alias
+    df = comm_study(
+        args.preset,
+        args.scenarios,
+        args.out,
+        methods=[m for m in named if m != "exact"],
+        exact=exact,
+        seed=args.seed,
+        jobs=args.jobs,
+        dask=args.dask,
+        time_limit=args.time_limit,
+        progress=not args.quiet,
     )
-    parser.add_argument("--seed", type=int, default=1, help="study seed")
-    _common(parser, "time-limit", "jobs", "plot", "quiet")
-    return parser
+    table = summarize(df)
+    table.to_csv(FilePath(args.out) / f"summary_{args.preset}.csv", index=False)
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(preset.title)
+        for n, m in preset.sizes:
+            print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
+            print(q_table(table, n, m).round(4).to_string())
+            if table["certified"].sum():
+                print("\nmean true gap f / f_o (certified scenarios)")
+                print(q_table(table, n, m, value="gap").round(4).to_string())
+            print("\nmean bytes relayed (10^5 bytes)")
+            print(bytes_table(table, n, m).round(4).to_string())
+    if args.plot:
+        n, m = preset.sizes[0]
+        plot_study(table, n, m, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
 
 
-# -- chapter 4 (limited communication): `taopt simulate` and `taopt study comm` ----------------
+# -- one grammar: shared flags, defaults in every help, deprecated spellings --------------------
 
 
-def add_comm_commands(sub: Any, studies: Any) -> None:
-    """Chapter 4's commands: ``taopt simulate FILE`` and ``taopt study comm`` (§4.4)."""
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps descriptions' line breaks and shows every option's default.
 
-    def simulate(args: argparse.Namespace) -> int:
-        from taopt.comm import CommProblem
-        from taopt.comm.plot import animate_run, plot_run
-        from taopt.pipeline import solve
+    An option whose help already says "default" is left as written (that is how options
+    whose default is None say what happens then: "default: none (...)"); any other option
+    with a value gets "(default: VALUE)", an on/off flag "(default: off)".
+    """
 
-        problem = CommProblem.load(args.file)
-        if args.range is not None:
-            problem = problem.replace(comm_range=args.range)
-        result = solve(problem, args.algorithm, seed=args.seed)
-        info = result.info
-        print(result.summary())
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if not action.option_strings or action.default is argparse.SUPPRESS:
+            return text
+        if "default" in text or action.default is None:
+            return text
+        if action.nargs == 0 and action.default is False:
+            return f"{text} (default: off)"
+        return f"{text} (default: %(default)s)"
+
+
+class _Deprecated(argparse.Action):
+    """An old spelling kept for one release: warns on stderr, then acts as its replacement."""
+
+    def __init__(self, option_strings: list[str], dest: str, replacement: str, **kwargs: Any):
+        kwargs.setdefault("help", argparse.SUPPRESS)
+        super().__init__(option_strings, dest, **kwargs)
+        self.replacement = replacement
+
+    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
         print(
-            f"r = {problem.comm_range:g} m, bytes relayed {info['bytes']:.6g} "
-            f"({info['numbers']} numbers, {info['messages']} messages, {info['rounds']} rounds), "
-            f"{info['group_events']} newly connected groups, {info['replans']} reassignments"
+            f"taopt: DeprecationWarning: {option_string} is deprecated and will be removed in "
+            f"the next release; use {self.replacement}",
+            file=sys.stderr,
         )
-        for j, d in enumerate(result.solution.lengths()):
-            print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
-        if args.save:
-            result.save(args.save)
-            print(f"solution written to {args.save}")
-        if args.plot:
-            plot_run(problem, result, path=args.plot)
-            print(f"plot written to {args.plot}")
-        if args.animate:
-            animate_run(problem, result, args.animate, frames=args.frames)
-            print(f"animation written to {args.animate}")
-        return 0
-
-    def study(args: argparse.Namespace) -> int:
-        import pandas as pd
-
-        from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
-        from taopt.studies.comm import summary as summarize
-
-        preset = PRESETS[args.preset]
-        df = comm_study(
-            args.preset,
-            args.scenarios,
-            args.out,
-            methods=_methods(args.methods),
-            exact=args.exact,
-            seed=args.seed,
-            jobs=args.jobs,
-            dask=args.dask,
-            time_limit=args.time_limit,
-            progress=not args.quiet,
-        )
-        table = summarize(df)
-        table.to_csv(FilePath(args.out) / f"summary_{args.preset}.csv", index=False)
-        with pd.option_context("display.width", 160, "display.max_columns", 20):
-            print(preset.title)
-            for n, m in preset.sizes:
-                print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
-                print(q_table(table, n, m).round(4).to_string())
-                if table["certified"].sum():
-                    print("\nmean true gap f / f_o (certified scenarios)")
-                    print(q_table(table, n, m, value="gap").round(4).to_string())
-                print("\nmean bytes relayed (10^5 bytes)")
-                print(bytes_table(table, n, m).round(4).to_string())
-        if args.plot:
-            n, m = preset.sizes[0]
-            plot_study(table, n, m, path=args.plot)
-            print(f"plot written to {args.plot}")
-        return 0
-
-    run = add_subcommand(
-        sub,
-        "simulate",
-        simulate,
-        "chapter 4: simulate CAA, DAA or HDA on a comm_problem file (limited range)",
-    )
-    run.add_argument("file", help="a comm_problem JSON file")
-    run.add_argument("--algorithm", choices=["DAA", "CAA", "HDA"], default="DAA")
-    run.add_argument(
-        "--range", type=float, default=None, metavar="METRES", help="override r of the file"
-    )
-    run.add_argument("--animate", default=None, metavar="GIF", help="write an animation")
-    run.add_argument("--frames", type=int, default=120, help="frames of the animation")
-    run.add_argument("--save", default=None, metavar="JSON", help="write the solution")
-    _common(run, "seed", "plot")
-
-    comm = add_subcommand(
-        studies,
-        "comm",
-        study,
-        "chapter 4 (§4.4, Tables 4.1-4.4, Figs. 4.5-4.8): CAA/DAA/HDA, q, bytes, true gap",
-    )
-    comm.add_argument(
-        "--preset",
-        choices=["table", "table100", "homogeneous15", "homogeneous30", "scalability"],
-        default="table",
-        help="the experiment (table: Tables 4.1-4.2; table100: 4.3-4.4; homogeneous15/30: "
-        "Figs. 4.5/4.6; scalability: Figs. 4.7-4.8)",
-    )
-    comm.add_argument("--scenarios", type=int, default=500, help="scenarios per (n, m, |A|)")
-    comm.add_argument("--out", required=True, help="output folder (comm.csv; resumable)")
-    comm.add_argument(
-        "--exact", action="store_true", help="also certify f_o once per scenario (true gap)"
-    )
-    comm.add_argument("--seed", type=int, default=0, help="study seed")
-    _common(comm, "methods", "time-limit", "jobs", "plot", "quiet")
+        setattr(namespace, self.dest, True if self.nargs == 0 else values)
 
 
-# -- the parser ---------------------------------------------------------------------------------
+def deprecated(parser: argparse.ArgumentParser, old: str, dest: str, replacement: str, **kw: Any):
+    """Keep ``old`` working as ``replacement`` (stored in ``dest``) with a warning, hidden."""
+    parser.add_argument(old, dest=dest, action=_Deprecated, replacement=replacement, **kw)
 
 
-class _Formatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
-    """Shows every option's default and keeps descriptions' line breaks."""
+def _seconds(text: str) -> float | None:
+    """``--time-limit`` value: positive seconds, or 'none' for no limit."""
+    if text.strip().lower() in ("none", "inf", "unlimited"):
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'none', got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected positive seconds or 'none', got {text!r}")
+    return value
 
 
 def add_subcommand(parent: Any, name: str, handler: Any, help_text: str) -> argparse.ArgumentParser:
-    """A subcommand of ``parent`` (a subparsers group) handled by ``handler(args) -> int``."""
+    """A subcommand of ``parent`` (a subparsers group) handled by ``handler(args) -> int``.
+
+    Every subcommand takes ``--quiet`` and ``-v`` (the log level of the ``taopt`` logger).
+    """
     child = parent.add_parser(
         name, help=help_text, description=help_text, formatter_class=_Formatter
     )
     child.set_defaults(handler=handler)
+    group = child.add_mutually_exclusive_group()
+    group.add_argument(
+        "--quiet", action="store_true", help="no progress bar; log warnings and errors only"
+    )
+    group.add_argument(
+        "-v", "--verbose", action="store_true", help="log debug messages of the library too"
+    )
     return child
 
 
 def _common(parser: argparse.ArgumentParser, *names: str) -> None:
-    """The shared flags, with the same names, meanings and help everywhere."""
+    """The shared flags, with the same names, meanings, defaults and help everywhere."""
     if "seed" in names:
-        parser.add_argument("--seed", type=int, default=0, help="seed of randomised methods")
+        parser.add_argument("--seed", type=int, default=SEED, help="seed of randomised methods")
     if "methods" in names:
         parser.add_argument(
             "--methods",
             default=None,
-            help="comma-separated method names; unset: every method that applies",
+            metavar="LIST",
+            help="comma-separated method names, 'exact' among them (default: none named: every "
+            "method that applies, the certified optimum first where affordable; peers only "
+            "when named)",
         )
     if "time-limit" in names:
         parser.add_argument(
             "--time-limit",
-            type=float,
-            default=None,
+            type=_seconds,
+            default=TIME_LIMIT,
             metavar="SECONDS",
-            help="per exact model (or peer) run; a stopped model reports its proven gap",
+            help="per exact model (or peer) run, 'none' for no limit; a stopped model reports "
+            f"its proven gap (default: {TIME_LIMIT:g} s)",
         )
     if "jobs" in names:
-        parser.add_argument("--jobs", type=int, default=1, help="worker processes")
+        parser.add_argument(
+            "--jobs", type=int, default=1, help="worker processes (scenarios in parallel)"
+        )
         parser.add_argument(
             "--dask",
             default=None,
             metavar="ADDRESS",
             help="run on a Dask cluster: 'local' (a LocalCluster of --jobs workers) or a "
-            "scheduler address (needs taopt[dask])",
+            "scheduler address (needs taopt[dask]) (default: none: worker processes here)",
         )
     if "plot" in names:
-        parser.add_argument("--plot", default=None, metavar="PNG", help="write a plot to this PNG")
-    if "quiet" in names:
-        parser.add_argument("--quiet", action="store_true", help="no progress bar")
+        parser.add_argument(
+            "--plot", default=None, metavar="PNG", help="write a plot to this PNG (default: none)"
+        )
+
+
+def setup_logging(quiet: bool = False, verbose: bool = False) -> logging.Logger:
+    """Send the ``taopt`` logger to stderr: WARNING with ``--quiet``, DEBUG with ``-v``, else INFO.
+
+    Calling it again (``main`` run twice in one process) replaces the handler it installed.
+    """
+    logger = logging.getLogger("taopt")
+    for handler in list(logger.handlers):
+        if handler.get_name() == "taopt-cli":
+            logger.removeHandler(handler)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.set_name("taopt-cli")
+    handler.setFormatter(logging.Formatter("%(name)s: %(levelname)s: %(message)s"))
+    logger.addHandler(handler)
+    logger.setLevel(logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO)
+    return logger
+
+
+# -- the parser ---------------------------------------------------------------------------------
+
+SOLVE_DESCRIPTION = (
+    "Solve a JSON problem file with every registered method that applies (or --methods)\n"
+    "and print one table: status, objective, proven bound and gap, true gap to a certified\n"
+    "optimum, ratio to a valid bound. The certified optimum is computed by default where it\n"
+    "is affordable; one line says why when it is not.\n\n"
+    "File kinds (docs/file-formats.md; schemas in taopt/schemas/): 'instance' (positions,\n"
+    "field, obstacles: travel times by navigation), 'assignment_problem' (a travel-time\n"
+    "matrix), 'delivery_instance' (truck-drone, chapter 5), 'sop_problem',\n"
+    "'capability_problem' (chapter 3) and 'comm_problem' (chapter 4). Examples ship with the\n"
+    "package: taopt/data/demo.json (an instance, 10 targets, 3 vehicles),\n"
+    "taopt/data/delivery_example_20.json (20 customers) and taopt/data/examples/*.json (one\n"
+    "small file of each kind)."
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``taopt`` parser with every subcommand."""
+    """The ``taopt`` parser with every subcommand (builds without importing numpy)."""
     from taopt import __version__
 
     parser = argparse.ArgumentParser(
@@ -504,21 +556,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     nav = add_subcommand(sub, "navigate", cmd_navigate, "minimum travel times t(i, j) and t(j, i)")
     nav.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
-    nav.add_argument("--from", dest="start", required=True, metavar="X,Y", help="point i")
-    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j")
+    nav.add_argument(
+        "--from", dest="start", required=True, metavar="X,Y", help="point i (required)"
+    )
+    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j (required)")
     nav.add_argument("--speed", type=float, default=1.0, help="vehicle speed v (m/s)")
     nav.add_argument(
         "--method",
         choices=["collocation", "pmp", "shooting", "closed_form"],
         default="collocation",
-        help="solver",
+        help="navigation solver",
     )
     _common(nav, "plot")
 
     demo = add_subcommand(
         sub, "demo", cmd_demo, "the embedded instance solved exactly and by every heuristic"
     )
-    _common(demo, "seed", "plot", "quiet")
+    _common(demo, "seed", "plot")
 
     solve = add_subcommand(
         sub,
@@ -526,32 +580,22 @@ def build_parser() -> argparse.ArgumentParser:
         cmd_solve,
         "solve a problem file exactly and with every heuristic, with certified gaps",
     )
-    solve.description = (
-        "Solve a JSON problem file with every registered method that applies (or --methods)\n"
-        "and print one table: status, objective, proven bound and gap, true gap to a certified\n"
-        "optimum, ratio to a valid bound.\n\n"
-        "File kinds (docs/file-formats.md; schemas in taopt/schemas/): 'instance' (positions,\n"
-        "field, obstacles: travel times by navigation), 'assignment_problem' (a travel-time\n"
-        "matrix), 'delivery_instance' (truck-drone, chapter 5), 'sop_problem', and the\n"
-        "chapter 3/4 kinds. Examples ship with the package: taopt/data/demo.json (an instance,\n"
-        "10 targets, 3 vehicles), taopt/data/delivery_example_20.json (20 customers) and\n"
-        "taopt/data/examples/*.json (one small file of each kind)."
-    )
+    solve.description = SOLVE_DESCRIPTION
     solve.add_argument("file", help="a JSON problem file")
-    _common(solve, "methods", "seed", "plot", "quiet")
+    _common(solve, "methods", "seed", "time-limit", "plot")
     solve.add_argument(
-        "--time-limit",
-        type=float,
-        default=60.0,
-        metavar="SECONDS",
-        help="per exact model (or peer) run; a stopped model reports its proven gap",
+        "--gantt",
+        default=None,
+        metavar="PNG",
+        help="delivery files: truck and drone timelines (default: none)",
     )
     solve.add_argument(
-        "--gantt", default=None, metavar="PNG", help="delivery files: truck and drone timelines"
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="write each solution as DIR/<method>.json, for taopt verify (default: none)",
     )
-    solve.add_argument(
-        "--save", default=None, metavar="DIR", help="write each solution as DIR/<method>.json"
-    )
+    deprecated(solve, "--save", "out", "--out DIR", metavar="DIR")
 
     verify = add_subcommand(
         sub,
@@ -559,7 +603,7 @@ def build_parser() -> argparse.ArgumentParser:
         cmd_verify,
         "re-score a saved solution from the problem file alone and check every constraint",
     )
-    verify.add_argument("solution", help="a solution JSON (taopt solve --save, Solution.save)")
+    verify.add_argument("solution", help="a solution JSON (taopt solve --out, Solution.save)")
     verify.add_argument("problem", help="the problem file it solves")
     verify.add_argument(
         "--exact",
@@ -573,7 +617,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     claims.add_argument("--samples", type=int, default=200, help="instances per class")
     claims.add_argument(
-        "--out", default=None, help="folder for the smallest counterexamples (JSON)"
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="folder for the smallest counterexamples, as JSON (default: none: not saved)",
     )
     claims.add_argument(
         "--classes",
@@ -581,6 +628,35 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma list of instance classes",
     )
     _common(claims, "seed")
+
+    simulate = add_subcommand(
+        sub,
+        "simulate",
+        cmd_simulate,
+        "chapter 4: simulate CAA, DAA or HDA on a comm_problem file (limited range)",
+    )
+    simulate.add_argument("file", help="a comm_problem JSON file")
+    simulate.add_argument("--algorithm", choices=["DAA", "CAA", "HDA"], default="DAA")
+    simulate.add_argument(
+        "--range",
+        type=float,
+        default=None,
+        metavar="METRES",
+        help="communication range r (default: none: the file's r)",
+    )
+    simulate.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="write the solution as DIR/<algorithm>.json, for taopt verify (default: none)",
+    )
+    deprecated(simulate, "--save", "save_file", "--out DIR (writes DIR/<algorithm>.json)")
+    simulate.set_defaults(save_file=None)
+    simulate.add_argument(
+        "--animate", default=None, metavar="GIF", help="write an animation (default: none)"
+    )
+    simulate.add_argument("--frames", type=int, default=120, help="frames of the animation")
+    _common(simulate, "seed", "plot")
 
     study = sub.add_parser(
         "study", help="run a thesis study (resumable, parallel)", formatter_class=_Formatter
@@ -594,21 +670,23 @@ def build_parser() -> argparse.ArgumentParser:
         cmd_study_drift,
         "chapter 2 (§2.5, Tables 2.1-2.2): heuristics vs f_a, a valid bound and the optimum",
     )
-    drift.add_argument("--n", type=int, required=True, help="number of targets")
-    drift.add_argument("--m", type=int, required=True, help="number of vehicles")
-    drift.add_argument("--scenarios", type=int, default=400, help="random scenarios")
+    drift.add_argument("--n", type=int, required=True, help="number of targets (required)")
+    drift.add_argument("--m", type=int, required=True, help="number of vehicles (required)")
+    drift.add_argument("--scenarios", type=int, default=400, help="random scenarios (a count)")
     drift.add_argument(
         "--methods",
         default="VN,VM,EVN,EVM,MC,GA,exact",
+        metavar="LIST",
         help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
     )
-    drift.add_argument("--out", required=True, help="output folder (drift.csv; resumable)")
     drift.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
     drift.add_argument(
-        "--ga-generations", type=int, default=None, help="GA generations (thesis 350)"
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own, the thesis's 350)",
     )
-    drift.add_argument("--seed", type=int, default=1, help="study seed")
-    _common(drift, "time-limit", "jobs", "plot", "quiet")
+    _study_flags(drift, "drift.csv")
 
     delivery = add_subcommand(
         studies,
@@ -619,30 +697,119 @@ def build_parser() -> argparse.ArgumentParser:
     delivery.add_argument(
         "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
     )
-    delivery.add_argument("--instances", type=int, default=10, help="random instances")
     delivery.add_argument(
-        "--methods", default="NIA,MMA,SMMA,GA", help="comma-separated: NIA,MMA,SMMA,GA,DP,exact"
+        "--instances", type=int, default=10, help="random instances per setup (a count)"
+    )
+    delivery.add_argument(
+        "--methods",
+        default="NIA,MMA,SMMA,GA",
+        metavar="LIST",
+        help="comma-separated: NIA,MMA,SMMA,GA,DP,exact",
     )
     delivery.add_argument(
         "--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9", help="comma-separated L/L0 values"
     )
-    delivery.add_argument("--out", required=True, help="output folder (resumable CSV)")
-    delivery.add_argument("--vd-ratio", type=float, default=None, help="override v_d / v_t")
+    delivery.add_argument(
+        "--vd-ratio",
+        type=float,
+        default=None,
+        help="override v_d / v_t (default: none: the setup's)",
+    )
     delivery.add_argument(
         "--exact-max-n", type=int, default=8, help="compute optima (subset DP) when n <= this"
     )
-    delivery.add_argument("--ga-generations", type=int, default=None, help="GA generations")
-    delivery.add_argument("--seed", type=int, default=1, help="study seed")
-    _common(delivery, "time-limit", "jobs", "plot", "quiet")
-    add_capability_study(studies)
-    add_comm_commands(sub, studies)
+    delivery.add_argument(
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own)",
+    )
+    _study_flags(delivery, "delivery_<setup>.csv")
+
+    capability = add_subcommand(
+        studies,
+        "capability",
+        cmd_study_capability,
+        "chapter 3 (§3.7, Figs. 3.4-3.6, Tables 3.1-3.2): DTAA and GA vs f^a, a valid bound "
+        "and the certified optimum",
+    )
+    capability.add_argument(
+        "--sizes", default="n50m10,n70m10,n90m10", help="comma-separated nNmM sizes"
+    )
+    deprecated(capability, "--instances", "sizes", "--sizes (a list of nNmM sizes)")
+    capability.add_argument("--capabilities", default="1,3,5,7,10", help="comma-separated |A|")
+    capability.add_argument(
+        "--scenarios", type=int, default=50, help="scenarios per (size, |A|) (a count)"
+    )
+    capability.add_argument(
+        "--first-scenario", type=int, default=0, help="index of the first scenario"
+    )
+    capability.add_argument(
+        "--methods",
+        default="DTAA,GA,exact",
+        metavar="LIST",
+        help="comma-separated: DTAA,GA,exact,MC,joint",
+    )
+    capability.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
+    capability.add_argument(
+        "--neighbours", type=int, choices=[8, 16], default=16, help="grid moves"
+    )
+    capability.add_argument(
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own, 350)",
+    )
+    capability.add_argument(
+        "--ga-operators",
+        default="ox-inversion",
+        help="chapter 2 GA operator set: 'ox-inversion' (the thesis's plain GA, as in "
+        "docs/reproduction/chapter3.md), 'memetic', or 'default' (the GA's own default)",
+    )
+    _study_flags(capability, "capability.csv")
+
+    comm = add_subcommand(
+        studies,
+        "comm",
+        cmd_study_comm,
+        "chapter 4 (§4.4, Tables 4.1-4.4, Figs. 4.5-4.8): CAA/DAA/HDA, q, bytes, true gap",
+    )
+    comm.add_argument(
+        "--preset",
+        choices=["table", "table100", "homogeneous15", "homogeneous30", "scalability"],
+        default="table",
+        help="the experiment (table: Tables 4.1-4.2; table100: 4.3-4.4; homogeneous15/30: "
+        "Figs. 4.5/4.6; scalability: Figs. 4.7-4.8)",
+    )
+    comm.add_argument(
+        "--scenarios", type=int, default=500, help="scenarios per (n, m, |A|) (a count)"
+    )
+    comm.add_argument(
+        "--methods",
+        default=None,
+        metavar="LIST",
+        help="comma-separated: CAA,DAA,HDA and 'exact' (certifies f_o once per scenario, for "
+        "the true gap) (default: none named: the preset's algorithms, no exact)",
+    )
+    deprecated(comm, "--exact", "exact_alias", "--methods ...,exact", nargs=0)
+    comm.set_defaults(exact_alias=False)
+    _study_flags(comm, "comm.csv")
     return parser
+
+
+def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
+    """What every study takes: --out, --seed, --time-limit, --jobs, --dask, --plot."""
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="DIR",
+        help=f"output folder ({csv}; resumable) (default: none, required)",
+    )
+    _common(parser, "seed", "time-limit", "jobs", "plot")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
-    from taopt.study import StudyInterrupted
-
     # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
     # multiprocessing resource tracker (started with these warning options) would print a
     # warning about it after our one-line message.
@@ -652,9 +819,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse already printed usage and the error
         return int(exc.code or 0)
+    setup_logging(quiet=getattr(args, "quiet", False), verbose=getattr(args, "verbose", False))
     try:
         return int(args.handler(args) or 0)
-    except StudyInterrupted as exc:
+    except KeyboardInterrupt as exc:
+        # taopt.study.StudyInterrupted (a TaoptError and a KeyboardInterrupt): the study's
+        # rows are on disk. Not imported here: it loads pandas and the solvers.
+        if not isinstance(exc, TaoptError):
+            raise
         print(f"taopt {args.command}: {exc}", file=sys.stderr)
         return 130
     except (TaoptError, ValueError, OSError) as exc:

@@ -25,7 +25,7 @@ from typing import Any
 import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.errors import InstanceError, SolverError
-from taopt.registry import ensure_families, family_of, get_method, methods
+from taopt.registry import CATEGORIES, ensure_families, family_of, get_method, methods
 from taopt.result import ERROR, INFEASIBLE, RELAXATION, Solution
 from taopt.scoring import evaluate
 
@@ -117,7 +117,8 @@ def solve(
 def available_methods(problem: Any, category: str | None = None) -> list[str]:
     """Names of the methods usable on ``problem`` here, in registration order.
 
-    Every registered method of ``problem``'s family (optionally of one ``category``: "exact",
+    Exact methods first, then heuristics, peers, simulations and relaxations. Every
+    registered method of ``problem``'s family (optionally of one ``category``: "exact",
     "heuristic", "peer", "simulation", "relaxation") whose packages are installed: a peer
     such as "pyvrp" or "ortools" is listed only when its package is (found with
     ``importlib.util.find_spec``, never imported here).
@@ -138,7 +139,9 @@ def available_methods(problem: Any, category: str | None = None) -> list[str]:
     >>> taopt.available_methods(p, "exact")
     ['exact']
     """
-    return [name for name, spec in methods(problem, category).items() if spec.available]
+    found = [spec for spec in methods(problem, category).values() if spec.available]
+    found.sort(key=lambda spec: CATEGORIES.index(spec.category))  # stable: exact first
+    return [spec.name for spec in found]
 
 
 def default_methods(problem: Any) -> list[str]:

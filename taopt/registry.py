@@ -161,7 +161,7 @@ class Method:
             )
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _installed(package: str) -> bool:
     """Whether top-level ``package`` can be imported, found without importing it.
 
