@@ -397,15 +397,18 @@ def cmd_study_comm(args: argparse.Namespace) -> int:
 class _Formatter(argparse.RawDescriptionHelpFormatter):
     """Keeps descriptions' line breaks and shows every option's default.
 
-    An option whose help already says "default" is left as written (that is how options
-    whose default is None say what happens then: "default: none (...)"); any other option
-    with a value gets "(default: VALUE)", an on/off flag "(default: off)".
+    A required option gets "(required: no default)". An option whose help already says
+    "default" is left as written (that is how options whose default is None say what
+    happens then: "default: none (...)"); any other option with a value gets
+    "(default: VALUE)", an on/off flag "(default: off)".
     """
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         if not action.option_strings or action.default is argparse.SUPPRESS:
             return text
+        if action.required:
+            return f"{text} (required: no default)"
         if "default" in text or action.default is None:
             return text
         if action.nargs == 0 and action.default is False:
@@ -556,10 +559,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     nav = add_subcommand(sub, "navigate", cmd_navigate, "minimum travel times t(i, j) and t(j, i)")
     nav.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
-    nav.add_argument(
-        "--from", dest="start", required=True, metavar="X,Y", help="point i (required)"
-    )
-    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j (required)")
+    nav.add_argument("--from", dest="start", required=True, metavar="X,Y", help="point i")
+    nav.add_argument("--to", dest="goal", required=True, metavar="X,Y", help="point j")
     nav.add_argument("--speed", type=float, default=1.0, help="vehicle speed v (m/s)")
     nav.add_argument(
         "--method",
@@ -670,8 +671,8 @@ def build_parser() -> argparse.ArgumentParser:
         cmd_study_drift,
         "chapter 2 (§2.5, Tables 2.1-2.2): heuristics vs f_a, a valid bound and the optimum",
     )
-    drift.add_argument("--n", type=int, required=True, help="number of targets (required)")
-    drift.add_argument("--m", type=int, required=True, help="number of vehicles (required)")
+    drift.add_argument("--n", type=int, required=True, help="number of targets")
+    drift.add_argument("--m", type=int, required=True, help="number of vehicles")
     drift.add_argument("--scenarios", type=int, default=400, help="random scenarios (a count)")
     drift.add_argument(
         "--methods",
@@ -803,7 +804,7 @@ def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
         "--out",
         required=True,
         metavar="DIR",
-        help=f"output folder ({csv}; resumable) (default: none, required)",
+        help=f"output folder ({csv}; resumable)",
     )
     _common(parser, "seed", "time-limit", "jobs", "plot")
 

@@ -122,7 +122,7 @@ def test_cli_runs_the_study(tmp_path, capsys):
         [
             "study",
             "capability",
-            "--instances",
+            "--sizes",
             "n5m2",
             "--capabilities",
             "1,2",

@@ -177,3 +177,267 @@ def test_solve_command_rejects_unknown_kind(tmp_path, capsys):
     bad.write_text('{"schema_version": 1, "kind": "pizza"}')
     assert main(["solve", str(bad)]) == 2
     assert "kind 'pizza'" in capsys.readouterr().err
+
+
+# -- one grammar ------------------------------------------------------------------------------
+
+
+def _commands(parser=None, prefix=()):
+    """(command words, parser) of every leaf subcommand of the taopt parser."""
+    import argparse
+
+    parser = parser or build_parser()
+    found = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                found += _commands(child, (*prefix, name))
+    return found or [(prefix, parser)]
+
+
+def _options(parser):
+    """The visible options of ``parser`` (not -h, --version or hidden deprecated spellings)."""
+    import argparse
+
+    return [
+        a
+        for a in parser._actions
+        if a.option_strings
+        and a.help is not argparse.SUPPRESS
+        and not isinstance(a, (argparse._HelpAction, argparse._VersionAction))
+    ]
+
+
+def test_every_command_is_listed():
+    """The walk finds the eleven commands (a guard for the grammar tests below)."""
+    names = {" ".join(words) for words, _ in _commands()}
+    assert names == {
+        "navigate", "demo", "solve", "verify", "claims", "simulate",
+        "study drift", "study delivery", "study capability", "study comm",
+    }  # fmt: skip
+
+
+def test_every_option_help_shows_a_default():
+    """Every option of every subcommand states its default in --help, never "None"."""
+    for words, parser in _commands():
+        text = parser.format_help()
+        assert "default: None" not in text, words
+        formatter = parser._get_formatter()
+        for action in _options(parser):
+            shown = formatter._expand_help(action)
+            assert "default" in shown, (words, action.option_strings)
+            assert action.option_strings[-1] in text
+
+
+def test_seed_and_time_limit_defaults_are_the_same_everywhere():
+    """--seed defaults to 0 and --time-limit to one value in every command that has them."""
+    seeds, limits = {}, {}
+    for words, parser in _commands():
+        for action in _options(parser):
+            if "--seed" in action.option_strings:
+                seeds[" ".join(words)] = action.default
+            if "--time-limit" in action.option_strings:
+                limits[" ".join(words)] = action.default
+    assert set(seeds) >= {"demo", "solve", "claims", "simulate", "study drift", "study comm"}
+    assert set(seeds.values()) == {0}
+    assert set(limits) >= {"solve", "verify", "study drift", "study delivery", "study comm"}
+    assert len(set(limits.values())) == 1 and None not in limits.values()
+
+
+def test_every_command_takes_quiet_and_verbose():
+    """--quiet and -v parse on every subcommand (the log level of the taopt logger)."""
+    for _, parser in _commands():
+        flags = {flag for a in _options(parser) for flag in a.option_strings}
+        assert {"--quiet", "-v"} <= flags
+
+
+def test_shared_flags_have_one_name_and_meaning():
+    """--out, --methods, --jobs are spelled one way; --instances is a count wherever it is."""
+    for words, parser in _commands():
+        options = {flag: a for a in _options(parser) for flag in a.option_strings}
+        assert not {"--save", "--exact-methods", "--n-jobs", "--workers"} & set(options), words
+        if "--instances" in options:
+            assert options["--instances"].type is int, words
+        if "--jobs" in options:
+            assert "--dask" in options and options["--jobs"].default == 1
+
+
+def test_old_spelling_still_works_and_warns(tmp_path, capsys):
+    """`solve --save DIR` (now --out) still writes the solutions and warns on stderr."""
+    problem = "taopt/data/examples/assignment_problem.json"
+    from pathlib import Path
+
+    problem = str(Path(__file__).parent.parent / problem)
+    assert main(["solve", problem, "--methods", "MC", "--save", str(tmp_path), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "DeprecationWarning" in err and "--save" in err and "--out" in err
+    assert (tmp_path / "MC.json").exists()
+    parser = build_parser()
+    args = parser.parse_args(["study", "capability", "--instances", "n5m2", "--out", "x"])
+    assert args.sizes == "n5m2"
+    args = parser.parse_args(["study", "comm", "--exact", "--out", "x"])
+    assert args.exact_alias is True
+    assert capsys.readouterr().err.count("DeprecationWarning") == 2
+
+
+def test_time_limit_none_means_no_limit(capsys):
+    """--time-limit none is no limit; a negative limit is an argparse error (exit 2)."""
+    parser = build_parser()
+    assert parser.parse_args(["verify", "a", "b", "--time-limit", "none"]).time_limit is None
+    assert parser.parse_args(["verify", "a", "b", "--time-limit", "2.5"]).time_limit == 2.5
+    assert main(["verify", "a", "b", "--time-limit", "-1"]) == 2
+    assert "--time-limit" in capsys.readouterr().err
+
+
+# -- a light entry point ------------------------------------------------------------------------
+
+
+def test_version_loads_no_heavy_module():
+    """`python -m taopt --version` answers without importing numpy, pandas, cvxpy, matplotlib."""
+    import subprocess
+    import sys
+
+    code = (
+        "import runpy, sys\n"
+        "sys.argv = ['taopt', '--version']\n"
+        "try:\n"
+        "    runpy.run_module('taopt', run_name='__main__', alter_sys=True)\n"
+        "except SystemExit as exc:\n"
+        "    assert not exc.code, exc.code\n"
+        "heavy = ('numpy', 'pandas', 'cvxpy', 'matplotlib', 'scipy')\n"
+        "print('loaded:', sorted(m for m in heavy if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("taopt ") and lines[-1] == "loaded: []"
+
+
+def test_python_dash_m_taopt_runs_the_cli():
+    """`python -m taopt navigate ...` is the taopt command."""
+    import subprocess
+    import sys
+
+    argv = ["navigate", "--field", "still", "--from", "0,0", "--to", "3,4"]
+    done = subprocess.run(
+        [sys.executable, "-m", "taopt", *argv, "--method", "closed_form", "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "t(i, j) = 5.000000" in done.stdout
+
+
+def test_top_level_api_is_complete_and_lazy():
+    """taopt.__all__ names every problem type and resolves; `import taopt` loads no numpy."""
+    import subprocess
+    import sys
+
+    import taopt
+
+    for name in taopt.__all__:
+        assert getattr(taopt, name) is not None, name
+    families = {f.problem_type for f in taopt.registry.families()}
+    assert families <= {getattr(taopt, name) for name in taopt.__all__}
+    assert {"CapabilityProblem", "CommProblem", "available_methods", "bounds"} <= set(taopt.__all__)
+    code = "import sys, taopt; print('numpy' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stdout.strip() == "False", done.stderr
+
+
+# -- methods: discovered, only what is usable here -----------------------------------------------
+
+
+def test_available_methods_lists_installed_peers_only(monkeypatch):
+    """A peer is listed only when its package is installed (found, never imported)."""
+    import importlib.util
+
+    import taopt
+    from taopt import registry
+
+    problem = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    listed = taopt.available_methods(problem)
+    assert listed[0] == "exact" and {"VN", "VM", "EVN", "EVM", "MC", "GA"} <= set(listed)
+    for peer in ("pyvrp", "ortools"):
+        assert (peer in listed) == (importlib.util.find_spec(peer) is not None)
+    monkeypatch.setattr(registry, "_installed", lambda package: package != "pyvrp")
+    assert "pyvrp" not in taopt.available_methods(problem)
+    assert "pyvrp" in registry.method_names(problem)  # registered, but not usable here
+
+
+def test_every_exact_method_is_registered_by_taopt_models():
+    """Importing taopt.models registers the exact methods of every family, the delivery DP too."""
+    import taopt
+    import taopt.models  # noqa: F401
+    from taopt.registry import families, method_names
+
+    for family in families():
+        assert method_names(family.problem_type, "exact"), family.kind
+    assert "DP" in method_names(taopt.DeliveryInstance, "exact")
+
+
+def test_a_family_that_fails_to_import_fails_loudly(monkeypatch):
+    """ensure_families raises the ImportError of a broken family instead of skipping it."""
+    from taopt import registry
+
+    broken = (*registry.FAMILY_PACKAGES, "taopt._no_such_family")
+    monkeypatch.setattr(registry, "FAMILY_PACKAGES", broken)
+    with pytest.raises(ImportError, match="_no_such_family"):
+        registry.file_kinds()
+
+
+def test_solve_delivery_example_shows_the_certified_optimum(capsys):
+    """`taopt solve delivery_instance.json` prints an optimal row with its bound by default."""
+    from pathlib import Path
+
+    path = Path(__file__).parent.parent / "taopt/data/examples/delivery_instance.json"
+    assert main(["solve", str(path), "--quiet"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()]
+    optimal = [row for row in rows if len(row) > 3 and row[1] == "optimal"]
+    assert optimal, rows
+    objective, bound = float(optimal[0][2]), float(optimal[0][3])
+    assert bound == pytest.approx(objective) and objective > 0
+    heuristics = [float(row[2]) for row in rows if len(row) > 3 and row[1] == "feasible"]
+    assert heuristics and min(heuristics) >= objective * (1 - 1e-9)
+
+
+def test_solve_says_why_no_optimum_is_computed():
+    """Beyond 12 customers the DP is left out by default, and the reason names n."""
+    from taopt.delivery.instance import DeliveryInstance
+    from taopt.pipeline import default_methods, no_optimum_note
+
+    rng = np.random.default_rng(0)
+
+    def grid(n):
+        return DeliveryInstance.grid(rng.uniform(0, 600, size=(n, 2)), 3, 600.0, 1.0, 1.0, 700.0)
+
+    small, large = grid(5), grid(13)
+    assert "DP" in default_methods(small) and no_optimum_note(small) == ""
+    assert not {"DP", "exact"} & set(default_methods(large))
+    note = no_optimum_note(large)
+    assert "n = 13" in note and "--methods DP" in note and "\n" not in note
+
+
+# -- logging ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("flags", "shown"), [((), True), (("--quiet",), False), (("-v",), True)])
+def test_cli_sends_library_logs_to_stderr(capsys, flags, shown):
+    """Library messages go to the taopt logger; the CLI shows INFO on stderr unless --quiet."""
+    import logging
+
+    from taopt.cli import setup_logging
+    from taopt.models.routing import describe
+
+    parser = build_parser()
+    args = parser.parse_args(["demo", *flags])
+    setup_logging(args.quiet, args.verbose)
+    problem = __import__("taopt").AssignmentProblem(np.ones((3, 3)) - np.eye(3), n_targets=2)
+    describe(problem, "mtz")
+    captured = capsys.readouterr()
+    assert captured.out == ""  # never on stdout
+    assert ("(2.2)-(2.5) with sec='mtz'" in captured.err) == shown
+    expected = logging.DEBUG if "-v" in flags else logging.WARNING if flags else logging.INFO
+    assert logging.getLogger("taopt").level == expected
+    setup_logging(quiet=True)  # leave the logger quiet for the other tests

@@ -77,7 +77,7 @@ def test_plots_and_animation(tmp_path) -> None:
 
 
 def test_simulate_command(tmp_path, capsys) -> None:
-    """`taopt simulate FILE --algorithm DAA --range 150 --plot --animate --save` works."""
+    """`taopt simulate FILE --algorithm DAA --range 150 --plot --animate --out DIR` works."""
     p = random_problem(6, 3, 1, 10.0, seed=2)
     p.save(tmp_path / "p.json")
     code = main(
@@ -94,11 +94,12 @@ def test_simulate_command(tmp_path, capsys) -> None:
             str(tmp_path / "run.gif"),
             "--frames",
             "3",
-            "--save",
-            str(tmp_path / "sol.json"),
+            "--out",
+            str(tmp_path / "sols"),
         ]
     )
     assert code == 0
+    (tmp_path / "sols" / "DAA.json").rename(tmp_path / "sol.json")
     out = capsys.readouterr().out
     assert "r = 150 m" in out and "bytes relayed" in out
     saved = json.loads((tmp_path / "sol.json").read_text())

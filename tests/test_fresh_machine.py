@@ -47,7 +47,7 @@ def test_demo_prints_only_taopt_lines(tmp_path: Path, quiet: bool):
 def test_solve_verify_and_study_print_only_taopt_lines(tmp_path: Path):
     """`taopt solve`, `verify` and a small study write no line of HiGHS's on stdout."""
     problem = EXAMPLES / "assignment_problem.json"
-    solved = run_cli("solve", str(problem), "--save", str(tmp_path / "sols"), cwd=tmp_path)
+    solved = run_cli("solve", str(problem), "--out", str(tmp_path / "sols"), cwd=tmp_path)
     assert solved.returncode == 0, solved.stderr
     assert foreign_lines(solved.stdout) == []
     verified = run_cli(

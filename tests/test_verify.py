@@ -18,7 +18,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "taopt" / "data" / "examples"
 def test_saved_solutions_verify(tmp_path, kind, capsys):
     """Every solution `taopt solve --save` writes passes `taopt verify --exact`."""
     problem = EXAMPLES / f"{kind}.json"
-    assert main(["solve", str(problem), "--save", str(tmp_path), "--quiet"]) == 0
+    assert main(["solve", str(problem), "--out", str(tmp_path), "--quiet"]) == 0
     saved = sorted(tmp_path.glob("*.json"))
     assert saved
     for path in saved:
