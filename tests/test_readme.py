@@ -106,3 +106,19 @@ def test_readme_method_table_is_what_available_methods_lists(kind: str) -> None:
     listed = [m.strip() for m in row.group(1).split(",")]
     peers = set(taopt.available_methods(problem, "peer"))
     assert listed == [m for m in taopt.available_methods(problem) if m not in peers]
+
+
+def test_file_formats_doc_lists_every_kind() -> None:
+    """docs/file-formats.md's table names every registered file kind, and the README does too."""
+    from taopt.registry import file_kinds
+    from taopt.schemas import __file__ as schemas_init
+
+    doc = (ROOT / "docs" / "file-formats.md").read_text()
+    table = set(re.findall(r"^\| `(\w+)` \| \[`\w+\.schema\.json`\]", doc, re.M))
+    schemas = {
+        p.name.removesuffix(".schema.json") for p in Path(schemas_init).parent.glob("*.json")
+    }
+    assert table == schemas and set(file_kinds()) <= table
+    assert "three more" not in doc
+    for kind in table:
+        assert f"`{kind}`" in TEXT, kind

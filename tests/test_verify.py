@@ -1,4 +1,4 @@
-"""`taopt solve --save` writes certificates that `taopt verify` re-checks from the problem alone."""
+"""`taopt solve --out` writes certificates that `taopt verify` re-checks from the problem alone."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "taopt" / "data" / "examples"
     "kind", ["assignment_problem", "delivery_instance", "sop_problem", "comm_problem"]
 )
 def test_saved_solutions_verify(tmp_path, kind, capsys):
-    """Every solution `taopt solve --save` writes passes `taopt verify --exact`."""
+    """Every solution `taopt solve --out` writes passes `taopt verify --exact`."""
     problem = EXAMPLES / f"{kind}.json"
     assert main(["solve", str(problem), "--out", str(tmp_path), "--quiet"]) == 0
     saved = sorted(tmp_path.glob("*.json"))
