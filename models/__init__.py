@@ -53,8 +53,8 @@ DP_DEFAULT_MAX_N = 12
 
 def _dp_too_large(instance: DeliveryInstance) -> str:
     return (
-        f"DP not run: n = {instance.n} customers > {DP_DEFAULT_MAX_N} (its states grow as 2^n; "
-        f"name it with --methods DP to try, it refuses n > 14)"
+        f"the exact DP is not run on n = {instance.n} customers > {DP_DEFAULT_MAX_N} (its states "
+        f"grow as 2^n); name it with --methods DP to try (it refuses n > 14)"
     )
 
 

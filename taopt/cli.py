@@ -360,6 +360,11 @@ def cmd_study_comm(args: argparse.Namespace) -> int:
     preset = PRESETS[args.preset]
     named = list(_methods(args.methods) or preset.methods)
     exact = "exact" in named or args.exact_alias
+    if not [m for m in named if m != "exact"]:
+        raise InstanceError(
+            "--methods: name an algorithm (CAA, DAA, HDA) beside 'exact': f_o is certified once "
+            "per scenario for the true gap of the algorithms"
+        )
     df = comm_study(
         args.preset,
         args.scenarios,

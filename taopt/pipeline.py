@@ -170,7 +170,7 @@ def no_optimum_note(problem: Any) -> str:
     if not exact or any(spec.is_default_for(problem) for spec in exact.values()):
         return ""
     first = next(iter(exact.values()))
-    return f"no certified optimum by default: {first.why_not_default(problem)}"
+    return f"no certified optimum: {first.why_not_default(problem)}"
 
 
 def load_problem(data: Any) -> Any:

@@ -441,3 +441,16 @@ def test_cli_sends_library_logs_to_stderr(capsys, flags, shown):
     expected = logging.DEBUG if "-v" in flags else logging.WARNING if flags else logging.INFO
     assert logging.getLogger("taopt").level == expected
     setup_logging(quiet=True)  # leave the logger quiet for the other tests
+
+
+def test_study_comm_takes_exact_as_a_method(tmp_path, capsys):
+    """`study comm --methods DAA,exact` certifies f_o once per scenario (was --exact)."""
+    import pandas as pd
+
+    argv = ["study", "comm", "--preset", "homogeneous15", "--scenarios", "1", "--quiet"]
+    assert main([*argv, "--methods", "DAA,exact", "--out", str(tmp_path)]) == 0
+    rows = pd.read_csv(tmp_path / "comm.csv")
+    assert (rows.method == "exact").sum() == 1 and (rows.method == "DAA").sum() > 1
+    assert "mean true gap" in capsys.readouterr().out
+    assert main([*argv, "--methods", "exact", "--out", str(tmp_path / "x")]) == 2
+    assert "beside 'exact'" in capsys.readouterr().err
