@@ -37,17 +37,18 @@ def _map_source_tree_packages() -> None:
     does nothing in an installed package (the subpackages are real folders).
     """
     import importlib.util
+    import os.path
     import sys
-    from pathlib import Path
 
-    here = Path(__file__).resolve().parent
-    root = here.parent
+    here = os.path.dirname(os.path.realpath(__file__))
+    root = os.path.dirname(here)
     mapped = {
-        f"taopt.{name}": root / name
+        f"taopt.{name}": os.path.join(root, name)
         for name in ("models", "heuristics")
-        if not (here / name).is_dir() and (root / name / "__init__.py").is_file()
+        if not os.path.isdir(os.path.join(here, name))
+        and os.path.isfile(os.path.join(root, name, "__init__.py"))
     }
-    if not mapped or not (root / "pyproject.toml").is_file():
+    if not mapped or not os.path.isfile(os.path.join(root, "pyproject.toml")):
         return
 
     class _SourceTreeFinder:  # a meta path finder (importlib.abc is not imported: it is slow)
@@ -56,7 +57,7 @@ def _map_source_tree_packages() -> None:
             if folder is None:
                 return None
             return importlib.util.spec_from_file_location(
-                fullname, folder / "__init__.py", submodule_search_locations=[str(folder)]
+                fullname, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder]
             )
 
     sys.meta_path.append(_SourceTreeFinder())

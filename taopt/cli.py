@@ -24,13 +24,13 @@ messages go through the ``taopt`` logger, which :func:`main` sends to stderr.
 from __future__ import annotations
 
 import argparse
-import json
-import logging
 import math
 import sys
 from collections.abc import Sequence
-from pathlib import Path as FilePath
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import logging
 
 from taopt.errors import InstanceError, TaoptError
 
@@ -82,7 +82,10 @@ def parse_field(spec: str) -> Any:
     if lower.startswith("linear:"):
         a = parse_numbers(key.split(":", 1)[1], 4, "linear field")
         return LinearField(np.reshape(a, (2, 2)))
-    path = FilePath(key)
+    import json
+    from pathlib import Path
+
+    path = Path(key)
     if path.suffix.lower() == ".json" or path.exists():
         if not path.exists():
             raise InstanceError(f"field file {key!r} does not exist")
@@ -98,6 +101,13 @@ def parse_field(spec: str) -> Any:
             return None if data["field"] is None else field_from_dict(data["field"])
         return field_from_dict(data)
     raise InstanceError(f"unknown field {spec!r}; {FIELD_HELP}")
+
+
+def _folder(path: str) -> Any:
+    """``pathlib.Path(path)``, imported when a command writes files (not for ``--version``)."""
+    from pathlib import Path
+
+    return Path(path)
 
 
 # -- subcommands -------------------------------------------------------------------------------
@@ -222,7 +232,7 @@ def cmd_study_drift(args: argparse.Namespace) -> int:
         print(table.round(4).to_string())
         print()
         print(wilcoxon_pairs(df).round(4).to_string(index=False))
-    table.to_csv(FilePath(args.out) / "summary.csv")
+    table.to_csv(_folder(args.out) / "summary.csv")
     if args.plot:
         plot_gaps(df, path=args.plot)
         print(f"plot written to {args.plot}")
@@ -262,7 +272,7 @@ def cmd_study_delivery(args: argparse.Namespace) -> int:
         if df["optimum"].notna().any():
             print("\naverage gap to the optimum f / f_o - 1:")
             print(thesis_table(df, "gap_to_optimum").round(4).to_string())
-    print(f"\nrows: {FilePath(args.out) / f'delivery_{args.setup}.csv'}")
+    print(f"\nrows: {_folder(args.out) / f'delivery_{args.setup}.csv'}")
     if args.plot:
         plot_study(df, "q", path=args.plot)
         print(f"plot written to {args.plot}")
@@ -307,7 +317,7 @@ def cmd_study_capability(args: argparse.Namespace) -> int:
         for name in ("3.1", "3.2"):
             print(f"\nTable {name}, thesis beside taopt:")
             print(thesis_comparison(df, name).round(4).to_string())
-    table.to_csv(FilePath(args.out) / "summary.csv")
+    table.to_csv(_folder(args.out) / "summary.csv")
     if args.plot:
         plot_figures(df, path=args.plot)
         print(f"plot written to {args.plot}")
@@ -334,7 +344,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     for j, d in enumerate(result.solution.lengths()):
         print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
     if args.out:
-        folder = FilePath(args.out)
+        folder = _folder(args.out)
         folder.mkdir(parents=True, exist_ok=True)
         result.save(folder / f"{args.algorithm}.json")
         print(f"solution written to {folder / f'{args.algorithm}.json'}")
@@ -378,7 +388,7 @@ def cmd_study_comm(args: argparse.Namespace) -> int:
         progress=not args.quiet,
     )
     table = summarize(df)
-    table.to_csv(FilePath(args.out) / f"summary_{args.preset}.csv", index=False)
+    table.to_csv(_folder(args.out) / f"summary_{args.preset}.csv", index=False)
     with pd.option_context("display.width", 160, "display.max_columns", 20):
         print(preset.title)
         for n, m in preset.sizes:
@@ -519,6 +529,8 @@ def setup_logging(quiet: bool = False, verbose: bool = False) -> logging.Logger:
 
     Calling it again (``main`` run twice in one process) replaces the handler it installed.
     """
+    import logging
+
     logger = logging.getLogger("taopt")
     for handler in list(logger.handlers):
         if handler.get_name() == "taopt-cli":
