@@ -184,5 +184,4 @@ __all__ = [
     # subpackages used as namespaces
     "bounds",
     "navigation",
-    "__version__",
 ]

@@ -115,10 +115,10 @@ def solve(
 
 
 def available_methods(problem: Any, category: str | None = None) -> list[str]:
-    """Names of the methods usable on ``problem`` here, in registration order.
+    """Names of the methods usable on ``problem`` here: exact methods first.
 
-    Exact methods first, then heuristics, peers, simulations and relaxations. Every
-    registered method of ``problem``'s family (optionally of one ``category``: "exact",
+    Then heuristics, peers, simulations and relaxations (registration order within each
+    category). Every registered method of ``problem``'s family (optionally of one ``category``: "exact",
     "heuristic", "peer", "simulation", "relaxation") whose packages are installed: a peer
     such as "pyvrp" or "ortools" is listed only when its package is (found with
     ``importlib.util.find_spec``, never imported here).
