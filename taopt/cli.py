@@ -566,8 +566,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="taopt",
-        description="Cooperative multi-vehicle task assignment (thesis toolkit): navigation, "
-        "exact models and heuristics, side by side.",
+        description="Cooperative multi-vehicle task assignment (thesis toolkit): navigation,\n"
+        "exact models, heuristics and distributed algorithms, side by side.",
+        epilog="'taopt COMMAND --help' shows a command's options, each with its default.\n"
+        "'python -m taopt' is the same command.",
         formatter_class=_Formatter,
     )
     parser.add_argument("--version", action="version", version=f"taopt {__version__}")
