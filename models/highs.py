@@ -44,9 +44,11 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import logging
 import math
 import os
 import sys
+import time
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -61,6 +63,11 @@ from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
 
 #: "optimal" only when (objective − bound) / |objective| is at most this.
 OPTIMALITY_TOLERANCE = 1e-6
+#: A MIP run whose reported objective differs from ``c·x + offset`` of its own point by more
+#: than this (relative, at least 1e-6 absolute) is not trusted (see :meth:`HighsModel.solve`).
+CONSISTENCY_TOLERANCE = 1e-6
+
+logger = logging.getLogger("taopt")
 
 __all__ = [
     "OPTIMALITY_TOLERANCE",
@@ -477,6 +484,9 @@ class HighsModel:
             raise SolverError("HiGHS rejected the compiled model")
         self.column_lower = column_lower
         self.column_upper = column_upper
+        self._start: np.ndarray | None = None
+        #: MIP runs re-done without presolve because HiGHS's answer contradicted its point
+        self.reruns = 0
 
     # ------------------------------------------------------------------ columns
     def columns(self, variable: cp.Variable) -> np.ndarray:
@@ -547,11 +557,13 @@ class HighsModel:
         """Give HiGHS a full column vector as a MIP start (``Highs.setSolution``).
 
         HiGHS checks it and keeps it as its first incumbent if it is feasible.
-        Returns False if HiGHS rejected the call.
+        Returns False if HiGHS rejected the call. The start is kept for the next
+        :meth:`solve` only (a re-run of it may need it again).
         """
         solution = np.asarray(solution, dtype=float)
         if solution.shape != (self.n_columns,):
             raise SolverError(f"a start needs {self.n_columns} values, got {solution.shape}")
+        self._start = solution.copy()
         status = self.highs.setSolution(
             self.n_columns, np.arange(self.n_columns, dtype=np.int32), solution
         )
@@ -597,12 +609,59 @@ class HighsModel:
 
         if on_solution is not None and is_mip:
             highs.cbMipSolution.subscribe(forward)
+        began = time.perf_counter()
+        start, self._start = self._start, None
         try:
             highs.run()
+            run = _highs_run(highs, is_mip, time_limit)
+            if is_mip and not self._consistent(run):
+                # HiGHS 1.16 can map a MIP start into its presolved space with the wrong
+                # objective (e.g. "feasible in the reduced space: objective value is 1" for a
+                # start of value 4) and then stop at node 0 calling that start "Optimal",
+                # with objective and dual bound both in the wrong space. Neither number is a
+                # proof, so the same run is done again without presolve, start included.
+                self.reruns += 1
+                logger.info(
+                    "HiGHS reported objective %.10g for a point of value %.10g; solving "
+                    "again without presolve",
+                    run.objective,
+                    self.point_objective(),
+                )
+                left = limit - (time.perf_counter() - began)
+                highs.setOptionValue("time_limit", max(left, 1e-3))
+                highs.setOptionValue("presolve", "off")
+                try:
+                    if start is not None:
+                        self._give_start(start)
+                    highs.run()
+                finally:
+                    highs.setOptionValue("presolve", "choose")
+                run = _highs_run(highs, is_mip, time_limit)
+                if not self._consistent(run):
+                    raise SolverError(
+                        f"HiGHS reported objective {run.objective} for a point of value "
+                        f"{self.point_objective()}, also without presolve"
+                    )
         finally:
             if on_solution is not None and is_mip:
                 highs.cbMipSolution.unsubscribe(forward)
-        return _highs_run(highs, is_mip, time_limit)
+        return run
+
+    def point_objective(self, solution: Any = None) -> float:
+        """``c·x + offset`` of the last solution (or of ``solution``), computed here."""
+        if solution is None:
+            solution = self.highs.getSolution().col_value
+        return float(self.cost @ np.asarray(solution, dtype=float)) + self.offset
+
+    def _consistent(self, run: HighsRun) -> bool:
+        """HiGHS's objective is the value of the point it returns (True without a point)."""
+        if not run.has_point or run.objective is None:
+            return True
+        value = self.point_objective()
+        return abs(value - run.objective) <= CONSISTENCY_TOLERANCE * max(1.0, abs(value))
+
+    def _give_start(self, solution: np.ndarray) -> None:
+        self.highs.setSolution(self.n_columns, np.arange(self.n_columns, dtype=np.int32), solution)
 
     def lagrangian_bound(self) -> tuple[float, np.ndarray]:
         """A proven lower bound and reduced costs from the last LP's row duals.

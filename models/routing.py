@@ -456,6 +456,8 @@ CORE_SIZE = 4
 #: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
 #: bench_routing_exact.py); the optimum and its proof do not depend on it.
 MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+#: Compact formulation that finishes a DFJ loop which stalls with an open gap.
+FALLBACK_SEC = "flow"
 #: A DFJ row (2.5) counts as violated when it is off by more than this.
 CUT_TOLERANCE = 1e-6
 #: Fixed-point scale of σ for scipy's integer maximum flow (errors below 2**-25 per arc).
@@ -923,6 +925,15 @@ def solve_routing(
     ``Σ_j min_i t(i, j)`` (:func:`entry_bound`); the loop stops as soon as it
     is within ``max(mip_gap, 1e-6)`` of the incumbent.
 
+    Every MIP answer is checked by :meth:`taopt.models.highs.HighsModel.solve`
+    (HiGHS's objective must be the value of its point; HiGHS 1.16 can accept a
+    MIP start in its presolved space with a wrong objective and call it optimal,
+    and such a run is done again without presolve). Should a round still bring
+    nothing new (no cycle, no change of the core) while the gap is open, the
+    loop hands its incumbent to the compact :data:`FALLBACK_SEC` model on all
+    arcs, which ends optimal without a time limit: no run without a limit
+    ends "feasible" for want of progress.
+
     MTZ and flow are compact: one solve on a compiled model, with the
     incumbent as MIP start.
 
@@ -1020,6 +1031,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
     rounds = 0
     solver_status, stopped_by = "", "time_limit"
+    stall = False
     while True:
         left = remaining()
         if left is not None and left <= 0:
@@ -1052,7 +1064,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         stopped_by = run.stopped_by
         if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
             break  # proven: "optimal", or "mip_gap" for a loose gap
-        if not run.has_point or run.stopped_by in ("time_limit", "solver_limit"):
+        if run.stopped_by in ("time_limit", "solver_limit"):
             break  # a limit: the incumbent stands with the bound proven so far
         if rounds >= max_rounds:
             stopped_by = "max_rounds"
@@ -1061,8 +1073,22 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         # the core's own optimum has no cycle, every such arc comes in
         if not subtours:
             cap = np.inf
-        if not resize_core() and not subtours:
-            break  # nothing left to learn (cannot happen with a closed core)
+        if not run.has_point or (not resize_core() and not subtours):
+            # Nothing left to learn, yet the gap is open: the round's answer contradicts
+            # the proof (a solver fault, as HiGHS 1.16's MIP starts in a presolved space
+            # were before HighsModel checked them). A compact model closes it.
+            stall = True
+            break
+    if stall:
+        fallback = _solve_compact(
+            problem, FALLBACK_SEC, time_limit, mip_gap, verbose, best_routes, started
+        )
+        if fallback.objective < best_value:
+            best_routes, best_value = fallback.routes, fallback.objective
+        if fallback.bound is not None:
+            best_bound = max(best_bound, fallback.bound)
+        stopped_by = fallback.info["stopped_by"]
+        solver_status = fallback.info["solver_status"]
     bound = min(best_bound, best_value)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(best_value, bound, stopped_by)
@@ -1077,6 +1103,8 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         "solver_status": solver_status,
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
+        "reruns": dfj.model.reruns,
+        "fallback": FALLBACK_SEC if stall else None,
     }
     return _solution(problem, best_value, status, bound, started, "exact-dfj", best_routes, info)
 
