@@ -266,3 +266,23 @@ def test_generators_cover_the_hard_cases():
     assert any(len(np.unique(p.cost)) <= 4 for p in problems)
     assert any(sop_instance(s).precedences for s in range(10))
     assert nx.is_directed_acyclic_graph(delivery_instance(0, 5).precedence_graph)
+
+
+def test_study_flags_uncertified_exact_rows(caplog):
+    """The study runner warns about an exact row neither optimal nor infeasible without a limit."""
+    from taopt.study import _flag_uncertified
+    from taopt.studies.drift import SPEC as spec
+
+    key = {c: 1 for c in spec.key_columns}
+    rows = [
+        {**key, "method": "exact", "status": "feasible"},
+        {**key, "method": "exact", "status": "optimal"},
+        {**key, "method": "MC", "status": "feasible"},
+    ]
+    with caplog.at_level("WARNING", logger="taopt"):
+        _flag_uncertified(spec, rows, {"exact"}, None)
+    assert len(caplog.records) == 1 and "'feasible'" in caplog.records[0].getMessage()
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="taopt"):
+        _flag_uncertified(spec, rows, {"exact"}, 5.0)  # a limit may stop an exact method
+    assert not caplog.records
