@@ -46,6 +46,7 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
 from taopt.errors import InstanceError, SolverError
@@ -61,6 +62,7 @@ __all__ = [
     "SUBTOUR_ELIMINATIONS",
     "DfjModel",
     "RootRelaxation",
+    "assignment_bound",
     "RoutingModel",
     "build",
     "cut_rows",
@@ -323,8 +325,9 @@ def describe(problem: AssignmentProblem, sec: str = "dfj", show: bool = True) ->
 
 
 # ------------------------------------------------------------------------- decoding
-def _successors(model: RoutingModel, values: np.ndarray | None = None) -> dict[int, int]:
-    values = model.arc_use.value if values is None else values
+def _successors(model: Any, values: np.ndarray | None = None) -> dict[int, int]:
+    if values is None:
+        values = model.arc_use.value if isinstance(model, RoutingModel) else None
     if values is None:
         raise SolverError("the model has no solution values to decode")
     used = np.flatnonzero(np.asarray(values) > 0.5)
@@ -340,9 +343,12 @@ def _successors(model: RoutingModel, values: np.ndarray | None = None) -> dict[i
 
 
 def decode(
-    problem: AssignmentProblem, model: RoutingModel, values: np.ndarray | None = None
+    problem: AssignmentProblem, model: RoutingModel | DfjModel, values: np.ndarray | None = None
 ) -> tuple[list[list[int]], list[list[int]]]:
     """Turn an integral σ into routes (one per vehicle) and the subtours left over.
+
+    ``values`` is σ over the model's arc list (``model.tails``, ``model.heads``);
+    by default the cvxpy variable's value of a :class:`RoutingModel`.
 
     Returns
     -------
@@ -428,6 +434,21 @@ def entry_bound(problem: AssignmentProblem) -> float:
     return float(cost.min(axis=0).sum())
 
 
+def assignment_bound(problem: AssignmentProblem) -> float:
+    """Optimum of (2.2)–(2.4) without (2.5): a valid lower bound, at least :func:`entry_bound`.
+
+    (2.3) and (2.4) alone are a rectangular assignment of every target to a distinct
+    predecessor point (its own excluded), solved exactly by
+    :func:`scipy.optimize.linear_sum_assignment` in ``O((n + m) n^2)`` — about 0.1 s for
+    n = 1000, so it is the bound a time limit leaves when no LP can be solved in time.
+    """
+    cost = np.array(problem.cost[:, : problem.n], dtype=float)
+    # a self loop is never used: any finite value above every route's cost excludes it
+    cost[np.arange(problem.n), np.arange(problem.n)] = cost.sum() + 1.0
+    rows, columns = linear_sum_assignment(cost)
+    return float(cost[rows, columns].sum())
+
+
 def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
     """A quick feasible solution: repeatedly append the cheapest (route end, target) pair.
 
@@ -456,6 +477,16 @@ CORE_SIZE = 4
 #: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
 #: bench_routing_exact.py); the optimum and its proof do not depend on it.
 MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+#: Seconds per arc to build :class:`DfjModel` (arrays and HiGHS's ``passModel``), and per
+#: arc before HiGHS's simplex first checks its clock (its setup of the LP): upper
+#: estimates measured on a loaded 2-core machine (about 1 and 3.5 µs for n = 1000,
+#: benchmarks/bench_routing_exact.py --limit). Under a time limit a stage is not started
+#: when its estimate exceeds the time left: the incumbent and the bounds proven so far
+#: are returned instead (status "time_limit").
+BUILD_SECONDS_PER_ARC = 2e-6
+LP_SECONDS_PER_ARC = 4e-6
+#: Seconds per ``n^2 (n + m)`` of :func:`assignment_bound` (an upper estimate, as above).
+ASSIGNMENT_SECONDS_PER_CUBE = 3e-10
 #: Compact formulation that finishes a DFJ loop which stalls with an open gap.
 FALLBACK_SEC = "flow"
 #: A DFJ row (2.5) counts as violated when it is off by more than this.
@@ -517,6 +548,7 @@ def separate_subtours(
     heads: np.ndarray,
     values: np.ndarray,
     tolerance: float = CUT_TOLERANCE,
+    deadline: float | None = None,
 ) -> list[tuple[int, ...]]:
     """Subsets S of targets whose (2.5) row is violated by σ = ``values`` (exact separation).
 
@@ -534,7 +566,9 @@ def separate_subtours(
 
     Returns an empty list only if no S has ``σ(into S) < 1 − tolerance``
     (up to the ``2**-24`` fixed-point rounding of σ for scipy's integer
-    maximum flow; every returned S is checked in floating point).
+    maximum flow; every returned S is checked in floating point) — unless
+    ``deadline`` (a ``time.perf_counter()`` value) passes during stage 2,
+    which then stops with the subsets found so far (each still violated).
 
     Notes
     -----
@@ -603,6 +637,8 @@ def separate_subtours(
     for target in (int(v) for v in order):
         if covered[target] or safe[target]:
             continue
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
         result = maximum_flow(flow_graph, source, target)
         if result.flow_value >= threshold:
             safe |= _reachable(strong_graph, np.array([target]))
@@ -677,26 +713,57 @@ class RootRelaxation:
 
 
 class DfjModel:
-    """(2.2)–(2.4) compiled once into one live HiGHS model; (2.5) rows added in place.
+    """(2.2)–(2.4) passed once to one live HiGHS model; (2.5) rows added in place.
 
-    The cvxpy model of :func:`build` (no cuts) is compiled once by
-    :class:`taopt.models.highs.HighsModel`. Afterwards every (2.5) row found,
-    at the root LP or in a MIP round, is added to the same ``highspy.Highs``
-    object; arcs are switched off and on through their upper bounds, and a MIP
-    start is passed with ``Highs.setSolution``.
+    The rows of :func:`build` (no cuts) are written straight into sparse
+    arrays — column a is σ of arc ``tails[a] -> heads[a]``, with a 1 in row
+    ``heads[a]`` of (2.3) and in row ``n + tails[a]`` of (2.4) — and passed to
+    HiGHS by :meth:`taopt.models.highs.HighsModel.from_arrays`: the same model
+    cvxpy would compile, without cvxpy's compilation (about 20 s for the
+    million arcs of n = 1000, against a fraction of a second here; the
+    cvxpy model is :attr:`formulation`, built on demand). Afterwards every
+    (2.5) row found, at the root LP or in a MIP round, is added to the same
+    ``highspy.Highs`` object; arcs are switched off and on through their upper
+    bounds, and a MIP start is passed with ``Highs.setSolution``.
     """
 
     def __init__(self, problem: AssignmentProblem, verbose: bool = False) -> None:
         self.problem = problem
-        self.formulation = build(problem, "dfj")
-        self.model = HighsModel(self.formulation.problem, verbose=verbose)
-        self.arcs = self.model.columns(self.formulation.arc_use)
-        self.tails, self.heads = self.formulation.tails, self.formulation.heads
+        n, m = problem.n, problem.m
+        size = n + m
+        self.tails, self.heads = arc_list(problem)
+        n_arcs = len(self.tails)
+        self.arcs = np.arange(n_arcs)
+        # (2.3) rows 0..n-1: sum_i sigma_ij = 1; (2.4) rows n..2n+m-1: sum_j sigma_ij <= 1
+        rows = np.empty(2 * n_arcs, dtype=np.int64)
+        rows[0::2] = self.heads
+        rows[1::2] = n + self.tails
+        matrix = sp.csc_matrix(
+            (np.ones(2 * n_arcs), rows, np.arange(0, 2 * n_arcs + 1, 2)),
+            shape=(n + size, n_arcs),
+        )
+        self.model = HighsModel.from_arrays(
+            cost=problem.cost[self.tails, self.heads],  # (2.2)
+            matrix=matrix,
+            lower=np.concatenate([np.ones(n), np.full(size, -np.inf)]),
+            upper=np.ones(n + size),
+            column_lower=np.zeros(n_arcs),
+            column_upper=np.ones(n_arcs),
+            integers=self.arcs,
+            verbose=verbose,
+        )
         self.cuts: list[tuple[int, ...]] = []
         self._known: set[tuple[int, ...]] = set()
-        n, size = problem.n, problem.n + problem.m
         self.arc_index = np.full((size, n), -1, dtype=np.int64)
-        self.arc_index[self.tails, self.heads] = np.arange(len(self.tails))
+        self.arc_index[self.tails, self.heads] = np.arange(n_arcs)
+        self._formulation: RoutingModel | None = None
+
+    @property
+    def formulation(self) -> RoutingModel:
+        """The same (2.2)–(2.4) as a labelled cvxpy model (:func:`build`), built on first use."""
+        if self._formulation is None:
+            self._formulation = build(self.problem, "dfj")
+        return self._formulation
 
     def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
         """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
@@ -717,7 +784,10 @@ class DfjModel:
         return len(new)
 
     def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
-        return self.model.values(self.formulation.arc_use, solution)
+        """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
+        if solution is None:
+            solution = self.model.highs.getSolution().col_value
+        return np.asarray(solution, dtype=float)[self.arcs]
 
     def start_vector(self, routes: list[list[int]]) -> np.ndarray:
         """The full column vector of σ for ``routes`` (a MIP start)."""
@@ -747,14 +817,15 @@ class DfjModel:
         (``complete`` False).
         """
         began = time.perf_counter()
+        deadline = None if budget is None else began + budget
         self.model.relax(True)
         rounds, value, complete = 0, -np.inf, False
         bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
         try:
             while max_rounds is None or rounds < max_rounds:
                 left = None if budget is None else budget - (time.perf_counter() - began)
-                if left is not None and left <= 0:
-                    break
+                if left is not None and left < LP_SECONDS_PER_ARC * len(self.arcs):
+                    break  # HiGHS would not even reach its first clock check in time
                 rounds += 1
                 run = self.model.solve(time_limit=left)
                 if run.solver_status != "optimal" or run.objective is None:
@@ -767,7 +838,12 @@ class DfjModel:
                 values = self.arc_values()
                 bound, full_reduced = self.model.lagrangian_bound()
                 reduced = full_reduced[self.arcs]
-                found = separate_subtours(self.problem, self.tails, self.heads, values)
+                found = separate_subtours(
+                    self.problem, self.tails, self.heads, values, deadline=deadline
+                )
+                if deadline is not None and time.perf_counter() >= deadline:
+                    self.add_cuts(found)  # valid rows, but the separation may be unfinished
+                    break
                 if not self.add_cuts(found):
                     complete = True
                     break
@@ -971,9 +1047,23 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
 
     n, m = problem.n, problem.m
-    dfj = DfjModel(problem, verbose=verbose)
     best_routes, best_value = _first_incumbent(problem, given)
     best_bound = entry_bound(problem)
+    left = remaining()
+    if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
+        best_bound = max(best_bound, assignment_bound(problem))
+    n_arcs = (n + m) * n - n
+    left = remaining()
+    if left is not None and left < BUILD_SECONDS_PER_ARC * n_arcs:
+        # no time to build the model: the incumbent with the bounds proven so far
+        bound = min(best_bound, best_value)
+        status, stopped_by = certify(best_value, bound, "time_limit")
+        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": stopped_by}
+        info.update(solver_status="", stage="build", mip_gap=mip_gap)
+        return _solution(
+            problem, best_value, status, bound, started, "exact-dfj", best_routes, info
+        )
+    dfj = DfjModel(problem, verbose=verbose)
     # 1. root LP with exact separation; at most half of a time limit
     budget = remaining()
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
@@ -1020,7 +1110,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     def harvest(solution: np.ndarray) -> None:
         values = dfj.arc_values(solution)
         try:
-            routes, subtours = decode(problem, dfj.formulation, values)
+            routes, subtours = decode(problem, dfj, values)
         except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
             return
         if subtours:
@@ -1034,8 +1124,8 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     stall = False
     while True:
         left = remaining()
-        if left is not None and left <= 0:
-            stopped_by = "time_limit"
+        if left is not None and left < LP_SECONDS_PER_ARC * int(core.sum()):
+            stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
             break
         rounds += 1
         dfj.model.set_start(dfj.start_vector(best_routes))
@@ -1055,7 +1145,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
                 best_routes, best_value = routes, value
         subtours: list[list[int]] = []
         if run.has_point:
-            routes, subtours = decode(problem, dfj.formulation, dfj.arc_values())
+            routes, subtours = decode(problem, dfj, dfj.arc_values())
             candidate = repair(problem, routes, subtours) if subtours else routes
             value = evaluate_routes(problem, candidate)
             if value < best_value:
