@@ -667,9 +667,21 @@ class HighsModel:
         def forward(event: Any) -> None:
             on_solution(np.array(event.data_out.mip_solution, dtype=float))
 
+        began = time.perf_counter()
+        deadline = began + limit
+
+        def stop_at_deadline(event: Any) -> None:
+            # HiGHS looks at time_limit rarely inside an LP; these callbacks come every
+            # simplex / IPM iteration and MIP node, so a limit is kept more closely
+            if time.perf_counter() >= deadline:
+                event.interrupt()
+
+        interrupts = (highs.cbSimplexInterrupt, highs.cbIpmInterrupt, highs.cbMipInterrupt)
+        if time_limit is not None:
+            for callback in interrupts:
+                callback.subscribe(stop_at_deadline)
         if on_solution is not None and is_mip:
             highs.cbMipSolution.subscribe(forward)
-        began = time.perf_counter()
         start, self._start = self._start, None
         try:
             highs.run()
@@ -705,6 +717,9 @@ class HighsModel:
         finally:
             if on_solution is not None and is_mip:
                 highs.cbMipSolution.unsubscribe(forward)
+            if time_limit is not None:
+                for callback in interrupts:
+                    callback.unsubscribe(stop_at_deadline)
         return run
 
     def point_objective(self, solution: Any = None) -> float:
