@@ -939,7 +939,15 @@ def solve_routing(
     sec : {"dfj", "mtz", "flow"}
         Subtour elimination; all three give the same optimum.
     time_limit : float, optional
-        Wall-clock seconds for the whole solve (all DFJ rounds together).
+        Wall-clock seconds for the whole call, building included: it returns
+        within about ``time_limit + 0.5`` s with status "time_limit", the best
+        routes found and a proven bound. A stage (building the model, an LP,
+        a MIP round; for MTZ / flow, cvxpy's compilation and HiGHS's presolve)
+        is not started when its per-arc estimate (:data:`BUILD_SECONDS_PER_ARC`,
+        :data:`LP_SECONDS_PER_ARC`, :data:`COMPACT_SECONDS_PER_ARC`) exceeds the
+        time left; the bound is then the best of :func:`entry_bound`,
+        :func:`assignment_bound` and what was proven (``info["stage"] ==
+        "build"`` when no model was built).
     mip_gap : float
         Relative MIP gap passed to HiGHS (``mip_rel_gap``). The status is
         "optimal" only when the final gap is at most
