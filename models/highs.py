@@ -44,9 +44,11 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import logging
 import math
 import os
 import sys
+import time
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -61,6 +63,11 @@ from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
 
 #: "optimal" only when (objective − bound) / |objective| is at most this.
 OPTIMALITY_TOLERANCE = 1e-6
+#: A MIP run whose reported objective differs from ``c·x + offset`` of its own point by more
+#: than this (relative, at least 1e-6 absolute) is not trusted (see :meth:`HighsModel.solve`).
+CONSISTENCY_TOLERANCE = 1e-6
+
+logger = logging.getLogger("taopt")
 
 __all__ = [
     "OPTIMALITY_TOLERANCE",
@@ -416,64 +423,127 @@ class HighsModel:
     (4.0, [3.0, 1.0])
     """
 
-    def __init__(self, problem: cp.Problem, verbose: bool = False) -> None:
+    def __init__(self, problem: cp.Problem | None, verbose: bool = False) -> None:
+        self.highs = new_highs(verbose)
+        for name, value in thread_options().items():
+            self.highs.setOptionValue(name, value)
+        self._columns: dict[int, tuple[int, int]] = {}
+        self._start: np.ndarray | None = None
+        #: MIP runs re-done without presolve because HiGHS's answer contradicted its point
+        self.reruns = 0
+        if problem is None:  # filled by from_arrays
+            return
         data, _, inverse = problem.get_problem_data(cp.HIGHS)
         program = data["param_prob"]
         self._columns = {
             var.id: (program.var_id_to_col[var.id], int(var.size)) for var in program.variables
         }
         dims = data["dims"]
-        cost = np.asarray(data["c"], dtype=float)
-        matrix = sp.csr_matrix(data["A"])
         upper = np.asarray(data["b"], dtype=float)
         equalities = int(dims.zero)
         # cvxpy's cone form: rows [0, zero) are A x = b, the rest A x <= b
         lower = np.concatenate([upper[:equalities], np.full(len(upper) - equalities, -np.inf)])
-        n_columns = len(cost)
-        column_lower = data["lower_bounds"]
-        column_upper = data["upper_bounds"]
-        column_lower = np.full(n_columns, -np.inf) if column_lower is None else column_lower.copy()
-        column_upper = np.full(n_columns, np.inf) if column_upper is None else column_upper.copy()
-        booleans = np.asarray(data["bool_vars_idx"], dtype=np.int64)
         integers = np.asarray(
             sorted({*data["bool_vars_idx"], *data["int_vars_idx"]}), dtype=np.int64
         )
+        self._load(
+            cost=np.asarray(data["c"], dtype=float),
+            matrix=sp.csr_matrix(data["A"]),
+            lower=lower,
+            upper=upper,
+            column_lower=data["lower_bounds"],
+            column_upper=data["upper_bounds"],
+            booleans=np.asarray(data["bool_vars_idx"], dtype=np.int64),
+            integers=integers,
+            offset=float(inverse[-1][cp.settings.OFFSET]) if inverse else 0.0,
+        )
+
+    @classmethod
+    def from_arrays(
+        cls,
+        cost: np.ndarray,
+        matrix: sp.spmatrix,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        column_lower: np.ndarray | None = None,
+        column_upper: np.ndarray | None = None,
+        integers: np.ndarray | None = None,
+        offset: float = 0.0,
+        verbose: bool = False,
+    ) -> HighsModel:
+        """A model from numpy arrays, without cvxpy: ``min c x + offset``, ``lower <= A x <= upper``.
+
+        For models too large for cvxpy's compilation within a time limit (the DFJ model of
+        n = 1000 targets has a million columns: about 20 s through ``get_problem_data``,
+        a fraction of a second here). :meth:`columns` knows no cvxpy variable then.
+        """
+        model = cls(None, verbose=verbose)
+        integers = np.zeros(0, dtype=np.int64) if integers is None else np.asarray(integers)
+        model._load(
+            cost=np.asarray(cost, dtype=float),
+            matrix=matrix if sp.issparse(matrix) else sp.csr_matrix(matrix),
+            lower=np.asarray(lower, dtype=float),
+            upper=np.asarray(upper, dtype=float),
+            column_lower=column_lower,
+            column_upper=column_upper,
+            booleans=np.zeros(0, dtype=np.int64),
+            integers=integers.astype(np.int64),
+            offset=float(offset),
+        )
+        return model
+
+    def _load(
+        self, cost, matrix, lower, upper, column_lower, column_upper, booleans, integers, offset
+    ) -> None:
+        """Pass the model to HiGHS: one ``passModel`` of numpy arrays, integrality included."""
+        n_columns = len(cost)
+        column_lower = (
+            np.full(n_columns, -np.inf)
+            if column_lower is None
+            else np.array(column_lower, dtype=float)
+        )
+        column_upper = (
+            np.full(n_columns, np.inf)
+            if column_upper is None
+            else np.array(column_upper, dtype=float)
+        )
         column_lower[booleans] = np.maximum(column_lower[booleans], 0.0)
         column_upper[booleans] = np.minimum(column_upper[booleans], 1.0)
-        self.offset = float(inverse[-1][cp.settings.OFFSET]) if inverse else 0.0
+        self.offset = offset
         self.n_columns = n_columns
         self.is_mip = len(integers) > 0
         self._integers = integers.astype(np.int32)
         self._relaxed = False
         self.cost = cost
         # the rows as kept here too (for Lagrangian bounds): matrix, lower, upper
-        self._row_blocks: list[tuple[sp.csr_matrix, np.ndarray, np.ndarray]] = [
+        self._row_blocks: list[tuple[sp.spmatrix, np.ndarray, np.ndarray]] = [
             (matrix, lower, upper)
         ]
-
-        lp = highspy.HighsLp()
-        lp.num_col_ = n_columns
-        lp.num_row_ = matrix.shape[0]
-        lp.offset_ = self.offset
-        lp.col_cost_ = cost
-        lp.col_lower_ = column_lower
-        lp.col_upper_ = column_upper
-        lp.row_lower_ = lower
-        lp.row_upper_ = upper
         by_column = matrix.tocsc()
-        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = by_column.indptr
-        lp.a_matrix_.index_ = by_column.indices
-        lp.a_matrix_.value_ = by_column.data
-        if self.is_mip:
-            integrality = [highspy.HighsVarType.kContinuous] * n_columns
-            for column in integers:
-                integrality[column] = highspy.HighsVarType.kInteger
-            lp.integrality_ = integrality
-        self.highs = new_highs(verbose)
-        for name, value in thread_options().items():
-            self.highs.setOptionValue(name, value)
-        if self.highs.passModel(lp) == highspy.HighsStatus.kError:
+        if not by_column.has_sorted_indices:
+            by_column = by_column.sorted_indices()
+        integrality = np.zeros(n_columns, dtype=np.int32)
+        integrality[self._integers] = int(highspy.HighsVarType.kInteger)
+        # passModel's array form: numpy arrays in, no Python loop over columns (a HighsLp's
+        # attributes are copied element by element: 2 s for a million columns)
+        status = self.highs.passModel(
+            n_columns,
+            matrix.shape[0],
+            by_column.nnz,
+            int(highspy.MatrixFormat.kColwise),
+            int(highspy.ObjSense.kMinimize),
+            self.offset,
+            np.ascontiguousarray(cost, dtype=np.float64),
+            column_lower,
+            column_upper,
+            np.ascontiguousarray(lower, dtype=np.float64),
+            np.ascontiguousarray(upper, dtype=np.float64),
+            by_column.indptr.astype(np.int32),
+            by_column.indices.astype(np.int32),
+            by_column.data.astype(np.float64),
+            integrality,
+        )
+        if status == highspy.HighsStatus.kError:
             raise SolverError("HiGHS rejected the compiled model")
         self.column_lower = column_lower
         self.column_upper = column_upper
@@ -547,11 +617,13 @@ class HighsModel:
         """Give HiGHS a full column vector as a MIP start (``Highs.setSolution``).
 
         HiGHS checks it and keeps it as its first incumbent if it is feasible.
-        Returns False if HiGHS rejected the call.
+        Returns False if HiGHS rejected the call. The start is kept for the next
+        :meth:`solve` only (a re-run of it may need it again).
         """
         solution = np.asarray(solution, dtype=float)
         if solution.shape != (self.n_columns,):
             raise SolverError(f"a start needs {self.n_columns} values, got {solution.shape}")
+        self._start = solution.copy()
         status = self.highs.setSolution(
             self.n_columns, np.arange(self.n_columns, dtype=np.int32), solution
         )
@@ -595,14 +667,76 @@ class HighsModel:
         def forward(event: Any) -> None:
             on_solution(np.array(event.data_out.mip_solution, dtype=float))
 
+        began = time.perf_counter()
+        deadline = began + limit
+
+        def stop_at_deadline(event: Any) -> None:
+            # HiGHS looks at time_limit rarely inside an LP; these callbacks come every
+            # simplex / IPM iteration and MIP node, so a limit is kept more closely
+            if time.perf_counter() >= deadline:
+                event.interrupt()
+
+        interrupts = (highs.cbSimplexInterrupt, highs.cbIpmInterrupt, highs.cbMipInterrupt)
+        if time_limit is not None:
+            for callback in interrupts:
+                callback.subscribe(stop_at_deadline)
         if on_solution is not None and is_mip:
             highs.cbMipSolution.subscribe(forward)
+        start, self._start = self._start, None
         try:
             highs.run()
+            run = _highs_run(highs, is_mip, time_limit)
+            if is_mip and not self._consistent(run):
+                # HiGHS 1.16 can map a MIP start into its presolved space with the wrong
+                # objective (e.g. "feasible in the reduced space: objective value is 1" for a
+                # start of value 4) and then stop at node 0 calling that start "Optimal",
+                # with objective and dual bound both in the wrong space. Neither number is a
+                # proof, so the same run is done again without presolve, start included.
+                self.reruns += 1
+                logger.info(
+                    "HiGHS reported objective %.10g for a point of value %.10g; solving "
+                    "again without presolve",
+                    run.objective,
+                    self.point_objective(),
+                )
+                left = limit - (time.perf_counter() - began)
+                highs.setOptionValue("time_limit", max(left, 1e-3))
+                highs.setOptionValue("presolve", "off")
+                try:
+                    if start is not None:
+                        self._give_start(start)
+                    highs.run()
+                finally:
+                    highs.setOptionValue("presolve", "choose")
+                run = _highs_run(highs, is_mip, time_limit)
+                if not self._consistent(run):
+                    raise SolverError(
+                        f"HiGHS reported objective {run.objective} for a point of value "
+                        f"{self.point_objective()}, also without presolve"
+                    )
         finally:
             if on_solution is not None and is_mip:
                 highs.cbMipSolution.unsubscribe(forward)
-        return _highs_run(highs, is_mip, time_limit)
+            if time_limit is not None:
+                for callback in interrupts:
+                    callback.unsubscribe(stop_at_deadline)
+        return run
+
+    def point_objective(self, solution: Any = None) -> float:
+        """``c·x + offset`` of the last solution (or of ``solution``), computed here."""
+        if solution is None:
+            solution = self.highs.getSolution().col_value
+        return float(self.cost @ np.asarray(solution, dtype=float)) + self.offset
+
+    def _consistent(self, run: HighsRun) -> bool:
+        """HiGHS's objective is the value of the point it returns (True without a point)."""
+        if not run.has_point or run.objective is None:
+            return True
+        value = self.point_objective()
+        return abs(value - run.objective) <= CONSISTENCY_TOLERANCE * max(1.0, abs(value))
+
+    def _give_start(self, solution: np.ndarray) -> None:
+        self.highs.setSolution(self.n_columns, np.arange(self.n_columns, dtype=np.int32), solution)
 
     def lagrangian_bound(self) -> tuple[float, np.ndarray]:
         """A proven lower bound and reduced costs from the last LP's row duals.

@@ -47,6 +47,7 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
 from taopt.errors import InstanceError, SolverError
@@ -64,6 +65,7 @@ __all__ = [
     "SUBTOUR_ELIMINATIONS",
     "DfjModel",
     "RootRelaxation",
+    "assignment_bound",
     "RoutingModel",
     "build",
     "cut_rows",
@@ -327,8 +329,9 @@ def describe(problem: AssignmentProblem, sec: str = "dfj", show: bool = True) ->
 
 
 # ------------------------------------------------------------------------- decoding
-def _successors(model: RoutingModel, values: np.ndarray | None = None) -> dict[int, int]:
-    values = model.arc_use.value if values is None else values
+def _successors(model: Any, values: np.ndarray | None = None) -> dict[int, int]:
+    if values is None:
+        values = model.arc_use.value if isinstance(model, RoutingModel) else None
     if values is None:
         raise SolverError("the model has no solution values to decode")
     used = np.flatnonzero(np.asarray(values) > 0.5)
@@ -344,9 +347,12 @@ def _successors(model: RoutingModel, values: np.ndarray | None = None) -> dict[i
 
 
 def decode(
-    problem: AssignmentProblem, model: RoutingModel, values: np.ndarray | None = None
+    problem: AssignmentProblem, model: RoutingModel | DfjModel, values: np.ndarray | None = None
 ) -> tuple[list[list[int]], list[list[int]]]:
     """Turn an integral σ into routes (one per vehicle) and the subtours left over.
+
+    ``values`` is σ over the model's arc list (``model.tails``, ``model.heads``);
+    by default the cvxpy variable's value of a :class:`RoutingModel`.
 
     Returns
     -------
@@ -432,6 +438,21 @@ def entry_bound(problem: AssignmentProblem) -> float:
     return float(cost.min(axis=0).sum())
 
 
+def assignment_bound(problem: AssignmentProblem) -> float:
+    """Optimum of (2.2)–(2.4) without (2.5): a valid lower bound, at least :func:`entry_bound`.
+
+    (2.3) and (2.4) alone are a rectangular assignment of every target to a distinct
+    predecessor point (its own excluded), solved exactly by
+    :func:`scipy.optimize.linear_sum_assignment` in ``O((n + m) n^2)`` — about 0.1 s for
+    n = 1000, so it is the bound a time limit leaves when no LP can be solved in time.
+    """
+    cost = np.array(problem.cost[:, : problem.n], dtype=float)
+    # a self loop is never used: any finite value above every route's cost excludes it
+    cost[np.arange(problem.n), np.arange(problem.n)] = cost.sum() + 1.0
+    rows, columns = linear_sum_assignment(cost)
+    return float(cost[rows, columns].sum())
+
+
 def greedy_routes(problem: AssignmentProblem) -> list[list[int]]:
     """A quick feasible solution: repeatedly append the cheapest (route end, target) pair.
 
@@ -460,6 +481,27 @@ CORE_SIZE = 4
 #: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
 #: bench_routing_exact.py); the optimum and its proof do not depend on it.
 MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+#: Seconds per arc to build :class:`DfjModel` (arrays and HiGHS's ``passModel``), and per
+#: arc before HiGHS's simplex first checks its clock (its setup of the LP): upper
+#: estimates measured on a loaded 2-core machine (about 1 and 3.5 µs for n = 1000,
+#: benchmarks/bench_routing_exact.py --limit). Under a time limit a stage is not started
+#: when its estimate exceeds the time left: the incumbent and the bounds proven so far
+#: are returned instead (status "time_limit").
+BUILD_SECONDS_PER_ARC = 2e-6
+LP_SECONDS_PER_ARC = 4e-6
+#: Seconds per arc to build and compile the MTZ / flow model through cvxpy and for
+#: HiGHS's MIP presolve, which does not stop at its time limit (flow at n = 150, m = 5,
+#: 23,100 arcs, loaded 2-core machine: 0.5 s of cvxpy, then 1.75 s of presolve on a
+#: 1.26 s limit): an upper estimate.
+COMPACT_SECONDS_PER_ARC = 1e-4
+#: HiGHS overruns its own ``time_limit``: MIP presolve and node 0 look at the clock
+#: rarely (0.62 s of presolve on a 0.6 s limit for MTZ at n = 150, 0.3-0.65 s late on a
+#: loaded machine). A MIP run is given the time left minus this.
+HIGHS_OVERRUN = 0.25
+#: Seconds per ``n^2 (n + m)`` of :func:`assignment_bound` (an upper estimate, as above).
+ASSIGNMENT_SECONDS_PER_CUBE = 3e-10
+#: Compact formulation that finishes a DFJ loop which stalls with an open gap.
+FALLBACK_SEC = "flow"
 #: A DFJ row (2.5) counts as violated when it is off by more than this.
 CUT_TOLERANCE = 1e-6
 #: Fixed-point scale of σ for scipy's integer maximum flow (errors below 2**-25 per arc).
@@ -519,6 +561,7 @@ def separate_subtours(
     heads: np.ndarray,
     values: np.ndarray,
     tolerance: float = CUT_TOLERANCE,
+    deadline: float | None = None,
 ) -> list[tuple[int, ...]]:
     """Subsets S of targets whose (2.5) row is violated by σ = ``values`` (exact separation).
 
@@ -536,7 +579,9 @@ def separate_subtours(
 
     Returns an empty list only if no S has ``σ(into S) < 1 − tolerance``
     (up to the ``2**-24`` fixed-point rounding of σ for scipy's integer
-    maximum flow; every returned S is checked in floating point).
+    maximum flow; every returned S is checked in floating point) — unless
+    ``deadline`` (a ``time.perf_counter()`` value) passes during stage 2,
+    which then stops with the subsets found so far (each still violated).
 
     Notes
     -----
@@ -605,6 +650,8 @@ def separate_subtours(
     for target in (int(v) for v in order):
         if covered[target] or safe[target]:
             continue
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
         result = maximum_flow(flow_graph, source, target)
         if result.flow_value >= threshold:
             safe |= _reachable(strong_graph, np.array([target]))
@@ -679,26 +726,57 @@ class RootRelaxation:
 
 
 class DfjModel:
-    """(2.2)–(2.4) compiled once into one live HiGHS model; (2.5) rows added in place.
+    """(2.2)–(2.4) passed once to one live HiGHS model; (2.5) rows added in place.
 
-    The cvxpy model of :func:`build` (no cuts) is compiled once by
-    :class:`taopt.models.highs.HighsModel`. Afterwards every (2.5) row found,
-    at the root LP or in a MIP round, is added to the same ``highspy.Highs``
-    object; arcs are switched off and on through their upper bounds, and a MIP
-    start is passed with ``Highs.setSolution``.
+    The rows of :func:`build` (no cuts) are written straight into sparse
+    arrays — column a is σ of arc ``tails[a] -> heads[a]``, with a 1 in row
+    ``heads[a]`` of (2.3) and in row ``n + tails[a]`` of (2.4) — and passed to
+    HiGHS by :meth:`taopt.models.highs.HighsModel.from_arrays`: the same model
+    cvxpy would compile, without cvxpy's compilation (about 20 s for the
+    million arcs of n = 1000, against a fraction of a second here; the
+    cvxpy model is :attr:`formulation`, built on demand). Afterwards every
+    (2.5) row found, at the root LP or in a MIP round, is added to the same
+    ``highspy.Highs`` object; arcs are switched off and on through their upper
+    bounds, and a MIP start is passed with ``Highs.setSolution``.
     """
 
     def __init__(self, problem: AssignmentProblem, verbose: bool = False) -> None:
         self.problem = problem
-        self.formulation = build(problem, "dfj")
-        self.model = HighsModel(self.formulation.problem, verbose=verbose)
-        self.arcs = self.model.columns(self.formulation.arc_use)
-        self.tails, self.heads = self.formulation.tails, self.formulation.heads
+        n, m = problem.n, problem.m
+        size = n + m
+        self.tails, self.heads = arc_list(problem)
+        n_arcs = len(self.tails)
+        self.arcs = np.arange(n_arcs)
+        # (2.3) rows 0..n-1: sum_i sigma_ij = 1; (2.4) rows n..2n+m-1: sum_j sigma_ij <= 1
+        rows = np.empty(2 * n_arcs, dtype=np.int64)
+        rows[0::2] = self.heads
+        rows[1::2] = n + self.tails
+        matrix = sp.csc_matrix(
+            (np.ones(2 * n_arcs), rows, np.arange(0, 2 * n_arcs + 1, 2)),
+            shape=(n + size, n_arcs),
+        )
+        self.model = HighsModel.from_arrays(
+            cost=problem.cost[self.tails, self.heads],  # (2.2)
+            matrix=matrix,
+            lower=np.concatenate([np.ones(n), np.full(size, -np.inf)]),
+            upper=np.ones(n + size),
+            column_lower=np.zeros(n_arcs),
+            column_upper=np.ones(n_arcs),
+            integers=self.arcs,
+            verbose=verbose,
+        )
         self.cuts: list[tuple[int, ...]] = []
         self._known: set[tuple[int, ...]] = set()
-        n, size = problem.n, problem.n + problem.m
         self.arc_index = np.full((size, n), -1, dtype=np.int64)
-        self.arc_index[self.tails, self.heads] = np.arange(len(self.tails))
+        self.arc_index[self.tails, self.heads] = np.arange(n_arcs)
+        self._formulation: RoutingModel | None = None
+
+    @property
+    def formulation(self) -> RoutingModel:
+        """The same (2.2)–(2.4) as a labelled cvxpy model (:func:`build`), built on first use."""
+        if self._formulation is None:
+            self._formulation = build(self.problem, "dfj")
+        return self._formulation
 
     def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
         """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
@@ -719,7 +797,10 @@ class DfjModel:
         return len(new)
 
     def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
-        return self.model.values(self.formulation.arc_use, solution)
+        """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
+        if solution is None:
+            solution = self.model.highs.getSolution().col_value
+        return np.asarray(solution, dtype=float)[self.arcs]
 
     def start_vector(self, routes: list[list[int]]) -> np.ndarray:
         """The full column vector of σ for ``routes`` (a MIP start)."""
@@ -749,14 +830,15 @@ class DfjModel:
         (``complete`` False).
         """
         began = time.perf_counter()
+        deadline = None if budget is None else began + budget
         self.model.relax(True)
         rounds, value, complete = 0, -np.inf, False
         bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
         try:
             while max_rounds is None or rounds < max_rounds:
                 left = None if budget is None else budget - (time.perf_counter() - began)
-                if left is not None and left <= 0:
-                    break
+                if left is not None and left < LP_SECONDS_PER_ARC * len(self.arcs):
+                    break  # HiGHS would not even reach its first clock check in time
                 rounds += 1
                 run = self.model.solve(time_limit=left)
                 if run.solver_status != "optimal" or run.objective is None:
@@ -769,7 +851,12 @@ class DfjModel:
                 values = self.arc_values()
                 bound, full_reduced = self.model.lagrangian_bound()
                 reduced = full_reduced[self.arcs]
-                found = separate_subtours(self.problem, self.tails, self.heads, values)
+                found = separate_subtours(
+                    self.problem, self.tails, self.heads, values, deadline=deadline
+                )
+                if deadline is not None and time.perf_counter() >= deadline:
+                    self.add_cuts(found)  # valid rows, but the separation may be unfinished
+                    break
                 if not self.add_cuts(found):
                     complete = True
                     break
@@ -856,7 +943,15 @@ def solve_routing(
     sec : {"dfj", "mtz", "flow"}
         Subtour elimination; all three give the same optimum.
     time_limit : float, optional
-        Wall-clock seconds for the whole solve (all DFJ rounds together).
+        Wall-clock seconds for the whole call, building included: it returns
+        within about ``time_limit + 0.5`` s with status "time_limit", the best
+        routes found and a proven bound. A stage (building the model, an LP,
+        a MIP round; for MTZ / flow, cvxpy's compilation and HiGHS's presolve)
+        is not started when its per-arc estimate (:data:`BUILD_SECONDS_PER_ARC`,
+        :data:`LP_SECONDS_PER_ARC`, :data:`COMPACT_SECONDS_PER_ARC`) exceeds the
+        time left; the bound is then the best of :func:`entry_bound`,
+        :func:`assignment_bound` and what was proven (``info["stage"] ==
+        "build"`` when no model was built).
     mip_gap : float
         Relative MIP gap passed to HiGHS (``mip_rel_gap``). The status is
         "optimal" only when the final gap is at most
@@ -927,6 +1022,15 @@ def solve_routing(
     ``Σ_j min_i t(i, j)`` (:func:`entry_bound`); the loop stops as soon as it
     is within ``max(mip_gap, 1e-6)`` of the incumbent.
 
+    Every MIP answer is checked by :meth:`taopt.models.highs.HighsModel.solve`
+    (HiGHS's objective must be the value of its point; HiGHS 1.16 can accept a
+    MIP start in its presolved space with a wrong objective and call it optimal,
+    and such a run is done again without presolve). Should a round still bring
+    nothing new (no cycle, no change of the core) while the gap is open, the
+    loop hands its incumbent to the compact :data:`FALLBACK_SEC` model on all
+    arcs, which ends optimal without a time limit: no run without a limit
+    ends "feasible" for want of progress.
+
     MTZ and flow are compact: one solve on a compiled model, with the
     incumbent as MIP start.
 
@@ -964,9 +1068,23 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
 
     n, m = problem.n, problem.m
-    dfj = DfjModel(problem, verbose=verbose)
     best_routes, best_value = _first_incumbent(problem, given)
     best_bound = entry_bound(problem)
+    left = remaining()
+    if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
+        best_bound = max(best_bound, assignment_bound(problem))
+    n_arcs = (n + m) * n - n
+    left = remaining()
+    if left is not None and left < BUILD_SECONDS_PER_ARC * n_arcs:
+        # no time to build the model: the incumbent with the bounds proven so far
+        bound = min(best_bound, best_value)
+        status, stopped_by = certify(best_value, bound, "time_limit")
+        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": stopped_by}
+        info.update(solver_status="", stage="build", mip_gap=mip_gap)
+        return _solution(
+            problem, best_value, status, bound, started, "exact-dfj", best_routes, info
+        )
+    dfj = DfjModel(problem, verbose=verbose)
     # 1. root LP with exact separation; at most half of a time limit
     budget = remaining()
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
@@ -1013,7 +1131,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     def harvest(solution: np.ndarray) -> None:
         values = dfj.arc_values(solution)
         try:
-            routes, subtours = decode(problem, dfj.formulation, values)
+            routes, subtours = decode(problem, dfj, values)
         except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
             return
         if subtours:
@@ -1024,17 +1142,21 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
     rounds = 0
     solver_status, stopped_by = "", "time_limit"
+    stall = False
     while True:
         left = remaining()
-        if left is not None and left <= 0:
-            stopped_by = "time_limit"
+        if left is not None and left < LP_SECONDS_PER_ARC * int(core.sum()):
+            stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
             break
         rounds += 1
         dfj.model.set_start(dfj.start_vector(best_routes))
         harvested.clear()
         candidates.clear()
         run = dfj.model.solve(
-            time_limit=left, mip_rel_gap=mip_gap, on_solution=harvest, options=MIP_OPTIONS
+            time_limit=_highs_limit(left),
+            mip_rel_gap=mip_gap,
+            on_solution=harvest,
+            options=MIP_OPTIONS,
         )
         solver_status = run.solver_status
         if solver_status not in ("optimal", "user_limit"):
@@ -1047,7 +1169,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
                 best_routes, best_value = routes, value
         subtours: list[list[int]] = []
         if run.has_point:
-            routes, subtours = decode(problem, dfj.formulation, dfj.arc_values())
+            routes, subtours = decode(problem, dfj, dfj.arc_values())
             candidate = repair(problem, routes, subtours) if subtours else routes
             value = evaluate_routes(problem, candidate)
             if value < best_value:
@@ -1056,7 +1178,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         stopped_by = run.stopped_by
         if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
             break  # proven: "optimal", or "mip_gap" for a loose gap
-        if not run.has_point or run.stopped_by in ("time_limit", "solver_limit"):
+        if run.stopped_by in ("time_limit", "solver_limit"):
             break  # a limit: the incumbent stands with the bound proven so far
         if rounds >= max_rounds:
             stopped_by = "max_rounds"
@@ -1065,8 +1187,22 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         # the core's own optimum has no cycle, every such arc comes in
         if not subtours:
             cap = np.inf
-        if not resize_core() and not subtours:
-            break  # nothing left to learn (cannot happen with a closed core)
+        if not run.has_point or (not resize_core() and not subtours):
+            # Nothing left to learn, yet the gap is open: the round's answer contradicts
+            # the proof (a solver fault, as HiGHS 1.16's MIP starts in a presolved space
+            # were before HighsModel checked them). A compact model closes it.
+            stall = True
+            break
+    if stall:
+        fallback = _solve_compact(
+            problem, FALLBACK_SEC, time_limit, mip_gap, verbose, best_routes, started
+        )
+        if fallback.objective < best_value:
+            best_routes, best_value = fallback.routes, fallback.objective
+        if fallback.bound is not None:
+            best_bound = max(best_bound, fallback.bound)
+        stopped_by = fallback.info["stopped_by"]
+        solver_status = fallback.info["solver_status"]
     bound = min(best_bound, best_value)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(best_value, bound, stopped_by)
@@ -1081,6 +1217,8 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         "solver_status": solver_status,
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
+        "reruns": dfj.model.reruns,
+        "fallback": FALLBACK_SEC if stall else None,
     }
     return _solution(problem, best_value, status, bound, started, "exact-dfj", best_routes, info)
 
@@ -1103,15 +1241,38 @@ def _start_vector(problem, model: HighsModel, formulation: RoutingModel, routes)
     return vector
 
 
+def _highs_limit(left: float | None) -> float | None:
+    """HiGHS's ``time_limit`` for ``left`` seconds: :data:`HIGHS_OVERRUN` less (at least 1 ms)."""
+    return None if left is None else max(left - HIGHS_OVERRUN, 1e-3)
+
+
 def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -> Solution:
     """MTZ or flow: one solve of the compiled model, the incumbent as MIP start."""
-    formulation = build(problem, sec)
-    model = HighsModel(formulation.problem, verbose=verbose)
+
+    def remaining() -> float | None:
+        return None if time_limit is None else time_limit - (time.perf_counter() - started)
+
+    n, m = problem.n, problem.m
     best_routes, best_value = _first_incumbent(problem, given)
     best_bound = entry_bound(problem)
-    left = None if time_limit is None else time_limit - (time.perf_counter() - started)
+    left = remaining()
+    if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
+        best_bound = max(best_bound, assignment_bound(problem))
+    left = remaining()
+    if left is not None and left < COMPACT_SECONDS_PER_ARC * ((n + m) * n - n):
+        # cvxpy's build and compilation, and HiGHS's presolve (which does not stop at its
+        # time limit), would not fit: the incumbent and the bounds so far
+        bound = min(best_bound, best_value)
+        status, stopped_by = certify(best_value, bound, "time_limit")
+        info = {"rounds": 0, "cuts": 0, "stopped_by": stopped_by, "solver_status": ""}
+        info.update(stage="build", mip_gap=mip_gap)
+        method = f"exact-{sec}"
+        return _solution(problem, best_value, status, bound, started, method, best_routes, info)
+    formulation = build(problem, sec)
+    model = HighsModel(formulation.problem, verbose=verbose)
+    left = remaining()
     model.set_start(_start_vector(problem, model, formulation, best_routes))
-    run = model.solve(time_limit=left, mip_rel_gap=mip_gap)
+    run = model.solve(time_limit=_highs_limit(left), mip_rel_gap=mip_gap)
     if run.solver_status not in ("optimal", "user_limit"):
         raise SolverError(f"HiGHS returned status {run.solver_status!r} on the {sec} model")
     if run.bound is not None:

@@ -35,6 +35,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import json
+import logging
 import math
 import os
 import signal
@@ -54,6 +55,8 @@ from taopt.errors import InstanceError, TaoptError
 from taopt.pipeline import solve
 from taopt.registry import get_method
 from taopt.studyio import ResultsStore, normalize_key
+
+logger = logging.getLogger("taopt")
 
 RESULT_COLUMNS = ("method", "objective", "status", "bound", "runtime", "seed")
 #: Environment for worker processes: one solver / BLAS thread per task.
@@ -453,8 +456,11 @@ def run_study(
                 executor.submit(run_task, spec, key, todo, worker_settings, time_limit, options)
                 for key, todo in tasks
             ]
+            exact = {m for m in methods if get_method(spec.problem_type, m).exact}
             for future in as_completed(futures):
-                store.append(future.result())  # one scenario's rows in one write
+                rows = future.result()
+                store.append(rows)  # one scenario's rows in one write
+                _flag_uncertified(spec, rows, exact, time_limit)
                 bar.update(1)
     except KeyboardInterrupt:
         bar.close()
@@ -473,6 +479,25 @@ def run_study(
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     return _table(store.read(), spec, keys, methods)
+
+
+def _flag_uncertified(
+    spec: StudySpec, rows: Sequence[Mapping[str, Any]], exact: set[str], time_limit: Any
+) -> None:
+    """Warn (logger ``taopt``) about an exact row that is neither optimal nor infeasible
+    although no time limit stopped it: DESIGN invariant 4 says that is a bug."""
+    if time_limit is not None:
+        return
+    for row in rows:
+        if row["method"] in exact and row["status"] not in ("optimal", "infeasible"):
+            key = ", ".join(f"{c}={row[c]}" for c in spec.key_columns)
+            logger.warning(
+                "%s: exact method %r ended %r without a time limit (scenario %s): not certified",
+                spec.name,
+                row["method"],
+                row["status"],
+                key,
+            )
 
 
 def _interrupt(signum: int, frame: Any) -> None:

@@ -453,3 +453,46 @@ def test_tsplib_optimum_with_incumbent(name):
     assert solution.status == "optimal"
     assert solution.objective == pytest.approx(KNOWN_OPTIMA[name], abs=1e-6)
     assert solution.bound == pytest.approx(KNOWN_OPTIMA[name], rel=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_assignment_bound_lies_between_entry_bound_and_optimum(seed):
+    """assignment_bound ((2.2)-(2.4) without (2.5)) is >= entry_bound and <= the DP optimum."""
+    from taopt.models.routing import assignment_bound
+
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(1, 7)), int(rng.integers(1, 4))
+    cost = rng.integers(0, 5, size=(n + m, n + m)).astype(float)
+    problem = AssignmentProblem(cost, n)
+    bound = assignment_bound(problem)
+    assert entry_bound(problem) - 1e-9 <= bound <= dp_optimum(problem) + 1e-9
+
+
+@pytest.mark.parametrize("sec", SECS)
+@pytest.mark.parametrize("limit", [1e-3, 0.05, 0.3, 1.0])
+def test_time_limit_contract_on_mid_size(sec, limit):
+    """A tiny limit on n = 80: time_limit (or optimal), a real incumbent, a proven bound."""
+    problem = drift_problem(80, 5, seed=4)
+    limited = solve_routing(problem, sec=sec, time_limit=limit)
+    assert limited.status in ("time_limit", "optimal")
+    assert taopt.evaluate(problem, limited.routes) == pytest.approx(limited.objective, rel=1e-9)
+    assert limited.bound is not None and entry_bound(problem) - 1e-9 <= limited.bound
+    assert limited.bound <= limited.objective
+    if limited.status == "time_limit":
+        assert limited.info["stopped_by"] == "time_limit"
+
+
+def test_time_limit_below_build_estimate_returns_bounds_without_model(monkeypatch):
+    """When building the model cannot fit the limit, the incumbent and assignment bound return."""
+    from taopt.models import routing
+
+    problem = drift_problem(45, 5, seed=3)
+    optimum = solve_routing(problem).objective
+    monkeypatch.setattr(routing, "BUILD_SECONDS_PER_ARC", 1.0)
+    monkeypatch.setattr(routing, "COMPACT_SECONDS_PER_ARC", 1.0)
+    for sec in SECS:
+        limited = solve_routing(problem, sec=sec, time_limit=5.0)
+        assert limited.info["stage"] == "build" and limited.status == "time_limit"
+        assert limited.bound == pytest.approx(routing.assignment_bound(problem))
+        assert limited.bound <= optimum + 1e-9 <= limited.objective + 2e-9
+        assert limited.runtime < 5.0

@@ -1,0 +1,288 @@
+"""Every family's exact methods against brute force on seeded random small instances.
+
+DESIGN invariant 4: without a time limit an exact method ends "optimal" (here every instance
+is feasible), with the brute-force value. The default run checks a few hundred instances; the
+``slow`` run checks more than 2,000 (``pytest -m slow tests/test_exact_brute_force.py``).
+Generators favour the cases that broke the DFJ loop: asymmetric costs, zero and equal costs,
+1–7 vehicles.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import networkx as nx
+import numpy as np
+import pytest
+from reference import brute_force_delivery, brute_force_routing
+from test_models_routing import dp_optimum
+
+import taopt
+from taopt.comm.problem import random_problem
+
+REL = 1e-6
+
+#: The file of issue 15: DFJ ended "feasible" 4 with bound 3 (HiGHS accepted its MIP start,
+#: valued in the presolved space, as optimal); the optimum is 3.
+ISSUE_15 = {
+    "schema_version": 1,
+    "kind": "assignment_problem",
+    "n_targets": 4,
+    "cost": [[0, 1, 2, 1, 2], [0, 0, 0, 2, 1], [2, 2, 0, 0, 3], [0, 3, 3, 0, 3], [3, 3, 3, 3, 0]],
+}
+
+
+# ----------------------------------------------------------------------- generators
+def _costs(rng: np.random.Generator, size: int, kind: int) -> np.ndarray:
+    """Asymmetric costs: uniform reals, small integers (many ties), or 0/1 (many zeros)."""
+    if kind == 0:
+        return rng.uniform(0.0, 100.0, size=(size, size))
+    if kind == 1:
+        return rng.integers(0, 4, size=(size, size)).astype(float)
+    return np.where(rng.random((size, size)) < 0.5, 0.0, 1.0)
+
+
+def routing_instance(seed: int) -> taopt.AssignmentProblem:
+    """1–7 targets, 1–7 vehicles (fewer vehicles for more targets), three cost kinds."""
+    rng = np.random.default_rng([15, seed])
+    n = int(rng.integers(1, 8))
+    m = int(rng.integers(1, 8 if n <= 5 else 4))
+    return taopt.AssignmentProblem(_costs(rng, n + m, seed % 3), n, name=f"rand-{seed}")
+
+
+def delivery_instance(seed: int, customers: int) -> taopt.DeliveryInstance:
+    """Customers on a 3×3 street grid with random precedences (a DAG by index order)."""
+    rng = np.random.default_rng([16, seed])
+    pairs = [(a, b) for a, b in itertools.combinations(range(customers), 2) if rng.random() < 0.3]
+    return taopt.DeliveryInstance.grid(
+        rng.uniform(0, 600, size=(customers, 2)),
+        3,
+        600.0,
+        float(rng.uniform(1.0, 3.0)),
+        1.0,
+        float(rng.uniform(450.0, 1200.0)),  # every sortie to a nearest stop fits
+        precedences=pairs,
+    )
+
+
+def sop_instance(seed: int) -> taopt.SopProblem:
+    """4–7 nodes, start 0 and end n-1, random precedences among the inner nodes."""
+    rng = np.random.default_rng([17, seed])
+    n = int(rng.integers(4, 8))
+    cost = _costs(rng, n, seed % 3)
+    inner = range(1, n - 1)
+    pairs = [(a, b) for a, b in itertools.combinations(inner, 2) if rng.random() < 0.25]
+    return taopt.SopProblem(cost, pairs, 0, n - 1, name=f"sop-{seed}")
+
+
+def sop_brute_force(problem: taopt.SopProblem) -> float:
+    """Cheapest precedence-respecting path from start to end over every order of the rest."""
+    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
+    best = math.inf
+    for order in itertools.permutations(inner):
+        position = {v: i for i, v in enumerate(order)}
+        if all(position[a] < position[b] for a, b in problem.precedences):
+            path = [problem.start, *order, problem.end]
+            best = min(best, sum(problem.cost[a, b] for a, b in itertools.pairwise(path)))
+    return best
+
+
+def capability_instance(seed: int) -> taopt.CapabilityProblem:
+    """2–5 targets demanding one or both of {a, b}, 2–4 vehicles holding each at least once."""
+    rng = np.random.default_rng([18, seed])
+    n, m = int(rng.integers(2, 6)), int(rng.integers(2, 5))
+    kinds = ["a", "b"] + [str(rng.choice(["a", "b"])) for _ in range(m - 2)]
+    rng.shuffle(kinds)
+    options = [{"a"}, {"b"}, {"a", "b"}]
+    demands = [options[int(rng.integers(0, 3))] for _ in range(n)]
+    return taopt.CapabilityProblem(_costs(rng, n + m, seed % 3), n, kinds, demands)
+
+
+def capability_brute_force(problem: taopt.CapabilityProblem) -> float:
+    """Sum of per-class brute-force optima (the §3.6 split)."""
+    return sum(
+        brute_force_routing(c.problem.cost, c.problem.n) for c in problem.classes if c.problem
+    )
+
+
+def comm_instance(seed: int) -> taopt.CommProblem:
+    """Chapter 4: 2–6 targets, 2–4 vehicles, 1–2 attributes, random range."""
+    rng = np.random.default_rng([19, seed])
+    n, m = int(rng.integers(2, 7)), int(rng.integers(2, 5))
+    attributes = int(rng.integers(1, 3))
+    return random_problem(n, m, attributes, float(rng.uniform(50, 500)), seed=rng, side=1000.0)
+
+
+def comm_brute_force(problem: taopt.CommProblem) -> float:
+    """f_o: brute force per attribute class of the full-information problem."""
+    full = problem.full_information()
+    classes = getattr(full, "classes", None)
+    if classes is None:
+        return dp_optimum(full)
+    return sum(dp_optimum(c.problem) for c in classes if c.problem)
+
+
+# -------------------------------------------------------------------------- checking
+def _failures(cases, method: str) -> list[str]:
+    """Run ``method`` without a time limit on each (problem, optimum); describe every miss."""
+    failures = []
+    for problem, optimum in cases:
+        solution = taopt.solve(problem, method)
+        value = taopt.evaluate(problem, solution.solution)
+        tolerance = REL * max(1.0, abs(optimum))
+        if (
+            solution.status != "optimal"
+            or abs(solution.objective - optimum) > tolerance
+            or abs(value - optimum) > tolerance
+            or solution.bound is None
+            or solution.bound > optimum + tolerance
+        ):
+            failures.append(
+                f"{getattr(problem, 'name', '') or problem!r}: {solution.status} "
+                f"{solution.objective} (bound {solution.bound}), brute force {optimum}"
+            )
+    return failures
+
+
+def _routing_cases(seeds):
+    return [(p, dp_optimum(p)) for p in map(routing_instance, seeds)]
+
+
+def _delivery_cases(seeds, customers):
+    cases = []
+    for seed in seeds:
+        instance = delivery_instance(seed, customers(seed))
+        cases.append((instance, brute_force_delivery(instance)))
+    return cases
+
+
+def _sop_cases(seeds):
+    return [(p, sop_brute_force(p)) for p in map(sop_instance, seeds)]
+
+
+def _capability_cases(seeds):
+    return [(p, capability_brute_force(p)) for p in map(capability_instance, seeds)]
+
+
+def _comm_cases(seeds):
+    return [(p, comm_brute_force(p)) for p in map(comm_instance, seeds)]
+
+
+# default run: 100 + 30 + 10 + 40 + 20 + 10 + 20 = 230 instances
+FAST = {"routing": 100, "dp": 30, "milp": 10, "sop": 40, "capability": 20, "joint": 10, "comm": 20}
+# slow run: 1,200 + 250 + 60 + 250 + 150 + 60 + 100 = 2,070 instances (seeds disjoint from FAST)
+SLOW = {
+    "routing": 1200,
+    "dp": 250,
+    "milp": 60,
+    "sop": 250,
+    "capability": 150,
+    "joint": 60,
+    "comm": 100,
+}
+
+
+def _run_family(family: str, seeds) -> list[str]:
+    if family == "routing":
+        return _failures(_routing_cases(seeds), "exact")
+    if family == "dp":
+        return _failures(_delivery_cases(seeds, lambda s: 3 + s % 4), "DP")
+    if family == "milp":
+        return _failures(_delivery_cases(seeds, lambda s: 2 + s % 2), "exact")
+    if family == "sop":
+        return _failures(_sop_cases(seeds), "exact")
+    if family == "capability":
+        return _failures(_capability_cases(seeds), "exact")
+    if family == "joint":
+        return _failures(_capability_cases(seeds), "joint")
+    return _failures(_comm_cases(seeds), "exact")
+
+
+def test_issue_15_file_is_optimal_three(tmp_path):
+    """The issue's 4-target file: exact (DFJ) ends optimal 3, as MTZ, flow and brute force."""
+    path = tmp_path / "issue15.json"
+    path.write_text(__import__("json").dumps(ISSUE_15))
+    problem = taopt.AssignmentProblem.load(path)
+    assert brute_force_routing(problem.cost, problem.n) == 3.0
+    solution = taopt.solve(problem, "exact")
+    assert solution.status == "optimal", solution.summary()
+    assert solution.objective == pytest.approx(3.0) and solution.bound == pytest.approx(3.0)
+    assert taopt.evaluate(problem, solution.solution) == pytest.approx(3.0)
+
+
+def test_issue_15_stalled_loop_falls_back_to_compact_model(monkeypatch, tmp_path):
+    """With HiGHS's answers no longer checked, the stalled DFJ loop still ends optimal 3 via flow."""
+    from taopt.models.highs import HighsModel
+
+    monkeypatch.setattr(HighsModel, "_consistent", lambda self, run: True)
+    path = tmp_path / "issue15.json"
+    path.write_text(__import__("json").dumps(ISSUE_15))
+    solution = taopt.solve(taopt.AssignmentProblem.load(path), "exact")
+    assert solution.info["fallback"] == "flow"
+    assert solution.status == "optimal" and solution.objective == pytest.approx(3.0)
+
+
+def test_highs_model_rejects_start_valued_in_presolved_space(tmp_path):
+    """HighsModel re-solves when HiGHS's objective is not its point's value (issue 15's MIP)."""
+    from taopt.models.routing import DfjModel
+
+    path = tmp_path / "issue15.json"
+    path.write_text(__import__("json").dumps(ISSUE_15))
+    problem = taopt.AssignmentProblem.load(path)
+    dfj = DfjModel(problem)
+    root = dfj.root()
+    routes = [[0, 1, 2, 3]]  # value 4; the optimum is [1, 2, 3, 0], value 3
+    core = root.reduced_costs <= 1.0 + 1e-9
+    core[dfj.route_arcs(routes)] = True
+    dfj.model.set_upper(dfj.arcs[~core], 0.0)
+    dfj.model.set_start(dfj.start_vector(routes))
+    run = dfj.model.solve(mip_rel_gap=1e-6)
+    assert run.status == "optimal"
+    assert run.objective == pytest.approx(dfj.model.point_objective()) == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("family", sorted(FAST))
+def test_exact_equals_brute_force(family):
+    """Exact method of each family: optimal with the brute-force value on every instance."""
+    failures = _run_family(family, range(FAST[family]))
+    assert not failures, f"{len(failures)} of {FAST[family]}:\n" + "\n".join(failures[:10])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("family", sorted(SLOW))
+def test_exact_equals_brute_force_on_two_thousand(family):
+    """The same on 2,070 more instances in all (seeds after the default run's)."""
+    seeds = range(FAST[family], FAST[family] + SLOW[family])
+    failures = _run_family(family, seeds)
+    assert not failures, f"{len(failures)} of {SLOW[family]}:\n" + "\n".join(failures[:10])
+
+
+def test_generators_cover_the_hard_cases():
+    """Routing instances include 1 and 7 vehicles, zero costs and ties; SOP has precedences."""
+    problems = [routing_instance(s) for s in range(FAST["routing"])]
+    assert {1, 7} <= {p.m for p in problems}
+    assert any((p.cost == 0).sum() > len(p.cost) for p in problems)
+    assert any(len(np.unique(p.cost)) <= 4 for p in problems)
+    assert any(sop_instance(s).precedences for s in range(10))
+    assert nx.is_directed_acyclic_graph(delivery_instance(0, 5).precedence_graph)
+
+
+def test_study_flags_uncertified_exact_rows(caplog):
+    """The study runner warns about an exact row neither optimal nor infeasible without a limit."""
+    from taopt.studies.drift import SPEC as spec
+    from taopt.study import _flag_uncertified
+
+    key = {c: 1 for c in spec.key_columns}
+    rows = [
+        {**key, "method": "exact", "status": "feasible"},
+        {**key, "method": "exact", "status": "optimal"},
+        {**key, "method": "MC", "status": "feasible"},
+    ]
+    with caplog.at_level("WARNING", logger="taopt"):
+        _flag_uncertified(spec, rows, {"exact"}, None)
+    assert len(caplog.records) == 1 and "'feasible'" in caplog.records[0].getMessage()
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="taopt"):
+        _flag_uncertified(spec, rows, {"exact"}, 5.0)  # a limit may stop an exact method
+    assert not caplog.records
