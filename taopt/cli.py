@@ -639,6 +639,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an image or animation file of the wrong kind before any work starts."""
+    for option, suffix in (("plot", ".png"), ("gantt", ".png"), ("animate", ".gif")):
+        if getattr(args, option, None) is not None:
+            from taopt.plot import check_output
+
+            check_output(getattr(args, option), suffix, f"--{option}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
     from taopt.study import StudyInterrupted
@@ -653,6 +662,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse already printed usage and the error
         return int(exc.code or 0)
     try:
+        _check_outputs(args)
         return int(args.handler(args) or 0)
     except StudyInterrupted as exc:
         print(f"taopt {args.command}: {exc}", file=sys.stderr)

@@ -170,14 +170,9 @@ def solve_file(
     """
     out = out or sys.stdout
     tic = time.perf_counter()
+    _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
-    if gantt and "gantt" not in family.plots:
-        raise InstanceError(f"--gantt draws delivery plans; {path} is a {family.kind}")
-    if plot and not family.plots:
-        raise InstanceError(f"no plot for a {family.kind} file")
-    if plot and instance is None and family.kind == "assignment_problem":
-        raise InstanceError("--plot needs positions: give an 'instance' file, not a matrix")
     table, solutions = method_table(problem, methods, seed=seed, time_limit=time_limit)
     print(f"{problem!r} from {path}", file=out)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
@@ -190,13 +185,55 @@ def solve_file(
         print(f"solutions written to {folder}/<method>.json", file=out)
     if plot:
         name, draw = next(iter(family.plots.items()))
-        draw(problem, best.solution, plot, instance=instance)
+        draw(problem, best.solution, plot, instance=instance, method=best.method)
         print(f"{name} plot of {best.method} written to {plot}", file=out)
+        for line in _route_lines(best, instance, problem):
+            print(line, file=out)
     if gantt:
-        family.plots["gantt"](problem, best.solution, gantt, instance=instance)
+        family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
     print(f"({time.perf_counter() - tic:.2f} s)", file=out)
     return {"problem": problem, "instance": instance, "table": table, "solutions": solutions}
+
+
+def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -> None:
+    """Refuse a plot request before any work: wrong extension, or a kind with no such plot."""
+    from taopt.plot import check_output
+
+    check_output(plot, ".png", "--plot")
+    check_output(gantt, ".png", "--gantt")
+    if not (plot or gantt):
+        return
+    data = load_json(path)
+    kind = data.get("kind") if isinstance(data, dict) else None
+    if kind == "instance":  # becomes a chapter 2 or 3 problem: both draw routes, neither a Gantt
+        plots: tuple[str, ...] = ("routes",)
+    else:
+        try:
+            plots = tuple(family_for_kind(kind).plots)
+        except InstanceError:  # an unknown kind: the loader says so, with the schema's words
+            return
+    if gantt and "gantt" not in plots:
+        raise InstanceError(f"--gantt draws delivery plans (truck and drone); {path} is a {kind}")
+    if plot and not plots:
+        raise InstanceError(f"--plot: no plot for a {kind} file ({path})")
+
+
+def _route_lines(best: Solution, instance: Instance | None, problem: Any) -> list[str]:
+    """The plotted routes spelt with the ids written on the picture (``v0: v0 -> t2 -> t1``)."""
+    routes = getattr(best.solution, "routes", None)
+    if routes is None:
+        return []
+    from taopt.routing.plot import route_text
+
+    routes = [list(r) for r in routes]
+    if instance is not None:
+        targets = [t.id for t in instance.targets]
+        vehicles = [v.id for v in instance.vehicles]
+    else:
+        targets = [f"t{k}" for k in range(problem.n_targets)]
+        vehicles = [f"v{k}" for k in range(len(routes))]
+    return [f"  {route_text(vehicles[k], r, targets)}" for k, r in enumerate(routes)]
 
 
 def verify_file(
