@@ -98,6 +98,10 @@ def plot_scene(
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
+    xmin, xmax, ymin, ymax = instance.region
+    pad = 0.03 * max(xmax - xmin, ymax - ymin)  # points on the border stay visible
+    ax.set_xlim(xmin - pad, xmax + pad)
+    ax.set_ylim(ymin - pad, ymax + pad)
     plot_obstacles(instance.obstacles, ax)
     colours = capability_colours([v.capability for v in instance.vehicles])
     targets = np.array([t.position for t in instance.targets])

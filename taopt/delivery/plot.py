@@ -132,7 +132,7 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
     for p, j in enumerate(plan.order):
         S, t, back = line.launch_time[p], line.service_time[p], line.drone_return[p]
         truck, R = line.truck_arrival[p], line.recovery_time[p]
-        bar(truck_y, truck, R - tau, "0.75")
+        bar(truck_y, truck, R, "0.75")  # waits for the drone, then while it lands (τ)
         bar(drone_y, S, t - tau, "tab:orange")
         bar(drone_y, t - tau, t, "tab:red")
         bar(drone_y, t, back, "tab:orange")
@@ -152,24 +152,34 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
         Line2D([], [], color="k", ls=":", label="makespan (5.1): last customer served"),
     ]
     ax.axvline(line.makespan, color="k", ls=":", lw=1.2)
+    ax.annotate(
+        f"f = {line.makespan:.1f} s: last customer served",
+        (line.makespan, 1.62),
+        xytext=(-4, 0),
+        textcoords="offset points",
+        fontsize=7,
+        ha="right",
+        va="center",
+    )
     if end > line.makespan:
         ax.axvspan(
             line.makespan, end, facecolor="none", edgecolor="0.6", hatch="//", lw=0, zorder=0
         )
-        ax.annotate(
-            "after (5.1): the drone\nreturns and lands,\nnot counted in f",
-            (line.makespan, 1.55),
-            xytext=(4, 0),
-            textcoords="offset points",
-            fontsize=7,
-            va="center",
-        )
+        if end - line.makespan > 0.15 * end:  # room for the words inside the hatched part
+            ax.annotate(
+                "drone returns and lands:\nnot counted in f",
+                (line.makespan, 1.62),
+                xytext=(4, 0),
+                textcoords="offset points",
+                fontsize=7,
+                va="center",
+            )
         legend.append(
             Patch(
                 facecolor="none",
                 edgecolor="0.6",
                 hatch="//",
-                label="after the makespan: return flight, not in f",
+                label="after the makespan: the drone flies back\nand lands, not part of (5.1)",
             )
         )
     ax.set_yticks([drone_y, truck_y], ["drone", "truck"])
@@ -274,6 +284,7 @@ def plot_order(
     ax.set_xlabel("position in the order (visit number, 0 = start)")
     ax.set_ylabel("cumulative cost (cost units of the file)")
     ax.set_xlim(-0.6, len(sequence) - 0.4)
+    ax.margins(y=0.12)
     ax.grid(alpha=0.3)
     who = f"{method} order" if method else "order"
     ax.set_title(

@@ -19,8 +19,9 @@ __all__ = ["plot_routes", "plot_instance_routes", "route_text"]
 
 
 def route_text(vehicle: str, route: Sequence[int], target_ids: Sequence[str]) -> str:
-    """``"v0: v0 -> t3 -> t1"``: a route as ``taopt demo`` prints it."""
-    return f"{vehicle}: " + " -> ".join([vehicle, *(target_ids[t] for t in route)])
+    """``"v0: v0 -> t3 -> t1"``: a route as ``taopt demo`` prints it (``"v0: v0 (no target)"``)."""
+    text = f"{vehicle}: " + " -> ".join([vehicle, *(target_ids[t] for t in route)])
+    return text if len(route) else f"{text} (no target)"
 
 
 def plot_routes(
