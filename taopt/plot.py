@@ -30,22 +30,24 @@ Region = tuple[float, float, float, float]
 LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">")
 _FIXED_STYLES = {
-    # the thesis's methods keep one look in every figure of taopt
+    # the thesis's methods keep one look in every figure of taopt; the methods one chapter
+    # compares never share a pair
     "exact": ("-", "*"),
-    "DAA": ("-", "o"),
-    "HDA": ("--", "s"),
-    "CAA": (":", "^"),
-    "DTAA": ("-", "o"),
-    "GA": ("--", "s"),
-    "GA-memetic": ("-.", "D"),
-    "MC": (":", "^"),
-    "NIA": ("-", "o"),
-    "MMA": ("--", "s"),
-    "SMMA": ("-.", "D"),
+    "DP": ("-", "X"),
     "VN": ("-", "o"),
     "VM": ("--", "s"),
     "EVN": ("-.", "D"),
     "EVM": (":", "^"),
+    "MC": ("--", "v"),
+    "GA": ("-.", "h"),
+    "GA-memetic": (":", "p"),
+    "DTAA": ("-", "d"),
+    "DAA": ("-", "o"),
+    "HDA": ("--", "s"),
+    "CAA": (":", "^"),
+    "NIA": ("-", "o"),
+    "MMA": ("--", "s"),
+    "SMMA": ("-.", "D"),
 }
 
 
@@ -108,7 +110,7 @@ def legend_outside(ax: Any, where: str = "right", **options: Any) -> Any:
     if where == "below":
         options.setdefault("ncol", 3)
         return ax.legend(
-            loc="upper center", bbox_to_anchor=(0.5, -0.14), borderaxespad=0.0, **options
+            loc="upper center", bbox_to_anchor=(0.5, -0.2), borderaxespad=0.0, **options
         )
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **options)
 

@@ -420,6 +420,6 @@ def plot_quality(
     )
     ax.set_title(f"{instance or 'all instances'}: mean {column} per method", fontsize=9)
     ax.grid(alpha=0.3)
-    legend_outside(ax, "below", ncol=3, fontsize=7)
+    legend_outside(ax, fontsize=7)
     _save(ax, path)
     return ax
