@@ -112,6 +112,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
             [forward, backward],
             labels=[f"i -> j: {forward.time:.3f} s", f"j -> i: {backward.time:.3f} s"],
         )
+        ax.set_title(f"minimum-time paths i <-> j, speed {args.speed:g} m/s ({args.method})")
         save(ax, args.plot)
         print(f"plot written to {args.plot}")
     return 0

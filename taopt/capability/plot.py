@@ -195,8 +195,14 @@ def figure_3_2(
     from taopt.navigation.grid import GridGraph
 
     graph = GridGraph(thesis_field(1e-2), (0, 100, 0, 100), cell, [obstacle], 1.0, neighbours)
-    ax = plot_grid_paths(graph, [(point_1, point_2), (point_2, point_1)], show_blocked=True)
     times = graph.travel_time_matrix(np.array([point_1, point_2]))
+    ax = plot_grid_paths(
+        graph,
+        [(point_1, point_2), (point_2, point_1)],
+        labels=[f"1 -> 2: {times[0, 1]:.2f} s", f"2 -> 1: {times[1, 0]:.2f} s"],
+        show_blocked=True,
+    )
+    label_points([point_1, point_2], ["1", "2"], ax, offset=(6, 6), fontsize=12)
     ax.set_title(
         f"grid ({neighbours} moves, {cell:g} m): t(1,2) = {times[0, 1]:.2f} s, "
         f"t(2,1) = {times[1, 0]:.2f} s",
