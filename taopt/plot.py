@@ -109,8 +109,16 @@ def legend_outside(ax: Any, where: str = "right", **options: Any) -> Any:
     options.setdefault("fontsize", 8)
     if where == "below":
         options.setdefault("ncol", 3)
+        from matplotlib.transforms import offset_copy
+
+        # 40 points under the axes: below the tick labels and the x label, whatever the size
+        under = offset_copy(ax.transAxes, fig=ax.figure, y=-40, units="points")
         return ax.legend(
-            loc="upper center", bbox_to_anchor=(0.5, -0.2), borderaxespad=0.0, **options
+            loc="upper center",
+            bbox_to_anchor=(0.5, 0.0),
+            bbox_transform=under,
+            borderaxespad=0.0,
+            **options,
         )
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **options)
 
