@@ -292,6 +292,10 @@ def test_solve_plot_writes_a_png_for_every_kind(kind, tmp_path, capsys):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     out = capsys.readouterr().out
     assert f"plot of {FAST[kind]} written to {png}" in out
+    # under it, the drawn solution in the ids of the picture (trajectories excepted)
+    after = out.split(f"written to {png}\n")[1].splitlines()
+    spelt = {"delivery_instance": "#1: customer ", "sop_problem": "order: "}.get(kind, "v0: v0")
+    assert kind == "comm_problem" or after[0].startswith(f"  {spelt}")
 
 
 def test_solve_prints_the_plotted_routes_with_the_plotted_ids(tmp_path, capsys):
