@@ -417,6 +417,9 @@ def plot_quality(
         style = method_style(method, methods.index(method))
         colour = "black" if method == "exact" else None
         ax.plot(rows["A"], rows[column], color=colour, label=label, **style)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # |A| is a count
     ax.set_xlabel("|A|, number of capabilities (count)")
     ax.set_ylabel(
         {
