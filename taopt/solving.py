@@ -30,7 +30,7 @@ from typing import IO, Any
 import pandas as pd
 
 from taopt import bounds as bound_functions
-from taopt.errors import FeasibilityError, InstanceError
+from taopt.errors import FeasibilityError, InstanceError, OutputError
 from taopt.instance import Instance, load_json
 from taopt.pipeline import default_methods, solve
 from taopt.registry import family_for_kind, family_of
@@ -157,9 +157,20 @@ def solve_file(
         Seconds for each exact model (and peer); a stopped model reports status
         "time_limit" with its proven bound and gap.
     plot : str, optional
-        PNG of the best solution (the family's first plot).
+        PNG of the best solution (the family's first plot): routes over the drift field
+        along their minimum-time paths (instance files, as ``taopt demo`` draws them), routes
+        on a schematic MDS layout (matrix files, said in the caption), the plan on the
+        streets (delivery), the order as a position/cost chart with its precedences (SOP),
+        the driven trajectories (comm). The drawn solution is printed under it in the same
+        ids.
     gantt : str, optional
         PNG of the truck and drone timelines (delivery instances).
+
+    Raises
+    ------
+    OutputError
+        ``plot`` or ``gantt`` not a ``.png`` file, or a Gantt chart asked of a file that is
+        not a delivery instance: raised before the file is loaded or anything solved.
     save : path, optional
         Folder: each method's solution is written there as ``<method>.json``, which
         ``taopt verify`` re-checks.
@@ -214,9 +225,9 @@ def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -
         except InstanceError:  # an unknown kind: the loader says so, with the schema's words
             return
     if gantt and "gantt" not in plots:
-        raise InstanceError(f"--gantt draws delivery plans (truck and drone); {path} is a {kind}")
+        raise OutputError(f"--gantt draws delivery plans (truck and drone); {path} is a {kind}")
     if plot and not plots:
-        raise InstanceError(f"--plot: no plot for a {kind} file ({path})")
+        raise OutputError(f"--plot: no plot for a {kind} file ({path})")
 
 
 def _route_lines(best: Solution, instance: Instance | None, problem: Any) -> list[str]:
