@@ -142,6 +142,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
             [forward, backward],
             labels=[f"i -> j: {forward.time:.3f} s", f"j -> i: {backward.time:.3f} s"],
         )
+        ax.set_title(f"minimum-time paths i <-> j, speed {args.speed:g} m/s ({args.method})")
         save(ax, args.plot)
         print(f"plot written to {args.plot}")
     return 0
@@ -828,6 +829,15 @@ def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
     _common(parser, "seed", "time-limit", "jobs", "plot")
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse an image or animation file of the wrong kind before any work starts."""
+    for option, suffix in (("plot", ".png"), ("gantt", ".png"), ("animate", ".gif")):
+        if getattr(args, option, None) is not None:
+            from taopt.plot import check_output
+
+            check_output(getattr(args, option), suffix, f"--{option}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
     # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
@@ -841,6 +851,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     setup_logging(quiet=getattr(args, "quiet", False), verbose=getattr(args, "verbose", False))
     try:
+        _check_outputs(args)
         return int(args.handler(args) or 0)
     except KeyboardInterrupt as exc:
         # taopt.study.StudyInterrupted (a TaoptError and a KeyboardInterrupt): the study's

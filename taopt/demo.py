@@ -107,16 +107,13 @@ def run_demo(
             )
             print(f"  vehicle {instance.vehicles[vehicle].id}: {names_route}", file=out)
     if plot is not None:
-        from taopt.routing.plot import plot_routes
+        from taopt.routing.plot import plot_instance_routes
 
         best = exact if exact is not None else min(solutions.values(), key=lambda s: s.objective)
-        plot_routes(
-            instance.points,
+        plot_instance_routes(
+            instance,
             best.routes,
-            field=instance.field,
-            title=f"{instance.name}: {best.method} routes, total {best.objective:.1f} s",
-            curved=True,
-            speed=speed,
+            title=f"{instance.name}: {best.method} routes, total travel time {best.objective:.1f} s",
             path=plot,
         )
         print(f"plot written to {plot}", file=out)

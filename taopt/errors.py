@@ -25,3 +25,7 @@ class SolverError(TaoptError, RuntimeError):
 
 class ConvergenceError(SolverError):
     """An iterative method (collocation, shooting) did not converge."""
+
+
+class OutputError(TaoptError, ValueError):
+    """An output file cannot be written as asked (e.g. ``--plot x.jpg`` where PNG is drawn)."""

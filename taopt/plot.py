@@ -1,7 +1,14 @@
 """Navigation plots: drift fields, minimum-time paths, Fig. 2.1 (matplotlib, Agg-safe).
 
 Every function takes an optional ``ax``, returns the Axes (or Figure), and can
-save a PNG. Other areas keep their plots in their own subpackages.
+save a PNG. Other areas keep their plots in their own subpackages; the helpers shared by
+every plot of taopt live here:
+
+* :func:`check_output` — refuse an output file of the wrong kind before any work;
+* :func:`legend_outside` — the legend right of (or below) the axes, never over the data;
+* :func:`label_points` — ids (``t0``, ``v0``, ...) written next to points;
+* :func:`schematic_layout` — 2-D positions for a problem given only by a cost matrix;
+* :func:`save` — PNG with the outside legend kept in the picture.
 """
 
 from __future__ import annotations
@@ -12,10 +19,154 @@ from typing import Any
 
 import numpy as np
 
+from taopt.errors import OutputError
 from taopt.fields import Field
 from taopt.navigation.path import Path, as_field
 
 Region = tuple[float, float, float, float]
+
+#: Line styles and markers that tell methods apart without colour (a comparison plot gives
+#: each method its own pair; ``method_style(name)`` picks it).
+LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">")
+_FIXED_STYLES = {
+    # the thesis's methods keep one look in every figure of taopt; the methods one chapter
+    # compares never share a pair
+    "exact": ("-", "*"),
+    "DP": ("-", "X"),
+    "VN": ("-", "o"),
+    "VM": ("--", "s"),
+    "EVN": ("-.", "D"),
+    "EVM": (":", "^"),
+    "MC": ("--", "v"),
+    "GA": ("-.", "h"),
+    "GA-memetic": (":", "p"),
+    "DTAA": ("-", "d"),
+    "DAA": ("-", "o"),
+    "HDA": ("--", "s"),
+    "CAA": (":", "^"),
+    "NIA": ("-", "o"),
+    "MMA": ("--", "s"),
+    "SMMA": ("-.", "D"),
+}
+
+
+def method_style(method: str, k: int = 0) -> dict[str, Any]:
+    """Matplotlib keywords (``linestyle``, ``marker``) that identify ``method`` in black and white.
+
+    The thesis's methods have fixed styles; any other gets the ``k``-th pair of
+    :data:`LINESTYLES` x :data:`MARKERS`.
+    """
+    linestyle, marker = _FIXED_STYLES.get(
+        str(method), (LINESTYLES[k % len(LINESTYLES)], MARKERS[k % len(MARKERS)])
+    )
+    return {"linestyle": linestyle, "marker": marker}
+
+
+def check_output(path: str | os.PathLike[str] | None, suffix: str, option: str) -> None:
+    """Raise :class:`~taopt.errors.OutputError` unless ``path`` ends in ``suffix``.
+
+    Called before any work starts, so a misspelt output file never wastes a solve.
+
+    Parameters
+    ----------
+    path : path or None
+        The output file (None: nothing asked, nothing checked).
+    suffix : str
+        ".png" or ".gif".
+    option : str
+        The option that named the file ("--plot"), for the message.
+
+    Example
+    -------
+    >>> check_output("routes.png", ".png", "--plot")
+    >>> check_output("routes.jpg", ".png", "--plot")
+    Traceback (most recent call last):
+    ...
+    taopt.errors.OutputError: --plot routes.jpg: the file must end in .png (taopt writes PNG images here)
+    """
+    if path is None:
+        return
+    if not os.fspath(path).lower().endswith(suffix):
+        kind = {".png": "PNG images", ".gif": "GIF animations"}.get(suffix, suffix)
+        raise OutputError(
+            f"{option} {os.fspath(path)}: the file must end in {suffix} (taopt writes {kind} here)"
+        )
+    folder = os.path.dirname(os.path.abspath(os.fspath(path)))
+    if not os.path.isdir(folder):
+        raise OutputError(f"{option} {os.fspath(path)}: the folder {folder} does not exist")
+
+
+def legend_outside(ax: Any, where: str = "right", **options: Any) -> Any:
+    """A legend outside the axes, right of them (``where="right"``) or below (``"below"``).
+
+    Keyword ``options`` go to ``Axes.legend`` (``handles``, ``ncol``, ...). Returns the
+    Legend, or None when nothing has a label.
+    """
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles and "handles" not in options:
+        return None
+    options.setdefault("fontsize", 8)
+    if where == "below":
+        options.setdefault("ncol", 3)
+        from matplotlib.transforms import offset_copy
+
+        # 40 points under the axes: below the tick labels and the x label, whatever the size
+        under = offset_copy(ax.transAxes, fig=ax.figure, y=-40, units="points")
+        return ax.legend(
+            loc="upper center",
+            bbox_to_anchor=(0.5, 0.0),
+            bbox_transform=under,
+            borderaxespad=0.0,
+            **options,
+        )
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **options)
+
+
+def label_points(
+    points: Any, names: Sequence[str], ax: Any, offset: tuple[float, float] = (4, 4), **style: Any
+) -> list[Any]:
+    """Write ``names[k]`` next to ``points[k]`` (offset in points); returns the Text artists."""
+    style.setdefault("fontsize", 8)
+    return [
+        ax.annotate(
+            str(name), (float(x), float(y)), textcoords="offset points", xytext=offset, **style
+        )
+        for name, (x, y) in zip(names, np.asarray(points, dtype=float), strict=True)
+    ]
+
+
+def schematic_layout(cost: Any, seed: int = 0) -> np.ndarray:
+    """2-D positions whose distances approximate a cost matrix (classical MDS).
+
+    For problems given only by a matrix: the symmetric part ``(C + C^T) / 2`` (infinite
+    entries replaced by the largest finite one) is embedded by Torgerson's classical
+    multidimensional scaling (the two leading eigenvectors of the double-centred squared
+    distances). The picture is a schematic: asymmetry and triangle-inequality violations
+    are lost, and its axes are in the matrix's units, not positions.
+
+    Returns
+    -------
+    (N, 2) ndarray
+    """
+    c = np.array(cost, dtype=float)
+    finite = np.isfinite(c) & (c >= 0)
+    fill = float(c[finite].max()) if finite.any() else 1.0
+    c = np.where(finite, c, fill)
+    d = (c + c.T) / 2.0
+    np.fill_diagonal(d, 0.0)
+    n = len(d)
+    centring = np.eye(n) - np.ones((n, n)) / n
+    gram = -0.5 * centring @ (d**2) @ centring
+    values, vectors = np.linalg.eigh(gram)
+    top = np.argsort(values)[::-1][:2]
+    xy = vectors[:, top] * np.sqrt(np.clip(values[top], 0.0, None))
+    if xy.shape[1] < 2:
+        xy = np.column_stack([xy, np.zeros(n)])
+    if not np.any(np.abs(xy) > 1e-12):  # all points equal: spread them on a circle
+        angle = 2 * np.pi * np.arange(n) / max(n, 1)
+        xy = np.column_stack([np.cos(angle), np.sin(angle)]) * fill
+    return xy
 
 
 def _axes(ax: Any = None, figsize: tuple[float, float] = (6.0, 6.0)) -> Any:
@@ -93,21 +244,37 @@ def plot_paths(
                 width=0.004,
                 alpha=0.6,
             )
-    ax.legend(loc="best", fontsize=8)
+    ax.plot([], [], "o", color="0.3", label="start")
+    ax.plot([], [], "s", color="0.3", label="goal")
+    legend_outside(ax, "below", ncol=2)
     return ax
 
 
-def plot_points(points: np.ndarray, n_targets: int, ax: Any, labels: bool = True) -> Any:
-    """Targets (squares, 0..n-1) and vehicle starts (triangles, n..), thesis order."""
+def plot_points(
+    points: np.ndarray,
+    n_targets: int,
+    ax: Any,
+    labels: bool = True,
+    names: Sequence[str] | None = None,
+) -> Any:
+    """Targets (squares) and vehicle starts (triangles), thesis order (targets first).
+
+    ``names`` label the points (default ``t0, t1, ...`` for targets and ``v0, v1, ...`` for
+    vehicles, as ``taopt demo`` and the route tables print them).
+    """
     points = np.asarray(points, dtype=float)
+    if names is None:
+        names = [f"t{k}" for k in range(n_targets)]
+        names += [f"v{k}" for k in range(len(points) - n_targets)]
     ax.plot(points[:n_targets, 0], points[:n_targets, 1], "s", color="tab:red", label="targets")
     ax.plot(
         points[n_targets:, 0], points[n_targets:, 1], "^", color="tab:blue", ms=9, label="vehicles"
     )
     if labels:
-        for k, (x, y) in enumerate(points):
-            ax.annotate(str(k), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
-    ax.legend(loc="best", fontsize=8)
+        label_points(points, names, ax)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    legend_outside(ax)
     return ax
 
 
@@ -115,7 +282,8 @@ def save(ax_or_fig: Any, path_out: str | os.PathLike[str], dpi: int = 120) -> No
     """Save the figure of an Axes (or a Figure) as PNG."""
     fig = getattr(ax_or_fig, "figure", ax_or_fig)
     fig.tight_layout()
-    fig.savefig(os.fspath(path_out), dpi=dpi)
+    # "tight" keeps a legend placed outside the axes inside the picture
+    fig.savefig(os.fspath(path_out), dpi=dpi, bbox_inches="tight")
 
 
 def figure_2_1(

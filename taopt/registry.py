@@ -66,9 +66,12 @@ class Family:
     bounds : tuple of str
         Names of the generic bounds of :mod:`taopt.bounds` it implements.
     plots : dict
-        ``name -> plot(problem, payload, path, instance=None)`` writing a PNG (the first
-        one is what ``taopt solve --plot`` draws; ``instance`` gives positions and the field
-        when the problem came from an instance file).
+        ``name -> plot(problem, payload, path, instance=None, method="")`` writing a PNG
+        (the first one is what ``taopt solve --plot`` draws; ``instance`` gives positions and
+        the field when the problem came from an instance file, ``method`` is named in the
+        title). Every family draws something for every file of its kind (a problem without
+        positions on a schematic layout, said in the caption), so ``--plot`` never fails
+        after the solve.
     """
 
     problem_type: type
@@ -204,7 +207,8 @@ def register_family(
     load : callable, optional
         ``load(dict) -> problem`` (default ``problem_type.from_dict``).
     plots : dict, optional
-        ``name -> plot(problem, payload, path, instance=None)`` (see :class:`Family`).
+        ``name -> plot(problem, payload, path, instance=None, method="")`` (see
+        :class:`Family`).
     """
     from taopt import bounds as bound_functions
     from taopt.scoring import evaluate as generic_evaluate

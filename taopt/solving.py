@@ -30,7 +30,7 @@ from typing import IO, Any
 import pandas as pd
 
 from taopt import bounds as bound_functions
-from taopt.errors import FeasibilityError, InstanceError
+from taopt.errors import FeasibilityError, InstanceError, OutputError
 from taopt.instance import Instance, load_json
 from taopt.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import family_for_kind, family_of
@@ -157,9 +157,20 @@ def solve_file(
         Seconds for each exact model (and peer); a stopped model reports status
         "time_limit" with its proven bound and gap.
     plot : str, optional
-        PNG of the best solution (the family's first plot).
+        PNG of the best solution (the family's first plot): routes over the drift field
+        along their minimum-time paths (instance files, as ``taopt demo`` draws them), routes
+        on a schematic MDS layout (matrix files, said in the caption), the plan on the
+        streets (delivery), the order as a position/cost chart with its precedences (SOP),
+        the driven trajectories (comm). The drawn solution is printed under it in the same
+        ids.
     gantt : str, optional
         PNG of the truck and drone timelines (delivery instances).
+
+    Raises
+    ------
+    OutputError
+        ``plot`` or ``gantt`` not a ``.png`` file, or a Gantt chart asked of a file that is
+        not a delivery instance: raised before the file is loaded or anything solved.
     save : path, optional
         Folder: each method's solution is written there as ``<method>.json``, which
         ``taopt verify`` re-checks.
@@ -170,14 +181,9 @@ def solve_file(
     """
     out = out or sys.stdout
     tic = time.perf_counter()
+    _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
-    if gantt and "gantt" not in family.plots:
-        raise InstanceError(f"--gantt draws delivery plans; {path} is a {family.kind}")
-    if plot and not family.plots:
-        raise InstanceError(f"no plot for a {family.kind} file")
-    if plot and instance is None and family.kind == "assignment_problem":
-        raise InstanceError("--plot needs positions: give an 'instance' file, not a matrix")
     table, solutions = method_table(problem, methods, seed=seed, time_limit=time_limit)
     print(f"{problem!r} from {path}", file=out)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
@@ -193,13 +199,69 @@ def solve_file(
         print(f"solutions written to {folder}/<method>.json", file=out)
     if plot:
         name, draw = next(iter(family.plots.items()))
-        draw(problem, best.solution, plot, instance=instance)
+        draw(problem, best.solution, plot, instance=instance, method=best.method)
         print(f"{name} plot of {best.method} written to {plot}", file=out)
+        for line in _route_lines(best, instance, problem):
+            print(line, file=out)
     if gantt:
-        family.plots["gantt"](problem, best.solution, gantt, instance=instance)
+        family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
     print(f"({time.perf_counter() - tic:.2f} s)", file=out)
     return {"problem": problem, "instance": instance, "table": table, "solutions": solutions}
+
+
+def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -> None:
+    """Refuse a plot request before any work: wrong extension, or a kind with no such plot."""
+    from taopt.plot import check_output
+
+    check_output(plot, ".png", "--plot")
+    check_output(gantt, ".png", "--gantt")
+    if not (plot or gantt):
+        return
+    data = load_json(path)
+    kind = data.get("kind") if isinstance(data, dict) else None
+    if kind == "instance":  # becomes a chapter 2 or 3 problem: both draw routes, neither a Gantt
+        plots: tuple[str, ...] = ("routes",)
+    else:
+        try:
+            plots = tuple(family_for_kind(kind).plots)
+        except InstanceError:  # an unknown kind: the loader says so, with the schema's words
+            return
+    if gantt and "gantt" not in plots:
+        raise OutputError(f"--gantt draws delivery plans (truck and drone); {path} is a {kind}")
+    if plot and not plots:
+        raise OutputError(f"--plot: no plot for a {kind} file ({path})")
+
+
+def _route_lines(best: Solution, instance: Instance | None, problem: Any) -> list[str]:
+    """The plotted solution spelt with the ids written on the picture.
+
+    Routes as ``v0: v0 -> t2 -> t1``; a delivery plan as one ``#p: customer j, launch s<i>,
+    landing s<k>`` line per sortie; an SOP order as its node sequence. Other payloads
+    (trajectories) print nothing here.
+    """
+    payload = best.solution
+    if hasattr(payload, "launch") and hasattr(payload, "landing"):  # a delivery Plan
+        sorties = zip(payload.order, payload.launch, payload.landing, strict=True)
+        return [
+            f"  #{p + 1}: customer {j}, launch s{i}, landing s{k}"
+            for p, (j, i, k) in enumerate(sorties)
+        ]
+    if hasattr(payload, "sequence"):  # an SOP Order
+        return ["  order: " + " -> ".join(str(v) for v in payload.sequence)]
+    routes = getattr(payload, "routes", None)
+    if routes is None:
+        return []
+    from taopt.routing.plot import route_text
+
+    routes = [list(r) for r in routes]
+    if instance is not None:
+        targets = [t.id for t in instance.targets]
+        vehicles = [v.id for v in instance.vehicles]
+    else:
+        targets = [f"t{k}" for k in range(problem.n_targets)]
+        vehicles = [f"v{k}" for k in range(len(routes))]
+    return [f"  {route_text(vehicles[k], r, targets)}" for k, r in enumerate(routes)]
 
 
 def verify_file(

@@ -15,23 +15,42 @@ from typing import Any
 
 from taopt.capability.bounds import arborescence_bound, doubled_arborescence, thesis_mcga
 from taopt.capability.problem import CapabilityClass, CapabilityProblem, evaluate_capability
-from taopt.errors import InstanceError
 from taopt.registry import register_family
 from taopt.result import Routes
 
 
-def _plot_routes(problem: CapabilityProblem, routes: Any, path: str, instance: Any = None) -> None:
-    """Routes coloured by capability over the field and obstacles (needs an instance file)."""
-    from taopt.capability.plot import plot_routes
+def _plot_routes(
+    problem: CapabilityProblem, routes: Any, path: str, instance: Any = None, method: str = ""
+) -> None:
+    """Routes coloured by capability over the field and obstacles.
 
-    if instance is None:
-        raise InstanceError("a route plot needs positions: give an 'instance' file, not a matrix")
-    total = problem.evaluate(list(routes))
-    plot_routes(
-        instance,
-        problem,
-        list(routes),
-        title=f"{problem.name or 'routes'}: total travel time {total:.1f} s",
+    Without an instance file (bare matrices) the points are placed by classical MDS of the
+    element-wise fastest travel time over the capabilities
+    (:func:`taopt.plot.schematic_layout`) and the caption says so.
+    """
+    import numpy as np
+
+    from taopt.capability.plot import plot_routes
+    from taopt.plot import schematic_layout
+    from taopt.routing.plot import plot_routes as plot_plain_routes
+
+    routes = list(routes)
+    total = problem.evaluate(routes)
+    title = (
+        f"{problem.name or 'routes'}: {method or 'best'} routes, total travel time {total:.1f} s"
+    )
+    if instance is not None:
+        plot_routes(instance, problem, routes, title=title, path=path)
+        return
+    fastest = np.fmin.reduce([problem.cost_for(c) for c in problem.capabilities])
+    plot_plain_routes(
+        schematic_layout(fastest),
+        routes,
+        title=title,
+        vehicle_ids=[f"v{k} ({c})" for k, c in enumerate(problem.vehicle_capability)],
+        unit="s, schematic",
+        caption="schematic layout: the file has no positions; points placed by classical MDS "
+        "of the fastest symmetrised travel time over the capabilities",
         path=path,
     )
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from taopt.plot import _axes, plot_field
+from taopt.plot import LINESTYLES, _axes, label_points, legend_outside, method_style, plot_field
 
 __all__ = [
     "capability_colours",
@@ -49,7 +49,7 @@ def capability_colours(capabilities: Sequence[Any]) -> dict[Any, Any]:
 def _save(ax: Any, path: str | None) -> None:
     if path:
         ax.figure.tight_layout()
-        ax.figure.savefig(path, dpi=120)
+        ax.figure.savefig(path, dpi=120, bbox_inches="tight")  # keeps the outside legend
 
 
 def plot_obstacles(obstacles: Sequence[Any], ax: Any) -> Any:
@@ -72,7 +72,9 @@ def plot_obstacles(obstacles: Sequence[Any], ax: Any) -> Any:
     return ax
 
 
-def plot_scene(instance: Any, ax: Any = None, density: int = 15, path: str | None = None) -> Any:
+def plot_scene(
+    instance: Any, ax: Any = None, density: int = 15, path: str | None = None, ids: bool = True
+) -> Any:
     """The instance: drift quiver, obstacles, targets (by demand count), vehicles by capability.
 
     Parameters
@@ -83,6 +85,8 @@ def plot_scene(instance: Any, ax: Any = None, density: int = 15, path: str | Non
         Quiver arrows per side.
     path : str, optional
         Save as PNG.
+    ids : bool
+        Write the instance's target and vehicle ids next to their points.
     """
     ax = _axes(ax, (7.0, 7.0))
     if instance.field is not None:
@@ -94,6 +98,10 @@ def plot_scene(instance: Any, ax: Any = None, density: int = 15, path: str | Non
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
+    xmin, xmax, ymin, ymax = instance.region
+    pad = 0.03 * max(xmax - xmin, ymax - ymin)  # points on the border stay visible
+    ax.set_xlim(xmin - pad, xmax + pad)
+    ax.set_ylim(ymin - pad, ymax + pad)
     plot_obstacles(instance.obstacles, ax)
     colours = capability_colours([v.capability for v in instance.vehicles])
     targets = np.array([t.position for t in instance.targets])
@@ -113,7 +121,11 @@ def plot_scene(instance: Any, ax: Any = None, density: int = 15, path: str | Non
             zorder=4,
             label=f"vehicles {capability}",
         )
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.9)
+    if ids:
+        label_points(targets, [t.id for t in instance.targets], ax)
+        starts = np.array([v.start for v in instance.vehicles])
+        label_points(starts, [v.id for v in instance.vehicles], ax, fontweight="bold")
+    legend_outside(ax)
     _save(ax, path)
     return ax
 
@@ -152,7 +164,9 @@ def plot_grid_paths(
         ax.plot(line[:, 0], line[:, 1], "-", color=colour, lw=2, label=label)
         ax.plot(*line[0], "o", color=colour)
         ax.plot(*line[-1], "s", color=colour)
-    ax.legend(loc="best", fontsize=8)
+    ax.plot([], [], "o", color="0.3", label="start")
+    ax.plot([], [], "s", color="0.3", label="goal")
+    legend_outside(ax)
     _save(ax, path)
     return ax
 
@@ -181,8 +195,14 @@ def figure_3_2(
     from taopt.navigation.grid import GridGraph
 
     graph = GridGraph(thesis_field(1e-2), (0, 100, 0, 100), cell, [obstacle], 1.0, neighbours)
-    ax = plot_grid_paths(graph, [(point_1, point_2), (point_2, point_1)], show_blocked=True)
     times = graph.travel_time_matrix(np.array([point_1, point_2]))
+    ax = plot_grid_paths(
+        graph,
+        [(point_1, point_2), (point_2, point_1)],
+        labels=[f"1 -> 2: {times[0, 1]:.2f} s", f"2 -> 1: {times[1, 0]:.2f} s"],
+        show_blocked=True,
+    )
+    label_points([point_1, point_2], ["1", "2"], ax, offset=(6, 6), fontsize=12)
     ax.set_title(
         f"grid ({neighbours} moves, {cell:g} m): t(1,2) = {times[0, 1]:.2f} s, "
         f"t(2,1) = {times[1, 0]:.2f} s",
@@ -213,8 +233,15 @@ def plot_routes(
         One route per vehicle (``Solution.routes``).
     graph : taopt.navigation.grid.GridGraph, optional
         Draw every leg along its grid path (default: a 10 m, 16-move grid when the instance
-        has obstacles; straight arrows otherwise).
+        has obstacles, as :func:`~taopt.capability.instances.capability_problem_from_instance`
+        plans them). Without obstacles each leg is its minimum-time path in the field (the
+        curve its travel time was computed along), or a straight arrow in still water.
+
+    Each vehicle has its capability's colour and its own line style; the legend (outside
+    the axes) spells every route with the instance's ids.
     """
+    from taopt.routing.plot import route_text
+
     ax = plot_scene(instance, ax=ax)
     points = instance.points
     n = problem.n
@@ -230,21 +257,35 @@ def plot_routes(
             instance.vehicles[0].speed,
             STUDY_NEIGHBOURS,
         )
+    target_ids = [t.id for t in instance.targets]
     colours = capability_colours(problem.vehicle_capability)
     for k, route in enumerate(routes):
         colour = colours[problem.vehicle_capability[k]]
+        style = LINESTYLES[k % len(LINESTYLES)]
         nodes = [n + k, *route]
         for a, b in zip(nodes[:-1], nodes[1:], strict=True):
             if graph is not None:
                 line = graph.path(points[a], points[b])
-                ax.plot(line[:, 0], line[:, 1], "-", color=colour, lw=1.4, zorder=3)
+            elif instance.field is not None:
+                from taopt.navigation import min_time_path
+
+                speed = instance.vehicles[k].speed
+                line = min_time_path(instance.field, points[a], points[b], speed=speed).xy
             else:
-                ax.annotate(
-                    "",
-                    xy=points[b],
-                    xytext=points[a],
-                    arrowprops={"arrowstyle": "->", "color": colour, "lw": 1.4},
-                )
+                line = np.array([points[a], points[b]])
+            ax.plot(line[:, 0], line[:, 1], color=colour, ls=style, lw=1.5, zorder=3)
+            mid = max(len(line) // 2, 1)
+            ax.annotate(
+                "",
+                xy=line[mid],
+                xytext=line[mid - 1],
+                arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.2},
+                zorder=3,
+            )
+        vehicle = instance.vehicles[k].id
+        label = f"{route_text(vehicle, route, target_ids)} ({problem.vehicle_capability[k]})"
+        ax.plot([], [], color=colour, ls=style, lw=1.5, label=label)
+    legend_outside(ax)
     if title:
         ax.set_title(title, fontsize=9)
     _save(ax, path)
@@ -293,9 +334,9 @@ def plot_printed_arcs(
             },
             zorder=5,
         )
-    for k, (x, y) in enumerate(points):
-        name = instance.targets[k].id if k < problem.n else instance.vehicles[k - problem.n].id
-        ax.annotate(name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.plot([], [], color="0.3", ls="--", label="arc on a subtour")
+    ax.plot([], [], color="red", label="arc from another class's start")
+    legend_outside(ax)
     if title:
         ax.set_title(title, fontsize=9)
     _save(ax, path)
@@ -341,12 +382,9 @@ def figure_printed_vs_corrected(
         ax=right,
         title=f"corrected (per class (2.2)-(2.5)): optimum {corrected.objective:.2f} s",
     )
-    for k, (x, y) in enumerate(instance.points):
-        name = instance.targets[k].id if k < problem.n else instance.vehicles[k - problem.n].id
-        right.annotate(name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
     if path:
         figure.tight_layout()
-        figure.savefig(path, dpi=120)
+        figure.savefig(path, dpi=120, bbox_inches="tight")
     return figure
 
 
@@ -372,17 +410,25 @@ def plot_quality(
     """
     data = table if instance is None else table[table["instance"] == instance]
     ax = _axes(ax, (5.0, 4.0))
-    styles = {"DTAA": "o-", "GA": "s-", "GA-memetic": "s--", "exact": "k--", "MC": "^:"}
+    methods = sorted(set(data["method"]))
     for (name, method), rows in data.groupby(["instance", "method"], sort=True):
         rows = rows.sort_values("A")
         label = method if instance is not None else f"{name} {method}"
-        ax.plot(rows["A"], rows[column], styles.get(method, "x-"), label=label)
-    ax.set_xlabel("|A| (capabilities)")
+        style = method_style(method, methods.index(method))
+        colour = "black" if method == "exact" else None
+        ax.plot(rows["A"], rows[column], color=colour, label=label, **style)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # |A| is a count
+    ax.set_xlabel("|A|, number of capabilities (count)")
     ax.set_ylabel(
-        {"q_thesis": "q = f / f^a", "q_valid": "f / arborescence bound"}.get(column, "f / optimum")
+        {
+            "q_thesis": "mean q = f / f^a (3.15), ratio (1)",
+            "q_valid": "mean f / arborescence bound, ratio (1)",
+        }.get(column, "mean f / optimum, ratio (1)")
     )
-    ax.set_title(instance or "", fontsize=9)
+    ax.set_title(f"{instance or 'all instances'}: mean {column} per method", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    legend_outside(ax, fontsize=7)
     _save(ax, path)
     return ax

@@ -12,6 +12,16 @@ from taopt.comm.problem import CommProblem, random_problem
 from taopt.comm.trajectories import Trajectories, evaluate_trajectories
 from taopt.registry import register_family
 
+
+def _plot_run(
+    problem: CommProblem, trajectories: Trajectories, path: str, method: str = "", **_: object
+) -> None:
+    """The driven trajectories, targets and start points (as ``taopt simulate --plot``)."""
+    from taopt.comm.plot import plot_run
+
+    plot_run(problem, trajectories, path=path, method=method)
+
+
 register_family(
     CommProblem,
     kind="comm_problem",
@@ -19,6 +29,7 @@ register_family(
     title="task assignment under a limited communication range (chapter 4)",
     evaluate=evaluate_trajectories,
     bounds={"mst": mst_bound},
+    plots={"run": _plot_run},
 )
 
 __all__ = ["CommProblem", "Trajectories", "evaluate_trajectories", "mst_bound", "random_problem"]

@@ -14,6 +14,7 @@ import numpy as np
 
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories
+from taopt.plot import LINESTYLES, legend_outside, method_style
 
 _MARKERS = "so^DvP*Xhp<>"
 
@@ -44,11 +45,15 @@ def _save(ax_or_fig: Any, path: str | os.PathLike[str] | None, dpi: int = 120) -
         return
     fig = getattr(ax_or_fig, "figure", ax_or_fig)
     fig.tight_layout()
-    fig.savefig(os.fspath(path), dpi=dpi)
+    fig.savefig(os.fspath(path), dpi=dpi, bbox_inches="tight")  # keeps the outside legend
 
 
 def plot_points(problem: CommProblem, ax: Any, labels: bool = True) -> Any:
-    """Targets (one marker per attribute) and the vehicles' start points (triangles)."""
+    """Targets (one marker per attribute) and the vehicles' start points (triangles).
+
+    With ``labels`` the targets carry their index q (as ``taopt simulate`` lists the visits)
+    and the vehicles ``v0, v1, ...`` (vehicle j of the printed table).
+    """
     for code, label in enumerate(problem.attributes):
         where = problem.target_code == code
         if where.any():
@@ -62,7 +67,9 @@ def plot_points(problem: CommProblem, ax: Any, labels: bool = True) -> Any:
                 label=f"targets, attribute {label}",
             )
     for j, (x, y) in enumerate(problem.vehicles):
-        ax.plot(x, y, "^", color=_colour(j), ms=10, mec="k")
+        ax.plot(
+            x, y, "^", color=_colour(j), ms=10, mec="k", label="vehicle starts" if j == 0 else None
+        )
         if labels:
             ax.annotate(f"v{j}", (x, y), textcoords="offset points", xytext=(5, 5), fontsize=8)
     if labels:
@@ -82,8 +89,12 @@ def plot_run(
     labels: bool = True,
     title: str | None = None,
     path: str | os.PathLike[str] | None = None,
+    method: str = "",
 ) -> Any:
-    """A run: targets, start points, the driven paths coloured by vehicle, and the links.
+    """A run: targets, start points, the driven paths by vehicle, and the links.
+
+    Each vehicle has its own colour and line style; the legend (outside the axes) gives
+    each vehicle's ability and driven length, positions are in metres.
 
     Parameters
     ----------
@@ -99,9 +110,18 @@ def plot_run(
     matplotlib.axes.Axes
     """
     tr = _payload(solution)
-    ax = _axes(ax)
+    ax = _axes(ax, (8.0, 6.0))
+    lengths = tr.lengths()
     for j, path_j in enumerate(tr.paths):
-        ax.plot(path_j[:, 1], path_j[:, 2], "-", color=_colour(j), lw=1.6, alpha=0.9)
+        ax.plot(
+            path_j[:, 1],
+            path_j[:, 2],
+            color=_colour(j),
+            ls=LINESTYLES[j % len(LINESTYLES)],
+            lw=1.6,
+            alpha=0.9,
+            label=f"v{j} ({problem.vehicle_ability[j]}): {lengths[j]:.1f} m",
+        )
         if len(path_j) > 1:
             end = path_j[-1, 1:]
             ax.plot(*end, "o", color=_colour(j), ms=5)
@@ -120,16 +140,18 @@ def plot_run(
         for a, b in g["links"]:
             pa, pb = where[a], where[b]
             ax.plot([pa[0], pb[0]], [pa[1], pb[1]], ":", color="0.4", lw=1.0)
+    if groups:
+        ax.plot([], [], ":", color="0.4", label="links when a group connects")
     plot_points(problem, ax, labels=labels)
     if title is None:
-        name = getattr(solution, "method", "") or "run"
+        name = method or getattr(solution, "method", "") or "run"
         total = float(tr.lengths().sum())
         title = f"{name}: f = {total:.1f} m, r = {problem.comm_range:g} m"
         info = getattr(solution, "info", {})
         if "bytes" in info:
             title += f", {info['bytes']:.3g} bytes"
     ax.set_title(title, fontsize=10)
-    ax.legend(loc="best", fontsize=7)
+    legend_outside(ax, fontsize=7)
     _save(ax, path)
     return ax
 
@@ -147,7 +169,7 @@ def plot_pair(
     """
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(12, 5.8))
+    fig = Figure(figsize=(15, 5.8))
     for k, (problem, result) in enumerate(((short, short_solution), (long, long_solution))):
         ax = fig.add_subplot(1, 2, k + 1)
         tr = _payload(result)
@@ -187,11 +209,12 @@ def animate_run(
     from matplotlib.figure import Figure
 
     tr = _payload(solution)
+    name = getattr(solution, "method", "") or "run"
     end = max(tr.end_time, 1e-9)
     times = np.linspace(0.0, end, int(frames))
     fig = Figure(figsize=(6, 6))
     ax = fig.add_subplot()
-    plot_points(problem, ax, labels=False)
+    plot_points(problem, ax, labels=True)
     side = problem.side()
     ax.set_xlim(-0.02 * side, 1.02 * side)
     ax.set_ylim(-0.02 * side, 1.02 * side)
@@ -225,7 +248,7 @@ def animate_run(
                     k += 1
         for line in link_lines[k:]:
             line.set_data([], [])
-        clock.set_text(f"t = {t:.0f} s, r = {problem.comm_range:g} m")
+        clock.set_text(f"{name}: t = {t:.0f} s, r = {problem.comm_range:g} m (grey: links)")
         return [*trails, *dots, done, *link_lines, clock]
 
     animation = FuncAnimation(fig, draw, frames=len(times), blit=False)
@@ -247,25 +270,24 @@ def plot_range_curves(
     :func:`taopt.comm.study.summary`).
     """
     ax = _axes(ax, (7.0, 4.5))
-    styles = {"DAA": "-", "HDA": "--", "CAA": ":"}
     for a_index, (attributes, part) in enumerate(summary.groupby("A")):
-        for method in algorithms:
+        for k, method in enumerate(algorithms):
             rows = part[part["method"] == method].sort_values("r")
             if rows.empty:
                 continue
             ax.plot(
                 rows["r"],
                 rows[value],
-                styles.get(method, "-"),
-                marker="o",
-                ms=3,
+                ms=5,
+                mfc="white" if method == "HDA" else None,
                 color=_colour(a_index),
                 label=f"{method}, |A| = {attributes}",
+                **method_style(method, k),
             )
     ax.set_xlabel("communication range r (m)")
     ax.set_ylabel(ylabel or value)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    legend_outside(ax, "below", fontsize=7, ncol=len(algorithms))
     _save(ax, path)
     return ax
 

@@ -21,18 +21,29 @@ from taopt.registry import register_family
 from taopt.result import Order
 
 
-def _plot_plan(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+def _plot_plan(
+    problem: DeliveryInstance, plan: Plan, path: str, method: str = "", **_: Any
+) -> None:
     """The truck path and drone sorties on the street network."""
     from taopt.delivery.plot import plot_plan
 
-    plot_plan(problem, plan).figure.savefig(path, dpi=120)
+    plot_plan(problem, plan, method=method).figure.savefig(path, dpi=120, bbox_inches="tight")
 
 
-def _plot_gantt(problem: DeliveryInstance, plan: Plan, path: str, **_: Any) -> None:
+def _plot_gantt(
+    problem: DeliveryInstance, plan: Plan, path: str, method: str = "", **_: Any
+) -> None:
     """The truck's and the drone's timelines (Gantt chart)."""
     from taopt.delivery.plot import plot_gantt
 
-    plot_gantt(problem, plan).figure.savefig(path, dpi=120)
+    plot_gantt(problem, plan, method=method).figure.savefig(path, dpi=120, bbox_inches="tight")
+
+
+def _plot_order(problem: SopProblem, order: Order, path: str, method: str = "", **_: Any) -> None:
+    """The order as a position/cost chart with the precedence arcs."""
+    from taopt.delivery.plot import plot_order
+
+    plot_order(problem, order, method=method, path=path)
 
 
 register_family(
@@ -51,6 +62,7 @@ register_family(
     title="sequential ordering, TSPLIB SOP (chapter 5 certification)",
     evaluate=evaluate_order,
     bounds={"arborescence": sop_arborescence_bound},
+    plots={"order": _plot_order},
 )
 
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"

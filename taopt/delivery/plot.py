@@ -1,7 +1,7 @@
-"""Plots of a chapter 5 plan: the map (thesis Figs. 5.6–5.7) and a Gantt chart.
+"""Plots of chapter 5: a plan's map (thesis Figs. 5.6–5.7), its Gantt chart, an SOP order.
 
-Both take an optional matplotlib ``ax``, return it, and work with the Agg backend
-(``ax.figure.savefig("plan.png")``).
+Each takes an optional matplotlib ``ax``, returns it, and works with the Agg backend
+(``ax.figure.savefig("plan.png", bbox_inches="tight")``: the legends sit outside the axes).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import numpy as np
 
 from taopt.delivery.evaluate import timeline
 from taopt.delivery.instance import DeliveryInstance, Plan
+from taopt.plot import _axes, label_points, legend_outside
 
 
 def _plan_of(plan: Any) -> Plan:
@@ -20,28 +21,33 @@ def _plan_of(plan: Any) -> Plan:
 
 
 def _new_ax(ax: Any, figsize: tuple[float, float]) -> Any:
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots(figsize=figsize)
-    return ax
+    return _axes(ax, figsize)
 
 
 def plot_plan(
-    instance: DeliveryInstance, plan: Any, ax: Any = None, label_customers: bool = True
+    instance: DeliveryInstance,
+    plan: Any,
+    ax: Any = None,
+    label_customers: bool = True,
+    method: str = "",
 ) -> Any:
     """Street network, truck path and drone sorties of a plan (Fig. 5.6 style).
 
     Streets are grey, stops small dots, the depot a black square. The truck path
     (street shortest paths between consecutive launch/landing stops) is a thick blue
     line; each sortie is a dashed orange launch -> customer -> landing polyline.
-    Customers are red dots labelled with their index and serving position.
+    Customers are red dots labelled ``j (#p)``: their index j in the file and the plan
+    (``Plan.order``) and their sortie number p (1 = first served). The launch and landing
+    stops the plan uses are labelled ``s<i>`` (``Plan.launch``, ``Plan.landing``).
 
     Parameters
     ----------
     instance : DeliveryInstance
+        Positions in metres.
     plan : Plan or Solution
     ax : matplotlib Axes, optional
+    method : str
+        Named in the title.
 
     Returns
     -------
@@ -70,25 +76,42 @@ def plot_plan(
     ax.scatter(*customers.T, s=30, color="tab:red", zorder=5, label="customer")
     if label_customers:
         position = {j: p for p, j in enumerate(plan.order)}
-        for j, (x, y) in enumerate(customers):
-            tag = f"{j}" if j not in position else f"{j} ({position[j] + 1})"
-            ax.annotate(tag, (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7)
+        tags = [
+            f"{j}" if j not in position else f"{j} (#{position[j] + 1})"
+            for j in range(len(customers))
+        ]
+        label_points(customers, tags, ax, offset=(3, 3), fontsize=7, color="darkred")
+        used = sorted(set(plan.launch) | set(plan.landing) | {instance.depot})
+        label_points(
+            stops[used], [f"s{i}" for i in used], ax, offset=(3, -9), fontsize=6, color="navy"
+        )
     ax.scatter(*stops[instance.depot], marker="s", s=80, color="black", zorder=6, label="depot")
+    ax.plot([], [], " ", label="labels: customer j (#sortie),\nstop s<i>")
     ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    who = f"{method} plan" if method else "plan"
     ax.set_title(
-        f"{instance.name or 'plan'}: makespan {line.makespan:.1f} s, L = {instance.flight_range:g}"
+        f"{instance.name or 'delivery'}: {who}, makespan (5.1) {line.makespan:.1f} s, "
+        f"L = {instance.flight_range:g} m",
+        fontsize=10,
     )
-    ax.legend(loc="best", fontsize=8)
+    legend_outside(ax)
     return ax
 
 
-def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None) -> Any:
+def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: str = "") -> Any:
     """Truck and drone timelines of a plan.
 
     Truck row: repositioning with the drone aboard (blue), carrying legs while the
     drone is out (light blue), waiting for the drone (grey). Drone row: flights (orange),
     landing time τ at the customer and on the truck (red), waiting at the landing stop
     (grey); customer indices are written at their service times t_j.
+
+    The dotted line is the makespan (5.1), ``f = max_j t_j``: the time the last customer
+    is served (chapter 5 minimises "the time when the last customer is served"). The
+    last sortie's flight back to the truck and its landing τ come after it and are not
+    part of f; they are drawn on a hatched background labelled so.
 
     Returns
     -------
@@ -109,18 +132,15 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None) -> Any:
     for p, j in enumerate(plan.order):
         S, t, back = line.launch_time[p], line.service_time[p], line.drone_return[p]
         truck, R = line.truck_arrival[p], line.recovery_time[p]
-        bar(truck_y, truck, R - tau, "0.75")
+        bar(truck_y, truck, R, "0.75")  # waits for the drone, then while it lands (τ)
         bar(drone_y, S, t - tau, "tab:orange")
         bar(drone_y, t - tau, t, "tab:red")
         bar(drone_y, t, back, "tab:orange")
         bar(drone_y, back, R - tau, "0.75")
         bar(drone_y, R - tau, R, "tab:red")
         ax.annotate(str(j), (t, drone_y + h / 2), ha="center", va="bottom", fontsize=7)
-    ax.axvline(line.makespan, color="k", ls=":", lw=1)
-    ax.set_yticks([drone_y, truck_y], ["drone", "truck"])
-    ax.set_ylim(-0.6, 1.9)
-    ax.set_xlabel("time (s)")
-    ax.set_title(f"makespan (5.1) = {line.makespan:.1f} s")
+    end = max([line.makespan, *line.recovery_time]) if len(plan.order) else line.makespan
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     legend = [
@@ -129,10 +149,152 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None) -> Any:
         Patch(color="0.75", label="waiting"),
         Patch(color="tab:orange", label="drone flies"),
         Patch(color="tab:red", label="landing time τ"),
+        Line2D([], [], color="k", ls=":", label="makespan (5.1): last customer served"),
     ]
-    ax.legend(handles=legend, loc="upper center", ncol=5, fontsize=7, frameon=False)
-    ax.figure.tight_layout()
+    ax.axvline(line.makespan, color="k", ls=":", lw=1.2)
+    ax.annotate(
+        f"f = {line.makespan:.1f} s: last customer served",
+        (line.makespan, 1.62),
+        xytext=(-4, 0),
+        textcoords="offset points",
+        fontsize=7,
+        ha="right",
+        va="center",
+    )
+    if end > line.makespan:
+        ax.axvspan(
+            line.makespan, end, facecolor="none", edgecolor="0.6", hatch="//", lw=0, zorder=0
+        )
+        if end - line.makespan > 0.15 * end:  # room for the words inside the hatched part
+            ax.annotate(
+                "drone returns and lands:\nnot counted in f",
+                (line.makespan, 1.62),
+                xytext=(4, 0),
+                textcoords="offset points",
+                fontsize=7,
+                va="center",
+            )
+        legend.append(
+            Patch(
+                facecolor="none",
+                edgecolor="0.6",
+                hatch="//",
+                label="after the makespan: the drone flies back\nand lands, not part of (5.1)",
+            )
+        )
+    ax.set_yticks([drone_y, truck_y], ["drone", "truck"])
+    ax.set_ylim(-0.6, 1.9)
+    ax.set_xlim(0.0, end * 1.02 if end > 0 else 1.0)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("vehicle")
+    who = f"{method} plan" if method else "plan"
+    ax.set_title(
+        f"{instance.name or 'delivery'}: {who}, makespan (5.1) = {line.makespan:.1f} s "
+        "(numbers: customer j at its service time t_j)",
+        fontsize=9,
+    )
+    legend_outside(ax, handles=legend)
     return ax
 
 
-__all__ = ["plot_plan", "plot_gantt"]
+def plot_order(
+    problem: Any,
+    order: Any,
+    ax: Any = None,
+    method: str = "",
+    path: str | None = None,
+) -> Any:
+    """An SOP order as a position/cost chart with the precedence arcs.
+
+    The k-th node of the order is drawn at (k, cumulative arc cost to reach it); the
+    order's arcs join consecutive points (each labelled with its cost) and every
+    precedence (r, j) of the problem is a dashed red arc from r to j above them. In a
+    feasible order every precedence arc points right (r is visited first).
+
+    Parameters
+    ----------
+    problem : SopProblem
+    order : Order, Solution or sequence of int
+    ax : matplotlib Axes, optional
+    method : str
+        Named in the title.
+    path : str, optional
+        Save as PNG.
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    sequence = list(getattr(getattr(order, "solution", order), "sequence", order))
+    cost = np.asarray(problem.cost, dtype=float)
+    legs = cost[sequence[:-1], sequence[1:]] if len(sequence) > 1 else np.zeros(0)
+    reach = np.concatenate([[0.0], np.cumsum(legs)])
+    xy = np.column_stack([np.arange(len(sequence)), reach])
+    where = {node: k for k, node in enumerate(sequence)}
+    ax = _new_ax(ax, (max(6.0, 0.45 * len(sequence) + 3.0), 4.5))
+    ax.plot(
+        xy[:, 0],
+        xy[:, 1],
+        "-",
+        color="tab:blue",
+        lw=1.8,
+        marker="o",
+        ms=6,
+        zorder=3,
+        label="visiting order (arc cost on each step)",
+    )
+    if len(sequence) <= 40:
+        for k, c in enumerate(legs):
+            ax.annotate(
+                f"{c:g}",
+                (xy[k] + xy[k + 1]) / 2,
+                xytext=(4, -8),
+                textcoords="offset points",
+                fontsize=7,
+                color="tab:blue",
+            )
+    for r, j in problem.precedences:
+        if r in where and j in where:
+            ax.annotate(
+                "",
+                xy=xy[where[j]],
+                xytext=xy[where[r]],
+                arrowprops={
+                    "arrowstyle": "-|>",
+                    "color": "tab:red",
+                    "lw": 1.0,
+                    "linestyle": "--",
+                    "connectionstyle": "arc3,rad=-0.35",
+                    "shrinkA": 5,
+                    "shrinkB": 5,
+                    "alpha": 0.7,
+                },
+                zorder=2,
+            )
+    ax.plot([], [], "--", color="tab:red", label="precedence r -> j (r first)")
+    label_points(
+        xy,
+        [str(node) for node in sequence],
+        ax,
+        offset=(-4, 6),
+        fontsize=8,
+        fontweight="bold",
+        ha="right",
+    )
+    ax.set_xlabel("position in the order (visit number, 0 = start)")
+    ax.set_ylabel("cumulative cost (cost units of the file)")
+    ax.set_xlim(-0.6, len(sequence) - 0.4)
+    ax.margins(y=0.12)
+    ax.grid(alpha=0.3)
+    who = f"{method} order" if method else "order"
+    ax.set_title(
+        f"{problem.name or 'SOP'}: {who}, path cost {reach[-1]:g} (labels: node ids)",
+        fontsize=10,
+    )
+    legend_outside(ax, "below", ncol=2)
+    if path:
+        ax.figure.savefig(path, dpi=120, bbox_inches="tight")
+    return ax
+
+
+__all__ = ["plot_plan", "plot_gantt", "plot_order"]

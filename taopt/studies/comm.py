@@ -390,19 +390,24 @@ def plot_study(
     from taopt.comm.plot import plot_range_curves
 
     part = table[(table["n"] == n) & (table["m"] == m)]
-    fig = Figure(figsize=(13, 4.8))
-    plot_range_curves(part, "q", ("DAA", "HDA"), ax=fig.add_subplot(1, 2, 1), ylabel="mean q")
+    fig = Figure(figsize=(13, 5.4))
+    q_ax, bytes_ax = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    plot_range_curves(
+        part, "q", ("DAA", "HDA"), ax=q_ax, ylabel="mean q = f / f_MST (4.21), ratio (1)"
+    )
+    q_ax.set_title("solution quality (Table 4.1)", fontsize=10)
     plot_range_curves(
         part,
         "bytes",
         ("DAA", "HDA", "CAA"),
-        ax=fig.add_subplot(1, 2, 2),
-        ylabel="mean bytes relayed",
+        ax=bytes_ax,
+        ylabel="mean bytes relayed (bytes)",
     )
-    fig.suptitle(f"n = {n}, m = {m}")
+    bytes_ax.set_title("communication load (Table 4.2)", fontsize=10)
+    fig.suptitle(f"DAA, HDA and CAA against the range r: n = {n} targets, m = {m} vehicles")
     if path is not None:
         fig.tight_layout()
-        fig.savefig(str(path), dpi=120)
+        fig.savefig(str(path), dpi=120, bbox_inches="tight")
     return fig
 
 
@@ -461,6 +466,8 @@ def plot_homogeneous(tables: Sequence[pd.DataFrame], path: str | Path | None = N
     """Figs. 4.5–4.6: DAA's mean q (and true gap, where certified) against r, |A| = 1."""
     from matplotlib.figure import Figure
 
+    from taopt.plot import legend_outside
+
     fig = Figure(figsize=(6.5 * len(tables), 4.5))
     for k, table in enumerate(tables):
         ax = fig.add_subplot(1, len(tables), k + 1)
@@ -469,15 +476,15 @@ def plot_homogeneous(tables: Sequence[pd.DataFrame], path: str | Path | None = N
         ax.plot(rows["r"], rows["q"], "o-", label="q = f / f_MST")
         if rows["certified"].sum():
             ax.plot(rows["r"], rows["gap"], "s--", label="f / f_o (certified)")
-        ax.axhline(2.0, color="0.6", lw=0.8, ls=":")
+        ax.axhline(2.0, color="0.6", lw=0.8, ls=":", label="2: Theorem 4.9, f <= 2 f_o (initially connected)")
         ax.set_xlabel("communication range r (m)")
-        ax.set_ylabel("mean ratio")
+        ax.set_ylabel("mean ratio (1)")
         ax.set_title(f"DAA, n = {n}, m = {m}, |A| = 1")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        legend_outside(ax, "below", ncol=2)
     if path is not None:
         fig.tight_layout()
-        fig.savefig(str(path), dpi=120)
+        fig.savefig(str(path), dpi=120, bbox_inches="tight")
     return fig
 
 
@@ -485,20 +492,25 @@ def plot_scalability(table: pd.DataFrame, path: str | Path | None = None) -> Any
     """Figs. 4.7–4.8: DAA's mean q and run time against n, one line per |A| (always connected)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(12, 4.5))
+    from taopt.plot import LINESTYLES, MARKERS, legend_outside
+
+    fig = Figure(figsize=(12, 4.8))
     q_ax, time_ax = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     rows = table[table["method"] == "DAA"]
-    for attributes, part in rows.groupby("A"):
+    for k, (attributes, part) in enumerate(rows.groupby("A")):
         part = part.sort_values("n")
-        q_ax.plot(part["n"], part["q"], "o-", label=f"|A| = {attributes}")
-        time_ax.plot(part["n"], part["runtime"], "o-", label=f"|A| = {attributes}")
-    q_ax.set_ylabel("mean q = f / f_MST")
+        style = {"ls": LINESTYLES[k % len(LINESTYLES)], "marker": MARKERS[k % len(MARKERS)]}
+        q_ax.plot(part["n"], part["q"], label=f"|A| = {attributes}", **style)
+        time_ax.plot(part["n"], part["runtime"], label=f"|A| = {attributes}", **style)
+    q_ax.set_ylabel("mean q = f / f_MST (4.21), ratio (1)")
     time_ax.set_ylabel("mean run time of a simulation (s)")
+    q_ax.set_title("DAA: solution quality against n", fontsize=10)
+    time_ax.set_title("DAA: run time against n", fontsize=10)
     for ax in (q_ax, time_ax):
-        ax.set_xlabel("targets n (m = 10)")
+        ax.set_xlabel("targets n (count; m = 10 vehicles)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        legend_outside(ax, "below", ncol=4)
     if path is not None:
         fig.tight_layout()
-        fig.savefig(str(path), dpi=120)
+        fig.savefig(str(path), dpi=120, bbox_inches="tight")
     return fig

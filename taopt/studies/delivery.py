@@ -280,20 +280,35 @@ def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | N
     """
     from matplotlib.figure import Figure
 
+    from taopt.plot import legend_outside, method_style
+
     if ax is None:
-        ax = Figure(figsize=(6, 4)).add_subplot()
+        ax = Figure(figsize=(7, 4)).add_subplot()
     table = thesis_table(df, value)
-    for method, row in table.iterrows():
-        ax.plot(row.index.astype(float), row.to_numpy(dtype=float), marker="o", label=str(method))
-    ax.set_xlabel("L / L0")
+    for k, (method, row) in enumerate(table.iterrows()):
+        ax.plot(
+            row.index.astype(float),
+            row.to_numpy(dtype=float),
+            label=str(method),
+            **method_style(str(method), k),
+        )
+    ax.set_xlabel("flight range L / L0, ratio (1)")
     ax.set_ylabel(
-        {"q": "mean q = f / f_a (5.19)", "makespan": "mean makespan (s)"}.get(value, value)
+        {
+            "q": "mean q = f / f_a (5.19), ratio (1)",
+            "makespan": "mean makespan (5.1) (s)",
+            "runtime": "mean run time (s)",
+            "seconds": "mean run time (s)",
+            "gap_to_optimum": "mean f / f_o - 1, ratio (1)",
+        }.get(value, value)
     )
-    ax.legend(fontsize=8)
+    n_scenarios = df["scenario"].nunique() if "scenario" in df else len(df)
+    ax.set_title(f"mean {value} per method against L / L0 ({n_scenarios} scenarios)", fontsize=10)
+    legend_outside(ax)
     ax.grid(alpha=0.3)
     if path is not None:
         ax.figure.tight_layout()
-        ax.figure.savefig(path, dpi=120)
+        ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     return ax
 
 

@@ -269,15 +269,19 @@ def plot_gaps(df: Any, column: str = "q_thesis", ax: Any = None, path: str | Non
     ax.boxplot(values, tick_labels=methods)
     ax.axhline(1.0, color="0.5", lw=0.8, ls="--")
     labels = {
-        "q_thesis": "q = f / f_a (2.26)",
-        "q_valid": "f / arborescence bound",
-        "q_exact": "f / optimum",
+        "q_thesis": "q = f / f_a (2.26), ratio (1)",
+        "q_valid": "f / arborescence bound, ratio (1)",
+        "q_exact": "f / optimum, ratio (1)",
     }
-    ax.set_xlabel("method")
+    ax.set_xlabel("method (box: quartiles, whiskers: 1.5 IQR, circles: outliers)")
     ax.set_ylabel(labels.get(column, column))
     n = int(data["n"].iloc[0]) if len(data) else 0
     m = int(data["m"].iloc[0]) if len(data) else 0
-    ax.set_title(f"n{n}m{m}: {data['scenario'].nunique()} scenarios")
+    ax.set_title(
+        f"{column} per method, n = {n} targets, m = {m} vehicles: "
+        f"{data['scenario'].nunique()} scenarios (dashed: 1)",
+        fontsize=10,
+    )
     if path:
         ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     return ax
