@@ -12,6 +12,7 @@ vehicles' start positions ``n..n+m-1``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -341,13 +342,43 @@ def check_schema(data: Any, kind: str, source: str | None = None) -> None:
     schemas.validate(data, kind, source)
 
 
+def check_square(rows: Any, where: str, source: str) -> None:
+    """Raise :class:`InstanceError` naming the first row of ``rows`` (a schema-checked list of
+    lists) whose length is not ``len(rows)``: a ragged or non-square matrix."""
+    for i, row in enumerate(rows):
+        if len(row) != len(rows):
+            raise InstanceError(
+                f"{source}: {where}[{i}]: expected {len(rows)} numbers "
+                f"(the matrix must be square), got {len(row)}"
+            )
+
+
+def unique_temp(path: str | os.PathLike[str], suffix: str = ".tmp") -> Path:
+    """A temporary name beside ``path`` that no other process or call uses:
+    ``.<name>.<pid>.<random>.tmp`` (hidden, so a folder listing does not show it)."""
+    import secrets
+
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(6)}{suffix}")
+
+
 def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
-    """Write JSON atomically (a temporary file renamed into place): nothing is written half."""
+    """Write JSON atomically (a temporary file renamed into place): nothing is written half.
+
+    The temporary file has a name of its own (:func:`unique_temp`), so two processes saving
+    the same path never write into one temporary file, and it is removed if anything fails.
+    """
     path = Path(path)
     text = json.dumps(data, indent=1, allow_nan=False)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    tmp = unique_temp(path)
+    try:
+        with open(tmp, "x", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
@@ -376,4 +407,6 @@ __all__ = [
     "save_json",
     "load_json",
     "check_schema",
+    "check_square",
+    "unique_temp",
 ]

@@ -29,6 +29,7 @@ from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
 from taopt.instance import Instance, load_json
+from taopt.result import Solution
 from taopt.routing.problem import AssignmentProblem
 
 DATA = Path(resources.files("taopt").joinpath("data"))
@@ -67,7 +68,10 @@ LOADERS: dict[str, tuple[Callable[[Any], Any], Callable[[Path], Any], Path]] = {
     ),
     "comm_problem": (CommProblem.from_dict, CommProblem.load, EXAMPLES / "comm_problem.json"),
     "sop_problem": (SopProblem.from_dict, SopProblem.load, EXAMPLES / "sop_problem.json"),
+    "solution": (Solution.from_dict, Solution.load, EXAMPLES / "solution.json"),
 }
+#: The seven file kinds a user hands to taopt (``field`` is also read inside an instance).
+FILE_KINDS = [kind for kind in sorted(LOADERS) if kind != "field"]
 
 
 # -- mutation --------------------------------------------------------------------------------------
@@ -185,6 +189,91 @@ def mutate_randomly(doc: Any, rng: random.Random, steps: int = 1) -> Any:
         operation = rng.choice(["replace", "replace", "delete", "insert"])
         key = rng.choice(KEYS) if rng.random() < 0.5 else rng.randint(0, 50)
         doc = apply(doc, path, operation, random_value(rng), key)
+    return doc
+
+
+#: Magnitudes that once overflowed or broke a solver (1.3e154 squared is infinite; HiGHS takes
+#: 1e20 as infinity) and values just outside the documented bound of 1e9.
+HUGE = [1.3e154, -1.3e154, 1e200, -1e200, 1e29, 1e20, 1e9 * (1 + 1e-9), -2e9, 10**18, 1e308]
+#: The mutation classes of the fuzz tests (issue 15, item 5).
+MUTATIONS = ["ragged", "huge", "numeric_string", "wrong_type", "missing_key", "unknown_key",
+             "duplicate", "self_loop"]  # fmt: skip
+
+
+def _paths_where(doc: Any, test: Callable[[Any], bool]) -> list[tuple[Any, ...]]:
+    """The JSON paths of ``doc`` whose value passes ``test``."""
+    return [path for path in nodes(doc) if test(_get(doc, path))]
+
+
+def _get(doc: Any, path: tuple[Any, ...]) -> Any:
+    for part in path:
+        doc = doc[part]
+    return doc
+
+
+def _is_real(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_int_pair(value: Any) -> bool:
+    return (
+        isinstance(value, list)
+        and len(value) >= 2
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in value[:2])
+    )
+
+
+def mutate_class(doc: Any, rng: random.Random, how: str) -> Any:
+    """One mutation of class ``how`` (see :data:`MUTATIONS`) at a random fitting place of
+    ``doc``; a class with no fitting place falls back to a wrong type."""
+    doc = copy.deepcopy(doc)
+    if how == "ragged":  # a row of a matrix (a list of lists) made shorter or longer
+        places = _paths_where(
+            doc,
+            lambda v: isinstance(v, list) and len(v) > 1 and all(isinstance(r, list) for r in v),
+        )
+        if places:
+            row = rng.choice(_get(doc, rng.choice(places)))
+            if row and rng.random() < 0.5:
+                row.pop(rng.randrange(len(row)))
+            else:
+                row.append(rng.choice(row) if row else 1.0)
+            return doc
+    elif how in ("huge", "numeric_string"):
+        places = _paths_where(doc, _is_real)
+        if places:
+            path = rng.choice(places)
+            old = _get(doc, path)
+            value = rng.choice(HUGE) if how == "huge" else rng.choice([str(old), repr(float(old))])
+            return apply(doc, path, "replace", value, None)
+    elif how in ("missing_key", "unknown_key"):
+        places = _paths_where(doc, lambda v: isinstance(v, dict) and v)
+        if places:
+            path = rng.choice(places)
+            if how == "missing_key":
+                key = rng.choice(sorted(_get(doc, path)))
+                return apply(doc, (*path, key), "delete", None, None)
+            return apply(doc, path, "insert", random_value(rng), rng.choice(KEYS))
+    elif how == "duplicate":  # an item of a list repeated (demands, edges, ids, precedences)
+        places = _paths_where(doc, lambda v: isinstance(v, list) and v)
+        if places:
+            items = _get(doc, rng.choice(places))
+            items.insert(rng.randrange(len(items) + 1), copy.deepcopy(rng.choice(items)))
+            return doc
+    elif how == "self_loop":  # an edge or a precedence from a node to itself
+        places = _paths_where(doc, _is_int_pair)
+        if places:
+            pair = _get(doc, rng.choice(places))
+            pair[1] = pair[0]
+            return doc
+    path = rng.choice(nodes(doc))
+    return apply(doc, path, "replace", random_value(rng), None)
+
+
+def mutate_by_classes(doc: Any, rng: random.Random) -> Any:
+    """One to three mutations of random classes (most often one)."""
+    for _ in range(rng.choice([1, 1, 1, 2, 3])):
+        doc = mutate_class(doc, rng, rng.choice(MUTATIONS))
     return doc
 
 
@@ -598,6 +687,59 @@ def run_file_mutations(kind: str, count: int, tmp_path: Path, seed: int) -> dict
             assert str(path) in str(exc), f"error does not name the file: {exc}"
             outcomes["refused"] += 1
     return outcomes
+
+
+def run_class_mutations(kind: str, count: int, folder: Path, seed: int) -> dict[str, int]:
+    """``count`` seeded mutations of the shipped example of ``kind`` by class (ragged rows,
+    huge magnitudes, numeric strings, wrong types, missing and unknown keys, duplicates,
+    self-loops), each written to its own file and loaded: a loaded file round-trips through
+    its schema, a refused one raised a TaoptError whose message starts with the path."""
+    rng = random.Random(seed)
+    source = read(LOADERS[kind][2])
+    from_dict, load = LOADERS[kind][0], LOADERS[kind][1]
+    outcomes = {"loaded": 0, "refused": 0}
+    for k in range(count):
+        doc = mutate_by_classes(source, rng)
+        path = folder / f"mutant-{kind}-{k}.json"
+        path.write_text(json.dumps(doc, allow_nan=True))
+        try:
+            built = load(path)
+        except TaoptError as exc:
+            assert str(exc).startswith(f"{path}: "), f"error does not start with the file: {exc}"
+            outcomes["refused"] += 1
+        else:
+            again = built.to_dict()
+            schemas.validate(again, kind)
+            assert from_dict(again).to_dict() == again
+            outcomes["loaded"] += 1
+        path.unlink()
+    return outcomes
+
+
+@pytest.mark.parametrize("kind", FILE_KINDS)
+def test_mutated_files_of_every_kind_only_raise_taopt_errors(tmp_path, kind):
+    """300 mutations by class of each kind's example, loaded from files: only TaoptErrors,
+    each starting with the file's path, and some mutants of every kind are refused."""
+    outcomes = run_class_mutations(kind, 300, tmp_path, seed=15)
+    assert outcomes["refused"] > 0 and sum(outcomes.values()) == 300
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", FILE_KINDS)
+def test_3000_mutated_files_of_every_kind_only_raise_taopt_errors(tmp_path, kind):
+    """3,000 mutations by class per kind (the issue's count): only TaoptErrors naming the file."""
+    outcomes = run_class_mutations(kind, 3000, tmp_path, seed=2026)
+    assert sum(outcomes.values()) == 3000
+
+
+@pytest.mark.parametrize("how", MUTATIONS)
+def test_every_mutation_class_changes_every_kind(how):
+    """Each mutation class finds a place to act in each kind's example (no silent no-op)."""
+    for kind in FILE_KINDS:
+        source = read(LOADERS[kind][2])
+        rng = random.Random(1)
+        changed = [mutate_class(source, rng, how) != source for _ in range(20)]
+        assert any(changed), (kind, how)
 
 
 @pytest.mark.parametrize("kind", ["instance", "delivery_instance"])
