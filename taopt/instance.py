@@ -177,6 +177,12 @@ class Instance:
             demands = tuple(t.demands)
             if not demands:
                 raise InstanceError(f"target {t.id!r} demands no capability")
+            twice = sorted({cap for cap in demands if demands.count(cap) > 1}, key=str)
+            if twice:
+                raise InstanceError(
+                    f"target {t.id!r} demands capability {twice[0]!r} twice (one visit per "
+                    "capability: list it once)"
+                )
             for cap in demands:
                 if cap not in capabilities:
                     raise InstanceError(

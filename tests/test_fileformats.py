@@ -244,7 +244,7 @@ def mutate_class(doc: Any, rng: random.Random, how: str) -> Any:
         if places:
             path = rng.choice(places)
             old = _get(doc, path)
-            value = rng.choice(HUGE) if how == "huge" else rng.choice([str(old), repr(float(old))])
+            value = rng.choice(HUGE) if how == "huge" else rng.choice([str(old), f" {old} "])
             return apply(doc, path, "replace", value, None)
     elif how in ("missing_key", "unknown_key"):
         places = _paths_where(doc, lambda v: isinstance(v, dict) and v)

@@ -19,6 +19,7 @@ classes' totals. :meth:`CapabilityProblem.classes` gives those sub-problems.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 import math
 import os
 from collections.abc import Hashable, Iterable, Mapping, Sequence
@@ -96,7 +97,9 @@ class CapabilityProblem:
     vehicle_capability : sequence of m labels
         The capability a_k of each vehicle (strings or integers).
     demands : sequence of n collections of labels
-        The capabilities each target demands (y_jq = 1), each non-empty.
+        The capabilities each target demands (y_jq = 1), each non-empty. A list naming
+        a capability twice is read as a set, with a warning (a file doing so is refused by
+        its schema).
     name : str
 
     Raises
@@ -161,6 +164,13 @@ class CapabilityProblem:
         for j, wanted in enumerate(self.demands):
             if isinstance(wanted, (str, bytes)) or not isinstance(wanted, Iterable):
                 raise InstanceError(f"demands[{j}] must be a collection of capabilities")
+            if not isinstance(wanted, (set, frozenset)):
+                wanted = list(wanted)
+                if len(set(wanted)) != len(wanted):  # documented normalisation, with a warning
+                    warnings.warn(
+                        f"demands[{j}] lists a capability twice; it is demanded once",
+                        stacklevel=3,
+                    )
             wanted = frozenset(wanted)
             if not wanted:
                 raise InstanceError(f"target {j} demands no capability")

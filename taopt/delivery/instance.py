@@ -16,6 +16,7 @@ and the depot ``w_0`` is one of them (``depot``). A precedence pair
 from __future__ import annotations
 
 import dataclasses
+import warnings
 import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -97,7 +98,8 @@ class DeliveryInstance:
         Street network on the stop indices 0..s-1; every edge has a ``"length"``
         attribute (street length, at least the straight-line distance between its two
         stops, up to a relative ``STREET_TOLERANCE``). Must be connected. It is copied
-        and frozen.
+        and frozen. A self-loop is dropped with a warning (documented normalisation; a file
+        with one is refused by :meth:`from_dict`).
     depot : int
         The stop w_0 where the truck and the drone start.
     v_drone, v_truck : float
@@ -105,7 +107,8 @@ class DeliveryInstance:
     flight_range : float
         The drone's maximum flight distance L per sortie (out and back), (5.6).
     precedences : iterable of (r, j)
-        Customer-index pairs: r is served before j (5.7). Duplicates are dropped.
+        Customer-index pairs: r is served before j (5.7). Duplicates are dropped (a file
+        listing one twice is refused by its schema).
     service_time : float
         Landing/loading time τ >= 0, paid once at the customer and once at the
         truck per sortie (0 in §5.5, 30 s in the Fig. 5.6 example).
@@ -185,7 +188,10 @@ class DeliveryInstance:
             if "length" not in data:
                 raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
             length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
-            if a == b:
+            if a == b:  # documented normalisation: a loop never shortens a truck path
+                warnings.warn(
+                    f"graph edge ({a}, {b}) is a self-loop; it is dropped", stacklevel=3
+                )
                 continue
             straight = float(np.hypot(*(stops[a] - stops[b])))
             if length < straight * (1.0 - STREET_TOLERANCE):
@@ -395,7 +401,7 @@ class DeliveryInstance:
         ------
         InstanceError
             A schema violation (naming the JSON path and the value), a street listed
-            twice, or the constructor's own complaint (bad index, a street shorter than
+            twice or joining a stop to itself, or the constructor's own complaint (bad index, a street shorter than
             the straight line, a disconnected network, a precedence cycle, ...).
         """
         check_schema(data, "delivery_instance", source)
@@ -403,6 +409,11 @@ class DeliveryInstance:
         graph.add_nodes_from(range(len(data["stops"])))
         first: dict[frozenset[int], int] = {}
         for k, (u, v, length) in enumerate(data["edges"]):
+            if int(u) == int(v):
+                raise InstanceError(
+                    f"{source or 'delivery_instance'}: edges[{k}]: the street ({int(u)}, "
+                    f"{int(v)}) joins stop {int(u)} to itself (a self-loop is not a street)"
+                )
             key = frozenset((int(u), int(v)))
             if key in first:
                 raise InstanceError(
