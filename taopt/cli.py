@@ -271,7 +271,7 @@ def add_capability_study(studies: Any) -> argparse.ArgumentParser:
         options = {"GA": ga} if ga else None
         df = capability_study(
             instances=[i.strip() for i in args.instances.split(",") if i.strip()],
-            capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
+            capabilities=args.capabilities,  # parsed and checked by capability_study
             scenarios=args.scenarios,
             methods=args.methods,
             seed=args.seed,
