@@ -124,7 +124,7 @@ class Instance:
             xmin, xmax, ymin, ymax = (float(v) for v in self.region)
         except (TypeError, ValueError):
             raise InstanceError(
-                f"region must be (xmin, xmax, ymin, ymax), got {self.region!r}"
+                f"region must be (xmin, xmax, ymin, ymax), got {plain(self.region)!r}"
             ) from None
         if (
             not all(math.isfinite(v) for v in (xmin, xmax, ymin, ymax))
@@ -132,7 +132,7 @@ class Instance:
             or ymin >= ymax
         ):
             raise InstanceError(
-                f"region {self.region!r} must be finite with xmin < xmax and ymin < ymax"
+                f"region {plain(self.region)!r} must be finite with xmin < xmax and ymin < ymax"
             )
         object.__setattr__(self, "region", (xmin, xmax, ymin, ymax))
         if not self.vehicles:
@@ -348,6 +348,18 @@ def check_schema(data: Any, kind: str, source: str | None = None) -> None:
     schemas.validate(data, kind, source)
 
 
+def plain(value: Any) -> Any:
+    """``value`` with numpy scalars made plain Python numbers (inside lists, tuples and dicts
+    too), so a message shows ``20.0``, never ``np.float64(20.0)``."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return type(value)(plain(v) for v in value)
+    if isinstance(value, dict):
+        return {plain(k): plain(v) for k, v in value.items()}
+    return value
+
+
 def check_square(rows: Any, where: str, source: str) -> None:
     """Raise :class:`InstanceError` naming the first row of ``rows`` (a schema-checked list of
     lists) whose length is not ``len(rows)``: a ragged or non-square matrix."""
@@ -414,5 +426,6 @@ __all__ = [
     "load_json",
     "check_schema",
     "check_square",
+    "plain",
     "unique_temp",
 ]

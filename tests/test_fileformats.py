@@ -777,3 +777,187 @@ def test_docs_examples_are_the_shipped_examples():
     shipped = [read(path) for path in sorted(EXAMPLES.glob("*.json"))]
     assert len(shipped) >= 7
     assert sorted(map(json.dumps, shown)) == sorted(map(json.dumps, shipped))
+
+
+# -- magnitudes, ragged rows and file names (issue 15, item 5) -----------------------------------------
+@pytest.mark.parametrize(
+    "kind, path, value, message",
+    [
+        ("instance", ("vehicles", 0, "speed"), 1.3e154, r"vehicles\[0\]\.speed: must be <= 1000000000"),
+        ("instance", ("targets", 0, "position", 0), 1e200, r"targets\[0\]\.position\[0\]: must be <="),
+        ("comm_problem", ("targets", 1, 0), 1e200, r"targets\[1\]\[0\]: must be <= 1000000000"),
+        ("comm_problem", ("vehicles", 0, 1), -1e200, r"vehicles\[0\]\[1\]: must be >= -1000000000"),
+        ("sop_problem", ("cost", 0, 1), 1e29, r"cost\[0\]\[1\]: must be <= 1000000000, got 1e\+29"),
+        ("delivery_instance", ("v_drone",), 1.3e154, r"v_drone: must be <= 1000000000"),
+        ("delivery_instance", ("v_truck",), 1e-12, r"v_truck: must be >= 1e-09"),
+        ("assignment_problem", ("cost", 1, 2), 2e9, r"cost\[1\]\[2\]: must be <= 1000000000"),
+        ("capability_problem", ("cost", "boat", 1, 2), 2e9, r"cost\.boat\[1\]\[2\]: must be <="),
+        ("solution", ("payload", "routes", 1, 0), 10**12, r"payload\.routes\[1\]\[0\]: must be <="),
+    ],
+)  # fmt: skip
+def test_magnitudes_above_the_bound_are_refused_by_name(tmp_path, kind, path, value, message):
+    """Coordinates, speeds, costs and indices beyond the documented 1e9 are refused at the
+    edge, with the file, the JSON path and the bound in the message."""
+    doc = apply(read(LOADERS[kind][2]), path, "replace", value, None)
+    file = tmp_path / f"{kind}.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+        LOADERS[kind][1](file)
+
+
+def test_values_at_the_bound_still_load():
+    """1e9 itself is allowed: a coordinate, a cost and a speed at the bound load."""
+    doc = read(EXAMPLES / "comm_problem.json")
+    doc["targets"][0] = [1e9, -1e9]
+    doc["comm_range"] = 1e9
+    assert CommProblem.from_dict(doc).targets[0].tolist() == [1e9, -1e9]
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["cost"][0][1] = 1e9
+    assert SopProblem.from_dict(doc).cost[0, 1] == 1e9
+
+
+def test_net_speed_of_huge_speeds_does_not_overflow():
+    """(3.4) at speeds of 1.3e154 (whose square overflows) gives the scaled root, not an
+    OverflowError: v_net(s v_c, s v) = s v_net(v_c, v)."""
+    from taopt.navigation.uniform import net_speed, uniform_travel_times
+
+    small_ = float(net_speed([0.3, 0.1], [1.0, 0.0], 1.0))
+    huge = float(net_speed([0.3e154, 0.1e154], [1.0, 0.0], 1.3e154 / 1.3))
+    assert huge == pytest.approx(small_ * 1e154, rel=1e-12)
+    times = uniform_travel_times([0.0, 0.0], [0.0, 0.0], [3.0, 4.0], speed=1.3e154)
+    assert float(times) == pytest.approx(5.0 / 1.3e154, rel=1e-12)
+
+
+def test_ragged_sop_cost_names_the_row_and_the_file(tmp_path):
+    """A short row of an SOP cost matrix is an InstanceError naming the file and the row, not
+    numpy's 'inhomogeneous shape' ValueError."""
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["cost"][3] = doc["cost"][3][:-1]
+    file = tmp_path / "ragged.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: cost\[3\]: expected 5"):
+        SopProblem.load(file)
+
+
+def test_tsplib_errors_start_with_the_path(tmp_path):
+    """A broken TSPLIB .sop file (bad dimension, a non-number, a huge weight) is named by its
+    full path."""
+    good = "NAME: x\nTYPE: SOP\nDIMENSION: 3\nEDGE_WEIGHT_TYPE: EXPLICIT\n"
+    good += "EDGE_WEIGHT_FORMAT: FULL_MATRIX\nEDGE_WEIGHT_SECTION\n3\n0 1 1000000\n-1 0 1\n-1 -1 0\nEOF\n"
+    file = tmp_path / "x.sop"
+    file.write_text(good)
+    assert SopProblem.load(file).n == 3
+    for old, new, message in [
+        ("DIMENSION: 3", "DIMENSION: x", "DIMENSION 'x' is not a whole number"),
+        ("0 1 1000000", "0 one 1000000", "EDGE_WEIGHT_SECTION holds a non-number"),
+        ("0 1 1000000", "0 1e29 1000000", r"weight \[0\]\[1\] = 1e\+29"),
+    ]:
+        file.write_text(good.replace(old, new))
+        with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+            SopProblem.load(file)
+
+
+# -- nothing changed silently on load (issue 15, item 9) -------------------------------------------------
+def test_duplicate_demands_are_refused_not_merged():
+    """["boat", "boat"] in a capability or instance file is an error naming both positions; in
+    Python a list with a repeat is read as a set with a warning."""
+    doc = read(EXAMPLES / "capability_problem.json")
+    doc["demands"][1] = ["boat", "boat"]
+    with pytest.raises(InstanceError, match=r'demands\[1\]: \[1\] = "boat" is listed twice'):
+        CapabilityProblem.from_dict(doc)
+    doc = read(DEMO_PATH)
+    doc["targets"][0]["demands"] = ["any", "any"]
+    with pytest.raises(InstanceError, match=r"targets\[0\]\.demands: \[1\] = \"any\" is listed"):
+        Instance.from_dict(doc)
+    cost = np.ones((3, 3))
+    with pytest.warns(UserWarning, match=r"demands\[0\] lists a capability twice"):
+        problem = CapabilityProblem(cost, 1, ("a", "a"), (["a", "a"],))
+    assert problem.demands == (frozenset({"a"}),)
+
+
+def test_duplicate_precedences_are_refused():
+    """A precedence listed twice in a delivery or SOP file is refused by name."""
+    doc = read(EXAMPLE_PATH)
+    doc["precedences"].append(list(doc["precedences"][0]))
+    with pytest.raises(InstanceError, match=r"precedences: \[\d+\] = .* is listed twice"):
+        DeliveryInstance.from_dict(doc)
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["precedences"].append([2, 1])
+    with pytest.raises(InstanceError, match=r"precedences: \[1\] = .* is listed twice"):
+        SopProblem.from_dict(doc)
+
+
+def test_street_self_loop_is_refused_in_a_file_and_warned_in_python():
+    """A street [3, 3, 0] in a file is an error naming the edge; a self-loop in a Python graph
+    is dropped with a warning (documented)."""
+    doc = read(EXAMPLE_PATH)
+    doc["edges"].append([3, 3, 0.0])
+    last = len(doc["edges"]) - 1
+    with pytest.raises(InstanceError, match=rf"edges\[{last}\]: the street \(3, 3\) joins stop 3"):
+        DeliveryInstance.from_dict(doc)
+    base = DeliveryInstance.load(EXAMPLE_PATH)
+    graph = nx_graph_with_loop(base)
+    with pytest.warns(UserWarning, match=r"graph edge \(3, 3\) is a self-loop"):
+        again = base.replace(graph=graph)
+    assert again.graph.number_of_edges() == base.graph.number_of_edges()
+
+
+def nx_graph_with_loop(instance: DeliveryInstance) -> Any:
+    """The instance's street graph plus a self-loop at stop 3."""
+    import networkx as nx
+
+    graph = nx.Graph(instance.graph)
+    graph.add_edge(3, 3, length=0.0)
+    return graph
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda d: d["payload"].update(extra=1), r"payload: unknown key 'extra'"),
+        (lambda d: d["payload"].pop("routes"), r"payload: missing 'routes'"),
+        (lambda d: d.update(payload_kind=None), r"payload: expected null"),
+        (lambda d: d["payload"].update(routes=[[0, "1"]]), r"payload\.routes\[0\]\[1\]: expected an integer"),
+        (lambda d: d.update(payload_kind="plan"), r"payload: missing 'order'"),
+        (lambda d: d.update(payload_kind="nope"), r"unknown payload kind 'nope'"),
+    ],
+)  # fmt: skip
+def test_solution_payloads_are_checked_not_dropped(tmp_path, change, message):
+    """Unknown or missing payload keys, a payload without a kind, wrong index types and an
+    unknown kind are InstanceErrors starting with the file (once KeyError/TypeError or a
+    silent drop)."""
+    doc = read(EXAMPLES / "solution.json")
+    change(doc)
+    file = tmp_path / "solution.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+        Solution.load(file)
+
+
+def test_seed_2_0_stays_2():
+    """A seed written 2.0 is the seed 2 (it became null); a Generator still records none."""
+    doc = read(EXAMPLES / "solution.json")
+    doc["seed"] = 2.0
+    assert Solution.from_dict(doc).seed == 2
+    assert Solution(1.0, "feasible", seed=np.float64(3.0)).seed == 3
+    assert Solution(1.0, "feasible", seed=np.random.default_rng(0)).seed is None
+
+
+def test_messages_print_plain_numbers():
+    """numpy scalars in constructor arguments are shown as plain numbers in messages."""
+    from taopt.instance import Target, Vehicle
+
+    f = np.float64
+    with pytest.raises(InstanceError) as info:
+        Instance(
+            vehicles=(Vehicle("v", (f(0), f(0)), f(1)),),
+            targets=(Target("t", (f(20), f(20))),),
+            region=(f(100), f(0), f(0), f(100)),
+            field=None,
+        )
+    assert "np." not in str(info.value) and "(100.0, 0.0, 0.0, 100.0)" in str(info.value)
+    with pytest.raises(InstanceError, match=r"^start = 5 is not a node index"):
+        SopProblem(np.ones((3, 3)), (), np.int64(5), 2)
+    base = DeliveryInstance.load(EXAMPLE_PATH)
+    with pytest.raises(InstanceError, match=r"precedence \(0, 0\.5\) must be an integer"):
+        base.replace(precedences=((np.int64(0), np.float64(0.5)),))

@@ -19,9 +19,9 @@ classes' totals. :meth:`CapabilityProblem.classes` gives those sub-problems.
 from __future__ import annotations
 
 import dataclasses
-import warnings
 import math
 import os
+import warnings
 from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -128,7 +128,9 @@ class CapabilityProblem:
         set_ = object.__setattr__
         n = self.n_targets
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise InstanceError(f"n_targets must be an integer >= 1, got {n!r}")
+            from taopt.instance import plain
+
+            raise InstanceError(f"n_targets must be an integer >= 1, got {plain(n)!r}")
         n = int(n)
         set_(self, "n_targets", n)
         if isinstance(self.vehicle_capability, (str, bytes)):

@@ -16,8 +16,8 @@ and the depot ``w_0`` is one of them (``depot``). A precedence pair
 from __future__ import annotations
 
 import dataclasses
-import warnings
 import os
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 
 from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
-from taopt.instance import check_schema, load_json, save_json
+from taopt.instance import check_schema, load_json, plain, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
 
@@ -63,7 +63,7 @@ def _positive(value: Any, what: str, allow_zero: bool = False) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise InstanceError(f"{what} must be a number, got {value!r}") from None
+        raise InstanceError(f"{what} must be a number, got {plain(value)!r}") from None
     if not np.isfinite(x):
         raise InstanceError(f"{what} = {x} is not finite")
     if x < 0 or (x == 0 and not allow_zero):
@@ -78,7 +78,7 @@ def _index(value: Any, what: str, size: int, kind: str) -> int:
     except (TypeError, ValueError):
         ok = False
     if not ok or isinstance(value, bool):
-        raise InstanceError(f"{what} must be an integer {kind} index, got {value!r}")
+        raise InstanceError(f"{what} must be an integer {kind} index, got {plain(value)!r}")
     if not 0 <= k < size:
         raise InstanceError(f"{what} = {k} is not a {kind} (valid: 0..{size - 1})")
     return k
@@ -189,9 +189,7 @@ class DeliveryInstance:
                 raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
             length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
             if a == b:  # documented normalisation: a loop never shortens a truck path
-                warnings.warn(
-                    f"graph edge ({a}, {b}) is a self-loop; it is dropped", stacklevel=3
-                )
+                warnings.warn(f"graph edge ({a}, {b}) is a self-loop; it is dropped", stacklevel=3)
                 continue
             straight = float(np.hypot(*(stops[a] - stops[b])))
             if length < straight * (1.0 - STREET_TOLERANCE):
@@ -244,9 +242,9 @@ class DeliveryInstance:
             try:
                 r_raw, j_raw = item
             except (TypeError, ValueError):
-                raise InstanceError(f"precedence {item!r} is not an (r, j) pair") from None
-            r = _index(r_raw, f"precedence {tuple(item)!r}", n, "customer")
-            j = _index(j_raw, f"precedence {tuple(item)!r}", n, "customer")
+                raise InstanceError(f"precedence {plain(item)!r} is not an (r, j) pair") from None
+            r = _index(r_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
+            j = _index(j_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
             if r == j:
                 raise InstanceError(f"precedence ({r}, {j}): customer {r} cannot precede itself")
             if (r, j) not in seen:

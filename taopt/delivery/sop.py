@@ -206,6 +206,8 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
         cyclic precedence, a precedence putting something before start or
         after end.
     """
+    from taopt.instance import plain
+
     try:
         cost = np.array(cost, dtype=float)
     except (TypeError, ValueError):
@@ -221,7 +223,7 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
     n = cost.shape[0]
     for label, node in (("start", start), ("end", end)):
         if isinstance(node, bool) or not (isinstance(node, (int, np.integer)) and 0 <= node < n):
-            raise InstanceError(f"{label} = {node!r} is not a node index in 0..{n - 1}")
+            raise InstanceError(f"{label} = {plain(node)!r} is not a node index in 0..{n - 1}")
     if start == end:
         raise InstanceError(f"start and end are the same node {start}")
     graph = nx.DiGraph()
@@ -230,7 +232,9 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
         try:
             r, j = (int(v) for v in pair)
         except (TypeError, ValueError, OverflowError):
-            raise InstanceError(f"precedence {pair!r} is not a pair of node indices") from None
+            raise InstanceError(
+                f"precedence {plain(pair)!r} is not a pair of node indices"
+            ) from None
         if not (0 <= r < n and 0 <= j < n):
             raise InstanceError(f"precedence ({r}, {j}) has a node outside 0..{n - 1}")
         if r == j:
