@@ -435,7 +435,7 @@ class Solution:
         InstanceError starting with the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path, "solution"), source=str(path))
+        return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Solution):

@@ -286,7 +286,7 @@ class CommProblem:
         InstanceError starting with the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path, "comm_problem"), source=str(path))
+        return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 
     def __repr__(self) -> str:
         label = f" {self.name!r}" if self.name else ""

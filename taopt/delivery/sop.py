@@ -324,7 +324,7 @@ class SopProblem:
         if path.suffix.lower() == ".json":
             from taopt.instance import load_json
 
-            return cls.from_dict(load_json(path, "sop_problem"), source=str(path))
+            return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
         cost, precedences, start, end, name = load_sop(name_or_path)
         label = str(path) if path.is_file() else str(sop_path(str(name_or_path)))
         with naming(label):
