@@ -28,15 +28,15 @@ def net_speed(drift: Any, direction: Any, speed: float) -> np.ndarray:
 
     Notes
     -----
-    (3.4)'s root is homogeneous of degree 1 in ``(v, v_c)``, so it is computed on speeds
-    divided by ``s = max(v, |v_c|)`` and multiplied back: squaring a speed of 1.3e154
-    would overflow, the scaled squares never do.
+    (3.4)'s root is homogeneous of degree 1 in ``(v, v_c)``, so speeds above 1e100 are
+    divided by ``s = max(v, |v_c|)`` and the root multiplied back: squaring a speed of
+    1.3e154 would overflow, the scaled squares never do.
     """
     drift = np.asarray(drift, dtype=float)
     direction = np.asarray(direction, dtype=float)
     speed = float(speed)
     scale = max(abs(speed), float(np.max(np.abs(drift), initial=0.0)))
-    if not np.isfinite(scale) or scale == 0.0:
+    if not np.isfinite(scale) or scale < 1e100:  # ordinary speeds: the same bits as unscaled
         scale = 1.0
     drift, speed = drift / scale, speed / scale
     along = np.sum(drift * direction, axis=-1)
