@@ -297,7 +297,7 @@ def cmd_study_capability(args: argparse.Namespace) -> int:
     options = {"GA": ga} if ga else None
     df = capability_study(
         instances=[i.strip() for i in args.sizes.split(",") if i.strip()],
-        capabilities=[int(k) for k in args.capabilities.split(",") if k.strip()],
+        capabilities=args.capabilities,  # parsed and checked by capability_study
         scenarios=args.scenarios,
         methods=args.methods,
         seed=args.seed,

@@ -12,6 +12,7 @@ vehicles' start positions ``n..n+m-1``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -123,7 +124,7 @@ class Instance:
             xmin, xmax, ymin, ymax = (float(v) for v in self.region)
         except (TypeError, ValueError):
             raise InstanceError(
-                f"region must be (xmin, xmax, ymin, ymax), got {self.region!r}"
+                f"region must be (xmin, xmax, ymin, ymax), got {plain(self.region)!r}"
             ) from None
         if (
             not all(math.isfinite(v) for v in (xmin, xmax, ymin, ymax))
@@ -131,7 +132,7 @@ class Instance:
             or ymin >= ymax
         ):
             raise InstanceError(
-                f"region {self.region!r} must be finite with xmin < xmax and ymin < ymax"
+                f"region {plain(self.region)!r} must be finite with xmin < xmax and ymin < ymax"
             )
         object.__setattr__(self, "region", (xmin, xmax, ymin, ymax))
         if not self.vehicles:
@@ -176,6 +177,12 @@ class Instance:
             demands = tuple(t.demands)
             if not demands:
                 raise InstanceError(f"target {t.id!r} demands no capability")
+            twice = sorted({cap for cap in demands if demands.count(cap) > 1}, key=str)
+            if twice:
+                raise InstanceError(
+                    f"target {t.id!r} demands capability {twice[0]!r} twice (one visit per "
+                    "capability: list it once)"
+                )
             for cap in demands:
                 if cap not in capabilities:
                     raise InstanceError(
@@ -341,13 +348,55 @@ def check_schema(data: Any, kind: str, source: str | None = None) -> None:
     schemas.validate(data, kind, source)
 
 
+def plain(value: Any) -> Any:
+    """``value`` with numpy scalars made plain Python numbers (inside lists, tuples and dicts
+    too), so a message shows ``20.0``, never ``np.float64(20.0)``."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return type(value)(plain(v) for v in value)
+    if isinstance(value, dict):
+        return {plain(k): plain(v) for k, v in value.items()}
+    return value
+
+
+def check_square(rows: Any, where: str, source: str) -> None:
+    """Raise :class:`InstanceError` naming the first row of ``rows`` (a schema-checked list of
+    lists) whose length is not ``len(rows)``: a ragged or non-square matrix."""
+    for i, row in enumerate(rows):
+        if len(row) != len(rows):
+            raise InstanceError(
+                f"{source}: {where}[{i}]: expected {len(rows)} numbers "
+                f"(the matrix must be square), got {len(row)}"
+            )
+
+
+def unique_temp(path: str | os.PathLike[str], suffix: str = ".tmp") -> Path:
+    """A temporary name beside ``path`` that no other process or call uses:
+    ``.<name>.<pid>.<random>.tmp`` (hidden, so a folder listing does not show it)."""
+    import secrets
+
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(6)}{suffix}")
+
+
 def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
-    """Write JSON atomically (a temporary file renamed into place): nothing is written half."""
+    """Write JSON atomically (a temporary file renamed into place): nothing is written half.
+
+    The temporary file has a name of its own (:func:`unique_temp`), so two processes saving
+    the same path never write into one temporary file, and it is removed if anything fails.
+    """
     path = Path(path)
     text = json.dumps(data, indent=1, allow_nan=False)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    tmp = unique_temp(path)
+    try:
+        with open(tmp, "x", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
@@ -376,4 +425,7 @@ __all__ = [
     "save_json",
     "load_json",
     "check_schema",
+    "check_square",
+    "plain",
+    "unique_temp",
 ]

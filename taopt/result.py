@@ -292,8 +292,13 @@ class Solution:
             set_(self, "bound", float(self.bound))
         set_(self, "runtime", float(self.runtime))
         if self.seed is not None:
-            if isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool):
-                set_(self, "seed", int(self.seed))
+            whole = isinstance(self.seed, (float, np.floating)) and float(self.seed).is_integer()
+            if (
+                whole
+                or isinstance(self.seed, (int, np.integer))
+                and not isinstance(self.seed, bool)
+            ):
+                set_(self, "seed", int(self.seed))  # 2.0 stays the seed 2, not null
             else:  # a Generator or other non-integer seed is not recorded
                 set_(self, "seed", None)
         set_(self, "info", dict(self.info))
@@ -375,26 +380,48 @@ class Solution:
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Solution:
-        """Inverse of :meth:`to_dict` (validated against the solution schema first)."""
-        from taopt.schemas import validate
+    def from_dict(cls, data: Mapping[str, Any], source: str | None = None) -> Solution:
+        """Inverse of :meth:`to_dict` (validated against the solution schema first).
 
-        validate(data, "solution")
+        Parameters
+        ----------
+        data : mapping
+            Parsed JSON of kind "solution".
+        source : str, optional
+            What to call the data in messages (the file path); default "solution".
+
+        Raises
+        ------
+        InstanceError
+            A schema violation (an unknown key in the payload included: the schema holds
+            the keys of each payload kind), an unknown payload kind, or a payload its type
+            refuses; the message starts with ``source``.
+        """
+        from taopt.instance import check_schema
+        from taopt.schemas import naming
+
+        label = source or "solution"
+        check_schema(data, "solution", label)
         kind = data.get("payload_kind")
-        payload = None
-        if kind is not None:
-            payload = payload_type(kind).from_dict(data["payload"])
-        objective = data["objective"]
-        return cls(
-            objective=math.nan if objective is None else objective,
-            status=data["status"],
-            solution=payload,
-            bound=data.get("bound"),
-            runtime=data.get("runtime", 0.0),
-            method=data.get("method", ""),
-            seed=data.get("seed"),
-            info=dict(data.get("info") or {}),
-        )
+        with naming(label):
+            payload = None
+            if kind is not None:
+                try:
+                    payload = payload_type(kind).from_dict(data["payload"])
+                except FeasibilityError as exc:  # a payload type's own complaint about its data
+                    raise InstanceError(f"payload: {exc}") from None
+            objective = data["objective"]
+            seed = data.get("seed")
+            return cls(
+                objective=math.nan if objective is None else objective,
+                status=data["status"],
+                solution=payload,
+                bound=data.get("bound"),
+                runtime=data.get("runtime", 0.0),
+                method=data.get("method", ""),
+                seed=None if seed is None else int(seed),  # the schema allows 2.0 for 2
+                info=dict(data.get("info") or {}),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the solution as JSON, atomically."""
@@ -404,10 +431,11 @@ class Solution:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Solution:
-        """Read a solution written by :meth:`save`."""
+        """Read a solution written by :meth:`save` (strict JSON, validated; every failure an
+        InstanceError starting with the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path))
+        return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Solution):

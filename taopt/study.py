@@ -19,7 +19,13 @@ Execution
 * Solver threads are 1 inside tasks (``OMP_NUM_THREADS`` & co., and HiGHS's ``threads``
   through ``TAOPT_SOLVER_THREADS``).
 * Every argument is validated before anything is written: an invalid call leaves the output
-  folder as it was.
+  folder as it was. Method options with a known meaning (``generations``, ``population``,
+  rates, ...) are checked here too (:data:`OPTION_RULES`), and a Dask scheduler address is
+  probed with a short connect timeout (:data:`DASK_CONNECT_TIMEOUT`) before the folder is made.
+* One writer per folder: the run holds :func:`taopt.studyio.folder_lock` (an OS-level lock)
+  while it writes; a second run on the same folder is refused at once
+  (:class:`~taopt.studyio.StudyLocked`, naming the holder's pid). A folder whose rows are all
+  finished is only read: no lock, nothing written (a read-only folder can be reported on).
 * Ctrl-C (SIGINT) or SIGTERM stops the study at once: pending tasks are cancelled, worker processes are
   killed (pool workers also die with their parent if it is killed: ``PR_SET_PDEATHSIG`` on
   Linux, plus a watchdog thread), finished rows stay on disk, and :class:`StudyInterrupted`
@@ -54,7 +60,7 @@ import pandas as pd
 from taopt.errors import InstanceError, TaoptError
 from taopt.pipeline import solve
 from taopt.registry import get_method
-from taopt.studyio import ResultsStore, normalize_key
+from taopt.studyio import ResultsStore, StudyLocked, folder_lock, normalize_key
 
 logger = logging.getLogger("taopt")
 
@@ -67,13 +73,32 @@ THREAD_ENV = {
     "TAOPT_SOLVER_THREADS": "1",
 }
 
+#: Method options a study checks before anything is written (the methods check them again):
+#: option name -> ("integer", smallest) or ("rate",) for a number in [0, 1].
+OPTION_RULES: dict[str, tuple[Any, ...]] = {
+    "generations": ("integer", 0),
+    "population": ("integer", 2),
+    "tournament": ("integer", 1),
+    "crossover_rate": ("rate",),
+    "mutation_rate": ("rate",),
+    "crossover": ("rate",),
+    "mutation": ("rate",),
+}
+#: Seconds to wait for a Dask scheduler to accept a connection before the study is refused.
+DASK_CONNECT_TIMEOUT = 5.0
+
 __all__ = [
     "Scenario",
     "StudySpec",
     "StudyInterrupted",
+    "StudyLocked",
     "run_study",
     "with_optimum",
+    "check_integer",
+    "check_positive",
+    "parse_integers",
     "RESULT_COLUMNS",
+    "OPTION_RULES",
 ]
 
 
@@ -218,6 +243,110 @@ def _scalar(value: Any) -> Any:
     return json.dumps(value)
 
 
+# -- argument checks (every study calls them before anything is written) -------------------------
+
+
+def check_integer(label: str, value: Any, low: int = 0) -> int:
+    """``value`` as an int, or :class:`InstanceError` naming ``label`` unless it is an integer
+    ``>= low`` (a float such as 3.0 is accepted as 3; ``True`` is not a count)."""
+    whole = isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value)
+    if isinstance(value, (bool, np.bool_)) or not (isinstance(value, (int, np.integer)) or whole):
+        raise InstanceError(f"{label} must be an integer >= {low}, got {_show(value)}")
+    if int(value) < low:
+        raise InstanceError(f"{label} must be an integer >= {low}, got {int(value)}")
+    return int(value)
+
+
+def check_positive(label: str, value: Any, allow_none: bool = False) -> float | None:
+    """``value`` as a float, or :class:`InstanceError` naming ``label`` unless it is a finite
+    number > 0 (``None`` passes when ``allow_none``)."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        raise InstanceError(f"{label} must be a positive number, got {_show(value)}")
+    if not (math.isfinite(float(value)) and float(value) > 0):
+        raise InstanceError(f"{label} must be a positive finite number, got {float(value):g}")
+    return float(value)
+
+
+def parse_integers(label: str, values: Any, low: int = 0) -> list[int]:
+    """A comma-separated string (``"1,3,5"``) or a sequence of integers, each ``>= low``;
+    :class:`InstanceError` naming ``label`` and the offending item otherwise."""
+    if isinstance(values, str):
+        items: list[Any] = [part.strip() for part in values.split(",") if part.strip()]
+    else:
+        items = list(values)
+    if not items:
+        raise InstanceError(f"{label}: no values given")
+    out = []
+    for item in items:
+        if isinstance(item, str):
+            try:
+                item = int(item)
+            except ValueError:
+                raise InstanceError(
+                    f"{label}: {item!r} is not an integer (expected e.g. 1,3,5)"
+                ) from None
+        out.append(check_integer(label, item, low))
+    return out
+
+
+def _show(value: Any) -> str:
+    """A value for a message: numbers plain (``20`` or ``0.5``, never ``np.float64(20.0)``)."""
+    if isinstance(value, (np.integer, np.floating)):
+        value = value.item()
+    return f"{value:g}" if isinstance(value, float) else repr(value)
+
+
+def _check_option_values(name: str, options: Mapping[str, Any]) -> None:
+    for option, value in options.items():
+        rule = OPTION_RULES.get(option)
+        if rule is None:
+            continue
+        label = f"method {name!r} option {option!r}"
+        if rule[0] == "integer":
+            check_integer(label, value, rule[1])
+        elif isinstance(value, (bool, np.bool_)) or not (
+            isinstance(value, (int, float, np.number)) and 0.0 <= float(value) <= 1.0
+        ):
+            raise InstanceError(f"{label} must be a number in [0, 1], got {_show(value)}")
+
+
+def check_dask_address(address: str, timeout: float = DASK_CONNECT_TIMEOUT) -> None:
+    """Refuse a Dask scheduler address that does not accept a TCP connection in ``timeout``
+    seconds (``tcp://host:port``, ``tls://host:port`` or ``host:port``; other transports are
+    left to Dask). Called before the study folder is created.
+
+    Raises
+    ------
+    InstanceError
+        The address is malformed or nothing answers there.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    if not isinstance(address, str) or not address.strip():
+        raise InstanceError(f"dask must be 'local' or a scheduler address, got {address!r}")
+    text = address.strip()
+    parts = urlsplit(text if "://" in text else f"tcp://{text}")
+    if parts.scheme not in ("tcp", "tls"):
+        return
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or port is None:
+        raise InstanceError(f"dask address {address!r} is not tcp://host:port")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        raise InstanceError(
+            f"no Dask scheduler at {address} ({reason} within {timeout:g} s); nothing written"
+        ) from None
+
+
 # -- the runner ---------------------------------------------------------------------------------
 
 
@@ -246,6 +375,7 @@ def _check_arguments(
     for name in dict.fromkeys([*methods, *method_options]):
         method = get_method(spec.problem_type, name)
         method.check_options(dict(method_options.get(name, {})))
+        _check_option_values(name, dict(method_options.get(name, {})))
 
 
 _POOLS: dict[int, ProcessPoolExecutor] = {}
@@ -404,7 +534,10 @@ def run_study(
     Raises
     ------
     InstanceError
-        A bad argument (nothing is written), or the folder holds rows of other settings.
+        A bad argument (nothing is written; a Dask address that does not answer included),
+        or the folder holds rows of other settings.
+    StudyLocked
+        Another study is writing to ``out_dir`` (raised at once, nothing written).
     StudyInterrupted
         Ctrl-C; the finished rows are on disk and a re-run resumes.
     """
@@ -414,26 +547,70 @@ def run_study(
     _check_arguments(spec, keys, methods, jobs, time_limit, options)
     if dask is not None and executor is not None:
         raise InstanceError("give either dask or executor, not both")
+    if dask is not None and dask != "local":
+        check_dask_address(dask)
     saved = {
         **dict(settings),
         "time_limit": None if time_limit is None else float(time_limit),
         "method_options": options,
     }
-    store = ResultsStore(
-        out_dir,
-        f"{spec.name}.csv",
-        spec.columns,
-        spec.row_key,
-        saved,
-        config=f"{spec.name}.config.json",
-    )
-    done = store.done_keys()
-    tasks = []
-    for key in keys:
-        base = [key[c] for c in spec.key_columns]
-        missing = [m for m in methods if normalize_key([*base, m]) not in done]
-        if missing:
-            tasks.append((key, missing))
+
+    def open_store(write: bool) -> tuple[ResultsStore, list[tuple[dict, list[str]]]]:
+        store = ResultsStore(
+            out_dir,
+            f"{spec.name}.csv",
+            spec.columns,
+            spec.row_key,
+            saved,
+            config=f"{spec.name}.config.json",
+            write=write,
+        )
+        done = store.done_keys()
+        tasks = []
+        for key in keys:
+            base = [key[c] for c in spec.key_columns]
+            missing = [m for m in methods if normalize_key([*base, m]) not in done]
+            if missing:
+                tasks.append((key, missing))
+        return store, tasks
+
+    store, tasks = open_store(write=False)  # reading needs no lock and writes nothing
+    if not tasks:
+        return _table(store.read(), spec, keys, methods)
+    with folder_lock(out_dir):
+        store, tasks = open_store(write=True)  # again under the lock: rows may have landed
+        _run_tasks(
+            spec,
+            store,
+            keys,
+            tasks,
+            saved,
+            jobs,
+            dask,
+            executor,
+            time_limit,
+            options,
+            context,
+            progress,
+        )
+    return _table(store.read(), spec, keys, methods)
+
+
+def _run_tasks(
+    spec: StudySpec,
+    store: ResultsStore,
+    keys: Sequence[Mapping[str, Any]],
+    tasks: Sequence[tuple[dict, list[str]]],
+    saved: Mapping[str, Any],
+    jobs: int,
+    dask: str | None,
+    executor: Executor | None,
+    time_limit: float | None,
+    options: Mapping[str, Mapping[str, Any]],
+    context: Mapping[str, Any] | None,
+    progress: bool,
+) -> None:
+    """Run ``tasks`` on the executor and append each scenario's rows as it finishes."""
     worker_settings = {**saved, "context": dict(context or {})}
 
     from tqdm.auto import tqdm
@@ -478,7 +655,6 @@ def run_study(
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
-    return _table(store.read(), spec, keys, methods)
 
 
 def _flag_uncertified(

@@ -16,9 +16,14 @@ keeps them in one CSV file so that a re-run computes only what is missing:
   with a single write, flushed and fsync'd, as soon as it is known. A line cut by
   a crash lacks that last field (or has fewer fields), so it is recognised.
 * **Opening.** Torn or unreadable lines and repeated keys (the first is kept) are
-  dropped and the file is rewritten atomically (temporary file, ``os.replace``)
-  before anything is appended, so a torn line never joins the next row. Finished
-  rows are never dropped, whichever methods are asked for now.
+  dropped and the file is rewritten atomically (a temporary file of this process,
+  ``os.replace``; removed if anything fails) before anything is appended, so a torn
+  line never joins the next row. Finished rows are never dropped, whichever methods
+  are asked for now. A store opened with ``write=False`` only reads (a finished,
+  read-only folder can be reported on).
+* **One writer.** :func:`folder_lock` holds an OS-level lock (``filelock``) on the
+  folder while a study writes to it; a second writer is refused at once with
+  :class:`StudyLocked`, naming the folder and the holder's pid.
 
 Example
 -------
@@ -31,24 +36,99 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+import socket
+import time
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from taopt.errors import InstanceError
-from taopt.instance import load_json, save_json
+from taopt.errors import InstanceError, TaoptError
+from taopt.instance import load_json, save_json, unique_temp
 
 COMPLETE = "complete"
 CONFIG = "config.json"
+#: The lock file of a study folder, and the note naming its holder.
+LOCK = ".taopt-study.lock"
+OWNER = ".taopt-study.owner.json"
 
-__all__ = ["COMPLETE", "CONFIG", "ResultsStore", "normalize_key"]
+__all__ = [
+    "COMPLETE",
+    "CONFIG",
+    "LOCK",
+    "ResultsStore",
+    "StudyLocked",
+    "folder_lock",
+    "normalize_key",
+]
+
+
+class StudyLocked(TaoptError, RuntimeError):
+    """Another process is writing to this study folder."""
+
+
+def _holder(folder: Path) -> str:
+    """`` (pid 123 on host, since ...)`` from the owner note, or ``""``."""
+    try:
+        note = json.loads((folder / OWNER).read_text(encoding="utf-8"))
+        return f" (pid {int(note['pid'])} on {note['host']}, since {note['since']})"
+    except (OSError, ValueError, KeyError, TypeError):
+        return ""
+
+
+@contextlib.contextmanager
+def folder_lock(folder: str | os.PathLike[str]) -> Iterator[Path]:
+    """Hold the one-writer lock of a study folder (created if missing) while the block runs.
+
+    The lock is the operating system's (``flock`` through :mod:`filelock`), so it is freed
+    when the holder exits, however it exits (``kill -9`` included); a note beside it names
+    the holder's pid for the message a second writer gets. Reading a folder needs no lock.
+
+    Raises
+    ------
+    StudyLocked
+        Another process (or another study of this one) holds the folder; raised at once.
+    InstanceError
+        The folder cannot be created or written.
+    """
+    from filelock import FileLock, Timeout
+
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InstanceError(f"{folder}: cannot create the study folder ({exc.strerror})") from None
+    lock = FileLock(str(folder / LOCK), timeout=0)
+    try:
+        lock.acquire()
+    except Timeout:
+        raise StudyLocked(
+            f"{folder} is in use by another study{_holder(folder)}; wait for it to finish "
+            "or give another output folder"
+        ) from None
+    except OSError as exc:
+        detail = exc.strerror or str(exc)
+        raise InstanceError(f"{folder}: cannot lock the study folder ({detail})") from None
+    try:
+        note = {
+            "pid": os.getpid(),
+            "host": socket.gethostname(),
+            "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        with contextlib.suppress(OSError):
+            save_json(note, folder / OWNER)
+        yield folder
+    finally:
+        with contextlib.suppress(OSError):
+            (folder / OWNER).unlink()
+        lock.release()
 
 
 def normalize_key(values: Iterable[Any]) -> tuple[Any, ...]:
@@ -92,6 +172,11 @@ class ResultsStore:
         JSON-able description of everything that changes the results.
     config : str
         Name of the settings file inside ``folder`` (``config.json``).
+    write : bool
+        False: only read (nothing is created or rewritten, :meth:`append` refuses), so a
+        finished folder on a read-only disk can be reported on. True (the default):
+        create the folder, save the settings and clean the file; hold
+        :func:`folder_lock` around a writing store.
 
     Raises
     ------
@@ -108,6 +193,7 @@ class ResultsStore:
         key_columns: Sequence[str],
         settings: Mapping[str, Any],
         config: str = CONFIG,
+        write: bool = True,
     ) -> None:
         self.data_columns = [c for c in columns if c != COMPLETE]
         self.columns = self.data_columns + [COMPLETE]
@@ -116,19 +202,32 @@ class ResultsStore:
         if missing or not self.key_columns:
             raise InstanceError(f"key columns {missing or '[]'} are not among {self.data_columns}")
         self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
         self.path = self.folder / filename
         self.config_path = self.folder / config
         self.settings = _plain(settings)
+        self.writable = bool(write)
         # 1. settings first: a refused open touches nothing
         lines, self.dropped = self._clean_lines()
         self._check_settings(has_rows=bool(lines))
-        save_json(self.settings, self.config_path)
+        self._done = {self._line_key(line) for line in lines}
+        if not self.writable:
+            return
+        self.folder.mkdir(parents=True, exist_ok=True)
+        if self._saved_settings() != self.settings:
+            save_json(self.settings, self.config_path)
         # 2. a clean file (header + finished rows) before any append
         self._rewrite(lines)
-        self._done = {self._line_key(line) for line in lines}
 
     # -- settings --------------------------------------------------------------------------
+    def _saved_settings(self) -> Any:
+        """The settings file's data, or None if it is missing or unreadable."""
+        if not self.config_path.exists():
+            return None
+        try:
+            return load_json(self.config_path)
+        except InstanceError:
+            return None
+
     def _check_settings(self, has_rows: bool) -> None:
         if not self.config_path.exists():
             if has_rows:
@@ -199,13 +298,26 @@ class ResultsStore:
         return _parse_key([fields[self.columns.index(c)] for c in self.key_columns])
 
     def _rewrite(self, lines: list[str]) -> None:
-        tmp = self.path.with_name(self.path.name + ".tmp")
-        with open(tmp, "w", encoding="utf-8", newline="") as handle:
-            handle.write(",".join(self.columns) + "\n")
-            handle.writelines(lines)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, self.path)
+        """Write the header and ``lines`` atomically, unless the file already holds exactly
+        that (a clean file is left alone: a finished folder is not rewritten)."""
+        text = ",".join(self.columns) + "\n" + "".join(lines)
+        with contextlib.suppress(OSError):
+            if self.path.read_bytes() == text.encode("utf-8"):
+                return
+        tmp = unique_temp(self.path)
+        try:
+            with open(tmp, "x", encoding="utf-8", newline="") as handle:
+                handle.write(text)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.replace(tmp, self.path)
+        except OSError as exc:
+            raise InstanceError(
+                f"{self.path}: cannot be rewritten ({exc.strerror or exc}); is the folder "
+                "read-only?"
+            ) from None
+        finally:
+            tmp.unlink(missing_ok=True)
 
     def done_keys(self) -> set[tuple[Any, ...]]:
         """Keys (normalised with :func:`normalize_key`) of the finished rows."""
@@ -230,6 +342,8 @@ class ResultsStore:
         Rows whose key is already finished are skipped: a finished row is never
         replaced.
         """
+        if not self.writable:
+            raise InstanceError(f"{self.path}: opened read-only (write=False); cannot append")
         fresh = []
         for row in rows:
             missing = [c for c in self.data_columns if c not in row]

@@ -29,6 +29,7 @@ from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
 from taopt.instance import Instance, load_json
+from taopt.result import Solution
 from taopt.routing.problem import AssignmentProblem
 
 DATA = Path(resources.files("taopt").joinpath("data"))
@@ -67,7 +68,10 @@ LOADERS: dict[str, tuple[Callable[[Any], Any], Callable[[Path], Any], Path]] = {
     ),
     "comm_problem": (CommProblem.from_dict, CommProblem.load, EXAMPLES / "comm_problem.json"),
     "sop_problem": (SopProblem.from_dict, SopProblem.load, EXAMPLES / "sop_problem.json"),
+    "solution": (Solution.from_dict, Solution.load, EXAMPLES / "solution.json"),
 }
+#: The seven file kinds a user hands to taopt (``field`` is also read inside an instance).
+FILE_KINDS = [kind for kind in sorted(LOADERS) if kind != "field"]
 
 
 # -- mutation --------------------------------------------------------------------------------------
@@ -185,6 +189,96 @@ def mutate_randomly(doc: Any, rng: random.Random, steps: int = 1) -> Any:
         operation = rng.choice(["replace", "replace", "delete", "insert"])
         key = rng.choice(KEYS) if rng.random() < 0.5 else rng.randint(0, 50)
         doc = apply(doc, path, operation, random_value(rng), key)
+    return doc
+
+
+#: Magnitudes that once overflowed or broke a solver (1.3e154 squared is infinite; HiGHS takes
+#: 1e20 as infinity) and values just outside the documented bound of 1e9.
+HUGE = [1.3e154, -1.3e154, 1e200, -1e200, 1e29, 1e20, 1e9 * (1 + 1e-9), -2e9, 10**18, 1e308]
+#: The mutation classes of the fuzz tests (issue 15, item 5).
+MUTATIONS = ["ragged", "huge", "numeric_string", "wrong_type", "missing_key", "unknown_key",
+             "duplicate", "self_loop"]  # fmt: skip
+
+
+def _paths_where(doc: Any, test: Callable[[Any], bool]) -> list[tuple[Any, ...]]:
+    """The JSON paths of ``doc`` whose value passes ``test``."""
+    return [path for path in nodes(doc) if test(_get(doc, path))]
+
+
+def _get(doc: Any, path: tuple[Any, ...]) -> Any:
+    for part in path:
+        doc = doc[part]
+    return doc
+
+
+def _is_real(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_int_pair(value: Any) -> bool:
+    return (
+        isinstance(value, list)
+        and len(value) >= 2
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in value[:2])
+    )
+
+
+def _is_matrix(value: Any) -> bool:
+    return isinstance(value, list) and len(value) > 1 and all(isinstance(r, list) for r in value)
+
+
+#: Where each mutation class can act: a predicate on the values of a document.
+PLACES: dict[str, Callable[[Any], bool]] = {
+    "ragged": _is_matrix,  # a row of a matrix made shorter or longer
+    "huge": _is_real,
+    "numeric_string": _is_real,
+    "wrong_type": lambda value: True,
+    "missing_key": lambda value: isinstance(value, dict) and bool(value),
+    "unknown_key": lambda value: isinstance(value, dict) and bool(value),
+    "duplicate": lambda value: isinstance(value, list) and bool(value),  # demands, edges, ...
+    "self_loop": _is_int_pair,  # an edge or a precedence from a node to itself
+}
+
+
+def mutate_class(doc: Any, rng: random.Random, how: str) -> Any:
+    """One mutation of class ``how`` (see :data:`MUTATIONS`) at a random fitting place of
+    ``doc`` (:data:`PLACES`); a class with no fitting place falls back to a wrong type."""
+    doc = copy.deepcopy(doc)
+    places = _paths_where(doc, PLACES[how]) if how != "wrong_type" else []
+    if how == "ragged" and places:
+        row = rng.choice(_get(doc, rng.choice(places)))
+        if row and rng.random() < 0.5:
+            row.pop(rng.randrange(len(row)))
+        else:
+            row.append(rng.choice(row) if row else 1.0)
+        return doc
+    if how in ("huge", "numeric_string") and places:
+        path = rng.choice(places)
+        old = _get(doc, path)
+        value = rng.choice(HUGE) if how == "huge" else rng.choice([str(old), f" {old} "])
+        return apply(doc, path, "replace", value, None)
+    if how in ("missing_key", "unknown_key") and places:
+        path = rng.choice(places)
+        if how == "missing_key":
+            key = rng.choice(sorted(_get(doc, path)))
+            return apply(doc, (*path, key), "delete", None, None)
+        return apply(doc, path, "insert", random_value(rng), rng.choice(KEYS))
+    if how == "duplicate" and places:
+        items = _get(doc, rng.choice(places))
+        items.insert(rng.randrange(len(items) + 1), copy.deepcopy(rng.choice(items)))
+        return doc
+    if how == "self_loop" and places:
+        pair = _get(doc, rng.choice(places))
+        pair[1] = pair[0]
+        return doc
+    path = rng.choice(nodes(doc))
+    return apply(doc, path, "replace", random_value(rng), None)
+
+
+def mutate_by_classes(doc: Any, rng: random.Random) -> Any:
+    """One to three mutations of random classes (most often one)."""
+    for _ in range(rng.choice([1, 1, 1, 2, 3])):
+        doc = mutate_class(doc, rng, rng.choice(MUTATIONS))
     return doc
 
 
@@ -600,6 +694,65 @@ def run_file_mutations(kind: str, count: int, tmp_path: Path, seed: int) -> dict
     return outcomes
 
 
+def run_class_mutations(kind: str, count: int, folder: Path, seed: int) -> dict[str, int]:
+    """``count`` seeded mutations of the shipped example of ``kind`` by class (ragged rows,
+    huge magnitudes, numeric strings, wrong types, missing and unknown keys, duplicates,
+    self-loops), each written to its own file and loaded: a loaded file round-trips through
+    its schema, a refused one raised a TaoptError whose message starts with the path."""
+    rng = random.Random(seed)
+    source = read(LOADERS[kind][2])
+    from_dict, load = LOADERS[kind][0], LOADERS[kind][1]
+    outcomes = {"loaded": 0, "refused": 0}
+    for k in range(count):
+        doc = mutate_by_classes(source, rng)
+        path = folder / f"mutant-{kind}-{k}.json"
+        path.write_text(json.dumps(doc, allow_nan=True))
+        try:
+            built = load(path)
+        except TaoptError as exc:
+            assert str(exc).startswith(f"{path}: "), f"error does not start with the file: {exc}"
+            outcomes["refused"] += 1
+        else:
+            again = built.to_dict()
+            schemas.validate(again, kind)
+            assert from_dict(again).to_dict() == again
+            outcomes["loaded"] += 1
+        path.unlink()
+    return outcomes
+
+
+@pytest.mark.parametrize("kind", FILE_KINDS)
+def test_mutated_files_of_every_kind_only_raise_taopt_errors(tmp_path, kind):
+    """300 mutations by class of each kind's example, loaded from files: only TaoptErrors,
+    each starting with the file's path, and some mutants of every kind are refused."""
+    outcomes = run_class_mutations(kind, 300, tmp_path, seed=15)
+    assert outcomes["refused"] > 0 and sum(outcomes.values()) == 300
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", FILE_KINDS)
+def test_3000_mutated_files_of_every_kind_only_raise_taopt_errors(tmp_path, kind):
+    """3,000 mutations by class per kind (the issue's count): only TaoptErrors naming the file."""
+    outcomes = run_class_mutations(kind, 3000, tmp_path, seed=2026)
+    assert sum(outcomes.values()) == 3000
+
+
+def test_mutation_classes_find_their_places():
+    """Each mutation class has places to act in the examples it is meant for: matrices to make
+    ragged in every matrix kind, numbers and objects everywhere, index pairs to turn into
+    self-loops in the delivery, SOP and solution examples."""
+    fits = {
+        how: {kind for kind in FILE_KINDS if _paths_where(read(LOADERS[kind][2]), PLACES[how])}
+        for how in MUTATIONS
+    }
+    every = set(FILE_KINDS)
+    assert fits["huge"] == fits["numeric_string"] == fits["missing_key"] == every
+    assert fits["duplicate"] == every
+    matrices = {"assignment_problem", "capability_problem", "sop_problem", "comm_problem"}
+    assert matrices | {"delivery_instance", "solution"} <= fits["ragged"]
+    assert {"delivery_instance", "sop_problem", "solution"} <= fits["self_loop"]
+
+
 @pytest.mark.parametrize("kind", ["instance", "delivery_instance"])
 def test_200_mutated_files_only_raise_taopt_errors(tmp_path, kind):
     """200 random mutations of demo.json / delivery_example_20.json, loaded from files: every
@@ -635,3 +788,187 @@ def test_docs_examples_are_the_shipped_examples():
     shipped = [read(path) for path in sorted(EXAMPLES.glob("*.json"))]
     assert len(shipped) >= 7
     assert sorted(map(json.dumps, shown)) == sorted(map(json.dumps, shipped))
+
+
+# -- magnitudes, ragged rows and file names (issue 15, item 5) -----------------------------------------
+@pytest.mark.parametrize(
+    "kind, path, value, message",
+    [
+        ("instance", ("vehicles", 0, "speed"), 1.3e154, r"vehicles\[0\]\.speed: must be <= 1000000000"),
+        ("instance", ("targets", 0, "position", 0), 1e200, r"targets\[0\]\.position\[0\]: must be <="),
+        ("comm_problem", ("targets", 1, 0), 1e200, r"targets\[1\]\[0\]: must be <= 1000000000"),
+        ("comm_problem", ("vehicles", 0, 1), -1e200, r"vehicles\[0\]\[1\]: must be >= -1000000000"),
+        ("sop_problem", ("cost", 0, 1), 1e29, r"cost\[0\]\[1\]: must be <= 1000000000, got 1e\+29"),
+        ("delivery_instance", ("v_drone",), 1.3e154, r"v_drone: must be <= 1000000000"),
+        ("delivery_instance", ("v_truck",), 1e-12, r"v_truck: must be >= 1e-09"),
+        ("assignment_problem", ("cost", 1, 2), 2e9, r"cost\[1\]\[2\]: must be <= 1000000000"),
+        ("capability_problem", ("cost", "boat", 1, 2), 2e9, r"cost\.boat\[1\]\[2\]: must be <="),
+        ("solution", ("payload", "routes", 1, 0), 10**12, r"payload\.routes\[1\]\[0\]: must be <="),
+    ],
+)  # fmt: skip
+def test_magnitudes_above_the_bound_are_refused_by_name(tmp_path, kind, path, value, message):
+    """Coordinates, speeds, costs and indices beyond the documented 1e9 are refused at the
+    edge, with the file, the JSON path and the bound in the message."""
+    doc = apply(read(LOADERS[kind][2]), path, "replace", value, None)
+    file = tmp_path / f"{kind}.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+        LOADERS[kind][1](file)
+
+
+def test_values_at_the_bound_still_load():
+    """1e9 itself is allowed: a coordinate, a cost and a speed at the bound load."""
+    doc = read(EXAMPLES / "comm_problem.json")
+    doc["targets"][0] = [1e9, -1e9]
+    doc["comm_range"] = 1e9
+    assert CommProblem.from_dict(doc).targets[0].tolist() == [1e9, -1e9]
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["cost"][0][1] = 1e9
+    assert SopProblem.from_dict(doc).cost[0, 1] == 1e9
+
+
+def test_net_speed_of_huge_speeds_does_not_overflow():
+    """(3.4) at speeds of 1.3e154 (whose square overflows) gives the scaled root, not an
+    OverflowError: v_net(s v_c, s v) = s v_net(v_c, v)."""
+    from taopt.navigation.uniform import net_speed, uniform_travel_times
+
+    small_ = float(net_speed([0.3, 0.1], [1.0, 0.0], 1.0))
+    huge = float(net_speed([0.3e154, 0.1e154], [1.0, 0.0], 1.3e154 / 1.3))
+    assert huge == pytest.approx(small_ * 1e154, rel=1e-12)
+    times = uniform_travel_times([0.0, 0.0], [0.0, 0.0], [3.0, 4.0], speed=1.3e154)
+    assert float(times) == pytest.approx(5.0 / 1.3e154, rel=1e-12)
+
+
+def test_ragged_sop_cost_names_the_row_and_the_file(tmp_path):
+    """A short row of an SOP cost matrix is an InstanceError naming the file and the row, not
+    numpy's 'inhomogeneous shape' ValueError."""
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["cost"][3] = doc["cost"][3][:-1]
+    file = tmp_path / "ragged.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: cost\[3\]: expected 5"):
+        SopProblem.load(file)
+
+
+def test_tsplib_errors_start_with_the_path(tmp_path):
+    """A broken TSPLIB .sop file (bad dimension, a non-number, a huge weight) is named by its
+    full path."""
+    good = "NAME: x\nTYPE: SOP\nDIMENSION: 3\nEDGE_WEIGHT_TYPE: EXPLICIT\n"
+    good += "EDGE_WEIGHT_FORMAT: FULL_MATRIX\nEDGE_WEIGHT_SECTION\n3\n0 1 1000000\n-1 0 1\n-1 -1 0\nEOF\n"
+    file = tmp_path / "x.sop"
+    file.write_text(good)
+    assert SopProblem.load(file).n == 3
+    for old, new, message in [
+        ("DIMENSION: 3", "DIMENSION: x", "DIMENSION 'x' is not a whole number"),
+        ("0 1 1000000", "0 one 1000000", "EDGE_WEIGHT_SECTION holds a non-number"),
+        ("0 1 1000000", "0 1e29 1000000", r"weight \[0\]\[1\] = 1e\+29"),
+    ]:
+        file.write_text(good.replace(old, new))
+        with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+            SopProblem.load(file)
+
+
+# -- nothing changed silently on load (issue 15, item 9) -------------------------------------------------
+def test_duplicate_demands_are_refused_not_merged():
+    """["boat", "boat"] in a capability or instance file is an error naming both positions; in
+    Python a list with a repeat is read as a set with a warning."""
+    doc = read(EXAMPLES / "capability_problem.json")
+    doc["demands"][1] = ["boat", "boat"]
+    with pytest.raises(InstanceError, match=r'demands\[1\]: \[1\] = "boat" is listed twice'):
+        CapabilityProblem.from_dict(doc)
+    doc = read(DEMO_PATH)
+    doc["targets"][0]["demands"] = ["any", "any"]
+    with pytest.raises(InstanceError, match=r"targets\[0\]\.demands: \[1\] = \"any\" is listed"):
+        Instance.from_dict(doc)
+    cost = np.ones((3, 3))
+    with pytest.warns(UserWarning, match=r"demands\[0\] lists a capability twice"):
+        problem = CapabilityProblem(cost, 1, ("a", "a"), (["a", "a"],))
+    assert problem.demands == (frozenset({"a"}),)
+
+
+def test_duplicate_precedences_are_refused():
+    """A precedence listed twice in a delivery or SOP file is refused by name."""
+    doc = read(EXAMPLE_PATH)
+    doc["precedences"].append(list(doc["precedences"][0]))
+    with pytest.raises(InstanceError, match=r"precedences: \[\d+\] = .* is listed twice"):
+        DeliveryInstance.from_dict(doc)
+    doc = read(EXAMPLES / "sop_problem.json")
+    doc["precedences"].append([2, 1])
+    with pytest.raises(InstanceError, match=r"precedences: \[1\] = .* is listed twice"):
+        SopProblem.from_dict(doc)
+
+
+def test_street_self_loop_is_refused_in_a_file_and_warned_in_python():
+    """A street [3, 3, 0] in a file is an error naming the edge; a self-loop in a Python graph
+    is dropped with a warning (documented)."""
+    doc = read(EXAMPLE_PATH)
+    doc["edges"].append([3, 3, 0.0])
+    last = len(doc["edges"]) - 1
+    with pytest.raises(InstanceError, match=rf"edges\[{last}\]: the street \(3, 3\) joins stop 3"):
+        DeliveryInstance.from_dict(doc)
+    base = DeliveryInstance.load(EXAMPLE_PATH)
+    graph = nx_graph_with_loop(base)
+    with pytest.warns(UserWarning, match=r"graph edge \(3, 3\) is a self-loop"):
+        again = base.replace(graph=graph)
+    assert again.graph.number_of_edges() == base.graph.number_of_edges()
+
+
+def nx_graph_with_loop(instance: DeliveryInstance) -> Any:
+    """The instance's street graph plus a self-loop at stop 3."""
+    import networkx as nx
+
+    graph = nx.Graph(instance.graph)
+    graph.add_edge(3, 3, length=0.0)
+    return graph
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda d: d["payload"].update(extra=1), r"payload: unknown key 'extra'"),
+        (lambda d: d["payload"].pop("routes"), r"payload: missing 'routes'"),
+        (lambda d: d.update(payload_kind=None), r"payload: expected null"),
+        (lambda d: d["payload"].update(routes=[[0, "1"]]), r"payload\.routes\[0\]\[1\]: expected an integer"),
+        (lambda d: d.update(payload_kind="plan"), r"payload: missing 'order'"),
+        (lambda d: d.update(payload_kind="nope"), r"unknown payload kind 'nope'"),
+    ],
+)  # fmt: skip
+def test_solution_payloads_are_checked_not_dropped(tmp_path, change, message):
+    """Unknown or missing payload keys, a payload without a kind, wrong index types and an
+    unknown kind are InstanceErrors starting with the file (once KeyError/TypeError or a
+    silent drop)."""
+    doc = read(EXAMPLES / "solution.json")
+    change(doc)
+    file = tmp_path / "solution.json"
+    file.write_text(json.dumps(doc))
+    with pytest.raises(InstanceError, match=rf"^{re.escape(str(file))}: {message}"):
+        Solution.load(file)
+
+
+def test_seed_2_0_stays_2():
+    """A seed written 2.0 is the seed 2 (it became null); a Generator still records none."""
+    doc = read(EXAMPLES / "solution.json")
+    doc["seed"] = 2.0
+    assert Solution.from_dict(doc).seed == 2
+    assert Solution(1.0, "feasible", seed=np.float64(3.0)).seed == 3
+    assert Solution(1.0, "feasible", seed=np.random.default_rng(0)).seed is None
+
+
+def test_messages_print_plain_numbers():
+    """numpy scalars in constructor arguments are shown as plain numbers in messages."""
+    from taopt.instance import Target, Vehicle
+
+    f = np.float64
+    with pytest.raises(InstanceError) as info:
+        Instance(
+            vehicles=(Vehicle("v", (f(0), f(0)), f(1)),),
+            targets=(Target("t", (f(20), f(20))),),
+            region=(f(100), f(0), f(0), f(100)),
+            field=None,
+        )
+    assert "np." not in str(info.value) and "(100.0, 0.0, 0.0, 100.0)" in str(info.value)
+    with pytest.raises(InstanceError, match=r"^start = 5 is not a node index"):
+        SopProblem(np.ones((3, 3)), (), np.int64(5), 2)
+    base = DeliveryInstance.load(EXAMPLE_PATH)
+    with pytest.raises(InstanceError, match=r"precedence \(0, 0\.5\) must be an integer"):
+        base.replace(precedences=((np.int64(0), np.float64(0.5)),))

@@ -4,12 +4,17 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import subprocess
+import sys
+import time
 
 import pandas as pd
 import pytest
 
 from taopt.errors import InstanceError
-from taopt.studyio import ResultsStore, normalize_key
+from taopt.instance import save_json, unique_temp
+from taopt.studyio import LOCK, ResultsStore, StudyLocked, folder_lock, normalize_key
 
 COLUMNS = ["k", "ratio", "method", "value", "status"]
 KEY = ["k", "ratio", "method"]
@@ -139,3 +144,94 @@ def test_torn_header_only(tmp_path):
     store = open_store(tmp_path)
     store.append(rows(0))
     assert len(strict_lines(tmp_path / "rows.csv")) == 2
+
+
+# -- one writer, temporary files, read-only folders (issue 15, item 7) --------------------------------
+def test_second_writer_in_this_process_is_refused_at_once(tmp_path):
+    """While a folder is locked, a second lock is refused at once, naming the folder and pid;
+    after release it can be taken again."""
+    with folder_lock(tmp_path / "study"):
+        started = time.monotonic()
+        with pytest.raises(StudyLocked, match=rf"in use by another study \(pid {os.getpid()} "):
+            with folder_lock(tmp_path / "study"):
+                pass
+        assert time.monotonic() - started < 2
+    with folder_lock(tmp_path / "study"):
+        pass
+
+
+def test_lock_held_by_another_process_is_refused_and_freed_when_it_dies(tmp_path):
+    """A lock held by another process refuses this one with its pid; killed with SIGKILL, the
+    holder frees the folder (an OS lock, not a stale file)."""
+    folder = tmp_path / "study"
+    code = (
+        "import sys, time\n"
+        "from taopt.studyio import folder_lock\n"
+        f"with folder_lock({str(folder)!r}):\n"
+        "    print('held', flush=True)\n"
+        "    time.sleep(60)\n"
+    )
+    holder = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(StudyLocked, match=rf"{folder}.*pid {holder.pid} "):
+            with folder_lock(folder):
+                pass
+    finally:
+        holder.kill()
+        holder.wait()
+    with folder_lock(folder):
+        assert (folder / LOCK).exists()
+
+
+def test_unique_temp_names_per_call_and_process(tmp_path):
+    """Temporary names are hidden, carry the pid and never repeat."""
+    names = {unique_temp(tmp_path / "m.npy", ".tmp.npy") for _ in range(50)}
+    assert len(names) == 50
+    assert all(p.name.startswith(".m.npy.") and f".{os.getpid()}." in p.name for p in names)
+    assert all(p.name.endswith(".tmp.npy") for p in names)
+
+
+def test_failed_rewrite_leaves_no_temporary_file(tmp_path, monkeypatch):
+    """When the CSV cannot be replaced (an immutable file), the error names it and no .tmp
+    is left behind; save_json cleans up the same way."""
+    store = open_store(tmp_path)
+    store.append(rows(0))
+    with open(store.path, "a") as handle:
+        handle.write("torn,line")  # forces a rewrite on the next open
+
+    def refuse(src, dst):
+        raise PermissionError(1, "Operation not permitted", str(dst))
+
+    monkeypatch.setattr(os, "replace", refuse)
+    with pytest.raises(InstanceError, match=r"rows\.csv: cannot be rewritten"):
+        open_store(tmp_path)
+    with pytest.raises(PermissionError):
+        save_json({"a": 1}, tmp_path / "x.json")
+    assert not [p.name for p in tmp_path.iterdir() if "tmp" in p.name]
+
+
+def test_read_only_store_writes_nothing(tmp_path):
+    """write=False reads the finished rows of a folder without creating, saving or rewriting
+    anything, and refuses to append."""
+    store = open_store(tmp_path / "study")
+    store.append(rows(0) + rows(1))
+    before = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "study").iterdir()}
+    reader = ResultsStore(tmp_path / "study", "rows.csv", COLUMNS, KEY, SETTINGS, write=False)
+    assert len(reader.read()) == 4 and len(reader.done_keys()) == 4
+    with pytest.raises(InstanceError, match="read-only"):
+        reader.append(rows(2))
+    after = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "study").iterdir()}
+    assert after == before
+    missing = ResultsStore(tmp_path / "none", "rows.csv", COLUMNS, KEY, SETTINGS, write=False)
+    assert missing.done_keys() == set() and not (tmp_path / "none").exists()
+
+
+def test_clean_file_is_not_rewritten(tmp_path):
+    """Reopening a clean file with the same settings leaves both files untouched."""
+    store = open_store(tmp_path)
+    store.append(rows(0))
+    before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+    time.sleep(0.01)
+    open_store(tmp_path)
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before

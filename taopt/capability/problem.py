@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import warnings
 from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -96,7 +97,9 @@ class CapabilityProblem:
     vehicle_capability : sequence of m labels
         The capability a_k of each vehicle (strings or integers).
     demands : sequence of n collections of labels
-        The capabilities each target demands (y_jq = 1), each non-empty.
+        The capabilities each target demands (y_jq = 1), each non-empty. A list naming
+        a capability twice is read as a set, with a warning (a file doing so is refused by
+        its schema).
     name : str
 
     Raises
@@ -125,7 +128,9 @@ class CapabilityProblem:
         set_ = object.__setattr__
         n = self.n_targets
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise InstanceError(f"n_targets must be an integer >= 1, got {n!r}")
+            from taopt.instance import plain
+
+            raise InstanceError(f"n_targets must be an integer >= 1, got {plain(n)!r}")
         n = int(n)
         set_(self, "n_targets", n)
         if isinstance(self.vehicle_capability, (str, bytes)):
@@ -161,6 +166,13 @@ class CapabilityProblem:
         for j, wanted in enumerate(self.demands):
             if isinstance(wanted, (str, bytes)) or not isinstance(wanted, Iterable):
                 raise InstanceError(f"demands[{j}] must be a collection of capabilities")
+            if not isinstance(wanted, (set, frozenset)):
+                wanted = list(wanted)
+                if len(set(wanted)) != len(wanted):  # documented normalisation, with a warning
+                    warnings.warn(
+                        f"demands[{j}] lists a capability twice; it is demanded once",
+                        stacklevel=3,
+                    )
             wanted = frozenset(wanted)
             if not wanted:
                 raise InstanceError(f"target {j} demands no capability")

@@ -243,19 +243,36 @@ class CommProblem:
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> CommProblem:
-        """From JSON data (validated against ``comm_problem.schema.json`` first)."""
-        from taopt.schemas import validate
+    def from_dict(cls, data: Mapping[str, Any], source: str | None = None) -> CommProblem:
+        """From JSON data (validated against ``comm_problem.schema.json`` first).
 
-        validate(data, "comm_problem")
-        return cls(
-            data["targets"],
-            data["vehicles"],
-            data["target_attribute"],
-            data["vehicle_ability"],
-            data["comm_range"],
-            data.get("name", ""),
-        )
+        Parameters
+        ----------
+        data : mapping
+            Parsed JSON of kind "comm_problem".
+        source : str, optional
+            What to call the data in messages (the file path); default "comm_problem".
+
+        Raises
+        ------
+        InstanceError
+            A schema violation (a coordinate or range above 1e9 in absolute value included)
+            or the constructor's complaint; the message starts with ``source``.
+        """
+        from taopt.instance import check_schema
+        from taopt.schemas import naming
+
+        label = source or "comm_problem"
+        check_schema(data, "comm_problem", label)
+        with naming(label):
+            return cls(
+                data["targets"],
+                data["vehicles"],
+                data["target_attribute"],
+                data["vehicle_ability"],
+                data["comm_range"],
+                data.get("name", ""),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the problem as JSON (atomically)."""
@@ -265,10 +282,11 @@ class CommProblem:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> CommProblem:
-        """Read a problem written by :meth:`save`."""
+        """Read a problem written by :meth:`save` (strict JSON, validated; every failure an
+        InstanceError starting with the path)."""
         from taopt.instance import load_json
 
-        return cls.from_dict(load_json(path))
+        return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 
     def __repr__(self) -> str:
         label = f" {self.name!r}" if self.name else ""

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -28,7 +29,7 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 
 from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
-from taopt.instance import check_schema, load_json, save_json
+from taopt.instance import check_schema, load_json, plain, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
 
@@ -62,7 +63,7 @@ def _positive(value: Any, what: str, allow_zero: bool = False) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise InstanceError(f"{what} must be a number, got {value!r}") from None
+        raise InstanceError(f"{what} must be a number, got {plain(value)!r}") from None
     if not np.isfinite(x):
         raise InstanceError(f"{what} = {x} is not finite")
     if x < 0 or (x == 0 and not allow_zero):
@@ -77,7 +78,7 @@ def _index(value: Any, what: str, size: int, kind: str) -> int:
     except (TypeError, ValueError):
         ok = False
     if not ok or isinstance(value, bool):
-        raise InstanceError(f"{what} must be an integer {kind} index, got {value!r}")
+        raise InstanceError(f"{what} must be an integer {kind} index, got {plain(value)!r}")
     if not 0 <= k < size:
         raise InstanceError(f"{what} = {k} is not a {kind} (valid: 0..{size - 1})")
     return k
@@ -97,7 +98,8 @@ class DeliveryInstance:
         Street network on the stop indices 0..s-1; every edge has a ``"length"``
         attribute (street length, at least the straight-line distance between its two
         stops, up to a relative ``STREET_TOLERANCE``). Must be connected. It is copied
-        and frozen.
+        and frozen. A self-loop is dropped with a warning (documented normalisation; a file
+        with one is refused by :meth:`from_dict`).
     depot : int
         The stop w_0 where the truck and the drone start.
     v_drone, v_truck : float
@@ -105,7 +107,8 @@ class DeliveryInstance:
     flight_range : float
         The drone's maximum flight distance L per sortie (out and back), (5.6).
     precedences : iterable of (r, j)
-        Customer-index pairs: r is served before j (5.7). Duplicates are dropped.
+        Customer-index pairs: r is served before j (5.7). Duplicates are dropped (a file
+        listing one twice is refused by its schema).
     service_time : float
         Landing/loading time τ >= 0, paid once at the customer and once at the
         truck per sortie (0 in §5.5, 30 s in the Fig. 5.6 example).
@@ -185,7 +188,8 @@ class DeliveryInstance:
             if "length" not in data:
                 raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
             length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
-            if a == b:
+            if a == b:  # documented normalisation: a loop never shortens a truck path
+                warnings.warn(f"graph edge ({a}, {b}) is a self-loop; it is dropped", stacklevel=3)
                 continue
             straight = float(np.hypot(*(stops[a] - stops[b])))
             if length < straight * (1.0 - STREET_TOLERANCE):
@@ -238,9 +242,9 @@ class DeliveryInstance:
             try:
                 r_raw, j_raw = item
             except (TypeError, ValueError):
-                raise InstanceError(f"precedence {item!r} is not an (r, j) pair") from None
-            r = _index(r_raw, f"precedence {tuple(item)!r}", n, "customer")
-            j = _index(j_raw, f"precedence {tuple(item)!r}", n, "customer")
+                raise InstanceError(f"precedence {plain(item)!r} is not an (r, j) pair") from None
+            r = _index(r_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
+            j = _index(j_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
             if r == j:
                 raise InstanceError(f"precedence ({r}, {j}): customer {r} cannot precede itself")
             if (r, j) not in seen:
@@ -395,7 +399,7 @@ class DeliveryInstance:
         ------
         InstanceError
             A schema violation (naming the JSON path and the value), a street listed
-            twice, or the constructor's own complaint (bad index, a street shorter than
+            twice or joining a stop to itself, or the constructor's own complaint (bad index, a street shorter than
             the straight line, a disconnected network, a precedence cycle, ...).
         """
         check_schema(data, "delivery_instance", source)
@@ -403,6 +407,11 @@ class DeliveryInstance:
         graph.add_nodes_from(range(len(data["stops"])))
         first: dict[frozenset[int], int] = {}
         for k, (u, v, length) in enumerate(data["edges"]):
+            if int(u) == int(v):
+                raise InstanceError(
+                    f"{source or 'delivery_instance'}: edges[{k}]: the street ({int(u)}, "
+                    f"{int(v)}) joins stop {int(u)} to itself (a self-loop is not a street)"
+                )
             key = frozenset((int(u), int(v)))
             if key in first:
                 raise InstanceError(

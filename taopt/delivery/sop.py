@@ -45,6 +45,7 @@ import numpy as np
 
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.result import Order
+from taopt.schemas import naming
 
 __all__ = [
     "KNOWN_OPTIMA",
@@ -69,6 +70,10 @@ KNOWN_OPTIMA: dict[str, int] = {
 }
 
 _DATA = "taopt.data"
+
+#: The largest |weight| a file may hold (docs/file-formats.md, "Magnitudes"); TSPLIB's
+#: structural 1000000 is well inside it.
+MAX_MAGNITUDE = 1e9
 
 
 def shipped_sop() -> list[str]:
@@ -118,10 +123,14 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
     path = Path(path_or_name)
     if not path.is_file():
         path = sop_path(str(path_or_name))
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InstanceError(f"{path}: cannot be read as TSPLIB text ({exc})") from None
     header: dict[str, str] = {}
     tokens: list[str] = []
     in_section = False
-    for line in path.read_text().splitlines():
+    for line in text.splitlines():
         text = line.strip()
         if not text:
             continue
@@ -135,28 +144,41 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
             key, value = text.split(":", 1)
             header[key.strip().upper()] = value.strip()
     if header.get("TYPE", "").upper() != "SOP":
-        raise InstanceError(f"{path.name}: TYPE is {header.get('TYPE')!r}, expected SOP")
+        raise InstanceError(f"{path}: TYPE is {header.get('TYPE')!r}, expected SOP")
     if header.get("EDGE_WEIGHT_FORMAT", "").upper() != "FULL_MATRIX":
-        raise InstanceError(f"{path.name}: only EDGE_WEIGHT_FORMAT FULL_MATRIX is supported")
-    n = int(header["DIMENSION"])
+        raise InstanceError(f"{path}: only EDGE_WEIGHT_FORMAT FULL_MATRIX is supported")
+    dimension = header.get("DIMENSION", "")
+    if not dimension.isdigit() or int(dimension) < 2:
+        raise InstanceError(f"{path}: DIMENSION {dimension!r} is not a whole number >= 2")
+    n = int(dimension)
     if len(tokens) != n * n + 1:
         raise InstanceError(
-            f"{path.name}: EDGE_WEIGHT_SECTION holds {len(tokens)} numbers, expected "
+            f"{path}: EDGE_WEIGHT_SECTION holds {len(tokens)} numbers, expected "
             f"{n * n + 1} (the leading dimension token plus {n}x{n})"
         )
-    if int(float(tokens[0])) != n:
-        raise InstanceError(f"{path.name}: leading token {tokens[0]} is not the dimension {n}")
-    raw = np.array([float(t) for t in tokens[1:]]).reshape(n, n)
+    try:
+        values = [float(t) for t in tokens]
+    except ValueError as exc:
+        raise InstanceError(f"{path}: EDGE_WEIGHT_SECTION holds a non-number ({exc})") from None
+    if values[0] != n:
+        raise InstanceError(f"{path}: leading token {tokens[0]} is not the dimension {n}")
+    raw = np.array(values[1:]).reshape(n, n)
+    if not np.isfinite(raw).all() or np.abs(raw).max() > MAX_MAGNITUDE:
+        i, j = np.argwhere(~(np.abs(raw) <= MAX_MAGNITUDE))[0]
+        raise InstanceError(
+            f"{path}: weight [{i}][{j}] = {float(raw[i, j]):g} is not a number with "
+            f"|value| <= {MAX_MAGNITUDE:g}"
+        )
     start, end = 0, n - 1
     minus = raw == -1
     np.fill_diagonal(minus, False)
     if not (minus[1:, start].all() and minus[end, :end].all() and not minus[start].any()):
-        raise InstanceError(f"{path.name}: node 0 is not first or node {end} is not last")
+        raise InstanceError(f"{path}: node 0 is not first or node {end} is not last")
     precedences = [
         (int(r), int(j)) for j, r in zip(*np.nonzero(minus), strict=True) if r != start and j != end
     ]
     if (raw[~minus] < 0).any():
-        raise InstanceError(f"{path.name}: negative weight other than -1")
+        raise InstanceError(f"{path}: negative weight other than -1")
     cost = np.where(minus, np.inf, raw)
     np.fill_diagonal(cost, 0.0)
     cost[start, end] = np.inf
@@ -184,6 +206,8 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
         cyclic precedence, a precedence putting something before start or
         after end.
     """
+    from taopt.instance import plain
+
     try:
         cost = np.array(cost, dtype=float)
     except (TypeError, ValueError):
@@ -199,7 +223,7 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
     n = cost.shape[0]
     for label, node in (("start", start), ("end", end)):
         if isinstance(node, bool) or not (isinstance(node, (int, np.integer)) and 0 <= node < n):
-            raise InstanceError(f"{label} = {node!r} is not a node index in 0..{n - 1}")
+            raise InstanceError(f"{label} = {plain(node)!r} is not a node index in 0..{n - 1}")
     if start == end:
         raise InstanceError(f"start and end are the same node {start}")
     graph = nx.DiGraph()
@@ -208,7 +232,9 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
         try:
             r, j = (int(v) for v in pair)
         except (TypeError, ValueError, OverflowError):
-            raise InstanceError(f"precedence {pair!r} is not a pair of node indices") from None
+            raise InstanceError(
+                f"precedence {plain(pair)!r} is not a pair of node indices"
+            ) from None
         if not (0 <= r < n and 0 <= j < n):
             raise InstanceError(f"precedence ({r}, {j}) has a node outside 0..{n - 1}")
         if r == j:
@@ -286,14 +312,23 @@ class SopProblem:
     @classmethod
     def load(cls, name_or_path: str | os.PathLike[str]) -> SopProblem:
         """A TSPLIB ``.sop`` file (a path or a shipped name such as "ESC07"), or a JSON
-        file of kind "sop_problem"."""
+        file of kind "sop_problem".
+
+        Raises
+        ------
+        InstanceError
+            The file cannot be read, breaks its format or the schema, or holds bad data;
+            the message starts with the path.
+        """
         path = Path(name_or_path)
         if path.suffix.lower() == ".json":
             from taopt.instance import load_json
 
-            return cls.from_dict(load_json(path))
+            return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
         cost, precedences, start, end, name = load_sop(name_or_path)
-        return cls(cost, tuple(precedences), start, end, name)
+        label = str(path) if path.is_file() else str(sop_path(str(name_or_path)))
+        with naming(label):
+            return cls(cost, tuple(precedences), start, end, name)
 
     def to_dict(self) -> dict[str, Any]:
         finite = np.where(np.isfinite(self.cost), self.cost, -1.0)
@@ -308,20 +343,38 @@ class SopProblem:
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> SopProblem:
-        """From JSON data; a cost of -1 marks a forbidden arc (as in TSPLIB)."""
-        from taopt.schemas import validate
+    def from_dict(cls, data: Mapping[str, Any], source: str | None = None) -> SopProblem:
+        """From JSON data; a cost of -1 marks a forbidden arc (as in TSPLIB).
 
-        validate(data, "sop_problem")
+        Parameters
+        ----------
+        data : mapping
+            Parsed JSON of kind "sop_problem" (checked against its schema first).
+        source : str, optional
+            What to call the data in messages (the file path); default "sop_problem".
+
+        Raises
+        ------
+        InstanceError
+            A schema violation (a cost above 1e9 included), a row of another length than
+            the matrix (named), or :func:`check_sop`'s complaint; the message starts with
+            ``source``.
+        """
+        from taopt.instance import check_schema, check_square
+
+        label = source or "sop_problem"
+        check_schema(data, "sop_problem", label)
+        check_square(data["cost"], "cost", label)
         cost = np.array(data["cost"], dtype=float)
         cost[cost == -1] = np.inf
-        return cls(
-            cost,
-            tuple(tuple(p) for p in data.get("precedences", [])),
-            data["start"],
-            data["end"],
-            data.get("name", ""),
-        )
+        with naming(label):
+            return cls(
+                cost,
+                tuple(tuple(int(v) for v in p) for p in data.get("precedences", [])),
+                int(data["start"]),
+                int(data["end"]),
+                data.get("name", ""),
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
         from taopt.instance import save_json

@@ -25,13 +25,24 @@ def net_speed(drift: Any, direction: Any, speed: float) -> np.ndarray:
 
     Returns ``nan`` where (3.5) fails (no heading makes the vehicle move along
     ``direction``) and where the positive root is not positive.
+
+    Notes
+    -----
+    (3.4)'s root is homogeneous of degree 1 in ``(v, v_c)``, so speeds above 1e100 are
+    divided by ``s = max(v, |v_c|)`` and the root multiplied back: squaring a speed of
+    1.3e154 would overflow, the scaled squares never do.
     """
     drift = np.asarray(drift, dtype=float)
     direction = np.asarray(direction, dtype=float)
+    speed = float(speed)
+    scale = max(abs(speed), float(np.max(np.abs(drift), initial=0.0)))
+    if not np.isfinite(scale) or scale < 1e100:  # ordinary speeds: the same bits as unscaled
+        scale = 1.0
+    drift, speed = drift / scale, speed / scale
     along = np.sum(drift * direction, axis=-1)
     disc = speed**2 - np.sum(drift * drift, axis=-1) + along**2
-    with np.errstate(invalid="ignore"):
-        vnet = along + np.sqrt(disc)
+    with np.errstate(invalid="ignore", over="ignore"):
+        vnet = (along + np.sqrt(disc)) * scale
     return np.where((disc >= 0) & (vnet > 0), vnet, np.nan)
 
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from taopt.errors import InstanceError
 from taopt.fields import Field, field_from_dict, thesis_field
-from taopt.instance import Instance, save_json
+from taopt.instance import Instance, save_json, unique_temp
 from taopt.routing.problem import AssignmentProblem
 
 THESIS_SIDE = 1000.0
@@ -136,9 +136,12 @@ def drift_scenario(
     if matrix is None:
         matrix = travel_time_matrix(field, points, speed=speed, jobs=jobs, method=method)
         if cache_dir is not None:
-            tmp = npy.with_name(npy.stem + ".tmp.npy")
-            np.save(tmp, matrix, allow_pickle=False)
-            os.replace(tmp, npy)
+            tmp = unique_temp(npy, ".tmp.npy")  # per process: parallel writers never share it
+            try:
+                np.save(tmp, matrix, allow_pickle=False)
+                os.replace(tmp, npy)
+            finally:
+                tmp.unlink(missing_ok=True)
             save_json(description, meta)  # atomic, written after the .npy it describes
     problem = AssignmentProblem(matrix, n_targets=n, name=f"n{n}m{m}-seed{seed}")
     return Scenario(instance=instance, problem=problem, seed=int(seed))

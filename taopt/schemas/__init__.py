@@ -336,6 +336,12 @@ def reason(error: ValidationError) -> str:
         return f"must be <= {show(expected)}, got {show(value)}"
     if keyword == "exclusiveMaximum":
         return f"must be < {show(expected)}, got {show(value)}"
+    if keyword == "uniqueItems" and isinstance(value, (list, tuple)):
+        seen: list[Any] = []
+        for k, item in enumerate(value):
+            if item in seen:
+                return f"[{k}] = {show(item)} is listed twice (first at [{seen.index(item)}])"
+            seen.append(item)
     return error.message
 
 

@@ -49,7 +49,16 @@ from taopt.capability.instances import (
 )
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError
-from taopt.study import Scenario, StudySpec, run_study, with_optimum
+from taopt.navigation.grid import NEIGHBOURHOODS
+from taopt.study import (
+    Scenario,
+    StudySpec,
+    check_integer,
+    check_positive,
+    parse_integers,
+    run_study,
+    with_optimum,
+)
 
 INSTANCES = ("n50m10", "n70m10", "n90m10")
 CAPABILITIES = (1, 3, 5, 7, 10)
@@ -165,8 +174,8 @@ def capability_study(
     ----------
     instances : sequence of str
         "nNmM" names (the thesis: n50m10, n70m10, n90m10).
-    capabilities : sequence of int
-        |A| values, each at most m (the thesis: 1, 3, 5, 7, 10).
+    capabilities : sequence of int, or str
+        |A| values, each at most m (the thesis: 1, 3, 5, 7, 10); "1,3,5" is accepted.
     scenarios : int
         Scenarios per (instance, |A|) (the thesis: 50).
     methods : str or sequence of str
@@ -193,9 +202,18 @@ def capability_study(
     if isinstance(methods, str):
         methods = [m.strip() for m in methods.split(",") if m.strip()]
     methods = list(dict.fromkeys(methods))
-    for label, value, low in (("scenarios", scenarios, 1), ("first_scenario", first_scenario, 0)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-            raise InstanceError(f"{label} must be an integer >= {low}, got {value!r}")
+    # every argument checked before anything is written (issue 15, item 7)
+    scenarios = check_integer("scenarios", scenarios, 1)
+    first_scenario = check_integer("first_scenario", first_scenario, 0)
+    seed = check_integer("seed", seed, 0)
+    cell = check_positive("cell", cell)
+    if check_integer("neighbours", neighbours, 1) not in NEIGHBOURHOODS:
+        raise InstanceError(f"neighbours must be one of {sorted(NEIGHBOURHOODS)}, got {neighbours}")
+    capabilities = parse_integers("capabilities", capabilities, 1)
+    if isinstance(instances, str):
+        instances = [part.strip() for part in instances.split(",") if part.strip()]
+    if not instances:
+        raise InstanceError("instances: no instance given (expected e.g. n50m10)")
     keys = []
     for name in instances:
         n, m = parse_instance(name)

@@ -44,7 +44,7 @@ from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
 from taopt.errors import InstanceError
-from taopt.study import Scenario, StudySpec, run_study
+from taopt.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 ALGORITHMS = ("DAA", "HDA", "CAA")
 INFO_COLUMNS = (
@@ -274,7 +274,13 @@ def comm_study(
         The rows (every range, every method; the exact rows at the largest range), with
         ``optimum`` joined by :func:`with_optimum` and ``q = objective / f_mst``.
     """
+    if isinstance(preset, str) and preset not in PRESETS:
+        raise InstanceError(f"unknown preset {preset!r}; choose from {sorted(PRESETS)}")
     spec = PRESETS[preset] if isinstance(preset, str) else preset
+    # every argument checked before anything is written (issue 15, item 7)
+    scenarios = check_integer("scenarios", scenarios, 1)
+    seed = check_integer("seed", seed, 0)
+    time_limit = check_positive("time_limit", time_limit, allow_none=True)
     settings = {"seed": int(seed), "side": THESIS_SIDE}
     keys = preset_keys(spec, scenarios)
     chosen = list(methods) if methods is not None else list(spec.methods)

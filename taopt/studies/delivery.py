@@ -42,7 +42,7 @@ from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import optimal_plan
 from taopt.errors import InstanceError
-from taopt.study import Scenario, StudySpec, run_study
+from taopt.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 L0 = 1000.0
 GRID_K = 11
@@ -194,14 +194,18 @@ def delivery_study(
     """
     if setup not in SETUPS:
         raise InstanceError(f"unknown setup {setup!r}; choose from {sorted(SETUPS)}")
-    if isinstance(instances, bool) or not isinstance(instances, (int, np.integer)):
-        raise InstanceError(f"instances must be an integer, got {instances!r}")
+    # every argument checked before anything is written (issue 15, item 7)
+    instances = check_integer("instances", instances, 1)
+    seed = check_integer("seed", seed, 0)
+    vd_ratio = check_positive("vd_ratio", vd_ratio, allow_none=True)
+    exact_max_n = check_integer("exact_max_n", exact_max_n, 0)
     try:
         ratios = [float(r) for r in ratios]
     except (TypeError, ValueError):
         raise InstanceError(f"ratios must be numbers, got {ratios!r}") from None
     if not ratios or not all(0 < r < math.inf for r in ratios):
-        raise InstanceError(f"ratios must be positive and finite, got {ratios}")
+        shown = ", ".join(f"{r:g}" for r in ratios)
+        raise InstanceError(f"ratios must be positive and finite, got [{shown}]")
     if time_limit is None and "exact" in methods:
         time_limit = EXACT_TIME_LIMIT
     settings = {

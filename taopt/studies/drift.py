@@ -37,7 +37,7 @@ from taopt.bounds import arborescence, thesis_mcga
 from taopt.errors import InstanceError
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
-from taopt.study import Scenario, StudySpec, run_study, with_optimum
+from taopt.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 
 METHODS = ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact")
 
@@ -138,9 +138,10 @@ def drift_study(
         settings (the message names the differing keys).
     """
     methods = parse_methods(methods)
-    for label, value, low in (("n", n, 1), ("m", m, 1), ("scenarios", scenarios, 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-            raise InstanceError(f"{label} must be an integer >= {low}, got {value!r}")
+    # every argument checked before anything is written (issue 15, item 7)
+    n, m = check_integer("n", n, 1), check_integer("m", m, 1)
+    scenarios = check_integer("scenarios", scenarios, 1)
+    seed = check_integer("seed", seed, 0)
     field_description = field if isinstance(field, str) or field is None else field.to_dict()
     settings = {"n": int(n), "m": int(m), "seed": int(seed), "field": field_description}
     df = run_study(
