@@ -633,7 +633,8 @@ def _run_tasks(
                 executor.submit(run_task, spec, key, todo, worker_settings, time_limit, options)
                 for key, todo in tasks
             ]
-            exact = {m for m in methods if get_method(spec.problem_type, m).exact}
+            named = {m for _, todo in tasks for m in todo}
+            exact = {m for m in named if get_method(spec.problem_type, m).exact}
             for future in as_completed(futures):
                 rows = future.result()
                 store.append(rows)  # one scenario's rows in one write
