@@ -52,7 +52,10 @@ register_method(
     warm_start=("NIA", "MMA", "SMMA"),
     default=False,
 )(solve_delivery)
-register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
+# the fast orderings of chapter 5 give the incumbent kept when a time limit stops HiGHS early
+register_method(SopProblem, "exact", category="exact", warm_start=("NIA", "MMA", "SMMA"))(
+    solve_sop_problem
+)
 # chapter 3: the corrected model is "exact"; the joint MILP on request. The printed model
 # (a relaxation without routes) is solve_capability(problem, "printed").
 register_method(CapabilityProblem, "exact", category="exact", warm_start=("DTAA",))(solve_exact)
