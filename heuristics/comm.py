@@ -68,12 +68,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.comm.engine import Group, Run, simulate
+from taopt.comm.engine import Group, Run, Simulation, SimulationStopped
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
+from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Solution
+from taopt.result import FEASIBLE, TIME_LIMIT, Solution
 
 #: Savings below this (metres) do not count as an improvement (HDA's stopping rule).
 SAVING_TOLERANCE = 1e-9
@@ -465,28 +466,64 @@ def _solution(run: Run, method: str, seed: int, runtime: float) -> Solution:
     )
 
 
-def _run(problem: CommProblem, policy: _Auction, seed: int, strict: bool) -> Solution:
+def _run(
+    problem: CommProblem,
+    policy: _Auction,
+    seed: int,
+    strict: bool,
+    time_limit: float | None = None,
+) -> Solution:
+    """Simulate ``policy``; under ``time_limit`` a run that has not visited every target
+    when it expires returns status "time_limit", objective inf and no trajectories (a
+    partial simulation is no plan)."""
     began = time.perf_counter()
-    run = simulate(problem, policy, seed=seed, strict=strict)
+    simulation = Simulation(problem, policy, seed=seed, strict=strict)
+    simulation.deadline = Deadline(time_limit) if time_limit is not None else None
+    try:
+        run = simulation.run()
+    except SimulationStopped as exc:
+        return Solution(
+            objective=math.inf,
+            status=TIME_LIMIT,
+            runtime=time.perf_counter() - began,
+            method=policy.name,
+            seed=seed,
+            info={"stopped_by": "time_limit", "message": str(exc)},
+        )
     return _solution(run, policy.name, seed, time.perf_counter() - began)
 
 
 @register_method(CommProblem, "DAA", category="simulation")
-def daa(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """DAA (Algorithms 4–6): decentralized auction under limited range, simulated."""
-    return _run(problem, DAA(), seed, strict)
+def daa(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """DAA (Algorithms 4–6): decentralized auction under limited range, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, DAA(), seed, strict, time_limit)
 
 
 @register_method(CommProblem, "CAA", category="simulation")
-def caa(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """CAA (Algorithm 3): centralized auction by a local leader, simulated."""
-    return _run(problem, CAA(), seed, strict)
+def caa(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """CAA (Algorithm 3): centralized auction by a local leader, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, CAA(), seed, strict, time_limit)
 
 
 @register_method(CommProblem, "HDA", category="simulation")
-def hda(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """HDA (Zhao, Meng & Chung 2016, as read in §4.1): release by significance, simulated."""
-    return _run(problem, HDA(), seed, strict)
+def hda(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """HDA (Zhao, Meng & Chung 2016, as read in §4.1): release by significance, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, HDA(), seed, strict, time_limit)
 
 
 POLICIES = {"CAA": CAA, "DAA": DAA, "HDA": HDA}
