@@ -62,6 +62,7 @@ Decisions where the thesis is ambiguous (kept in this one place)
 
 from __future__ import annotations
 
+import contextvars
 import math
 import time
 from collections.abc import Sequence
@@ -81,6 +82,20 @@ SAVING_TOLERANCE = 1e-9
 
 
 # -- the marginal-cost auction, centrally (CAA) --------------------------------------------
+
+
+#: The deadline of the simulation running in this context (set by a run with a time limit):
+#: the auctions check it between insertions, so a run stops inside a long auction too.
+_DEADLINE: contextvars.ContextVar[Deadline | None] = contextvars.ContextVar(
+    "taopt_comm_deadline", default=None
+)
+
+
+def _check_deadline() -> None:
+    """Raise SimulationStopped if the running simulation's deadline has passed."""
+    deadline = _DEADLINE.get()
+    if deadline is not None and deadline.expired():
+        raise SimulationStopped("time limit reached during an auction")
 
 
 def central_auction(
@@ -120,6 +135,7 @@ def central_auction(
         costs[i, own[i]], where[i, own[i]] = tables[i].cost, tables[i].position
     active = np.ones(targets.size, dtype=bool)
     for _ in range(targets.size):
+        _check_deadline()
         columns = np.flatnonzero(active)
         block = costs[:, columns]
         best_vehicle = np.argmin(block, axis=0)  # lowest vehicle on ties
@@ -321,6 +337,7 @@ class DAA(_Auction):
         me = np.arange(k)[:, None]
         active = np.ones(targets.size, dtype=bool)
         for _ in range(targets.size):
+            _check_deadline()
             columns = np.flatnonzero(active)
             bids = costs[:, columns]
             seen_cost, seen_bidder = group.flood_min(bids, me, k, "bid")  # l. 15-25
@@ -477,9 +494,11 @@ def _run(
     when it expires returns status "time_limit", objective inf and no trajectories (a
     partial simulation is no plan)."""
     began = time.perf_counter()
-    simulation = Simulation(problem, policy, seed=seed, strict=strict)
-    simulation.deadline = Deadline(time_limit) if time_limit is not None else None
+    deadline = Deadline(time_limit) if time_limit is not None else None
+    token = _DEADLINE.set(deadline)
     try:
+        simulation = Simulation(problem, policy, seed=seed, strict=strict)
+        simulation.deadline = deadline
         run = simulation.run()
     except SimulationStopped as exc:
         return Solution(
@@ -490,6 +509,8 @@ def _run(
             seed=seed,
             info={"stopped_by": "time_limit", "message": str(exc)},
         )
+    finally:
+        _DEADLINE.reset(token)
     return _solution(run, policy.name, seed, time.perf_counter() - began)
 
 

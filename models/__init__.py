@@ -20,6 +20,7 @@ from typing import Any
 from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
+from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability import solve_capability, solve_exact, solve_joint
 from taopt.models.comm import solve_comm
 from taopt.models.delivery import solve_delivery
@@ -43,6 +44,20 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
 
 
 register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",))(solve_routing)
+
+
+@register_footprint(AssignmentProblem, "exact")
+def _routing_footprint(problem: AssignmentProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """(2.2)–(2.5) has one binary per arc, (n + m)^2; the flow version n more per arc."""
+    arcs = float(problem.n + problem.m) ** 2
+    sec = options.get("sec", "dfj")
+    columns = arcs * (problem.n + 1) if sec == "flow" else arcs
+    return milp_bytes(columns), (
+        f"the exact routing model ({sec}) of {problem.n:,} targets and {problem.m} vehicles "
+        f"({columns:,.0f} columns)"
+    )
+
+
 # the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
 # exact method `taopt solve` runs by default), so it runs only when asked for
 register_method(

@@ -66,6 +66,7 @@ import scipy.sparse as sp
 
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError
+from taopt.limits import milp_bytes, register_footprint
 from taopt.models.highs import certify, solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, Routes, Solution
@@ -764,6 +765,21 @@ def solve_capability(
     if formulation == "corrected":
         return _solve_corrected(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
     return _solve_joint(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
+
+
+def _footprint(problem: CapabilityProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """A routing model per capability class (corrected) or one over all classes (joint):
+    at most (n + m)^2 arcs per class, the flow version n more per arc."""
+    arcs = float(problem.n + problem.m) ** 2 * max(1, len(problem.capabilities))
+    columns = arcs * (problem.n + 1) if options.get("sec", "dfj") == "flow" else arcs
+    return milp_bytes(columns), (
+        f"the exact models of {problem.n:,} targets, {problem.m} vehicles and "
+        f"{len(problem.capabilities)} capabilities (up to {columns:,.0f} columns)"
+    )
+
+
+register_footprint(CapabilityProblem, "exact")(_footprint)
+register_footprint(CapabilityProblem, "joint")(_footprint)
 
 
 def solve_exact(

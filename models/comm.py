@@ -27,6 +27,7 @@ import numpy as np
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories, evaluate_trajectories
 from taopt.errors import InstanceError
+from taopt.limits import milp_bytes, register_footprint
 from taopt.models.routing import solve_routing
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Routes, Solution, Status
@@ -161,5 +162,18 @@ def solve_comm(
 
 
 register_method(CommProblem, "exact", category="exact", warm_start=("DAA",))(solve_comm)
+
+
+@register_footprint(CommProblem, "exact")
+def _footprint(problem: CommProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """One routing model per ability class; the classes split the targets, so the arcs of all
+    of them are at most (n + m)^2 (the flow version n more per arc)."""
+    arcs = float(problem.n + problem.m) ** 2
+    columns = arcs * (problem.n + 1) if options.get("sec", "dfj") == "flow" else arcs
+    return milp_bytes(columns), (
+        f"the exact models of {problem.n:,} targets and {problem.m} vehicles "
+        f"(up to {columns:,.0f} columns)"
+    )
+
 
 __all__ = ["solve_comm", "drive"]
