@@ -56,6 +56,13 @@ def delivery(n: int, seed: int = 7):
     )
 
 
+@pytest.fixture(autouse=True, scope="module")
+def imports_paid():
+    """Import the methods (cvxpy, HiGHS: seconds on a loaded machine) before any clock runs,
+    as a CLI or a study pays them once."""
+    taopt.solve(euclidean(3), "exact")
+
+
 def timed(problem, method: str, time_limit: float = LIMIT, **options):
     began = time.perf_counter()
     result = taopt.solve(problem, method, time_limit=time_limit, **options)
@@ -268,3 +275,21 @@ def test_matrix_of_numeric_strings_is_refused_fast(tmp_path):
     with pytest.raises(InstanceError, match=r"strings.json.*cost\[0\]\[\d+\].*expected a number"):
         load_problem_file(path, progress=False)
     assert time.perf_counter() - began < 3.0
+
+
+@pytest.mark.parametrize("family", ["assignment", "sop", "delivery"])
+def test_genetic_algorithms_stop_on_their_limit(family):
+    """Each GA stops on a tiny time_limit with its best so far, feasible and scored."""
+    from taopt.delivery.sop import SopProblem
+
+    problem = {
+        "assignment": lambda: euclidean(200),
+        "sop": lambda: SopProblem.load("ESC25"),
+        "delivery": lambda: delivery(20),
+    }[family]()
+    result, elapsed = timed(problem, "GA", time_limit=0.05)
+    assert elapsed < 0.05 + SLACK
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+    history = result.info["history"]
+    full = 350 if family == "assignment" else 2000
+    assert len(history) < full + 1  # stopped before the last generation
