@@ -63,6 +63,7 @@ import cvxpy as cp
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
 
 from taopt.delivery.sop import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.errors import InstanceError, SolverError
@@ -77,6 +78,8 @@ __all__ = [
     "SopModel",
     "build",
     "decode",
+    "assignment_bound",
+    "column_count",
     "describe",
     "solve_sop",
     "solve_sop_problem",
@@ -430,6 +433,40 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     )
 
 
+def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> float:
+    """Valid lower bound: the assignment relaxation on the usable arcs (milliseconds).
+
+    Every node but ``end`` gets one successor and every node but ``start`` one
+    predecessor along a usable arc (:func:`usable_arcs`), subtours allowed: the degree rows
+    of the model without connectivity, solved exactly by
+    :func:`scipy.optimize.linear_sum_assignment`. 1,199 on ESC47 (optimum 1,288) where the
+    arborescence bound is 0. Returns 0 when the relaxation has no finite assignment.
+    """
+    tails, heads = usable_arcs(cost, closure)
+    n = cost.shape[0]
+    weights = np.full((n, n), np.inf)
+    weights[tails, heads] = cost[tails, heads]
+    rows = np.array([v for v in range(n) if v != end])
+    cols = np.array([v for v in range(n) if v != start])
+    sub = weights[np.ix_(rows, cols)]
+    finite = np.isfinite(sub)
+    if not finite.any(axis=1).all() or not finite.any(axis=0).all():
+        return 0.0
+    big = 1.0 + 2.0 * n * float(np.abs(sub[finite]).max(initial=0.0))
+    chosen_rows, chosen_cols = linear_sum_assignment(np.where(finite, sub, big))
+    if not finite[chosen_rows, chosen_cols].all():
+        return 0.0  # no assignment on usable arcs: claim nothing here
+    return float(sub[chosen_rows, chosen_cols].sum())
+
+
+def _cheap_bound(problem: SopProblem) -> float:
+    """The larger of the assignment and arborescence bounds (both valid, both fast)."""
+    return max(
+        assignment_bound(problem.cost, problem.closure, problem.start, problem.end),
+        sop_arborescence_bound(problem),
+    )
+
+
 def _known_order(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, incumbent):
     """``(cost, order)`` of a feasible incumbent order, or None (an infeasible one is ignored)."""
     if incumbent is None:
@@ -455,8 +492,9 @@ def _stopped(
     info: dict,
 ) -> Solution:
     """Status "time_limit": the incumbent (or no plan, objective inf) and the best valid
-    bound of HiGHS's and the arborescence bound (:func:`sop_arborescence_bound`)."""
-    tree = sop_arborescence_bound(problem)
+    bound of HiGHS's, the assignment bound (:func:`assignment_bound`) and the arborescence
+    bound (:func:`sop_arborescence_bound`)."""
+    tree = _cheap_bound(problem)
     bound = tree if bound is None or not np.isfinite(bound) else max(bound, tree)
     objective = np.inf if known is None else known[0]
     return Solution(
@@ -583,7 +621,7 @@ def solve_sop(
     if run.status == TIME_LIMIT:  # HiGHS may stop before its root bound beats the tree's
         if problem is None:
             problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
-        tree = sop_arborescence_bound(problem)
+        tree = _cheap_bound(problem)
         bound = tree if bound is None else max(bound, tree)
     bound = None if bound is None else min(bound, objective)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6

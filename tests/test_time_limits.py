@@ -293,3 +293,16 @@ def test_genetic_algorithms_stop_on_their_limit(family):
     history = result.info["history"]
     full = 350 if family == "assignment" else 2000
     assert len(history) < full + 1  # stopped before the last generation
+
+
+def test_sop_assignment_bound_is_valid_and_beats_the_tree_on_esc():
+    """The assignment relaxation never exceeds the optimum of the shipped SOP files."""
+    from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, shipped_sop, sop_arborescence_bound
+    from taopt.models.sop import assignment_bound
+
+    for name in shipped_sop():
+        p = SopProblem.load(name)
+        bound = assignment_bound(p.cost, p.closure, p.start, p.end)
+        assert 0 <= bound <= KNOWN_OPTIMA[name] + 1e-9
+    esc = SopProblem.load("ESC25")
+    assert assignment_bound(esc.cost, esc.closure, esc.start, esc.end) > sop_arborescence_bound(esc)
