@@ -99,7 +99,7 @@ def cases(quick: bool) -> list[tuple[str, str, callable, float]]:
         ("delivery", "DP", lambda: delivery(14), 1.0),
         ("capability", "exact", lambda: capability(90), 1.0),
         ("capability", "joint", lambda: capability(90), 1.0),
-        ("comm", "exact", lambda: comm(2000), 1.0),
+        ("comm", "exact", lambda: comm(1000), 1.0),
     ]
 
 

@@ -166,13 +166,18 @@ register_method(CommProblem, "exact", category="exact", warm_start=("DAA",))(sol
 
 @register_footprint(CommProblem, "exact")
 def _footprint(problem: CommProblem, options: dict[str, Any]) -> tuple[float, str]:
-    """One routing model per ability class; the classes split the targets, so the arcs of all
-    of them are at most (n + m)^2 (the flow version n more per arc)."""
-    arcs = float(problem.n + problem.m) ** 2
-    columns = arcs * (problem.n + 1) if options.get("sec", "dfj") == "flow" else arcs
+    """One routing model per ability class, (n_a + m_a)^2 arcs each (the flow version n_a
+    more per arc), counted from the targets' attributes and the vehicles' abilities."""
+    labels = np.arange(len(problem.attributes))
+    targets = np.bincount(problem.target_code, minlength=len(labels)).astype(float)
+    vehicles = np.bincount(problem.vehicle_code, minlength=len(labels)).astype(float)
+    arcs = (targets + vehicles) ** 2 * (targets > 0)
+    if options.get("sec", "dfj") == "flow":
+        arcs = arcs * (targets + 1)
+    columns = float(arcs.sum())
     return milp_bytes(columns), (
-        f"the exact models of {problem.n:,} targets and {problem.m} vehicles "
-        f"(up to {columns:,.0f} columns)"
+        f"the exact models of {problem.n:,} targets and {problem.m} vehicles in "
+        f"{int((targets > 0).sum())} ability classes ({columns:,.0f} columns)"
     )
 
 
