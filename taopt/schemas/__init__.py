@@ -369,6 +369,8 @@ def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
         elif isinstance(value, (list, tuple)):
             if all(map(_plain_leaf, value)):  # the common case: a row of ordinary numbers
                 continue
+            if all(type(row) is list and all(map(_plain_leaf, row)) for row in value):
+                continue  # a matrix, or a long list of pairs: no per-row stack entries
             stack.extend((path + [k], item) for k, item in reversed(list(enumerate(value))))
         elif isinstance(value, numbers.Real) and not isinstance(value, bool) and not _finite(value):
             yield path, value
