@@ -29,6 +29,7 @@ from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import mc
 from taopt.heuristics.ga_routing import genetic_algorithm
+from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Routes, Solution
 
@@ -74,6 +75,7 @@ def ga_per_class(
     population_factor: int = 3,
     tournament: int | None = None,
     operators: str | None = None,
+    time_limit: float | None = None,
 ) -> Solution:
     """§3.7's GA: chapter 2's GA on each class, population 3 (|T_q| + |R_q|).
 
@@ -92,6 +94,9 @@ def ga_per_class(
         Tournament size (the thesis gives none; default: the chapter 2 GA's).
     operators : str, optional
         The chapter 2 GA's operator set ("memetic", "ox-inversion"; default: its default).
+    time_limit : float, optional
+        Wall-clock seconds for all classes, shared out evenly over the classes still to
+        run; each class's GA stops on its share with its best so far.
 
     Returns
     -------
@@ -113,9 +118,11 @@ def ga_per_class(
         extra["operators"] = operators
     class_routes = {}
     per_class = []
-    for q, cls in enumerate(problem.classes):
-        if cls.problem is None:
-            continue
+    deadline = Deadline(time_limit)
+    classes = [(q, cls) for q, cls in enumerate(problem.classes) if cls.problem is not None]
+    for index, (q, cls) in enumerate(classes):
+        if deadline.limited:
+            extra["time_limit"] = max(deadline.remaining() / (len(classes) - index), 1e-3)
         population = max(2, population_factor * (len(cls.targets) + len(cls.vehicles)))
         result = genetic_algorithm(
             cls.problem,

@@ -62,24 +62,40 @@ Decisions where the thesis is ambiguous (kept in this one place)
 
 from __future__ import annotations
 
+import contextvars
 import math
 import time
 from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.comm.engine import Group, Run, simulate
+from taopt.comm.engine import Group, Run, Simulation, SimulationStopped
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
+from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Solution
+from taopt.result import FEASIBLE, TIME_LIMIT, Solution
 
 #: Savings below this (metres) do not count as an improvement (HDA's stopping rule).
 SAVING_TOLERANCE = 1e-9
 
 
 # -- the marginal-cost auction, centrally (CAA) --------------------------------------------
+
+
+#: The deadline of the simulation running in this context (set by a run with a time limit):
+#: the auctions check it between insertions, so a run stops inside a long auction too.
+_DEADLINE: contextvars.ContextVar[Deadline | None] = contextvars.ContextVar(
+    "taopt_comm_deadline", default=None
+)
+
+
+def _check_deadline() -> None:
+    """Raise SimulationStopped if the running simulation's deadline has passed."""
+    deadline = _DEADLINE.get()
+    if deadline is not None and deadline.expired():
+        raise SimulationStopped("time limit reached during an auction")
 
 
 def central_auction(
@@ -119,6 +135,7 @@ def central_auction(
         costs[i, own[i]], where[i, own[i]] = tables[i].cost, tables[i].position
     active = np.ones(targets.size, dtype=bool)
     for _ in range(targets.size):
+        _check_deadline()
         columns = np.flatnonzero(active)
         block = costs[:, columns]
         best_vehicle = np.argmin(block, axis=0)  # lowest vehicle on ties
@@ -320,6 +337,7 @@ class DAA(_Auction):
         me = np.arange(k)[:, None]
         active = np.ones(targets.size, dtype=bool)
         for _ in range(targets.size):
+            _check_deadline()
             columns = np.flatnonzero(active)
             bids = costs[:, columns]
             seen_cost, seen_bidder = group.flood_min(bids, me, k, "bid")  # l. 15-25
@@ -465,28 +483,68 @@ def _solution(run: Run, method: str, seed: int, runtime: float) -> Solution:
     )
 
 
-def _run(problem: CommProblem, policy: _Auction, seed: int, strict: bool) -> Solution:
+def _run(
+    problem: CommProblem,
+    policy: _Auction,
+    seed: int,
+    strict: bool,
+    time_limit: float | None = None,
+) -> Solution:
+    """Simulate ``policy``; under ``time_limit`` a run that has not visited every target
+    when it expires returns status "time_limit", objective inf and no trajectories (a
+    partial simulation is no plan)."""
     began = time.perf_counter()
-    run = simulate(problem, policy, seed=seed, strict=strict)
+    deadline = Deadline(time_limit) if time_limit is not None else None
+    token = _DEADLINE.set(deadline)
+    try:
+        simulation = Simulation(problem, policy, seed=seed, strict=strict)
+        simulation.deadline = deadline
+        run = simulation.run()
+    except SimulationStopped as exc:
+        return Solution(
+            objective=math.inf,
+            status=TIME_LIMIT,
+            runtime=time.perf_counter() - began,
+            method=policy.name,
+            seed=seed,
+            info={"stopped_by": "time_limit", "message": str(exc)},
+        )
+    finally:
+        _DEADLINE.reset(token)
     return _solution(run, policy.name, seed, time.perf_counter() - began)
 
 
 @register_method(CommProblem, "DAA", category="simulation")
-def daa(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """DAA (Algorithms 4–6): decentralized auction under limited range, simulated."""
-    return _run(problem, DAA(), seed, strict)
+def daa(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """DAA (Algorithms 4–6): decentralized auction under limited range, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, DAA(), seed, strict, time_limit)
 
 
 @register_method(CommProblem, "CAA", category="simulation")
-def caa(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """CAA (Algorithm 3): centralized auction by a local leader, simulated."""
-    return _run(problem, CAA(), seed, strict)
+def caa(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """CAA (Algorithm 3): centralized auction by a local leader, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, CAA(), seed, strict, time_limit)
 
 
 @register_method(CommProblem, "HDA", category="simulation")
-def hda(problem: CommProblem, *, seed: int = 0, strict: bool = False) -> Solution:
-    """HDA (Zhao, Meng & Chung 2016, as read in §4.1): release by significance, simulated."""
-    return _run(problem, HDA(), seed, strict)
+def hda(
+    problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
+) -> Solution:
+    """HDA (Zhao, Meng & Chung 2016, as read in §4.1): release by significance, simulated.
+
+    ``time_limit`` (wall-clock seconds) stops the simulation: status "time_limit", no plan.
+    """
+    return _run(problem, HDA(), seed, strict, time_limit)
 
 
 POLICIES = {"CAA": CAA, "DAA": DAA, "HDA": HDA}

@@ -47,6 +47,7 @@ from taopt.heuristics.sequencing import (
     schedule_order,
     sop_solution,
 )
+from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import Solution
 
@@ -82,12 +83,16 @@ def ga_search(
     generations: int = 2000,
     crossover: float = 0.5,
     mutation: float = 0.05,
+    time_limit: float | None = None,
 ) -> tuple[list[int], float, np.ndarray]:
     """Run the GA; return the best full path, its cost and the best cost per generation.
 
-    Parameters are those of :func:`ga_order`. ``history[g]`` is the best path cost after
-    generation g (``history[0]``: the initial population), non-increasing by elitism.
+    Parameters are those of :func:`ga_order`, and ``time_limit`` (wall-clock seconds: the
+    run stops after the generation during which it expires, and ``history`` is shorter).
+    ``history[g]`` is the best path cost after generation g (``history[0]``: the initial
+    population), non-increasing by elitism.
     """
+    deadline = Deadline(time_limit)
     matrix, nodes, pairs = _validate(cost, precedences, start, end)
     if int(population) != population or population < 2:
         raise InstanceError(f"population must be an integer >= 2, got {population!r}")
@@ -133,6 +138,9 @@ def ga_search(
     history[0] = values.min()
     children = population - 1
     for generation in range(1, generations + 1):
+        if deadline.limited and deadline.expired():
+            history = history[:generation]
+            break
         elite = int(np.argmin(values))
         drawn = rng.integers(population, size=(children, 2, 2))  # two tournaments per child
         winners = np.where(
@@ -217,16 +225,21 @@ def ga_order(
 
 
 @register_method(DeliveryInstance, "GA")
-def ga_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
+def ga_delivery(
+    instance: Any, seed: int = 0, time_limit: float | None = None, **options: Any
+) -> Solution:
     """GA order on t* (depot first), scheduled exactly by :func:`taopt.schedule`.
 
     Options are those of :func:`ga_order` (``population``, ``generations``, ``crossover``,
     ``mutation``). ``info["tstar_cost"]`` is the best path cost on t*,
-    ``info["history"]`` the best t* cost per generation.
+    ``info["history"]`` the best t* cost per generation. ``time_limit`` (wall-clock
+    seconds) stops the generations early (see :func:`ga_search`).
     """
     began = time.perf_counter()
     cost, start, pairs, customers = delivery_cost_matrix(instance)
-    path, value, history = ga_search(cost, pairs, start, None, seed, **options)
+    path, value, history = ga_search(
+        cost, pairs, start, None, seed, time_limit=time_limit, **options
+    )
     solution = schedule_order(instance, path, customers)
     return solution.replace(
         method="GA",
@@ -237,11 +250,20 @@ def ga_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
 
 
 @register_method(SopProblem, "GA")
-def ga_sop(problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
-    """The topological-sort GA of :func:`ga_order` on the SOP's own cost matrix."""
+def ga_sop(
+    problem: SopProblem, seed: int = 0, time_limit: float | None = None, **options: Any
+) -> Solution:
+    """The topological-sort GA of :func:`ga_order` on the SOP's own cost matrix
+    (``time_limit``: wall-clock seconds, see :func:`ga_search`)."""
     began = time.perf_counter()
     path, _, history = ga_search(
-        problem.cost, problem.precedences, problem.start, problem.end, seed, **options
+        problem.cost,
+        problem.precedences,
+        problem.start,
+        problem.end,
+        seed,
+        time_limit=time_limit,
+        **options,
     )
     solution = sop_solution(problem, path, "GA", seed, began)
     return solution.replace(info={"history": history.tolist()})

@@ -80,6 +80,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from taopt.errors import InstanceError
+from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Routes, Solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
@@ -630,6 +631,7 @@ def genetic_algorithm(
     mutation_rate: float = 0.1,
     tournament: int | None = None,
     operators: str | OperatorSet = "memetic",
+    time_limit: float | None = None,
 ) -> Solution:
     """GA of §2.5 with marker-gene encoding (operators in the module docstring).
 
@@ -653,6 +655,11 @@ def genetic_algorithm(
     operators : str or OperatorSet
         A name from :data:`OPERATOR_SETS` -- "memetic" (default) or
         "ox-inversion" (the first version) -- or an :class:`OperatorSet`.
+    time_limit : float, optional
+        Wall-clock seconds: the run stops after the generation during which it expires and
+        returns the best chromosome so far (``info["stopped_by"] == "time_limit"``,
+        ``info["generations_done"]`` fewer than ``generations``). A run stopped by time is
+        not reproducible; tests stop on ``generations``.
 
     Returns
     -------
@@ -697,6 +704,7 @@ def genetic_algorithm(
         if not 0.0 <= rate <= 1.0:
             raise InstanceError(f"{label} must be in [0, 1], got {rate}")
     start = time.perf_counter()
+    deadline = Deadline(time_limit)
     rng = np.random.default_rng(seed)
     length = problem.n + problem.m - 1
     matrix = path_matrix(problem) if ops.polish else None
@@ -710,7 +718,11 @@ def genetic_algorithm(
     history = [best_cost]
     half = (population + 1) // 2
     crossover = CROSSOVER[ops.crossover]
+    done = 0
     for _ in range(generations):
+        if deadline.limited and deadline.expired():
+            break
+        done += 1
         # Tournament selection of 2 * half parents.
         contenders = rng.integers(0, population, size=(2 * half, tournament))
         winners = contenders[np.arange(2 * half), np.argmin(fitness[contenders], axis=1)]
@@ -739,9 +751,11 @@ def genetic_algorithm(
         "generations": generations,
         "tournament": tournament,
         "operators": operators if isinstance(operators, str) else repr(operators),
-        "evaluations": population * (generations + 1),
+        "evaluations": population * (done + 1),
         **counters,
     }
+    if done < generations:
+        info.update(stopped_by="time_limit", generations_done=done)
     return _solution(problem, routes, seed, start, info)
 
 

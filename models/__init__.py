@@ -24,6 +24,7 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import optimal_plan
 from taopt.delivery.sop import SopProblem
+from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability import solve_capability, solve_exact, solve_joint
 from taopt.models.comm import solve_comm  # registers CommProblem "exact"
 from taopt.models.delivery import solve_delivery
@@ -47,6 +48,20 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
 
 
 register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",))(solve_routing)
+
+
+@register_footprint(AssignmentProblem, "exact")
+def _routing_footprint(problem: AssignmentProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """(2.2)–(2.5) has one binary per arc, (n + m)^2; the flow version n more per arc."""
+    arcs = float(problem.n + problem.m) ** 2
+    sec = options.get("sec", "dfj")
+    columns = arcs * (problem.n + 1) if sec == "flow" else arcs
+    return milp_bytes(columns), (
+        f"the exact routing model ({sec}) of {problem.n:,} targets and {problem.m} vehicles "
+        f"({columns:,.0f} columns)"
+    )
+
+
 #: Largest delivery instance on which `taopt solve` runs the exact DP by default.
 DP_DEFAULT_MAX_N = 12
 
@@ -65,9 +80,10 @@ register_method(
     category="exact",
     default=lambda instance: instance.n <= DP_DEFAULT_MAX_N,
     not_default=_dp_too_large,
+    warm_start=("NIA", "MMA", "SMMA"),
 )(optimal_plan)
-# the delivery MILP does not scale past a handful of customers (the DP above is the exact
-# method `taopt solve` runs by default), so it runs only when asked for
+# the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
+# exact method `taopt solve` runs by default), so it runs only when asked for
 register_method(
     DeliveryInstance,
     "exact",
@@ -76,7 +92,10 @@ register_method(
     default=False,
     not_default="the MILP (5.1)-(5.7) runs only when named (--methods exact): DP is faster",
 )(solve_delivery)
-register_method(SopProblem, "exact", category="exact")(solve_sop_problem)
+# the fast orderings of chapter 5 give the incumbent kept when a time limit stops HiGHS early
+register_method(SopProblem, "exact", category="exact", warm_start=("NIA", "MMA", "SMMA"))(
+    solve_sop_problem
+)
 # chapter 3: the corrected model is "exact"; the joint MILP on request. The printed model
 # (a relaxation without routes) is solve_capability(problem, "printed").
 register_method(CapabilityProblem, "exact", category="exact", warm_start=("DTAA",))(solve_exact)

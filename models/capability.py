@@ -65,11 +65,13 @@ import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 
+from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError
+from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import certify, solve_highs
 from taopt.models.routing import solve_routing
-from taopt.result import OPTIMAL, RELAXATION, Routes, Solution
+from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -436,6 +438,14 @@ def _solve_corrected(
                 "runtime": result.runtime,
             }
         )
+    if any(r.routes is None for r in results.values()):  # a class has no plan in time
+        info = {
+            "formulation": "corrected",
+            "sec": sec,
+            "classes": per_class,
+            "stopped_by": "time_limit",
+        }
+        return _solution(math.inf, TIME_LIMIT, None, bound, start, "corrected", info)
     routes = problem.join({cap: r.routes for cap, r in results.items()})
     objective = evaluate_capability(problem, routes)
     bound = min(bound, objective)
@@ -638,7 +648,14 @@ def _solve_joint(
         if left is not None and left <= 0:
             stopped_by = "time_limit"
             break
+        building = time.perf_counter()
         model = build_joint(problem, sec, cuts)
+        if left is not None:  # cvxpy compiles outside HiGHS's clock: about 4-8x the build
+            left = time_limit - (time.perf_counter() - start)
+            left -= COMPILE_PER_BUILD * (time.perf_counter() - building) + MARGIN
+            if left <= 0:
+                stopped_by = "time_limit"
+                break
         run = solve_highs(model.problem, time_limit=left, mip_rel_gap=mip_gap, verbose=verbose)
         solver_status = run.solver_status
         if run.status in ("error", "infeasible"):
@@ -664,7 +681,21 @@ def _solve_joint(
         stopped_by = run.stopped_by
         break
     if best_routes is None:
-        raise SolverError("the joint model found no feasible solution within the time limit")
+        if stopped_by != "time_limit":
+            raise SolverError(f"the joint model found no feasible solution ({solver_status})")
+        # no plan in time: status time_limit, objective inf, the bound stands
+        bound = max(best_bound, float(arborescence_lower(problem)))
+        info = {
+            "formulation": "joint",
+            "sec": sec,
+            "rounds": rounds,
+            "cuts": len(cuts),
+            "solver_status": solver_status,
+            "stopped_by": "time_limit",
+        }
+        return _solution(math.inf, TIME_LIMIT, None, bound, start, "joint", info)
+    if stopped_by == "time_limit":  # a valid bound of the family keeps the gap honest
+        best_bound = max(best_bound, float(arborescence_lower(problem)))
     bound = min(best_bound, best_value)
     status, stopped_by = certify(best_value, bound, stopped_by)
     info = {
@@ -767,6 +798,30 @@ def solve_capability(
     if formulation == "corrected":
         return _solve_corrected(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
     return _solve_joint(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
+
+
+#: cvxpy's compile for HiGHS takes about 4-8x the time of building a model (see
+#: :data:`taopt.models.sop.COMPILE_PER_BUILD`); a round under a limit keeps that in hand.
+COMPILE_PER_BUILD = 8.0
+
+
+def _footprint(problem: CapabilityProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """A routing model per capability class (corrected), or all of them in one MILP
+    (joint): (n_q + m_q)^2 arcs per class q, the flow version n_q more per arc."""
+    flow = options.get("sec", "dfj") == "flow"
+    columns = 0.0
+    for cls in problem.classes:
+        if cls.problem is not None:
+            arcs = float(len(cls.targets) + len(cls.vehicles)) ** 2
+            columns += arcs * (len(cls.targets) + 1) if flow else arcs
+    return milp_bytes(columns), (
+        f"the exact models of {problem.n:,} targets, {problem.m} vehicles and "
+        f"{len(problem.capabilities)} capabilities (up to {columns:,.0f} columns)"
+    )
+
+
+register_footprint(CapabilityProblem, "exact")(_footprint)
+register_footprint(CapabilityProblem, "joint")(_footprint)
 
 
 def solve_exact(

@@ -27,6 +27,7 @@ import numpy as np
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories, evaluate_trajectories
 from taopt.errors import InstanceError
+from taopt.limits import milp_bytes, register_footprint
 from taopt.models.routing import solve_routing
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Routes, Solution, Status
@@ -161,5 +162,23 @@ def solve_comm(
 
 
 register_method(CommProblem, "exact", category="exact", warm_start=("DAA",))(solve_comm)
+
+
+@register_footprint(CommProblem, "exact")
+def _footprint(problem: CommProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """One routing model per ability class, (n_a + m_a)^2 arcs each (the flow version n_a
+    more per arc), counted from the targets' attributes and the vehicles' abilities."""
+    labels = np.arange(len(problem.attributes))
+    targets = np.bincount(problem.target_code, minlength=len(labels)).astype(float)
+    vehicles = np.bincount(problem.vehicle_code, minlength=len(labels)).astype(float)
+    arcs = (targets + vehicles) ** 2 * (targets > 0)
+    if options.get("sec", "dfj") == "flow":
+        arcs = arcs * (targets + 1)
+    columns = float(arcs.sum())
+    return milp_bytes(columns), (
+        f"the exact models of {problem.n:,} targets and {problem.m} vehicles in "
+        f"{int((targets > 0).sum())} ability classes ({columns:,.0f} columns)"
+    )
+
 
 __all__ = ["solve_comm", "drive"]

@@ -64,10 +64,12 @@ import cvxpy as cp
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
 
-from taopt.delivery.sop import SopProblem, check_sop
+from taopt.delivery.sop import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.errors import InstanceError, SolverError
-from taopt.models.highs import certify, solve_highs
+from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
+from taopt.models.highs import HighsModel, certify, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
@@ -79,6 +81,8 @@ __all__ = [
     "SopModel",
     "build",
     "decode",
+    "assignment_bound",
+    "column_count",
     "describe",
     "solve_sop",
     "solve_sop_problem",
@@ -399,6 +403,120 @@ def _check_path(model: SopModel, order: list[int], precedences, model_value: flo
     return objective
 
 
+#: Seconds per column to build the flow model and compile it with cvxpy for HiGHS (measured
+#: 2.4e-5 on ESC47, 100,611 columns: 0.45 s to build, 2.0 s to compile; up to 8e-5 on
+#: rbg048a on a loaded machine). A run whose estimate exceeds its time limit does not build.
+SECONDS_PER_COLUMN = 3e-5
+
+#: Share of the build estimate spent compiling inside cvxpy's solve (outside HiGHS's clock).
+COMPILE_SHARE = 0.8
+
+#: cvxpy's compile for HiGHS takes 4-9 times as long as building the model (ESC47 0.45 s ->
+#: 2.0 s, ry48p.4 0.40 -> 1.65, prob.42 0.20 -> 1.39, rbg048a 0.53 -> 4.84); the measured
+#: build time times this is the compile estimate, which follows the machine's load.
+COMPILE_PER_BUILD = 8.0
+
+
+def column_count(
+    cost: np.ndarray, closure: nx.DiGraph, start: int, formulation: str = "flow"
+) -> int:
+    """Number of variables of the model :func:`build` would make, without building it."""
+    tails, heads = usable_arcs(cost, closure)
+    n = cost.shape[0]
+    if formulation == "mtz":
+        return len(tails) + n
+    before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
+    commodities = np.array([k for k in range(n) if k != start])
+    usable = ~before[commodities][:, tails] & ~before[commodities][:, heads]
+    usable &= tails[None, :] != commodities[:, None]
+    return len(tails) + int(usable.sum())
+
+
+@register_footprint(SopProblem, "exact")
+def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
+    formulation = options.get("formulation", "flow")
+    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    name = f" {problem.name}" if problem.name else ""
+    return milp_bytes(columns), (
+        f"the SOP {formulation} model of{name} ({problem.n} nodes, {columns:,} columns)"
+    )
+
+
+def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> float:
+    """Valid lower bound: the assignment relaxation on the usable arcs (milliseconds).
+
+    Every node but ``end`` gets one successor and every node but ``start`` one
+    predecessor along a usable arc (:func:`usable_arcs`), subtours allowed: the degree rows
+    of the model without connectivity, solved exactly by
+    :func:`scipy.optimize.linear_sum_assignment`. 1,199 on ESC47 (optimum 1,288) where the
+    arborescence bound is 0. Returns 0 when the relaxation has no finite assignment.
+    """
+    tails, heads = usable_arcs(cost, closure)
+    n = cost.shape[0]
+    weights = np.full((n, n), np.inf)
+    weights[tails, heads] = cost[tails, heads]
+    rows = np.array([v for v in range(n) if v != end])
+    cols = np.array([v for v in range(n) if v != start])
+    sub = weights[np.ix_(rows, cols)]
+    finite = np.isfinite(sub)
+    if not finite.any(axis=1).all() or not finite.any(axis=0).all():
+        return 0.0
+    big = 1.0 + 2.0 * n * float(np.abs(sub[finite]).max(initial=0.0))
+    chosen_rows, chosen_cols = linear_sum_assignment(np.where(finite, sub, big))
+    if not finite[chosen_rows, chosen_cols].all():
+        return 0.0  # no assignment on usable arcs: claim nothing here
+    return float(sub[chosen_rows, chosen_cols].sum())
+
+
+def _cheap_bound(problem: SopProblem) -> float:
+    """The larger of the assignment and arborescence bounds (both valid, both fast)."""
+    return max(
+        assignment_bound(problem.cost, problem.closure, problem.start, problem.end),
+        sop_arborescence_bound(problem),
+    )
+
+
+def _known_order(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, incumbent):
+    """``(cost, order)`` of a feasible incumbent order, or None (an infeasible one is ignored)."""
+    if incumbent is None:
+        return None
+    order = [int(v) for v in (incumbent.order if isinstance(incumbent, Solution) else incumbent)]
+    n = cost.shape[0]
+    if sorted(order) != list(range(n)) or order[0] != start or order[-1] != end:
+        return None
+    where = np.empty(n, dtype=np.int64)
+    where[order] = np.arange(n)
+    if any(where[r] > where[j] for r, j in closure.edges()):
+        return None
+    value = path_cost(cost, order)
+    return (value, order) if np.isfinite(value) else None
+
+
+def _stopped(
+    problem: SopProblem,
+    known,
+    bound: float | None,
+    began: float,
+    formulation: str,
+    info: dict,
+) -> Solution:
+    """Status "time_limit": the incumbent (or no plan, objective inf) and the best valid
+    bound of HiGHS's, the assignment bound (:func:`assignment_bound`) and the arborescence
+    bound (:func:`sop_arborescence_bound`)."""
+    tree = _cheap_bound(problem)
+    bound = tree if bound is None or not np.isfinite(bound) else max(bound, tree)
+    objective = np.inf if known is None else known[0]
+    return Solution(
+        objective=objective,
+        status=TIME_LIMIT,
+        bound=min(bound, objective),
+        runtime=time.perf_counter() - began,
+        method=f"exact-sop-{formulation}",
+        solution=None if known is None else Order(known[1]),
+        info={"stopped_by": "time_limit", **info},
+    )
+
+
 def solve_sop(
     cost,
     precedences,
@@ -408,6 +526,7 @@ def solve_sop(
     formulation: str = "flow",
     mip_gap: float = 1e-9,
     verbose: bool = False,
+    incumbent=None,
 ) -> Solution:
     """Exact sequential ordering: cheapest precedence-respecting Hamiltonian path.
 
@@ -420,8 +539,12 @@ def solve_sop(
     start, end : int
         Path endpoints.
     time_limit : float, optional
-        Seconds for HiGHS; on the limit the incumbent is returned with status
-        "time_limit" and HiGHS's proven bound.
+        Wall-clock seconds for everything (building, compiling, HiGHS, decoding). On the
+        limit the best order known (HiGHS's or ``incumbent``) is returned with status
+        "time_limit" and the best proven bound (HiGHS's or the arborescence bound); with
+        no order, objective ``inf`` and no order. When the model could not be built in
+        time (estimated :data:`SECONDS_PER_COLUMN` per column), it is not built
+        (``info["model"] == "not built"``).
     formulation : {"flow", "mtz"}
         See the module docstring; "flow" is the stronger one.
     mip_gap : float
@@ -432,6 +555,9 @@ def solve_sop(
         (``info["stopped_by"] == "mip_gap"``).
     verbose : bool
         HiGHS log.
+    incumbent : Order, list of int or Solution, optional
+        A feasible order (e.g. from SMMA), returned when HiGHS finds nothing better in
+        time; an infeasible one is ignored.
 
     Returns
     -------
@@ -447,8 +573,8 @@ def solve_sop(
     InstanceError
         Bad data (see :func:`check_sop`) or no feasible path exists.
     SolverError
-        HiGHS failed, hit the limit with no feasible path, or the decoded
-        path breaks a precedence or does not cost the model's value.
+        HiGHS failed, or the decoded path breaks a precedence or does not cost the
+        model's value (a time limit is never an error).
 
     Example
     -------
@@ -460,22 +586,63 @@ def solve_sop(
     began = time.perf_counter()
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    deadline = Deadline(time_limit)
+    checked, closure = check_sop(cost, precedences, start, end)
+    known = _known_order(checked, closure, start, end, incumbent)
+    problem = None
+    if deadline.limited:
+        problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
+        columns = column_count(checked, closure, start, formulation)
+        estimate = columns * SECONDS_PER_COLUMN
+        if estimate > deadline.remaining() - MARGIN:  # cannot build and compile in time
+            info = {"model": "not built", "columns": columns, "build_estimate": estimate}
+            return _stopped(problem, known, None, began, formulation, info)
+    building = time.perf_counter()
     model = build(cost, precedences, start, end, formulation)
-    run = solve_highs(
-        model.problem, time_limit=time_limit, mip_rel_gap=float(mip_gap), verbose=verbose
-    )
+    built_in = time.perf_counter() - building
+    values = None
+    if deadline.limited:
+        # compile apart from solving (HighsModel), so HiGHS gets exactly what is left
+        columns = sum(v.size for v in model.problem.variables())
+        compile_estimate = max(
+            COMPILE_SHARE * columns * SECONDS_PER_COLUMN, COMPILE_PER_BUILD * built_in
+        )
+        if deadline.remaining() - compile_estimate - MARGIN <= 0:
+            info = {"model": "built, not compiled", "columns": columns}
+            return _stopped(problem, known, None, began, formulation, info)
+        compiled = HighsModel(model.problem, verbose=verbose)
+        if deadline.expired(MARGIN):
+            info = {"model": "compiled, not solved", "columns": columns}
+            return _stopped(problem, known, None, began, formulation, info)
+        run = compiled.solve(time_limit=deadline.remaining() - MARGIN, mip_rel_gap=float(mip_gap))
+        if run.has_point:
+            values = compiled.values(model.arc_use)
+    else:
+        run = solve_highs(model.problem, mip_rel_gap=float(mip_gap), verbose=verbose)
     if run.solver_status == "solver_error":
         raise SolverError(f"HiGHS failed on the SOP model: {run.message}")
     if run.status == INFEASIBLE:
         raise InstanceError("no Hamiltonian path respects the precedences and forbidden arcs")
-    if run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT) or not run.has_point:
-        raise SolverError(
-            f"HiGHS returned status {run.solver_status!r} without a feasible path "
-            f"(time_limit={time_limit})"
-        )
-    order = decode(model)
+    if run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT):
+        raise SolverError(f"HiGHS returned status {run.solver_status!r} on the SOP model")
+    if not run.has_point or (
+        run.status == TIME_LIMIT and known is not None and known[0] < run.objective
+    ):
+        if run.status != TIME_LIMIT:
+            raise SolverError(f"HiGHS returned status {run.solver_status!r} without a path")
+        if problem is None:
+            problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
+        info = {"model": "solved", "solver_status": run.solver_status, "nodes": run.nodes}
+        return _stopped(problem, known, run.bound, began, formulation, info)
+    order = decode(model, values)
     objective = _check_path(model, order, precedences, run.objective)
-    bound = None if run.bound is None else min(run.bound, objective)
+    bound = run.bound
+    if run.status == TIME_LIMIT:  # HiGHS may stop before its root bound beats the tree's
+        if problem is None:
+            problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
+        tree = _cheap_bound(problem)
+        bound = tree if bound is None else max(bound, tree)
+    bound = None if bound is None else min(bound, objective)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(objective, bound, run.stopped_by)
     return Solution(
@@ -503,8 +670,10 @@ def solve_sop_problem(
     formulation: str = "flow",
     mip_gap: float = 1e-9,
     verbose: bool = False,
+    incumbent=None,
 ) -> Solution:
-    """:func:`solve_sop` on a :class:`taopt.SopProblem` (the registered "exact" method)."""
+    """:func:`solve_sop` on a :class:`taopt.SopProblem` (the registered "exact" method;
+    ``incumbent`` comes from its warm-start heuristics)."""
     return solve_sop(
         problem.cost,
         problem.precedences,
@@ -514,4 +683,5 @@ def solve_sop_problem(
         formulation=formulation,
         mip_gap=mip_gap,
         verbose=verbose,
+        incumbent=incumbent,
     )

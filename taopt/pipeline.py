@@ -18,19 +18,62 @@ Example
 
 from __future__ import annotations
 
+import logging
 import math
-import time
 from typing import Any
 
 import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError, SolverError, TaoptError
+from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.registry import CATEGORIES, ensure_families, family_of, get_method, methods
 from taopt.result import ERROR, INFEASIBLE, RELAXATION, Solution
 from taopt.scoring import evaluate
 
 #: Relative tolerance between a method's reported objective and the scorer's value.
 SCORE_TOLERANCE = 1e-6
+
+#: Smallest time limit passed on to a method (a budget already spent still gets this).
+MIN_SECONDS = 1e-3
+
+logger = logging.getLogger("taopt")
+
+
+def _warm_start(
+    problem: Any,
+    names: tuple[str, ...],
+    seed: int | None,
+    deadline: Deadline,
+    kwargs: dict[str, Any],
+) -> dict[str, Any] | None:
+    """Run the warm-start heuristics ``names``; put the best payload in ``kwargs``.
+
+    Under a limit they share :data:`WARM_START_SHARE` of it (each one that takes a
+    ``time_limit`` gets its part and stops on it; once the share is spent the remaining
+    ones are skipped). A heuristic that fails (a :class:`TaoptError`) is skipped and
+    logged: the exact method still runs, without that incumbent.
+    """
+    budget = deadline.share(WARM_START_SHARE)
+    end = None if budget is None else deadline.elapsed() + budget
+    warm = []
+    for k, name in enumerate(names):
+        limit = None
+        if end is not None:
+            left = end - deadline.elapsed()
+            if left <= 0 and warm:
+                logger.info("warm start %s skipped: its share of the time limit is spent", name)
+                continue
+            limit = max(left / (len(names) - k), MIN_SECONDS)
+        try:
+            warm.append(solve(problem, name, seed=seed, time_limit=limit))
+        except TaoptError as exc:
+            logger.warning("warm start %s failed and is skipped: %s", name, exc)
+    warm = [s for s in warm if s.solution is not None and math.isfinite(s.objective)]
+    if not warm:
+        return None
+    best = min(warm, key=lambda s: s.objective)
+    kwargs["incumbent"] = best.solution
+    return {"method": best.method, "objective": best.objective, "runtime": deadline.elapsed()}
 
 
 def solve(
@@ -39,6 +82,7 @@ def solve(
     *,
     seed: int | None = None,
     time_limit: float | None = None,
+    max_memory_gb: float | None = None,
     **options: Any,
 ) -> Solution:
     """Solve ``problem`` with the registered ``method``.
@@ -52,9 +96,17 @@ def solve(
     seed : int, optional
         Passed to methods that take one (randomised ones); ignored by the others.
     time_limit : float, optional
-        Seconds, passed to methods that take one (exact models, peers); ignored by the
-        others. An exact model stopped by it returns its incumbent with status
-        "time_limit" and a proven bound.
+        Wall-clock seconds for the whole call (DESIGN.md invariant 4): the clock starts on
+        entry; the warm-start heuristics of an exact method get a share of it
+        (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
+        that take no limit (fast heuristics) ignore it. An exact model stopped by it returns
+        its best plan with status "time_limit" and a proven bound; with no plan found in
+        time, status "time_limit", objective ``inf``, no payload, and the bound.
+    max_memory_gb : float, optional
+        The size guard's limit (default ``TAOPT_MAX_MEMORY_GB`` or
+        :data:`taopt.limits.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
+        whose estimated memory (:func:`taopt.limits.footprint`) is above it is refused
+        before anything is built.
     **options
         Method-specific keyword options (an unknown one is an error naming it).
         ``incumbent=None`` switches off the warm start of an exact model.
@@ -68,15 +120,20 @@ def solve(
     Raises
     ------
     InstanceError
-        Unknown method or option, or a bad ``time_limit``.
+        Unknown method or option, a bad ``time_limit``, or a problem too large for the
+        memory limit (the message names the size, the estimate and the limit).
     SolverError
         The method's objective differs from the scorer's value of its payload.
     """
+    deadline = Deadline(None)  # replaced below once time_limit is checked
     if time_limit is not None:
-        if not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit)):
+        if isinstance(time_limit, bool) or not (
+            isinstance(time_limit, (int, float)) and math.isfinite(time_limit)
+        ):
             raise InstanceError(f"time_limit must be a number of seconds, got {time_limit!r}")
         if time_limit <= 0:
             raise InstanceError(f"time_limit must be positive, got {time_limit}")
+        deadline = Deadline(time_limit)  # the clock starts now: everything below counts
     spec = get_method(problem, method)
     kwargs = dict(options)
     if seed is not None and spec.accepts("seed"):
@@ -84,21 +141,18 @@ def solve(
     if time_limit is not None and spec.accepts("time_limit"):
         kwargs["time_limit"] = time_limit
     spec.check_options(kwargs)
-    began = time.perf_counter()
+    # the size guard: refuse before anything is built (milliseconds, not a MemoryError)
+    check_footprint(problem, method, kwargs, max_memory_gb)
     warm_info = None
     if spec.warm_start and spec.accepts("incumbent") and "incumbent" not in kwargs:
-        warm = [solve(problem, name, seed=seed) for name in spec.warm_start]
-        best = min(warm, key=lambda s: s.objective)
-        kwargs["incumbent"] = best.solution
-        warm_info = {
-            "method": best.method,
-            "objective": best.objective,
-            "runtime": time.perf_counter() - began,
-        }
+        warm_info = _warm_start(problem, spec.warm_start, seed, deadline, kwargs)
+    if "time_limit" in kwargs:
+        # the method gets what is left: warm start and checks above were on the clock
+        kwargs["time_limit"] = max(deadline.remaining() - MARGIN, MIN_SECONDS)
     result = spec.func(problem, **kwargs)
     if not isinstance(result, Solution):
         raise SolverError(f"method {method!r} returned {type(result).__name__}, not a Solution")
-    runtime = time.perf_counter() - began
+    runtime = deadline.elapsed()
     if result.solution is not None and result.status not in (RELAXATION, ERROR, INFEASIBLE):
         value = evaluate(problem, result.solution)  # the one scorer, never the method's word
         if abs(value - result.objective) > SCORE_TOLERANCE * max(1.0, abs(value)):

@@ -32,6 +32,7 @@ import pandas as pd
 from taopt import bounds as bound_functions
 from taopt.errors import FeasibilityError, InstanceError, OutputError
 from taopt.instance import Instance, load_json
+from taopt.limits import check_memory, navigation_bytes
 from taopt.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import family_for_kind, family_of
 from taopt.result import OPTIMAL, Solution
@@ -56,6 +57,14 @@ def problem_from_instance(instance: Instance, progress: bool = True) -> Any:
     """
     from taopt.navigation import travel_time_matrix
 
+    # the size guard: the matrix and navigation's work arrays, before navigating
+    points = instance.n_targets + len(instance.vehicles)
+    check_memory(
+        navigation_bytes(points),
+        f"the travel-time matrix of {instance.name or 'this instance'} "
+        f"({instance.n_targets:,} targets + {len(instance.vehicles)} vehicles = "
+        f"{points:,} points, {points**2:,} pairs)",
+    )
     speeds = {v.speed for v in instance.vehicles}
     capabilities = {v.capability for v in instance.vehicles}
     if len(speeds) == 1 and len(capabilities) == 1 and not instance.obstacles:
@@ -79,6 +88,14 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
     if not isinstance(data, dict):
         raise InstanceError(f"{path}: a problem file holds a JSON object")
     if data.get("kind") == "instance":
+        targets, vehicles = data.get("targets"), data.get("vehicles")
+        if isinstance(targets, list) and isinstance(vehicles, list):  # before validating
+            points = len(targets) + len(vehicles)
+            check_memory(
+                navigation_bytes(points),
+                f"{path}: the travel-time matrix of {len(targets):,} targets + "
+                f"{len(vehicles)} vehicles ({points:,} points)",
+            )
         instance = Instance.from_dict(data, source=str(path))
         return problem_from_instance(instance, progress=progress), instance
     family = family_for_kind(data.get("kind"))

@@ -126,16 +126,17 @@ def test_mtz_formulation_agrees_on_esc07():
     assert sol.status == "optimal" and sol.objective == KNOWN_OPTIMA["ESC07"]
 
 
-def test_time_limit_returns_a_certified_gap_or_fails_loudly():
-    """A time limit gives a valid path with a proven bound, or a SolverError, never a fake optimum."""
+def test_time_limit_returns_a_certified_gap_or_no_plan():
+    """A time limit gives a valid path with a proven bound, or no plan and a bound; never an
+    error and never a fake optimum."""
     cost, precedences, start, end, _ = load_sop("br17.10")
-    try:
-        sol = solve_sop(cost, precedences, start, end, time_limit=1.0)
-    except SolverError:
-        return  # no incumbent within the limit: an error, never a fake optimum
+    sol = solve_sop(cost, precedences, start, end, time_limit=1.0)
     assert sol.status in ("time_limit", "optimal")
     assert sol.bound <= KNOWN_OPTIMA["br17.10"] + 1e-6 <= sol.objective + 2e-6
-    assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
+    if sol.order is None:  # no path within the limit: status time_limit, objective inf
+        assert sol.status == "time_limit" and sol.objective == float("inf")
+    else:
+        assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)
 
 
 def test_loose_mip_gap_is_not_called_optimal():

@@ -59,7 +59,7 @@ from taopt.comm.bytes import NUMBER_BYTES, message_numbers
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import distances_from, route_length
 from taopt.comm.trajectories import Trajectories, evaluate_trajectories
-from taopt.errors import ConvergenceError, FeasibilityError
+from taopt.errors import ConvergenceError, FeasibilityError, SolverError
 
 #: Events closer than this (seconds) are simultaneous.
 TIME_TOLERANCE = 1e-9
@@ -348,6 +348,8 @@ class Simulation:
     ) -> None:
         self.problem = problem
         self.policy = policy
+        #: a taopt.limits.Deadline, or None: run() raises SimulationStopped when it expires
+        self.deadline: Any = None
         self.rng = np.random.default_rng(seed)
         self.check = check
         self.strict = strict
@@ -412,6 +414,11 @@ class Simulation:
                     "is unvisited (Proposition 4.4 fails)"
                 )
             self.events += 1
+            if self.deadline is not None and self.deadline.expired():
+                raise SimulationStopped(
+                    f"{self.policy.name}: time limit reached at t={self.time:.6g} after "
+                    f"{self.events} events, {int(self.visited.sum())} of {problem.n} visited"
+                )
             if self.events > limit:
                 raise ConvergenceError(
                     f"{self.policy.name}: more than {limit} events by t={self.time:.6g}; the "
@@ -649,6 +656,10 @@ class Simulation:
         return Run(trajectories, objective, info)
 
 
+class SimulationStopped(SolverError):
+    """A run stopped by its :attr:`Simulation.deadline` before every target was visited."""
+
+
 def simulate(
     problem: CommProblem,
     policy: Policy,
@@ -704,6 +715,7 @@ __all__ = [
     "Run",
     "Simulation",
     "simulate",
+    "SimulationStopped",
     "components",
     "initially_connected",
     "TIME_TOLERANCE",

@@ -18,6 +18,7 @@ DP's own value agrees (relative :data:`MATCH_TOLERANCE`).
 
 from __future__ import annotations
 
+import math
 import time
 import weakref
 from collections.abc import Sequence
@@ -27,8 +28,9 @@ import numpy as np
 
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.errors import FeasibilityError, SolverError
-from taopt.result import FEASIBLE, OPTIMAL, Solution
+from taopt.errors import FeasibilityError, InstanceError, SolverError
+from taopt.limits import Deadline
+from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9
@@ -293,7 +295,30 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
     )
 
 
-def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solution:
+def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: dict) -> Solution:
+    """Status "time_limit": the incumbent plan (or none, objective inf) and Proposition
+    5.3's arborescence bound (the DP's partial table proves nothing tighter)."""
+    from taopt.delivery.bounds import arborescence_bound
+
+    plan = getattr(incumbent, "plan", incumbent)
+    objective = math.inf if plan is None else evaluate_plan(instance, plan)
+    return Solution(
+        objective=objective,
+        status=TIME_LIMIT,
+        bound=min(arborescence_bound(instance), objective),
+        runtime=time.perf_counter() - start,
+        method="DP",
+        solution=plan,
+        info={"stopped_by": "time_limit", **info},
+    )
+
+
+def optimal_plan(
+    instance: DeliveryInstance,
+    max_customers: int = 14,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+) -> Solution:
     """Exact optimum of (5.1)–(5.7) for small n by dynamic programming over subsets.
 
     The future of a partial plan depends only on the set of customers served, the
@@ -308,6 +333,13 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
     instance : DeliveryInstance
     max_customers : int
         Refuse instances with more customers (time and memory grow as 2^n).
+    time_limit : float, optional
+        Wall-clock seconds. When the table is not finished in time, the result has status
+        "time_limit", the incumbent (or no plan, objective inf) and the arborescence bound
+        of Proposition 5.3.
+    incumbent : Plan or Solution, optional
+        A feasible plan kept for a time limit (``taopt.solve`` passes the best of NIA, MMA
+        and SMMA).
 
     Returns
     -------
@@ -320,8 +352,10 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
 
     Raises
     ------
+    InstanceError
+        n > max_customers (the size guard: 2^n states).
     SolverError
-        n > max_customers, or the DP's makespan and the scorer's differ by more than
+        The DP's makespan and the scorer's differ by more than
         :data:`MATCH_TOLERANCE` relative (a bug, never expected).
 
     Notes
@@ -331,7 +365,11 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
     start = time.perf_counter()
     n, s = instance.n, instance.s
     if n > max_customers:
-        raise SolverError(f"optimal_plan: n = {n} > max_customers = {max_customers}")
+        raise InstanceError(
+            f"optimal_plan: n = {n} customers > max_customers = {max_customers} "
+            f"(2^n = {2**n:.3g} states); pass max_customers to raise it"
+        )
+    deadline = Deadline(time_limit)
     tt = instance.truck_time
     tau = instance.service_time
     data = _sortie_data(instance)
@@ -347,6 +385,8 @@ def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solutio
     back_prev = np.full((1 << n, s), -1, dtype=np.int64)
     best = (np.inf, -1, -1, -1, -1)  # makespan, last customer, launch, landing, prev landing
     for mask in range(full):
+        if deadline.limited and deadline.expired():
+            return _dp_stopped(instance, incumbent, start, {"states_done": mask})
         alive = np.flatnonzero(np.isfinite(ready[mask]))
         if alive.size == 0:
             continue

@@ -482,7 +482,13 @@ def plot_homogeneous(tables: Sequence[pd.DataFrame], path: str | Path | None = N
         ax.plot(rows["r"], rows["q"], "o-", label="q = f / f_MST")
         if rows["certified"].sum():
             ax.plot(rows["r"], rows["gap"], "s--", label="f / f_o (certified)")
-        ax.axhline(2.0, color="0.6", lw=0.8, ls=":", label="2: Theorem 4.9, f <= 2 f_o (initially connected)")
+        ax.axhline(
+            2.0,
+            color="0.6",
+            lw=0.8,
+            ls=":",
+            label="2: Theorem 4.9, f <= 2 f_o (initially connected)",
+        )
         ax.set_xlabel("communication range r (m)")
         ax.set_ylabel("mean ratio (1)")
         ax.set_title(f"DAA, n = {n}, m = {m}, |A| = 1")

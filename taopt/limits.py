@@ -1,0 +1,227 @@
+"""Wall-clock budgets and size guards: what a run may spend, checked before it spends it.
+
+Two promises of :func:`taopt.solve` live here.
+
+**A time limit is wall-clock** (DESIGN.md, invariant 4). A :class:`Deadline` is taken when
+the call starts; the warm-start heuristics get a share of it (:data:`WARM_START_SHARE`) and
+the method the *remaining* seconds, so warm start, model building, separation and decoding
+all count. A method that runs out returns its best plan with a proven bound and status
+"time_limit" (objective ``inf`` and no payload when it found no plan): never an exception.
+
+**A size guard refuses what cannot fit.** Before anything is built, the memory a method would
+need is estimated from the problem's size (:func:`footprint`, one estimator registered per
+family and method with :func:`register_footprint`) and compared with a limit: by default
+:data:`DEFAULT_MAX_MEMORY_GB` GB, or the environment variable ``TAOPT_MAX_MEMORY_GB``, or the
+``max_memory_gb`` option of :func:`taopt.solve` (``math.inf`` switches the guard off). Above
+it, :class:`~taopt.errors.InstanceError` names the size, the estimate and the limit, in
+milliseconds instead of a ``MemoryError`` after minutes.
+
+The estimates are rough on purpose (a factor of two either way): they were measured on the
+models as built (``benchmarks/bench_time_limits.py`` prints them next to the measured peaks)
+and only need to tell 200 MB from 20 GB.
+
+Example
+-------
+>>> d = Deadline(10.0)
+>>> 9.0 < d.remaining() <= 10.0, Deadline(None).remaining() is None
+(True, True)
+>>> check_memory(2e9, "a model", max_memory_gb=4)
+>>> check_memory(8e9, "a model of 10,000 targets", max_memory_gb=4)
+Traceback (most recent call last):
+...
+taopt.errors.InstanceError: a model of 10,000 targets needs about 8.0 GB, above the limit of 4 GB (raise it with TAOPT_MAX_MEMORY_GB=... or max_memory_gb=...)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Callable
+from typing import Any
+
+from taopt.errors import InstanceError
+
+#: Memory limit in GB when neither ``max_memory_gb`` nor ``TAOPT_MAX_MEMORY_GB`` is given.
+DEFAULT_MAX_MEMORY_GB = 4.0
+
+#: Environment variable that sets the memory limit (GB; "inf" switches the guard off).
+MEMORY_ENV = "TAOPT_MAX_MEMORY_GB"
+
+#: Share of a time limit the warm-start heuristics of an exact method may use.
+WARM_START_SHARE = 0.25
+
+#: Seconds a method keeps in hand for what follows its last check (decoding, scoring).
+MARGIN = 0.05
+
+#: Bytes per ordered pair of points when a travel-time matrix is built by navigation: the
+#: float64 matrix and the vectorised solvers' work arrays (an instance of 10,000 targets
+#: failed at 7.6 GB, about 76 bytes per pair).
+NAVIGATION_BYTES_PER_PAIR = 80.0
+
+#: Bytes per column of a MILP built with cvxpy and handed to HiGHS (cvxpy's canonical
+#: form, the sparse matrices and HiGHS's copy): about 1 KB per column on the SOP flow
+#: model of ESC47 (100,611 columns, 93 MB) and 2 KB per arc on the routing model.
+MILP_BYTES_PER_COLUMN = 2048.0
+
+
+class Deadline:
+    """A wall-clock budget taken at construction.
+
+    Parameters
+    ----------
+    seconds : float or None
+        The budget; None means no limit (every query answers "no limit").
+    """
+
+    def __init__(self, seconds: float | None) -> None:
+        self.began = time.perf_counter()
+        self.seconds = None if seconds is None else float(seconds)
+        self.end = math.inf if seconds is None else self.began + float(seconds)
+
+    @property
+    def limited(self) -> bool:
+        """Whether there is a limit at all."""
+        return self.seconds is not None
+
+    def elapsed(self) -> float:
+        """Seconds since the deadline was taken."""
+        return time.perf_counter() - self.began
+
+    def remaining(self) -> float | None:
+        """Seconds left (never below 0), or None without a limit."""
+        if self.seconds is None:
+            return None
+        return max(0.0, self.end - time.perf_counter())
+
+    def expired(self, margin: float = 0.0) -> bool:
+        """Whether fewer than ``margin`` seconds are left."""
+        return time.perf_counter() + margin >= self.end
+
+    def share(self, fraction: float) -> float | None:
+        """``fraction`` of the remaining seconds (None without a limit)."""
+        left = self.remaining()
+        return None if left is None else left * fraction
+
+    def __repr__(self) -> str:
+        return f"Deadline({self.seconds!r}, remaining={self.remaining()!r})"
+
+
+def max_memory_gb(value: float | None = None) -> float:
+    """The memory limit in GB: ``value`` if given, else ``TAOPT_MAX_MEMORY_GB``, else the
+    default :data:`DEFAULT_MAX_MEMORY_GB`.
+
+    Raises
+    ------
+    InstanceError
+        The value (or the environment variable) is not a positive number.
+    """
+    source = "max_memory_gb"
+    if value is None:
+        raw = os.environ.get(MEMORY_ENV)
+        if raw is None or not raw.strip():
+            return DEFAULT_MAX_MEMORY_GB
+        source = MEMORY_ENV
+        try:
+            value = float(raw)
+        except ValueError:
+            raise InstanceError(f"{MEMORY_ENV}={raw!r} is not a number of GB") from None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+        raise InstanceError(f"{source} must be a positive number of GB, got {value!r}")
+    return float(value)
+
+
+def check_memory(needed_bytes: float, what: str, max_memory_gb: float | None = None) -> None:
+    """Refuse ``what`` if it needs more than the memory limit.
+
+    Parameters
+    ----------
+    needed_bytes : float
+        The estimate.
+    what : str
+        Names the item and its size ("the exact model of 3,000 targets (9.0e6 arcs)").
+    max_memory_gb : float, optional
+        The limit (see :func:`max_memory_gb`).
+
+    Raises
+    ------
+    InstanceError
+        The estimate is above the limit; the message gives both and how to raise the limit.
+    """
+    limit = globals()["max_memory_gb"](max_memory_gb)
+    if needed_bytes > limit * 1e9:
+        raise InstanceError(
+            f"{what} needs about {needed_bytes / 1e9:.1f} GB, above the limit of {limit:g} GB "
+            f"(raise it with {MEMORY_ENV}=... or max_memory_gb=...)"
+        )
+
+
+def navigation_bytes(n_points: int) -> float:
+    """Estimated peak bytes of a travel-time matrix of ``n_points`` points by navigation."""
+    return NAVIGATION_BYTES_PER_PAIR * float(n_points) ** 2
+
+
+def milp_bytes(columns: float) -> float:
+    """Estimated peak bytes of a cvxpy + HiGHS MILP with ``columns`` variables."""
+    return MILP_BYTES_PER_COLUMN * float(columns)
+
+
+# -- estimators per (family, method) ----------------------------------------------------------
+#: (problem type, method name) -> estimator(problem, options) -> (bytes, description).
+_FOOTPRINTS: dict[tuple[type, str], Callable[[Any, dict[str, Any]], tuple[float, str]]] = {}
+
+
+def register_footprint(
+    problem_type: type, method: str
+) -> Callable[[Callable[[Any, dict[str, Any]], tuple[float, str]]], Any]:
+    """Decorator: register ``estimate(problem, options) -> (bytes, what)`` for a method.
+
+    ``what`` names the item and its size for the message ("the SOP flow model of ESC47:
+    100,611 columns").
+    """
+
+    def wrap(func: Callable[[Any, dict[str, Any]], tuple[float, str]]) -> Any:
+        _FOOTPRINTS[(problem_type, method)] = func
+        return func
+
+    return wrap
+
+
+def footprint(
+    problem: Any, method: str, options: dict[str, Any] | None = None
+) -> tuple[float, str]:
+    """Estimated peak bytes of ``method`` on ``problem`` and a description; (0, "") when no
+    estimator is registered (a heuristic works on the problem's own matrices)."""
+    for cls in type(problem).__mro__:
+        estimate = _FOOTPRINTS.get((cls, method))
+        if estimate is not None:
+            return estimate(problem, dict(options or {}))
+    return 0.0, ""
+
+
+def check_footprint(
+    problem: Any,
+    method: str,
+    options: dict[str, Any] | None = None,
+    max_memory_gb: float | None = None,
+) -> None:
+    """:func:`check_memory` on the :func:`footprint` of ``method`` on ``problem``."""
+    needed, what = footprint(problem, method, options)
+    if needed:
+        check_memory(needed, what, max_memory_gb)
+
+
+__all__ = [
+    "DEFAULT_MAX_MEMORY_GB",
+    "MEMORY_ENV",
+    "WARM_START_SHARE",
+    "MARGIN",
+    "Deadline",
+    "max_memory_gb",
+    "check_memory",
+    "navigation_bytes",
+    "milp_bytes",
+    "register_footprint",
+    "footprint",
+    "check_footprint",
+]

@@ -1,0 +1,317 @@
+"""Wall-clock time limits and size guards (issue 15 items 2 and 6; DESIGN.md invariant 4).
+
+Every exact method of every family, called through ``taopt.solve`` with a tiny ``time_limit``
+on an instance large for it, returns (no exception) with status "time_limit" and a proven
+bound not above the objective, or a certified optimum. Elapsed times are asserted loosely
+(T + 3 s; CI machines are noisy): the precise figures are in
+``benchmarks/bench_time_limits.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+
+import taopt
+from taopt.errors import InstanceError
+from taopt.limits import (
+    DEFAULT_MAX_MEMORY_GB,
+    MEMORY_ENV,
+    Deadline,
+    check_footprint,
+    check_memory,
+    max_memory_gb,
+)
+from taopt.result import OPTIMAL, TIME_LIMIT
+
+LIMIT = 0.2
+SLACK = 3.0
+
+
+def euclidean(n: int, m: int = 3, seed: int = 0) -> taopt.AssignmentProblem:
+    points = np.random.default_rng(seed).random((n + m, 2))
+    cost = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    return taopt.AssignmentProblem(cost, n, name=f"euclid-{n}")
+
+
+def delivery(n: int, seed: int = 7):
+    from taopt.delivery.dags import layered_dag, residential_network
+    from taopt.delivery.instance import DeliveryInstance
+
+    customers, stops, graph = residential_network(n, seed=seed)
+    return DeliveryInstance(
+        customers=customers.round(1),
+        stops=stops.round(1),
+        graph=graph,
+        depot=0,
+        v_drone=30 / 3.6,
+        v_truck=40 / 3.6,
+        flight_range=250.0,
+        precedences=layered_dag(n, layers=5, density=0.15, seed=seed),
+        service_time=30.0,
+    )
+
+
+@pytest.fixture(autouse=True, scope="module")
+def imports_paid():
+    """Import the methods (cvxpy, HiGHS: seconds on a loaded machine) before any clock runs,
+    as a CLI or a study pays them once."""
+    taopt.solve(euclidean(3), "exact")
+
+
+def timed(problem, method: str, time_limit: float = LIMIT, **options):
+    began = time.perf_counter()
+    result = taopt.solve(problem, method, time_limit=time_limit, **options)
+    return result, time.perf_counter() - began
+
+
+def assert_contract(problem, result, elapsed: float, time_limit: float = LIMIT) -> None:
+    """Status time_limit (or a proven optimum), a bound not above the objective, on time."""
+    assert elapsed < time_limit + SLACK
+    assert result.status in (TIME_LIMIT, OPTIMAL)
+    assert result.bound is not None and math.isfinite(result.bound)
+    assert result.bound <= result.objective + 1e-9 * max(1.0, abs(result.bound))
+    if result.status == OPTIMAL:
+        assert result.bound == pytest.approx(result.objective, rel=1e-6)
+    if result.solution is None:
+        assert result.objective == math.inf
+    else:
+        assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
+def run(problem, method: str, time_limit: float = LIMIT, **options):
+    result, elapsed = timed(problem, method, time_limit, **options)
+    assert_contract(problem, result, elapsed, time_limit)
+    return result, elapsed
+
+
+# -- the clock ---------------------------------------------------------------------------------
+
+
+def test_deadline_counts_down_and_none_is_unlimited():
+    """A Deadline's remaining time shrinks to 0 and expires; None never expires."""
+    d = Deadline(0.05)
+    assert 0 < d.remaining() <= 0.05 and not d.expired()
+    time.sleep(0.06)
+    assert d.remaining() == 0.0 and d.expired()
+    unlimited = Deadline(None)
+    assert unlimited.remaining() is None and not unlimited.expired() and not unlimited.limited
+
+
+def test_solve_rejects_a_bad_time_limit():
+    """A zero, negative, boolean or infinite time_limit is an InstanceError."""
+    p = euclidean(4)
+    for bad in (0, -1.0, True, math.inf):
+        with pytest.raises(InstanceError, match="time_limit"):
+            taopt.solve(p, "MC", time_limit=bad)
+
+
+# -- heuristics stop on their limit ------------------------------------------------------------
+
+
+def test_mc_stops_on_its_limit_with_complete_routes():
+    """MC under a tiny limit still returns every target once, scored by the one scorer."""
+    p = euclidean(400, 2)
+    result, elapsed = timed(p, "MC", time_limit=0.01)
+    assert elapsed < 0.01 + SLACK
+    assert sorted(k for route in result.routes for k in route) == list(range(p.n))
+    assert taopt.evaluate(p, result) == pytest.approx(result.objective)
+    assert result.info.get("stopped_by") == "time_limit"
+    unlimited = taopt.solve(p, "MC")
+    assert "stopped_by" not in unlimited.info
+    assert unlimited.objective <= result.objective + 1e-9  # the completion is a fallback
+
+
+def test_simulation_stopped_by_its_limit_has_no_plan():
+    """DAA stopped before every target is visited: status time_limit, objective inf, no plan."""
+    from taopt.comm.problem import random_problem
+
+    p = random_problem(300, 10, 3, 200.0, seed=0)
+    result, elapsed = timed(p, "DAA", time_limit=0.001)
+    assert elapsed < 0.001 + SLACK
+    assert result.status == TIME_LIMIT and result.objective == math.inf
+    assert result.solution is None
+
+
+# -- every exact method of every family --------------------------------------------------------
+
+
+def test_assignment_exact_under_a_tiny_limit():
+    """Routing (2.2)-(2.5) with 300 targets at T = 0.2: time_limit with a bound, warm-started."""
+    result, _ = run(euclidean(300), "exact")
+    assert result.info["warm_start"]["method"] == "MC"
+
+
+def test_sop_exact_returns_a_bound_not_an_error():
+    """SOP exact on ESC25 at T = 0.2: time_limit with SMMA's order and a bound, no SolverError."""
+    from taopt.delivery.sop import SopProblem
+
+    result, _ = run(SopProblem.load("ESC25"), "exact")
+    assert result.status == TIME_LIMIT and result.solution is not None
+
+
+def test_sop_exact_without_incumbent_reports_no_plan():
+    """Without a warm start and with no time to build, SOP exact has no plan but a bound."""
+    from taopt.delivery.sop import SopProblem
+
+    result, _ = run(SopProblem.load("ESC25"), "exact", incumbent=None)
+    assert result.status == TIME_LIMIT and result.solution is None
+    assert result.objective == math.inf
+
+
+def test_delivery_exact_under_a_tiny_limit():
+    """The delivery MILP on 20 customers at T = 0.2: time_limit, the incumbent and a bound."""
+    run(delivery(20), "exact")
+
+
+def test_delivery_dp_under_a_tiny_limit():
+    """The subset DP on 14 customers (2^14 states) at T = 0.05 stops with the incumbent."""
+    result, _ = run(delivery(14), "DP", time_limit=0.05)
+    assert result.status == TIME_LIMIT and result.solution is not None
+
+
+def test_delivery_dp_refuses_too_many_customers():
+    """Above max_customers the DP is refused by an InstanceError naming n and the limit."""
+    with pytest.raises(InstanceError, match="n = 16 customers > max_customers = 14"):
+        taopt.solve(delivery(16), "DP")
+
+
+@pytest.mark.parametrize("method", ["exact", "joint"])
+def test_capability_exact_under_a_tiny_limit(method):
+    """Chapter 3's corrected and joint models on 50 targets at T = 0.2."""
+    from taopt.capability.instances import thesis_scenario
+
+    run(thesis_scenario(50, 10, 3, 0).problem, method)
+
+
+def test_comm_exact_under_a_tiny_limit():
+    """Chapter 4's f_o on 300 targets at T = 0.2 (DAA's warm start is stopped too)."""
+    from taopt.comm.problem import random_problem
+
+    run(random_problem(300, 10, 3, 200.0, seed=0), "exact")
+
+
+def test_failing_warm_start_is_skipped():
+    """A warm-start heuristic that fails is skipped; the exact method still certifies."""
+    from taopt.delivery.sop import SopProblem
+
+    cost = [
+        [0, 3, 5, 9, -1],
+        [-1, 0, 4, 6, -1],
+        [-1, 2, 0, 3, 7],
+        [-1, 4, 1, 0, 3],
+        [2, -1, -1, -1, 0],
+    ]
+    cost = np.where(np.array(cost) == -1, np.inf, np.array(cost, dtype=float))
+    p = SopProblem(cost, ((2, 1),), 0, 4)
+    result = taopt.solve(p, "exact")
+    assert result.status == OPTIMAL and result.objective == 16
+
+
+# -- size guards -------------------------------------------------------------------------------
+
+
+def test_memory_limit_from_option_environment_and_default(monkeypatch):
+    """The limit is the option, else TAOPT_MAX_MEMORY_GB, else the documented default."""
+    monkeypatch.delenv(MEMORY_ENV, raising=False)
+    assert max_memory_gb() == DEFAULT_MAX_MEMORY_GB
+    monkeypatch.setenv(MEMORY_ENV, "0.5")
+    assert max_memory_gb() == 0.5 and max_memory_gb(8) == 8.0
+    monkeypatch.setenv(MEMORY_ENV, "lots")
+    with pytest.raises(InstanceError, match=MEMORY_ENV):
+        max_memory_gb()
+    with pytest.raises(InstanceError, match="positive"):
+        check_memory(1.0, "x", max_memory_gb=0)
+
+
+def test_large_assignment_exact_is_refused_fast():
+    """3,000 targets: the exact model is refused before building, naming size and limit."""
+    p = euclidean(3000)
+    began = time.perf_counter()
+    with pytest.raises(InstanceError, match=r"3,000 targets.*GB.*limit of 4 GB"):
+        taopt.solve(p, "exact", time_limit=30, max_memory_gb=4)
+    assert time.perf_counter() - began < 2.0
+    check_footprint(p, "exact", max_memory_gb=math.inf)  # the override lifts the guard
+    assert taopt.solve(p, "MC", time_limit=0.05, max_memory_gb=4).routes is not None
+
+
+def test_instance_of_ten_thousand_targets_is_refused_fast(tmp_path, monkeypatch):
+    """An instance file of 10,000 targets is refused before validation and navigation."""
+    from taopt.solving import load_problem_file
+
+    monkeypatch.delenv(MEMORY_ENV, raising=False)
+    data = {
+        "schema_version": 1,
+        "kind": "instance",
+        "region": [0.0, 1000.0],
+        "vehicles": [{"id": "v0", "start": [0.0, 0.0], "speed": 1.0, "capability": "any"}],
+        "targets": [
+            {"id": f"t{k}", "position": [float(k % 1000), float(k // 10)], "demands": ["any"]}
+            for k in range(10_000)
+        ],
+    }
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(data))
+    began = time.perf_counter()
+    with pytest.raises(InstanceError, match=r"big.json.*10,000 targets.*limit of 4 GB"):
+        load_problem_file(path, progress=False)
+    assert time.perf_counter() - began < 5.0
+
+
+def test_matrix_of_numeric_strings_is_refused_fast(tmp_path):
+    """A 400 x 400 cost matrix of numeric strings is refused in well under a second or two."""
+    from taopt.solving import load_problem_file
+
+    n = 400
+    cost = [[str(float(i + j)) for j in range(n)] for i in range(n)]
+    path = tmp_path / "strings.json"
+    data = {"schema_version": 1, "kind": "assignment_problem", "n_targets": n - 1, "cost": cost}
+    path.write_text(json.dumps(data))
+    began = time.perf_counter()
+    with pytest.raises(InstanceError, match=r"strings.json.*cost\[0\]\[\d+\].*expected a number"):
+        load_problem_file(path, progress=False)
+    assert time.perf_counter() - began < 3.0
+
+
+@pytest.mark.parametrize("family", ["assignment", "sop", "delivery"])
+def test_genetic_algorithms_stop_on_their_limit(family):
+    """Each GA stops on a tiny time_limit with its best so far, feasible and scored."""
+    from taopt.delivery.sop import SopProblem
+
+    problem = {
+        "assignment": lambda: euclidean(200),
+        "sop": lambda: SopProblem.load("ESC25"),
+        "delivery": lambda: delivery(20),
+    }[family]()
+    result, elapsed = timed(problem, "GA", time_limit=0.05)
+    assert elapsed < 0.05 + SLACK
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+    history = result.info["history"]
+    full = 350 if family == "assignment" else 2000
+    assert len(history) < full + 1  # stopped before the last generation
+
+
+def test_sop_assignment_bound_is_valid_and_beats_the_tree_on_esc():
+    """The assignment relaxation never exceeds the optimum of the shipped SOP files."""
+    from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, shipped_sop, sop_arborescence_bound
+    from taopt.models.sop import assignment_bound
+
+    for name in shipped_sop():
+        p = SopProblem.load(name)
+        bound = assignment_bound(p.cost, p.closure, p.start, p.end)
+        assert 0 <= bound <= KNOWN_OPTIMA[name] + 1e-9
+    esc = SopProblem.load("ESC25")
+    assert assignment_bound(esc.cost, esc.closure, esc.start, esc.end) > sop_arborescence_bound(esc)
+
+
+def test_sop_under_a_generous_limit_still_certifies():
+    """With time to spare, the limited path (compiled apart, then solved) proves the optimum."""
+    from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem
+
+    for name in ("ESC07", "ESC11", "ESC12"):
+        result = taopt.solve(SopProblem.load(name), "exact", time_limit=60)
+        assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
