@@ -135,10 +135,13 @@ def _methods(text: str | None) -> tuple[str, ...] | None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    """Solve a problem file with every (or the named) method and print the gap table."""
+    """Solve a problem file with every (or the named) method and print the gap table.
+
+    Exit code 1 when some method failed (its row says "error" and why), 0 otherwise.
+    """
     from taopt.solving import solve_file
 
-    solve_file(
+    result = solve_file(
         args.file,
         methods=_methods(args.methods),
         seed=args.seed,
@@ -148,7 +151,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         save=args.save,
         progress=not args.quiet,
     )
-    return 0
+    return 1 if result["failed"] else 0
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
@@ -536,6 +539,11 @@ def build_parser() -> argparse.ArgumentParser:
         "chapter 3/4 kinds. Examples ship with the package: taopt/data/demo.json (an instance,\n"
         "10 targets, 3 vehicles), taopt/data/delivery_example_20.json (20 customers) and\n"
         "taopt/data/examples/*.json (one small file of each kind)."
+    )
+    solve.epilog = (
+        "A method that fails does not stop the others: its row has status 'error' and a\n"
+        "message column says why. Exit codes: 0 every method ran, 1 some method failed,\n"
+        "2 bad input, 130 interrupted (Ctrl-C)."
     )
     solve.add_argument("file", help="a JSON problem file")
     _common(solve, "methods", "seed", "plot", "quiet")

@@ -21,6 +21,7 @@ Example files ship with the package: ``taopt/data/demo.json`` (an instance),
 
 from __future__ import annotations
 
+import logging
 import math
 import sys
 import time
@@ -33,11 +34,13 @@ from taopt import bounds as bound_functions
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import Instance, load_json
 from taopt.pipeline import default_methods, solve
-from taopt.registry import family_for_kind, family_of
-from taopt.result import OPTIMAL, Solution
+from taopt.registry import family_for_kind, family_of, get_method
+from taopt.result import ERROR, OPTIMAL, Solution
 from taopt.routing.problem import AssignmentProblem
 from taopt.schemas import naming
 from taopt.scoring import evaluate
+
+logger = logging.getLogger("taopt")
 
 __all__ = [
     "problem_from_instance",
@@ -104,10 +107,18 @@ def method_table(
     ``gap_to_optimum`` (f / f_o − 1 against a certified optimum found in this run — the
     true gap the thesis could not measure), ``q_valid`` (f / the family's valid
     arborescence bound), ``q_thesis`` (f / the thesis's Algorithm 1 value, where the family
-    has one; not a valid bound on asymmetric costs) and ``seconds``.
+    has one; not a valid bound on asymmetric costs), ``seconds`` and, when some method
+    failed, ``message``.
+
+    A method that raises does not sink the table: its row has status "error", objective
+    NaN and the exception's first line in ``message`` (its Solution carries it in
+    ``info["error"]``); the other rows stand. An unknown method name is still refused
+    (InstanceError) before anything runs. Ctrl-C (KeyboardInterrupt) stops the whole run.
     """
     methods = list(methods) if methods else default_methods(problem)
-    solutions = {m: solve(problem, m, seed=seed, time_limit=time_limit) for m in methods}
+    for method in methods:  # an unknown name is the user's error: refuse before running any
+        get_method(problem, method)
+    solutions = {m: _run_method(problem, m, seed, time_limit) for m in methods}
     valid = _bound("arborescence", problem)
     thesis = _bound("thesis_mcga", problem)
     optima = [s.objective for s in solutions.values() if s.status == OPTIMAL]
@@ -125,10 +136,41 @@ def method_table(
                 "q_valid": sol.objective / valid if valid > 0 else math.nan,
                 "q_thesis": sol.objective / thesis if thesis > 0 else math.nan,
                 "seconds": sol.runtime,
+                "message": _short(sol.info.get("error", "")) if sol.status == ERROR else "",
             }
         )
     table = pd.DataFrame(rows).dropna(axis=1, how="all")
+    if not table["message"].astype(bool).any():
+        table = table.drop(columns="message")
     return table, solutions
+
+
+def _short(text: str, width: int = 120) -> str:
+    """``text`` cut to ``width`` characters for a table cell (the full text is in ``info``)."""
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _run_method(problem: Any, method: str, seed: int, time_limit: float | None) -> Solution:
+    """``solve(problem, method)``, or an "error" row saying what failed and why.
+
+    Any ``Exception`` of one method (a heuristic's dead end, a solver failure, a bug) is
+    caught so the other methods' rows stand; ``KeyboardInterrupt`` is not an
+    ``Exception`` and still stops the whole run.
+    """
+    began = time.perf_counter()
+    try:
+        return solve(problem, method, seed=seed, time_limit=time_limit)
+    except Exception as exc:  # noqa: BLE001 -- one failing method must not sink the table
+        text = str(exc).splitlines()[0] if str(exc) else ""
+        message = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+        logger.info("method %s failed on %r: %s", method, problem, message)
+        return Solution(
+            objective=math.nan,
+            status=ERROR,
+            runtime=time.perf_counter() - began,
+            method=method,
+            info={"error": message},
+        )
 
 
 def solve_file(
@@ -166,7 +208,9 @@ def solve_file(
 
     Returns
     -------
-    dict with ``problem``, ``instance``, ``table`` (DataFrame) and ``solutions``.
+    dict with ``problem``, ``instance``, ``table`` (DataFrame), ``solutions`` and ``failed``
+    (the methods whose row has status "error"; ``taopt solve`` exits with 1 when there is
+    one). Failed methods are not saved and not plotted.
     """
     out = out or sys.stdout
     tic = time.perf_counter()
@@ -181,13 +225,18 @@ def solve_file(
     table, solutions = method_table(problem, methods, seed=seed, time_limit=time_limit)
     print(f"{problem!r} from {path}", file=out)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
-    best = min(solutions.values(), key=lambda s: s.objective)
+    found = [s for s in solutions.values() if s.solution is not None and s.status != ERROR]
+    best = min(found, key=lambda s: s.objective) if found else None
+    failed = [m for m, s in solutions.items() if s.status == ERROR]
     if save:
         folder = Path(save)
         folder.mkdir(parents=True, exist_ok=True)
         for method, sol in solutions.items():
-            sol.save(folder / f"{method}.json")
+            if sol.status != ERROR:
+                sol.save(folder / f"{method}.json")
         print(f"solutions written to {folder}/<method>.json", file=out)
+    if best is None:
+        plot = gantt = None  # nothing to draw
     if plot:
         name, draw = next(iter(family.plots.items()))
         draw(problem, best.solution, plot, instance=instance)
@@ -195,8 +244,16 @@ def solve_file(
     if gantt:
         family.plots["gantt"](problem, best.solution, gantt, instance=instance)
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
+    if failed:
+        print(f"failed: {', '.join(failed)} (see the message column)", file=out)
     print(f"({time.perf_counter() - tic:.2f} s)", file=out)
-    return {"problem": problem, "instance": instance, "table": table, "solutions": solutions}
+    return {
+        "problem": problem,
+        "instance": instance,
+        "table": table,
+        "solutions": solutions,
+        "failed": failed,
+    }
 
 
 def verify_file(
