@@ -155,11 +155,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    """Re-score a saved solution from the problem file alone; exit 1 when a check fails."""
+    """Re-check a saved solution from the problem file alone (exit codes in the help)."""
     from taopt.solving import verify_file
 
-    ok = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
-    return 0 if ok else 1
+    verdict = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
+    return verdict.exit_code
 
 
 def cmd_claims(args: argparse.Namespace) -> int:
@@ -566,6 +566,17 @@ def build_parser() -> argparse.ArgumentParser:
         "verify",
         cmd_verify,
         "re-score a saved solution from the problem file alone and check every constraint",
+    )
+    verify.epilog = (
+        "Always checked: the payload fits the problem, every constraint holds, the status\n"
+        "agrees with it, the objective re-scores to the saved value, a saved bound is not\n"
+        "above it. Claims about the optimum (an 'optimal' status, a saved bound, an\n"
+        "'infeasible' status) need --exact, which re-solves with the family's fastest exact\n"
+        "method (the subset DP for small delivery instances) within --time-limit; those it\n"
+        "cannot check are printed '[not checked] ...'. The last line is VALID, 'VALID (k\n"
+        "claims not checked)' or NOT VALID. Exit codes: 0 valid and every claim checked,\n"
+        "1 a check failed, 2 bad input (a malformed file), 3 valid but some claims not\n"
+        "checked, 130 interrupted (Ctrl-C)."
     )
     verify.add_argument("solution", help="a solution JSON (taopt solve --save, Solution.save)")
     verify.add_argument("problem", help="the problem file it solves")

@@ -103,6 +103,11 @@ class Method:
     default : bool or callable
         Whether the method is in the default set of ``taopt solve`` (a callable gets the
         problem, e.g. an exact DP only for small instances).
+    certifies : bool or callable
+        Whether this exact method is the family's *certifying method* for the problem: the
+        fastest exact method, which ``taopt verify --exact`` re-solves with (a callable
+        gets the problem, e.g. the subset DP only up to 14 customers). See
+        :func:`certifying_method`.
     """
 
     name: str
@@ -114,10 +119,17 @@ class Method:
     options: frozenset[str] = frozenset()
     takes_any: bool = False
     default: bool | Callable[[Any], bool] = True
+    certifies: bool | Callable[[Any], bool] = False
 
     def is_default_for(self, problem: Any) -> bool:
         """Whether ``taopt solve`` runs this method on ``problem`` when none are named."""
         return bool(self.default(problem) if callable(self.default) else self.default)
+
+    def certifies_for(self, problem: Any) -> bool:
+        """Whether this is the certifying method of ``problem`` (see :func:`certifying_method`)."""
+        if not self.exact:
+            return False
+        return bool(self.certifies(problem) if callable(self.certifies) else self.certifies)
 
     @property
     def exact(self) -> bool:
@@ -221,8 +233,12 @@ def register_method(
     category: str = "heuristic",
     warm_start: tuple[str, ...] | str = (),
     default: bool | Callable[[Any], bool] = True,
+    certifies: bool | Callable[[Any], bool] = False,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Decorator: register ``func(problem, **options) -> Solution`` as method ``name``.
+
+    ``certifies`` (exact methods only) marks the family's fastest exact method, where it
+    applies (see :class:`Method` and :func:`certifying_method`).
 
     Example
     -------
@@ -252,6 +268,7 @@ def register_method(
             options=options,
             takes_any=takes_any,
             default=default,
+            certifies=certifies,
         )
         return func
 
@@ -314,6 +331,23 @@ def methods(problem: Any, category: str | None = None) -> dict[str, Method]:
     return found
 
 
+def certifying_method(problem: Any) -> str | None:
+    """The exact method that certifies ``problem`` fastest (``taopt verify --exact`` uses it).
+
+    The first exact method registered with ``certifies`` true for the problem (e.g. the
+    subset DP "DP" of a delivery instance with at most 14 customers); else the family's
+    method "exact"; else its first exact method; None when it has none. Only methods
+    whose modules are imported count (see :func:`methods`).
+    """
+    exact = methods(problem, "exact")
+    for name, spec in exact.items():
+        if spec.certifies_for(problem):
+            return name
+    if "exact" in exact:
+        return "exact"
+    return next(iter(exact), None)
+
+
 def method_names(problem: Any, category: str | None = None) -> list[str]:
     """Names of :func:`methods`, in registration order."""
     return list(methods(problem, category))
@@ -344,5 +378,6 @@ __all__ = [
     "families",
     "methods",
     "method_names",
+    "certifying_method",
     "get_method",
 ]

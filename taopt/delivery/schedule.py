@@ -294,7 +294,13 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
     )
 
 
-@register_method(DeliveryInstance, "DP", category="exact", default=lambda inst: inst.n <= 12)
+@register_method(
+    DeliveryInstance,
+    "DP",
+    category="exact",
+    default=lambda inst: inst.n <= 12,
+    certifies=lambda inst: inst.n <= 14,  # taopt verify --exact: the fastest exact method
+)
 def optimal_plan(instance: DeliveryInstance, max_customers: int = 14) -> Solution:
     """Exact optimum of (5.1)–(5.7) for small n by dynamic programming over subsets.
 
