@@ -42,11 +42,13 @@ Example
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import ctypes
 import math
 import os
 import sys
+import threading
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -55,6 +57,7 @@ import cvxpy as cp
 import highspy
 import numpy as np
 import scipy.sparse as sp
+from highspy._core import _Highs
 
 from taopt.errors import SolverError
 from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
@@ -64,6 +67,8 @@ OPTIMALITY_TOLERANCE = 1e-6
 
 __all__ = [
     "OPTIMALITY_TOLERANCE",
+    "INTERRUPT_GRACE",
+    "run_interruptibly",
     "HighsModel",
     "HighsRun",
     "certify",
@@ -127,6 +132,125 @@ def new_highs(verbose: bool = False) -> highspy.Highs:
 # The banner is printed once per process, by whichever Highs() comes first:
 # cvxpy's HiGHS interface builds its own, so take the first one here, quietly.
 new_highs()
+
+
+# ------------------------------------------------------------------ Ctrl-C
+#: Seconds a Ctrl-C waits for HiGHS to stop at its next interrupt callback before the run
+#: is abandoned (HiGHS calls ``kCallbackMipInterrupt`` between nodes, but may go seconds
+#: without one at the root).
+INTERRUPT_GRACE = 1.0
+
+_INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
+_ABANDONED: list[threading.Thread] = []
+
+
+def _exit_if_abandoned() -> None:
+    """At interpreter exit: a HiGHS run abandoned on Ctrl-C still running in C++ would race
+    the interpreter's teardown (and HiGHS's own static objects); end the process at once
+    with the interrupt's exit code instead."""
+    if any(thread.is_alive() for thread in _ABANDONED):
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(130)
+
+
+def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
+    """``highs.run()`` that Ctrl-C stops within :data:`INTERRUPT_GRACE` seconds.
+
+    Python handles a signal only in the main thread and only between bytecodes; while the
+    main thread is inside ``Highs.run()`` that happens in HiGHS's callbacks, where the
+    ``KeyboardInterrupt`` becomes a HiGHS error, or never (the run goes on to its end).
+    So, on the main thread, HiGHS runs in a helper thread (``Highs.run`` releases the GIL)
+    while the main thread waits, ready for Ctrl-C. On Ctrl-C the interrupt callbacks
+    (``kCallbackSimplexInterrupt``, ``kCallbackIpmInterrupt``, ``kCallbackMipInterrupt``)
+    set ``user_interrupt`` and HiGHS returns; a run that has not stopped after the grace
+    period is left to finish on its own (the process, ending, exits at once with code
+    130). ``KeyboardInterrupt`` is then raised in the caller. Off the main thread (a study
+    worker thread) the run is plain.
+
+    Parameters
+    ----------
+    highs : highspy.Highs
+    run : callable, optional
+        The run to call (default ``highs.run``).
+
+    Returns
+    -------
+    HighsStatus
+        What ``run()`` returned.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C during the run.
+    """
+    run = run or highs.run
+    if threading.current_thread() is not threading.main_thread():
+        return run()
+    stop = threading.Event()
+
+    def on_interrupt(event: Any) -> None:
+        if stop.is_set():
+            event.interrupt()
+
+    for name in _INTERRUPT_CALLBACKS:
+        getattr(highs, name).subscribe(on_interrupt)
+    outcome: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            outcome["status"] = run()
+        except BaseException as exc:  # noqa: BLE001 -- handed to the waiting thread
+            outcome["error"] = exc
+        finally:
+            # HiGHS keeps a task scheduler per calling thread; release this thread's, as
+            # highspy's own threaded solve does (a live one aborts the process at exit)
+            _Highs.resetThreadScheduler(False)
+
+    worker = threading.Thread(target=target, name="highs-run", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except KeyboardInterrupt:
+        stop.set()
+        try:
+            worker.join(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
+        finally:
+            if worker.is_alive():
+                if not _ABANDONED:
+                    atexit.register(_exit_if_abandoned)
+                _ABANDONED.append(worker)
+        raise
+    for name in _INTERRUPT_CALLBACKS:
+        getattr(highs, name).unsubscribe(on_interrupt)
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome.get("status")
+
+
+class _InterruptibleHighs(highspy.Highs):
+    """``highspy.Highs`` whose ``run()`` is :func:`run_interruptibly` (for cvxpy's object)."""
+
+    def run(self) -> Any:
+        return run_interruptibly(self, super().run)
+
+
+@contextlib.contextmanager
+def _cvxpy_interruptible() -> Any:
+    """cvxpy's HiGHS interface builds its own ``highspy.Highs()`` and calls ``run()``: on
+    the main thread, let it build an :class:`_InterruptibleHighs` instead."""
+    if threading.current_thread() is not threading.main_thread() or (
+        highspy.Highs is _InterruptibleHighs
+    ):
+        yield
+        return
+    original, highspy.Highs = highspy.Highs, _InterruptibleHighs
+    try:
+        yield
+    finally:
+        highspy.Highs = original
 
 
 @dataclass(frozen=True)
@@ -266,7 +390,7 @@ def solve_highs(
     if objective_bound is not None:
         options["objective_bound"] = float(objective_bound)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _cvxpy_interruptible():
             # cvxpy warns "Solution may be inaccurate" on every limit; the status says it
             warnings.filterwarnings("ignore", message="Solution may be inaccurate")
             problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
@@ -598,7 +722,7 @@ class HighsModel:
         if on_solution is not None and is_mip:
             highs.cbMipSolution.subscribe(forward)
         try:
-            highs.run()
+            run_interruptibly(highs)  # Ctrl-C: HiGHS stops, then KeyboardInterrupt
         finally:
             if on_solution is not None and is_mip:
                 highs.cbMipSolution.unsubscribe(forward)

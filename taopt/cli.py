@@ -6,7 +6,10 @@ mean the same everywhere: ``--seed``, ``--jobs``, ``--dask``, ``--time-limit``,
 ``--methods``, ``--out``, ``--plot``, ``--quiet``; every option's help shows its default.
 
 :func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
-on stderr and exit code 2; Ctrl-C in a study prints one line and exits with 130.
+on stderr and exit code 2; Ctrl-C prints one line (``taopt solve: interrupted``; a study
+says where its rows are) and exits with 130, no traceback: a HiGHS run stops through its
+interrupt callbacks (:func:`taopt.models.highs.interruptible`), Python code between
+bytecodes.
 """
 
 from __future__ import annotations
@@ -659,13 +662,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
-    from taopt.study import StudyInterrupted
+    """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input).
 
+    Ctrl-C at any point (while modules load, in a solver, in a study) prints one line,
+    ``taopt COMMAND: interrupted`` (a study adds where its rows are), and returns 130.
+    """
     # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
     # multiprocessing resource tracker (started with these warning options) would print a
     # warning about it after our one-line message.
     sys.warnoptions.append("ignore:resource_tracker:UserWarning")
+    words = list(sys.argv[1:] if argv is None else argv)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:  # StudyInterrupted is one, and says where its rows are
+        command = next((w for w in words if not w.startswith("-")), "")
+        message = str(exc) if isinstance(exc, TaoptError) and str(exc) else "interrupted"
+        print(f"taopt{' ' + command if command else ''}: {message}", file=sys.stderr)
+        return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -673,9 +689,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         return int(args.handler(args) or 0)
-    except StudyInterrupted as exc:
-        print(f"taopt {args.command}: {exc}", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt:  # StudyInterrupted is a TaoptError too: main() reports it
+        raise
     except (TaoptError, ValueError, OSError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         print(f"taopt {args.command}: error: {message}", file=sys.stderr)
