@@ -11,7 +11,6 @@ its interrupt callback, on both of taopt's ways to run HiGHS.
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
