@@ -70,6 +70,7 @@ __all__ = [
     "OPTIMALITY_TOLERANCE",
     "INTERRUPT_GRACE",
     "run_interruptibly",
+    "solver_interrupted",
     "HighsModel",
     "HighsRun",
     "certify",
@@ -143,6 +144,17 @@ INTERRUPT_GRACE = 1.0
 
 _INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
 _ABANDONED: list[threading.Thread] = []
+_INTERRUPTED = threading.Event()
+
+
+def solver_interrupted() -> bool:
+    """Whether Ctrl-C stopped a HiGHS run in this process.
+
+    The interpreter's teardown after such a run can race HiGHS's own threads and static
+    objects (an abort or a segmentation fault at exit, now and then), so the command line
+    ends the process at once (``os._exit(130)``) when this is true.
+    """
+    return _INTERRUPTED.is_set()
 
 
 def _exit_if_abandoned() -> None:
@@ -209,8 +221,10 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
             outcome["error"] = exc
         finally:
             # HiGHS keeps a task scheduler per calling thread; release this thread's, as
-            # highspy's own threaded solve does (a live one aborts the process at exit)
-            _Highs.resetThreadScheduler(False)
+            # highspy's own threaded solve does. After a Ctrl-C, wait for its workers to
+            # end: the process is about to exit, and a worker still joinable when HiGHS's
+            # static objects are destroyed aborts it ("terminate called ...").
+            _Highs.resetThreadScheduler(stop.is_set())
 
     worker = threading.Thread(target=target, name="highs-run", daemon=True)
     worker.start()
@@ -219,6 +233,7 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
             worker.join(0.05)
     except KeyboardInterrupt:
         stop.set()
+        _INTERRUPTED.set()
         try:
             worker.join(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
         finally:
@@ -227,8 +242,10 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
                     atexit.register(_exit_if_abandoned)
                 _ABANDONED.append(worker)
         raise
-    for name in _INTERRUPT_CALLBACKS:
-        getattr(highs, name).unsubscribe(on_interrupt)
+    finally:
+        if not worker.is_alive():
+            for name in _INTERRUPT_CALLBACKS:
+                getattr(highs, name).unsubscribe(on_interrupt)
     if "error" in outcome:
         raise outcome["error"]
     return outcome.get("status")

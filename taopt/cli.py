@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path as FilePath
@@ -665,7 +666,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input).
 
     Ctrl-C at any point (while modules load, in a solver, in a study) prints one line,
-    ``taopt COMMAND: interrupted`` (a study adds where its rows are), and returns 130.
+    ``taopt COMMAND: interrupted`` (a study adds where its rows are), and returns 130. As
+    the script (``argv`` None) a command other than a study then ends the process at once
+    (see :func:`_end_after_interrupt`); so does any command whose HiGHS run was stopped.
     """
     # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
     # multiprocessing resource tracker (started with these warning options) would print a
@@ -678,7 +681,30 @@ def main(argv: Sequence[str] | None = None) -> int:
         command = next((w for w in words if not w.startswith("-")), "")
         message = str(exc) if isinstance(exc, TaoptError) and str(exc) else "interrupted"
         print(f"taopt{' ' + command if command else ''}: {message}", file=sys.stderr)
+        _end_after_interrupt(script=argv is None, study=isinstance(exc, TaoptError))
         return 130
+
+
+def _end_after_interrupt(script: bool, study: bool) -> None:
+    """After Ctrl-C, end the process now with 130 when that is safe and useful.
+
+    When Ctrl-C stopped a HiGHS run, the interpreter's teardown would destroy HiGHS's
+    static objects while its threads may still be winding down (an abort or a segmentation
+    fault at exit, now and then). As the script, the teardown is also seconds of work on a
+    loaded machine for nothing: taopt has nothing left to write (files are written
+    atomically; the message is printed and the streams are flushed first). A study keeps
+    the ordinary exit, whose hooks close its executor.
+    """
+    highs = sys.modules.get("taopt.models.highs")
+    solver = highs is not None and highs.solver_interrupted()
+    if not (solver or (script and not study)):
+        return
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(130)
 
 
 def _main(argv: Sequence[str] | None) -> int:

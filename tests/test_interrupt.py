@@ -33,7 +33,7 @@ STOP_BOUND = 6.0
 LAUNCH = (
     "import sys, taopt.cli, taopt.solving\n"
     "print('ready', flush=True)\n"
-    "sys.exit(taopt.cli.main(sys.argv[1:]))\n"
+    "sys.exit(taopt.cli.main())\n"  # as the `taopt` script: arguments from sys.argv
 )
 
 
@@ -92,12 +92,12 @@ def test_solve_delivery_milp(tmp_path):
     assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "solve")
 
 
-def test_verify_exact_dp(tmp_path):
-    """`taopt verify --exact` re-solving 14 customers with the subset DP (pure Python): Ctrl-C."""
+def test_verify_exact(tmp_path):
+    """`taopt verify --exact` re-solving 18 customers (beyond the DP: the MILP, minutes): Ctrl-C."""
     import taopt
     from taopt.delivery.instance import DeliveryInstance
 
-    path = delivery_file(tmp_path, 14)
+    path = delivery_file(tmp_path, 18)
     plan = taopt.solve(DeliveryInstance.load(path), "NIA")
     plan.replace(status="optimal", bound=plan.objective).save(tmp_path / "nia.json")
     args = ["verify", str(tmp_path / "nia.json"), str(path), "--exact"]
