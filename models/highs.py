@@ -143,7 +143,7 @@ new_highs()
 INTERRUPT_GRACE = 1.0
 
 _INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
-_ABANDONED: list[threading.Thread] = []
+_ABANDONED: list[threading.Event] = []  # the "finished" events of abandoned runs
 _INTERRUPTED = threading.Event()
 
 
@@ -161,7 +161,7 @@ def _exit_if_abandoned() -> None:
     """At interpreter exit: a HiGHS run abandoned on Ctrl-C still running in C++ would race
     the interpreter's teardown (and HiGHS's own static objects); end the process at once
     with the interrupt's exit code instead."""
-    if any(thread.is_alive() for thread in _ABANDONED):
+    if not all(finished.is_set() for finished in _ABANDONED):
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(Exception):
                 stream.flush()
@@ -213,6 +213,9 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
     for name in _INTERRUPT_CALLBACKS:
         getattr(highs, name).subscribe(on_interrupt)
     outcome: dict[str, Any] = {}
+    # the end of the run, as an Event: Thread.join() interrupted by Ctrl-C can mark a
+    # running thread as stopped (CPython's bpo-45274 clean-up), so it cannot be trusted
+    finished = threading.Event()
 
     def target() -> None:
         try:
@@ -225,25 +228,26 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
             # end: the process is about to exit, and a worker still joinable when HiGHS's
             # static objects are destroyed aborts it ("terminate called ...").
             _Highs.resetThreadScheduler(stop.is_set())
+            finished.set()
 
     worker = threading.Thread(target=target, name="highs-run", daemon=True)
     worker.start()
     try:
-        while worker.is_alive():
-            worker.join(0.05)
+        while not finished.wait(0.05):
+            pass
     except KeyboardInterrupt:
         stop.set()
         _INTERRUPTED.set()
         try:
-            worker.join(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
+            finished.wait(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
         finally:
-            if worker.is_alive():
+            if not finished.is_set():
                 if not _ABANDONED:
                     atexit.register(_exit_if_abandoned)
-                _ABANDONED.append(worker)
+                _ABANDONED.append(finished)
         raise
     finally:
-        if not worker.is_alive():
+        if finished.is_set():
             for name in _INTERRUPT_CALLBACKS:
                 getattr(highs, name).unsubscribe(on_interrupt)
     if "error" in outcome:
