@@ -12,7 +12,11 @@ Operators
 * **Decoding** (the topological sorting technique of §5.4.1): start from the start node;
   repeatedly append, among the viable nodes (no un-placed predecessor), the one with the
   smallest key (lowest index on ties); a forced end node is appended last. Every key vector
-  gives a feasible order, and every feasible order is reachable.
+  gives a precedence-feasible order, and every feasible order is reachable. When some arcs
+  are forbidden (infinite cost, as in TSPLIB SOP files), a viable node reached from the
+  last placed one by a usable arc is preferred; an order that still needs a forbidden arc
+  costs inf, and if the best order found does, the GA raises ``SolverError`` rather than
+  return it.
 * **Normalisation** (Lamarckian): after decoding, each node's key is reset to its rank in
   the decoded order divided by the number of nodes, so keys carry positions.
 * **Selection**: binary tournament (lower path cost wins, the first drawn on ties);
@@ -40,7 +44,7 @@ import numpy as np
 
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.sequencing import (
     _validate,
     delivery_cost_matrix,
@@ -54,11 +58,20 @@ from taopt.result import Solution
 __all__ = ["ga_order", "ga_search"]
 
 
-def _decode(keys: np.ndarray, successors: np.ndarray, waiting0: np.ndarray) -> np.ndarray:
+def _decode(
+    keys: np.ndarray,
+    successors: np.ndarray,
+    waiting0: np.ndarray,
+    usable: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Topological sort of every chromosome: the viable node with the smallest key first.
 
     ``keys`` (P, m); ``successors[a, b] = 1`` when a precedes b; ``waiting0`` the number of
-    predecessors of each node. Returns (P, m) orders of node positions 0..m-1.
+    predecessors of each node. ``usable`` (first, next), when some arcs are forbidden:
+    ``first[b]`` the arc start -> b is usable, ``next[a, b]`` the arc a -> b is; a viable
+    node reached by a usable arc is then preferred (the smallest key among those), and
+    only when none is left does the decoder take any viable node (that order uses a
+    forbidden arc and costs inf). Returns (P, m) orders of node positions 0..m-1.
     """
     population, m = keys.shape
     rows = np.arange(population)
@@ -66,7 +79,12 @@ def _decode(keys: np.ndarray, successors: np.ndarray, waiting0: np.ndarray) -> n
     orders = np.empty((population, m), dtype=np.int64)
     placed = np.int64(m + 1)  # a placed node never returns to 0 waiting predecessors
     for step in range(m):
-        choice = np.where(waiting == 0, keys, np.inf).argmin(axis=1)
+        viable = waiting == 0
+        if usable is not None:
+            reach = usable[0][None, :] if step == 0 else usable[1][orders[:, step - 1]]
+            preferred = viable & reach
+            viable = np.where(preferred.any(axis=1)[:, None], preferred, viable)
+        choice = np.where(viable, keys, np.inf).argmin(axis=1)
         orders[:, step] = choice
         waiting[rows, choice] = placed
         waiting -= successors[choice]
@@ -109,6 +127,8 @@ def ga_search(
     if m == 0:
         path = head + tail
         value = float(matrix[path[0], path[1]]) if len(path) == 2 else 0.0
+        if not np.isfinite(value):
+            raise SolverError(f"GA: the only order {path} uses the forbidden arc {path}")
         return path, value, np.full(generations + 1, value)
 
     local = {int(node): k for k, node in enumerate(nodes)}
@@ -121,9 +141,12 @@ def ga_search(
     to_end = matrix[nodes, end] if end is not None else np.zeros(m)
     rows = np.arange(population)
     ranks = np.arange(m) / m
+    usable = None
+    if not (np.isfinite(inner).all() and np.isfinite(from_start).all()):
+        usable = (np.isfinite(from_start), np.isfinite(inner))
 
     def evaluate(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        orders = _decode(keys, successors, waiting0)
+        orders = _decode(keys, successors, waiting0, usable)
         keys[rows[:, None], orders] = ranks[None, :]  # Lamarckian normalisation
         values = (
             from_start[orders[:, 0]]
@@ -156,6 +179,11 @@ def ga_search(
         orders, values = evaluate(keys)
         history[generation] = values.min()
     best = int(np.argmin(values))
+    if not np.isfinite(values[best]):
+        raise SolverError(
+            f"GA found no feasible order in {generations} generations: every order it decoded "
+            "uses a forbidden arc (infinite cost)"
+        )
     path = head + [int(nodes[k]) for k in orders[best]] + tail
     return path, float(values[best]), history
 
@@ -201,6 +229,8 @@ def ga_order(
     ------
     InstanceError
         Bad matrix, indices, parameters or a precedence cycle.
+    SolverError
+        Every order decoded uses a forbidden (infinite-cost) arc.
 
     Examples
     --------

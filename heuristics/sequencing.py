@@ -40,7 +40,7 @@ import numpy as np
 from taopt.delivery.dags import cycle_path
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem, evaluate_order
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution
 
@@ -202,8 +202,16 @@ def _argmin_2d(values: np.ndarray) -> tuple[int, int]:
     return divmod(flat, values.shape[1])
 
 
-def _no_slot(node: int) -> InstanceError:
-    return InstanceError(f"node {node} has no finite-cost insertion slot")
+def _no_slot(rule: str, node: int) -> SolverError:
+    """The error of a greedy rule that cannot place ``node``: no slot uses only usable arcs.
+
+    A greedy dead end, not a proof that the problem is infeasible (an exact method may
+    still find an order).
+    """
+    return SolverError(
+        f"{rule} found no feasible order (greedy dead end: every slot for node {node} "
+        "needs a forbidden arc)"
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -218,7 +226,10 @@ def nia_order(
 
     In each iteration pick the viable node c_j and slot q minimising t*(R_l(q), c_j) over
     q in T_a^j = {p, ..., |R_l|} and insert c_j right after R_l(q). The cost of the edge the
-    insertion breaks, and of the edge it creates towards R_l(q+1), is ignored (as printed).
+    insertion breaks, and of the edge it creates towards R_l(q+1), is ignored (as printed);
+    but a slot whose new edge c_j -> R_l(q+1) is forbidden (infinite cost) is not offered,
+    so the order never uses a forbidden arc (the thesis's t* has none between customers
+    that can follow each other; a TSPLIB SOP file has many).
 
     Parameters
     ----------
@@ -241,6 +252,9 @@ def nia_order(
     ------
     InstanceError
         Bad matrix or indices, a precedence cycle, or a pair that cannot hold.
+    SolverError
+        The greedy rule reached a node it cannot insert without a forbidden arc (a dead
+        end of the heuristic, not a proof that no order exists).
 
     Examples
     --------
@@ -276,13 +290,17 @@ def nia_order(
         nodes = state.viable()
         if len(nodes) == 0:
             break
-        tail, _ = state.slot_ends()
+        tail, head = state.slot_ends()
         nearest = matrix[tail[:, None], nodes[None, :]].T  # t*(R_l(q), c_j)
+        closed = head >= 0
+        if closed.any():  # the edge c_j -> R_l(q+1) the insertion creates must be usable
+            onward = matrix[nodes[:, None], head[closed][None, :]]
+            nearest[:, closed] = np.where(np.isfinite(onward), nearest[:, closed], np.inf)
         slots = np.arange(len(tail))
         nearest[slots[None, :] < state.earliest_slot(nodes)[:, None]] = np.inf
         row, slot = _argmin_2d(nearest)
         if not np.isfinite(nearest[row, slot]):
-            raise _no_slot(int(nodes[row]))
+            raise _no_slot("NIA", int(nodes[row]))
         state.insert(int(nodes[row]), slot)
     return state.result()
 
@@ -335,7 +353,7 @@ def mma_order(
         marginal = state.marginal_costs(nodes)
         row, slot = _argmin_2d(marginal)
         if not np.isfinite(marginal[row, slot]):
-            raise _no_slot(int(nodes[row]))
+            raise _no_slot("MMA", int(nodes[row]))
         state.insert(int(nodes[row]), slot)
     return state.result()
 
@@ -436,16 +454,22 @@ def smma_order(
         if len(nodes) == 1:
             row, slot = _argmin_2d(marginal)
             if not np.isfinite(marginal[row, slot]):
-                raise _no_slot(int(nodes[row]))
+                raise _no_slot("SMMA", int(nodes[row]))
             state.insert(int(nodes[row]), slot)
             continue
         first_slot, first_cost, second_best = _best_two(marginal)  # q1*, m(q1*), runner-up
-        if not np.isfinite(first_cost).all():
-            raise _no_slot(int(nodes[int(np.argmin(np.isfinite(first_cost)))]))
-        second_cost = _second_step(state, nodes, marginal, first_slot, second_best)
-        if lookahead == "updated":
-            second_cost = np.minimum(second_cost, _second_step_successors(state, nodes, first_slot))
-        total = first_cost + second_cost
+        placeable = np.isfinite(first_cost)  # a node with no usable slot now waits
+        if not placeable.any():
+            raise _no_slot("SMMA", int(nodes[0]))
+        with np.errstate(invalid="ignore"):  # inf - inf on forbidden arcs: NaN, made inf
+            second_cost = _second_step(state, nodes, marginal, first_slot, second_best)
+            if lookahead == "updated":
+                second_cost = np.minimum(
+                    second_cost, _second_step_successors(state, nodes, first_slot)
+                )
+            total = np.where(placeable, first_cost + second_cost, np.inf)
+        if not np.isfinite(total).any():  # no usable second step: MMA's rule
+            total = first_cost
         row = int(np.argmin(total))
         state.insert(int(nodes[row]), int(first_slot[row]))
     return state.result()

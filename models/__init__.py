@@ -81,6 +81,7 @@ register_method(
     default=lambda instance: instance.n <= DP_DEFAULT_MAX_N,
     not_default=_dp_too_large,
     warm_start=("NIA", "MMA", "SMMA"),
+    certifies=lambda instance: instance.n <= 14,  # taopt verify --exact: the fastest exact method
 )(optimal_plan)
 # the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
 # exact method `taopt solve` runs by default), so it runs only when asked for

@@ -42,12 +42,15 @@ Example
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import ctypes
 import logging
 import math
 import os
+import signal
 import sys
+import threading
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -57,6 +60,7 @@ import cvxpy as cp
 import highspy
 import numpy as np
 import scipy.sparse as sp
+from highspy._core import _Highs
 
 from taopt.errors import SolverError
 from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
@@ -71,6 +75,9 @@ logger = logging.getLogger("taopt")
 
 __all__ = [
     "OPTIMALITY_TOLERANCE",
+    "INTERRUPT_GRACE",
+    "run_interruptibly",
+    "solver_interrupted",
     "HighsModel",
     "HighsRun",
     "certify",
@@ -134,6 +141,150 @@ def new_highs(verbose: bool = False) -> highspy.Highs:
 # The banner is printed once per process, by whichever Highs() comes first:
 # cvxpy's HiGHS interface builds its own, so take the first one here, quietly.
 new_highs()
+
+
+# ------------------------------------------------------------------ Ctrl-C
+#: Seconds a Ctrl-C waits for HiGHS to stop at its next interrupt callback before the run
+#: is abandoned (HiGHS calls ``kCallbackMipInterrupt`` between nodes, but may go seconds
+#: without one at the root).
+INTERRUPT_GRACE = 1.0
+
+_INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
+_ABANDONED: list[threading.Event] = []  # the "finished" events of abandoned runs
+_INTERRUPTED = threading.Event()
+
+
+def solver_interrupted() -> bool:
+    """Whether Ctrl-C stopped a HiGHS run in this process.
+
+    The interpreter's teardown after such a run can race HiGHS's own threads and static
+    objects (an abort or a segmentation fault at exit, now and then), so the command line
+    ends the process at once (``os._exit(130)``) when this is true.
+    """
+    return _INTERRUPTED.is_set()
+
+
+def _exit_if_abandoned() -> None:
+    """At interpreter exit: a HiGHS run abandoned on Ctrl-C still running in C++ would race
+    the interpreter's teardown (and HiGHS's own static objects); end the process at once
+    with the interrupt's exit code instead."""
+    if not all(finished.is_set() for finished in _ABANDONED):
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(130)
+
+
+def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
+    """``highs.run()`` that Ctrl-C stops within :data:`INTERRUPT_GRACE` seconds.
+
+    Python handles a signal only in the main thread and only between bytecodes; while the
+    main thread is inside ``Highs.run()`` that happens in HiGHS's callbacks, where the
+    ``KeyboardInterrupt`` becomes a HiGHS error, or never (the run goes on to its end).
+    So, on the main thread, HiGHS runs in a helper thread (``Highs.run`` releases the GIL)
+    while the main thread waits, ready for Ctrl-C. On Ctrl-C the interrupt callbacks
+    (``kCallbackSimplexInterrupt``, ``kCallbackIpmInterrupt``, ``kCallbackMipInterrupt``)
+    set ``user_interrupt`` and HiGHS returns; a run that has not stopped after the grace
+    period is left to finish on its own (the process, ending, exits at once with code
+    130). ``KeyboardInterrupt`` is then raised in the caller. Off the main thread, or with
+    SIGINT ignored (a study's worker processes), the run is plain: the helper thread costs
+    about 2 ms per run.
+
+    Parameters
+    ----------
+    highs : highspy.Highs
+    run : callable, optional
+        The run to call (default ``highs.run``).
+
+    Returns
+    -------
+    HighsStatus
+        What ``run()`` returned.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C during the run.
+    """
+    run = run or highs.run
+    if threading.current_thread() is not threading.main_thread() or not callable(
+        signal.getsignal(signal.SIGINT)
+    ):
+        return run()  # no Ctrl-C to wait for (a worker thread, or SIGINT ignored)
+    stop = threading.Event()
+
+    def on_interrupt(event: Any) -> None:
+        if stop.is_set():
+            event.interrupt()
+
+    for name in _INTERRUPT_CALLBACKS:
+        getattr(highs, name).subscribe(on_interrupt)
+    outcome: dict[str, Any] = {}
+    # the end of the run, as an Event: Thread.join() interrupted by Ctrl-C can mark a
+    # running thread as stopped (CPython's bpo-45274 clean-up), so it cannot be trusted
+    finished = threading.Event()
+
+    def target() -> None:
+        try:
+            outcome["status"] = run()
+        except BaseException as exc:  # noqa: BLE001 -- handed to the waiting thread
+            outcome["error"] = exc
+        finally:
+            # HiGHS keeps a task scheduler per calling thread; release this thread's, as
+            # highspy's own threaded solve does. After a Ctrl-C, wait for its workers to
+            # end: the process is about to exit, and a worker still joinable when HiGHS's
+            # static objects are destroyed aborts it ("terminate called ...").
+            _Highs.resetThreadScheduler(stop.is_set())
+            finished.set()
+
+    worker = threading.Thread(target=target, name="highs-run", daemon=True)
+    worker.start()
+    try:
+        while not finished.wait(0.05):
+            pass
+    except KeyboardInterrupt:
+        stop.set()
+        _INTERRUPTED.set()
+        try:
+            finished.wait(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
+        finally:
+            if not finished.is_set():
+                if not _ABANDONED:
+                    atexit.register(_exit_if_abandoned)
+                _ABANDONED.append(finished)
+        raise
+    finally:
+        if finished.is_set():
+            for name in _INTERRUPT_CALLBACKS:
+                getattr(highs, name).unsubscribe(on_interrupt)
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome.get("status")
+
+
+class _InterruptibleHighs(highspy.Highs):
+    """``highspy.Highs`` whose ``run()`` is :func:`run_interruptibly` (for cvxpy's object)."""
+
+    def run(self) -> Any:
+        return run_interruptibly(self, super().run)
+
+
+@contextlib.contextmanager
+def _cvxpy_interruptible() -> Any:
+    """cvxpy's HiGHS interface builds its own ``highspy.Highs()`` and calls ``run()``: on
+    the main thread, let it build an :class:`_InterruptibleHighs` instead."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or not callable(signal.getsignal(signal.SIGINT))
+        or highspy.Highs is _InterruptibleHighs
+    ):
+        yield
+        return
+    original, highspy.Highs = highspy.Highs, _InterruptibleHighs
+    try:
+        yield
+    finally:
+        highspy.Highs = original
 
 
 @dataclass(frozen=True)
@@ -273,7 +424,7 @@ def solve_highs(
     if objective_bound is not None:
         options["objective_bound"] = float(objective_bound)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _cvxpy_interruptible():
             # cvxpy warns "Solution may be inaccurate" on every limit; the status says it
             warnings.filterwarnings("ignore", message="Solution may be inaccurate")
             problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
@@ -684,7 +835,7 @@ class HighsModel:
             highs.cbMipSolution.subscribe(forward)
         start, self._start = self._start, None
         try:
-            highs.run()
+            run_interruptibly(highs)  # Ctrl-C: HiGHS stops, then KeyboardInterrupt
             run = _highs_run(highs, is_mip, time_limit)
             if is_mip and not self._consistent(run):
                 # HiGHS 1.16 can map a MIP start into its presolved space with the wrong
@@ -705,7 +856,7 @@ class HighsModel:
                 try:
                     if start is not None:
                         self._give_start(start)
-                    highs.run()
+                    run_interruptibly(highs)  # Ctrl-C: HiGHS stops, then KeyboardInterrupt
                 finally:
                     highs.setOptionValue("presolve", "choose")
                 run = _highs_run(highs, is_mip, time_limit)

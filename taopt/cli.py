@@ -17,14 +17,18 @@ This module imports only the standard library and :mod:`taopt.errors` at the top
 imports what it needs.
 
 :func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
-on stderr and exit code 2; Ctrl-C in a study prints one line and exits with 130. Library
-messages go through the ``taopt`` logger, which :func:`main` sends to stderr.
+on stderr and exit code 2; Ctrl-C prints one line (``taopt solve: interrupted``; a study
+says where its rows are) and exits with 130, no traceback: a HiGHS run stops through its
+interrupt callbacks (:func:`taopt.models.highs.interruptible`), Python code between
+bytecodes.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import os
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -82,7 +86,6 @@ def parse_field(spec: str) -> Any:
     if lower.startswith("linear:"):
         a = parse_numbers(key.split(":", 1)[1], 4, "linear field")
         return LinearField(np.reshape(a, (2, 2)))
-    import json
     from pathlib import Path
 
     path = Path(key)
@@ -166,10 +169,13 @@ def _methods(text: str | None) -> tuple[str, ...] | None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    """Solve a problem file with every (or the named) method and print the gap table."""
+    """Solve a problem file with every (or the named) method and print the gap table.
+
+    Exit code 1 when some method failed (its row says "error" and why), 0 otherwise.
+    """
     from taopt.solving import solve_file
 
-    solve_file(
+    result = solve_file(
         args.file,
         methods=_methods(args.methods),
         seed=args.seed,
@@ -179,15 +185,15 @@ def cmd_solve(args: argparse.Namespace) -> int:
         save=args.out,
         progress=not args.quiet,
     )
-    return 0
+    return 1 if result["failed"] else 0
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    """Re-score a saved solution from the problem file alone; exit 1 when a check fails."""
+    """Re-check a saved solution from the problem file alone (exit codes in the help)."""
     from taopt.solving import verify_file
 
-    ok = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
-    return 0 if ok else 1
+    verdict = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
+    return verdict.exit_code
 
 
 def cmd_claims(args: argparse.Namespace) -> int:
@@ -602,6 +608,11 @@ def build_parser() -> argparse.ArgumentParser:
         "solve a problem file exactly and with every heuristic, with certified gaps",
     )
     solve.description = SOLVE_DESCRIPTION
+    solve.epilog = (
+        "A method that fails does not stop the others: its row has status 'error' and a\n"
+        "message column says why. Exit codes: 0 every method ran, 1 some method failed,\n"
+        "2 bad input, 130 interrupted (Ctrl-C)."
+    )
     solve.add_argument("file", help="a JSON problem file")
     _common(solve, "methods", "seed", "time-limit", "plot")
     solve.add_argument(
@@ -623,6 +634,17 @@ def build_parser() -> argparse.ArgumentParser:
         "verify",
         cmd_verify,
         "re-score a saved solution from the problem file alone and check every constraint",
+    )
+    verify.epilog = (
+        "Always checked: the payload fits the problem, every constraint holds, the status\n"
+        "agrees with it, the objective re-scores to the saved value, a saved bound is not\n"
+        "above it. Claims about the optimum (an 'optimal' status, a saved bound, an\n"
+        "'infeasible' status) need --exact, which re-solves with the family's fastest exact\n"
+        "method (the subset DP for small delivery instances) within --time-limit; those it\n"
+        "cannot check are printed '[not checked] ...'. The last line is VALID, 'VALID (k\n"
+        "claims not checked)' or NOT VALID. Exit codes: 0 valid and every claim checked,\n"
+        "1 a check failed, 2 bad input (a malformed file), 3 valid but some claims not\n"
+        "checked, 130 interrupted (Ctrl-C)."
     )
     verify.add_argument("solution", help="a solution JSON (taopt solve --out, Solution.save)")
     verify.add_argument("problem", help="the problem file it solves")
@@ -839,11 +861,51 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input)."""
+    """Entry point of the ``taopt`` script. Returns the exit code (2 on bad input).
+
+    Ctrl-C at any point (while modules load, in a solver, in a study) prints one line,
+    ``taopt COMMAND: interrupted`` (a study adds where its rows are), and returns 130. As
+    the script (``argv`` None) a command other than a study then ends the process at once
+    (see :func:`_end_after_interrupt`); so does any command whose HiGHS run was stopped.
+    """
     # Worker processes killed on Ctrl-C leave their queue's semaphore to the OS; the
     # multiprocessing resource tracker (started with these warning options) would print a
     # warning about it after our one-line message.
     sys.warnoptions.append("ignore:resource_tracker:UserWarning")
+    words = list(sys.argv[1:] if argv is None else argv)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:  # StudyInterrupted is one, and says where its rows are
+        command = next((w for w in words if not w.startswith("-")), "")
+        message = str(exc) if isinstance(exc, TaoptError) and str(exc) else "interrupted"
+        print(f"taopt{' ' + command if command else ''}: {message}", file=sys.stderr)
+        _end_after_interrupt(script=argv is None, study=isinstance(exc, TaoptError))
+        return 130
+
+
+def _end_after_interrupt(script: bool, study: bool) -> None:
+    """After Ctrl-C, end the process now with 130 when that is safe and useful.
+
+    When Ctrl-C stopped a HiGHS run, the interpreter's teardown would destroy HiGHS's
+    static objects while its threads may still be winding down (an abort or a segmentation
+    fault at exit, now and then). As the script, the teardown is also seconds of work on a
+    loaded machine for nothing: taopt has nothing left to write (files are written
+    atomically; the message is printed and the streams are flushed first). A study keeps
+    the ordinary exit, whose hooks close its executor.
+    """
+    highs = sys.modules.get("taopt.models.highs")
+    solver = highs is not None and highs.solver_interrupted()
+    if not (solver or (script and not study)):
+        return
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(130)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -853,13 +915,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         _check_outputs(args)
         return int(args.handler(args) or 0)
-    except KeyboardInterrupt as exc:
-        # taopt.study.StudyInterrupted (a TaoptError and a KeyboardInterrupt): the study's
-        # rows are on disk. Not imported here: it loads pandas and the solvers.
-        if not isinstance(exc, TaoptError):
-            raise
-        print(f"taopt {args.command}: {exc}", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt:  # StudyInterrupted is a TaoptError too: main() reports it
+        raise
     except (TaoptError, ValueError, OSError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         print(f"taopt {args.command}: error: {message}", file=sys.stderr)

@@ -114,6 +114,11 @@ class Method:
     requires : tuple of str
         Top-level packages the method needs (an optional extra such as ``pyvrp``); the
         method is :attr:`available` only when every one is installed.
+    certifies : bool or callable
+        Whether this exact method is the family's *certifying method* for the problem: the
+        fastest exact method, which ``taopt verify --exact`` re-solves with (a callable
+        gets the problem, e.g. the subset DP only up to 14 customers). See
+        :func:`certifying_method`.
     """
 
     name: str
@@ -127,6 +132,7 @@ class Method:
     default: bool | Callable[[Any], bool] = True
     not_default: str | Callable[[Any], str] = ""
     requires: tuple[str, ...] = ()
+    certifies: bool | Callable[[Any], bool] = False
 
     def is_default_for(self, problem: Any) -> bool:
         """Whether ``taopt solve`` runs this method on ``problem`` when none are named."""
@@ -143,6 +149,12 @@ class Method:
     def available(self) -> bool:
         """Whether every package in :attr:`requires` is installed (none is imported)."""
         return all(_installed(package) for package in self.requires)
+
+    def certifies_for(self, problem: Any) -> bool:
+        """Whether this is the certifying method of ``problem`` (see :func:`certifying_method`)."""
+        if not self.exact:
+            return False
+        return bool(self.certifies(problem) if callable(self.certifies) else self.certifies)
 
     @property
     def exact(self) -> bool:
@@ -259,6 +271,7 @@ def register_method(
     default: bool | Callable[[Any], bool] = True,
     not_default: str | Callable[[Any], str] = "",
     requires: tuple[str, ...] | str = (),
+    certifies: bool | Callable[[Any], bool] = False,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Decorator: register ``func(problem, **options) -> Solution`` as method ``name``.
 
@@ -278,6 +291,9 @@ def register_method(
         The one line ``taopt solve`` prints when an exact method is left out.
     requires : str or tuple of str
         Top-level packages it needs (optional extras); see :attr:`Method.available`.
+    certifies : bool or callable
+        Exact methods only: marks the family's fastest exact method where it applies
+        (``taopt verify --exact`` re-solves with it); see :func:`certifying_method`.
 
     Example
     -------
@@ -309,6 +325,7 @@ def register_method(
             default=default,
             not_default=not_default,
             requires=(requires,) if isinstance(requires, str) else tuple(requires),
+            certifies=certifies,
         )
         return func
 
@@ -375,6 +392,23 @@ def methods(problem: Any, category: str | None = None) -> dict[str, Method]:
     return found
 
 
+def certifying_method(problem: Any) -> str | None:
+    """The exact method that certifies ``problem`` fastest (``taopt verify --exact`` uses it).
+
+    The first exact method registered with ``certifies`` true for the problem (e.g. the
+    subset DP "DP" of a delivery instance with at most 14 customers); else the family's
+    method "exact"; else its first exact method; None when it has none. Only methods
+    whose modules are imported count (see :func:`methods`).
+    """
+    exact = methods(problem, "exact")
+    for name, spec in exact.items():
+        if spec.certifies_for(problem):
+            return name
+    if "exact" in exact:
+        return "exact"
+    return next(iter(exact), None)
+
+
 def method_names(problem: Any, category: str | None = None) -> list[str]:
     """Names of :func:`methods`, in registration order."""
     return list(methods(problem, category))
@@ -405,5 +439,6 @@ __all__ = [
     "families",
     "methods",
     "method_names",
+    "certifying_method",
     "get_method",
 ]

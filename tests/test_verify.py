@@ -42,3 +42,142 @@ def test_tampered_solutions_fail(tmp_path, capsys):
         assert main(["verify", str(path), str(problem)]) == 1, name
     out = capsys.readouterr().out
     assert "visited twice" in out and "payload is 'order'" in out
+
+
+# --------------------------------------------------------------- what verify checks (issue 15)
+def _write(tmp_path: Path, name: str, data: dict) -> Path:
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def _last_line(text: str) -> str:
+    return text.strip().splitlines()[-1]
+
+
+def _worse_routes() -> dict:
+    """The shipped optimal certificate with other feasible routes, objective re-scored."""
+    import taopt
+    from taopt.solving import load_problem_file
+
+    good = json.loads((EXAMPLES / "solution.json").read_text())
+    problem, _ = load_problem_file(EXAMPLES / "assignment_problem.json")
+    routes = [[], [1, 2, 0]]
+    value = taopt.evaluate(problem, taopt.Routes(routes))
+    assert value > good["objective"]  # not optimal
+    return {**good, "method": "MC", "objective": value, "payload": {"routes": routes}}
+
+
+def ten_customer_delivery():
+    """A 10-customer layered-DAG delivery instance where SMMA is not optimal (seed 0)."""
+    import numpy as np
+
+    from taopt.delivery.dags import layered_dag
+    from taopt.delivery.instance import DeliveryInstance
+
+    rng = np.random.default_rng(0)
+    customers = rng.uniform(0, 1000, size=(10, 2))
+    pairs = layered_dag(10, layers=3, density=0.2, seed=rng)
+    return DeliveryInstance.grid(
+        customers, 11, 1000.0, v_drone=1.0, v_truck=1.0, flight_range=300.0,
+        precedences=pairs, name="ten",
+    )  # fmt: skip
+
+
+def test_unchecked_optimality_is_said(tmp_path, capsys):
+    """A solution relabelled "optimal" (bound = objective) is not called plainly VALID without --exact."""
+    worse = _worse_routes()
+    relabelled = {**worse, "status": "optimal", "bound": worse["objective"]}
+    problem = EXAMPLES / "assignment_problem.json"
+    solution = _write(tmp_path, "relabelled", relabelled)
+    assert main(["verify", str(solution), str(problem)]) == 3
+    out = capsys.readouterr().out
+    assert "[not checked] optimality: needs --exact" in out
+    assert _last_line(out) == "VALID (2 claims not checked)"
+    assert main(["verify", str(solution), str(problem), "--exact"]) == 1
+    out = capsys.readouterr().out
+    assert "[FAIL] optimality: the re-solve found 10.5" in out
+    assert _last_line(out) == "NOT VALID"
+
+
+def test_fully_checked_certificate_is_plainly_valid(tmp_path, capsys):
+    """The shipped optimal solution: every claim checked with --exact, exit 0, last line VALID."""
+    solution, problem = EXAMPLES / "solution.json", EXAMPLES / "assignment_problem.json"
+    assert main(["verify", str(solution), str(problem), "--exact"]) == 0
+    out = capsys.readouterr().out
+    assert "[not checked]" not in out and _last_line(out) == "VALID"
+
+
+@pytest.mark.parametrize("status", ["infeasible", "error", "relaxation"])
+def test_status_contradicting_a_feasible_payload(tmp_path, capsys, status):
+    """A feasible payload saved with a status that says it is no solution is rejected."""
+    good = json.loads((EXAMPLES / "solution.json").read_text())
+    solution = _write(tmp_path, status, {**good, "status": status, "bound": None})
+    assert main(["verify", str(solution), str(EXAMPLES / "assignment_problem.json")]) == 1
+    assert f"status '{status}' contradicts a feasible payload" in capsys.readouterr().out
+
+
+def test_false_bound_caught_with_exact(tmp_path, capsys):
+    """A bound above the optimum (but below the objective) is unchecked alone, refuted with --exact."""
+    worse = _worse_routes()
+    tampered = {**worse, "status": "feasible", "bound": worse["objective"] - 0.1}
+    solution = _write(tmp_path, "bound", tampered)
+    problem = EXAMPLES / "assignment_problem.json"
+    assert main(["verify", str(solution), str(problem)]) == 3
+    assert main(["verify", str(solution), str(problem), "--exact"]) == 1
+    assert "is above a solution the re-solve found" in capsys.readouterr().out
+
+
+def test_delivery_exact_uses_dp_and_rejects_relabelled_smma(tmp_path, capsys):
+    """--exact on 10 customers re-solves with the subset DP and rejects a relabelled SMMA plan."""
+    import time
+
+    import taopt
+    from taopt.registry import certifying_method
+
+    instance = ten_customer_delivery()
+    assert certifying_method(instance) == "DP"
+    problem = tmp_path / "ten.json"
+    instance.save(problem)
+    smma = taopt.solve(instance, "SMMA")
+    smma.replace(status="optimal", bound=smma.objective).save(tmp_path / "smma.json")
+    began = time.perf_counter()
+    code = main(["verify", str(tmp_path / "smma.json"), str(problem), "--exact"])
+    assert time.perf_counter() - began < 30
+    out = capsys.readouterr().out
+    assert code == 1 and "re-solved with 'DP'" in out
+    assert "[FAIL] optimality: the re-solve found" in out
+    # a limit too short for the DP leaves the claims unchecked, said plainly
+    code = main(["verify", str(tmp_path / "smma.json"), str(problem), "--exact",
+                 "--time-limit", "0.001"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 3 and "[not checked] optimality: the re-solve stopped" in out
+
+
+MALFORMED = {
+    "plan payload on routes": {"payload_kind": "plan"},
+    "order payload on routes": {"payload_kind": "order"},
+    "routes not a list": {"payload": {"routes": "abc"}},
+    "route of strings": {"payload": {"routes": [["a"]]}},
+    "payload missing": {"payload": None},
+    "unknown payload kind": {"payload_kind": "nothing"},
+    "objective a string": {"objective": "ten"},
+    "status unknown": {"status": "certain"},
+    "index out of range": {"payload": {"routes": [[], [0, 1, 7]]}},
+    "negative index": {"payload": {"routes": [[], [0, 1, -2]]}},
+    "huge index": {"payload": {"routes": [[], [0, 1, 10**30]]}},
+}
+
+
+@pytest.mark.parametrize("name", sorted(MALFORMED))
+def test_malformed_certificates_clear_error(tmp_path, capsys, name):
+    """Every malformed certificate ends in a FAIL line or a one-line error naming the file."""
+    good = json.loads((EXAMPLES / "solution.json").read_text())
+    solution = _write(tmp_path, "bad", {**good, **MALFORMED[name]})
+    code = main(["verify", str(solution), str(EXAMPLES / "assignment_problem.json")])
+    captured = capsys.readouterr()
+    assert code in (1, 2)
+    if code == 2:
+        assert captured.err.count("\n") == 1 and str(solution) in captured.err
+    else:
+        assert _last_line(captured.out) == "NOT VALID"

@@ -65,6 +65,10 @@ register_family(
     plots={"order": _plot_order},
 )
 
+# the exact subset DP "DP" registers itself where it is defined; import it with the family so
+# it is known before any method look-up (taopt solve, taopt verify --exact)
+from taopt.delivery import schedule as _schedule  # noqa: E402, F401
+
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 
 
