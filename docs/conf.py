@@ -37,6 +37,9 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",  # numpydoc docstrings
     "sphinx.ext.mathjax",
+    # MathJax 3 served from the site itself (_static/mathjax), not from a CDN: the site reads
+    # offline, and the browser check in CI sees every resource load
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
 ]
 

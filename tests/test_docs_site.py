@@ -53,7 +53,8 @@ def test_every_page_is_in_a_toctree() -> None:
     pages = [
         p.relative_to(DOCS).with_suffix("").as_posix()
         for p in DOCS.rglob("*.md")
-        if "_build" not in p.parts and p.parent.name not in ("api", "notebooks")
+        if "_build" not in p.parts
+        and p.parent.name not in ("api", "notebooks")
         and p.name != "index.md"
     ]
     assert pages
@@ -70,7 +71,9 @@ def _browser():
     binary = shutil.which("chromium") or shutil.which("chromium-browser")
     driver = shutil.which("chromedriver")
     if binary is None or driver is None:
-        pytest.fail("Chromium and chromedriver are needed: apt-get install chromium chromium-driver")
+        pytest.fail(
+            "Chromium and chromedriver are needed: apt-get install chromium chromium-driver"
+        )
     options = webdriver.ChromeOptions()
     options.binary_location = binary
     for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"):
@@ -103,7 +106,9 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
     def send_error(self, code: int, message: str | None = None, explain: str | None = None):
-        _QuietHandler.missing.append(f"{code} {self.path}")
+        # Chromium asks for /favicon.ico by itself; the pages do not reference it
+        if self.path != "/favicon.ico":
+            _QuietHandler.missing.append(f"{code} {self.path}")
         super().send_error(code, message, explain)
 
 
@@ -167,6 +172,21 @@ def test_api_page_renders(browser, site_url: str) -> None:
 
 
 @pytest.mark.docs
+def test_notebook_page_shows_outputs(browser, site_url: str) -> None:
+    """A notebook page shows the outputs computed at build time: tables and loaded figures."""
+    page = _open(browser, site_url + "notebooks/02_drift_routing.html")
+    assert not page["missing"], f"missing resources: {page['missing']}"
+    assert not page["broken"], f"images that did not load: {page['broken']}"
+    assert not page["console"], f"browser errors: {page['console']}"
+    figures = browser.execute_script(
+        "return Array.from(document.querySelectorAll('.cell_output img'))"
+        ".filter(i => i.naturalWidth > 100).length"
+    )
+    assert figures >= 2, f"{figures} figures rendered"
+    assert "optimal" in browser.find_element("tag name", "article").text
+
+
+@pytest.mark.docs
 def test_formulation_page_typesets_equations(browser, site_url: str) -> None:
     """The chapter 2 page's LaTeX is typeset by MathJax, with the thesis's equation tags."""
     page = _open(browser, site_url + "families/routing.html")
@@ -175,8 +195,7 @@ def test_formulation_page_typesets_equations(browser, site_url: str) -> None:
     from selenium.webdriver.support.ui import WebDriverWait
 
     WebDriverWait(browser, 60).until(
-        lambda d: d.execute_script("return document.querySelectorAll('mjx-container').length")
-        >= 4
+        lambda d: d.execute_script("return document.querySelectorAll('mjx-container').length") >= 4
     )
     text = browser.find_element("tag name", "article").text
     for tag in ("(2.2)", "(2.3)", "(2.4)", "(2.5)"):
