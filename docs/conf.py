@@ -56,7 +56,8 @@ exclude_patterns = [
 # -- HTML ----------------------------------------------------------------------------------
 html_theme = "furo"
 html_title = f"taopt {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_favicon = "_static/favicon.svg"
 html_show_sourcelink = False
 
 # -- MyST / myst-nb --------------------------------------------------------------------------

