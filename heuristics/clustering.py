@@ -20,7 +20,7 @@ is already a full assignment. Every solution is scored by the one scorer
 (:func:`taopt.evaluate`).
 
 Conventions shared by all methods (where the equations are silent)
------------------------------------------------------------------
+------------------------------------------------------------------
 * A route ``o_j`` starts with the vehicle's start ``p_j`` at position 1;
   ``1 < q <= |o_j| + 1`` means the start stays first and target k may go
   into any gap after it or at the end (the route is open, so the end costs

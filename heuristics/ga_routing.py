@@ -88,6 +88,7 @@ from taopt.routing.problem import AssignmentProblem, evaluate_routes
 MARKERS = ("position", "vehicle")
 CROSSOVERS = ("ox", "obx")
 MUTATIONS = ("inversion", "swap", "slide")
+#: The local-search moves, in the order they are tried.
 NEIGHBOURHOOD = ("reverse", "relocate", "tails", "exchange")
 
 
@@ -153,6 +154,7 @@ class OperatorSet:
             raise InstanceError('local search (polish > 0) needs markers="vehicle"')
 
 
+#: The GA's operator sets, by name.
 OPERATOR_SETS: dict[str, OperatorSet] = {
     "memetic": OperatorSet(),
     "ox-inversion": OperatorSet(

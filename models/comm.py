@@ -2,7 +2,7 @@
 
 Without communication limits the problem is open multi-vehicle routing on Euclidean
 distances, split exactly by attribute (each target needs one vehicle of its attribute, and
-the classes share no vehicle): :meth:`CommProblem.full_information` gives chapter 2's
+the classes share no vehicle): :meth:`~taopt.comm.problem.CommProblem.full_information` gives chapter 2's
 :class:`~taopt.AssignmentProblem` (one attribute) or chapter 3's
 :class:`~taopt.CapabilityProblem` with one demand per target, whose ``classes`` are
 chapter 2 problems. Each class is solved by chapter 2's exact model

@@ -328,7 +328,7 @@ class ResultsStore:
         return normalize_key(values)
 
     def read(self) -> pd.DataFrame:
-        """The finished rows on disk, columns :attr:`data_columns` (``complete`` left out)."""
+        """The finished rows on disk, columns ``data_columns`` (``complete`` left out)."""
         lines, _ = self._clean_lines()
         if not lines:
             return pd.DataFrame(columns=self.data_columns)

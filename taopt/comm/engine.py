@@ -186,7 +186,7 @@ class Group:
 
     @property
     def knowledge(self) -> np.ndarray:
-        """(k, n) bool: s_j(t) (4.4), a copy."""
+        """s_j(t) (4.4) of every member, a (k, n) bool array (a copy)."""
         return self._sim.knows[self.members].copy()
 
     @property
@@ -205,7 +205,7 @@ class Group:
 
     @property
     def start_distances(self) -> np.ndarray:
-        """(k, n): distance from each member's current position to every target."""
+        """Distance from each member's current position to every target, a (k, n) array."""
         if self._start is None:
             sim = self._sim
             self._start = np.array([distances_from(sim.pos[j], sim.targets) for j in self.members])

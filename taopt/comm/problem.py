@@ -8,7 +8,7 @@ distance and time are the same number; two vehicles communicate while they are a
 been visited.
 
 Only the data lives here. The simulation (:mod:`taopt.comm.engine`) runs the algorithms of
-:mod:`taopt.heuristics.comm` on it; :meth:`CommProblem.full_information` gives the problem
+:mod:`taopt.heuristics.comm` on it; :meth:`~taopt.comm.problem.CommProblem.full_information` gives the problem
 without communication limits, whose exact optimum ``f_o`` is certified by
 ``taopt.solve(problem, "exact")``.
 """

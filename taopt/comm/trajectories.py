@@ -107,7 +107,7 @@ class Trajectories:
 
         Each route is the vehicle's first visits in order; by the triangle inequality it is
         no longer than the vehicle's trajectory, so these routes score at most (4.1) of the
-        trajectories in :meth:`CommProblem.full_information` (an incumbent for the exact
+        trajectories in :meth:`~taopt.comm.problem.CommProblem.full_information` (an incumbent for the exact
         model).
         """
         first: dict[int, tuple[float, int, int]] = {}

@@ -49,6 +49,7 @@ from taopt.routing.bounds import mcga_tree
 from taopt.studies.routing_claims import claims_table, euclidean_costs, metric_costs
 from taopt.studies.routing_claims import exact_optimum as routing_optimum
 
+#: The instance classes the claims are checked on.
 CLASSES = ("euclidean", "metric", "grid-drift")
 CLASS_NOTES = {
     "euclidean": "symmetric straight-line times, 100 m square",

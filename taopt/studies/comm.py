@@ -155,6 +155,7 @@ def make_scenario(key: dict, settings: dict) -> Scenario:
     )
 
 
+#: The study specification shared by every chapter 4 experiment.
 SPEC = StudySpec(
     name="comm",
     problem_type=CommProblem,
@@ -184,6 +185,7 @@ def ranges(r_c: float, steps: int = 6) -> tuple[float, ...]:
 
 DIAGONAL_PLUS = round(THESIS_SIDE * math.sqrt(2.0) + 1.0, 3)
 
+#: The thesis's setups, by name (see the module docstring).
 PRESETS = {
     "table": Preset(
         "Tables 4.1-4.2: m = 6, n = 30, r_c = 600 m",

@@ -187,6 +187,7 @@ def metric_costs(rng: np.random.Generator, size: int) -> np.ndarray:
     return shortest_path(raw, method="FW", directed=True)
 
 
+#: The instance classes the claims are checked on.
 CLASSES = ("euclidean", "uniform-drift", "drift", "metric")
 CLASS_NOTES = {
     "euclidean": "symmetric straight-line distances, 100 m square",
