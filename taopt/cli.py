@@ -219,7 +219,9 @@ def cmd_study_drift(args: argparse.Namespace) -> int:
 
     from taopt.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
 
-    options = {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    options = (
+        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    )
     df = drift_study(
         args.n,
         args.m,
@@ -253,7 +255,9 @@ def cmd_study_delivery(args: argparse.Namespace) -> int:
     from taopt.studies.delivery import delivery_study, plot_study, thesis_table
 
     ratios = tuple(parse_numbers(args.ratios, len(args.ratios.split(",")), "--ratios"))
-    options = {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    options = (
+        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    )
     df = delivery_study(
         setup=args.setup,
         instances=args.instances,
