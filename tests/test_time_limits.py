@@ -39,21 +39,10 @@ def euclidean(n: int, m: int = 3, seed: int = 0) -> taopt.AssignmentProblem:
 
 
 def delivery(n: int, seed: int = 7):
-    from taopt.delivery.dags import layered_dag, residential_network
-    from taopt.delivery.instance import DeliveryInstance
+    """The residential example's generator with n customers."""
+    from taopt.delivery import build_example_instance
 
-    customers, stops, graph = residential_network(n, seed=seed)
-    return DeliveryInstance(
-        customers=customers.round(1),
-        stops=stops.round(1),
-        graph=graph,
-        depot=0,
-        v_drone=30 / 3.6,
-        v_truck=40 / 3.6,
-        flight_range=250.0,
-        precedences=layered_dag(n, layers=5, density=0.15, seed=seed),
-        service_time=30.0,
-    )
+    return build_example_instance(seed=seed, n=n)
 
 
 @pytest.fixture(autouse=True, scope="module")

@@ -72,8 +72,11 @@ from taopt.delivery import schedule as _schedule  # noqa: E402, F401
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 
 
-def build_example_instance(seed: int = 7, flight_range: float = 250.0) -> Any:
+def build_example_instance(seed: int = 7, flight_range: float = 250.0, n: int = 20) -> Any:
     """Build the 20-customer residential example (Figs. 5.6–5.7 stand-in) from scratch.
+
+    ``n`` gives the same neighbourhood with another number of customers (named
+    ``residential-<n>``), as the time-limit tests and benchmarks use.
 
     A synthetic neighbourhood ≈ 1 km across (:func:`taopt.delivery.dags.residential_network`),
     depot at junction 0 (south-west corner), v_d = 30 km/h, v_t = 40 km/h (in m/s),
@@ -84,7 +87,7 @@ def build_example_instance(seed: int = 7, flight_range: float = 250.0) -> Any:
     from taopt.delivery.dags import layered_dag, residential_network
     from taopt.delivery.instance import DeliveryInstance
 
-    customers, stops, graph = residential_network(20, seed=seed)
+    customers, stops, graph = residential_network(n, seed=seed)
     return DeliveryInstance(
         customers=customers.round(1),
         stops=stops.round(1),
@@ -93,9 +96,9 @@ def build_example_instance(seed: int = 7, flight_range: float = 250.0) -> Any:
         v_drone=30 / 3.6,
         v_truck=40 / 3.6,
         flight_range=flight_range,
-        precedences=layered_dag(20, layers=5, density=0.15, seed=seed),
+        precedences=layered_dag(n, layers=5, density=0.15, seed=seed),
         service_time=30.0,
-        name="residential-20",
+        name=f"residential-{n}",
     )
 
 
