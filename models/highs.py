@@ -234,7 +234,11 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
             # highspy's own threaded solve does. After a Ctrl-C, wait for its workers to
             # end: the process is about to exit, and a worker still joinable when HiGHS's
             # static objects are destroyed aborts it ("terminate called ...").
-            _Highs.resetThreadScheduler(stop.is_set())
+            # (newer highspy only; older versions keep one global scheduler and have nothing
+            # per thread to release)
+            reset = getattr(_Highs, "resetThreadScheduler", None)
+            if reset is not None:
+                reset(stop.is_set())
             finished.set()
 
     worker = threading.Thread(target=target, name="highs-run", daemon=True)
