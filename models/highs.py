@@ -236,10 +236,12 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
             # static objects are destroyed aborts it ("terminate called ...").
             # (newer highspy only; older versions keep one global scheduler and have nothing
             # per thread to release)
-            reset = getattr(_Highs, "resetThreadScheduler", None)
-            if reset is not None:
-                reset(stop.is_set())
-            finished.set()
+            try:
+                reset = getattr(_Highs, "resetThreadScheduler", None)
+                if reset is not None:
+                    reset(stop.is_set())
+            finally:
+                finished.set()  # whatever happened, the waiting thread must not hang
 
     worker = threading.Thread(target=target, name="highs-run", daemon=True)
     worker.start()
