@@ -24,7 +24,8 @@ import numpy as np
 
 import taopt
 
-BENCHMARKS = Path("/work/shared/benchmarks/tsplib")
+# the public TSPLIB files beside the checkout (../shared/benchmarks/tsplib)
+BENCHMARKS = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "tsplib"
 
 
 def assignment(n: int, m: int = 3, seed: int = 0) -> taopt.AssignmentProblem:
