@@ -109,7 +109,8 @@ nitpicky = True
 _EXTERNAL = (
     "numpy|np|scipy|cvxpy|cp|networkx|nx|pandas|pd|matplotlib|casadi|highspy|jsonschema|dask|"
     "distributed|ortools|pyvrp|tqdm|concurrent|multiprocessing|pathlib|json|typing|collections|"
-    "functools|itertools|math|os|sys|logging|argparse|subprocess|signal|random|dataclasses|io"
+    "functools|itertools|math|os|sys|logging|argparse|subprocess|signal|random|dataclasses|io|"
+    "filelock|threading|atexit|contextlib|ctypes|time|tempfile|warnings|selenium"
 )
 nitpick_ignore_regex = [
     # a type in a docstring or annotation that does not name something in taopt

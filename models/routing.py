@@ -488,6 +488,7 @@ MIP_OPTIONS = {"mip_pool_soft_limit": 500}
 #: when its estimate exceeds the time left: the incumbent and the bounds proven so far
 #: are returned instead (status "time_limit").
 BUILD_SECONDS_PER_ARC = 2e-6
+#: Seconds per arc before HiGHS's simplex first checks its clock (see above).
 LP_SECONDS_PER_ARC = 4e-6
 #: Seconds per arc to build and compile the MTZ / flow model through cvxpy and for
 #: HiGHS's MIP presolve, which does not stop at its time limit (flow at n = 150, m = 5,
