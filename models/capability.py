@@ -680,32 +680,29 @@ def _solve_joint(
             continue
         stopped_by = run.stopped_by
         break
-    if best_routes is None:
-        if stopped_by != "time_limit":
-            raise SolverError(f"the joint model found no feasible solution ({solver_status})")
-        # no plan in time: status time_limit, objective inf, the bound stands
-        bound = max(best_bound, float(arborescence_lower(problem)))
-        info = {
+
+    def joint_info(stopped: str) -> dict:
+        return {
             "formulation": "joint",
             "sec": sec,
             "rounds": rounds,
             "cuts": len(cuts),
             "solver_status": solver_status,
-            "stopped_by": "time_limit",
+            "stopped_by": stopped,
         }
+
+    if best_routes is None:
+        if stopped_by != "time_limit":
+            raise SolverError(f"the joint model found no feasible solution ({solver_status})")
+        # no plan in time: status time_limit, objective inf, the bound stands
+        bound = max(best_bound, float(arborescence_lower(problem)))
+        info = joint_info("time_limit")
         return _solution(math.inf, TIME_LIMIT, None, bound, start, "joint", info)
     if stopped_by == "time_limit":  # a valid bound of the family keeps the gap honest
         best_bound = max(best_bound, float(arborescence_lower(problem)))
     bound = min(best_bound, best_value)
     status, stopped_by = certify(best_value, bound, stopped_by)
-    info = {
-        "formulation": "joint",
-        "sec": sec,
-        "rounds": rounds,
-        "cuts": len(cuts),
-        "solver_status": solver_status,
-        "stopped_by": stopped_by,
-    }
+    info = joint_info(stopped_by)
     return _solution(best_value, status, Routes(best_routes), bound, start, "joint", info)
 
 

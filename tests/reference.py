@@ -66,6 +66,21 @@ def brute_force_delivery(instance: Any) -> float:
 # -- the references ----------------------------------------------------------------------------
 
 
+def layered_grid_delivery(n: int, seed: int = 0) -> Any:
+    """n random customers on a 1 km grid of 11 x 11 stops with layered precedences (unit speeds,
+    L = 300 m): the delivery instance the verify and Ctrl-C tests share."""
+    from taopt.delivery.dags import layered_dag
+    from taopt.delivery.instance import DeliveryInstance
+
+    rng = np.random.default_rng(seed)
+    customers = rng.uniform(0, 1000, size=(n, 2))
+    pairs = layered_dag(n, layers=3, density=0.2, seed=rng)
+    return DeliveryInstance.grid(
+        customers, 11, 1000.0, v_drone=1.0, v_truck=1.0, flight_range=300.0,
+        precedences=pairs, name=f"delivery-{n}",
+    )  # fmt: skip
+
+
 def routing_line() -> Reference:
     """Targets at 1, 2, 4 and vehicles at 0 and 5 on a line: 0→1→2 and 5→4, total 3."""
     x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])

@@ -71,16 +71,9 @@ def assert_interrupted(code: int, err: str, seconds: float, command: str) -> Non
 
 def delivery_file(tmp_path: Path, n: int) -> Path:
     """A delivery instance with ``n`` customers (layered precedences), saved as JSON."""
-    from taopt.delivery.dags import layered_dag
-    from taopt.delivery.instance import DeliveryInstance
+    from reference import layered_grid_delivery
 
-    rng = np.random.default_rng(0)
-    customers = rng.uniform(0, 1000, size=(n, 2))
-    pairs = layered_dag(n, layers=3, density=0.2, seed=rng)
-    instance = DeliveryInstance.grid(
-        customers, 11, 1000.0, v_drone=1.0, v_truck=1.0, flight_range=300.0,
-        precedences=pairs, name=f"delivery-{n}",
-    )  # fmt: skip
+    instance = layered_grid_delivery(n)
     path = tmp_path / f"delivery{n}.json"
     instance.save(path)
     return path

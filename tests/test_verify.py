@@ -70,18 +70,9 @@ def _worse_routes() -> dict:
 
 def ten_customer_delivery():
     """A 10-customer layered-DAG delivery instance where SMMA is not optimal (seed 0)."""
-    import numpy as np
+    from reference import layered_grid_delivery
 
-    from taopt.delivery.dags import layered_dag
-    from taopt.delivery.instance import DeliveryInstance
-
-    rng = np.random.default_rng(0)
-    customers = rng.uniform(0, 1000, size=(10, 2))
-    pairs = layered_dag(10, layers=3, density=0.2, seed=rng)
-    return DeliveryInstance.grid(
-        customers, 11, 1000.0, v_drone=1.0, v_truck=1.0, flight_range=300.0,
-        precedences=pairs, name="ten",
-    )  # fmt: skip
+    return layered_grid_delivery(10).replace(name="ten")
 
 
 def test_unchecked_optimality_is_said(tmp_path, capsys):
