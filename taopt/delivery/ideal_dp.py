@@ -1,0 +1,525 @@
+"""Exact truck–drone delivery by dynamic programming over the order ideals of G^p.
+
+A served set of customers is always an *order ideal* of the precedence DAG G^p (a set
+closed under predecessors, (5.7)), so the states (served set, landing stop) of
+:func:`taopt.delivery.schedule.optimal_plan` need only range over ideals: on the dag40
+instances of Tables 5.1–5.2 that is 10^4–10^6 sets instead of 2^40. This module expands
+them ideal by ideal in order of size (one layer per number of served customers), keeping
+the current and the next layer's values and compact back-pointers, with
+
+* the transitions of :func:`taopt.delivery.schedule._sortie_step` folded into one min-plus
+  matrix per customer (below),
+* dominance among the landing stops of one ideal (the truck times are a shortest-path
+  metric),
+* pruning by a valid completion bound (:func:`completion_bound`) against an incumbent,
+* a wall-clock time limit and a size guard that return the best plan with a proven bound.
+
+The optimal order found is scheduled again by :func:`taopt.delivery.schedule.schedule`
+(the fixed-order DP, made of :func:`_sortie_step`) and the plan is scored by
+:func:`taopt.delivery.evaluate.evaluate_plan`; the DP's own value must agree
+(:func:`taopt.delivery.schedule._scored`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from taopt.delivery.evaluate import evaluate_plan
+from taopt.delivery.instance import DeliveryInstance, Plan
+from taopt.delivery.schedule import _scored, _sortie_data, schedule
+from taopt.errors import InstanceError
+from taopt.limits import Deadline
+from taopt.result import OPTIMAL, TIME_LIMIT, Solution
+
+#: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
+MAX_CUSTOMERS = 63
+
+#: Default cap on the states kept over the whole run (back-pointers, about 10 bytes each)
+#: and on the cells of one layer's dense table (ideals x stops, about 11 bytes each).
+DEFAULT_MAX_STATES = 100_000_000
+
+#: Relative safety margin taken off a completion bound before it prunes (floating point).
+BOUND_SLACK = 1e-10
+
+
+@dataclass
+class _Tables:
+    """Per-instance arrays of the DP (built once per call).
+
+    ``move[j]`` (s, |V_j|): the min-plus matrix of one sortie to customer j, from the
+    previous landing stop k' to the landing stop k ∈ V_j; ``finish[j, k']`` the earliest
+    service time of j after recovering at k' (last sortie); ``incoming[j]`` the cheapest
+    t*-style edge into j; ``need[j]`` the bit mask of j's direct predecessors.
+    """
+
+    viable: list[np.ndarray]
+    move: list[np.ndarray]
+    finish: np.ndarray
+    incoming: np.ndarray
+    need: np.ndarray
+    slack: float
+
+
+def _tables(instance: DeliveryInstance) -> _Tables:
+    n, s = instance.n, instance.s
+    tt = instance.truck_time
+    ft = instance.flight_time
+    tau = instance.service_time
+    data = _sortie_data(instance)
+    viable, move = [], []
+    finish = np.empty((n, s))
+    for j in range(n):
+        v, flight, penalty, carry = data.get(j)
+        # R = max(S + ft_i + τ + ft_k, S + tt_ik) + τ  =  S + cost[i, k]
+        cost = np.maximum(flight[:, None] + tau + flight[None, :], carry) + penalty
+        to_launch = tt[:, v]  # (s, |V_j|)
+        move.append((to_launch[:, :, None] + cost[None, :, :]).min(axis=1))
+        finish[j] = (to_launch + (flight + tau)[None, :]).min(axis=1)
+        viable.append(v)
+    # t*-style edge j -> j': served j, fly back to any stop k, truck k -> i', fly to j'
+    back_then_launch = (ft[:, :, None] + tt[None, :, :]).min(
+        axis=1
+    )  # (n, s): min_k ft[j,k]+tt[k,i]
+    edge = (back_then_launch[:, None, :] + ft[None, :, :]).min(axis=2) + 2.0 * tau  # (n, n)
+    need = np.zeros(n, dtype=np.uint64)
+    after = np.zeros((n, n), dtype=bool)  # after[r, j]: r must precede j (transitive)
+    for r, j in instance.precedences:
+        need[j] |= np.uint64(1) << np.uint64(r)
+        after[r, j] = True
+    for k in range(n):  # transitive closure (Warshall)
+        after |= after[:, [k]] & after[[k], :]
+    # j may be served right before j' unless j' must precede j: after[j', j]
+    allowed = ~after.T
+    np.fill_diagonal(allowed, False)
+    incoming = np.where(allowed, edge, np.inf).min(axis=0)
+    incoming[~np.isfinite(incoming)] = 0.0  # n = 1
+    # largest violation of the triangle inequality of truck_time (rounding only)
+    viol = 0.0
+    for b in range(s):
+        viol = max(viol, float((tt - (tt[:, [b]] + tt[[b], :])).max()))
+    return _Tables(viable, move, finish, incoming, need, max(viol, 0.0))
+
+
+def _byte_tables(values: np.ndarray) -> np.ndarray:
+    """(8, 256) table: the sum of ``values[j]`` over the bits j set in each byte."""
+    table = np.zeros((8, 256))
+    bits = (np.arange(256)[:, None] >> np.arange(8)[None, :]) & 1
+    for b in range(8):
+        chunk = np.zeros(8)
+        part = values[8 * b : 8 * b + 8]
+        chunk[: part.size] = part
+        table[b] = bits @ chunk
+    return table
+
+
+def _mask_sum(table: np.ndarray, ideals: np.ndarray) -> np.ndarray:
+    out = np.zeros(ideals.size)
+    for b in range(8):
+        out += table[b][((ideals >> np.uint64(8 * b)) & np.uint64(255)).astype(np.intp)]
+    return out
+
+
+def _bounds(tab: _Tables, ideals: np.ndarray, stops: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two terms of :func:`completion_bound` per state: max_U F_j(k), and
+    min over addable j1 of F_j1(k) − in(j1)."""
+    n = tab.finish.shape[0]
+    one_sortie = np.zeros(ideals.size)
+    first = np.full(ideals.size, np.inf)
+    for j in range(n):
+        bit = np.uint64(1) << np.uint64(j)
+        open_ = (ideals & bit) == 0
+        if not open_.any():
+            continue
+        f = tab.finish[j, stops]
+        one_sortie = np.where(open_, np.maximum(one_sortie, f), one_sortie)
+        addable = open_ & ((ideals & tab.need[j]) == tab.need[j])
+        first = np.where(addable, np.minimum(first, f - tab.incoming[j]), first)
+    return one_sortie, first
+
+
+def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> float:
+    """A lower bound on the time from recovering at ``stop`` to the end of the plan.
+
+    Parameters
+    ----------
+    instance : DeliveryInstance
+    served : int (bit mask) or iterable of int
+        The customers served so far (an order ideal of G^p, not the full set).
+    stop : int
+        The landing stop of the last sortie (the depot before the first).
+
+    Returns
+    -------
+    float
+        ``B(I, k)`` with makespan ≥ R + B(I, k) for every completion of a partial plan
+        that has served I and recovered at k at time R.
+
+    Notes
+    -----
+    Let U be the unserved customers. With ``F_j(k) = min_{i ∈ V_j} truck_time[k, i] +
+    flight_time[j, i] + τ`` every j ∈ U is served at t_j ≥ R + F_j(k) (the truck must
+    reach a launch stop, the drone fly out and land). Between two consecutive services
+    j then j' the drone flies back to some stop k'', lands (τ), the truck drives to the
+    next launch stop i', the drone flies out and lands at j' (τ)::
+
+        t_j' − t_j ≥ e(j, j') = 2τ + min_{k'', i'} flight_time[j, k''] + truck_time[k'', i']
+                                       + flight_time[j', i']
+
+    (a t*-style edge of (5.11), ignoring (5.6) and the truck's own carry). Every j' ∈ U
+    but the first served has a predecessor in the order that may precede it
+    (not forced after it by G^p), so with ``in(j') = min_{j may precede j'} e(j, j')``::
+
+        B(I, k) = max( max_{j ∈ U} F_j(k),
+                       min_{j1 ∈ U addable} (F_{j1}(k) − in(j1)) + Σ_{j' ∈ U} in(j') )
+
+    Both terms are valid, so is their maximum. O(n) per state.
+
+    References
+    ----------
+    Thesis §5.2 (timing of (5.1)–(5.7)), §5.3 (the t* edges of (5.11)).
+    """
+    tab = _tables(instance)
+    ideal = _as_mask(served)
+    full = (1 << instance.n) - 1
+    if ideal == full:
+        return 0.0
+    ideals = np.array([ideal], dtype=np.uint64)
+    stops = np.array([int(stop)])
+    value = _completion(tab, np.uint64(full), ideals, stops, _byte_tables(tab.incoming))
+    return float(value[0])
+
+
+def _completion(
+    tab: _Tables, full: np.uint64, ideals: np.ndarray, stops: np.ndarray, in_table: np.ndarray
+) -> np.ndarray:
+    one_sortie, first = _bounds(tab, ideals, stops)
+    unserved = _mask_sum(in_table, full & ~ideals)
+    return np.maximum(one_sortie, first + unserved)
+
+
+def _as_mask(served: Any) -> int:
+    if isinstance(served, (int, np.integer)):
+        return int(served)
+    mask = 0
+    for j in served:
+        mask |= 1 << int(j)
+    return mask
+
+
+def _stopped(
+    instance: DeliveryInstance,
+    incumbent_plan: Plan | None,
+    incumbent_value: float,
+    proven: float,
+    start: float,
+    info: dict,
+    why: str,
+) -> Solution:
+    """Status "time_limit": the incumbent (or no plan, objective inf) and the larger of
+    the DP's proven bound and Proposition 5.3's arborescence bound."""
+    from taopt.delivery.bounds import arborescence_bound
+
+    bound = max(proven, arborescence_bound(instance))
+    return Solution(
+        objective=incumbent_value,
+        status=TIME_LIMIT,
+        bound=min(bound, incumbent_value),
+        runtime=time.perf_counter() - start,
+        method="exact",
+        solution=incumbent_plan,
+        info={"stopped_by": why, **info},
+    )
+
+
+def ideal_dp(
+    instance: DeliveryInstance,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    max_states: int = DEFAULT_MAX_STATES,
+    dominance: bool = True,
+    prune: bool = True,
+    _start: tuple[int, int, float] | None = None,
+) -> Solution:
+    """Exact optimum of (5.1)–(5.7) by dynamic programming over the order ideals of G^p.
+
+    Parameters
+    ----------
+    instance : DeliveryInstance
+        At most :data:`MAX_CUSTOMERS` customers.
+    time_limit : float, optional
+        Wall-clock seconds (:class:`taopt.limits.Deadline`). When the DP has not finished,
+        the result has status "time_limit", the incumbent (or no plan, objective inf) and
+        the bound ``max(min over open states of R + B, arborescence_bound)``.
+    incumbent : Plan or Solution, optional
+        A feasible plan; states whose value plus completion bound reaches its makespan are
+        pruned (``taopt.solve`` passes the best of NIA, MMA and SMMA).
+    max_states : int
+        Size guard: the run stops like a time limit (``info["stopped_by"] == "size"``) when
+        the states kept, or the cells of one layer's table, would exceed it.
+    dominance, prune : bool
+        Switch the dominance rule or the bound pruning off (for measurements).
+
+    Returns
+    -------
+    Solution
+        ``.status`` "optimal", ``.objective == .bound`` the optimal makespan (5.1) as scored
+        by :func:`taopt.delivery.evaluate.evaluate_plan` (checked against the DP's value
+        within :data:`taopt.delivery.schedule.MATCH_TOLERANCE` relative), ``.plan`` an
+        optimal plan, ``.info`` with ``ideals`` (expanded), ``states_kept``,
+        ``states_pruned`` (by the bound), ``states_dominated``, ``peak_layer_states``,
+        ``peak_layer_ideals``, ``dp_objective``.
+
+    Raises
+    ------
+    InstanceError
+        More than :data:`MAX_CUSTOMERS` customers.
+
+    Notes
+    -----
+    States (I, k): I an ideal, k the landing stop of the last sortie; value R(I, k) the
+    earliest recovery time. The sortie to j from recovery R at k' is, for launch i and
+    landing k in V_j (as :func:`taopt.delivery.schedule._sortie_step`)::
+
+        S = R + truck_time[k', i],   t_j = S + flight_time[j, i] + τ,
+        R' = max(t_j + flight_time[j, k], S + truck_time[i, k]) + τ
+
+    so R' = R + M_j[k', k] with the min-plus matrix
+    ``M_j[k', k] = min_i truck_time[k', i] + max(flight_time[j, i] + τ + flight_time[j, k],
+    truck_time[i, k]) + τ`` (+inf unless (5.6)), computed once per customer: a transition
+    costs O(|V_j|) per state instead of O(|V_j|²). Later times are non-decreasing in R, so
+    the earliest R per state is exact (the argument of :func:`schedule`).
+
+    *Dominance.* ``truck_time`` is a shortest-path metric, so if R(I, k) ≥ R(I, k') +
+    truck_time[k', k] every launch reachable from (I, k) is reached as early from (I, k'):
+    (I, k) is dropped. The triangle inequality's largest floating-point violation on the
+    instance is added to the test, so no state is dropped by rounding.
+
+    *Pruning.* A state with R + B(I, k) ≥ the incumbent's makespan cannot lead to a better
+    plan (:func:`completion_bound`). When every state is pruned the incumbent is optimal.
+
+    *Rebuild.* The back-pointers (customer added, previous landing stop) give the optimal
+    order; :func:`taopt.delivery.schedule.schedule` schedules it (made of
+    :func:`_sortie_step`, the scorer's floating-point operations) and the DP's value is
+    checked against the scorer's.
+
+    Time O(Σ_layers states · Σ_j |V_j|) after O(n s³) tables; memory O(peak layer ideals ·
+    s) for one layer's table plus about 10 bytes per state kept.
+
+    References
+    ----------
+    Thesis §5.2 ((5.1)–(5.7)), §5.3.2 (Proposition 5.3, the fallback bound).
+    """
+    start = time.perf_counter()
+    deadline = Deadline(time_limit)
+    n, s = instance.n, instance.s
+    if n > MAX_CUSTOMERS:
+        raise InstanceError(
+            f"ideal_dp: n = {n} customers > {MAX_CUSTOMERS} (ideals are 64-bit masks)"
+        )
+    inc_plan = getattr(incumbent, "plan", incumbent) if incumbent is not None else None
+    inc_value = math.inf if inc_plan is None else evaluate_plan(instance, inc_plan)
+    tab = _tables(instance)
+    in_table = _byte_tables(tab.incoming)
+    full = np.uint64((1 << n) - 1)
+    tt = instance.truck_time
+    margin = tab.slack
+    if _start is None:
+        ideals = np.array([0], dtype=np.uint64)
+        st_idx = np.array([0], dtype=np.intp)
+        st_stop = np.array([instance.depot], dtype=np.intp)
+        st_val = np.array([0.0])
+    else:
+        ideals = np.array([_start[0]], dtype=np.uint64)
+        st_idx = np.array([0], dtype=np.intp)
+        st_stop = np.array([int(_start[1])], dtype=np.intp)
+        st_val = np.array([float(_start[2])])
+    size0 = int(ideals[0]).bit_count()
+    # back-pointer layers: (ideals, state key idx*s+stop sorted, customer, previous stop)
+    history: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = [
+        (ideals, st_idx * s + st_stop, np.full(1, -1, np.int8), np.full(1, -1, np.int16))
+    ]
+    counts = {
+        "ideals": 1,
+        "states_kept": 1,
+        "states_pruned": 0,
+        "states_dominated": 0,
+        "peak_layer_states": 1,
+        "peak_layer_ideals": 1,
+    }
+    st_bound = st_val + _completion(tab, full, ideals[st_idx], st_stop, in_table)
+    for _size in range(size0, n - 1):
+        if deadline.limited and deadline.expired():
+            proven = float(st_bound.min()) if st_bound.size else inc_value
+            return _stopped(
+                instance, inc_plan, inc_value, min(proven, inc_value), start, counts, "time_limit"
+            )
+        # -- next layer's ideals --------------------------------------------------------
+        blocks = []
+        for j in range(n):
+            bit = np.uint64(1) << np.uint64(j)
+            can = ((ideals & bit) == 0) & ((ideals & tab.need[j]) == tab.need[j])
+            if can.any():
+                blocks.append((j, np.flatnonzero(can)))
+        new_ideals = np.unique(
+            np.concatenate([ideals[rows] | (np.uint64(1) << np.uint64(j)) for j, rows in blocks])
+        )
+        m = new_ideals.size
+        if m * s > max_states or counts["states_kept"] > max_states:
+            proven = float(st_bound.min()) if st_bound.size else inc_value
+            return _stopped(
+                instance, inc_plan, inc_value, min(proven, inc_value), start, counts, "size"
+            )
+        table = np.full((m, s), np.inf)
+        back_j = np.full((m, s), -1, dtype=np.int8)
+        back_k = np.full((m, s), -1, dtype=np.int16)
+        # states grouped by ideal (st_idx sorted): group starts per source ideal
+        group_start = np.searchsorted(st_idx, np.arange(ideals.size))
+        group_len = np.diff(np.append(group_start, st_idx.size))
+        for j, rows in blocks:
+            if deadline.limited and deadline.expired():
+                proven = float(st_bound.min()) if st_bound.size else inc_value
+                return _stopped(
+                    instance,
+                    inc_plan,
+                    inc_value,
+                    min(proven, inc_value),
+                    start,
+                    counts,
+                    "time_limit",
+                )
+            v = tab.viable[j]
+            # the states of the source ideals in ``rows`` (contiguous per ideal)
+            lens = group_len[rows]
+            starts = group_start[rows]
+            sel = np.repeat(starts - np.cumsum(lens) + lens, lens) + np.arange(lens.sum())
+            vals = st_val[sel][:, None] + tab.move[j][st_stop[sel]]  # (states, |V_j|)
+            offsets = np.cumsum(lens) - lens
+            best = np.minimum.reduceat(vals, offsets, axis=0)  # (ideals, |V_j|)
+            hit = vals == np.repeat(best, lens, axis=0)
+            prev = np.where(hit, st_stop[sel][:, None], s)
+            prev = np.minimum.reduceat(prev, offsets, axis=0)
+            target = np.searchsorted(new_ideals, ideals[rows] | (np.uint64(1) << np.uint64(j)))
+            cur = table[target[:, None], v[None, :]]
+            better = best < cur
+            if better.any():
+                table[target[:, None], v[None, :]] = np.where(better, best, cur)
+                bj = back_j[target[:, None], v[None, :]]
+                bk = back_k[target[:, None], v[None, :]]
+                back_j[target[:, None], v[None, :]] = np.where(better, j, bj)
+                back_k[target[:, None], v[None, :]] = np.where(better, prev, bk)
+        # -- dominance among the landing stops of each ideal -------------------------------
+        finite = np.isfinite(table)
+        before = int(finite.sum())
+        if dominance:
+            keep = np.zeros((m, s), dtype=bool)
+            work = table.copy()
+            rows_left = np.arange(m)
+            while rows_left.size:
+                sub = work[rows_left]
+                kstar = sub.argmin(axis=1)
+                vstar = sub[np.arange(rows_left.size), kstar]
+                ok = np.isfinite(vstar)
+                rows_left, kstar, vstar, sub = rows_left[ok], kstar[ok], vstar[ok], sub[ok]
+                if not rows_left.size:
+                    break
+                keep[rows_left, kstar] = True
+                sub[np.arange(rows_left.size), kstar] = np.inf
+                sub[sub >= vstar[:, None] + tt[kstar] + margin] = np.inf
+                work[rows_left] = sub
+                alive_left = np.isfinite(sub).any(axis=1)
+                rows_left = rows_left[alive_left]
+            counts["states_dominated"] += before - int(keep.sum())
+        else:
+            keep = finite
+        idx, stop = np.nonzero(keep)  # sorted by ideal, then stop
+        val = table[idx, stop]
+        # -- pruning by the completion bound ----------------------------------------------
+        bound = val + _completion(tab, full, new_ideals[idx], stop, in_table)
+        if prune and math.isfinite(inc_value):
+            ok = bound * (1.0 - BOUND_SLACK) < inc_value
+            counts["states_pruned"] += int((~ok).sum())
+            idx, stop, val, bound = idx[ok], stop[ok], val[ok], bound[ok]
+        # keep only ideals with a state, renumbered
+        used, idx = np.unique(idx, return_inverse=True)
+        ideals = new_ideals[used]
+        bj, bk = back_j[used[idx], stop], back_k[used[idx], stop]
+        st_idx, st_stop, st_val, st_bound = idx.astype(np.intp), stop.astype(np.intp), val, bound
+        history.append((ideals, st_idx * s + st_stop, bj, bk))
+        counts["ideals"] += int(ideals.size)
+        counts["states_kept"] += int(st_idx.size)
+        counts["peak_layer_states"] = max(counts["peak_layer_states"], int(st_idx.size))
+        counts["peak_layer_ideals"] = max(counts["peak_layer_ideals"], int(ideals.size))
+        del table, back_j, back_k
+        if st_idx.size == 0:
+            break
+    # -- last sortie: the one missing customer of each ideal of size n - 1 ----------------
+    best_value, best_state, best_j = math.inf, -1, -1
+    if st_idx.size and int(ideals[0]).bit_count() == n - 1:
+        missing = (full & ~ideals[st_idx]).astype(np.uint64)
+        last = np.log2(missing.astype(np.float64)).round().astype(np.intp)
+        ends = tab.finish[last, st_stop] + st_val
+        p = int(ends.argmin())
+        best_value, best_state, best_j = float(ends[p]), p, int(last[p])
+    elif st_idx.size and int(ideals[0]).bit_count() == n:  # started from the full set
+        best_value, best_state, best_j = float(st_val[0]), 0, -1
+    info = dict(counts)
+    if not best_value < inc_value:
+        if inc_plan is None:
+            raise InstanceError("ideal_dp: no complete plan exists (no customers?)")
+        return Solution(
+            objective=inc_value,
+            status=OPTIMAL,
+            bound=inc_value,
+            runtime=time.perf_counter() - start,
+            method="exact",
+            solution=inc_plan,
+            info={**info, "dp_objective": inc_value, "incumbent_optimal": True},
+        )
+    order = _rebuild(history, s, best_state, best_j)
+    if _start is not None:
+        return Solution(
+            objective=best_value,
+            status=OPTIMAL,
+            bound=best_value,
+            runtime=time.perf_counter() - start,
+            method="exact",
+            solution=None,
+            info={**info, "dp_objective": best_value, "order": order},
+        )
+    plan = schedule(instance, order).plan
+    objective = _scored(instance, plan, best_value, "ideal_dp")
+    if objective >= inc_value:  # equal up to rounding: keep the incumbent
+        plan, objective = inc_plan, inc_value
+    return Solution(
+        objective=objective,
+        status=OPTIMAL,
+        bound=objective,
+        runtime=time.perf_counter() - start,
+        method="exact",
+        solution=plan,
+        info={**info, "dp_objective": best_value},
+    )
+
+
+def _rebuild(history: list, s: int, state: int, last_j: int) -> list[int]:
+    """The order of customers leading to ``state`` of the last layer (then ``last_j``)."""
+    order = [] if last_j < 0 else [last_j]
+    layer = len(history) - 1
+    ideals, keys, bj, bk = history[layer]
+    while layer > 0:
+        j, k_prev = int(bj[state]), int(bk[state])
+        ideal = ideals[keys[state] // s] & ~(np.uint64(1) << np.uint64(j))
+        order.append(j)
+        layer -= 1
+        ideals, keys, bj, bk = history[layer]
+        i = int(np.searchsorted(ideals, ideal))
+        state = int(np.searchsorted(keys, i * s + k_prev))
+    return order[::-1]
+
+
+__all__ = ["ideal_dp", "completion_bound", "MAX_CUSTOMERS"]
