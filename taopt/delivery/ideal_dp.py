@@ -34,7 +34,7 @@ from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.schedule import _scored, _sortie_data, schedule
 from taopt.errors import InstanceError
 from taopt.limits import Deadline
-from taopt.result import OPTIMAL, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution
 
 #: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
 MAX_CUSTOMERS = 63
@@ -42,6 +42,9 @@ MAX_CUSTOMERS = 63
 #: Default cap on the states kept over the whole run (back-pointers, about 10 bytes each)
 #: and on the cells of one layer's dense table (ideals x stops, about 11 bytes each).
 DEFAULT_MAX_STATES = 100_000_000
+
+#: Transition values computed at once (bounds the transient memory: 8 bytes each, times 3).
+CHUNK_CELLS = 4_000_000
 
 #: Relative safety margin taken off a completion bound before it prunes (floating point).
 BOUND_SLACK = 1e-10
@@ -63,6 +66,7 @@ class _Tables:
     incoming: np.ndarray
     need: np.ndarray
     slack: float
+    edge: np.ndarray
 
 
 def _tables(instance: DeliveryInstance) -> _Tables:
@@ -102,7 +106,7 @@ def _tables(instance: DeliveryInstance) -> _Tables:
     viol = 0.0
     for b in range(s):
         viol = max(viol, float((tt - (tt[:, [b]] + tt[[b], :])).max()))
-    return _Tables(viable, move, finish, incoming, need, max(viol, 0.0))
+    return _Tables(viable, move, finish, incoming, need, max(viol, 0.0), edge)
 
 
 def _byte_tables(values: np.ndarray) -> np.ndarray:
@@ -194,12 +198,93 @@ def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> floa
     return float(value[0])
 
 
+class _Relaxation:
+    """The sequencing relaxation of the completion: an exact DP over all ideals with the
+    gaps between services replaced by their lower bounds e(j, j').
+
+    ``layers[m]`` the sorted ideals of size m; ``after[m][r, j']`` = H(I_r ∪ {j'}, j') for
+    j' addable to I_r (+inf otherwise), where H(I, j) is the least Σ e over the orders of
+    the customers outside I that respect G^p, starting after j::
+
+        H(full, j) = 0,   H(I, j) = min_{j' addable to I} e(j, j') + H(I ∪ {j'}, j')
+
+    Built backwards layer by layer; O(Σ_I addable(I) · n) time, O(#ideals · n) memory.
+    ``None`` from :meth:`build` when the ideals exceed ``max_ideals``.
+    """
+
+    def __init__(self, layers: list[np.ndarray], after: list[np.ndarray]) -> None:
+        self.layers = layers
+        self.after = after
+
+    @classmethod
+    def build(
+        cls, tab: _Tables, edge: np.ndarray, n: int, max_ideals: int, deadline: Deadline
+    ) -> _Relaxation | None:
+        layers = [np.array([0], dtype=np.uint64)]
+        total = 1
+        for _ in range(n):
+            cur = layers[-1]
+            parts = []
+            for j in range(n):
+                bit = np.uint64(1) << np.uint64(j)
+                can = ((cur & bit) == 0) & ((cur & tab.need[j]) == tab.need[j])
+                parts.append(cur[can] | bit)
+            layers.append(np.unique(np.concatenate(parts)))
+            total += layers[-1].size
+            if total > max_ideals or (deadline.limited and deadline.expired()):
+                return None
+        after: list[np.ndarray] = [np.empty((0, n))] * (n + 1)
+        h_next = np.zeros((1, n))  # H(full, ·) = 0
+        for m in range(n - 1, -1, -1):
+            cur, nxt = layers[m], layers[m + 1]
+            c = np.full((cur.size, n), np.inf)
+            for j in range(n):
+                bit = np.uint64(1) << np.uint64(j)
+                can = np.flatnonzero(((cur & bit) == 0) & ((cur & tab.need[j]) == tab.need[j]))
+                if can.size:
+                    c[can, j] = h_next[np.searchsorted(nxt, cur[can] | bit), j]
+            after[m] = c
+            # H(I, j) = min_j' e(j, j') + C(I, j')
+            h_next = np.full((cur.size, n), np.inf)
+            for jp in range(n):
+                col = c[:, jp]
+                fin = np.isfinite(col)
+                if fin.any():
+                    h_next[fin] = np.minimum(h_next[fin], col[fin, None] + edge[None, :, jp])
+            if deadline.limited and deadline.expired():
+                return None
+        return cls(layers, after)
+
+    def bound(self, ideals: np.ndarray, stops: np.ndarray, finish: np.ndarray) -> np.ndarray:
+        """min_{j'} F_{j'}(k) + H(I ∪ {j'}, j') per state (I, k) (all I of one size)."""
+        if not ideals.size:
+            return np.empty(0)
+        m = int(ideals[0]).bit_count()
+        rows = np.searchsorted(self.layers[m], ideals)
+        c = self.after[m]
+        out = np.full(ideals.size, np.inf)
+        for jp in range(c.shape[1]):
+            col = c[rows, jp]
+            fin = np.isfinite(col)
+            if fin.any():
+                out[fin] = np.minimum(out[fin], finish[jp, stops[fin]] + col[fin])
+        return out
+
+
 def _completion(
-    tab: _Tables, full: np.uint64, ideals: np.ndarray, stops: np.ndarray, in_table: np.ndarray
+    tab: _Tables,
+    full: np.uint64,
+    ideals: np.ndarray,
+    stops: np.ndarray,
+    in_table: np.ndarray,
+    relax: _Relaxation | None = None,
 ) -> np.ndarray:
     one_sortie, first = _bounds(tab, ideals, stops)
     unserved = _mask_sum(in_table, full & ~ideals)
-    return np.maximum(one_sortie, first + unserved)
+    out = np.maximum(one_sortie, first + unserved)
+    if relax is not None:
+        out = np.maximum(out, relax.bound(ideals, stops, tab.finish))
+    return out
 
 
 def _as_mask(served: Any) -> int:
@@ -243,6 +328,10 @@ def ideal_dp(
     max_states: int = DEFAULT_MAX_STATES,
     dominance: bool = True,
     prune: bool = True,
+    relaxation: bool = True,
+    beam: int = 2000,
+    _beam: int | None = None,
+    _shared: tuple | None = None,
     _start: tuple[int, int, float] | None = None,
 ) -> Solution:
     """Exact optimum of (5.1)–(5.7) by dynamic programming over the order ideals of G^p.
@@ -323,7 +412,7 @@ def ideal_dp(
         )
     inc_plan = getattr(incumbent, "plan", incumbent) if incumbent is not None else None
     inc_value = math.inf if inc_plan is None else evaluate_plan(instance, inc_plan)
-    tab = _tables(instance)
+    tab = _tables(instance) if _shared is None else _shared[0]
     in_table = _byte_tables(tab.incoming)
     full = np.uint64((1 << n) - 1)
     tt = instance.truck_time
@@ -344,14 +433,37 @@ def ideal_dp(
         (ideals, st_idx * s + st_stop, np.full(1, -1, np.int8), np.full(1, -1, np.int16))
     ]
     counts = {
-        "ideals": 1,
+        "ideals_expanded": 1,
         "states_kept": 1,
         "states_pruned": 0,
         "states_dominated": 0,
         "peak_layer_states": 1,
         "peak_layer_ideals": 1,
     }
-    st_bound = st_val + _completion(tab, full, ideals[st_idx], st_stop, in_table)
+    relax = None
+    if _shared is not None:
+        relax = _shared[1]
+    elif relaxation:
+        relax = _Relaxation.build(tab, tab.edge, n, max_states // (n + 1), deadline)
+        counts["relaxation"] = relax is not None
+    if relax is not None:
+        counts["ideals"] = sum(int(layer.size) for layer in relax.layers)
+    if beam and _beam is None and _start is None:
+        # a restricted pass (the ``beam`` states of least value + bound per layer) for
+        # an incumbent: a plan of the same DP, often optimal, that prunes the exact pass
+        quick = ideal_dp(
+            instance,
+            time_limit=deadline.remaining(),
+            max_states=max_states,
+            dominance=dominance,
+            prune=prune,
+            _beam=beam,
+            _shared=(tab, relax),
+        )
+        counts["beam_objective"] = quick.objective
+        if quick.plan is not None and quick.objective < inc_value:
+            inc_plan, inc_value = quick.plan, quick.objective
+    st_bound = st_val + _completion(tab, full, ideals[st_idx], st_stop, in_table, relax)
     for _size in range(size0, n - 1):
         if deadline.limited and deadline.expired():
             proven = float(st_bound.min()) if st_bound.size else inc_value
@@ -393,25 +505,30 @@ def ideal_dp(
                     "time_limit",
                 )
             v = tab.viable[j]
-            # the states of the source ideals in ``rows`` (contiguous per ideal)
-            lens = group_len[rows]
-            starts = group_start[rows]
-            sel = np.repeat(starts - np.cumsum(lens) + lens, lens) + np.arange(lens.sum())
-            vals = st_val[sel][:, None] + tab.move[j][st_stop[sel]]  # (states, |V_j|)
-            offsets = np.cumsum(lens) - lens
-            best = np.minimum.reduceat(vals, offsets, axis=0)  # (ideals, |V_j|)
-            hit = vals == np.repeat(best, lens, axis=0)
-            prev = np.where(hit, st_stop[sel][:, None], s)
-            prev = np.minimum.reduceat(prev, offsets, axis=0)
-            target = np.searchsorted(new_ideals, ideals[rows] | (np.uint64(1) << np.uint64(j)))
-            cur = table[target[:, None], v[None, :]]
-            better = best < cur
-            if better.any():
-                table[target[:, None], v[None, :]] = np.where(better, best, cur)
-                bj = back_j[target[:, None], v[None, :]]
-                bk = back_k[target[:, None], v[None, :]]
-                back_j[target[:, None], v[None, :]] = np.where(better, j, bj)
-                back_k[target[:, None], v[None, :]] = np.where(better, prev, bk)
+            lens_all = group_len[rows]
+            # chunks of source ideals holding at most CHUNK_CELLS transition values
+            cells = np.cumsum(lens_all) * v.size
+            cuts = np.searchsorted(
+                cells, np.arange(1, int(cells[-1] // CHUNK_CELLS) + 1) * CHUNK_CELLS
+            )
+            for part in np.split(np.arange(rows.size), np.unique(cuts[cuts < rows.size])):
+                if part.size:
+                    _transition(
+                        tab,
+                        j,
+                        v,
+                        rows[part],
+                        group_start,
+                        group_len,
+                        st_stop,
+                        st_val,
+                        ideals,
+                        new_ideals,
+                        table,
+                        back_j,
+                        back_k,
+                        s,
+                    )
         # -- dominance among the landing stops of each ideal -------------------------------
         finite = np.isfinite(table)
         before = int(finite.sum())
@@ -439,18 +556,21 @@ def ideal_dp(
         idx, stop = np.nonzero(keep)  # sorted by ideal, then stop
         val = table[idx, stop]
         # -- pruning by the completion bound ----------------------------------------------
-        bound = val + _completion(tab, full, new_ideals[idx], stop, in_table)
+        bound = val + _completion(tab, full, new_ideals[idx], stop, in_table, relax)
         if prune and math.isfinite(inc_value):
             ok = bound * (1.0 - BOUND_SLACK) < inc_value
             counts["states_pruned"] += int((~ok).sum())
             idx, stop, val, bound = idx[ok], stop[ok], val[ok], bound[ok]
+        if _beam is not None and idx.size > _beam:
+            best = np.sort(np.argpartition(bound, _beam)[:_beam])
+            idx, stop, val, bound = idx[best], stop[best], val[best], bound[best]
         # keep only ideals with a state, renumbered
         used, idx = np.unique(idx, return_inverse=True)
         ideals = new_ideals[used]
         bj, bk = back_j[used[idx], stop], back_k[used[idx], stop]
         st_idx, st_stop, st_val, st_bound = idx.astype(np.intp), stop.astype(np.intp), val, bound
         history.append((ideals, st_idx * s + st_stop, bj, bk))
-        counts["ideals"] += int(ideals.size)
+        counts["ideals_expanded"] += int(ideals.size)
         counts["states_kept"] += int(st_idx.size)
         counts["peak_layer_states"] = max(counts["peak_layer_states"], int(st_idx.size))
         counts["peak_layer_ideals"] = max(counts["peak_layer_ideals"], int(ideals.size))
@@ -473,8 +593,8 @@ def ideal_dp(
             raise InstanceError("ideal_dp: no complete plan exists (no customers?)")
         return Solution(
             objective=inc_value,
-            status=OPTIMAL,
-            bound=inc_value,
+            status=OPTIMAL if _beam is None else FEASIBLE,
+            bound=inc_value if _beam is None else None,
             runtime=time.perf_counter() - start,
             method="exact",
             solution=inc_plan,
@@ -495,6 +615,15 @@ def ideal_dp(
     objective = _scored(instance, plan, best_value, "ideal_dp")
     if objective >= inc_value:  # equal up to rounding: keep the incumbent
         plan, objective = inc_plan, inc_value
+    if _beam is not None:  # a restricted pass proves nothing
+        return Solution(
+            objective=objective,
+            status=FEASIBLE,
+            runtime=time.perf_counter() - start,
+            method="exact-beam",
+            solution=plan,
+            info=info,
+        )
     return Solution(
         objective=objective,
         status=OPTIMAL,
@@ -504,6 +633,42 @@ def ideal_dp(
         solution=plan,
         info={**info, "dp_objective": best_value},
     )
+
+
+def _transition(
+    tab: _Tables,
+    j: int,
+    v: np.ndarray,
+    rows: np.ndarray,
+    group_start: np.ndarray,
+    group_len: np.ndarray,
+    st_stop: np.ndarray,
+    st_val: np.ndarray,
+    ideals: np.ndarray,
+    new_ideals: np.ndarray,
+    table: np.ndarray,
+    back_j: np.ndarray,
+    back_k: np.ndarray,
+    s: int,
+) -> None:
+    """Sorties to customer j from every state of the source ideals ``rows``: the next
+    layer's ``table`` (min) and back-pointers updated in place."""
+    lens = group_len[rows]
+    offsets = np.cumsum(lens) - lens
+    sel = np.repeat(group_start[rows] - offsets, lens) + np.arange(int(lens.sum()))
+    stops = st_stop[sel]
+    vals = st_val[sel][:, None] + tab.move[j][stops]  # (states, |V_j|)
+    best = np.minimum.reduceat(vals, offsets, axis=0)  # (ideals, |V_j|)
+    hit = vals == np.repeat(best, lens, axis=0)
+    prev = np.minimum.reduceat(np.where(hit, stops[:, None], s), offsets, axis=0)
+    target = np.searchsorted(new_ideals, ideals[rows] | (np.uint64(1) << np.uint64(j)))
+    where = (target[:, None], v[None, :])
+    cur = table[where]
+    better = best < cur
+    if better.any():
+        table[where] = np.where(better, best, cur)
+        back_j[where] = np.where(better, j, back_j[where])
+        back_k[where] = np.where(better, prev, back_k[where])
 
 
 def _rebuild(history: list, s: int, state: int, last_j: int) -> list[int]:
