@@ -1,14 +1,16 @@
 """Exact formulations (cvxpy + HiGHS), as ``taopt.models``.
 
 * :func:`solve_routing` — chapter 2, (2.2)–(2.5) with DFJ / MTZ / flow subtour elimination.
-* :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7).
+* :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7) (``"milp"``).
 * :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
 * :func:`solve_capability` — chapter 3, (3.1)–(3.3) as printed, corrected per class, joint.
 * :func:`solve_comm` — chapter 4's f_o: (4.1)–(4.2) without communication limits, per class.
-* ``"DP"`` — chapter 5's exact optimum by dynamic programming over order ideals
-  (:func:`taopt.delivery.schedule.optimal_plan`, core code because every ordering heuristic
-  is scored through the same DP; registered here with the other exact methods).
+* ``"exact"`` for a delivery instance — chapter 5's exact optimum by dynamic programming over
+  the order ideals of G^p (:func:`taopt.delivery.ideal_dp.ideal_dp`); ``"subset-dp"`` the
+  DP over all subsets (:func:`taopt.delivery.schedule.optimal_plan`, n <= 14). Core code,
+  because every ordering heuristic is scored through the same DP; registered here with
+  the other exact methods.
 
 Importing this package registers every exact method in :mod:`taopt.registry`
 (``taopt.solve(problem, "exact")``); no other import is needed for any of them. They never run a heuristic themselves: the registry's
@@ -21,6 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 from taopt.capability.problem import CapabilityProblem
+from taopt.delivery.ideal_dp import count_ideals, ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import optimal_plan
 from taopt.delivery.sop import SopProblem
@@ -62,36 +65,52 @@ def _routing_footprint(problem: AssignmentProblem, options: dict[str, Any]) -> t
     )
 
 
-#: Largest delivery instance on which `taopt solve` runs the exact DP by default.
-DP_DEFAULT_MAX_N = 12
+#: Largest number of order ideals of G^p on which `taopt solve` runs the exact ideal DP by
+#: default and `taopt verify --exact` certifies with it (about 1 GB and a minute at most;
+#: the dag40 instances of Tables 5.1-5.2 have 10^4 to 6·10^5).
+IDEAL_DP_DEFAULT_MAX_IDEALS = 2_000_000
 
 
-def _dp_too_large(instance: DeliveryInstance) -> str:
+def _ideal_dp_affordable(instance: DeliveryInstance) -> bool:
+    return count_ideals(instance, IDEAL_DP_DEFAULT_MAX_IDEALS) is not None
+
+
+def _ideal_dp_too_large(instance: DeliveryInstance) -> str:
     return (
-        f"the exact DP is not run on n = {instance.n} customers > {DP_DEFAULT_MAX_N} (its states "
-        f"grow as 2^n); name it with --methods DP to try (it refuses n > 14)"
+        f"the exact DP over order ideals is not run on n = {instance.n} customers: G^p has more "
+        f"than {IDEAL_DP_DEFAULT_MAX_IDEALS:,} order ideals; name it with --methods exact to try "
+        f"(its time limit returns the best plan with a proven bound)"
     )
 
 
-# chapter 5's certified optimum: the DP over order ideals, by default while it is affordable
-register_method(
-    DeliveryInstance,
-    "DP",
-    category="exact",
-    default=lambda instance: instance.n <= DP_DEFAULT_MAX_N,
-    not_default=_dp_too_large,
-    warm_start=("NIA", "MMA", "SMMA"),
-    certifies=lambda instance: instance.n <= 14,  # taopt verify --exact: the fastest exact method
-)(optimal_plan)
-# the delivery MILP does not scale past a handful of customers (the subset DP "DP" is the
-# exact method `taopt solve` runs by default), so it runs only when asked for
+# chapter 5's certified optimum: the DP over the order ideals of G^p, by default while the
+# ideals are affordable; SMMA's plan (the best of NIA, MMA, SMMA) is its incumbent
 register_method(
     DeliveryInstance,
     "exact",
     category="exact",
+    default=_ideal_dp_affordable,
+    not_default=_ideal_dp_too_large,
+    warm_start=("NIA", "MMA", "SMMA"),
+    certifies=_ideal_dp_affordable,  # taopt verify --exact: the fastest exact method
+)(ideal_dp)
+# the subset DP over all 2^n customer sets, kept for comparison (n <= 14)
+register_method(
+    DeliveryInstance,
+    "subset-dp",
+    category="exact",
     warm_start=("NIA", "MMA", "SMMA"),
     default=False,
-    not_default="the MILP (5.1)-(5.7) runs only when named (--methods exact): DP is faster",
+    not_default="the subset DP (2^n states) runs only when named (--methods subset-dp)",
+)(optimal_plan)
+# the teaching MILP (5.1)-(5.7) does not scale past a handful of customers
+register_method(
+    DeliveryInstance,
+    "milp",
+    category="exact",
+    warm_start=("NIA", "MMA", "SMMA"),
+    default=False,
+    not_default="the MILP (5.1)-(5.7) runs only when named (--methods milp): exact is faster",
 )(solve_delivery)
 # the fast orderings of chapter 5 give the incumbent kept when a time limit stops HiGHS early
 register_method(SopProblem, "exact", category="exact", warm_start=("NIA", "MMA", "SMMA"))(

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -107,6 +108,62 @@ def _tables(instance: DeliveryInstance) -> _Tables:
     for b in range(s):
         viol = max(viol, float((tt - (tt[:, [b]] + tt[[b], :])).max()))
     return _Tables(viable, move, finish, incoming, need, max(viol, 0.0), edge)
+
+
+_IDEAL_COUNTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def count_ideals(instance: DeliveryInstance, cap: int = 10_000_000) -> int | None:
+    """The number of order ideals of G^p (the empty and the full set included), or None
+    when it exceeds ``cap`` or n > :data:`MAX_CUSTOMERS` (the count stops there; cached
+    per instance and cap).
+
+    Example
+    -------
+    >>> from taopt.delivery import example_instance
+    >>> count_ideals(example_instance(250.0))
+    3384
+    """
+    key = int(cap)
+    cached = _IDEAL_COUNTS.setdefault(instance, {})
+    if key not in cached and instance.n > MAX_CUSTOMERS:
+        cached[key] = None  # beyond 64-bit masks: the DP refuses it anyway
+    if key not in cached:
+        n = instance.n
+        need = np.zeros(n, dtype=np.uint64)
+        for r, j in instance.precedences:
+            need[j] |= np.uint64(1) << np.uint64(r)
+        layers = _ideal_layers(need, n, key, Deadline(None))
+        cached[key] = None if layers is None else sum(int(layer.size) for layer in layers)
+    return cached[key]
+
+
+def _ideal_layers(
+    need: np.ndarray, n: int, cap: int, deadline: Deadline
+) -> list[np.ndarray] | None:
+    """The order ideals by size (sorted uint64 masks per layer), or None past ``cap``
+    ideals or the deadline."""
+    layers = [np.array([0], dtype=np.uint64)]
+    total = 1
+    for _ in range(n):
+        cur = layers[-1]
+        parts = []
+        size = 0
+        for j in range(n):
+            bit = np.uint64(1) << np.uint64(j)
+            part = cur[((cur & bit) == 0) & ((cur & need[j]) == need[j])] | bit
+            parts.append(part)
+            size += part.size
+            if size > 2 * (cap - total) + 1024:  # merge duplicates early, stop past the cap
+                parts = [np.unique(np.concatenate(parts))]
+                size = parts[0].size
+                if size > cap - total:
+                    return None
+        layers.append(np.unique(np.concatenate(parts)))
+        total += layers[-1].size
+        if total > cap or (deadline.limited and deadline.expired()):
+            return None
+    return layers
 
 
 def _byte_tables(values: np.ndarray) -> np.ndarray:
@@ -220,19 +277,9 @@ class _Relaxation:
     def build(
         cls, tab: _Tables, edge: np.ndarray, n: int, max_ideals: int, deadline: Deadline
     ) -> _Relaxation | None:
-        layers = [np.array([0], dtype=np.uint64)]
-        total = 1
-        for _ in range(n):
-            cur = layers[-1]
-            parts = []
-            for j in range(n):
-                bit = np.uint64(1) << np.uint64(j)
-                can = ((cur & bit) == 0) & ((cur & tab.need[j]) == tab.need[j])
-                parts.append(cur[can] | bit)
-            layers.append(np.unique(np.concatenate(parts)))
-            total += layers[-1].size
-            if total > max_ideals or (deadline.limited and deadline.expired()):
-                return None
+        layers = _ideal_layers(tab.need, n, max_ideals, deadline)
+        if layers is None:
+            return None
         after: list[np.ndarray] = [np.empty((0, n))] * (n + 1)
         h_next = np.zeros((1, n))  # H(full, ·) = 0
         for m in range(n - 1, -1, -1):
@@ -687,4 +734,4 @@ def _rebuild(history: list, s: int, state: int, last_j: int) -> list[int]:
     return order[::-1]
 
 
-__all__ = ["ideal_dp", "completion_bound", "MAX_CUSTOMERS"]
+__all__ = ["ideal_dp", "completion_bound", "count_ideals", "MAX_CUSTOMERS"]

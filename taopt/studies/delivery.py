@@ -6,19 +6,24 @@ customers for every flight range L = ratio · L0 with L0 = 1000 m):
 
 * ``dag40`` — 40 customers under a layered precedence DAG
   (:func:`taopt.delivery.dags.layered_dag`, 8 layers, density 0.1; Fig. 5.5 is not
-  printed), v_d / v_t = 1: Tables 5.1–5.2.
+  printed), v_d / v_t = 1: Tables 5.1–5.2. The exact DP over order ideals
+  (:func:`taopt.delivery.ideal_dp.ideal_dp`, method ``"exact"``) certifies every instance.
 * ``pairs120`` — 120 customers in dial-a-ride pairs
   (:func:`taopt.delivery.dags.paired_precedences`), v_d / v_t = 1.4: Tables 5.5–5.7
   (``vd_ratio=1.0`` gives the setting of the withheld Tables 5.3–5.4).
 * ``small`` — 7 customers, layered DAG of 3 layers, v_d / v_t = 1: small enough for
-  the exact optimum (:func:`taopt.delivery.schedule.optimal_plan`), so the true gaps of
-  the heuristics and of the bound can be measured.
+  the exact optimum in every run, so the true gaps of the heuristics and of the bound can
+  be measured.
 
 Measures per (instance, ratio, method): the makespan f (5.1) scored by
 :func:`taopt.evaluate`; f_a the valid arborescence bound (Proposition 5.3, rule
 "precede") and q = f / f_a (5.19); ``bound_thesis_rule`` the arborescence on E^d built
-from the sets S_r as printed (not a proven bound); the run time; and for n <=
-``exact_max_n`` the optimum f_o and the gap f / f_o − 1.
+from the sets S_r as printed (not a proven bound); the run time; and the optimum f_o and
+the gap f / f_o − 1. The reference ``optimum`` is computed per scenario by the ideal DP
+when n <= ``exact_max_n``; beyond, :func:`with_measures` takes it from the rows of method
+``"exact"`` with status "optimal" of the same (instance, ratio) (e.g. a separate
+``--methods exact`` run into the same folder, or a CSV of them joined with
+:func:`with_optimum`).
 
 Rows go through the one study runner (:func:`taopt.study.run_study`) into
 ``out_dir/delivery_<setup>.csv`` (settings in ``delivery_<setup>.config.json``): resumable,
@@ -39,8 +44,8 @@ import pandas as pd
 
 from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
+from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.schedule import optimal_plan
 from taopt.errors import InstanceError
 from taopt.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
@@ -102,7 +107,7 @@ def make_scenario(key: dict, settings: dict) -> Scenario:
         thesis_bound = arborescence_bound(inst, rule="thesis")
     except Exception:  # the printed E^d may have no arborescence
         thesis_bound = math.nan
-    optimum = optimal_plan(inst).objective if inst.n <= settings["exact_max_n"] else math.nan
+    optimum = ideal_dp(inst).objective if inst.n <= settings["exact_max_n"] else math.nan
     return Scenario(
         inst,
         columns={
@@ -157,10 +162,11 @@ def delivery_study(
     ratios : sequence of float
         L / L0 values (Tables 5.1–5.6: 0.15 ... 0.90).
     methods : sequence of str
-        Registered methods of DeliveryInstance: "NIA", "MMA", "SMMA", "GA", "DP" (exact
-        subset DP, n <= 14) or "exact" (the MILP, stopped after ``time_limit``, default
-        :data:`EXACT_TIME_LIMIT` s when "exact" is asked for; a stopped run is recorded with
-        status "time_limit" and its proven gap).
+        Registered methods of DeliveryInstance: "NIA", "MMA", "SMMA", "GA", "exact" (the DP
+        over order ideals, :func:`taopt.delivery.ideal_dp.ideal_dp`), "subset-dp" (n <= 14)
+        or "milp" (the MILP (5.1)–(5.7)). An exact method is stopped after ``time_limit``
+        (default :data:`EXACT_TIME_LIMIT` s when "exact" or "milp" is asked for); a stopped
+        run is recorded with status "time_limit" and its proven gap.
     seed : int
         Instances depend on (seed, index); randomised methods get seed·10007 + index.
     out_dir : path
@@ -170,13 +176,14 @@ def delivery_study(
     progress : bool
         tqdm progress bar.
     exact_max_n : int
-        Compute the optimum (subset DP) and the true gaps when n <= this.
+        Compute the optimum (ideal DP) per scenario when n <= this (beyond, the optimum
+        comes from the "exact" rows, see :func:`with_measures`).
     vd_ratio : float, optional
         Override the setup's v_d / v_t (e.g. 1.0 for Tables 5.3–5.4's setting).
     method_options : dict, optional
         Per-method keyword options, e.g. ``{"GA": {"generations": 200}}``.
     time_limit : float, optional
-        Seconds per MILP solve.
+        Wall-clock seconds per exact solve ("exact", "milp"; warm start included).
     dask : str, optional
         "local" or a scheduler address.
 
@@ -206,7 +213,7 @@ def delivery_study(
     if not ratios or not all(0 < r < math.inf for r in ratios):
         shown = ", ".join(f"{r:g}" for r in ratios)
         raise InstanceError(f"ratios must be positive and finite, got [{shown}]")
-    if time_limit is None and "exact" in methods:
+    if time_limit is None and {"exact", "milp"} & set(methods):
         time_limit = EXACT_TIME_LIMIT
     settings = {
         "setup": setup,
@@ -230,8 +237,38 @@ def delivery_study(
     return with_measures(df)
 
 
+def with_optimum(df: pd.DataFrame, exact: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Fill the ``optimum`` column where it is missing from certified "exact" rows.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Study rows.
+    exact : DataFrame, optional
+        Rows of method "exact" (e.g. another run's CSV, same setup and seed); default the
+        "exact" rows of ``df`` itself. Only rows with status "optimal" are used.
+
+    Returns
+    -------
+    DataFrame
+        ``df`` with ``optimum`` filled by (instance, ratio) where it was NaN.
+    """
+    source = df if exact is None else exact
+    if df.empty or "method" not in source or "optimum" not in df:
+        return df
+    done = source[(source["method"] == "exact") & (source["status"] == "optimal")]
+    if done.empty:
+        return df
+    best = done.groupby(["instance", "ratio"])["objective"].min()
+    keys = pd.MultiIndex.from_frame(df[["instance", "ratio"]])
+    found = pd.Series(best.reindex(keys).to_numpy(), index=df.index)
+    return df.assign(optimum=df["optimum"].fillna(found))
+
+
 def with_measures(df: pd.DataFrame) -> pd.DataFrame:
-    """Add ``makespan`` (f), ``q`` = f / f_a (5.19, the valid bound) and ``gap_to_optimum``."""
+    """Add ``makespan`` (f), ``q`` = f / f_a (5.19, the valid bound) and ``gap_to_optimum``
+    (the ``optimum`` filled from certified "exact" rows first, :func:`with_optimum`)."""
+    df = with_optimum(df)
     return df.assign(
         makespan=df["objective"],
         q=df["objective"] / df["valid_bound"],
@@ -326,4 +363,5 @@ __all__ = [
     "study_instance",
     "plot_study",
     "with_measures",
+    "with_optimum",
 ]
