@@ -644,7 +644,7 @@ def build_parser() -> argparse.ArgumentParser:
         "agrees with it, the objective re-scores to the saved value, a saved bound is not\n"
         "above it. Claims about the optimum (an 'optimal' status, a saved bound, an\n"
         "'infeasible' status) need --exact, which re-solves with the family's fastest exact\n"
-        "method (the subset DP for small delivery instances) within --time-limit; those it\n"
+        "method (the DP over order ideals for delivery instances) within --time-limit; those it\n"
         "cannot check are printed '[not checked] ...'. The last line is VALID, 'VALID (k\n"
         "claims not checked)' or NOT VALID. Exit codes: 0 valid and every claim checked,\n"
         "1 a check failed, 2 bad input (a malformed file), 3 valid but some claims not\n"
@@ -751,7 +751,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--methods",
         default="NIA,MMA,SMMA,GA",
         metavar="LIST",
-        help="comma-separated: NIA,MMA,SMMA,GA,DP,exact",
+        help="comma-separated: NIA,MMA,SMMA,GA,exact (DP over order ideals),subset-dp,milp",
     )
     delivery.add_argument(
         "--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9", help="comma-separated L/L0 values"
@@ -763,7 +763,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="override v_d / v_t (default: none: the setup's)",
     )
     delivery.add_argument(
-        "--exact-max-n", type=int, default=8, help="compute optima (subset DP) when n <= this"
+        "--exact-max-n",
+        type=int,
+        default=8,
+        help="compute optima (ideal DP) per scenario when n <= this; beyond, from 'exact' rows",
     )
     delivery.add_argument(
         "--ga-generations",

@@ -155,20 +155,23 @@ def test_solve_command_on_each_file_kind(tmp_path, capsys):
     table = result["table"]
     assert table.loc[table.method == "exact", "status"].item() == "optimal"
     assert (table["gap_to_optimum"] >= -1e-9).all()
-    # chapter 5, with the exact subset DP and the MILP
+    # chapter 5, with the exact ideal DP, the subset DP and the MILP
     inst = DeliveryInstance.grid(
         rng.uniform(0, 600, size=(5, 2)), 3, 600.0, 1.0, 1.0, 700.0, precedences=[(0, 1), (2, 3)]
     )
     inst.save(tmp_path / "d.json")
     png, gantt = tmp_path / "plan.png", tmp_path / "gantt.png"
-    argv = ["solve", str(tmp_path / "d.json"), "--methods", "NIA,MMA,SMMA,DP,exact"]
+    argv = ["solve", str(tmp_path / "d.json"), "--methods", "NIA,MMA,SMMA,subset-dp,exact"]
     assert main(argv + ["--plot", str(png), "--gantt", str(gantt), "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert "DP" in out and "exact" in out and png.exists() and gantt.exists()
-    result = solve_file(tmp_path / "d.json", methods=("MMA", "DP", "exact"), out=io.StringIO())
+    assert "subset-dp" in out and "exact" in out and png.exists() and gantt.exists()
+    methods = ("MMA", "subset-dp", "exact", "milp")
+    result = solve_file(tmp_path / "d.json", methods=methods, out=io.StringIO())
     table = result["table"].set_index("method")
-    assert table.loc["DP", "objective"] == pytest.approx(table.loc["exact", "objective"], rel=1e-6)
-    assert table.loc["MMA", "objective"] >= table.loc["DP", "objective"] * (1 - 1e-9)
+    exact = table.loc["exact", "objective"]
+    assert table.loc["subset-dp", "objective"] == pytest.approx(exact, rel=1e-9)
+    assert table.loc["milp", "objective"] == pytest.approx(exact, rel=1e-6)
+    assert table.loc["MMA", "objective"] >= exact * (1 - 1e-9)
 
 
 def test_solve_command_rejects_unknown_kind(tmp_path, capsys):
@@ -367,14 +370,14 @@ def test_available_methods_lists_installed_peers_only(monkeypatch):
 
 
 def test_every_exact_method_is_registered_by_taopt_models():
-    """Importing taopt.models registers the exact methods of every family, the delivery DP too."""
+    """Importing taopt.models registers the exact methods of every family, the delivery DPs too."""
     import taopt
     import taopt.models  # noqa: F401
     from taopt.registry import families, method_names
 
     for family in families():
         assert method_names(family.problem_type, "exact"), family.kind
-    assert "DP" in method_names(taopt.DeliveryInstance, "exact")
+    assert {"exact", "subset-dp", "milp"} <= set(method_names(taopt.DeliveryInstance, "exact"))
 
 
 def test_a_family_that_fails_to_import_fails_loudly(monkeypatch):
@@ -403,7 +406,7 @@ def test_solve_delivery_example_shows_the_certified_optimum(capsys):
 
 
 def test_solve_says_why_no_optimum_is_computed():
-    """Beyond 12 customers the DP is left out by default, and the reason names n."""
+    """Past 2,000,000 order ideals the exact DP is left out by default; the reason names n."""
     from taopt.delivery.instance import DeliveryInstance
     from taopt.pipeline import default_methods, no_optimum_note
 
@@ -412,11 +415,11 @@ def test_solve_says_why_no_optimum_is_computed():
     def grid(n):
         return DeliveryInstance.grid(rng.uniform(0, 600, size=(n, 2)), 3, 600.0, 1.0, 1.0, 700.0)
 
-    small, large = grid(5), grid(13)
-    assert "DP" in default_methods(small) and no_optimum_note(small) == ""
-    assert not {"DP", "exact"} & set(default_methods(large))
+    small, large = grid(5), grid(22)  # 2^22 ideals without precedences
+    assert "exact" in default_methods(small) and no_optimum_note(small) == ""
+    assert not {"exact", "subset-dp", "milp"} & set(default_methods(large))
     note = no_optimum_note(large)
-    assert "n = 13" in note and "--methods DP" in note and "\n" not in note
+    assert "n = 22" in note and "--methods exact" in note and "\n" not in note
 
 
 # -- logging ------------------------------------------------------------------------------------

@@ -23,35 +23,35 @@ def test_study_instance_servable_at_the_smallest_ratio():
 
 
 def test_small_study_resumes_and_checks(tmp_path):
-    """Resumes with more methods; bound <= optimum <= every method; the DP attains it."""
+    """Resumes with more methods; bound <= optimum <= every method; the subset DP attains it."""
     kwargs = dict(instances=2, ratios=(0.15, 0.6), seed=2, out_dir=tmp_path, progress=False)
-    first = delivery_study("small", methods=("NIA", "DP"), **kwargs)
+    first = delivery_study("small", methods=("NIA", "subset-dp"), **kwargs)
     assert len(first) == 2 * 2 * 2
     csv = tmp_path / "delivery_small.csv"
     assert len(pd.read_csv(csv)) == 8
     # re-run with one more method: only the 4 new rows are computed, old rows kept as is
-    second = delivery_study("small", methods=("NIA", "MMA", "DP"), jobs=2, **kwargs)
+    second = delivery_study("small", methods=("NIA", "MMA", "subset-dp"), jobs=2, **kwargs)
     assert len(second) == 12 and len(pd.read_csv(csv)) == 12
     old = second[second.method != "MMA"].reset_index(drop=True)
     pd.testing.assert_frame_equal(old, first.reset_index(drop=True), check_dtype=False)
     # a complete re-run computes nothing
-    third = delivery_study("small", methods=("NIA", "MMA", "DP"), **kwargs)
+    third = delivery_study("small", methods=("NIA", "MMA", "subset-dp"), **kwargs)
     assert len(third) == 12 and len(pd.read_csv(csv)) == 12
-    # properties: bound <= optimum <= every method; the DP attains the optimum
+    # properties: bound <= optimum <= every method; the subset DP attains the optimum
     assert (second.valid_bound <= second.optimum + 1e-9).all()
     assert (second.makespan >= second.optimum - 1e-9).all()
-    dp = second[second.method == "DP"]
+    dp = second[second.method == "subset-dp"]
     assert dp.gap_to_optimum.abs().max() < 1e-9
     assert (second.q >= 1 - 1e-12).all()
     table = summarize(second)
-    assert set(table.index.get_level_values("method")) == {"NIA", "MMA", "DP"}
-    assert table.loc[("DP", 0.15), "gap_mean"] == pytest.approx(0.0, abs=1e-9)
+    assert set(table.index.get_level_values("method")) == {"NIA", "MMA", "subset-dp"}
+    assert table.loc[("subset-dp", 0.15), "gap_mean"] == pytest.approx(0.0, abs=1e-9)
 
 
 def test_cli_prints_tables(tmp_path, capsys):
     """`taopt study delivery` prints the thesis's tables and the gap to the optimum."""
     argv = ["study", "delivery", "--setup", "small", "--instances", "1", "--ratios", "0.3"]
-    argv += ["--methods", "NIA,DP", "--out", str(tmp_path), "--quiet"]
+    argv += ["--methods", "NIA,subset-dp", "--out", str(tmp_path), "--quiet"]
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "average q" in out and "gap to the optimum" in out
@@ -62,12 +62,12 @@ def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
     """Through the real ``taopt`` entry point: the study prints its tables and draws q vs L/L0."""
     png = tmp_path / "q.png"
     argv = ["study", "delivery", "--setup", "small", "--instances", "1", "--ratios", "0.3,0.9"]
-    argv += ["--methods", "MMA,DP", "--out", str(tmp_path), "--quiet", "--plot", str(png)]
+    argv += ["--methods", "MMA,subset-dp", "--out", str(tmp_path), "--quiet", "--plot", str(png)]
     assert main(argv) == 0
     assert png.stat().st_size > 0
     df = pd.read_csv(tmp_path / "delivery_small.csv")
     # the subset DP is exact, so no heuristic is below it on the same instance and ratio
-    optimum = df[df.method == "DP"].set_index("ratio")["objective"]
+    optimum = df[df.method == "subset-dp"].set_index("ratio")["objective"]
     mma = df[df.method == "MMA"].set_index("ratio")["objective"]
     assert (mma >= optimum * (1 - 1e-9)).all()
 
@@ -79,12 +79,12 @@ TINY = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
 
 def test_other_method_set_keeps_earlier_rows(tmp_path):
     """Asking for other methods extends the file; nothing is recomputed."""
-    first = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path, **TINY)
+    first = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=tmp_path, **TINY)
     only_mma = delivery_study("small", methods=("MMA",), out_dir=tmp_path, **TINY)
     assert set(only_mma.method) == {"MMA"} and len(only_mma) == 4
     on_disk = pd.read_csv(tmp_path / "delivery_small.csv")
     assert len(on_disk) == 12 and (on_disk["complete"] == 1).all()
-    again = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path, **TINY)
+    again = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=tmp_path, **TINY)
     pd.testing.assert_frame_equal(again, first)  # same runtimes too: nothing recomputed
 
 
@@ -119,9 +119,9 @@ def test_setups_share_a_folder(tmp_path):
 @pytest.mark.parametrize("cut", ["mid-number", "after-field"])
 def test_torn_row_dropped_and_recomputed(tmp_path, cut):
     """A row torn by a crash is dropped and recomputed; later appends stay intact."""
-    reference = delivery_study("small", methods=("NIA", "DP"), out_dir=tmp_path / "ref", **TINY)
+    reference = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=tmp_path / "ref", **TINY)
     folder = tmp_path / "torn"
-    delivery_study("small", methods=("NIA", "DP"), out_dir=folder, **TINY)
+    delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **TINY)
     csv = folder / "delivery_small.csv"
     text = csv.read_text()
     last = text.splitlines()[-1]
@@ -132,9 +132,9 @@ def test_torn_row_dropped_and_recomputed(tmp_path, cut):
     else:  # cut right after the makespan: q and the rest missing
         torn = ",".join(fields[: at + 1]) + ","
     csv.write_text(text[: len(text) - len(last) - 1] + torn)
-    resumed = delivery_study("small", methods=("NIA", "DP"), out_dir=folder, **TINY)
+    resumed = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **TINY)
     pd.testing.assert_frame_equal(resumed[STABLE], reference[STABLE])
-    more = delivery_study("small", methods=("NIA", "DP", "MMA"), out_dir=folder, **TINY)
+    more = delivery_study("small", methods=("NIA", "subset-dp", "MMA"), out_dir=folder, **TINY)
     lines = csv.read_text().splitlines()
     assert len(lines) == 1 + 12 and len(more) == 12
     assert all(len(line.split(",")) == len(COLUMNS) + 1 for line in lines[1:])
@@ -143,7 +143,7 @@ def test_torn_row_dropped_and_recomputed(tmp_path, cut):
 
 def test_interrupted_resume_and_parallel_give_the_same_table(tmp_path):
     """A study cut after one instance and resumed on two workers equals the whole run."""
-    methods = ("NIA", "MMA", "DP")
+    methods = ("NIA", "MMA", "subset-dp")
     whole = delivery_study("small", methods=methods, out_dir=tmp_path / "whole", **TINY)
     # "interrupted" after the first instance, then resumed with jobs=2
     part = delivery_study(

@@ -187,9 +187,9 @@ def _run_family(family: str, seeds) -> list[str]:
     if family == "routing":
         return _failures(_routing_cases(seeds), "exact")
     if family == "dp":
-        return _failures(_delivery_cases(seeds, lambda s: 3 + s % 4), "DP")
+        return _failures(_delivery_cases(seeds, lambda s: 3 + s % 4), "exact")
     if family == "milp":
-        return _failures(_delivery_cases(seeds, lambda s: 2 + s % 2), "exact")
+        return _failures(_delivery_cases(seeds, lambda s: 2 + s % 2), "milp")
     if family == "sop":
         return _failures(_sop_cases(seeds), "exact")
     if family == "capability":

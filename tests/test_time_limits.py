@@ -152,21 +152,27 @@ def test_sop_exact_without_incumbent_reports_no_plan():
     assert result.objective == math.inf
 
 
-def test_delivery_exact_under_a_tiny_limit():
+def test_delivery_milp_under_a_tiny_limit():
     """The delivery MILP on 20 customers at T = 0.2: time_limit, the incumbent and a bound."""
-    run(delivery(20), "exact")
+    run(delivery(20), "milp")
+
+
+def test_delivery_exact_under_a_tiny_limit():
+    """The ideal DP on 20 customers at T = 0.01: the incumbent and a bound, never a raise."""
+    result, _ = run(delivery(20), "exact", time_limit=0.01)
+    assert result.solution is not None
 
 
 def test_delivery_dp_under_a_tiny_limit():
     """The subset DP on 14 customers (2^14 states) at T = 0.05 stops with the incumbent."""
-    result, _ = run(delivery(14), "DP", time_limit=0.05)
+    result, _ = run(delivery(14), "subset-dp", time_limit=0.05)
     assert result.status == TIME_LIMIT and result.solution is not None
 
 
 def test_delivery_dp_refuses_too_many_customers():
     """Above max_customers the DP is refused by an InstanceError naming n and the limit."""
     with pytest.raises(InstanceError, match="n = 16 customers > max_customers = 14"):
-        taopt.solve(delivery(16), "DP")
+        taopt.solve(delivery(16), "subset-dp")
 
 
 @pytest.mark.parametrize("method", ["exact", "joint"])

@@ -120,14 +120,14 @@ def test_false_bound_caught_with_exact(tmp_path, capsys):
 
 
 def test_delivery_exact_uses_dp_and_rejects_relabelled_smma(tmp_path, capsys):
-    """--exact on 10 customers re-solves with the subset DP and rejects a relabelled SMMA plan."""
+    """--exact on 10 customers re-solves with the ideal DP and rejects a relabelled SMMA plan."""
     import time
 
     import taopt
     from taopt.registry import certifying_method
 
     instance = ten_customer_delivery()
-    assert certifying_method(instance) == "DP"
+    assert certifying_method(instance) == "exact"
     problem = tmp_path / "ten.json"
     instance.save(problem)
     smma = taopt.solve(instance, "SMMA")
@@ -136,7 +136,7 @@ def test_delivery_exact_uses_dp_and_rejects_relabelled_smma(tmp_path, capsys):
     code = main(["verify", str(tmp_path / "smma.json"), str(problem), "--exact"])
     assert time.perf_counter() - began < 30
     out = capsys.readouterr().out
-    assert code == 1 and "re-solved with 'DP'" in out
+    assert code == 1 and "re-solved with 'exact'" in out
     assert "[FAIL] optimality: the re-solve found" in out
     # a limit too short for the DP leaves the claims unchecked, said plainly
     code = main(["verify", str(tmp_path / "smma.json"), str(problem), "--exact",
