@@ -203,7 +203,9 @@ def _bounds(tab: _Tables, ideals: np.ndarray, stops: np.ndarray) -> tuple[np.nda
     return one_sortie, first
 
 
-def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> float:
+def completion_bound(
+    instance: DeliveryInstance, served: Any, stop: int, relaxation: bool = True
+) -> float:
     """A lower bound on the time from recovering at ``stop`` to the end of the plan.
 
     Parameters
@@ -213,6 +215,9 @@ def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> floa
         The customers served so far (an order ideal of G^p, not the full set).
     stop : int
         The landing stop of the last sortie (the depot before the first).
+    relaxation : bool
+        Include the sequencing relaxation (built over all ideals: the strong term, as
+        :func:`ideal_dp` prunes with it); False gives the two O(n) terms only.
 
     Returns
     -------
@@ -240,6 +245,17 @@ def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> floa
 
     Both terms are valid, so is their maximum. O(n) per state.
 
+    *Sequencing relaxation* (the strong term). The same gaps, with the precedences kept
+    exactly: H(I', j) = the least Σ e over the orders of the customers outside I' that
+    respect G^p, after j was served last (a DP over all ideals, :class:`_Relaxation`), and::
+
+        B(I, k) ≥ min_{j' ∈ U addable} F_{j'}(k) + H(I ∪ {j'}, j')
+
+    since the first customer served after (I, k) is addable, is served at R + F_{j'}(k) at
+    the earliest, and every later gap is at least its e. On the dag40 instances this term
+    is within a few per cent of the true completion near the root, where the two O(n) terms
+    give about 40 %.
+
     References
     ----------
     Thesis §5.2 (timing of (5.1)–(5.7)), §5.3 (the t* edges of (5.11)).
@@ -251,7 +267,10 @@ def completion_bound(instance: DeliveryInstance, served: Any, stop: int) -> floa
         return 0.0
     ideals = np.array([ideal], dtype=np.uint64)
     stops = np.array([int(stop)])
-    value = _completion(tab, np.uint64(full), ideals, stops, _byte_tables(tab.incoming))
+    relax = None
+    if relaxation:
+        relax = _Relaxation.build(tab, tab.edge, instance.n, DEFAULT_MAX_STATES, Deadline(None))
+    value = _completion(tab, np.uint64(full), ideals, stops, _byte_tables(tab.incoming), relax)
     return float(value[0])
 
 
@@ -397,8 +416,11 @@ def ideal_dp(
     max_states : int
         Size guard: the run stops like a time limit (``info["stopped_by"] == "size"``) when
         the states kept, or the cells of one layer's table, would exceed it.
-    dominance, prune : bool
-        Switch the dominance rule or the bound pruning off (for measurements).
+    dominance, prune, relaxation : bool
+        Switch the dominance rule, the bound pruning or the sequencing relaxation of the
+        bound off (for measurements).
+    beam : int
+        Width of the restricted pass that finds an incumbent (0: none).
 
     Returns
     -------
@@ -436,15 +458,26 @@ def ideal_dp(
     instance is added to the test, so no state is dropped by rounding.
 
     *Pruning.* A state with R + B(I, k) ≥ the incumbent's makespan cannot lead to a better
-    plan (:func:`completion_bound`). When every state is pruned the incumbent is optimal.
+    plan (:func:`completion_bound`, with its sequencing relaxation built once over all ideals
+    while they number at most ``max_states / (n + 1)``). When every state is pruned the
+    incumbent is optimal.
+
+    *Incumbent.* Unless ``beam=0``, a restricted pass of the same DP first keeps only the
+    ``beam`` states of least R + B per layer (at most half the time limit); its plan, or the
+    caller's if better, prunes the exact pass. On dag40 the restricted pass finds the optimum
+    itself and the exact pass only proves it.
 
     *Rebuild.* The back-pointers (customer added, previous landing stop) give the optimal
     order; :func:`taopt.delivery.schedule.schedule` schedules it (made of
     :func:`_sortie_step`, the scorer's floating-point operations) and the DP's value is
     checked against the scorer's.
 
-    Time O(Σ_layers states · Σ_j |V_j|) after O(n s³) tables; memory O(peak layer ideals ·
-    s) for one layer's table plus about 10 bytes per state kept.
+    Time O(Σ_layers states · Σ_j |V_j|) after O(n s³) tables and O(#ideals · n²) for the
+    relaxation; memory O(peak layer ideals · s) for one layer's table, about 10 bytes per
+    state kept and 8n bytes per ideal for the relaxation. Measured (2 shared cores): the 60
+    dag40 pairs of Tables 5.1–5.2 in 0.4–5.5 s each (median 1.5 s, SMMA's warm start
+    included); the largest, 513,982 ideals at L/L0 = 0.9, in 2.8 s and 0.37 GB, against
+    796 s and 9.2 GB without the relaxation, the beam and the incumbent.
 
     References
     ----------
@@ -500,7 +533,7 @@ def ideal_dp(
         # an incumbent: a plan of the same DP, often optimal, that prunes the exact pass
         quick = ideal_dp(
             instance,
-            time_limit=deadline.remaining(),
+            time_limit=deadline.share(0.5),  # the exact pass keeps at least half
             max_states=max_states,
             dominance=dominance,
             prune=prune,
