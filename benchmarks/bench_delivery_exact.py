@@ -12,7 +12,7 @@ Run::
 side by side: ideals, states kept / pruned, peak traced memory (tracemalloc) and time.
 ``--dag40 N``: the ideal DP on dag40 instances 0..N-1 at every L/L0 (seed 1, as
 ``taopt study delivery --setup dag40``), with SMMA's plan as incumbent (as ``taopt.solve``
-passes it), and without the beam pass and pruning on instance 1 at 0.15 and 0.3 (the plain DP over
+passes it; ``--memory`` traces each run's peak allocation, about 5x slower), and without the beam pass and pruning on instance 1 at 0.15 and 0.3 (the plain DP over
 ideals with dominance).
 
 Instances: 8 customers uniform in a 1000 m square, 16 stops on a 4×4 grid (333 m
@@ -25,6 +25,7 @@ MILP's status, objective, bound and time (limit 60 s), and the subset-DP optimum
 from __future__ import annotations
 
 import argparse
+import resource
 import time
 import tracemalloc
 
@@ -56,15 +57,24 @@ def instance(seed: int, n: int, k: int, flight_range: float) -> DeliveryInstance
     )
 
 
-def measured(func, *args, **kwargs):
-    """(result, seconds, peak traced MB) of one call."""
-    tracemalloc.start()
+def measured(func, *args, trace: bool = True, **kwargs):
+    """(result, seconds, peak traced MB or nan) of one call; tracing numpy's allocations
+    slows the ideal DP about 5x, so the time is then only indicative."""
+    if trace:
+        tracemalloc.start()
     began = time.perf_counter()
     result = func(*args, **kwargs)
     seconds = time.perf_counter() - began
-    peak = tracemalloc.get_traced_memory()[1] / 1e6
-    tracemalloc.stop()
+    peak = float("nan")
+    if trace:
+        peak = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
     return result, seconds, peak
+
+
+def peak_rss_gb() -> float:
+    """The process's peak resident memory so far (GB, Linux's kB units)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
 
 
 def describe(sol, seconds: float, peak: float) -> str:
@@ -101,7 +111,7 @@ def compare(sizes: list[int], seeds: int, grid: int, flight_range: float, limit:
             assert abs(ideal.objective - subset.objective) <= 1e-9 * subset.objective
 
 
-def dag40(count: int, ratios: tuple[float, ...]) -> None:
+def dag40(count: int, ratios: tuple[float, ...], trace: bool) -> None:
     """The ideal DP on the dag40 instances (Tables 5.1-5.2), SMMA's plan as incumbent."""
     from taopt.studies.delivery import study_instance
 
@@ -110,17 +120,20 @@ def dag40(count: int, ratios: tuple[float, ...]) -> None:
         for ratio in ratios:
             inst = study_instance("dag40", i, seed=1, ratio=ratio)
             smma = taopt.solve(inst, "SMMA")
-            sol, seconds, peak = measured(ideal_dp, inst, incumbent=smma)
+            sol, seconds, peak = measured(ideal_dp, inst, incumbent=smma, trace=trace)
             rows.append(seconds)
             print(
                 f"dag40-{i} L/L0={ratio:<4g} SMMA {smma.objective:10.2f}  {describe(sol, seconds, peak)}"
             )
     rows.sort()
-    print(f"median {rows[len(rows) // 2]:.2f}s, max {rows[-1]:.2f}s over {len(rows)} runs")
+    print(
+        f"median {rows[len(rows) // 2]:.2f}s, max {rows[-1]:.2f}s over {len(rows)} runs; "
+        f"process peak RSS {peak_rss_gb():.2f} GB"
+    )
     if count > 1:
         for ratio in (0.15, 0.3):  # 0.9 takes minutes without pruning
             inst = study_instance("dag40", 1, seed=1, ratio=ratio)
-            plain, seconds, peak = measured(ideal_dp, inst, beam=0, prune=False)
+            plain, seconds, peak = measured(ideal_dp, inst, beam=0, prune=False, trace=trace)
             print(
                 f"dag40-1 L/L0={ratio:<4g} plain DP (no beam, no pruning): {describe(plain, seconds, peak)}"
             )
@@ -137,13 +150,15 @@ def main() -> None:
     parser.add_argument("--compare", default="", help="n values: ideal DP vs subset DP vs MILP")
     parser.add_argument("--dag40", type=int, default=0, help="ideal DP on dag40 instances 0..N-1")
     parser.add_argument("--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9")
+    parser.add_argument("--memory", action="store_true", help="dag40: trace memory (slower)")
     args = parser.parse_args()
     if args.compare or args.dag40:
         if args.compare:
             sizes = [int(x) for x in args.compare.split(",")]
             compare(sizes, args.seeds, args.grid, args.flight_range, args.time_limit)
         if args.dag40:
-            dag40(args.dag40, tuple(float(r) for r in args.ratios.split(",")))
+            ratios = tuple(float(r) for r in args.ratios.split(","))
+            dag40(args.dag40, ratios, args.memory)
         return
     variants = [False, True] if args.customer_legs else [False]
     for seed in range(args.seeds):
