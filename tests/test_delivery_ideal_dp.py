@@ -197,3 +197,23 @@ def test_example_instance_is_certified_and_below_every_heuristic():
     for name in ("NIA", "MMA", "SMMA"):
         assert taopt.solve(inst, name).objective >= sol.objective * (1 - REL)
     assert arborescence_bound(inst) <= sol.objective
+
+
+def test_study_takes_the_optimum_from_exact_rows(tmp_path):
+    """Beyond exact_max_n the study's optimum comes from the certified 'exact' rows."""
+    from taopt.studies.delivery import delivery_study
+
+    df = delivery_study(
+        "small",
+        instances=1,
+        ratios=(0.6,),
+        methods=("NIA", "exact"),
+        exact_max_n=0,
+        out_dir=tmp_path,
+        progress=False,
+    )
+    exact = df[df.method == "exact"].set_index("ratio")
+    assert (exact.status == "optimal").all()
+    assert df.optimum.notna().all() and (df.gap_to_optimum >= -1e-12).all()
+    nia = df[df.method == "NIA"].set_index("ratio")
+    assert (nia.optimum == exact.objective).all()
