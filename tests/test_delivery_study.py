@@ -119,7 +119,9 @@ def test_setups_share_a_folder(tmp_path):
 @pytest.mark.parametrize("cut", ["mid-number", "after-field"])
 def test_torn_row_dropped_and_recomputed(tmp_path, cut):
     """A row torn by a crash is dropped and recomputed; later appends stay intact."""
-    reference = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=tmp_path / "ref", **TINY)
+    reference = delivery_study(
+        "small", methods=("NIA", "subset-dp"), out_dir=tmp_path / "ref", **TINY
+    )
     folder = tmp_path / "torn"
     delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **TINY)
     csv = folder / "delivery_small.csv"
