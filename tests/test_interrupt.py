@@ -80,18 +80,23 @@ def delivery_file(tmp_path: Path, n: int) -> Path:
 
 
 def test_solve_delivery_milp(tmp_path):
-    """`taopt solve --methods exact` on 10 customers (the cvxpy-HiGHS MILP, minutes): Ctrl-C."""
+    """`taopt solve --methods milp` on 10 customers (the cvxpy-HiGHS MILP, minutes): Ctrl-C."""
     path = delivery_file(tmp_path, 10)
-    args = ["solve", str(path), "--methods", "exact", "--quiet"]
+    args = ["solve", str(path), "--methods", "milp", "--quiet"]
     assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "solve")
 
 
 def test_verify_exact(tmp_path):
-    """`taopt verify --exact` re-solving 18 customers (beyond the DP: the MILP, minutes): Ctrl-C."""
+    """`taopt verify --exact` re-solving 24 customers without precedences (2^24 order ideals:
+    the exact DP runs for minutes): Ctrl-C."""
+    import numpy as np
+
     import taopt
     from taopt.delivery.instance import DeliveryInstance
 
-    path = delivery_file(tmp_path, 18)
+    customers = np.random.default_rng(0).uniform(0, 1000, size=(24, 2))
+    path = tmp_path / "free24.json"
+    DeliveryInstance.grid(customers, 11, 1000.0, 1.0, 1.0, 300.0).save(path)
     plan = taopt.solve(DeliveryInstance.load(path), "NIA")
     plan.replace(status="optimal", bound=plan.objective).save(tmp_path / "nia.json")
     args = ["verify", str(tmp_path / "nia.json"), str(path), "--exact"]

@@ -129,7 +129,7 @@ def test_time_limit_keeps_a_certified_gap():
     registry's warm start gives the MILP its incumbent)."""
     inst = random_instance(1, n=7)
     expected = enumerate_optimum(inst)
-    sol = taopt.solve(inst, "exact", time_limit=0.05)
+    sol = taopt.solve(inst, "milp", time_limit=0.05)
     assert sol.status in ("time_limit", "optimal")
     assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=REL)
     assert sol.objective >= expected * (1 - REL)
@@ -145,7 +145,7 @@ def test_loose_mip_gap_is_not_called_optimal(incumbent):
     inst = random_instance(2, n=6)
     optimum = enumerate_optimum(inst)
     if incumbent == "heuristic":  # taopt.solve passes the best of NIA, MMA and SMMA
-        sol = taopt.solve(inst, "exact", mip_gap=0.5)
+        sol = taopt.solve(inst, "milp", mip_gap=0.5)
     else:
         sol = solve_delivery(inst, mip_gap=0.5, incumbent=None)
     assert taopt.evaluate(inst, sol.plan) == pytest.approx(sol.objective, rel=1e-9)
@@ -202,7 +202,7 @@ def test_time_limited_run_on_many_stops_is_no_worse_than_the_heuristics():
     from taopt.studies.delivery import study_instance
 
     inst = study_instance("small", 0, seed=3, ratio=0.3)
-    sol = taopt.solve(inst, "exact", time_limit=2.0)
+    sol = taopt.solve(inst, "milp", time_limit=2.0)
     best_heuristic = min(
         taopt.heuristics.run(name, inst).objective for name in ("NIA", "MMA", "SMMA")
     )

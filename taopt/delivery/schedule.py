@@ -307,7 +307,7 @@ def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: 
         status=TIME_LIMIT,
         bound=min(arborescence_bound(instance), objective),
         runtime=time.perf_counter() - start,
-        method="DP",
+        method="subset-dp",
         solution=plan,
         info={"stopped_by": "time_limit", **info},
     )
@@ -437,7 +437,7 @@ def optimal_plan(
         status=OPTIMAL,
         bound=objective,
         runtime=time.perf_counter() - start,
-        method="DP",
+        method="subset-dp",
         solution=plan,
         info={"dp_objective": makespan},
     )
