@@ -83,13 +83,17 @@ def _tables(instance: DeliveryInstance) -> _Tables:
         # R = max(S + ft_i + τ + ft_k, S + tt_ik) + τ  =  S + cost[i, k]
         cost = np.maximum(flight[:, None] + tau + flight[None, :], carry) + penalty
         to_launch = tt[:, v]  # (s, |V_j|)
-        move.append((to_launch[:, :, None] + cost[None, :, :]).min(axis=1))
+        best = np.full((s, v.size), np.inf)
+        step = max(1, CHUNK_CELLS // max(1, s * v.size))  # launch stops per slice
+        for lo in range(0, v.size, step):
+            part = to_launch[:, lo : lo + step, None] + cost[None, lo : lo + step, :]
+            np.minimum(best, part.min(axis=1), out=best)
+        move.append(best)
         finish[j] = (to_launch + (flight + tau)[None, :]).min(axis=1)
         viable.append(v)
-    # t*-style edge j -> j': served j, fly back to any stop k, truck k -> i', fly to j'
-    back_then_launch = (ft[:, :, None] + tt[None, :, :]).min(
-        axis=1
-    )  # (n, s): min_k ft[j,k]+tt[k,i]
+    # t*-style edge j -> j': served j, fly back to any stop k, truck k -> i', fly to j';
+    # back_then_launch[j, i] = min_k flight_time[j, k] + truck_time[k, i]
+    back_then_launch = np.stack([(ft[j][:, None] + tt).min(axis=0) for j in range(n)])
     edge = (back_then_launch[:, None, :] + ft[None, :, :]).min(axis=2) + 2.0 * tau  # (n, n)
     need = np.zeros(n, dtype=np.uint64)
     after = np.zeros((n, n), dtype=bool)  # after[r, j]: r must precede j (transitive)
