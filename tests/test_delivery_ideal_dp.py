@@ -164,6 +164,12 @@ def test_size_guard_stops_like_a_time_limit():
     sol = ideal_dp(inst, max_states=50, beam=0)
     assert sol.status == "time_limit" and sol.info["stopped_by"] == "size"
     assert sol.bound <= opt * (1 + REL)
+    for cells in (20, 60, 100):  # stops after a few layers, or not at all
+        later = ideal_dp(inst, max_states=cells * inst.s, beam=0, relaxation=False)
+        assert later.status in ("time_limit", "optimal")
+        assert later.bound <= opt * (1 + REL)
+        if later.status == "time_limit":
+            assert later.info["stopped_by"] == "size" and later.info["ideals_expanded"] > 1
 
 
 def test_degenerate_input():

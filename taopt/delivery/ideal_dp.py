@@ -34,15 +34,21 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.schedule import _scored, _sortie_data, schedule
 from taopt.errors import InstanceError
-from taopt.limits import Deadline
+from taopt.limits import Deadline, max_memory_gb
 from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution
 
 #: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
 MAX_CUSTOMERS = 63
 
 #: Default cap on the states kept over the whole run (back-pointers, about 10 bytes each)
-#: and on the cells of one layer's dense table (ideals x stops, about 11 bytes each).
+#: and on the cells of one layer's dense table (ideals x stops, about 21 bytes each with
+#: the dominance rounds' copies), for the default memory limit of 4 GB.
 DEFAULT_MAX_STATES = 100_000_000
+
+#: Bytes of memory limit per state allowed when ``max_states`` follows the limit: a full
+#: layer table, the back-pointers and the relaxation (8 (n + 1) bytes per ideal, at most
+#: ``max_states / (n + 1)`` ideals) together stay under 40 bytes per state.
+BYTES_PER_STATE = 40.0
 
 #: Transition values computed at once (bounds the transient memory: 8 bytes each, times 3).
 CHUNK_CELLS = 4_000_000
@@ -406,7 +412,7 @@ def ideal_dp(
     instance: DeliveryInstance,
     time_limit: float | None = None,
     incumbent: Any = None,
-    max_states: int = DEFAULT_MAX_STATES,
+    max_states: int | None = None,
     dominance: bool = True,
     prune: bool = True,
     relaxation: bool = True,
@@ -428,9 +434,11 @@ def ideal_dp(
     incumbent : Plan or Solution, optional
         A feasible plan; states whose value plus completion bound reaches its makespan are
         pruned (``taopt.solve`` passes the best of NIA, MMA and SMMA).
-    max_states : int
+    max_states : int, optional
         Size guard: the run stops like a time limit (``info["stopped_by"] == "size"``) when
-        the states kept, or the cells of one layer's table, would exceed it.
+        the states kept, or the cells of one layer's table, would exceed it. Default: the
+        memory limit of :func:`taopt.limits.max_memory_gb` (``TAOPT_MAX_MEMORY_GB``, 4 GB)
+        divided by :data:`BYTES_PER_STATE` (100,000,000 at 4 GB).
     dominance, prune, relaxation : bool
         Switch the dominance rule, the bound pruning or the sequencing relaxation of the
         bound off (for measurements).
@@ -505,6 +513,9 @@ def ideal_dp(
         raise InstanceError(
             f"ideal_dp: n = {n} customers > {MAX_CUSTOMERS} (ideals are 64-bit masks)"
         )
+    if max_states is None:
+        limit = max_memory_gb()  # inf: no guard
+        max_states = int(limit * 1e9 / BYTES_PER_STATE) if math.isfinite(limit) else 1 << 62
     inc_plan = getattr(incumbent, "plan", incumbent) if incumbent is not None else None
     inc_value = math.inf if inc_plan is None else evaluate_plan(instance, inc_plan)
     tab = _tables(instance) if _shared is None else _shared[0]
@@ -560,14 +571,14 @@ def ideal_dp(
             inc_plan, inc_value = quick.plan, quick.objective
     st_bound = st_val + _completion(tab, full, ideals[st_idx], st_stop, in_table, relax)
 
-    def stop(why: str) -> Solution:
+    def halt(why: str) -> Solution:
         # every optimal completion passes through an open state of the current layer
         proven = float(st_bound.min()) if st_bound.size else inc_value
         return _stopped(instance, inc_plan, inc_value, min(proven, inc_value), start, counts, why)
 
     for _size in range(size0, n - 1):
         if deadline.limited and deadline.expired():
-            return stop("time_limit")
+            return halt("time_limit")
         # -- next layer's ideals --------------------------------------------------------
         blocks = []
         for j in range(n):
@@ -580,7 +591,7 @@ def ideal_dp(
         )
         m = new_ideals.size
         if m * s > max_states or counts["states_kept"] > max_states:
-            return stop("size")
+            return halt("size")
         table = np.full((m, s), np.inf)
         back_j = np.full((m, s), -1, dtype=np.int8)
         back_k = np.full((m, s), -1, dtype=np.int16)
@@ -589,7 +600,7 @@ def ideal_dp(
         group_len = np.diff(np.append(group_start, st_idx.size))
         for j, rows in blocks:
             if deadline.limited and deadline.expired():
-                return stop("time_limit")
+                return halt("time_limit")
             v = tab.viable[j]
             lens_all = group_len[rows]
             # chunks of source ideals holding at most CHUNK_CELLS transition values
@@ -624,7 +635,7 @@ def ideal_dp(
             rows_left = np.arange(m)
             while rows_left.size:
                 if deadline.limited and deadline.expired():
-                    return stop("time_limit")
+                    return halt("time_limit")
                 sub = work[rows_left]
                 kstar = sub.argmin(axis=1)
                 vstar = sub[np.arange(rows_left.size), kstar]
