@@ -33,7 +33,8 @@ _FIXED_STYLES = {
     # the thesis's methods keep one look in every figure of taopt; the methods one chapter
     # compares never share a pair
     "exact": ("-", "*"),
-    "DP": ("-", "X"),
+    "subset-dp": ("-", "X"),
+    "milp": ("--", "*"),
     "VN": ("-", "o"),
     "VM": ("--", "s"),
     "EVN": ("-.", "D"),

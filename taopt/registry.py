@@ -117,7 +117,7 @@ class Method:
     certifies : bool or callable
         Whether this exact method is the family's *certifying method* for the problem: the
         fastest exact method, which ``taopt verify --exact`` re-solves with (a callable
-        gets the problem, e.g. the subset DP only up to 14 customers). See
+        gets the problem, e.g. the DP over order ideals only while the ideals are affordable). See
         :func:`certifying_method`.
     """
 
@@ -396,7 +396,7 @@ def certifying_method(problem: Any) -> str | None:
     """The exact method that certifies ``problem`` fastest (``taopt verify --exact`` uses it).
 
     The first exact method registered with ``certifies`` true for the problem (e.g. the
-    subset DP "DP" of a delivery instance with at most 14 customers); else the family's
+    DP over order ideals of a delivery instance with at most 2,000,000 ideals); else the family's
     method "exact"; else its first exact method; None when it has none. Only methods
     whose modules are imported count (see :func:`methods`).
     """

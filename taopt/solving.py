@@ -379,8 +379,8 @@ def _valid_lower_bound(problem: Any) -> float:
 def _run_within(problem: Any, method: str, time_limit: float | None) -> Solution:
     """``solve(problem, method)`` within ``time_limit`` wall-clock seconds.
 
-    A method that takes ``time_limit`` gets it; one that does not (the subset DP, pure
-    Python) is stopped by a SIGALRM timer when it runs on the main thread, and comes back
+    A method that takes ``time_limit`` gets it; one that does not (a pure-Python
+    method) is stopped by a SIGALRM timer when it runs on the main thread, and comes back
     as status "time_limit" without a solution or bound.
     """
     spec = get_method(problem, method)
@@ -487,8 +487,8 @@ def verify_file(
     Checked only with ``exact=True`` (else reported ``[not checked]``): that an "optimal"
     solution is optimal, that a saved bound is a valid lower bound (not above the optimum)
     and that an "infeasible" problem has no solution. The problem is re-solved with the
-    family's certifying method (:func:`taopt.registry.certifying_method`: the subset DP
-    for a delivery instance of at most 14 customers, the exact model otherwise), within
+    family's certifying method (:func:`taopt.registry.certifying_method`: the DP over
+    order ideals for a delivery instance with affordable ideals, the exact model otherwise), within
     ``time_limit`` seconds; a re-solve stopped by the limit still refutes a claim its
     incumbent beats, and proves one its bound reaches, and leaves the rest
     ``[not checked]``. Without ``exact``, a bound (or an optimum) at most the family's

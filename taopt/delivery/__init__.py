@@ -65,7 +65,7 @@ register_family(
     plots={"order": _plot_order},
 )
 
-# the exact subset DP "DP" registers itself where it is defined; import it with the family so
+# the fixed-order schedule DP (the scorer of every ordering heuristic); imported with the family so
 # it is known before any method look-up (taopt solve, taopt verify --exact)
 from taopt.delivery import schedule as _schedule  # noqa: E402, F401
 
