@@ -232,7 +232,8 @@ def degree_penalised_arborescence(
     pi = np.zeros(V)
     best = plain
     scale, stall, path_found, done = 2.0, 0, False, 0
-    for done in range(1, iterations + 1):
+    while done < iterations:
+        done += 1
         degree = np.bincount(tree[tree >= 0], minlength=V).astype(float)
         step_dir = np.where(free, 0.0, degree - cap)
         # inequality rows: π >= 0, so a negative direction at π = 0 is cut off
