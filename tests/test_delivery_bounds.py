@@ -19,8 +19,10 @@ from test_exact_brute_force import sop_brute_force, sop_instance
 
 import taopt
 from taopt.arborescence import min_arborescence
-from taopt.delivery.bounds import arborescence_bound, path_bound
+from taopt.delivery.bounds import arborescence_bound, path_bound, service_gap_matrix
+from taopt.delivery.costs import drone_cost_matrix
 from taopt.delivery.dags import layered_dag
+from taopt.delivery.evaluate import timeline
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.relaxation import degree_penalised_arborescence, min_arborescence_tree
 from taopt.delivery.schedule import optimal_plan
@@ -89,12 +91,26 @@ def test_path_bound_between_prop_5_3_and_optimum(seed, precedences):
 
 
 def test_path_bound_is_deterministic_and_zero_iterations_is_arborescence():
-    """Same instance, same value; 0 iterations is the arborescence on the consecutive edges."""
+    """Same instance, same value; 0 iterations is >= the arborescence on consecutive edges."""
     inst = _random_delivery(3, True)
     assert path_bound(inst) == path_bound(inst)
-    assert path_bound(inst, iterations=0) == pytest.approx(
-        arborescence_bound(inst, rule="consecutive"), rel=REL
+    assert path_bound(inst, iterations=0) >= arborescence_bound(inst, rule="consecutive") * (
+        1 - REL
     )
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_service_gap_is_at_least_tstar_and_below_every_real_gap(seed):
+    """t* <= t** <= t_j - t_r for consecutive services of the optimal and of SMMA's plan."""
+    inst = _random_delivery(seed, seed % 2 == 0)
+    D, gap = drone_cost_matrix(inst), service_gap_matrix(inst)
+    assert (gap >= D - 1e-9).all()
+    for plan in (optimal_plan(inst).plan, taopt.solve(inst, "SMMA").plan):
+        times = timeline(inst, plan).service_time
+        order = list(plan.order)
+        assert gap[inst.n, order[0]] <= times[0] + 1e-9
+        for p in range(1, len(order)):
+            assert gap[order[p - 1], order[p]] <= times[p] - times[p - 1] + 1e-9
 
 
 def test_path_bound_beats_prop_5_3_on_a_pairs120_instance():
