@@ -215,3 +215,15 @@ def test_degree_penalised_arborescence_finds_a_forced_path():
     result = degree_penalised_arborescence(w, 0, capacity, np.ones(4, dtype=bool), target=4.0)
     assert result.arborescence == pytest.approx(3.3)
     assert result.arborescence < result.value <= 4.0 + 1e-9
+
+
+def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):
+    """The delivery study's strong_bound column: valid_bound <= strong_bound <= optimum."""
+    from taopt.studies.delivery import delivery_study
+
+    df = delivery_study(
+        "small", instances=2, ratios=[0.3], methods=["NIA"], out_dir=tmp_path, progress=False
+    )
+    assert (df.valid_bound <= df.strong_bound * (1 + REL)).all()
+    assert (df.strong_bound <= df.optimum * (1 + REL)).all()
+    assert np.allclose(df.q_strong, df.objective / df.strong_bound)
