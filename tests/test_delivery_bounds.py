@@ -227,3 +227,15 @@ def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):
     assert (df.valid_bound <= df.strong_bound * (1 + REL)).all()
     assert (df.strong_bound <= df.optimum * (1 + REL)).all()
     assert np.allclose(df.q_strong, df.objective / df.strong_bound)
+
+
+@pytest.mark.parametrize("flight_range", [250.0, 300.0])
+def test_path_bound_on_the_fig_5_6_example(flight_range):
+    """The 20-customer example: Prop. 5.3 < path_bound <= every heuristic's makespan."""
+    from taopt.delivery import example_instance
+
+    inst = example_instance(flight_range)
+    value = path_bound(inst)
+    assert value > arborescence_bound(inst)
+    for method in ("NIA", "MMA", "SMMA"):
+        assert value <= taopt.solve(inst, method).objective
