@@ -133,13 +133,15 @@ def lower(problem: Any, strength: str = "auto") -> float:
     AssignmentProblem (ch. 2) :func:`arborescence`            degree-penalised arborescence
                                                               (targets out-degree <= 1); strong:
                                                               also ``taopt.models.lp_bound``
-                                                              (DFJ LP, needs cvxpy; exponential
-                                                              rows, slow past ~60 targets)
+                                                              (the DFJ LP, needs cvxpy; the
+                                                              slowest by far)
     CapabilityProblem (ch. 3) Σ over classes of the above    Σ over classes of the above
     CommProblem (ch. 4)       :func:`mst` (Lemma 4.8)         the same (no stronger bound yet)
-    DeliveryInstance (ch. 5)  Proposition 5.3                 :func:`taopt.delivery.bounds.\
-                                                              path_bound` (Held–Karp-type; 1–3 s
-                                                              at n = 120)
+    DeliveryInstance (ch. 5)  Proposition 5.3                 the larger of
+                                                              ``decomposition_bound`` and
+                                                              ``path_bound`` of
+                                                              ``taopt.delivery.bounds``
+                                                              (5–20 s at n = 120)
     SopProblem                arborescence from ``start``     degree-penalised arborescence
     ========================  ==============================  =================================
 
@@ -166,9 +168,9 @@ def lower(problem: Any, strength: str = "auto") -> float:
     if strength == "fast":
         return float(arborescence(problem))
     if kind == "DeliveryInstance":
-        from taopt.delivery.bounds import path_bound
+        from taopt.delivery.bounds import decomposition_bound, path_bound
 
-        return float(max(path_bound(problem), arborescence(problem)))
+        return float(max(decomposition_bound(problem), path_bound(problem), arborescence(problem)))
     if kind == "SopProblem":
         return float(_sop_path_bound(problem))
     if kind == "CapabilityProblem":

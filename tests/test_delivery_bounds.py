@@ -19,7 +19,12 @@ from test_exact_brute_force import sop_brute_force, sop_instance
 
 import taopt
 from taopt.arborescence import min_arborescence
-from taopt.delivery.bounds import arborescence_bound, path_bound, service_gap_matrix
+from taopt.delivery.bounds import (
+    arborescence_bound,
+    decomposition_bound,
+    path_bound,
+    service_gap_matrix,
+)
 from taopt.delivery.costs import drone_cost_matrix
 from taopt.delivery.dags import layered_dag
 from taopt.delivery.evaluate import timeline
@@ -90,6 +95,30 @@ def test_path_bound_between_prop_5_3_and_optimum(seed, precedences):
     assert value <= optimum * (1 + REL)
 
 
+@pytest.mark.parametrize("precedences", [False, True])
+@pytest.mark.parametrize("seed", range(12))
+def test_decomposition_bound_between_prop_5_3_and_optimum(seed, precedences):
+    """f_a <= decomposition_bound <= f_o (subset DP) on small random instances."""
+    inst = _random_delivery(seed, precedences)
+    optimum = optimal_plan(inst).objective
+    value = decomposition_bound(inst)
+    assert arborescence_bound(inst) <= value * (1 + REL)
+    assert value <= optimum * (1 + REL)
+
+
+def test_decomposition_bound_on_pickup_delivery_pairs_beats_path_bound():
+    """n = 10 pick-up/delivery pairs, v_d/v_t = 1.4: path <= decomposition <= f_o, strictly."""
+    from taopt.delivery.dags import paired_precedences
+
+    rng = np.random.default_rng([99, 1])
+    inst = DeliveryInstance.grid(
+        rng.uniform(0, 1000, (10, 2)), 11, 1000.0, 1.4, 1.0, 300.0,
+        precedences=paired_precedences(10, seed=rng),
+    )  # fmt: skip
+    optimum = optimal_plan(inst).objective
+    assert path_bound(inst) < decomposition_bound(inst) <= optimum * (1 + REL)
+
+
 def test_path_bound_is_deterministic_and_zero_iterations_is_arborescence():
     """Same instance, same value; 0 iterations is >= the arborescence on consecutive edges."""
     inst = _random_delivery(3, True)
@@ -119,6 +148,7 @@ def test_path_bound_beats_prop_5_3_on_a_pairs120_instance():
 
     inst = study_instance("pairs120", 0, ratio=0.3)
     assert path_bound(inst) > 1.05 * taopt.bounds.arborescence(inst)
+    assert decomposition_bound(inst, iterations=60) > taopt.bounds.arborescence(inst)
 
 
 @pytest.mark.slow
@@ -134,8 +164,8 @@ def test_path_bound_beats_prop_5_3_on_every_pairs120_instance(vd_ratio):
 
 @pytest.mark.slow
 @pytest.mark.skipif(not DAG40_EXACT.exists(), reason="delivery_dag40_exact.csv not produced yet")
-def test_path_bound_below_every_certified_dag40_optimum():
-    """The bound never exceeds a certified dag40 optimum (the exact-DP helper's CSV)."""
+def test_lower_below_every_certified_dag40_optimum():
+    """lower() never exceeds a certified dag40 optimum (the exact-DP helper's CSV)."""
     import pandas as pd
 
     from taopt.studies.delivery import study_instance
@@ -146,7 +176,7 @@ def test_path_bound_below_every_certified_dag40_optimum():
     assert len(table) > 0
     for row in table.itertuples():
         inst = study_instance("dag40", int(row.instance), ratio=float(row.ratio))
-        assert path_bound(inst) <= getattr(row, column) * (1 + REL)
+        assert taopt.bounds.lower(inst) <= getattr(row, column) * (1 + REL)
 
 
 @pytest.mark.parametrize("seed", range(20))
@@ -231,11 +261,11 @@ def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):
 
 @pytest.mark.parametrize("flight_range", [250.0, 300.0])
 def test_path_bound_on_the_fig_5_6_example(flight_range):
-    """The 20-customer example: Prop. 5.3 < path_bound <= every heuristic's makespan."""
+    """The 20-customer example: Prop. 5.3 < lower() <= every heuristic's makespan."""
     from taopt.delivery import example_instance
 
     inst = example_instance(flight_range)
-    value = path_bound(inst)
+    value = taopt.bounds.lower(inst)
     assert value > arborescence_bound(inst)
     for method in ("NIA", "MMA", "SMMA"):
         assert value <= taopt.solve(inst, method).objective

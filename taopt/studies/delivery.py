@@ -17,7 +17,7 @@ customers for every flight range L = ratio · L0 with L0 = 1000 m):
 Measures per (instance, ratio, method): the makespan f (5.1) scored by
 :func:`taopt.evaluate`; f_a the valid arborescence bound (Proposition 5.3, rule
 "precede") and q = f / f_a (5.19); ``strong_bound`` the stronger valid bound
-:func:`taopt.delivery.bounds.path_bound` and ``q_strong`` = f / strong_bound;
+:func:`taopt.bounds.lower` and ``q_strong`` = f / strong_bound;
 ``bound_thesis_rule`` the arborescence on E^d built
 from the sets S_r as printed (not a proven bound); the run time; and for n <=
 ``exact_max_n`` the optimum f_o and the gap f / f_o − 1.
@@ -39,7 +39,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from taopt.delivery.bounds import arborescence_bound, path_bound
+from taopt.bounds import lower
+from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import optimal_plan
@@ -115,7 +116,7 @@ def make_scenario(key: dict, settings: dict) -> Scenario:
         },
         references={
             "valid_bound": arborescence_bound(inst),
-            "strong_bound": path_bound(inst),  # issue 16: never below valid_bound
+            "strong_bound": lower(inst),  # issue 16: never below valid_bound
             "bound_thesis_rule": thesis_bound,
             "optimum": optimum,
         },
@@ -235,7 +236,7 @@ def delivery_study(
 
 def with_measures(df: pd.DataFrame) -> pd.DataFrame:
     """Add ``makespan`` (f), ``q`` = f / f_a (5.19, the valid bound), ``q_strong`` = f /
-    :func:`taopt.delivery.bounds.path_bound` (NaN for rows written without it) and
+    :func:`taopt.bounds.lower` (NaN for rows written without it) and
     ``gap_to_optimum``."""
     strong = df["strong_bound"] if "strong_bound" in df else math.nan
     return df.assign(
