@@ -113,21 +113,29 @@ def min_arborescence_tree(weights: np.ndarray, root: int) -> tuple[float, np.nda
     order = np.argsort(group, kind="stable")
     sorted_groups = group[order]
     starts = np.flatnonzero(np.r_[True, sorted_groups[1:] != sorted_groups[:-1]])
-    contracted = np.minimum.reduceat(reduced[order], starts, axis=0)
-    contracted = np.minimum.reduceat(contracted[:, order], starts, axis=1)
+    by_group = np.minimum.reduceat(reduced[order], starts, axis=0)  # (G, V): min over rows
+    contracted = np.minimum.reduceat(by_group[:, order], starts, axis=1)
     np.fill_diagonal(contracted, np.inf)
     _, outer = min_arborescence_tree(contracted, int(group[root]))
     if outer is None:
         return np.inf, None
-    members = np.split(order, starts[1:])
+    # expand: each non-root group b enters at its vertex v* cheapest from its parent group,
+    # from that group's vertex u* cheapest into v* (vectorised over the groups)
     result = parent.copy()
-    for b, a in enumerate(outer):
-        if a < 0:
-            continue
-        sources, targets = members[a], members[b]
-        block = reduced[np.ix_(sources, targets)]
-        u, v = np.unravel_index(int(block.argmin()), block.shape)
-        result[targets[v]] = sources[u]
+    entering = outer[group]  # parent group of every vertex's group (-1 in the root's)
+    inside = entering >= 0
+    cost = np.full(V, np.inf)
+    cost[inside] = by_group[entering[inside], columns[inside]]
+    sorted_cost = cost[order]
+    first = np.minimum.reduceat(sorted_cost, starts)
+    best_of_group = first[group[order]]
+    hit = np.flatnonzero((sorted_cost == best_of_group) & inside[order])
+    hit_groups = group[order][hit]
+    keep_first = np.r_[True, hit_groups[1:] != hit_groups[:-1]]
+    v_star = order[hit[keep_first]]
+    from_group = entering[v_star]
+    block = np.where(group[:, None] == from_group[None, :], reduced[:, v_star], np.inf)
+    result[v_star] = block.argmin(axis=0)
     result[root] = -1
     keep = columns != root
     return float(W[result[keep], columns[keep]].sum()), result
