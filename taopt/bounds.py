@@ -141,7 +141,7 @@ def lower(problem: Any, strength: str = "auto") -> float:
                                                               ``decomposition_bound`` and
                                                               ``path_bound`` of
                                                               ``taopt.delivery.bounds``
-                                                              (5–20 s at n = 120)
+                                                              (about 10 s at n = 120)
     SopProblem                arborescence from ``start``     degree-penalised arborescence
     ========================  ==============================  =================================
 
