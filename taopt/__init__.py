@@ -75,6 +75,7 @@ _LAZY: dict[str, tuple[str, str]] = {
     "available_methods": ("taopt.pipeline", "available_methods"),
     "evaluate": ("taopt.scoring", "evaluate"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
+    "lower": ("taopt.bounds", "lower"),
     # problem types, one per family (DESIGN.md), and the instance file's parts
     "AssignmentProblem": ("taopt.routing.problem", "AssignmentProblem"),
     "CapabilityProblem": ("taopt.capability", "CapabilityProblem"),
@@ -153,6 +154,7 @@ __all__ = [
     "available_methods",
     "evaluate",
     "schedule",
+    "lower",
     # problem types
     "AssignmentProblem",
     "CapabilityProblem",

@@ -12,6 +12,8 @@ their implementations in with :func:`taopt.registry.register_family`.
   NOT a valid lower bound on asymmetric matrices (it can exceed the optimum).
 * :func:`doubled_arborescence` — Lemma 3.6's f^da, an upper bound on the optimum.
 * :func:`mst` — Lemma 4.8's minimum-spanning-tree bound (chapter 4).
+* :func:`lower` — the strongest valid lower bound each family has, at a chosen cost
+  (``strength``): the one to quote a gap against.
 """
 
 from __future__ import annotations
@@ -44,4 +46,143 @@ doubled_arborescence = _generic(
 )
 mst = _generic("mst", "Lemma 4.8's minimum-spanning-tree lower bound (chapter 4).")
 
-__all__ = ["arborescence", "thesis_mcga", "doubled_arborescence", "mst"]
+#: Accepted values of ``strength`` in :func:`lower`.
+STRENGTHS = ("fast", "auto", "strong")
+
+
+def _routing_path_bound(problem: Any) -> float:
+    """Chapter 2: the degree-penalised arborescence (targets out-degree <= 1, vehicles <= m).
+
+    Validity: a feasible solution of (2.2)–(2.5) with the vehicles merged into one root
+    (root -> target k costs min_j t(p_j, k), as in the dense arborescence bound) is a
+    spanning arborescence in which every target has out-degree <= 1 and the root <= m, of
+    weight <= f; the Lagrangian with π >= 0 on these rows is <= f
+    (:mod:`taopt.delivery.relaxation`).
+    """
+    import numpy as np
+
+    from taopt.delivery.relaxation import degree_penalised_arborescence
+
+    n, m = problem.n, problem.m
+    if n == 0:
+        return 0.0
+    weight = np.full((n + 1, n + 1), np.inf)
+    weight[:n, :n] = problem.cost[:n, :n]
+    weight[n, :n] = problem.cost[n:, :n].min(axis=0)
+    capacity = np.r_[np.ones(n), float(m)]
+    result = degree_penalised_arborescence(weight, n, capacity, np.zeros(n + 1, dtype=bool))
+    return max(result.value, arborescence(problem))
+
+
+def _sop_path_bound(problem: Any) -> float:
+    """SOP: the degree-penalised arborescence (every node but ``end`` has out-degree 1).
+
+    Validity: a feasible order is a Hamiltonian path start -> ... -> end, a spanning
+    arborescence rooted at ``start`` on the usable arcs (those of
+    :func:`taopt.delivery.sop.sop_arborescence_bound`) in which every node except ``end``
+    has out-degree exactly 1; hence every L(π) is <= its cost.
+    """
+    import numpy as np
+
+    from taopt.delivery.relaxation import degree_penalised_arborescence, greedy_path_weight
+
+    weights = np.array(problem.cost, dtype=float)
+    closure = problem.closure
+    for r, j in closure.edges:
+        weights[j, r] = np.inf
+    weights[problem.end, :] = np.inf
+    n = problem.n
+    capacity = np.ones(n)
+    capacity[problem.end] = np.inf
+    need = [set(closure.predecessors(v)) if v in closure else set() for v in range(n)]
+    target = greedy_path_weight(weights, problem.start, need)
+    result = degree_penalised_arborescence(
+        weights, problem.start, capacity, np.ones(n, dtype=bool), target=target
+    )
+    return max(result.value, arborescence(problem))
+
+
+def lower(problem: Any, strength: str = "auto") -> float:
+    """The strongest valid lower bound on the optimum of ``problem`` at a given cost.
+
+    Parameters
+    ----------
+    problem : AssignmentProblem, CapabilityProblem, CommProblem, DeliveryInstance or SopProblem
+    strength : {"fast", "auto", "strong"}
+        "fast": the family's Edmonds/MST bound (milliseconds). "auto" (default): the
+        strongest bound that takes seconds at the thesis's sizes. "strong": "auto" plus
+        the LP relaxations where the family has one (may take minutes).
+
+    Returns
+    -------
+    float
+        A valid lower bound (never above the optimum), always >= the "fast" bound.
+
+    Raises
+    ------
+    InstanceError
+        Unknown problem type or strength.
+
+    Notes
+    -----
+    Which bound each family gets (all valid, proofs in the functions named):
+
+    ========================  ==============================  =================================
+    family                    "fast"                          "auto" (and "strong" additions)
+    ========================  ==============================  =================================
+    AssignmentProblem (ch. 2) :func:`arborescence`            degree-penalised arborescence
+                                                              (targets out-degree <= 1); strong:
+                                                              also ``taopt.models.lp_bound``
+                                                              (the DFJ LP, needs cvxpy; the
+                                                              slowest by far)
+    CapabilityProblem (ch. 3) Σ over classes of the above    Σ over classes of the above
+    CommProblem (ch. 4)       :func:`mst` (Lemma 4.8)         the same (no stronger bound yet)
+    DeliveryInstance (ch. 5)  Proposition 5.3                 the larger of
+                                                              ``decomposition_bound`` and
+                                                              ``path_bound`` of
+                                                              ``taopt.delivery.bounds``
+                                                              (about 10 s at n = 120)
+    SopProblem                arborescence from ``start``     degree-penalised arborescence
+    ========================  ==============================  =================================
+
+    "auto" returns the maximum of its bound and the "fast" one, so it is never weaker.
+
+    Example
+    -------
+    >>> import taopt
+    >>> inst = taopt.DeliveryInstance.grid([[0, 100], [100, 100]], 2, 100, 10.0, 5.0, 150)
+    >>> lower(inst) >= arborescence(inst)
+    True
+
+    References
+    ----------
+    Thesis Prop. 5.3 (§5.3.2), §2.4.3, Lemma 4.8; Held and Karp (1970).
+    """
+    if strength not in STRENGTHS:
+        raise InstanceError(f"strength must be one of {STRENGTHS}, got {strength!r}")
+    kind = type(problem).__name__
+    if kind == "CommProblem":
+        return float(mst(problem))
+    if kind not in ("AssignmentProblem", "CapabilityProblem", "DeliveryInstance", "SopProblem"):
+        raise InstanceError(f"lower() does not know problems of type {kind}")
+    if strength == "fast":
+        return float(arborescence(problem))
+    if kind == "DeliveryInstance":
+        from taopt.delivery.bounds import decomposition_bound, path_bound
+
+        return float(max(decomposition_bound(problem), path_bound(problem), arborescence(problem)))
+    if kind == "SopProblem":
+        return float(_sop_path_bound(problem))
+    if kind == "CapabilityProblem":
+        return float(
+            sum(lower(c.problem, strength) for c in problem.classes if c.problem is not None)
+        )
+    value = _routing_path_bound(problem)
+    if strength == "strong":
+        from taopt.models import lp_bound
+
+        value = max(value, float(lp_bound(problem)))
+    return float(value)
+
+
+__all__ = ["arborescence", "thesis_mcga", "doubled_arborescence", "mst", "lower", "STRENGTHS"]
