@@ -127,23 +127,17 @@ def lower(problem: Any, strength: str = "auto") -> float:
     -----
     Which bound each family gets (all valid, proofs in the functions named):
 
-    ========================  ==============================  =================================
-    family                    "fast"                          "auto" (and "strong" additions)
-    ========================  ==============================  =================================
-    AssignmentProblem (ch. 2) :func:`arborescence`            degree-penalised arborescence
-                                                              (targets out-degree <= 1); strong:
-                                                              also ``taopt.models.lp_bound``
-                                                              (the DFJ LP, needs cvxpy; the
-                                                              slowest by far)
-    CapabilityProblem (ch. 3) Σ over classes of the above    Σ over classes of the above
-    CommProblem (ch. 4)       :func:`mst` (Lemma 4.8)         the same (no stronger bound yet)
-    DeliveryInstance (ch. 5)  Proposition 5.3                 the larger of
-                                                              ``decomposition_bound`` and
-                                                              ``path_bound`` of
-                                                              ``taopt.delivery.bounds``
-                                                              (about 10 s at n = 120)
-    SopProblem                arborescence from ``start``     degree-penalised arborescence
-    ========================  ==============================  =================================
+    - AssignmentProblem (ch. 2): fast :func:`arborescence`; auto a degree-penalised
+      arborescence (targets' out-degree <= 1); strong also ``taopt.models.lp_bound`` (the
+      DFJ LP, needs cvxpy; the slowest by far).
+    - CapabilityProblem (ch. 3): the sum over classes of the above.
+    - CommProblem (ch. 4): :func:`mst` (Lemma 4.8) for every strength (no stronger bound
+      yet).
+    - DeliveryInstance (ch. 5): fast Proposition 5.3; auto the larger of
+      ``decomposition_bound`` and ``path_bound`` of ``taopt.delivery.bounds`` (about 10 s at
+      n = 120).
+    - SopProblem: fast the arborescence from ``start``; auto a degree-penalised
+      arborescence.
 
     "auto" returns the maximum of its bound and the "fast" one, so it is never weaker.
 
