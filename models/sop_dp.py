@@ -189,14 +189,15 @@ class _Bound:
         prefix, values = table
         k = len(prefix) - 1
         lo = np.zeros(len(open_mask), dtype=np.int64)
-        hi = np.full(len(open_mask), k, dtype=np.int64)  # answer t in [lo, hi]; k+... = none
+        # the answer is the first arc t (0-based) whose end is open, in [lo, hi]
+        hi = np.full(len(open_mask), max(k - 1, 0), dtype=np.int64)
         found = (prefix[k] & open_mask) != 0
         while True:
             active = lo < hi
             if not active.any():
                 break
-            mid = (lo + hi) // 2
-            hit = (prefix[mid + 1] & open_mask) != 0  # some of the first mid+1 ends is open
+            mid = (lo + hi) // 2  # < hi <= k - 1 where active; unused elsewhere
+            hit = (prefix[np.minimum(mid + 1, k)] & open_mask) != 0  # an end among 0..mid
             hi = np.where(active & hit, mid, hi)
             lo = np.where(active & ~hit, mid + 1, lo)
         return np.where(found, values[np.minimum(lo, k)], np.inf)
