@@ -563,7 +563,7 @@ def cpsat_solve(
     Solution
         Method "cpsat". Status: CP-SAT's OPTIMAL -> "optimal", FEASIBLE -> "time_limit",
         no solution -> "time_limit" with objective ``inf``, INFEASIBLE -> "infeasible".
-        ``objective`` is re-scored by taopt's scorer (:func:`taopt.evaluate_order` or
+        ``objective`` is re-scored by taopt's scorer (:func:`taopt.delivery.sop.evaluate_order` or
         :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
         rounded down and lowered by the rounding error of a path when the scaling is not
         exact (so it stays valid). ``info`` has ``cpsat_status``, ``solver_objective``,
