@@ -794,7 +794,11 @@ def solve_sop_problem(
             result = result.replace(bound=bound, status=status)
         return result
 
-    if engine == "milp" or problem.n > MAX_NODES:
+    if deadline.expired(MARGIN):  # no time left after the warm start and the count
+        known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+        result = _stopped(problem, known, None, began, "portfolio", {"model": "not run"})
+        used = "none"
+    elif engine == "milp" or problem.n > MAX_NODES:
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:
