@@ -493,7 +493,8 @@ def solve_sop_dp(
         bound); a stopped run never reports less. Computed here when needed and not given.
     max_states : int, optional
         Stop (as on the time limit, ``info["stopped_by"] == "max_states"``) before the
-        states kept over all layers would pass this (memory: about 40 bytes a state).
+        states kept over all layers would pass this, or one layer's extensions before
+        merging and pruning would pass four times this (memory: about 40 bytes a state).
     beam_width : int
         Width of the widest beam pass (:func:`beam_order`), run first to improve the
         incumbent: width :data:`NARROW_BEAM`, then ``beam_width``, within
@@ -561,9 +562,6 @@ def solve_sop_dp(
         if grown is None:
             stopped_by = "time_limit" if deadline.expired(MARGIN) else "max_states"
             break
-        if max_states is not None and kept + len(grown[0]) > max_states:
-            stopped_by = "max_states"
-            break
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
         total = search.totals(*grown[:3], deadline)
@@ -575,6 +573,9 @@ def solve_sop_dp(
             pruned += int((~keep).sum())
             pruned_min = min(pruned_min, float(total[~keep].min()))
             grown = tuple(a[keep] for a in grown)
+        if max_states is not None and kept + len(grown[0]) > max_states:
+            stopped_by = "max_states"  # the previous layer stays the open one
+            break
         mask, last, value, parent = grown
         layer_total = total[keep]
         layers.append(grown)
