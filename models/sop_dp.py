@@ -98,6 +98,10 @@ PRUNE_TOLERANCE = 1e-9
 
 _ONE = np.uint64(1)
 
+#: Below this many (state, arc) pairs the cheapest open arc is found by one 2-D test
+#: instead of a binary search (numpy call overhead dominates small layers).
+_DIRECT = 1 << 18
+
 
 def _bits(n: int) -> np.ndarray:
     return np.left_shift(_ONE, np.arange(n, dtype=np.uint64))
@@ -203,6 +207,11 @@ class _Bound:
         """Per state, the cheapest arc whose other end is in ``open_mask`` (inf if none)."""
         prefix, values = table
         k = len(prefix) - 1
+        if len(open_mask) * k <= _DIRECT:  # small: one 2-D test, no loop (less overhead)
+            hit = (open_mask[:, None] & prefix[None, 1:]) != 0
+            first = np.argmax(hit, axis=1) if k else np.zeros(len(open_mask), dtype=np.int64)
+            found = hit.any(axis=1) if k else np.zeros(len(open_mask), dtype=bool)
+            return np.where(found, values[first], np.inf)
         lo = np.zeros(len(open_mask), dtype=np.int64)
         # the answer is the first arc t (0-based) whose end is open, in [lo, hi]
         hi = np.full(len(open_mask), max(k - 1, 0), dtype=np.int64)
@@ -217,22 +226,33 @@ class _Bound:
             lo = np.where(active & ~hit, mid + 1, lo)
         return np.where(found, values[np.minimum(lo, k)], np.inf)
 
+    def potential(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """``P(I, v)``: alpha of ``v`` and of every node still to be left, beta of every node
+        still to be entered. With reduced costs >= 0 it is a valid bound by itself."""
+        constant = self.alpha[last].astype(float)
+        for w in range(self.n):
+            if w != self.start:
+                todo = (mask & self.bits[w]) == 0
+                constant[todo] += self.beta[w] + (self.alpha[w] if w != self.end else 0.0)
+        return constant
+
     def __call__(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
         """``g`` for each state ``(mask[i], last[i])``."""
+        return self.potential(mask, last) + self.extra(mask, last)
+
+    def extra(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """``max(in', out')`` on the reduced costs (>= 0 when they are)."""
         n, bits = self.n, self.bits
         full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
         unvisited = ~mask & full
         total_in = np.zeros(len(mask))
         total_out = np.zeros(len(mask))
-        # potential part: alpha of every node still to be left, beta of every node to enter
-        constant = self.alpha[last].astype(float)
         for w in range(n):
             if w == self.start:
                 continue
             todo = (mask & bits[w]) == 0
             if not todo.any():
                 continue
-            constant[todo] += self.beta[w] + (self.alpha[w] if w != self.end else 0.0)
             others = unvisited[todo] & ~bits[w]
             from_open = self._cheapest(others, self.into[w])
             from_last = self.usable[last[todo], w]
@@ -240,7 +260,7 @@ class _Bound:
             if w != self.end:
                 total_out[todo] += self._cheapest(others, self.out[w])
         total_out += self._cheapest_from_last(unvisited, last)
-        return constant + np.maximum(total_in, total_out)
+        return np.maximum(total_in, total_out)
 
     def _cheapest_from_last(self, unvisited: np.ndarray, last: np.ndarray) -> np.ndarray:
         result = np.full(len(last), np.inf)
@@ -268,18 +288,21 @@ def assignment_potentials(
     node but ``start`` entered once (price ``beta_w``), solved by HiGHS through
     :func:`scipy.optimize.linprog`. Any prices give valid bounds (see the module
     docstring); these make the reduced costs ``c - alpha_u - beta_w`` non-negative and
-    their sum the assignment bound. Zeros when the LP has no solution.
+    their sum the assignment bound; ``beta`` is then lowered by any negative reduced cost
+    left by the LP's tolerance, so every reduced cost is >= 0 exactly (which lets
+    ``f + P`` alone prune). Without an LP solution the prices start from zero (and are
+    lowered the same way, which matters only for negative costs).
     """
     from scipy.optimize import linprog
-    from scipy.sparse import csr_matrix
+    from scipy.sparse import csr_matrix, vstack
 
     n = usable.shape[0]
     tails, heads = np.nonzero(np.isfinite(usable))
-    zeros = (np.zeros(n), np.zeros(n))
+    alpha, beta = np.zeros(n), np.zeros(n)
     rows_out = np.array([v for v in range(n) if v != end])
     rows_in = np.array([v for v in range(n) if v != start])
     if len(tails) == 0:
-        return zeros
+        return alpha, beta
     arcs = np.arange(len(tails))
     out_row = np.searchsorted(rows_out, tails)
     in_row = np.searchsorted(rows_in, heads)
@@ -293,8 +316,6 @@ def assignment_potentials(
         (np.ones(keep_in.sum()), (in_row[keep_in], arcs[keep_in])),
         shape=(len(rows_in), len(tails)),
     )
-    from scipy.sparse import vstack
-
     result = linprog(
         usable[tails, heads],
         A_eq=vstack([a_out, a_in]).tocsr(),
@@ -302,14 +323,15 @@ def assignment_potentials(
         bounds=(0, None),
         method="highs",
     )
-    if result.status != 0:
-        return zeros
-    prices = np.asarray(result.eqlin.marginals, dtype=float)
-    alpha, beta = np.zeros(n), np.zeros(n)
-    alpha[rows_out] = prices[: len(rows_out)]
-    beta[rows_in] = prices[len(rows_out) :]
-    if not (np.isfinite(alpha).all() and np.isfinite(beta).all()):
-        return zeros
+    if result.status == 0:
+        prices = np.asarray(result.eqlin.marginals, dtype=float)
+        if np.isfinite(prices).all():
+            alpha[rows_out] = prices[: len(rows_out)]
+            beta[rows_in] = prices[len(rows_out) :]
+    # lower beta so that every reduced cost is >= 0 exactly (the LP's are, up to tolerance)
+    reduced = usable - alpha[:, None] - beta[None, :]
+    lowest = np.min(np.where(np.isfinite(reduced), reduced, np.inf), axis=0)
+    beta += np.minimum(np.where(np.isfinite(lowest), lowest, 0.0), 0.0)
     return alpha, beta
 
 
@@ -410,14 +432,22 @@ class _Search:
         order = order[first]
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
-    def totals(self, mask, last, value, deadline: Deadline, chunk: int = 200_000):
-        """``f + g`` per state, in chunks between deadline checks; None when it passed."""
-        out = np.empty(len(mask))
-        for lo in range(0, len(mask), chunk):
+    def totals(
+        self, mask, last, value, deadline: Deadline, cutoff: float = np.inf, chunk: int = 200_000
+    ):
+        """``f + g`` per state, in chunks between deadline checks; None when it passed.
+
+        A state whose ``f + P`` already reaches ``cutoff`` gets that (smaller, valid) value:
+        it is pruned anyway, so ``max(in', out')`` is not computed for it (the reduced costs
+        are non-negative, :func:`assignment_potentials`).
+        """
+        out = value + self.bound.potential(mask, last)
+        need = np.flatnonzero(out < cutoff)
+        for lo in range(0, len(need), chunk):
             if deadline.expired(MARGIN):
                 return None
-            hi = lo + chunk
-            out[lo:hi] = value[lo:hi] + self.bound(mask[lo:hi], last[lo:hi])
+            part = need[lo : lo + chunk]
+            out[part] += self.bound.extra(mask[part], last[part])
         return out
 
     def path(self, layers, k: int) -> list[int]:
@@ -564,7 +594,7 @@ def solve_sop_dp(
             break
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
-        total = search.totals(*grown[:3], deadline)
+        total = search.totals(*grown[:3], deadline, cutoff=upper - tolerance)
         if total is None:
             stopped_by = "time_limit"
             break
