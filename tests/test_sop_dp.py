@@ -215,3 +215,22 @@ def test_each_engine_alone_agrees(engine):
     result = solve_sop_problem(SopProblem.load("ESC11"), engine=engine)
     assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA["ESC11"]
     assert result.info["engine"] == engine
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_assignment_prices_leave_no_negative_reduced_cost(seed):
+    """Reduced costs c - alpha - beta are >= 0 on every usable arc, and the prices' sum (the
+    bound f + P at the start) is not above the brute-force optimum."""
+    from taopt.models.sop import usable_arcs
+    from taopt.models.sop_dp import assignment_potentials
+
+    problem = random_problem(400 + seed, 7, 0.1, 0.2)
+    tails, heads = usable_arcs(problem.cost, problem.closure)
+    usable = np.full((problem.n, problem.n), np.inf)
+    usable[tails, heads] = problem.cost[tails, heads]
+    alpha, beta = assignment_potentials(usable, problem.start, problem.end)
+    reduced = usable[tails, heads] - alpha[tails] - beta[heads]
+    assert (reduced >= 0).all()
+    optimum = brute_force(problem)
+    total = alpha[np.arange(problem.n) != problem.end].sum() + beta.sum()
+    assert total <= optimum + 1e-9
