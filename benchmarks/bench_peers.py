@@ -1,4 +1,4 @@
-"""PyVRP and OR-Tools beside the thesis's MC heuristic and the certified optimum (chapter 2).
+"""PyVRP, OR-Tools and CP-SAT beside the thesis's MC heuristic and the certified optimum (chapter 2).
 
 Harness ("uniform current"): n targets then m vehicle starts uniform in a
 1000 m square (``numpy.random.default_rng(seed)``), a uniform current
@@ -8,7 +8,9 @@ script prints the exact optimum (``taopt.models.solve_routing``, DFJ + HiGHS),
 MC (``taopt.heuristics.run("MC", p)``) and each peer at each time limit, with
 its gap ``(f - f*) / f*`` in percent; then the mean and worst gap per method
 and size. The peers run in their worker processes (started once, before the
-timed calls); every objective is re-scored by ``taopt.evaluate``. Peers stopped
+timed calls); every objective is re-scored by ``taopt.evaluate``. CP-SAT (the
+circuit model of ``"cpsat"``, 2 workers) may find no solution in a short limit: its
+objective is then inf. Peers stopped
 by time are not deterministic, so the figures move a little between runs.
 
 Usage::
@@ -26,11 +28,11 @@ import numpy as np
 
 import taopt
 import taopt.heuristics
-from taopt.heuristics.peers import ortools_solve, pyvrp_solve, shutdown
+from taopt.heuristics.peers import cpsat_solve, ortools_solve, pyvrp_solve, shutdown
 from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
 
-PEERS = {"pyvrp": pyvrp_solve, "ortools": ortools_solve}
+PEERS = {"pyvrp": pyvrp_solve, "ortools": ortools_solve, "cpsat": cpsat_solve}
 
 
 def uniform_current_problem(n: int, m: int, seed: int) -> taopt.AssignmentProblem:

@@ -6,6 +6,16 @@ Run::
     python benchmarks/bench_sop.py --esc25            # also ESC25 (about a minute)
     python benchmarks/bench_sop.py --mtz 60           # also the MTZ model with a 60 s limit
     python benchmarks/bench_sop.py --time-limit 300 ESC12 br17.10
+    python benchmarks/bench_sop.py --compare 60       # portfolio, DP, MILP, CP-SAT side by side
+    python benchmarks/bench_sop.py --compare 60 ESC25 p43.4
+
+``--compare T`` runs, on each instance (default: :data:`COMPARE`, read from the shipped
+files or from ``../shared/benchmarks/tsplib``), ``taopt.solve(problem, "exact")`` (the
+portfolio of :func:`taopt.models.sop.solve_sop_problem`), the same with
+``engine="dp"`` and ``engine="milp"`` (each with the NIA/MMA/SMMA warm start), and
+OR-Tools CP-SAT (``"cpsat"``, 2 workers, in its worker process), each with a time limit of
+T seconds, and prints a Markdown table: status, objective, bound, wall time, ideals, DP
+states kept and pruned. Every objective is re-scored by ``evaluate_order``.
 
 For every instance it prints the exact model's status, objective, proven bound, gap and
 time, the TSPLIB optimum, and the path cost and gap to the optimum of NIA, MMA and SMMA
@@ -17,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 from taopt.delivery.sop import KNOWN_OPTIMA, load_sop, path_cost
 from taopt.models import solve_sop
@@ -39,13 +50,91 @@ def heuristic_rows(cost, precedences, start, end, optimum):
         print(f"    {name:<5} cost={value:<8g} gap to optimum={gap:6.2f}%  time={elapsed:.3f}s")
 
 
+COMPARE = [
+    "ESC07",
+    "ESC11",
+    "ESC12",
+    "br17.10",
+    "br17.12",
+    "ESC25",
+    "ESC47",
+    "rbg048a",
+    "rbg050c",
+    "p43.4",
+    "ry48p.4",
+    "ft53.4",
+]
+
+#: Optima of the comparison set not shipped with taopt (shared/benchmarks/tsplib/README.md).
+MORE_OPTIMA = {"rbg048a": 351, "rbg050c": 467, "ry48p.4": 31446, "ft53.4": 14425}
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / "tsplib"
+
+
+def load_problem(name: str):
+    from taopt.delivery.sop import SopProblem, shipped_sop
+
+    if name in shipped_sop():
+        return SopProblem.load(name)
+    return SopProblem.load(SHARED / f"{name}.sop")
+
+
+def compare(names: list[str], limit: float) -> None:
+    """The side-by-side table of ``--compare`` (see the module docstring)."""
+    import taopt
+    from taopt.delivery.sop import evaluate_order
+
+    runs = {
+        "portfolio": lambda p: taopt.solve(p, "exact", time_limit=limit),
+        "DP alone": lambda p: taopt.solve(p, "exact", time_limit=limit, engine="dp"),
+        "MILP alone": lambda p: taopt.solve(p, "exact", time_limit=limit, engine="milp"),
+        "CP-SAT": lambda p: taopt.solve(p, "cpsat", time_limit=limit, num_workers=2),
+    }
+    taopt.solve(load_problem("ESC07"), "cpsat", time_limit=10)  # start the worker: not timed
+    print(f"time limit {limit:g} s per run")
+    print(
+        "| instance | optimum | method | status | objective | bound | time (s) | ideals | states kept / pruned |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name in names:
+        problem = load_problem(name)
+        optimum = KNOWN_OPTIMA.get(name, MORE_OPTIMA.get(name))
+        for label, run in runs.items():
+            began = time.perf_counter()
+            result = run(problem)
+            elapsed = time.perf_counter() - began
+            if result.solution is not None:
+                assert evaluate_order(problem, result.order) == result.objective
+            info = result.info
+            ideals = info.get("ideals", "")
+            if ideals != "" and info.get("ideals_capped"):
+                ideals = f"> {ideals:,}"
+            elif ideals != "":
+                ideals = f"{ideals:,}"
+            kept = info.get("states", info.get("dp_states"))
+            pruned = info.get("pruned", info.get("dp_pruned"))
+            states = "" if kept is None else f"{kept:,} / {pruned:,}"
+            bound = "" if result.bound is None else f"{result.bound:g}"
+            print(
+                f"| {name} | {optimum} | {label} | {result.status} | {result.objective:g} | "
+                f"{bound} | {elapsed:.2f} | {ideals} | {states} |",
+                flush=True,
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("names", nargs="*", default=None)
+    parser.add_argument(
+        "--compare", type=float, default=0.0, help="portfolio, DP, MILP, CP-SAT with this limit"
+    )
     parser.add_argument("--time-limit", type=float, default=300.0)
     parser.add_argument("--esc25", action="store_true", help="add ESC25")
     parser.add_argument("--mtz", type=float, default=0.0, help="also run MTZ with this limit")
     args = parser.parse_args()
+    if args.compare > 0:
+        compare(args.names or COMPARE, args.compare)
+        return
     names = args.names or DEFAULT + (["ESC25"] if args.esc25 else [])
     for name in names:
         cost, precedences, start, end, _ = load_sop(name)

@@ -1,4 +1,4 @@
-"""Worker process that runs one peer solver (PyVRP or OR-Tools) for :mod:`taopt.heuristics.peers`.
+"""Worker process that runs one peer solver (PyVRP, OR-Tools routing or CP-SAT) for :mod:`taopt.heuristics.peers`.
 
 This file is started as a script (``python _peer_worker.py <peer> <parent pid>
 <die with parent>``) in a fresh interpreter, never imported into a process
@@ -153,8 +153,149 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     }
 
 
-SOLVERS = {"pyvrp": solve_pyvrp, "ortools": solve_ortools}
-PACKAGES = {"pyvrp": "pyvrp", "ortools": "ortools"}
+def _cpsat_solver(options: dict[str, Any]) -> Any:
+    """A CP-SAT solver with the request's time limit, seed and number of workers."""
+    from ortools.sat.python import cp_model
+
+    solver = cp_model.CpSolver()
+    if options.get("time_limit") is not None:
+        solver.parameters.max_time_in_seconds = float(options["time_limit"])
+    solver.parameters.random_seed = int(options["seed"])
+    solver.parameters.num_workers = int(options["num_workers"])
+    return solver
+
+
+def _cpsat_reply(solver: Any, status: int, started: float) -> dict[str, Any]:
+    from ortools.sat.python import cp_model
+
+    found = status in (cp_model.OPTIMAL, cp_model.FEASIBLE)
+    return {
+        "cpsat_status": solver.status_name(status),
+        "objective": int(round(solver.objective_value)) if found else None,
+        "best_bound": float(solver.best_objective_bound)
+        if found or status == cp_model.UNKNOWN
+        else None,
+        "solver_runtime": time.perf_counter() - started,
+        "branches": int(solver.num_branches),
+    }
+
+
+def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
+    """Sequential ordering as one circuit: the arcs of ``cost`` (-1: forbidden) plus a dummy
+    ``end -> start`` arc, and position variables for the precedences.
+
+    ``AddCircuit`` over every node makes the chosen arcs one Hamiltonian cycle; with the
+    dummy arc as the only way into ``start`` and out of ``end`` it is a path start -> end.
+    ``position[start] = 0``, an arc ``i -> j`` (not the dummy) forces
+    ``position[j] = position[i] + 1``, and each precedence ``(r, j)`` adds
+    ``position[r] < position[j]``.
+    """
+    from ortools.sat.python import cp_model
+
+    n = cost.shape[0]
+    start, end = int(options["start"]), int(options["end"])
+    model = cp_model.CpModel()
+    position = [model.NewIntVar(0, n - 1, f"position {v}") for v in range(n)]
+    model.Add(position[start] == 0)
+    model.Add(position[end] == n - 1)
+    arcs, terms, used = [], [], {}
+    for i in range(n):
+        for j in range(n):
+            if i == j or cost[i, j] < 0 or j == start or i == end:
+                continue
+            literal = model.NewBoolVar(f"{i}->{j}")
+            arcs.append((i, j, literal))
+            terms.append(int(cost[i, j]) * literal)
+            used[(i, j)] = literal
+            model.Add(position[j] == position[i] + 1).OnlyEnforceIf(literal)
+    arcs.append((end, start, model.NewConstant(1)))
+    model.AddCircuit(arcs)
+    for r, j in options["precedences"]:
+        model.Add(position[int(r)] < position[int(j)])
+    model.Minimize(sum(terms))
+    solver = _cpsat_solver(options)
+    started = time.perf_counter()
+    status = solver.Solve(model)
+    reply = _cpsat_reply(solver, status, started)
+    order = None
+    if reply["objective"] is not None:
+        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
+        order = [start]
+        while order[-1] != end and len(order) <= n:
+            order.append(successor[order[-1]])
+    reply["order"] = order
+    return reply
+
+
+def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
+    """Open multi-vehicle routing (2.2)-(2.5) as one circuit through a dummy node.
+
+    Nodes: targets ``0..n-1``, vehicle starts ``n..n+m-1``, dummy ``D = n+m``. The circuit
+    runs ``D -> start 0 -> (vehicle 0's targets) -> start 1 -> ... -> start m-1 -> ...
+    -> D``: an arc into ``start k`` (from ``start k-1`` or a target of vehicle k-1) or into
+    ``D`` (from vehicle m-1) ends a route at no cost, so routes are open and a vehicle that
+    goes straight to the next start is idle. ``vehicle[v]`` labels each node with its
+    vehicle (``vehicle[start k] = k``; an arc between a node and a target keeps the label),
+    which fixes the order of the vehicles along the circuit (no symmetric copies).
+    """
+    from ortools.sat.python import cp_model
+
+    model = cp_model.CpModel()
+    dummy = n + m
+    vehicle = [model.NewIntVar(0, m - 1, f"vehicle {v}") for v in range(n)]
+    vehicle += [model.NewConstant(k) for k in range(m)]
+    arcs, terms, used = [], [], {}
+
+    def arc(i: int, j: int, charge: int) -> Any:
+        literal = model.NewBoolVar(f"{i}->{j}")
+        arcs.append((i, j, literal))
+        used[(i, j)] = literal
+        if charge:
+            terms.append(charge * literal)
+        return literal
+
+    arc(dummy, n, 0)  # the circuit leaves D into vehicle 0's start
+    for i in range(n + m):
+        for j in range(n):  # into a target: same vehicle, cost charged
+            if i != j:
+                literal = arc(i, j, int(cost[i, j]))
+                model.Add(vehicle[j] == vehicle[i]).OnlyEnforceIf(literal)
+        for k in range(1, m):  # into start k: the route of vehicle k-1 ends here
+            if i < n or i == n + k - 1:
+                literal = arc(i, n + k, 0)
+                model.Add(vehicle[i] == k - 1).OnlyEnforceIf(literal)
+        literal = arc(i, dummy, 0)  # back to D: the last vehicle's route ends
+        model.Add(vehicle[i] == m - 1).OnlyEnforceIf(literal)
+    model.AddCircuit(arcs)
+    model.Minimize(sum(terms))
+    solver = _cpsat_solver(options)
+    started = time.perf_counter()
+    status = solver.Solve(model)
+    reply = _cpsat_reply(solver, status, started)
+    routes = None
+    if reply["objective"] is not None:
+        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
+        routes = [[] for _ in range(m)]
+        at, current = successor[dummy], -1
+        while at != dummy:
+            if at >= n:
+                current = at - n
+            else:
+                routes[current].append(int(at))
+            at = successor[at]
+    reply["routes"] = routes
+    return reply
+
+
+def solve_cpsat(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
+    """CP-SAT on an SOP (``options["kind"] == "sop"``) or on the routing problem."""
+    if options.get("kind") == "sop":
+        return solve_cpsat_sop(cost, options)
+    return solve_cpsat_routing(cost, n, m, options)
+
+
+SOLVERS = {"pyvrp": solve_pyvrp, "ortools": solve_ortools, "cpsat": solve_cpsat}
+PACKAGES = {"pyvrp": "pyvrp", "ortools": "ortools", "cpsat": "ortools"}
 
 
 def _load(peer: str) -> str:
@@ -163,6 +304,8 @@ def _load(peer: str) -> str:
 
     if peer == "pyvrp":
         import pyvrp  # noqa: F401
+    elif peer == "cpsat":
+        from ortools.sat.python import cp_model  # noqa: F401
     else:
         from ortools.constraint_solver import pywrapcp  # noqa: F401
     return version(PACKAGES[peer])

@@ -79,20 +79,21 @@ from typing import Any
 
 import numpy as np
 
+from taopt.delivery.sop import SopProblem, evaluate_order
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Routes, Solution
 from taopt.routing.problem import AssignmentProblem
 from taopt.scoring import evaluate
 
-__all__ = ["LARGEST_ENTRY", "PEERS", "pyvrp_solve", "ortools_solve", "shutdown"]
+__all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
 
 #: The largest travel time becomes this integer when ``scale`` is not given.
 LARGEST_ENTRY = 10**7
 #: Integer entries above this are refused (a route of n + m arcs must stay far below 2**63).
 MAX_ENTRY = 10**12
 #: Peer name -> the package its worker imports.
-PEERS = {"pyvrp": "pyvrp", "ortools": "ortools"}
+PEERS = {"pyvrp": "pyvrp", "ortools": "ortools", "cpsat": "ortools"}
 INSTALL_HINT = 'pip install "taopt[peers]"'
 WORKER_SCRIPT = Path(__file__).with_name("_peer_worker.py")
 #: Seconds a worker may take to import its package and say it is ready.
@@ -290,9 +291,24 @@ def _solve(
 ) -> Solution:
     """Run ``peer`` in its worker and turn its routes into a re-scored Solution."""
     cost, scale = integer_costs(problem, scale)
-    time_limit = options.get("time_limit")
-    timeout = None if time_limit is None else time_limit + GRACE
     request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
+    reply, runtime, worker, startup = _call(peer, request, options.get("time_limit"))
+    info = {
+        "solver_objective": reply.pop("objective"),
+        "scale": scale,
+        "version": worker.version,
+        "startup": startup,
+        **{key: value for key, value in options.items() if key != "seed"},
+        **{key: value for key, value in reply.items() if key != "routes"},
+    }
+    return _solution(problem, reply["routes"], peer, seed, runtime, info)
+
+
+def _call(
+    peer: str, request: dict[str, Any], time_limit: float | None
+) -> tuple[dict[str, Any], float, _Worker, float]:
+    """Send ``request`` to ``peer``'s worker: (reply, seconds, worker, startup seconds)."""
+    timeout = None if time_limit is None else time_limit + GRACE
     for _attempt in range(3):
         worker, startup = _worker(peer)
         started = time.perf_counter()
@@ -303,16 +319,7 @@ def _solve(
             continue
     else:
         raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
-    runtime = time.perf_counter() - started
-    info = {
-        "solver_objective": reply.pop("objective"),
-        "scale": scale,
-        "version": worker.version,
-        "startup": startup,
-        **{key: value for key, value in options.items() if key != "seed"},
-        **{key: value for key, value in reply.items() if key != "routes"},
-    }
-    return _solution(problem, reply["routes"], peer, seed, runtime, info)
+    return reply, time.perf_counter() - started, worker, startup
 
 
 def _solution(
@@ -477,3 +484,185 @@ def ortools_solve(
         "seed": int(seed),
     }
     return _solve("ortools", problem, seed, scale, options)
+
+
+# ----------------------------------------------------------------------------- CP-SAT
+def _sop_integer_costs(problem: SopProblem, scale: float | None) -> tuple[np.ndarray, float, bool]:
+    """The SOP's usable arcs as int64 (-1: forbidden), the scale, and whether it is exact.
+
+    Whole-number costs keep ``scale = 1`` (exact); otherwise the largest finite entry
+    becomes :data:`LARGEST_ENTRY`. An arc ``i -> j`` with ``j`` required before ``i`` is
+    forbidden too (no feasible path uses it).
+    """
+    cost = problem.cost
+    finite = np.isfinite(cost)
+    largest = float(np.abs(cost[finite]).max(initial=0.0))
+    if scale is None:
+        integral = bool(np.all(cost[finite] == np.rint(cost[finite])))
+        scale = 1.0 if integral else (LARGEST_ENTRY / largest if largest > 0 else 1.0)
+    scale = float(scale)
+    if not np.isfinite(scale) or scale <= 0:
+        raise InstanceError(f"scale must be a positive number, got {scale}")
+    if largest * scale > MAX_ENTRY:
+        raise InstanceError(
+            f"scale {scale:g} makes the largest cost {largest:g} into "
+            f"{largest * scale:.3g} > {MAX_ENTRY:.0e} integer units"
+        )
+    scaled = np.where(finite, cost * scale, 0.0)
+    exact = bool(np.all(scaled == np.rint(scaled)))
+    matrix = np.where(finite, np.rint(scaled), -1).astype(np.int64)
+    for r, j in problem.closure.edges:
+        matrix[j, r] = -1
+    return matrix, scale, exact
+
+
+def _cpsat_status(reply: dict[str, Any]) -> str:
+    """CP-SAT's status as taopt's: OPTIMAL -> optimal, INFEASIBLE -> infeasible, else a limit."""
+    return {"OPTIMAL": OPTIMAL, "INFEASIBLE": INFEASIBLE}.get(reply["cpsat_status"], TIME_LIMIT)
+
+
+def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> float | None:
+    """CP-SAT's proven bound in the problem's units, rounded down (valid after rounding)."""
+    bound = reply.get("best_bound")
+    if bound is None or not np.isfinite(bound):
+        return None
+    return (np.floor(bound + 1e-9) - slack_units) / scale
+
+
+def cpsat_solve(
+    problem: SopProblem | AssignmentProblem,
+    time_limit: float | None = 10.0,
+    seed: int = 0,
+    *,
+    num_workers: int = 2,
+    scale: float | None = None,
+) -> Solution:
+    """OR-Tools CP-SAT on an SOP or on the chapter 2 routing problem, in its worker process.
+
+    SOP: one ``AddCircuit`` over the usable arcs plus a dummy ``end -> start`` arc, with
+    position variables for the precedences (``_peer_worker.solve_cpsat_sop``). Routing
+    (2.2)-(2.5): one circuit through a dummy node that chains the vehicles' open routes,
+    targets first then the vehicles' start points as in :class:`AssignmentProblem`
+    (``_peer_worker.solve_cpsat_routing``).
+
+    Parameters
+    ----------
+    problem : SopProblem or AssignmentProblem
+    time_limit : float or None
+        CP-SAT's ``max_time_in_seconds``; None: until it proves the optimum.
+    seed : int
+        CP-SAT's ``random_seed``.
+    num_workers : int
+        CP-SAT's ``num_workers`` (default 2: this machine's cores).
+    scale : float, optional
+        Integer units per unit of cost. Default: 1 for an SOP with whole-number costs
+        (exact), else the largest entry becomes :data:`LARGEST_ENTRY`.
+
+    Returns
+    -------
+    Solution
+        Method "cpsat". Status: CP-SAT's OPTIMAL -> "optimal", FEASIBLE -> "time_limit",
+        no solution -> "time_limit" with objective ``inf``, INFEASIBLE -> "infeasible".
+        ``objective`` is re-scored by taopt's scorer (:func:`taopt.delivery.sop.evaluate_order` or
+        :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
+        rounded down and lowered by the rounding error of a path when the scaling is not
+        exact (so it stays valid). ``info`` has ``cpsat_status``, ``solver_objective``,
+        ``best_bound`` (CP-SAT's units), ``scale``, ``branches``, ``solver_runtime``.
+
+    Raises
+    ------
+    InstanceError
+        Another problem type, or bad limits, seed, workers or scale.
+    SolverError
+        OR-Tools missing (the message says ``pip install "taopt[peers]"``), or a failure
+        or crash in the worker.
+
+    Example
+    -------
+    >>> from taopt.heuristics.peers import cpsat_solve
+    >>> s = cpsat_solve(SopProblem.load("ESC07"), time_limit=10)
+    >>> str(s.status), s.objective, s.bound
+    ('optimal', 2125.0, 2125.0)
+
+    References
+    ----------
+    Thesis §2.2.1 and §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
+    """
+    if not isinstance(problem, (SopProblem, AssignmentProblem)):
+        raise InstanceError(
+            f"cpsat solves a SopProblem or an AssignmentProblem, got {type(problem).__name__}"
+        )
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
+        raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
+    if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:
+        raise InstanceError(f"seed must be an integer in [0, 2**31), got {seed}")
+    if isinstance(num_workers, bool) or int(num_workers) != num_workers or num_workers < 1:
+        raise InstanceError(f"num_workers must be a positive integer, got {num_workers}")
+    options: dict[str, Any] = {
+        "time_limit": time_limit,
+        "seed": int(seed),
+        "num_workers": int(num_workers),
+    }
+    if isinstance(problem, SopProblem):
+        cost, scale, exact = _sop_integer_costs(problem, scale)
+        options.update(
+            kind="sop",
+            start=problem.start,
+            end=problem.end,
+            precedences=[(int(r), int(j)) for r, j in problem.precedences],
+        )
+        request = {"cost": cost, "n": problem.n, "m": 0, "options": options}
+        slack = 0.0 if exact else 0.5 * (problem.n - 1)
+    else:
+        cost, scale = integer_costs(problem, scale)
+        exact = bool(np.all(problem.cost * scale == cost))
+        options["kind"] = "routing"
+        request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
+        slack = 0.0 if exact else 0.5 * problem.n
+    reply, runtime, worker, startup = _call("cpsat", request, time_limit)
+    status = _cpsat_status(reply)
+    info = {
+        "cpsat_status": reply["cpsat_status"],
+        "solver_objective": reply["objective"],
+        "best_bound": reply["best_bound"],
+        "scale": scale,
+        "exact_scaling": exact,
+        "branches": reply["branches"],
+        "solver_runtime": reply["solver_runtime"],
+        "num_workers": int(num_workers),
+        "time_limit": time_limit,
+        "version": worker.version,
+        "startup": startup,
+    }
+    bound = _scaled_bound(reply, scale, slack)
+    payload: Order | Routes | None = None
+    objective = np.inf
+    try:
+        if isinstance(problem, SopProblem) and reply.get("order") is not None:
+            payload = Order(reply["order"])
+            objective = evaluate_order(problem, reply["order"])
+        elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
+            payload = Routes(reply["routes"])
+            objective = evaluate(problem, reply["routes"])
+    except Exception as exc:
+        raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
+    if status == INFEASIBLE:
+        bound = np.inf
+    elif bound is not None:
+        bound = min(bound, objective)
+    if status == OPTIMAL and payload is None:
+        raise SolverError("cpsat reported OPTIMAL without a solution")
+    return Solution(
+        objective=objective,
+        status=status,
+        bound=bound,
+        runtime=runtime,
+        method="cpsat",
+        seed=int(seed),
+        solution=payload,
+        info=info,
+    )
+
+
+register_method(SopProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)
+register_method(AssignmentProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)

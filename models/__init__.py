@@ -2,7 +2,9 @@
 
 * :func:`solve_routing` — chapter 2, (2.2)–(2.5) with DFJ / MTZ / flow subtour elimination.
 * :func:`solve_delivery` — chapter 5, a linear equivalent of (5.1)–(5.7) (``"milp"``).
-* :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path).
+* :func:`solve_sop` — sequential ordering (precedence-constrained Hamiltonian path); the
+  registered SOP "exact" is the portfolio :func:`taopt.models.sop.solve_sop_problem` (the
+  DP over order ideals of :mod:`taopt.models.sop_dp`, then this MILP).
 * :func:`lp_bound` — the LP relaxation of (2.2)–(2.5), a valid lower bound.
 * :func:`solve_capability` — chapter 3, (3.1)–(3.3) as printed, corrected per class, joint.
 * :func:`solve_comm` — chapter 4's f_o: (4.1)–(4.2) without communication limits, per class.
@@ -112,7 +114,8 @@ register_method(
     default=False,
     not_default="the MILP (5.1)-(5.7) runs only when named (--methods milp): exact is faster",
 )(solve_delivery)
-# the fast orderings of chapter 5 give the incumbent kept when a time limit stops HiGHS early
+# the SOP portfolio: the ideal DP (dense precedence) then the flow MILP (sparse); the fast
+# orderings of chapter 5 give the incumbent that prunes the DP and is kept on a time limit
 register_method(SopProblem, "exact", category="exact", warm_start=("NIA", "MMA", "SMMA"))(
     solve_sop_problem
 )

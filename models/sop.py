@@ -517,6 +517,36 @@ def _stopped(
     )
 
 
+def _unreachable(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> str | None:
+    """Why no path can exist when a node cannot be entered or left on a usable arc (or no
+    usable path runs from start through it to end); None when this cheap test finds none."""
+    tails, heads = usable_arcs(cost, closure)
+    graph = nx.DiGraph()
+    graph.add_nodes_from(range(cost.shape[0]))
+    graph.add_edges_from(zip(tails.tolist(), heads.tolist(), strict=True))
+    reach = nx.descendants(graph, start) | {start}
+    back = nx.ancestors(graph, end) | {end}
+    for v in range(cost.shape[0]):
+        if v not in reach:
+            return f"node {v} cannot be reached from start {start} by any usable arc"
+        if v not in back:
+            return f"end {end} cannot be reached from node {v} by any usable arc"
+    return None
+
+
+def _infeasible(began: float, formulation: str, proof: str) -> Solution:
+    """Status "infeasible" (no path exists), with the reason as ``info["proof"]``."""
+    return Solution(
+        objective=np.inf,
+        status=INFEASIBLE,
+        bound=np.inf,
+        runtime=time.perf_counter() - began,
+        method=f"exact-sop-{formulation}",
+        solution=None,
+        info={"stopped_by": "infeasible", "proof": proof},
+    )
+
+
 def solve_sop(
     cost,
     precedences,
@@ -571,7 +601,8 @@ def solve_sop(
     Raises
     ------
     InstanceError
-        Bad data (see :func:`check_sop`) or no feasible path exists.
+        Bad data (see :func:`check_sop`). When no feasible path exists the status is
+        "infeasible" (objective ``inf``, ``info["proof"]`` says why), not an error.
     SolverError
         HiGHS failed, or the decoded path breaks a precedence or does not cost the
         model's value (a time limit is never an error).
@@ -588,6 +619,9 @@ def solve_sop(
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
     deadline = Deadline(time_limit)
     checked, closure = check_sop(cost, precedences, start, end)
+    unreachable = _unreachable(checked, closure, start, end)
+    if unreachable is not None:
+        return _infeasible(began, formulation, unreachable)
     known = _known_order(checked, closure, start, end, incumbent)
     problem = None
     if deadline.limited:
@@ -622,7 +656,7 @@ def solve_sop(
     if run.solver_status == "solver_error":
         raise SolverError(f"HiGHS failed on the SOP model: {run.message}")
     if run.status == INFEASIBLE:
-        raise InstanceError("no Hamiltonian path respects the precedences and forbidden arcs")
+        return _infeasible(began, formulation, "HiGHS proved the model infeasible")
     if run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT):
         raise SolverError(f"HiGHS returned status {run.solver_status!r} on the SOP model")
     if not run.has_point or (
@@ -664,6 +698,17 @@ def solve_sop(
     )
 
 
+#: States the DP may keep in all before the portfolio hands over to the MILP (rbg048a: 1.8
+#: million states kept peaked at 3.2 GB with the work arrays of the largest layer).
+PORTFOLIO_MAX_STATES = 2_000_000
+
+#: Share of a time limit the portfolio gives the DP when the ideals are too many to count
+#: (the MILP gets the rest).
+DP_SHARE = 0.5
+
+PORTFOLIO_ENGINES = ("auto", "dp", "milp")
+
+
 def solve_sop_problem(
     problem: SopProblem,
     time_limit: float | None = None,
@@ -671,17 +716,110 @@ def solve_sop_problem(
     mip_gap: float = 1e-9,
     verbose: bool = False,
     incumbent=None,
+    engine: str = "auto",
+    ideal_cap: int | None = None,
+    max_states: int = PORTFOLIO_MAX_STATES,
 ) -> Solution:
-    """:func:`solve_sop` on a :class:`taopt.SopProblem` (the registered "exact" method;
-    ``incumbent`` comes from its warm-start heuristics)."""
-    return solve_sop(
-        problem.cost,
-        problem.precedences,
-        problem.start,
-        problem.end,
-        time_limit=time_limit,
-        formulation=formulation,
-        mip_gap=mip_gap,
-        verbose=verbose,
-        incumbent=incumbent,
+    """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
+    MILP for sparse precedence.
+
+    Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
+    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a fraction of a second).
+    When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
+    states are at most n times the ideals. Otherwise the DP runs first with at most
+    ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
+    often close the instance anyway: ESC25), and if it has not proved the optimum the flow
+    MILP (:func:`solve_sop`) gets the rest, warm-started with the best order so far; the
+    bound reported is the larger of the two proven bounds (never below the assignment
+    and arborescence bounds). More than 64 nodes: the MILP alone. The figures behind the
+    rule are in ``docs/benchmarks.md`` (SOP section).
+
+    Parameters
+    ----------
+    problem : SopProblem
+    time_limit : float, optional
+        Wall-clock seconds for the whole portfolio.
+    formulation, mip_gap, verbose
+        Passed to :func:`solve_sop` when the MILP runs.
+    incumbent : Order, list of int or Solution, optional
+        The warm start's order (NIA, MMA, SMMA through the registry).
+    engine : {"auto", "dp", "milp"}
+        Force one engine ("dp" runs the DP with ``max_states`` and no MILP after it).
+    ideal_cap : int, optional
+        Cap of the ideal count (default :data:`taopt.models.sop_dp.IDEAL_CAP`).
+    max_states : int
+        States the DP may keep when the ideals passed the cap.
+
+    Returns
+    -------
+    Solution
+        As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
+        ``engine`` ("dp", "milp" or "dp+milp"), ``ideals`` and ``ideals_capped``, and the
+        DP's ``states``/``pruned`` when it ran.
+    """
+    from taopt.models.sop_dp import IDEAL_CAP, MAX_NODES, count_ideals, solve_sop_dp
+
+    began = time.perf_counter()
+    if engine not in PORTFOLIO_ENGINES:
+        raise InstanceError(f"engine must be one of {PORTFOLIO_ENGINES}, got {engine!r}")
+    if time_limit is not None and time_limit <= 0:
+        raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    deadline = Deadline(time_limit)
+    unreachable = _unreachable(problem.cost, problem.closure, problem.start, problem.end)
+    if unreachable is not None:
+        return _infeasible(began, "portfolio", unreachable)
+    cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
+    ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
+    info = {"ideals": ideals, "ideals_capped": capped}
+
+    def milp(known, time_left, dp_result=None) -> Solution:
+        result = solve_sop(
+            problem.cost,
+            problem.precedences,
+            problem.start,
+            problem.end,
+            time_limit=time_left,
+            formulation=formulation,
+            mip_gap=mip_gap,
+            verbose=verbose,
+            incumbent=known,
+        )
+        if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
+            bound = max(result.bound or 0.0, dp_result.bound or 0.0)
+            bound = min(bound, result.objective)
+            status = result.status
+            if np.isfinite(result.objective):
+                stopped_by = result.info.get("stopped_by") or "time_limit"
+                status, _ = certify(result.objective, bound, stopped_by)
+            result = result.replace(bound=bound, status=status)
+        return result
+
+    if deadline.expired(MARGIN):  # no time left after the warm start and the count
+        known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+        result = _stopped(problem, known, None, began, "portfolio", {"model": "not run"})
+        used = "none"
+    elif engine == "milp" or problem.n > MAX_NODES:
+        result = milp(incumbent, deadline.remaining())
+        used = "milp"
+    elif engine == "dp" or not capped:
+        result = solve_sop_dp(
+            problem,
+            deadline.remaining(),
+            incumbent=incumbent,
+            max_states=max_states if capped else None,
+        )
+        used = "dp"
+    else:
+        share = deadline.share(DP_SHARE)
+        result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
+        used = "dp"
+        if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+            info.update({f"dp_{k}": v for k, v in result.info.items()})
+            known = result.solution if result.solution is not None else incumbent
+            result = milp(known, deadline.remaining(), dp_result=result)
+            used = "dp+milp"
+    return result.replace(
+        runtime=time.perf_counter() - began,
+        method="exact-sop",
+        info={**result.info, **info, "engine": used},
     )

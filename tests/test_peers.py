@@ -23,6 +23,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import taopt
+from taopt.delivery.sop import evaluate_order
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics import peers
 from taopt.heuristics.peers import ortools_solve, pyvrp_solve
@@ -369,3 +370,107 @@ def test_n50m10_one_second_not_below_certified_optimum(seed):
         solution = solve(problem, time_limit=1.0, seed=seed)
         assert solution.objective == taopt.evaluate(problem, solution.routes)
         assert_not_below(solution, exact)
+
+
+# ----------------------------------------------------------------------------- CP-SAT
+def random_sop(seed: int, n: int) -> taopt.SopProblem:
+    """Random integer SOP with 10 % forbidden arcs and a few precedences (always feasible
+    once the arcs along one precedence-respecting order are restored)."""
+    rng = np.random.default_rng([7, seed])
+    cost = rng.integers(1, 40, (n, n)).astype(float)
+    cost[rng.random((n, n)) < 0.1] = np.inf
+    np.fill_diagonal(cost, 0.0)
+    inner = [int(v) for v in rng.permutation(np.arange(1, n - 1))]
+    pairs = [(inner[a], inner[a + 2]) for a in range(0, n - 4, 2)]
+    path = [0, *inner, n - 1]
+    cost[path[:-1], path[1:]] = rng.integers(1, 40, n - 1)  # one feasible order
+    return taopt.SopProblem(cost, tuple(pairs), 0, n - 1, name=f"sop-{seed}")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_cpsat_agrees_with_exact_on_small_sop(seed):
+    """cpsat proves the same SOP optimum as taopt's exact portfolio; order re-scored."""
+    problem = random_sop(seed, 7 + seed)
+    exact = taopt.solve(problem, "exact")
+    solution = taopt.solve(problem, "cpsat", time_limit=30, seed=seed)
+    assert exact.status == "optimal" and solution.status == "optimal"
+    assert solution.method == "cpsat" and solution.info["cpsat_status"] == "OPTIMAL"
+    assert solution.objective == exact.objective
+    assert evaluate_order(problem, solution.order) == solution.objective
+    assert solution.bound == pytest.approx(exact.objective)
+
+
+def test_cpsat_certifies_a_shipped_tsplib_sop():
+    """cpsat proves TSPLIB's optimum 1675 of ESC12 (bound = objective, integer scale 1)."""
+    problem = taopt.SopProblem.load("ESC12")
+    solution = taopt.solve(problem, "cpsat", time_limit=30)
+    assert solution.status == "optimal" and solution.objective == 1675.0 == solution.bound
+    assert solution.info["scale"] == 1.0 and solution.info["exact_scaling"]
+
+
+@pytest.mark.parametrize("n, m, seed", [(4, 2, 0), (6, 1, 1), (7, 3, 2), (8, 2, 3)])
+def test_cpsat_agrees_with_exact_on_small_routing(n, m, seed):
+    """cpsat's circuit model of (2.2)-(2.5) proves the exact model's optimum (within scaling)."""
+    problem = uniform_current_problem(n, m, seed)
+    exact = solve_routing(problem)
+    solution = taopt.solve(problem, "cpsat", time_limit=30, seed=seed)
+    assert solution.status == "optimal" and len(solution.routes) == m
+    assert solution.objective == taopt.evaluate(problem, solution.routes)
+    assert solution.objective == pytest.approx(exact.objective, rel=RELATIVE)
+    assert solution.bound <= exact.objective * (1 + 1e-12)  # rounded down: still valid
+    assert_not_below(solution, exact)
+
+
+def test_cpsat_keeps_idle_vehicles_and_direction():
+    """The hand-made references (idle vehicle, one-way arcs) come out at their optima."""
+    for reference in REFERENCES:
+        problem, optimum, routes = reference()
+        solution = taopt.solve(problem, "cpsat", time_limit=30)
+        assert solution.objective == pytest.approx(optimum, rel=RELATIVE)
+        assert solution.routes == routes
+
+
+def test_cpsat_same_seed_same_result():
+    """Same seed, same answer (a proof is unique in value; the order too on this instance)."""
+    problem = random_sop(9, 10)
+    first = taopt.solve(problem, "cpsat", time_limit=30, seed=3, num_workers=1)
+    second = taopt.solve(problem, "cpsat", time_limit=30, seed=3, num_workers=1)
+    assert first.order == second.order and first.objective == second.objective
+
+
+def test_cpsat_infeasible_sop_is_a_status():
+    """An SOP with no feasible path: CP-SAT's INFEASIBLE becomes status "infeasible"."""
+    cost = np.ones((4, 4))
+    cost[1, 2] = cost[2, 3] = np.inf
+    problem = taopt.SopProblem(cost, ((1, 2),), 0, 3)  # 1 before 2, then 2 -> 3 forbidden
+    solution = taopt.solve(problem, "cpsat", time_limit=30)
+    assert solution.status == "infeasible" and solution.solution is None
+
+
+def test_cpsat_status_and_bound_mapping():
+    """OPTIMAL -> optimal, FEASIBLE/UNKNOWN -> time_limit; the bound is scaled back rounded down."""
+    assert peers._cpsat_status({"cpsat_status": "OPTIMAL"}) == "optimal"
+    assert peers._cpsat_status({"cpsat_status": "FEASIBLE"}) == "time_limit"
+    assert peers._cpsat_status({"cpsat_status": "UNKNOWN"}) == "time_limit"
+    assert peers._cpsat_status({"cpsat_status": "INFEASIBLE"}) == "infeasible"
+    assert peers._scaled_bound({"best_bound": 1234.7}, 10.0, 0.0) == 123.4
+    assert peers._scaled_bound({"best_bound": 1234.7}, 10.0, 2.0) == 123.2
+    assert peers._scaled_bound({"best_bound": None}, 10.0, 0.0) is None
+
+
+def test_cpsat_missing_ortools_fails_loudly(monkeypatch):
+    """Without OR-Tools, cpsat raises a SolverError with the install hint (never a skip)."""
+    monkeypatch.setattr(peers, "_find_spec", lambda name: None)
+    with pytest.raises(SolverError, match=r"cpsat is not installed.*taopt\[peers\]"):
+        peers.cpsat_solve(taopt.SopProblem.load("ESC07"))
+
+
+def test_cpsat_bad_arguments_are_clear():
+    """A wrong problem type, seed or worker count is an InstanceError before any worker runs."""
+    problem = taopt.SopProblem.load("ESC07")
+    with pytest.raises(InstanceError, match="SopProblem or an AssignmentProblem"):
+        peers.cpsat_solve(problem.cost)
+    with pytest.raises(InstanceError, match="num_workers"):
+        peers.cpsat_solve(problem, num_workers=0)
+    with pytest.raises(InstanceError, match="seed"):
+        peers.cpsat_solve(problem, seed=-1)

@@ -174,14 +174,14 @@ def test_decoded_path_is_checked_against_precedences_and_model_value():
 @pytest.mark.parametrize("formulation", ["flow", "mtz"])
 @pytest.mark.parametrize("seed", range(6))
 def test_random_sop_matches_held_karp(seed, formulation):
-    """Random SOPs: the MILP equals an independent Held-Karp DP (or both find none)."""
+    """Random SOPs: the MILP equals an independent Held-Karp DP (or both find none: the MILP
+    says "infeasible", it does not raise)."""
     cost, precedences, start, end = random_sop(seed, n=5 + seed % 4)
     expected = held_karp_sop(cost, precedences, start, end)
-    if not np.isfinite(expected):
-        with pytest.raises(InstanceError):
-            solve_sop(cost, precedences, start, end, formulation=formulation)
-        return
     sol = solve_sop(cost, precedences, start, end, formulation=formulation)
+    if not np.isfinite(expected):
+        assert sol.status == "infeasible" and sol.order is None and sol.objective == np.inf
+        return
     assert sol.status == "optimal"
     assert sol.objective == pytest.approx(expected, abs=1e-9)
     assert_valid_order(sol.order, cost, precedences, start, end, sol.objective)

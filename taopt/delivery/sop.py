@@ -59,14 +59,17 @@ __all__ = [
 ]
 
 #: Proven optima of the shipped .sop files (TSPLIB95 DOC.PS Table 3; confirmed by
-#: xgillard/ddo and IsaacRudich/ImprovedPnB, and by a Held–Karp DP for all but ESC25).
+#: xgillard/ddo and IsaacRudich/ImprovedPnB, and by a Held–Karp DP for all but ESC25;
+#: ESC47 and p43.4 also by the ideal DP, :func:`taopt.models.sop_dp.solve_sop_dp`).
 KNOWN_OPTIMA: dict[str, int] = {
     "ESC07": 2125,
     "ESC11": 2075,
     "ESC12": 1675,
     "ESC25": 1681,
+    "ESC47": 1288,
     "br17.10": 55,
     "br17.12": 55,
+    "p43.4": 83005,
 }
 
 _DATA = "taopt.data"

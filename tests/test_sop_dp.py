@@ -1,0 +1,236 @@
+"""The ideal DP for the SOP and the "exact" portfolio (issue 16 item 3).
+
+Checked without trusting either engine: optima against brute force over permutations and
+against the flow MILP, the completion bound against the true cheapest completion of
+every state of small instances, the ideal count against a subset enumeration, and the
+portfolio against TSPLIB's proven optima.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import taopt
+from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, evaluate_order, shipped_sop
+from taopt.models.sop import solve_sop, solve_sop_problem
+from taopt.models.sop_dp import beam_order, completion_bound, count_ideals, solve_sop_dp
+from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT
+
+
+def random_problem(seed: int, n: int, forbidden: float, density: float) -> SopProblem:
+    """Random integer costs, a share of forbidden arcs, random acyclic precedences."""
+    rng = np.random.default_rng([16, seed])
+    cost = rng.integers(0, 60, size=(n, n)).astype(float)
+    cost[rng.random((n, n)) < forbidden] = np.inf
+    np.fill_diagonal(cost, 0.0)
+    inner = rng.permutation(np.arange(1, n - 1))
+    pairs = [
+        (int(inner[a]), int(inner[b]))
+        for a, b in itertools.combinations(range(n - 2), 2)
+        if rng.random() < density
+    ]
+    return SopProblem(cost, tuple(pairs), 0, n - 1, f"random-{seed}")
+
+
+def feasible_orders(problem: SopProblem, visited: tuple[int, ...] = ()):
+    """Every feasible order that starts with ``visited`` (default: with start)."""
+    prefix = list(visited) or [problem.start]
+    rest = [v for v in range(problem.n) if v not in prefix and v != problem.end]
+    for perm in itertools.permutations(rest):
+        order = [*prefix, *perm, problem.end]
+        where = {v: k for k, v in enumerate(order)}
+        if all(where[r] < where[j] for r, j in problem.precedences):
+            if np.isfinite(problem.cost[order[:-1], order[1:]]).all():
+                yield order
+
+
+def brute_force(problem: SopProblem) -> float:
+    """Cheapest feasible order by enumeration (inf when none)."""
+    costs = [float(problem.cost[o[:-1], o[1:]].sum()) for o in feasible_orders(problem)]
+    return min(costs, default=np.inf)
+
+
+CASES = [
+    (seed, n, forbidden, density)
+    for seed, (n, forbidden, density) in enumerate(
+        [(5, 0.0, 0.0), (6, 0.2, 0.0), (7, 0.0, 0.3), (7, 0.3, 0.3), (8, 0.15, 0.2)] * 4
+    )
+]
+
+
+@pytest.mark.parametrize("seed, n, forbidden, density", CASES)
+def test_dp_equals_brute_force_and_the_milp(seed, n, forbidden, density):
+    """Small random SOPs (with/without precedences, missing arcs): DP = brute force = MILP."""
+    problem = random_problem(seed, n, forbidden, density)
+    optimum = brute_force(problem)
+    dp = solve_sop_dp(problem)
+    milp = solve_sop(problem.cost, problem.precedences, problem.start, problem.end)
+    if not np.isfinite(optimum):
+        assert dp.status == INFEASIBLE and milp.status == INFEASIBLE
+        assert dp.solution is None and dp.objective == np.inf
+        return
+    assert dp.status == OPTIMAL and milp.status == OPTIMAL
+    assert dp.objective == pytest.approx(optimum) == milp.objective
+    assert evaluate_order(problem, dp.order) == pytest.approx(dp.objective)
+    assert dp.bound == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_dp_with_a_good_incumbent_still_proves_the_optimum(seed):
+    """Given the optimal order as incumbent (everything prunes), the DP returns it, optimal."""
+    problem = random_problem(100 + seed, 7, 0.0, 0.3)  # complete: always feasible
+    optimum = brute_force(problem)
+    best = min(feasible_orders(problem), key=lambda o: problem.cost[o[:-1], o[1:]].sum())
+    result = solve_sop_dp(problem, incumbent=best, beam_width=0)
+    assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+    assert result.bound <= optimum + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_completion_bound_never_exceeds_the_true_completion(seed):
+    """For every reachable state (ideal, last) of a small SOP, g <= the cheapest completion."""
+    problem = random_problem(200 + seed, 7, 0.15, 0.25)
+    checked = 0
+    for order in feasible_orders(problem):
+        for k in range(1, problem.n):
+            prefix = tuple(order[:k])
+            completions = [
+                float(problem.cost[o[k - 1 :][:-1], o[k - 1 :][1:]].sum())
+                for o in feasible_orders(problem, prefix)
+            ]
+            true = min(completions, default=np.inf)
+            assert completion_bound(problem, set(prefix), prefix[-1]) <= true + 1e-9
+            checked += 1
+        if checked > 150:
+            break
+
+
+def test_completion_bound_is_positive_somewhere():
+    """The bound is not trivially zero: at the start of ESC12 it is at least the assignment
+    relaxation's half of the optimum (a check that the test above can fail)."""
+    problem = SopProblem.load("ESC12")
+    assert completion_bound(problem, {problem.start}, problem.start) > 0.5 * KNOWN_OPTIMA["ESC12"]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_count_ideals_equals_a_subset_enumeration(seed):
+    """The capped BFS count equals the number of predecessor-closed sets holding start."""
+    problem = random_problem(300 + seed, 9, 0.0, 0.3)
+    inner = [v for v in range(problem.n) if v != problem.start]
+    closed = 0
+    for size in range(len(inner) + 1):
+        for subset in itertools.combinations(inner, size):
+            chosen = {problem.start, *subset}
+            if all(r in chosen for r, j in problem.closure.edges if j in chosen):
+                closed += 1
+    assert count_ideals(problem) == (closed, False)
+    assert count_ideals(problem, cap=closed // 2)[1] is True
+
+
+@pytest.mark.parametrize("name", sorted(set(shipped_sop()) - {"ESC47", "p43.4"}))
+def test_portfolio_certifies_the_shipped_tsplib_optima(name):
+    """taopt.solve(SopProblem, "exact") proves TSPLIB's optimum on the small shipped files."""
+    problem = SopProblem.load(name)
+    result = taopt.solve(problem, "exact")
+    assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
+    assert result.bound == pytest.approx(KNOWN_OPTIMA[name])
+    assert evaluate_order(problem, result.order) == KNOWN_OPTIMA[name]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["ESC47", "p43.4"])
+def test_portfolio_certifies_the_larger_shipped_files(name):
+    """ESC47 (sparse precedence) and p43.4 (dense): the portfolio proves the optimum."""
+    problem = SopProblem.load(name)
+    result = taopt.solve(problem, "exact", time_limit=120)
+    assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
+
+
+def test_esc47_with_one_second_returns_a_bound_not_an_error():
+    """ESC47 at time_limit=1 s: time_limit (or optimal) with a feasible order and a bound <= 1288."""
+    problem = SopProblem.load("ESC47")
+    result = taopt.solve(problem, "exact", time_limit=1.0)
+    assert result.status in (TIME_LIMIT, OPTIMAL)
+    assert 0 < result.bound <= KNOWN_OPTIMA["ESC47"] <= result.objective
+    assert evaluate_order(problem, result.order) == result.objective
+
+
+def test_a_stopped_dp_returns_the_incumbent_and_a_valid_bound():
+    """The DP stopped by max_states keeps NIA's order and proves a bound <= the optimum."""
+    problem = SopProblem.load("ESC25")
+    nia = taopt.solve(problem, "NIA")
+    result = solve_sop_dp(problem, incumbent=nia, max_states=200, beam_width=0)
+    assert result.status == TIME_LIMIT and result.info["stopped_by"] == "max_states"
+    assert result.order == nia.order and result.objective == nia.objective
+    assert 0 < result.bound <= KNOWN_OPTIMA["ESC25"]
+
+
+def test_a_stopped_dp_without_incumbent_has_no_path_but_a_bound():
+    """Stopped with no incumbent and no beam: objective inf, no order, a positive valid bound."""
+    problem = SopProblem.load("ESC25")
+    result = solve_sop_dp(problem, max_states=200, beam_width=0)
+    assert result.status == TIME_LIMIT and result.solution is None
+    assert result.objective == np.inf and 0 < result.bound <= KNOWN_OPTIMA["ESC25"]
+
+
+def test_infeasible_sop_is_reported_with_a_proof():
+    """Precedences 1 before 2 and 2 before 3 with arc 1 -> 2 the only way into 2 ... and no
+    arc 2 -> 3 nor 1 -> 3 usable: no path exists; every engine says "infeasible"."""
+    cost = np.ones((5, 5))
+    cost[:, 2] = np.inf
+    cost[1, 2] = 1.0  # 2 can only be entered from 1
+    cost[2, 3] = np.inf  # ... and 3 never directly after 2
+    cost[0, 3] = cost[1, 3] = np.inf
+    problem = SopProblem(cost, ((1, 2), (2, 3)), 0, 4)
+    assert brute_force(problem) == np.inf
+    dp = solve_sop_dp(problem)
+    assert dp.status == INFEASIBLE and "proof" in dp.info
+    for engine in ("dp", "milp", "auto"):
+        assert solve_sop_problem(problem, engine=engine).status == INFEASIBLE
+    assert taopt.solve(problem, "exact").status == INFEASIBLE
+
+
+def test_unreachable_node_is_infeasible_not_an_error():
+    """A node no usable arc enters: status infeasible with the node named, no InstanceError."""
+    cost = np.ones((4, 4))
+    cost[:, 2] = np.inf
+    result = taopt.solve(SopProblem(cost, (), 0, 3), "exact")
+    assert result.status == INFEASIBLE and "node 2" in result.info["proof"]
+
+
+def test_beam_order_is_feasible_and_deterministic():
+    """The beam's order is feasible, scored as claimed, never below the optimum, repeatable."""
+    problem = SopProblem.load("ESC12")
+    cost, order = beam_order(problem, width=16)
+    assert evaluate_order(problem, order) == cost >= KNOWN_OPTIMA["ESC12"]
+    assert beam_order(problem, width=16) == (cost, order)
+
+
+@pytest.mark.parametrize("engine", ["dp", "milp"])
+def test_each_engine_alone_agrees(engine):
+    """engine="dp" and engine="milp" both certify ESC11."""
+    result = solve_sop_problem(SopProblem.load("ESC11"), engine=engine)
+    assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA["ESC11"]
+    assert result.info["engine"] == engine
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_assignment_prices_leave_no_negative_reduced_cost(seed):
+    """Reduced costs c - alpha - beta are >= 0 on every usable arc, and the prices' sum (the
+    bound f + P at the start) is not above the brute-force optimum."""
+    from taopt.models.sop import usable_arcs
+    from taopt.models.sop_dp import assignment_potentials
+
+    problem = random_problem(400 + seed, 7, 0.1, 0.2)
+    tails, heads = usable_arcs(problem.cost, problem.closure)
+    usable = np.full((problem.n, problem.n), np.inf)
+    usable[tails, heads] = problem.cost[tails, heads]
+    alpha, beta = assignment_potentials(usable, problem.start, problem.end)
+    reduced = usable[tails, heads] - alpha[tails] - beta[heads]
+    assert (reduced >= 0).all()
+    optimum = brute_force(problem)
+    total = alpha[np.arange(problem.n) != problem.end].sum() + beta.sum()
+    assert total <= optimum + 1e-9
