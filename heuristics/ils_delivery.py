@@ -75,7 +75,7 @@ from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import Solution
 
-__all__ = ["ScheduleStates", "PathStates", "ils_search", "forward_states"]
+__all__ = ["ScheduleStates", "PathStates", "Screen", "ils_search", "forward_states"]
 
 #: Relative tolerance below which two makespans are treated as equal (float rounding of the
 #: DP; a move must improve by more than this to be taken).
@@ -355,6 +355,36 @@ def _moves(order: np.ndarray, i: int, prec: _Precedence, window: int, max_block:
         yield i, [other] + items[i + 1 : j] + [first]
 
 
+class Screen:
+    """Granular filter: skip moves that lengthen a surrogate path cost by more than a threshold.
+
+    For the delivery problem the surrogate is the path cost on t* (5.11) from the depot, the
+    quantity NIA/MMA/SMMA and the thesis's GA minimise. Measured on dag40 and pairs120 from
+    SMMA's orders, the moves whose t* change is in the lowest fifth of all moves held every
+    move that shortens the makespan (96 of 96 on pairs120-0 at L/L0 = 0.45, 87 of 87 at 0.9,
+    20 of 20 on dag40-0 at 0.3), so the DP is run on those only, best t* change first.
+    """
+
+    def __init__(self, cost: np.ndarray, start: int, threshold: float) -> None:
+        self.cost, self.start, self.threshold = cost, int(start), float(threshold)
+
+    def delta(self, order: np.ndarray, a: int, segment: Sequence[int]) -> float:
+        """Change of the surrogate path cost when ``order[a:a+len(segment)]`` becomes it."""
+        b = a + len(segment) - 1
+        prev = self.start if a == 0 else int(order[a - 1])
+        old, new = [prev, *order[a : b + 1].tolist()], [prev, *segment]
+        if b + 1 < order.size:
+            old.append(int(order[b + 1]))
+            new.append(int(order[b + 1]))
+        cost = self.cost
+        return float(cost[new[:-1], new[1:]].sum() - cost[old[:-1], old[1:]].sum())
+
+    def rank(self, order: np.ndarray, moves: Iterable[tuple[int, list[int]]]) -> list:
+        """The moves within the threshold, smallest surrogate change first (stable)."""
+        scored = [(self.delta(order, a, seg), k, (a, seg)) for k, (a, seg) in enumerate(moves)]
+        return [move for d, _, move in sorted(scored) if d <= self.threshold]
+
+
 class _Budget:
     """Evaluations counted, and the wall clock read every :data:`_CHECK_EVERY` of them."""
 
@@ -383,6 +413,7 @@ def _local_search(
     max_block: int,
     radius: int,
     budget: _Budget,
+    screen: Screen | None = None,
 ) -> int:
     """First-improvement descent from ``states`` over the items flagged in ``look``
     (don't-look bits by item); returns the number of moves made. A move re-flags the items
@@ -395,7 +426,10 @@ def _local_search(
         position[states.order] = np.arange(states.order.size)
         i = int(position[item])
         improved = False
-        for a, segment in _moves(states.order, i, prec, window, max_block):
+        moves = _moves(states.order, i, prec, window, max_block)
+        if screen is not None:
+            moves = screen.rank(states.order, moves)
+        for a, segment in moves:
             if budget.tick():
                 break
             if states.try_segment(a, segment) is not None:
@@ -449,6 +483,7 @@ def ils_search(
     strength: int = 2,
     accept_worse: float = 0.01,
     radius: int = 2,
+    screen: Screen | None = None,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Iterated local search over precedence-feasible orders (see the module docstring).
 
@@ -480,6 +515,9 @@ def ils_search(
     radius : int
         Don't-look bits: a move or a perturbation re-flags the items within this many
         positions of those it moved.
+    screen : Screen, optional
+        Evaluate only the moves it passes, in its order (default: every move, nearest
+        first).
 
     Returns
     -------
@@ -526,7 +564,7 @@ def ils_search(
         start_value = min(start_value, states.value)
         look = np.zeros(size, dtype=bool)
         look[states.order] = True
-        made += _local_search(states, prec, look, rng, window, max_block, radius, budget)
+        made += _local_search(states, prec, look, rng, window, max_block, radius, budget, screen)
         if best is None or states.value < best.value:
             best, current = states, states.snapshot()
     if best is None:
@@ -546,7 +584,7 @@ def ils_search(
             for p in touched:
                 lo, hi = max(0, p - radius), min(best.order.size, p + radius + 1)
                 look[best.order[lo:hi]] = True
-            made += _local_search(best, prec, look, rng, window, max_block, radius, budget)
+            made += _local_search(best, prec, look, rng, window, max_block, radius, budget, screen)
             if best.value < incumbent[-1] - TOLERANCE * abs(incumbent[-1]):
                 incumbent = best.snapshot()
             if best.value <= current[-1] or best.value <= incumbent[-1] * (1 + accept_worse):
@@ -591,11 +629,15 @@ def ils_delivery(
     max_block: int = 3,
     strength: int = 2,
     accept_worse: float = 0.01,
+    tstar_screen: float | None = 1.5,
 ) -> Solution:
     """Iterated local search over orders, each scored by the exact schedule DP.
 
     Starts from SMMA's and MMA's orders (§5.4.2) and returns an order at least as good as
-    SMMA's; options as in :func:`ils_search`. ``info``: ``tstar_cost`` (the order's path
+    SMMA's; options as in :func:`ils_search`, and ``tstar_screen``: the DP evaluates only
+    moves that lengthen the t* path by at most ``tstar_screen`` times the mean t* leg of the
+    better start order, best t* change first (:class:`Screen`; None: every move, nearest
+    first). ``info``: ``tstar_cost`` (the order's path
     cost on t*), ``start_objective`` (the better start), ``iterations``, ``evaluations``,
     ``steps`` (DP sorties run), ``moves``, ``stopped_by``.
 
@@ -607,6 +649,12 @@ def ils_delivery(
     began = time.perf_counter()
     cost, start, pairs, _ = delivery_cost_matrix(instance)
     starts = [_tstar_order(rule, cost, pairs, start) for rule in (smma_order, mma_order)]
+    screen = None
+    if tstar_screen is not None:
+        if not tstar_screen >= 0:
+            raise InstanceError(f"tstar_screen must be >= 0 or None, got {tstar_screen!r}")
+        legs = min(path_cost(cost, [start, *order]) for order in starts) / max(instance.n, 1)
+        screen = Screen(cost, start, tstar_screen * legs)
     order, _, info = ils_search(
         lambda o: ScheduleStates(instance, o),
         starts,
@@ -619,6 +667,7 @@ def ils_delivery(
         max_block,
         strength,
         accept_worse,
+        screen=screen,
     )
     solution = schedule(instance, order.tolist())
     return solution.replace(

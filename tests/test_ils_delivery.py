@@ -21,10 +21,12 @@ from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.ils_delivery import (
     TOLERANCE,
     ScheduleStates,
+    Screen,
     _moves,
     _Precedence,
     forward_states,
 )
+from taopt.heuristics.sequencing import delivery_cost_matrix, path_cost
 from taopt.studies.delivery import study_instance
 
 SMALL = [(i, r) for i in range(4) for r in (0.15, 0.45, 0.9)]
@@ -80,8 +82,23 @@ def test_ils_time_limit_returns_a_feasible_plan():
     assert result.objective <= taopt.solve(inst, "SMMA").objective
 
 
+def test_ils_without_the_tstar_screen():
+    """With every move evaluated (no t* screen) ILS is still feasible and <= SMMA."""
+    inst = study_instance("dag40", 4, seed=1, ratio=0.3)
+    result = taopt.solve(inst, "ILS", seed=0, iterations=1, window=3, tstar_screen=None)
+    assert taopt.evaluate(inst, result.plan) == pytest.approx(result.objective, rel=1e-12)
+    assert result.objective <= taopt.solve(inst, "SMMA").objective
+
+
 @pytest.mark.parametrize(
-    "option", [{"iterations": -1}, {"window": 0}, {"max_block": 1.5}, {"accept_worse": -0.1}]
+    "option",
+    [
+        {"tstar_screen": -1.0},
+        {"iterations": -1},
+        {"window": 0},
+        {"max_block": 1.5},
+        {"accept_worse": -0.1},
+    ],
 )
 def test_ils_rejects_bad_options(option):
     """Bad search parameters raise InstanceError naming them."""
@@ -123,10 +140,14 @@ def test_incremental_move_evaluation_matches_full_schedule(index, ratio, setup, 
     prec = _Precedence(range(inst.n), inst.precedences)
     moves = [m for i in range(inst.n) for m in _moves(states.order, i, prec, 6, 3)]
     assert moves  # at least the first customer can move (moves from every position)
+    cost, depot, _, _ = delivery_cost_matrix(inst)
+    screen = Screen(cost, depot, 0.0)
     for a, segment in pick.sample(moves, min(len(moves), 12)):
         moved = states.order.copy()
         moved[a : a + len(segment)] = segment
         assert respects_precedences(inst, moved.tolist())
+        change = path_cost(cost, [depot, *moved]) - path_cost(cost, [depot, *states.order])
+        assert screen.delta(states.order, a, segment) == pytest.approx(change, abs=1e-6)
         truth = schedule(inst, moved.tolist()).info["dp_objective"]
         exact = states.try_segment(a, segment, exact=True)
         quick = states.try_segment(a, segment)
