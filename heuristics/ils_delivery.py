@@ -367,6 +367,7 @@ class Screen:
 
     def __init__(self, cost: np.ndarray, start: int, threshold: float) -> None:
         self.cost, self.start, self.threshold = cost, int(start), float(threshold)
+        self.rows = np.asarray(cost, dtype=float).tolist()  # plain floats: ~8 arcs per move
 
     def delta(self, order: np.ndarray, a: int, segment: Sequence[int]) -> float:
         """Change of the surrogate path cost when ``order[a:a+len(segment)]`` becomes it."""
@@ -376,8 +377,9 @@ class Screen:
         if b + 1 < order.size:
             old.append(int(order[b + 1]))
             new.append(int(order[b + 1]))
-        cost = self.cost
-        return float(cost[new[:-1], new[1:]].sum() - cost[old[:-1], old[1:]].sum())
+        rows = self.rows
+        added = sum(rows[u][v] for u, v in zip(new[:-1], new[1:], strict=True))
+        return added - sum(rows[u][v] for u, v in zip(old[:-1], old[1:], strict=True))
 
     def rank(self, order: np.ndarray, moves: Iterable[tuple[int, list[int]]]) -> list:
         """The moves within the threshold, smallest surrogate change first (stable)."""
@@ -476,9 +478,9 @@ def ils_search(
     items: Sequence[int],
     pairs: Iterable[Sequence[int]],
     seed: int | np.random.Generator | None = 0,
-    iterations: int = 200,
+    iterations: int = 30,
     time_limit: float | None = None,
-    window: int = 10,
+    window: int = 20,
     max_block: int = 3,
     strength: int = 2,
     accept_worse: float = 0.01,
@@ -624,8 +626,8 @@ def ils_delivery(
     instance: Any,
     seed: int = 0,
     time_limit: float | None = None,
-    iterations: int = 200,
-    window: int = 10,
+    iterations: int = 30,
+    window: int = 20,
     max_block: int = 3,
     strength: int = 2,
     accept_worse: float = 0.01,
@@ -693,8 +695,8 @@ def ils_sop(
     problem: SopProblem,
     seed: int = 0,
     time_limit: float | None = None,
-    iterations: int = 200,
-    window: int = 10,
+    iterations: int = 30,
+    window: int = 20,
     max_block: int = 3,
     strength: int = 2,
     accept_worse: float = 0.01,
