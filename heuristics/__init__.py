@@ -17,6 +17,7 @@ from taopt.heuristics.registry import run  # noqa: I001
 
 # Importing the modules registers their methods.
 from taopt.heuristics import clustering, ga_routing, sequencing, ga_delivery  # noqa: F401, E402
+from taopt.heuristics import ils_delivery  # noqa: F401, E402  (ILS over orders, chapter 5)
 from taopt.heuristics import comm  # noqa: F401, E402
 from taopt.heuristics import peers  # noqa: F401, E402  (PyVRP, OR-Tools: run in worker processes)
 from taopt.heuristics import dtaa, capability  # noqa: F401, E402  (chapter 3)

@@ -82,7 +82,7 @@ def test_method_styles_differ_without_colour():
         ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact"),
         ("DTAA", "GA", "GA-memetic", "MC", "exact"),
         ("DAA", "HDA", "CAA", "exact"),
-        ("NIA", "MMA", "SMMA", "GA", "subset-dp", "milp", "exact"),
+        ("NIA", "MMA", "SMMA", "GA", "ILS", "subset-dp", "milp", "exact"),
     )
     for group in chapters:
         pairs = {tuple(method_style(m).values()) for m in group}
