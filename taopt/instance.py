@@ -12,14 +12,11 @@ vehicles' start positions ``n..n+m-1``.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import json
 import math
 import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -27,6 +24,10 @@ import numpy as np
 from taopt import schemas
 from taopt.errors import InstanceError
 from taopt.fields import Field, field_from_dict
+
+# save_json, load_json and unique_temp live in taopt.io; re-exported here for compatibility
+# (code written against `from taopt.instance import save_json` keeps working).
+from taopt.io import load_json, save_json, unique_temp
 
 SCHEMA_VERSION = 1
 
@@ -369,47 +370,6 @@ def check_square(rows: Any, where: str, source: str) -> None:
                 f"{source}: {where}[{i}]: expected {len(rows)} numbers "
                 f"(the matrix must be square), got {len(row)}"
             )
-
-
-def unique_temp(path: str | os.PathLike[str], suffix: str = ".tmp") -> Path:
-    """A temporary name beside ``path`` that no other process or call uses:
-    ``.<name>.<pid>.<random>.tmp`` (hidden, so a folder listing does not show it)."""
-    import secrets
-
-    path = Path(path)
-    return path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(6)}{suffix}")
-
-
-def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
-    """Write JSON atomically (a temporary file renamed into place): nothing is written half.
-
-    The temporary file has a name of its own (:func:`unique_temp`), so two processes saving
-    the same path never write into one temporary file, and it is removed if anything fails.
-    """
-    path = Path(path)
-    text = json.dumps(data, indent=1, allow_nan=False)
-    tmp = unique_temp(path)
-    try:
-        with open(tmp, "x", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-
-
-def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
-    """Read a JSON file strictly and, given ``kind``, check it against that kind's schema.
-
-    Raises
-    ------
-    InstanceError
-        Missing or unreadable file, not UTF-8, invalid JSON, a ``NaN``/``Infinity``
-        literal or an overflowing number, or (given ``kind``) a schema violation; the
-        message starts with the path. See :func:`taopt.schemas.load_json`.
-    """
-    return schemas.load_json(path, kind)
 
 
 def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") -> tuple[Target, ...]:

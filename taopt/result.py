@@ -425,7 +425,7 @@ class Solution:
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the solution as JSON, atomically."""
-        from taopt.instance import save_json
+        from taopt.io import save_json
 
         save_json(self.to_dict(), path)
 
@@ -433,7 +433,7 @@ class Solution:
     def load(cls, path: str | os.PathLike[str]) -> Solution:
         """Read a solution written by :meth:`save` (strict JSON, validated; every failure an
         InstanceError starting with the path)."""
-        from taopt.instance import load_json
+        from taopt.io import load_json
 
         return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 

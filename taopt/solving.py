@@ -35,7 +35,8 @@ import pandas as pd
 
 from taopt import bounds as bound_functions
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError
-from taopt.instance import Instance, load_json
+from taopt.instance import Instance
+from taopt.io import load_json
 from taopt.limits import check_memory, navigation_bytes
 from taopt.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import certifying_method, family_for_kind, family_of, get_method

@@ -51,7 +51,7 @@ from typing import Any
 import pandas as pd
 
 from taopt.errors import InstanceError, TaoptError
-from taopt.instance import load_json, save_json, unique_temp
+from taopt.io import load_json, save_json, unique_temp
 
 COMPLETE = "complete"
 CONFIG = "config.json"

@@ -28,7 +28,8 @@ from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
-from taopt.instance import Instance, load_json
+from taopt.instance import Instance
+from taopt.io import load_json
 from taopt.result import Solution
 from taopt.routing.problem import AssignmentProblem
 

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from taopt.errors import InstanceError
-from taopt.instance import save_json, unique_temp
+from taopt.io import save_json, unique_temp
 from taopt.studyio import LOCK, ResultsStore, StudyLocked, folder_lock, normalize_key
 
 COLUMNS = ["k", "ratio", "method", "value", "status"]

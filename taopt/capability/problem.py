@@ -330,7 +330,7 @@ class CapabilityProblem:
             )
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        from taopt.instance import save_json
+        from taopt.io import save_json
 
         save_json(self.to_dict(), path)
 
@@ -338,7 +338,7 @@ class CapabilityProblem:
     def load(cls, path: str | os.PathLike[str]) -> CapabilityProblem:
         """Read a file written by :meth:`save` (strict JSON, validated; every failure an
         InstanceError naming the path)."""
-        from taopt.instance import load_json
+        from taopt.io import load_json
 
         return cls.from_dict(load_json(path, "capability_problem"), source=str(path))
 

@@ -276,7 +276,7 @@ class CommProblem:
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the problem as JSON (atomically)."""
-        from taopt.instance import save_json
+        from taopt.io import save_json
 
         save_json(self.to_dict(), path)
 
@@ -284,7 +284,7 @@ class CommProblem:
     def load(cls, path: str | os.PathLike[str]) -> CommProblem:
         """Read a problem written by :meth:`save` (strict JSON, validated; every failure an
         InstanceError starting with the path)."""
-        from taopt.instance import load_json
+        from taopt.io import load_json
 
         return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
 

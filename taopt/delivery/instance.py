@@ -29,7 +29,8 @@ from scipy.sparse.csgraph import connected_components, shortest_path
 
 from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
-from taopt.instance import check_schema, load_json, plain, save_json
+from taopt.instance import check_schema, plain
+from taopt.io import load_json, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
 

@@ -325,7 +325,7 @@ class SopProblem:
         """
         path = Path(name_or_path)
         if path.suffix.lower() == ".json":
-            from taopt.instance import load_json
+            from taopt.io import load_json
 
             return cls.from_dict(load_json(path), source=str(path))  # from_dict checks the schema
         cost, precedences, start, end, name = load_sop(name_or_path)
@@ -380,7 +380,7 @@ class SopProblem:
             )
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        from taopt.instance import save_json
+        from taopt.io import save_json
 
         save_json(self.to_dict(), path)
 

@@ -153,7 +153,7 @@ class AssignmentProblem:
             return cls(np.array(cost, dtype=float), int(data["n_targets"]), data.get("name", ""))
 
     def save(self, path: Any) -> None:
-        from taopt.instance import save_json
+        from taopt.io import save_json
 
         save_json(self.to_dict(), path)
 
@@ -161,7 +161,7 @@ class AssignmentProblem:
     def load(cls, path: Any) -> AssignmentProblem:
         """Read a file written by :meth:`save` (strict JSON, validated; every failure an
         InstanceError naming the path)."""
-        from taopt.instance import load_json
+        from taopt.io import load_json
 
         return cls.from_dict(load_json(path, "assignment_problem"), source=str(path))
 

@@ -27,7 +27,8 @@ import numpy as np
 
 from taopt.errors import InstanceError
 from taopt.fields import Field, field_from_dict, thesis_field
-from taopt.instance import Instance, save_json, unique_temp
+from taopt.instance import Instance
+from taopt.io import save_json, unique_temp
 from taopt.routing.problem import AssignmentProblem
 
 THESIS_SIDE = 1000.0
