@@ -44,6 +44,10 @@ from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution
 
+# path_cost is defined in taopt.tsplib; re-exported here (heuristics and tests import it from
+# this module).
+from taopt.tsplib import path_cost
+
 __all__ = [
     "nia_order",
     "mma_order",
@@ -544,15 +548,6 @@ def _second_step_successors(
 # ---------------------------------------------------------------------------------------------
 # Orders: cost and checks
 # ---------------------------------------------------------------------------------------------
-
-
-def path_cost(cost: Any, order: Sequence[int]) -> float:
-    """Sum of cost[order[i], order[i+1]] along the path (the open path cost on t*)."""
-    matrix = np.asarray(cost, dtype=float)
-    nodes = np.asarray(order, dtype=np.int64)
-    if len(nodes) < 2:
-        return 0.0
-    return float(matrix[nodes[:-1], nodes[1:]].sum())
 
 
 def check_order(

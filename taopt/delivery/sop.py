@@ -36,7 +36,6 @@ import dataclasses
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +45,10 @@ import numpy as np
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.result import Order
 from taopt.schemas import naming
+
+# path_cost is defined in taopt.tsplib and re-exported here (models and tests import it from
+# this module).
+from taopt.tsplib import path_cost, read_tsplib, shipped_tsplib, tsplib_file
 
 __all__ = [
     "KNOWN_OPTIMA",
@@ -72,8 +75,6 @@ KNOWN_OPTIMA: dict[str, int] = {
     "p43.4": 83005,
 }
 
-_DATA = "taopt.data"
-
 #: The largest |weight| a file may hold (docs/file-formats.md, "Magnitudes"); TSPLIB's
 #: structural 1000000 is well inside it.
 MAX_MAGNITUDE = 1e9
@@ -81,14 +82,13 @@ MAX_MAGNITUDE = 1e9
 
 def shipped_sop() -> list[str]:
     """Names (without ``.sop``) of the SOP files shipped in ``taopt/data/tsplib``."""
-    folder = resources.files(_DATA) / "tsplib"
-    return sorted(p.name[: -len(".sop")] for p in folder.iterdir() if p.name.endswith(".sop"))
+    return shipped_tsplib(".sop")
 
 
 def sop_path(name: str) -> Path:
     """Path of a shipped SOP file, e.g. ``sop_path("ESC07")``."""
     stem = name[: -len(".sop")] if name.endswith(".sop") else name
-    path = Path(str(resources.files(_DATA) / "tsplib" / f"{stem}.sop"))
+    path = tsplib_file(f"{stem}.sop")
     if not path.is_file():
         raise InstanceError(f"no shipped SOP file {stem!r}; shipped: {shipped_sop()}")
     return path
@@ -126,26 +126,8 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
     path = Path(path_or_name)
     if not path.is_file():
         path = sop_path(str(path_or_name))
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InstanceError(f"{path}: cannot be read as TSPLIB text ({exc})") from None
-    header: dict[str, str] = {}
-    tokens: list[str] = []
-    in_section = False
-    for line in text.splitlines():
-        text = line.strip()
-        if not text:
-            continue
-        if in_section:
-            if text.upper() == "EOF":
-                break
-            tokens.extend(text.split())
-        elif text.upper().startswith("EDGE_WEIGHT_SECTION"):
-            in_section = True
-        elif ":" in text:
-            key, value = text.split(":", 1)
-            header[key.strip().upper()] = value.strip()
+    header, weights = read_tsplib(path)
+    tokens = weights or []  # no EDGE_WEIGHT_SECTION: reported below as 0 numbers
     if header.get("TYPE", "").upper() != "SOP":
         raise InstanceError(f"{path}: TYPE is {header.get('TYPE')!r}, expected SOP")
     if header.get("EDGE_WEIGHT_FORMAT", "").upper() != "FULL_MATRIX":
@@ -188,12 +170,6 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
     name = header.get("NAME", path.stem)
     name = name[: -len(".sop")] if name.endswith(".sop") else name
     return cost, precedences, start, end, name
-
-
-def path_cost(cost: np.ndarray, order) -> float:
-    """Length of the path ``order[0] -> order[1] -> ...`` on ``cost`` (no return arc)."""
-    order = np.asarray(order, dtype=int)
-    return float(np.asarray(cost)[order[:-1], order[1:]].sum())
 
 
 def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.ndarray, nx.DiGraph]:

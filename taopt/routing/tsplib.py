@@ -18,13 +18,13 @@ Example
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from taopt.errors import InstanceError
 from taopt.routing.problem import AssignmentProblem
+from taopt.tsplib import read_tsplib, shipped_tsplib, tsplib_file
 
 #: Proven optima from TSPLIB95's documentation (DOC.PS, Table 2), also in its
 #: ``atsp/bestSolutions.txt``; see ``taopt/data/tsplib/README.md``.
@@ -79,8 +79,7 @@ class AtspInstance:
 
 def shipped() -> list[str]:
     """Names of the ATSP instances shipped in ``taopt/data/tsplib``."""
-    folder = resources.files("taopt") / "data" / "tsplib"
-    return sorted(p.name[: -len(".atsp")] for p in folder.iterdir() if p.name.endswith(".atsp"))
+    return shipped_tsplib(".atsp")
 
 
 def load_atsp(name_or_path: str | Path) -> AtspInstance:
@@ -102,26 +101,13 @@ def load_atsp(name_or_path: str | Path) -> AtspInstance:
     """
     path = Path(name_or_path)
     if path.suffix != ".atsp" and not path.exists():
-        candidate = resources.files("taopt") / "data" / "tsplib" / f"{name_or_path}.atsp"
-        if not candidate.is_file():
-            raise InstanceError(f"no shipped TSPLIB instance {name_or_path!r}; have {shipped()}")
-        text = candidate.read_text()
-    else:
+        path = tsplib_file(f"{name_or_path}.atsp")
         if not path.is_file():
-            raise InstanceError(f"TSPLIB file {str(path)!r} does not exist")
-        text = path.read_text()
-    header: dict[str, str] = {}
-    lines = text.splitlines()
-    body_start = None
-    for number, line in enumerate(lines):
-        stripped = line.strip()
-        if stripped.startswith("EDGE_WEIGHT_SECTION"):
-            body_start = number + 1
-            break
-        if ":" in stripped:
-            key, value = stripped.split(":", 1)
-            header[key.strip()] = value.strip()
-    if body_start is None:
+            raise InstanceError(f"no shipped TSPLIB instance {name_or_path!r}; have {shipped()}")
+    elif not path.is_file():
+        raise InstanceError(f"TSPLIB file {str(path)!r} does not exist")
+    header, tokens = read_tsplib(path)
+    if tokens is None:
         raise InstanceError(f"{name_or_path}: no EDGE_WEIGHT_SECTION")
     if header.get("TYPE") != "ATSP":
         raise InstanceError(f"{name_or_path}: TYPE is {header.get('TYPE')!r}, expected 'ATSP'")
@@ -134,12 +120,6 @@ def load_atsp(name_or_path: str | Path) -> AtspInstance:
         dimension = int(header["DIMENSION"])
     except (KeyError, ValueError):
         raise InstanceError(f"{name_or_path}: bad or missing DIMENSION") from None
-    tokens = []
-    for line in lines[body_start:]:
-        stripped = line.strip()
-        if stripped in ("EOF", "DISPLAY_DATA_SECTION") or stripped.endswith("_SECTION"):
-            break
-        tokens.extend(stripped.split())
     if len(tokens) != dimension * dimension:
         raise InstanceError(
             f"{name_or_path}: {len(tokens)} weights for DIMENSION {dimension} "
