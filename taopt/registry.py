@@ -12,7 +12,8 @@ A *method* (an exact model, a heuristic, a peer, a simulation policy) registers 
 ``taopt.heuristics``); :func:`taopt.solve` looks it up by (problem class, name). A method is
 a callable ``method(problem, **options) -> Solution``.
 
-Adding a family touches its own modules and one line of :data:`FAMILY_PACKAGES`.
+Adding a family touches its own modules and one line of
+:data:`taopt.families.FAMILY_PACKAGES`.
 
 Example
 -------
@@ -35,13 +36,10 @@ from typing import Any
 
 from taopt.errors import InstanceError
 
-#: Core packages whose import registers a family (imported on demand by kind look-ups).
-FAMILY_PACKAGES = (
-    "taopt.routing",
-    "taopt.delivery",
-    "taopt.capability",
-    "taopt.comm",
-)
+# FAMILY_PACKAGES and ensure_families live in taopt.families (which imports nothing of taopt,
+# so taopt.result can use it without importing this module); re-exported here.
+from taopt.families import FAMILY_PACKAGES, ensure_families
+from taopt.result import Solution
 
 #: Method categories: how a method's result may be read.
 CATEGORIES = ("exact", "heuristic", "peer", "simulation", "relaxation")
@@ -250,8 +248,6 @@ def register_family(
 
 def _scorer(evaluate: Callable[[Any, Any], float], payload: type) -> Callable[[Any, Any], float]:
     def score(problem: Any, solution: Any) -> float:
-        from taopt.result import Solution
-
         if isinstance(solution, Solution):
             solution = solution.solution
             if solution is None:
@@ -330,16 +326,6 @@ def register_method(
         return func
 
     return wrap
-
-
-def ensure_families() -> None:
-    """Import every package of :data:`FAMILY_PACKAGES` (each registers its family).
-
-    A family that fails to import fails loudly: its ImportError is raised as it is, never
-    skipped (a family silently missing would make its file kind "unknown").
-    """
-    for package in FAMILY_PACKAGES:
-        importlib.import_module(package)
 
 
 def family_of(item: Any) -> Family:

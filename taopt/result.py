@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import FeasibilityError, InstanceError
+from taopt.families import ensure_families
 
 
 class Status(str, enum.Enum):
@@ -93,8 +94,6 @@ def register_payload(name: str) -> Callable[[type], type]:
 
 def payload_type(name: str) -> type:
     """The payload class registered under ``name`` (families register theirs on import)."""
-    from taopt.registry import ensure_families
-
     ensure_families()
     try:
         return _PAYLOADS[name]

@@ -382,10 +382,10 @@ def test_every_exact_method_is_registered_by_taopt_models():
 
 def test_a_family_that_fails_to_import_fails_loudly(monkeypatch):
     """ensure_families raises the ImportError of a broken family instead of skipping it."""
-    from taopt import registry
+    from taopt import families, registry
 
-    broken = (*registry.FAMILY_PACKAGES, "taopt._no_such_family")
-    monkeypatch.setattr(registry, "FAMILY_PACKAGES", broken)
+    broken = (*families.FAMILY_PACKAGES, "taopt._no_such_family")
+    monkeypatch.setattr(families, "FAMILY_PACKAGES", broken)
     with pytest.raises(ImportError, match="_no_such_family"):
         registry.file_kinds()
 
