@@ -485,11 +485,12 @@ def test_time_limit_contract_on_mid_size(sec, limit):
 def test_time_limit_below_build_estimate_returns_bounds_without_model(monkeypatch):
     """When building the model cannot fit the limit, the incumbent and assignment bound return."""
     from taopt.models import routing
+    from taopt.models.routing import compact, dfj
 
     problem = drift_problem(45, 5, seed=3)
     optimum = solve_routing(problem).objective
-    monkeypatch.setattr(routing, "BUILD_SECONDS_PER_ARC", 1.0)
-    monkeypatch.setattr(routing, "COMPACT_SECONDS_PER_ARC", 1.0)
+    monkeypatch.setattr(dfj, "BUILD_SECONDS_PER_ARC", 1.0)
+    monkeypatch.setattr(compact, "COMPACT_SECONDS_PER_ARC", 1.0)
     for sec in SECS:
         limited = solve_routing(problem, sec=sec, time_limit=5.0)
         assert limited.info["stage"] == "build" and limited.status == "time_limit"

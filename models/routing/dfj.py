@@ -1,0 +1,443 @@
+"""The DFJ loop of chapter 2: (2.2)–(2.4) on one live HiGHS model, (2.5) rows added lazily.
+
+:class:`DfjModel` passes (2.2)–(2.4) once to HiGHS and adds (2.5) rows in place;
+:meth:`DfjModel.root` solves the root LP with exact separation
+(:func:`~taopt.models.routing.separation.separate_subtours`), :func:`dfj_root` returns it,
+and :func:`_solve_dfj` runs the MIP rounds on a reduced-cost core until the gap is closed
+(see :func:`taopt.models.routing.solve.solve_routing`, Notes).
+
+References
+----------
+Thesis §2.2.1, (2.5).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from taopt.errors import SolverError
+from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
+from taopt.models.routing.compact import (
+    ASSIGNMENT_SECONDS_PER_CUBE,
+    _first_incumbent,
+    _highs_limit,
+    _solution,
+    _solve_compact,
+)
+from taopt.models.routing.formulation import (
+    RoutingModel,
+    _check,
+    arc_list,
+    assignment_bound,
+    build,
+    decode,
+    entry_bound,
+    repair,
+)
+from taopt.models.routing.separation import cut_rows, separate_subtours
+from taopt.result import Solution
+from taopt.routing.problem import AssignmentProblem, evaluate_routes
+
+#: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
+CORE_SIZE = 4
+
+
+#: HiGHS options of the DFJ rounds. A smaller cut pool than HiGHS's default (10000)
+#: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
+#: bench_routing_exact.py); the optimum and its proof do not depend on it.
+MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+
+
+#: Seconds per arc to build :class:`DfjModel` (arrays and HiGHS's ``passModel``), and per
+#: arc before HiGHS's simplex first checks its clock (its setup of the LP): upper
+#: estimates measured on a loaded 2-core machine (about 1 and 3.5 µs for n = 1000,
+#: benchmarks/bench_routing_exact.py --limit). Under a time limit a stage is not started
+#: when its estimate exceeds the time left: the incumbent and the bounds proven so far
+#: are returned instead (status "time_limit").
+BUILD_SECONDS_PER_ARC = 2e-6
+
+
+#: Seconds per arc before HiGHS's simplex first checks its clock (see above).
+LP_SECONDS_PER_ARC = 4e-6
+
+
+#: Compact formulation that finishes a DFJ loop which stalls with an open gap.
+FALLBACK_SEC = "flow"
+
+
+@dataclass
+class RootRelaxation:
+    """The DFJ LP relaxation at the root: (2.2)–(2.4) plus separated (2.5) rows.
+
+    Attributes
+    ----------
+    cuts : list of tuple
+        The subsets S whose (2.5) rows were added (every one a valid row).
+    value : float
+        HiGHS's LP value with those rows (``-inf`` if no LP finished).
+    bound : float
+        A proven lower bound on the optimum of (2.2)–(2.5) from the LP's row
+        duals (:meth:`taopt.models.highs.HighsModel.lagrangian_bound`); equal
+        to ``value`` up to solver tolerances.
+    reduced_costs : ndarray
+        Reduced cost ``d_a`` of every arc: a solution that uses arc a costs at
+        least ``bound + d_a``.
+    values : ndarray or None
+        σ at the LP optimum.
+    rounds : int
+        LPs solved.
+    complete : bool
+        The last separation found no violated (2.5) row: ``value`` is the LP
+        bound of the full (2.2)–(2.5).
+    """
+
+    cuts: list[tuple[int, ...]]
+    value: float
+    bound: float
+    reduced_costs: np.ndarray
+    values: np.ndarray | None
+    rounds: int
+    complete: bool
+
+
+class DfjModel:
+    """(2.2)–(2.4) passed once to one live HiGHS model; (2.5) rows added in place.
+
+    The rows of :func:`build` (no cuts) are written straight into sparse
+    arrays — column a is σ of arc ``tails[a] -> heads[a]``, with a 1 in row
+    ``heads[a]`` of (2.3) and in row ``n + tails[a]`` of (2.4) — and passed to
+    HiGHS by :meth:`taopt.models.highs.HighsModel.from_arrays`: the same model
+    cvxpy would compile, without cvxpy's compilation (about 20 s for the
+    million arcs of n = 1000, against a fraction of a second here; the
+    cvxpy model is :attr:`formulation`, built on demand). Afterwards every
+    (2.5) row found, at the root LP or in a MIP round, is added to the same
+    ``highspy.Highs`` object; arcs are switched off and on through their upper
+    bounds, and a MIP start is passed with ``Highs.setSolution``.
+    """
+
+    def __init__(self, problem: AssignmentProblem, verbose: bool = False) -> None:
+        self.problem = problem
+        n, m = problem.n, problem.m
+        size = n + m
+        self.tails, self.heads = arc_list(problem)
+        n_arcs = len(self.tails)
+        self.arcs = np.arange(n_arcs)
+        # (2.3) rows 0..n-1: sum_i sigma_ij = 1; (2.4) rows n..2n+m-1: sum_j sigma_ij <= 1
+        rows = np.empty(2 * n_arcs, dtype=np.int64)
+        rows[0::2] = self.heads
+        rows[1::2] = n + self.tails
+        matrix = sp.csc_matrix(
+            (np.ones(2 * n_arcs), rows, np.arange(0, 2 * n_arcs + 1, 2)),
+            shape=(n + size, n_arcs),
+        )
+        self.model = HighsModel.from_arrays(
+            cost=problem.cost[self.tails, self.heads],  # (2.2)
+            matrix=matrix,
+            lower=np.concatenate([np.ones(n), np.full(size, -np.inf)]),
+            upper=np.ones(n + size),
+            column_lower=np.zeros(n_arcs),
+            column_upper=np.ones(n_arcs),
+            integers=self.arcs,
+            verbose=verbose,
+        )
+        self.cuts: list[tuple[int, ...]] = []
+        self._known: set[tuple[int, ...]] = set()
+        self.arc_index = np.full((size, n), -1, dtype=np.int64)
+        self.arc_index[self.tails, self.heads] = np.arange(n_arcs)
+        self._formulation: RoutingModel | None = None
+
+    @property
+    def formulation(self) -> RoutingModel:
+        """The same (2.2)–(2.4) as a labelled cvxpy model (:func:`build`), built on first use."""
+        if self._formulation is None:
+            self._formulation = build(self.problem, "dfj")
+        return self._formulation
+
+    def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
+        """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
+        new = []
+        for subset in cuts:
+            subset = tuple(sorted(int(v) for v in subset))
+            if len(subset) >= 2 and subset not in self._known:
+                self._known.add(subset)
+                new.append(subset)
+        if new:
+            rows, lower, upper = cut_rows(self.problem, new, self.tails, self.heads)
+            full = sp.csr_matrix(
+                (rows.data, self.arcs[rows.indices], rows.indptr),
+                shape=(rows.shape[0], self.model.n_columns),
+            )
+            self.model.add_rows(full, lower, upper)
+            self.cuts.extend(new)
+        return len(new)
+
+    def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
+        """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
+        if solution is None:
+            solution = self.model.highs.getSolution().col_value
+        return np.asarray(solution, dtype=float)[self.arcs]
+
+    def start_vector(self, routes: list[list[int]]) -> np.ndarray:
+        """The full column vector of σ for ``routes`` (a MIP start)."""
+        vector = np.zeros(self.model.n_columns)
+        vector[self.arcs[self.route_arcs(routes)]] = 1.0
+        return vector
+
+    def route_arcs(self, routes: list[list[int]]) -> np.ndarray:
+        """Arc indices used by ``routes``."""
+        n = self.problem.n
+        arcs = []
+        for k, route in enumerate(routes):
+            points = [n + k, *route]
+            arcs.extend(self.arc_index[points[:-1], points[1:]])
+        return np.asarray(arcs, dtype=np.int64)
+
+    def root(
+        self,
+        budget: float | None = None,
+        max_rounds: int | None = None,
+    ) -> RootRelaxation:
+        """Solve the DFJ LP, separating (2.5) exactly (:func:`separate_subtours`) until none is left.
+
+        The model is switched to its LP relaxation for the loop and back to
+        binary σ at the end. Each re-solve after new rows starts from the last
+        basis. Stops early after ``budget`` seconds or ``max_rounds`` LPs
+        (``complete`` False).
+        """
+        began = time.perf_counter()
+        deadline = None if budget is None else began + budget
+        self.model.relax(True)
+        rounds, value, complete = 0, -np.inf, False
+        bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
+        try:
+            while max_rounds is None or rounds < max_rounds:
+                left = None if budget is None else budget - (time.perf_counter() - began)
+                if left is not None and left < LP_SECONDS_PER_ARC * len(self.arcs):
+                    break  # HiGHS would not even reach its first clock check in time
+                rounds += 1
+                run = self.model.solve(time_limit=left)
+                if run.solver_status != "optimal" or run.objective is None:
+                    if run.solver_status not in ("user_limit",):
+                        raise SolverError(
+                            f"the DFJ LP relaxation ended with status {run.solver_status!r}"
+                        )
+                    break
+                value = run.objective
+                values = self.arc_values()
+                bound, full_reduced = self.model.lagrangian_bound()
+                reduced = full_reduced[self.arcs]
+                found = separate_subtours(
+                    self.problem, self.tails, self.heads, values, deadline=deadline
+                )
+                if deadline is not None and time.perf_counter() >= deadline:
+                    self.add_cuts(found)  # valid rows, but the separation may be unfinished
+                    break
+                if not self.add_cuts(found):
+                    complete = True
+                    break
+        finally:
+            self.model.relax(False)
+        return RootRelaxation(
+            cuts=list(self.cuts),
+            value=value,
+            bound=bound,
+            reduced_costs=reduced,
+            values=values,
+            rounds=rounds,
+            complete=complete,
+        )
+
+
+def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> RootRelaxation:
+    """The root DFJ LP of (2.2)–(2.5) with its exactly separated (2.5) rows.
+
+    Every returned subset S is a row of (2.5), so any feasible solution
+    satisfies ``Σ_{i,j∈S} σ_ij ≤ |S| − 1``.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt import AssignmentProblem
+    >>> cost = np.array([[0, 1, 9], [1, 0, 9], [5, 6, 0.0]])
+    >>> root = dfj_root(AssignmentProblem(cost, 2))
+    >>> root.cuts, root.value
+    ([(0, 1)], 6.0)
+    """
+    _check(problem, "dfj")
+    return DfjModel(problem).root(budget=time_limit)
+
+
+def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started) -> Solution:
+    def remaining() -> float | None:
+        return None if time_limit is None else time_limit - (time.perf_counter() - started)
+
+    n, m = problem.n, problem.m
+    best_routes, best_value = _first_incumbent(problem, given)
+    best_bound = entry_bound(problem)
+    left = remaining()
+    if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
+        best_bound = max(best_bound, assignment_bound(problem))
+    n_arcs = (n + m) * n - n
+    left = remaining()
+    if left is not None and left < BUILD_SECONDS_PER_ARC * n_arcs:
+        # no time to build the model: the incumbent with the bounds proven so far
+        bound = min(best_bound, best_value)
+        status, stopped_by = certify(best_value, bound, "time_limit")
+        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": stopped_by}
+        info.update(solver_status="", stage="build", mip_gap=mip_gap)
+        return _solution(
+            problem, best_value, status, bound, started, "exact-dfj", best_routes, info
+        )
+    dfj = DfjModel(problem, verbose=verbose)
+    # 1. root LP with exact separation; at most half of a time limit
+    budget = remaining()
+    root = dfj.root(budget=None if budget is None else 0.5 * budget)
+    root_cuts = len(dfj.cuts)
+    best_bound = max(best_bound, root.bound)
+    # 2. the core: arcs of small reduced cost, at most CORE_SIZE per point at first
+    # (all arcs if the root LP did not finish)
+    if np.isfinite(root.bound):
+        size = min(CORE_SIZE * (n + m), len(dfj.arcs))
+        cap = float(np.partition(root.reduced_costs, size - 1)[size - 1])
+    else:
+        cap = np.inf
+    core = np.ones(len(dfj.arcs), dtype=bool)
+
+    def resize_core() -> bool:
+        """Core := arcs with ``d_a <= min(UB − L, cap)``, plus the incumbent's. Changed?
+
+        Arcs with ``d_a > UB − L`` cannot be in a solution better than the incumbent
+        (``UB``); ``cap`` keeps the first rounds small while UB is still poor.
+        """
+        if not np.isfinite(root.bound):
+            return False
+        slack = 1e-9 * max(1.0, abs(best_value))
+        wanted = root.reduced_costs <= min(best_value - root.bound + slack, cap)
+        wanted[dfj.route_arcs(best_routes)] = True
+        on, off = wanted & ~core, core & ~wanted
+        dfj.model.set_upper(dfj.arcs[on], 1.0)
+        dfj.model.set_upper(dfj.arcs[off], 0.0)
+        core[:] = wanted
+        return bool(on.any() or off.any())
+
+    resize_core()
+
+    def outside_bound() -> float:
+        """Proven bound on every solution using an arc outside the core."""
+        if core.all():
+            return np.inf
+        return root.bound + float(root.reduced_costs[~core].min())
+
+    # 3. MIP rounds on the core, (2.5) rows from every solution HiGHS reports
+    harvested: list[tuple[int, ...]] = []
+    candidates: list[tuple[float, list[list[int]]]] = []
+
+    def harvest(solution: np.ndarray) -> None:
+        values = dfj.arc_values(solution)
+        try:
+            routes, subtours = decode(problem, dfj, values)
+        except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
+            return
+        if subtours:
+            harvested.extend(tuple(sorted(c)) for c in subtours)
+            routes = repair(problem, routes, subtours)
+        candidates.append((evaluate_routes(problem, routes), routes))
+
+    target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
+    rounds = 0
+    solver_status, stopped_by = "", "time_limit"
+    stall = False
+    while True:
+        left = remaining()
+        if left is not None and left < LP_SECONDS_PER_ARC * int(core.sum()):
+            stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
+            break
+        rounds += 1
+        dfj.model.set_start(dfj.start_vector(best_routes))
+        harvested.clear()
+        candidates.clear()
+        run = dfj.model.solve(
+            time_limit=_highs_limit(left),
+            mip_rel_gap=mip_gap,
+            on_solution=harvest,
+            options=MIP_OPTIONS,
+        )
+        solver_status = run.solver_status
+        if solver_status not in ("optimal", "user_limit"):
+            raise SolverError(f"HiGHS returned status {solver_status!r} on the DFJ model")
+        # every solution stays in the core (cost >= HiGHS's bound) or leaves it
+        core_bound = run.bound if run.bound is not None else -np.inf
+        best_bound = max(best_bound, min(core_bound, outside_bound()))
+        for value, routes in candidates:
+            if value < best_value:
+                best_routes, best_value = routes, value
+        subtours: list[list[int]] = []
+        if run.has_point:
+            routes, subtours = decode(problem, dfj, dfj.arc_values())
+            candidate = repair(problem, routes, subtours) if subtours else routes
+            value = evaluate_routes(problem, candidate)
+            if value < best_value:
+                best_routes, best_value = candidate, value
+        dfj.add_cuts([*map(tuple, subtours), *harvested])
+        stopped_by = run.stopped_by
+        if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
+            break  # proven: "optimal", or "mip_gap" for a loose gap
+        if run.stopped_by in ("time_limit", "solver_limit"):
+            break  # a limit: the incumbent stands with the bound proven so far
+        if rounds >= max_rounds:
+            stopped_by = "max_rounds"
+            break
+        # only arcs that can still improve on the incumbent stay in the model; once
+        # the core's own optimum has no cycle, every such arc comes in
+        if not subtours:
+            cap = np.inf
+        if not run.has_point or (not resize_core() and not subtours):
+            # Nothing left to learn, yet the gap is open: the round's answer contradicts
+            # the proof (a solver fault, as HiGHS 1.16's MIP starts in a presolved space
+            # were before HighsModel checked them). A compact model closes it.
+            stall = True
+            break
+    if stall:
+        fallback = _solve_compact(
+            problem, FALLBACK_SEC, time_limit, mip_gap, verbose, best_routes, started
+        )
+        if fallback.objective < best_value:
+            best_routes, best_value = fallback.routes, fallback.objective
+        if fallback.bound is not None:
+            best_bound = max(best_bound, fallback.bound)
+        stopped_by = fallback.info["stopped_by"]
+        solver_status = fallback.info["solver_status"]
+    bound = min(best_bound, best_value)
+    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
+    status, stopped_by = certify(best_value, bound, stopped_by)
+    info = {
+        "rounds": rounds,
+        "cuts": len(dfj.cuts),
+        "root_cuts": root_cuts,
+        "root_rounds": root.rounds,
+        "lp_bound": root.bound,
+        "core_arcs": int(core.sum()),
+        "arcs": len(dfj.arcs),
+        "solver_status": solver_status,
+        "mip_gap": mip_gap,
+        "stopped_by": stopped_by,
+        "reruns": dfj.model.reruns,
+        "fallback": FALLBACK_SEC if stall else None,
+    }
+    return _solution(problem, best_value, status, bound, started, "exact-dfj", best_routes, info)
+
+
+__all__ = [
+    "CORE_SIZE",
+    "MIP_OPTIONS",
+    "BUILD_SECONDS_PER_ARC",
+    "LP_SECONDS_PER_ARC",
+    "FALLBACK_SEC",
+    "RootRelaxation",
+    "DfjModel",
+    "dfj_root",
+]
