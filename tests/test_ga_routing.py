@@ -203,10 +203,12 @@ def test_tails_move_by_hand():
     """2-opt* on routes 3 -> 0 -> 1 and 4 -> 2 (starts 3, 4; end 5): swapping the tails after
     target 0 and after start 4 exchanges targets 1 and 2; an empty tail after target 1 hands
     target 2 to vehicle 0."""
+    from taopt.heuristics import ga_local_search
+
     nodes = np.array([3, 0, 1, 4, 2, 5])
-    swapped = ga_routing._apply(nodes.copy(), "tails", 1, 3, 0)  # cuts before positions 2, 4
+    swapped = ga_local_search._apply(nodes.copy(), "tails", 1, 3, 0)  # cuts before positions 2, 4
     assert swapped.tolist() == [3, 0, 2, 4, 1, 5]
-    moved = ga_routing._apply(nodes.copy(), "tails", 2, 3, 0)  # cuts before positions 3, 4
+    moved = ga_local_search._apply(nodes.copy(), "tails", 2, 3, 0)  # cuts before positions 3, 4
     assert moved.tolist() == [3, 0, 1, 2, 4, 5]
 
 
