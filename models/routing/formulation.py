@@ -34,6 +34,7 @@ if TYPE_CHECKING:
 # the logger of the package (a child of the "taopt" logger), as before the split
 logger = logging.getLogger("taopt.models.routing")
 
+#: The ways (2.5) can be written: DFJ rows (added lazily), MTZ order variables, a flow.
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
 
 
