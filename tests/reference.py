@@ -188,7 +188,10 @@ def check_method(reference: Reference, method: str) -> taopt.Solution:
         assert solution.bound <= optimum * (1 + REL) + 1e-9, (method, solution.bound, optimum)
     if spec.exact:
         assert solution.status == "optimal", (method, solution.summary())
-        assert abs(solution.objective - optimum) <= REL * max(1.0, optimum), (method, optimum)
+    elif spec.category == "peer":  # a peer may prove its answer (CP-SAT does), or stop on the limit
+        assert solution.status in ("optimal", "feasible", "time_limit"), (method, solution.summary())
     else:
         assert solution.status == "feasible", (method, solution.summary())
+    if solution.status == "optimal":  # whoever claims the optimum must be at it
+        assert abs(solution.objective - optimum) <= REL * max(1.0, optimum), (method, optimum)
     return solution
