@@ -1,9 +1,9 @@
 """Iterated local search over precedence-feasible orders, each scored by the exact schedule DP.
 
-The thesis's own search for chapter 5 is the topological-sort GA (:mod:`ga_delivery`), which
+The thesis's own search for chapter 5 is the topological-sort GA (:mod:`taopt.heuristics.ga_delivery`), which
 optimises the path cost on t* (5.11) and only schedules its best order. This module is a
 *competent* ordering metaheuristic in the sense of chapter 2's memetic GA
-(:mod:`ga_routing`): it starts from the constructive heuristics' orders, improves them by
+(:mod:`taopt.heuristics.ga_routing`): it starts from the constructive heuristics' orders, improves them by
 local search, and judges every candidate order by the quantity that matters, the makespan
 (5.1) of the best truck schedule for that order (the exact fixed-order DP of
 :func:`taopt.delivery.schedule.schedule`).
