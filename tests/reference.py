@@ -189,7 +189,10 @@ def check_method(reference: Reference, method: str) -> taopt.Solution:
     if spec.exact:
         assert solution.status == "optimal", (method, solution.summary())
     elif spec.category == "peer":  # a peer may prove its answer (CP-SAT does), or stop on the limit
-        assert solution.status in ("optimal", "feasible", "time_limit"), (method, solution.summary())
+        assert solution.status in ("optimal", "feasible", "time_limit"), (
+            method,
+            solution.summary(),
+        )
     else:
         assert solution.status == "feasible", (method, solution.summary())
     if solution.status == "optimal":  # whoever claims the optimum must be at it
