@@ -478,11 +478,12 @@ class _Search:
             out[part] += self.bound.extra(mask[part], last[part])
         return out
 
-    def path(self, layers, k: int) -> list[int]:
-        """The path ending at state ``k`` of the last layer, by the parent pointers."""
-        path = [int(layers[-1][1][k])]
-        at = int(layers[-1][3][k])
-        for level in range(len(layers) - 2, -1, -1):
+    def path(self, layers, k: int, top: int = -1) -> list[int]:
+        """The path ending at state ``k`` of layer ``top`` (the last), by the parents."""
+        top = top % len(layers)
+        path = [int(layers[top][1][k])]
+        at = int(layers[top][3][k])
+        for level in range(top - 1, -1, -1):
             path.append(int(layers[level][1][at]))
             at = int(layers[level][3][at])
         path.reverse()
@@ -560,6 +561,40 @@ class _Run:
         open layer or among the dropped states."""
         open_min = float(self.layer_total.min()) if len(self.layer_total) else np.inf
         return min(open_min, self.pruned_min)
+
+
+def _join(forward: _Run, backward: _Run, cost: np.ndarray):
+    """Meet in the middle: the cheapest path through a forward state ``(I, v)`` of the
+    forward's last layer, an arc ``v -> w`` and a backward state ``(V \\ I, w)``.
+
+    Returns ``(cost, path)`` or None (no pair joins). Every path cheaper than the
+    incumbent crosses both layers unpruned, so it is among the pairs.
+    """
+    n = forward.n
+    top = len(forward.layers) - 1
+    other = n - 2 - top  # the backward layer with the complementary sets
+    f_mask, f_last, f_value, _ = forward.layers[top]
+    b_mask, b_first, b_value, _ = backward.layers[other]
+    full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
+    order = np.argsort(b_mask, kind="stable")
+    sorted_mask = b_mask[order]
+    wanted = ~f_mask & full
+    lo = np.searchsorted(sorted_mask, wanted, side="left")
+    hi = np.searchsorted(sorted_mask, wanted, side="right")
+    counts = hi - lo
+    if counts.sum() == 0:
+        return None
+    left = np.repeat(np.arange(len(f_mask)), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    right = order[np.repeat(lo, counts) + offsets]
+    total = f_value[left] + forward.search.usable[f_last[left], b_first[right]] + b_value[right]
+    best = int(np.argmin(total))
+    if not np.isfinite(total[best]):
+        return None
+    head = forward.search.path(forward.layers, int(left[best]), top)
+    tail = backward.search.path(backward.layers, int(right[best]), other)
+    path = head + tail[::-1]
+    return path_cost(cost, path), path
 
 
 def beam_order(
@@ -692,6 +727,12 @@ def solve_sop_dp(
             break
         if run.finished:
             done = run
+        elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:
+            done = runs[0]  # the two directions meet: join them
+            joined = _join(runs[0], runs[1], problem.cost)
+            done.best_path = None if joined is None else joined[1]
+            done.pruned_min = min(r.pruned_min for r in runs)
+            info["met"] = True
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
         if cost < upper:
@@ -700,6 +741,8 @@ def solve_sop_dp(
     pruned = sum(r.pruned for r in runs)
     peak = max(r.peak for r in runs)
     info["direction"] = None if done is None else ("backward" if done.reverse else "forward")
+    if info.get("met"):
+        info["direction"] = "both"
     info.update(states=kept, pruned=pruned, peak_layer=peak)
     objective = np.inf if known is None else known[0]
     runtime = time.perf_counter() - began
