@@ -42,7 +42,21 @@ arcs still usable (the additive bounding of Fischetti and Toth). This is what cl
 ESC25 and ESC47: without the prices the DP kept 2.3 million states on ESC25 and did not
 finish ESC47 within 2 million; with them 454 and about 25,000. The minima over ``U``
 are found per state by a binary search over each node's arcs sorted by reduced cost
-(the first arc whose other end is still unvisited), ``O(n log n)`` per state.
+(the first arc whose other end is still unvisited), ``O(n log n)`` per state. The arc
+out of ``v`` goes to an *available* node (its predecessors all in ``I``), and exactly
+one node of ``U`` is entered from ``v``: ``in`` takes the cheapest arc from ``U`` for every
+node but one available node, entered from ``v`` (the cheapest such swap).
+
+Two directions. The same DP on the reversed SOP (:func:`reversed_problem`: transposed
+costs, reversed precedences, ``end`` first) builds paths backwards from ``end``, over the
+order *filters*; its completion bound is the same bound on the reversed data. The two run
+side by side, one layer at a time, the one that has kept fewer states advancing; when the
+forward depth plus the backward depth reaches ``n - 2``, a forward state ``(I, v)`` and a
+backward state ``(V \\ I, w)`` joined by the arc ``v -> w`` are exactly the paths, and the
+cheapest join is the optimum (every path cheaper than the incumbent is unpruned in both).
+The pruning is much stronger in one direction on some instances: rbg048a's forward
+search kept 5.5 million states in 33 s without closing; the backward one closes it in
+0.4 s. Meeting in the middle spares each direction its widest layers (the middle ones).
 
 Pruning. With an incumbent of cost ``UB`` (the warm start, or ``incumbent=``), a state
 with ``f + g >= UB - tol`` cannot lead to a path cheaper than ``UB`` by more than
@@ -80,6 +94,7 @@ __all__ = [
     "IDEAL_CAP",
     "count_ideals",
     "completion_bound",
+    "reversed_problem",
     "solve_sop_dp",
 ]
 
@@ -666,14 +681,18 @@ def solve_sop_dp(
         Width of the widest beam pass (:func:`beam_order`), run first to improve the
         incumbent: width :data:`NARROW_BEAM`, then ``beam_width``, within
         :data:`BEAM_SHARE` of the time (0: no beam).
+    both : bool
+        Search forward and backward (:func:`reversed_problem`) and meet in the middle
+        (the module docstring); False: forward only.
 
     Returns
     -------
     Solution
         ``order``, ``objective`` (its path cost recomputed from the data), ``status``
         "optimal", "time_limit" or "infeasible", ``bound``; ``info`` has ``states`` (kept
-        over all layers), ``pruned``, ``peak_layer``, ``beam`` (the beam's cost when it improved the incumbent) and
-        ``stopped_by``.
+        over all layers), ``pruned``, ``peak_layer``, ``beam`` (the beam's cost when it improved the incumbent),
+        ``direction`` ("both" when the directions met, "forward"/"backward" when one
+        finished alone, None when stopped) and ``stopped_by``.
 
     Raises
     ------
