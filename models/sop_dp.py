@@ -737,8 +737,9 @@ def solve_sop_dp(
     stopped_by = None
     done = None
     while done is None:
-        # advance the direction that has kept fewer states so far (forward on ties)
-        run = min(runs, key=lambda r: r.kept)
+        # advance the direction with the smaller last layer (forward on ties): each grows
+        # into its widest layers only as far as the other is wider
+        run = min(runs, key=lambda r: len(r.layers[-1][0]))
         limit = np.inf if max_states is None else 4 * max_states
         room = None if max_states is None else max_states - sum(r.kept for r in runs)
         stopped_by = run.step(upper, tolerance, deadline, limit, room)
