@@ -690,9 +690,10 @@ def solve_sop_dp(
     Solution
         ``order``, ``objective`` (its path cost recomputed from the data), ``status``
         "optimal", "time_limit" or "infeasible", ``bound``; ``info`` has ``states`` (kept
-        over all layers), ``pruned``, ``peak_layer``, ``beam`` (the beam's cost when it improved the incumbent),
-        ``direction`` ("both" when the directions met, "forward"/"backward" when one
-        finished alone, None when stopped) and ``stopped_by``.
+        over all layers, both directions), ``pruned``, ``peak_layer``, ``beam`` (the
+        beam's cost when it improved the incumbent), ``direction`` ("both" when the
+        directions met, "forward"/"backward" when one finished alone, None when
+        stopped) and ``stopped_by``.
 
     Raises
     ------
@@ -701,8 +702,8 @@ def solve_sop_dp(
 
     Notes
     -----
-    Time ``O(S · n log n)`` and memory ``O(S)`` for ``S`` states kept, at most
-    ``n ×`` the number of ideals; the bound and the incumbent cut ``S`` by orders of
+    Time ``O(S · n log n)`` and memory ``O(S)`` for ``S`` states kept (both directions),
+    at most ``2n ×`` the number of ideals; the bound and the incumbent cut ``S`` by orders of
     magnitude on the TSPLIB instances (``benchmarks/bench_sop.py``).
 
     Example
