@@ -108,6 +108,15 @@ IDEAL_CAP = 20_000
 BEAM_SHARE = 0.25
 NARROW_BEAM = 64
 
+#: Default of ``solve_sop_dp(both_prices=...)``: off (see its docstring).
+BOTH_PRICES = False
+
+#: The other prices are dropped when, over their first ``SECOND_PRICES_TRIAL`` states, they
+#: prune under ``SECOND_PRICES_MIN_SHARE`` of them (ry48p.4, ft53.4: nothing to gain there,
+#: and the second bound doubled the time).
+SECOND_PRICES_TRIAL = 20_000
+SECOND_PRICES_MIN_SHARE = 0.02
+
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
 PRUNE_TOLERANCE = 1e-9
 
@@ -423,6 +432,8 @@ class _Search:
         self.pred = _predecessor_masks(problem)
         self.bits = _bits(n)
         self.bound = _completion(self.usable, problem.start, problem.end, self.pred)
+        self.more_bounds: list[_Bound] = []  # the same bound on other prices (max taken)
+        self.trial: dict[int, list[int]] = {}  # per extra bound: states evaluated, pruned
         self.problem = problem
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -484,14 +495,30 @@ class _Search:
         it is pruned anyway, so ``max(in', out')`` is not computed for it (the reduced costs
         are non-negative, :func:`assignment_potentials`).
         """
-        out = value + self.bound.potential(mask, last)
-        need = np.flatnonzero(out < cutoff)
-        for lo in range(0, len(need), chunk):
-            if deadline.expired(MARGIN):
-                return None
-            part = need[lo : lo + chunk]
-            out[part] += self.bound.extra(mask[part], last[part])
-        return out
+        best = None
+        for bound in [self.bound, *self.more_bounds]:
+            out = value + bound.potential(mask, last)
+            if best is not None:  # a second price set: only where the first did not prune
+                out = np.maximum(out, best)
+            need = np.flatnonzero(out < cutoff)
+            for lo in range(0, len(need), chunk):
+                if deadline.expired(MARGIN):
+                    return None
+                part = need[lo : lo + chunk]
+                out[part] = np.maximum(out[part], value[part] + bound(mask[part], last[part]))
+            if best is not None:
+                self._judge(bound, len(need), int((out[need] >= cutoff).sum()))
+            best = out
+        return best
+
+    def _judge(self, bound: _Bound, evaluated: int, pruned: int) -> None:
+        """Drop a second price set that prunes under :data:`SECOND_PRICES_MIN_SHARE` of the
+        states it was evaluated on, once it has seen :data:`SECOND_PRICES_TRIAL` states."""
+        seen = self.trial.setdefault(id(bound), [0, 0])
+        seen[0] += evaluated
+        seen[1] += pruned
+        if seen[0] >= SECOND_PRICES_TRIAL and seen[1] < SECOND_PRICES_MIN_SHARE * seen[0]:
+            self.more_bounds = [b for b in self.more_bounds if b is not bound]
 
     def path(self, layers, k: int, top: int = -1) -> list[int]:
         """The path ending at state ``k`` of layer ``top`` (the last), by the parents."""
@@ -656,6 +683,7 @@ def solve_sop_dp(
     max_states: int | None = None,
     beam_width: int = 1024,
     both: bool = True,
+    both_prices: bool = BOTH_PRICES,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -684,6 +712,12 @@ def solve_sop_dp(
     both : bool
         Search forward and backward (:func:`reversed_problem`) and meet in the middle
         (the module docstring); False: forward only.
+    both_prices : bool
+        With ``both``: each direction's bound is also taken on the other direction's
+        assignment prices (transposed; the LP is degenerate, these are other optimal
+        prices) and the larger value kept. It certifies rbg050c (2.9 million states,
+        36 s) where one price set does not within 10 million, but costs 1.5–1.7 × the
+        time on ESC47, ry48p.4 and ft53.4, so it is off by default.
 
     Returns
     -------
@@ -735,6 +769,14 @@ def solve_sop_dp(
     upper = np.inf if known is None else known[0]
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
     runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    if both and both_prices:
+        # the assignment LP is degenerate: the reversed problem's optimal prices (read
+        # transposed) are other optimal prices, and often prune other states
+        for run, other in ((runs[0], runs[1]), (runs[1], runs[0])):
+            s, o = run.search, other.search.bound
+            s.more_bounds.append(
+                _Bound(s.usable, s.problem.start, s.problem.end, (o.beta, o.alpha), s.pred)
+            )
     stopped_by = None
     done = None
     while done is None:

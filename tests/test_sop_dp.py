@@ -296,3 +296,16 @@ def test_portfolio_certifies_rbg048a():
     result = taopt.solve(problem, "exact", time_limit=60)
     assert result.status == OPTIMAL and result.objective == 351
     assert evaluate_order(problem, result.order) == 351
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_both_price_sets_still_equal_brute_force(seed):
+    """The bound on both directions' prices (the larger of two valid bounds) stays exact."""
+    problem = random_problem(600 + seed, 8, 0.1 * (seed % 3), 0.15)
+    optimum = brute_force(problem)
+    result = solve_sop_dp(problem, beam_width=0, both_prices=True)
+    if not np.isfinite(optimum):
+        assert result.status == INFEASIBLE
+        return
+    assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+    assert result.bound == pytest.approx(optimum)
