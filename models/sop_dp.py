@@ -42,7 +42,21 @@ arcs still usable (the additive bounding of Fischetti and Toth). This is what cl
 ESC25 and ESC47: without the prices the DP kept 2.3 million states on ESC25 and did not
 finish ESC47 within 2 million; with them 454 and about 25,000. The minima over ``U``
 are found per state by a binary search over each node's arcs sorted by reduced cost
-(the first arc whose other end is still unvisited), ``O(n log n)`` per state.
+(the first arc whose other end is still unvisited), ``O(n log n)`` per state. The arc
+out of ``v`` goes to an *available* node (its predecessors all in ``I``), and exactly
+one node of ``U`` is entered from ``v``: ``in`` takes the cheapest arc from ``U`` for every
+node but one available node, entered from ``v`` (the cheapest such swap).
+
+Two directions. The same DP on the reversed SOP (:func:`reversed_problem`: transposed
+costs, reversed precedences, ``end`` first) builds paths backwards from ``end``, over the
+order *filters*; its completion bound is the same bound on the reversed data. The two run
+side by side, one layer at a time, the one that has kept fewer states advancing; when the
+forward depth plus the backward depth reaches ``n - 2``, a forward state ``(I, v)`` and a
+backward state ``(V \\ I, w)`` joined by the arc ``v -> w`` are exactly the paths, and the
+cheapest join is the optimum (every path cheaper than the incumbent is unpruned in both).
+The pruning is much stronger in one direction on some instances: rbg048a's forward
+search kept 5.5 million states in 33 s without closing; the backward one closes it in
+0.4 s. Meeting in the middle spares each direction its widest layers (the middle ones).
 
 Pruning. With an incumbent of cost ``UB`` (the warm start, or ``incumbent=``), a state
 with ``f + g >= UB - tol`` cannot lead to a path cheaper than ``UB`` by more than
@@ -80,6 +94,7 @@ __all__ = [
     "IDEAL_CAP",
     "count_ideals",
     "completion_bound",
+    "reversed_problem",
     "solve_sop_dp",
 ]
 
@@ -92,6 +107,15 @@ IDEAL_CAP = 20_000
 #: Share of the time limit the beam passes may use, and the width of the first pass.
 BEAM_SHARE = 0.25
 NARROW_BEAM = 64
+
+#: Default of ``solve_sop_dp(both_prices=...)``: off (see its docstring).
+BOTH_PRICES = False
+
+#: The other prices are dropped when, over their first ``SECOND_PRICES_TRIAL`` states, they
+#: prune under ``SECOND_PRICES_MIN_SHARE`` of them (ry48p.4, ft53.4: nothing to gain there,
+#: and the second bound doubled the time).
+SECOND_PRICES_TRIAL = 20_000
+SECOND_PRICES_MIN_SHARE = 0.02
 
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
 PRUNE_TOLERANCE = 1e-9
@@ -179,6 +203,7 @@ class _Bound:
         start: int,
         end: int,
         potentials: tuple[np.ndarray, np.ndarray] | None = None,
+        pred: np.ndarray | None = None,
     ) -> None:
         n = usable.shape[0]
         self.n, self.start, self.end = n, start, end
@@ -187,6 +212,7 @@ class _Bound:
         self.alpha, self.beta = potentials
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
+        self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
         bits = _bits(n)
         self.bits = bits
         self.into = [self._sorted(usable[:, w], bits) for w in range(n)]
@@ -241,12 +267,24 @@ class _Bound:
         return self.potential(mask, last) + self.extra(mask, last)
 
     def extra(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
-        """``max(in', out')`` on the reduced costs (>= 0 when they are)."""
-        n, bits = self.n, self.bits
+        """``max(in', out')`` on the reduced costs (>= 0 when they are).
+
+        Exactly one node of ``U`` is entered from ``v``, and only a node whose
+        predecessors are all in ``I`` (*available*): ``in'`` is the sum over ``U`` of the
+        cheapest arc from ``U``, plus the least ``c'[v, w] - (that arc)`` over available
+        ``w`` (one node swaps its in-arc for the arc from ``v``); ``out'`` leaves ``v``
+        towards an available node.
+        """
+        n, bits, pred = self.n, self.bits, self.pred
         full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
         unvisited = ~mask & full
-        total_in = np.zeros(len(mask))
-        total_out = np.zeros(len(mask))
+        count = len(mask)
+        total_in = np.zeros(count)
+        total_out = np.zeros(count)
+        swap = np.full(count, np.inf)  # least c'[v, w] - in_U(w) over available w
+        forced = np.zeros(count, dtype=np.int64)  # nodes of U enterable from v only
+        forced_cost = np.zeros(count)
+        available = np.zeros(count, dtype=np.uint64)
         for w in range(n):
             if w == self.start:
                 continue
@@ -255,11 +293,25 @@ class _Bound:
                 continue
             others = unvisited[todo] & ~bits[w]
             from_open = self._cheapest(others, self.into[w])
-            from_last = self.usable[last[todo], w]
-            total_in[todo] += np.minimum(from_open, from_last)
+            ready = (mask[todo] & pred[w]) == pred[w]
+            from_last = np.where(ready, self.usable[last[todo], w], np.inf)
+            available[np.flatnonzero(todo)[ready]] |= bits[w]
+            finite = np.isfinite(from_open)
+            add = np.where(finite, from_open, 0.0)
+            total_in[todo] += add
+            with np.errstate(invalid="ignore"):
+                delta = np.where(finite, from_last - add, np.inf)
+            swap[todo] = np.minimum(swap[todo], delta)
+            only = ~finite
+            forced[todo] += only
+            forced_cost[todo] += np.where(only, from_last, 0.0)
             if w != self.end:
                 total_out[todo] += self._cheapest(others, self.out[w])
-        total_out += self._cheapest_from_last(unvisited, last)
+        # no forced node: one swap; one: it is the node entered from v; more: infeasible
+        total_in += np.where(forced == 0, swap, np.where(forced == 1, forced_cost, np.inf))
+        total_in[unvisited == 0] = 0.0
+        total_out += self._cheapest_from_last(available, last)
+        total_out[unvisited == 0] = 0.0
         return np.maximum(total_in, total_out)
 
     def _cheapest_from_last(self, unvisited: np.ndarray, last: np.ndarray) -> np.ndarray:
@@ -270,13 +322,13 @@ class _Bound:
         return np.where(unvisited == 0, 0.0, result)
 
 
-def _completion(usable: np.ndarray, start: int, end: int) -> _Bound:
+def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | None = None) -> _Bound:
     """``g`` on the reduced costs of the assignment prices (:func:`assignment_potentials`).
 
     The bound on the plain costs (zero prices) is valid too, but on ESC47, ft53.4 and
     ry48p.4 it pruned under 0.3 % more states than this one alone, at twice the time.
     """
-    return _Bound(usable, start, end, assignment_potentials(usable, start, end))
+    return _Bound(usable, start, end, assignment_potentials(usable, start, end), pred)
 
 
 def assignment_potentials(
@@ -356,7 +408,7 @@ def completion_bound(problem: SopProblem, visited: set[int], last: int) -> float
     tails, heads = usable_arcs(problem.cost, problem.closure)
     usable = np.full((problem.n, problem.n), np.inf)
     usable[tails, heads] = problem.cost[tails, heads]
-    bound = _completion(usable, problem.start, problem.end)
+    bound = _completion(usable, problem.start, problem.end, _predecessor_masks(problem))
     mask = np.array([sum(1 << v for v in visited)], dtype=np.uint64)
     return float(bound(mask, np.array([last]))[0])
 
@@ -379,7 +431,9 @@ class _Search:
         self.usable[tails, heads] = problem.cost[tails, heads]
         self.pred = _predecessor_masks(problem)
         self.bits = _bits(n)
-        self.bound = _completion(self.usable, problem.start, problem.end)
+        self.bound = _completion(self.usable, problem.start, problem.end, self.pred)
+        self.more_bounds: list[_Bound] = []  # the same bound on other prices (max taken)
+        self.trial: dict[int, list[int]] = {}  # per extra bound: states evaluated, pruned
         self.problem = problem
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -441,24 +495,148 @@ class _Search:
         it is pruned anyway, so ``max(in', out')`` is not computed for it (the reduced costs
         are non-negative, :func:`assignment_potentials`).
         """
-        out = value + self.bound.potential(mask, last)
-        need = np.flatnonzero(out < cutoff)
-        for lo in range(0, len(need), chunk):
-            if deadline.expired(MARGIN):
-                return None
-            part = need[lo : lo + chunk]
-            out[part] += self.bound.extra(mask[part], last[part])
-        return out
+        best = None
+        for bound in [self.bound, *self.more_bounds]:
+            out = value + bound.potential(mask, last)
+            if best is not None:  # a second price set: only where the first did not prune
+                out = np.maximum(out, best)
+            need = np.flatnonzero(out < cutoff)
+            for lo in range(0, len(need), chunk):
+                if deadline.expired(MARGIN):
+                    return None
+                part = need[lo : lo + chunk]
+                out[part] = np.maximum(out[part], value[part] + bound(mask[part], last[part]))
+            if best is not None:
+                self._judge(bound, len(need), int((out[need] >= cutoff).sum()))
+            best = out
+        return best
 
-    def path(self, layers, k: int) -> list[int]:
-        """The path ending at state ``k`` of the last layer, by the parent pointers."""
-        path = [int(layers[-1][1][k])]
-        at = int(layers[-1][3][k])
-        for level in range(len(layers) - 2, -1, -1):
+    def _judge(self, bound: _Bound, evaluated: int, pruned: int) -> None:
+        """Drop a second price set that prunes under :data:`SECOND_PRICES_MIN_SHARE` of the
+        states it was evaluated on, once it has seen :data:`SECOND_PRICES_TRIAL` states."""
+        seen = self.trial.setdefault(id(bound), [0, 0])
+        seen[0] += evaluated
+        seen[1] += pruned
+        if seen[0] >= SECOND_PRICES_TRIAL and seen[1] < SECOND_PRICES_MIN_SHARE * seen[0]:
+            self.more_bounds = [b for b in self.more_bounds if b is not bound]
+
+    def path(self, layers, k: int, top: int = -1) -> list[int]:
+        """The path ending at state ``k`` of layer ``top`` (the last), by the parents."""
+        top = top % len(layers)
+        path = [int(layers[top][1][k])]
+        at = int(layers[top][3][k])
+        for level in range(top - 1, -1, -1):
             path.append(int(layers[level][1][at]))
             at = int(layers[level][3][at])
         path.reverse()
         return path
+
+
+def reversed_problem(problem: SopProblem) -> SopProblem:
+    """The same SOP read backwards: transposed costs, reversed precedences, ``end`` first.
+
+    A path of it reversed is a path of ``problem`` of the same cost (and conversely), so
+    the DP over its ideals (the *filters* of ``problem``) is the backward DP.
+    """
+    return SopProblem(
+        np.ascontiguousarray(problem.cost.T),
+        tuple((j, r) for r, j in problem.precedences),
+        problem.end,
+        problem.start,
+        problem.name,
+    )
+
+
+class _Run:
+    """One direction of the exact DP, advanced one layer per :meth:`step`."""
+
+    def __init__(self, problem: SopProblem, reverse: bool) -> None:
+        self.reverse = reverse
+        self.n = problem.n
+        self.search = _Search(problem)
+        mask, last, value, parent = self.search.first()
+        self.layers = [(mask, last, value, parent)]  # layer k: (mask, last, value, parent)
+        self.layer_total = self.search.totals(mask, last, value, Deadline(None))
+        self.pruned_min = np.inf
+        self.pruned = 0
+        self.kept = 1
+        self.peak = 1
+        self.finished = False
+        self.best_cost = np.inf
+        self.best_path: list[int] | None = None
+
+    def step(self, upper, tolerance, deadline, limit, room) -> str | None:
+        """Expand one layer; the reason to stop ("time_limit", "max_states") or None."""
+        mask, last, value, _ = self.layers[-1]
+        grown = self.search.grow(mask, last, value, deadline, limit)
+        if grown is None:
+            return "time_limit" if deadline.expired(MARGIN) else "max_states"
+        # drop the states whose value plus completion bound cannot beat the incumbent
+        # (with no incumbent: those the bound sees cannot be completed, g = inf)
+        total = self.search.totals(*grown[:3], deadline, cutoff=upper - tolerance)
+        if total is None:
+            return "time_limit"
+        keep = total < upper - tolerance
+        if not keep.all():
+            self.pruned += int((~keep).sum())
+            self.pruned_min = min(self.pruned_min, float(total[~keep].min()))
+            grown = tuple(a[keep] for a in grown)
+        if room is not None and len(grown[0]) > room:
+            return "max_states"  # the previous layer stays the open one
+        self.layers.append(grown)
+        self.layer_total = total[keep]
+        self.kept += len(grown[0])
+        self.peak = max(self.peak, len(grown[0]))
+        if len(grown[0]) == 0 or len(self.layers) == self.n:
+            self.finished = True
+            if len(self.layers) == self.n and len(grown[0]) > 0:
+                # the last layer is (V, end): a path cheaper than the incumbent
+                path = self.search.path(self.layers, int(np.argmin(grown[2])))
+                if self.reverse:
+                    path.reverse()
+                self.best_path = path
+                self.best_cost = float(np.min(grown[2]))
+        return None
+
+    def proven(self) -> float:
+        """The bound this direction proves while unfinished: every cheaper path is in the
+        open layer or among the dropped states."""
+        open_min = float(self.layer_total.min()) if len(self.layer_total) else np.inf
+        return min(open_min, self.pruned_min)
+
+
+def _join(forward: _Run, backward: _Run, cost: np.ndarray):
+    """Meet in the middle: the cheapest path through a forward state ``(I, v)`` of the
+    forward's last layer, an arc ``v -> w`` and a backward state ``(V \\ I, w)``.
+
+    Returns ``(cost, path)`` or None (no pair joins). Every path cheaper than the
+    incumbent crosses both layers unpruned, so it is among the pairs.
+    """
+    n = forward.n
+    top = len(forward.layers) - 1
+    other = n - 2 - top  # the backward layer with the complementary sets
+    f_mask, f_last, f_value, _ = forward.layers[top]
+    b_mask, b_first, b_value, _ = backward.layers[other]
+    full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
+    order = np.argsort(b_mask, kind="stable")
+    sorted_mask = b_mask[order]
+    wanted = ~f_mask & full
+    lo = np.searchsorted(sorted_mask, wanted, side="left")
+    hi = np.searchsorted(sorted_mask, wanted, side="right")
+    counts = hi - lo
+    if counts.sum() == 0:
+        return None
+    left = np.repeat(np.arange(len(f_mask)), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    right = order[np.repeat(lo, counts) + offsets]
+    total = f_value[left] + forward.search.usable[f_last[left], b_first[right]] + b_value[right]
+    best = int(np.argmin(total))
+    if not np.isfinite(total[best]):
+        return None
+    head = forward.search.path(forward.layers, int(left[best]), top)
+    tail = backward.search.path(backward.layers, int(right[best]), other)
+    path = head + tail[::-1]
+    return path_cost(cost, path), path
 
 
 def beam_order(
@@ -504,6 +682,8 @@ def solve_sop_dp(
     cheap_bound: float | None = None,
     max_states: int | None = None,
     beam_width: int = 1024,
+    both: bool = True,
+    both_prices: bool = BOTH_PRICES,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -529,14 +709,25 @@ def solve_sop_dp(
         Width of the widest beam pass (:func:`beam_order`), run first to improve the
         incumbent: width :data:`NARROW_BEAM`, then ``beam_width``, within
         :data:`BEAM_SHARE` of the time (0: no beam).
+    both : bool
+        Search forward and backward (:func:`reversed_problem`) and meet in the middle
+        (the module docstring); False: forward only.
+    both_prices : bool
+        With ``both``: each direction's bound is also taken on the other direction's
+        assignment prices (transposed; the LP is degenerate, these are other optimal
+        prices) and the larger value kept. It certifies rbg050c (2.9 million states,
+        36 s) where one price set does not within 10 million, but costs 1.5–1.7 × the
+        time on ESC47, ry48p.4 and ft53.4, so it is off by default.
 
     Returns
     -------
     Solution
         ``order``, ``objective`` (its path cost recomputed from the data), ``status``
         "optimal", "time_limit" or "infeasible", ``bound``; ``info`` has ``states`` (kept
-        over all layers), ``pruned``, ``peak_layer``, ``beam`` (the beam's cost when it improved the incumbent) and
-        ``stopped_by``.
+        over all layers, both directions), ``pruned``, ``peak_layer``, ``beam`` (the
+        beam's cost when it improved the incumbent), ``direction`` ("both" when the
+        directions met, "forward"/"backward" when one finished alone, None when
+        stopped) and ``stopped_by``.
 
     Raises
     ------
@@ -545,8 +736,8 @@ def solve_sop_dp(
 
     Notes
     -----
-    Time ``O(S · n log n)`` and memory ``O(S)`` for ``S`` states kept, at most
-    ``n ×`` the number of ideals; the bound and the incumbent cut ``S`` by orders of
+    Time ``O(S · n log n)`` and memory ``O(S)`` for ``S`` states kept (both directions),
+    at most ``2n ×`` the number of ideals; the bound and the incumbent cut ``S`` by orders of
     magnitude on the TSPLIB instances (``benchmarks/bench_sop.py``).
 
     Example
@@ -576,53 +767,50 @@ def solve_sop_dp(
                 known = beam
                 info["beam"] = beam[0]
     upper = np.inf if known is None else known[0]
-    search = _Search(problem)
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
-    mask, last, value, parent = search.first()
-    layers = [(mask, last, value, parent)]  # layer k: (mask, last, value, parent in k - 1)
-    layer_total = search.totals(mask, last, value, Deadline(None))
-    pruned_min = np.inf
-    pruned = 0
-    kept = 1
-    peak = 1
+    runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    if both and both_prices:
+        # the assignment LP is degenerate: the reversed problem's optimal prices (read
+        # transposed) are other optimal prices, and often prune other states
+        for run, other in ((runs[0], runs[1]), (runs[1], runs[0])):
+            s, o = run.search, other.search.bound
+            s.more_bounds.append(
+                _Bound(s.usable, s.problem.start, s.problem.end, (o.beta, o.alpha), s.pred)
+            )
     stopped_by = None
-    for _size in range(1, n):
+    done = None
+    while done is None:
+        # advance the direction with the smaller last layer (forward on ties): each grows
+        # into its widest layers only as far as the other is wider
+        run = min(runs, key=lambda r: len(r.layers[-1][0]))
         limit = np.inf if max_states is None else 4 * max_states
-        grown = search.grow(mask, last, value, deadline, limit)
-        if grown is None:
-            stopped_by = "time_limit" if deadline.expired(MARGIN) else "max_states"
+        room = None if max_states is None else max_states - sum(r.kept for r in runs)
+        stopped_by = run.step(upper, tolerance, deadline, limit, room)
+        if stopped_by is not None:
             break
-        # drop the states whose value plus completion bound cannot beat the incumbent
-        # (with no incumbent: those the bound sees cannot be completed, g = inf)
-        total = search.totals(*grown[:3], deadline, cutoff=upper - tolerance)
-        if total is None:
-            stopped_by = "time_limit"
-            break
-        keep = total < upper - tolerance
-        if not keep.all():
-            pruned += int((~keep).sum())
-            pruned_min = min(pruned_min, float(total[~keep].min()))
-            grown = tuple(a[keep] for a in grown)
-        if max_states is not None and kept + len(grown[0]) > max_states:
-            stopped_by = "max_states"  # the previous layer stays the open one
-            break
-        mask, last, value, parent = grown
-        layer_total = total[keep]
-        layers.append(grown)
-        kept += len(mask)
-        peak = max(peak, len(mask))
-        if len(mask) == 0:
-            break
-    info.update(states=kept, pruned=pruned, peak_layer=peak)
-    if stopped_by is None and len(layers) == n and len(mask) > 0:
-        # the last layer is (V, end): a path cheaper than the incumbent
-        path = search.path(layers, int(np.argmin(value)))
-        cost = path_cost(problem.cost, path)
+        if run.finished:
+            done = run
+        elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:
+            done = runs[0]  # the two directions meet: join them
+            joined = _join(runs[0], runs[1], problem.cost)
+            done.best_path = None if joined is None else joined[1]
+            done.pruned_min = min(r.pruned_min for r in runs)
+            info["met"] = True
+    if done is not None and done.best_path is not None:
+        cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
         if cost < upper:
-            known = (cost, path)
+            known = (cost, done.best_path)
+    kept = sum(r.kept for r in runs)
+    pruned = sum(r.pruned for r in runs)
+    peak = max(r.peak for r in runs)
+    info["direction"] = None if done is None else ("backward" if done.reverse else "forward")
+    if info.get("met"):
+        info["direction"] = "both"
+    info.update(states=kept, pruned=pruned, peak_layer=peak)
     objective = np.inf if known is None else known[0]
     runtime = time.perf_counter() - began
     if stopped_by is None:
+        pruned_min = done.pruned_min
         if known is None and not np.isfinite(pruned_min):  # no state can reach the end
             return Solution(
                 objective=np.inf,
@@ -645,8 +833,8 @@ def solve_sop_dp(
             info={**info, "stopped_by": None},
         )
     # stopped: the open layer and the dropped states hold every cheaper path
-    open_min = float(layer_total.min()) if len(layer_total) else np.inf
-    proven = min(open_min, pruned_min)
+    # each direction alone proves min(open layer, dropped states); both hold: the larger
+    proven = max(r.proven() for r in runs)
     if cheap_bound is None:
         cheap_bound = _cheap_bound(problem)
     proven = max(proven, cheap_bound) if np.isfinite(proven) else max(cheap_bound, 0.0)

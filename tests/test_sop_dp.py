@@ -9,6 +9,7 @@ portfolio against TSPLIB's proven optima.
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,7 +17,13 @@ import pytest
 import taopt
 from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, evaluate_order, shipped_sop
 from taopt.models.sop import solve_sop, solve_sop_problem
-from taopt.models.sop_dp import beam_order, completion_bound, count_ideals, solve_sop_dp
+from taopt.models.sop_dp import (
+    beam_order,
+    completion_bound,
+    count_ideals,
+    reversed_problem,
+    solve_sop_dp,
+)
 from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT
 
 
@@ -234,3 +241,71 @@ def test_assignment_prices_leave_no_negative_reduced_cost(seed):
     optimum = brute_force(problem)
     total = alpha[np.arange(problem.n) != problem.end].sum() + beta.sum()
     assert total <= optimum + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_each_direction_and_the_meeting_equal_brute_force(seed):
+    """Forward alone, the reversed problem alone and the two meeting all give the optimum."""
+    problem = random_problem(300 + seed, 8, 0.1 * (seed % 3), 0.1 * (seed % 4))
+    optimum = brute_force(problem)
+    met = solve_sop_dp(problem, beam_width=0)
+    forward = solve_sop_dp(problem, beam_width=0, both=False)
+    backward = solve_sop_dp(reversed_problem(problem), beam_width=0, both=False)
+    if not np.isfinite(optimum):
+        assert met.status == forward.status == backward.status == INFEASIBLE
+        return
+    for result in (met, forward, backward):
+        assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+        assert result.bound == pytest.approx(optimum)
+    assert evaluate_order(problem, met.order) == pytest.approx(optimum)
+    assert met.order[0] == problem.start and met.order[-1] == problem.end
+
+
+def test_the_two_directions_meet_on_a_search_without_pruning():
+    """With no incumbent and no beam nothing prunes: the search ends by the meeting join."""
+    problem = random_problem(400, 8, 0.0, 0.2)
+    result = solve_sop_dp(problem, beam_width=0)
+    assert result.info["direction"] == "both"
+    assert result.objective == pytest.approx(brute_force(problem))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_completion_bound_of_the_reversed_problem_is_valid(seed):
+    """The backward search's bound (the bound on the reversed SOP) never exceeds the truth."""
+    problem = reversed_problem(random_problem(500 + seed, 7, 0.15, 0.3))
+    for order in itertools.islice(feasible_orders(problem), 20):
+        for k in range(1, problem.n):
+            prefix = tuple(order[:k])
+            true = min(
+                (
+                    float(problem.cost[o[k - 1 :][:-1], o[k - 1 :][1:]].sum())
+                    for o in feasible_orders(problem, prefix)
+                ),
+                default=np.inf,
+            )
+            assert completion_bound(problem, set(prefix), prefix[-1]) <= true + 1e-9
+
+
+RBG = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / "tsplib"
+
+
+@pytest.mark.skipif(not (RBG / "rbg048a.sop").exists(), reason="shared TSPLIB files absent")
+def test_portfolio_certifies_rbg048a():
+    """rbg048a (TSPLIB optimum 351): the portfolio proves it (the backward search closes it)."""
+    problem = SopProblem.load(RBG / "rbg048a.sop")
+    result = taopt.solve(problem, "exact", time_limit=60)
+    assert result.status == OPTIMAL and result.objective == 351
+    assert evaluate_order(problem, result.order) == 351
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_both_price_sets_still_equal_brute_force(seed):
+    """The bound on both directions' prices (the larger of two valid bounds) stays exact."""
+    problem = random_problem(600 + seed, 8, 0.1 * (seed % 3), 0.15)
+    optimum = brute_force(problem)
+    result = solve_sop_dp(problem, beam_width=0, both_prices=True)
+    if not np.isfinite(optimum):
+        assert result.status == INFEASIBLE
+        return
+    assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+    assert result.bound == pytest.approx(optimum)
