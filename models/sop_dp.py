@@ -104,11 +104,14 @@ MAX_NODES = 64
 #: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
 IDEAL_CAP = 20_000
 
-#: Share of the time limit the beam passes may use, and the width of the first pass.
+#: Share of the time limit the beam passes may use.
 BEAM_SHARE = 0.25
+
+#: Width of the first, narrow beam pass.
 NARROW_BEAM = 64
 
-#: Default of ``solve_sop_dp(both_prices=...)``: off (see its docstring).
+#: Default of ``solve_sop_dp(both_prices=...)``: off (see its docstring); the portfolio's
+#: second DP stage turns it on.
 BOTH_PRICES = False
 
 #: The other prices are dropped when, over their first ``SECOND_PRICES_TRIAL`` states, they

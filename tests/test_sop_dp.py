@@ -9,7 +9,6 @@ portfolio against TSPLIB's proven optima.
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -286,16 +285,25 @@ def test_completion_bound_of_the_reversed_problem_is_valid(seed):
             assert completion_bound(problem, set(prefix), prefix[-1]) <= true + 1e-9
 
 
-RBG = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / "tsplib"
-
-
-@pytest.mark.skipif(not (RBG / "rbg048a.sop").exists(), reason="shared TSPLIB files absent")
 def test_portfolio_certifies_rbg048a():
     """rbg048a (TSPLIB optimum 351): the portfolio proves it (the backward search closes it)."""
-    problem = SopProblem.load(RBG / "rbg048a.sop")
+    problem = SopProblem.load("rbg048a")
     result = taopt.solve(problem, "exact", time_limit=60)
-    assert result.status == OPTIMAL and result.objective == 351
-    assert evaluate_order(problem, result.order) == 351
+    assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA["rbg048a"]
+    assert evaluate_order(problem, result.order) == result.objective
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "name", ["ESC25", "ESC47", "rbg048a", "rbg050c", "p43.4", "ry48p.4", "ft53.4"]
+)
+def test_portfolio_certifies_the_issue_16_set(name):
+    """The certification set of issue 16 at its known optima within 120 s (rbg050c needs the
+    second DP stage, about 40 s)."""
+    problem = SopProblem.load(name)
+    result = taopt.solve(problem, "exact", time_limit=120)
+    assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
+    assert evaluate_order(problem, result.order) == result.objective
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -63,7 +63,8 @@ __all__ = [
 
 #: Proven optima of the shipped .sop files (TSPLIB95 DOC.PS Table 3; confirmed by
 #: xgillard/ddo and IsaacRudich/ImprovedPnB, and by a Held–Karp DP for all but ESC25;
-#: ESC47 and p43.4 also by the ideal DP, :func:`taopt.models.sop_dp.solve_sop_dp`).
+#: ESC47, p43.4, ry48p.4, ft53.4, rbg048a and rbg050c by the ideal DP here,
+#: :func:`taopt.models.sop_dp.solve_sop_dp`; rbg048a and rbg050c also by OR-Tools CP-SAT).
 KNOWN_OPTIMA: dict[str, int] = {
     "ESC07": 2125,
     "ESC11": 2075,
@@ -73,6 +74,10 @@ KNOWN_OPTIMA: dict[str, int] = {
     "br17.10": 55,
     "br17.12": 55,
     "p43.4": 83005,
+    "ry48p.4": 31446,
+    "ft53.4": 14425,
+    "rbg048a": 351,
+    "rbg050c": 467,
 }
 
 #: The largest |weight| a file may hold (docs/file-formats.md, "Magnitudes"); TSPLIB's
