@@ -194,3 +194,74 @@ def test_describe_lists_labelled_constraints():
     assert printed[1]["rows"] == problem.demand_pairs()
     joint = describe(problem, "joint", sec="mtz", show=False)
     assert "(2.5)" in [f["equation"] for f in joint]
+
+
+# ------------------------------------------------------- classes in worker processes (issue 18)
+@pytest.mark.parametrize("seed", range(3))
+def test_workers_give_the_serial_optimum(seed):
+    """Classes solved in 2 worker processes: the same certified optimum as workers=1."""
+    rng = np.random.default_rng(300 + seed)
+    kind = ("metric", "euclidean", "grid-drift")[seed]
+    problem = random_problem(kind, 14, 4, 3, rng)
+    serial = solve_capability(problem, workers=1)
+    parallel = solve_capability(problem, workers=2)
+    assert serial.status == parallel.status == "optimal"
+    assert parallel.objective == pytest.approx(serial.objective, rel=1e-9)
+    assert parallel.objective == pytest.approx(taopt.evaluate(problem, parallel.routes), rel=1e-12)
+    assert [c["objective"] for c in parallel.info["classes"]] == pytest.approx(
+        [c["objective"] for c in serial.info["classes"]], rel=1e-9
+    )
+
+
+def test_workers_respect_the_time_limit():
+    """In workers, a short limit is kept and the result certified or time_limit, bound <= f."""
+    problem = thesis_scenario(60, 6, 3, seed=7).problem
+    dtaa = taopt.solve(problem, "DTAA")
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    limited = solve_capability(problem, time_limit=0.3, incumbent=dtaa, workers=2)
+    assert limited.runtime < 0.3 + 1.5
+    assert limited.status in ("optimal", "time_limit")
+    assert limited.bound <= limited.objective * (1 + 1e-9)
+    assert limited.objective <= dtaa.objective * (1 + 1e-9)
+
+
+def test_workers_option_checked():
+    """workers must be a positive integer; 1 is the serial path."""
+    problem = thesis_scenario(9, 2, 2, seed=4).problem
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(InstanceError, match="workers"):
+            solve_capability(problem, workers=bad)
+
+
+def test_killed_worker_is_a_clear_error():
+    """A worker process killed mid-solve raises SolverError naming its class, never hangs."""
+    import os
+    import signal
+    import threading
+
+    from taopt.capability.instances import STUDY_CELL
+    from taopt.errors import SolverError
+    from taopt.models import capability
+    from taopt.studies.capability import make_scenario
+
+    # the benchmark's n90m10 |A| = 5 scenario: its hardest class takes about 10 s
+    settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+    problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    pool = capability._POOLS[2]
+
+    def kill_one() -> None:
+        os.kill(next(iter(pool._processes)), signal.SIGKILL)
+
+    timer = threading.Timer(0.3, kill_one)
+    timer.start()
+    try:
+        with pytest.raises(SolverError, match="worker process"):
+            solve_capability(problem, workers=2)
+    finally:
+        timer.cancel()
+    assert 2 not in capability._POOLS  # the broken pool is dropped; the next call starts anew
+    small = thesis_scenario(9, 2, 2, seed=4).problem
+    assert solve_capability(small, workers=2).objective == pytest.approx(
+        solve_capability(small, workers=1).objective
+    )
