@@ -390,6 +390,10 @@ WORKER_ENV = {
     "TAOPT_SOLVER_THREADS": "1",
 }
 
+#: A class counts towards the default number of workers from this many targets (smaller
+#: ones are certified in milliseconds: not worth starting a process for).
+PARALLEL_MIN_TARGETS = 20
+
 _POOLS: dict[int, ProcessPoolExecutor] = {}
 
 
@@ -401,15 +405,19 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _auto_workers(classes: int) -> int:
-    """Worker processes for ``classes`` classes: one per core, none inside a study's task.
+def _auto_workers(classes: list[Any]) -> int:
+    """Worker processes for these classes: one per core, at most one per class of at least
+    :data:`PARALLEL_MIN_TARGETS` targets; 1 (in this process) when fewer than two classes are
+    that large, and inside a study's task.
 
     A study's worker runs with ``TAOPT_SOLVER_THREADS=1`` (its scenarios already share the
-    cores), as do this module's own workers: there the classes are solved in turn.
+    cores), as do this module's own workers: there the classes are solved in turn. Small
+    classes take milliseconds, less than the workers' first start-up (about 1-3 s).
     """
     if os.environ.get("TAOPT_SOLVER_THREADS") == "1":
         return 1
-    return max(1, min(classes, available_cores()))
+    large = sum(len(c.targets) >= PARALLEL_MIN_TARGETS for c in classes)
+    return 1 if large < 2 else min(large, available_cores())
 
 
 def _worker_init(parent: int) -> None:  # pragma: no cover - runs in the workers
@@ -578,7 +586,7 @@ def _solve_corrected(
     starts = class_incumbents(problem, incumbent)
     classes = sorted((c for c in problem.classes if c.problem), key=lambda c: len(c.targets))
     if workers is None:
-        workers = _auto_workers(len(classes))
+        workers = _auto_workers(classes)
     workers = min(workers, max(len(classes), 1))
 
     def left() -> float:
@@ -646,6 +654,7 @@ def _solve_corrected(
         info = {
             "formulation": "corrected",
             "sec": sec,
+            "workers": workers,
             "classes": per_class,
             "stopped_by": "time_limit",
         }
@@ -654,7 +663,13 @@ def _solve_corrected(
     objective = evaluate_capability(problem, routes)
     bound = min(bound, objective)
     status, stopped_by = certify(objective, bound, stopped_by)
-    info = {"formulation": "corrected", "sec": sec, "stopped_by": stopped_by, "classes": per_class}
+    info = {
+        "formulation": "corrected",
+        "sec": sec,
+        "workers": workers,
+        "stopped_by": stopped_by,
+        "classes": per_class,
+    }
     return _solution(objective, status, Routes(routes), bound, start, "corrected", info)
 
 
@@ -970,9 +985,10 @@ def solve_capability(
     workers : int, optional
         "corrected": worker processes solving the classes at the same time (spawned once
         and kept for the next call). Default: one per core this process may use
-        (``os.sched_getaffinity``), at most one per class, and 1 inside a study's task
-        (``TAOPT_SOLVER_THREADS=1``); 1 solves the classes one after another in this
-        process. The optimum does not depend on it.
+        (``os.sched_getaffinity``), at most one per class of at least
+        :data:`PARALLEL_MIN_TARGETS` targets, so 1 when fewer than two classes are that
+        large, and 1 inside a study's task (``TAOPT_SOLVER_THREADS=1``); 1 solves the
+        classes one after another in this process. The optimum does not depend on it.
 
     Returns
     -------
@@ -980,7 +996,7 @@ def solve_capability(
         Routes (one per vehicle), objective = ``evaluate(routes)``, status by the one rule
         of :func:`taopt.models.highs.certify`, ``bound`` the sum of the proven class bounds
         (corrected) or the MIP bound (joint); ``info["classes"]`` has each class's status,
-        objective, bound and time (corrected).
+        objective, bound and time, ``info["workers"]`` the processes used (corrected).
 
     Raises
     ------

@@ -265,3 +265,83 @@ def test_killed_worker_is_a_clear_error():
     assert solve_capability(small, workers=2).objective == pytest.approx(
         solve_capability(small, workers=1).objective
     )
+
+
+CTRL_C_SCRIPT = """
+import os, sys, threading, time
+from taopt.capability.instances import STUDY_CELL
+from taopt.models import capability, solve_capability
+from taopt.studies.capability import make_scenario
+
+settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+pids = []
+def note():
+    while not pids:
+        time.sleep(0.05)
+        pool = capability._POOLS.get(2)
+        pids.extend(getattr(pool, "_processes", {}) or [])
+threading.Thread(target=note, daemon=True).start()
+print("ready", flush=True)
+try:
+    solve_capability(problem, workers=2)
+except KeyboardInterrupt:
+    alive = []
+    for pid in pids:
+        try:
+            os.kill(pid, 0)
+            alive.append(pid)
+        except ProcessLookupError:
+            pass
+    print("interrupted", len(pids), "alive", alive, flush=True)
+    sys.exit(130)
+print("finished", flush=True)
+"""
+
+
+def test_ctrl_c_stops_the_workers():
+    """Ctrl-C during a solve in workers: KeyboardInterrupt at once, every worker gone."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    process = subprocess.Popen(
+        [sys.executable, "-c", CTRL_C_SCRIPT],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        assert process.stdout.readline().strip() == "ready", process.communicate()
+        time.sleep(2.0)  # the workers start (about 1 s) and are solving
+        assert process.poll() is None, process.communicate()
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert time.monotonic() - sent < 6.0
+    assert process.returncode == 130, err
+    assert out.split() == ["interrupted", "2", "alive", "[]"], (out, err)
+
+
+def test_default_workers(monkeypatch):
+    """Default workers: 1 for small classes or inside a study's task, else one per core."""
+    from taopt.models import capability
+
+    small = thesis_scenario(9, 2, 2, seed=4).problem
+    assert solve_capability(small).info["workers"] == 1
+    large = thesis_scenario(60, 6, 2, seed=7).problem
+    classes = [c for c in large.classes if c.problem]
+    assert min(len(c.targets) for c in classes) >= capability.PARALLEL_MIN_TARGETS
+    monkeypatch.setattr(capability, "available_cores", lambda: 8)
+    monkeypatch.delenv("TAOPT_SOLVER_THREADS", raising=False)
+    assert capability._auto_workers(classes) == 2  # at most one per class
+    monkeypatch.setattr(capability, "available_cores", lambda: 1)
+    assert capability._auto_workers(classes) == 1
+    monkeypatch.setattr(capability, "available_cores", lambda: 8)
+    monkeypatch.setenv("TAOPT_SOLVER_THREADS", "1")
+    assert capability._auto_workers(classes) == 1
