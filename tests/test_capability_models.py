@@ -277,10 +277,10 @@ settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
 problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
 pids = []
 def note():
-    while not pids:
+    while len(pids) < 2:
         time.sleep(0.05)
         pool = capability._POOLS.get(2)
-        pids.extend(getattr(pool, "_processes", {}) or [])
+        pids[:] = list(getattr(pool, "_processes", None) or [])
 threading.Thread(target=note, daemon=True).start()
 print("ready", flush=True)
 try:
