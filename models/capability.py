@@ -81,6 +81,7 @@ from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import certify, solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution
+from taopt.routing.problem import evaluate_routes
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -601,16 +602,17 @@ def _solve_corrected(
         return _solve_classes_serial(jobs, left, options, least)
 
     results = solve([(cls, starts[cls.capability]) for cls in classes])
-    for cls in classes:  # a class killed past its limit: no routes, no bound but 0
+    for cls in classes:  # a class killed past its limit: its incumbent (if any), bound 0
         if cls.capability not in results:
+            given = starts[cls.capability]
             results[cls.capability] = Solution(
-                objective=math.inf,
+                objective=math.inf if given is None else evaluate_routes(cls.problem, given),
                 status=TIME_LIMIT,
-                solution=None,
+                solution=None if given is None else Routes(given),
                 bound=0.0,
                 runtime=time.perf_counter() - start,
                 method="exact-dfj",
-                info={"stopped_by": "time_limit"},
+                info={"stopped_by": "time_limit", "killed": True},
             )
     unfinished = [c for c in classes if results[c.capability].status != OPTIMAL]
     if unfinished and left() >= 0.05:

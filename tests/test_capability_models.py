@@ -345,3 +345,25 @@ def test_default_workers(monkeypatch):
     monkeypatch.setattr(capability, "available_cores", lambda: 8)
     monkeypatch.setenv("TAOPT_SOLVER_THREADS", "1")
     assert capability._auto_workers(classes) == 1
+
+
+def test_worker_past_its_limit_is_killed(monkeypatch):
+    """A worker past limit + grace is killed: time_limit, the incumbent's routes, bound <= f."""
+    from taopt.capability.instances import STUDY_CELL
+    from taopt.models import capability
+    from taopt.studies.capability import make_scenario
+
+    settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+    problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+    dtaa = taopt.solve(problem, "DTAA")
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    monkeypatch.setattr(capability, "WORKER_GRACE", -29.0)  # "past" 1 s into a 30 s limit
+    result = solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
+    assert result.runtime < 10.0
+    assert result.status == "time_limit"
+    assert 2 not in capability._POOLS
+    killed = [c for c in result.info["classes"] if c["status"] == "time_limit"]
+    assert killed
+    assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)
+    assert result.objective <= dtaa.objective * (1 + 1e-9)
+    assert result.bound <= result.objective
