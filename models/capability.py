@@ -52,11 +52,20 @@ Example
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import ctypes
 import inspect
 import logging
 import math
+import multiprocessing
+import os
+import signal
+import sys
 import time
 from collections.abc import Hashable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -72,6 +81,7 @@ from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import certify, solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution
+from taopt.routing.problem import evaluate_routes
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -368,6 +378,194 @@ def _routing_takes_incumbent() -> bool:
     return "incumbent" in inspect.signature(solve_routing).parameters
 
 
+# ------------------------------------------------------------- classes in worker processes
+#: Seconds a worker may run past its class's time limit before the pool is killed and the
+#: class counted as unfinished (``solve_routing`` keeps its limit within about 0.5 s).
+WORKER_GRACE = 5.0
+#: Environment of the worker processes: one HiGHS / BLAS thread each (the workers are the
+#: parallelism), and a nested ``solve_capability`` inside a worker stays serial.
+WORKER_ENV = {
+    "OMP_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "TAOPT_SOLVER_THREADS": "1",
+}
+
+#: A class counts towards the default number of workers from this many targets (smaller
+#: ones are certified in milliseconds: not worth starting a process for).
+PARALLEL_MIN_TARGETS = 20
+
+_POOLS: dict[int, ProcessPoolExecutor] = {}
+
+
+def available_cores() -> int:
+    """Cores this process may run on (``os.sched_getaffinity``; ``os.cpu_count`` elsewhere)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _auto_workers(classes: list[Any]) -> int:
+    """Worker processes for these classes: one per core, at most one per class of at least
+    :data:`PARALLEL_MIN_TARGETS` targets; 1 (in this process) when fewer than two classes are
+    that large, and inside a study's task.
+
+    A study's worker runs with ``TAOPT_SOLVER_THREADS=1`` (its scenarios already share the
+    cores), as do this module's own workers: there the classes are solved in turn. Small
+    classes take milliseconds, less than the workers' first start-up (about 1-3 s).
+    """
+    if os.environ.get("TAOPT_SOLVER_THREADS") == "1":
+        return 1
+    large = sum(len(c.targets) >= PARALLEL_MIN_TARGETS for c in classes)
+    return 1 if large < 2 else min(large, available_cores())
+
+
+def _worker_init(parent: int) -> None:  # pragma: no cover - runs in the workers
+    """One solver thread; Ctrl-C ignored (the parent stops the pool); die with the parent."""
+    os.environ.update(WORKER_ENV)
+    with contextlib.suppress(ValueError, OSError):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL("libc.so.6", use_errno=True)
+            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG: killed when the parent dies
+
+
+def _class_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` spawned processes, created on first use and kept for reuse.
+
+    "spawn", not "fork": HiGHS's threads do not survive a fork. The first call pays the
+    workers' start-up (the imports, about a second each); later calls reuse them.
+    """
+    pool = _POOLS.get(workers)
+    if pool is None or getattr(pool, "_broken", False):
+        pool = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_worker_init,
+            initargs=(os.getpid(),),
+        )
+        _POOLS[workers] = pool
+        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
+    return pool
+
+
+def _kill_pool(workers: int) -> None:
+    """Kill the pool's processes at once (after Ctrl-C, an error or a hung worker)."""
+    pool = _POOLS.pop(workers, None)
+    if pool is None:
+        return
+    for process in list(getattr(pool, "_processes", {}).values()):
+        with contextlib.suppress(Exception):
+            process.kill()
+    with contextlib.suppress(Exception):
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+@contextlib.contextmanager
+def _main_not_rerun() -> Any:
+    """While workers are started: hide ``__main__``'s file and spec, so that a spawned worker
+    does not run the caller's script again (spawn re-imports it, and a script without an
+    ``if __name__ == "__main__":`` guard would start the solve anew in every worker). The
+    workers unpickle only this module's function and taopt's objects, never ``__main__``'s.
+    """
+    main = sys.modules.get("__main__")
+    if main is None:
+        yield
+        return
+    saved = {key: main.__dict__[key] for key in ("__file__", "__spec__") if key in main.__dict__}
+    main.__dict__.pop("__file__", None)
+    main.__spec__ = None
+    try:
+        yield
+    finally:
+        main.__dict__.pop("__spec__", None)
+        main.__dict__.update(saved)
+
+
+def _solve_class(problem: Any, options: dict[str, Any], submitted: float) -> Solution:
+    """In a worker: ``solve_routing`` with the time limit less the wait since submission."""
+    options = dict(options)
+    if "time_limit" in options:  # time.time(): the one clock the processes share
+        options["time_limit"] = max(options["time_limit"] - (time.time() - submitted), 0.01)
+    return solve_routing(problem, **options)
+
+
+def _class_options(
+    sec: str, mip_gap: float, verbose: bool, share: float | None, given: Any
+) -> dict[str, Any]:
+    options: dict[str, Any] = {"sec": sec, "mip_gap": mip_gap, "verbose": verbose}
+    if share is not None:
+        options["time_limit"] = max(share, 0.01)
+    if given is not None and _routing_takes_incumbent():
+        options["incumbent"] = given
+    return options
+
+
+def _solve_classes_serial(
+    jobs: list[tuple[Any, Any]], left: Any, options: Any, least: float = -math.inf
+) -> dict[Hashable, Solution]:
+    """Classes one after another, each with an equal share of the time left; the classes
+    still to come when less than ``least`` seconds are left are not started."""
+    results = {}
+    for index, (cls, given) in enumerate(jobs):
+        if left() < least:
+            break
+        share = left() / (len(jobs) - index) if math.isfinite(left()) else None
+        results[cls.capability] = solve_routing(cls.problem, **options(share, given))
+    return results
+
+
+def _solve_classes_parallel(
+    jobs: list[tuple[Any, Any]], left: Any, options: Any, workers: int
+) -> dict[Hashable, Solution]:
+    """Classes in ``workers`` processes, largest first; a class missing from the answer
+    ran past its limit by more than :data:`WORKER_GRACE` (the pool is then killed).
+
+    At most ``workers`` classes run at once; a class is given the time left divided by the
+    number of waves still to come (``ceil(r / workers)`` for ``r`` classes not started), so
+    with no more classes than workers each gets all the time left.
+    """
+    pool = _class_pool(workers)
+    waiting = sorted(jobs, key=lambda job: -len(job[0].targets))
+    running: dict[Future, Hashable] = {}
+    results: dict[Hashable, Solution] = {}
+    try:
+        while waiting or running:
+            while waiting and len(running) < workers:
+                cls, given = waiting.pop(0)
+                waves = math.ceil((len(waiting) + 1) / workers)
+                share = left() / waves if math.isfinite(left()) else None
+                with _main_not_rerun():  # the pool starts its workers in submit()
+                    future = pool.submit(
+                        _solve_class, cls.problem, options(share, given), time.time()
+                    )
+                running[future] = cls.capability
+            done, _ = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
+            for future in done:
+                capability = running.pop(future)
+                try:
+                    results[capability] = future.result()
+                except BrokenProcessPool as error:
+                    raise SolverError(
+                        f"the worker process solving capability class {capability!r} died "
+                        "(killed, or out of memory); run again with workers=1 to see why"
+                    ) from error
+            if running and left() < -WORKER_GRACE:
+                logger.warning(
+                    "capability classes %s ran %.0f s past the time limit: workers killed",
+                    sorted(map(str, running.values())),
+                    WORKER_GRACE,
+                )
+                _kill_pool(workers)
+                break
+    except BaseException:  # Ctrl-C or a class's error: stop every worker, then raise
+        _kill_pool(workers)
+        raise
+    return results
+
+
 def _solve_corrected(
     problem: CapabilityProblem,
     time_limit: float | None,
@@ -376,46 +574,62 @@ def _solve_corrected(
     mip_gap: float,
     verbose: bool,
     start: float,
+    workers: int | None = None,
 ) -> Solution:
     """One certified (2.2)–(2.5) per class; a time limit is shared between the classes.
 
-    Classes are solved smallest first, each with an equal share of the time left (so a hard
-    class cannot starve the others); with time to spare, classes stopped by their share are
-    solved again with the rest (their best routes and largest proven bound are kept).
+    Serially (``workers == 1``) classes are solved smallest first, each with an equal share
+    of the time left (so a hard class cannot starve the others); in worker processes,
+    largest first, each with the time left over the waves still to come. With time to
+    spare, classes stopped by their share are solved again with the rest (their best routes
+    and largest proven bound are kept).
     """
     starts = class_incumbents(problem, incumbent)
     classes = sorted((c for c in problem.classes if c.problem), key=lambda c: len(c.targets))
-    results: dict[Hashable, Solution] = {}
+    if workers is None:
+        workers = _auto_workers(classes)
+    workers = min(workers, max(len(classes), 1))
 
     def left() -> float:
         return time_limit - (time.perf_counter() - start) if time_limit is not None else math.inf
 
-    def run(cls: Any, share: float | None, given: Any) -> Solution:
-        options: dict[str, Any] = {"sec": sec, "mip_gap": mip_gap, "verbose": verbose}
-        if share is not None:
-            options["time_limit"] = max(share, 0.01)
-        if given is not None and _routing_takes_incumbent():
-            options["incumbent"] = given
-        return solve_routing(cls.problem, **options)
+    def options(share: float | None, given: Any) -> dict[str, Any]:
+        return _class_options(sec, mip_gap, verbose, share, given)
 
-    for index, cls in enumerate(classes):
-        share = None if time_limit is None else left() / (len(classes) - index)
-        results[cls.capability] = run(cls, share, starts[cls.capability])
+    def solve(jobs: list[tuple[Any, Any]], least: float = -math.inf) -> dict[Hashable, Solution]:
+        if workers > 1 and len(jobs) > 1:
+            return _solve_classes_parallel(jobs, left, options, workers)
+        return _solve_classes_serial(jobs, left, options, least)
+
+    results = solve([(cls, starts[cls.capability]) for cls in classes])
+    for cls in classes:  # a class killed past its limit: its incumbent (if any), bound 0
+        if cls.capability not in results:
+            given = starts[cls.capability]
+            results[cls.capability] = Solution(
+                objective=math.inf if given is None else evaluate_routes(cls.problem, given),
+                status=TIME_LIMIT,
+                solution=None if given is None else Routes(given),
+                bound=0.0,
+                runtime=time.perf_counter() - start,
+                method="exact-dfj",
+                info={"stopped_by": "time_limit", "killed": True},
+            )
     unfinished = [c for c in classes if results[c.capability].status != OPTIMAL]
-    for index, cls in enumerate(unfinished):
-        if left() < 0.05:
-            break
-        first = results[cls.capability]
-        again = run(cls, left() / (len(unfinished) - index), first.routes)
-        best = again if again.objective < first.objective else first
-        proven = max(b for b in (first.bound, again.bound, 0.0) if b is not None)
-        status, _ = certify(best.objective, min(proven, best.objective), "time_limit")
-        results[cls.capability] = best.replace(
-            bound=min(proven, best.objective),
-            status=status,
-            runtime=first.runtime + again.runtime,
-            info={**best.info, "passes": 2},
-        )
+    if unfinished and left() >= 0.05:
+        again_all = solve([(cls, results[cls.capability].routes) for cls in unfinished], 0.05)
+        for cls in unfinished:
+            first, again = results[cls.capability], again_all.get(cls.capability)
+            if again is None:
+                continue
+            best = again if again.objective < first.objective else first
+            proven = max(b for b in (first.bound, again.bound, 0.0) if b is not None)
+            status, _ = certify(best.objective, min(proven, best.objective), "time_limit")
+            results[cls.capability] = best.replace(
+                bound=min(proven, best.objective),
+                status=status,
+                runtime=first.runtime + again.runtime,
+                info={**best.info, "passes": 2},
+            )
     stopped_by = "optimal"
     bound = 0.0
     per_class = []
@@ -442,6 +656,7 @@ def _solve_corrected(
         info = {
             "formulation": "corrected",
             "sec": sec,
+            "workers": workers,
             "classes": per_class,
             "stopped_by": "time_limit",
         }
@@ -450,7 +665,13 @@ def _solve_corrected(
     objective = evaluate_capability(problem, routes)
     bound = min(bound, objective)
     status, stopped_by = certify(objective, bound, stopped_by)
-    info = {"formulation": "corrected", "sec": sec, "stopped_by": stopped_by, "classes": per_class}
+    info = {
+        "formulation": "corrected",
+        "sec": sec,
+        "workers": workers,
+        "stopped_by": stopped_by,
+        "classes": per_class,
+    }
     return _solution(objective, status, Routes(routes), bound, start, "corrected", info)
 
 
@@ -736,6 +957,7 @@ def solve_capability(
     sec: str = "dfj",
     mip_gap: float = 1e-6,
     verbose: bool = False,
+    workers: int | None = None,
 ) -> Solution:
     """Solve chapter 3's problem (3.1)–(3.3) with one of three formulations.
 
@@ -762,6 +984,13 @@ def solve_capability(
         HiGHS ``mip_rel_gap``.
     verbose : bool
         HiGHS log.
+    workers : int, optional
+        "corrected": worker processes solving the classes at the same time (spawned once
+        and kept for the next call). Default: one per core this process may use
+        (``os.sched_getaffinity``), at most one per class of at least
+        :data:`PARALLEL_MIN_TARGETS` targets, so 1 when fewer than two classes are that
+        large, and 1 inside a study's task (``TAOPT_SOLVER_THREADS=1``); 1 solves the
+        classes one after another in this process. The optimum does not depend on it.
 
     Returns
     -------
@@ -769,7 +998,7 @@ def solve_capability(
         Routes (one per vehicle), objective = ``evaluate(routes)``, status by the one rule
         of :func:`taopt.models.highs.certify`, ``bound`` the sum of the proven class bounds
         (corrected) or the MIP bound (joint); ``info["classes"]`` has each class's status,
-        objective, bound and time (corrected).
+        objective, bound and time, ``info["workers"]`` the processes used (corrected).
 
     Raises
     ------
@@ -789,11 +1018,17 @@ def solve_capability(
         raise InstanceError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}")
     if time_limit is not None and not time_limit > 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
+        raise InstanceError(f"workers must be a positive integer, got {workers!r}")
     start = time.perf_counter()
     if formulation == "printed":
         return _solve_printed(problem, time_limit, verbose, start)
     if formulation == "corrected":
-        return _solve_corrected(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
+        return _solve_corrected(
+            problem, time_limit, incumbent, sec, mip_gap, verbose, start, workers
+        )
     return _solve_joint(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
 
 
@@ -826,10 +1061,18 @@ def solve_exact(
     time_limit: float | None = None,
     incumbent: Any = None,
     sec: str = "dfj",
+    workers: int | None = None,
 ) -> Solution:
-    """Certified optimum of (3.1)–(3.3): the corrected model, one (2.2)–(2.5) per class."""
+    """Certified optimum of (3.1)–(3.3): the corrected model, one (2.2)–(2.5) per class,
+    the classes in ``workers`` processes (default: one per core; see
+    :func:`solve_capability`)."""
     return solve_capability(
-        problem, "corrected", time_limit=time_limit, incumbent=incumbent, sec=sec
+        problem,
+        "corrected",
+        time_limit=time_limit,
+        incumbent=incumbent,
+        sec=sec,
+        workers=workers,
     )
 
 

@@ -194,3 +194,176 @@ def test_describe_lists_labelled_constraints():
     assert printed[1]["rows"] == problem.demand_pairs()
     joint = describe(problem, "joint", sec="mtz", show=False)
     assert "(2.5)" in [f["equation"] for f in joint]
+
+
+# ------------------------------------------------------- classes in worker processes (issue 18)
+@pytest.mark.parametrize("seed", range(3))
+def test_workers_give_the_serial_optimum(seed):
+    """Classes solved in 2 worker processes: the same certified optimum as workers=1."""
+    rng = np.random.default_rng(300 + seed)
+    kind = ("metric", "euclidean", "grid-drift")[seed]
+    problem = random_problem(kind, 14, 4, 3, rng)
+    serial = solve_capability(problem, workers=1)
+    parallel = solve_capability(problem, workers=2)
+    assert serial.status == parallel.status == "optimal"
+    assert parallel.objective == pytest.approx(serial.objective, rel=1e-9)
+    assert parallel.objective == pytest.approx(taopt.evaluate(problem, parallel.routes), rel=1e-12)
+    assert [c["objective"] for c in parallel.info["classes"]] == pytest.approx(
+        [c["objective"] for c in serial.info["classes"]], rel=1e-9
+    )
+
+
+def test_workers_respect_the_time_limit():
+    """In workers, a short limit is kept and the result certified or time_limit, bound <= f."""
+    problem = thesis_scenario(60, 6, 3, seed=7).problem
+    dtaa = taopt.solve(problem, "DTAA")
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    limited = solve_capability(problem, time_limit=0.3, incumbent=dtaa, workers=2)
+    assert limited.runtime < 0.3 + 1.5
+    assert limited.status in ("optimal", "time_limit")
+    assert limited.bound <= limited.objective * (1 + 1e-9)
+    assert limited.objective <= dtaa.objective * (1 + 1e-9)
+
+
+def test_workers_option_checked():
+    """workers must be a positive integer; 1 is the serial path."""
+    problem = thesis_scenario(9, 2, 2, seed=4).problem
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(InstanceError, match="workers"):
+            solve_capability(problem, workers=bad)
+
+
+def test_killed_worker_is_a_clear_error():
+    """A worker process killed mid-solve raises SolverError naming its class, never hangs."""
+    import os
+    import signal
+    import threading
+
+    from taopt.capability.instances import STUDY_CELL
+    from taopt.errors import SolverError
+    from taopt.models import capability
+    from taopt.studies.capability import make_scenario
+
+    # the benchmark's n90m10 |A| = 5 scenario: its hardest class takes about 10 s
+    settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+    problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    pool = capability._POOLS[2]
+
+    def kill_one() -> None:
+        os.kill(next(iter(pool._processes)), signal.SIGKILL)
+
+    timer = threading.Timer(0.3, kill_one)
+    timer.start()
+    try:
+        with pytest.raises(SolverError, match="worker process"):
+            solve_capability(problem, workers=2)
+    finally:
+        timer.cancel()
+    assert 2 not in capability._POOLS  # the broken pool is dropped; the next call starts anew
+    small = thesis_scenario(9, 2, 2, seed=4).problem
+    assert solve_capability(small, workers=2).objective == pytest.approx(
+        solve_capability(small, workers=1).objective
+    )
+
+
+CTRL_C_SCRIPT = """
+import os, sys, threading, time
+from taopt.capability.instances import STUDY_CELL
+from taopt.models import capability, solve_capability
+from taopt.studies.capability import make_scenario
+
+settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+pids = []
+def note():
+    while len(pids) < 2:
+        time.sleep(0.05)
+        pool = capability._POOLS.get(2)
+        pids[:] = list(getattr(pool, "_processes", None) or [])
+threading.Thread(target=note, daemon=True).start()
+print("ready", flush=True)
+try:
+    solve_capability(problem, workers=2)
+except KeyboardInterrupt:
+    alive = []
+    for pid in pids:
+        try:
+            os.kill(pid, 0)
+            alive.append(pid)
+        except ProcessLookupError:
+            pass
+    print("interrupted", len(pids), "alive", alive, flush=True)
+    sys.exit(130)
+print("finished", flush=True)
+"""
+
+
+def test_ctrl_c_stops_the_workers():
+    """Ctrl-C during a solve in workers: KeyboardInterrupt at once, every worker gone."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    process = subprocess.Popen(
+        [sys.executable, "-c", CTRL_C_SCRIPT],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        assert process.stdout.readline().strip() == "ready", process.communicate()
+        time.sleep(2.0)  # the workers start (about 1 s) and are solving
+        assert process.poll() is None, process.communicate()
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert time.monotonic() - sent < 6.0
+    assert process.returncode == 130, err
+    assert out.split() == ["interrupted", "2", "alive", "[]"], (out, err)
+
+
+def test_default_workers(monkeypatch):
+    """Default workers: 1 for small classes or inside a study's task, else one per core."""
+    from taopt.models import capability
+
+    small = thesis_scenario(9, 2, 2, seed=4).problem
+    assert solve_capability(small).info["workers"] == 1
+    large = thesis_scenario(60, 6, 2, seed=7).problem
+    classes = [c for c in large.classes if c.problem]
+    assert min(len(c.targets) for c in classes) >= capability.PARALLEL_MIN_TARGETS
+    monkeypatch.setattr(capability, "available_cores", lambda: 8)
+    monkeypatch.delenv("TAOPT_SOLVER_THREADS", raising=False)
+    assert capability._auto_workers(classes) == 2  # at most one per class
+    monkeypatch.setattr(capability, "available_cores", lambda: 1)
+    assert capability._auto_workers(classes) == 1
+    monkeypatch.setattr(capability, "available_cores", lambda: 8)
+    monkeypatch.setenv("TAOPT_SOLVER_THREADS", "1")
+    assert capability._auto_workers(classes) == 1
+
+
+def test_worker_past_its_limit_is_killed(monkeypatch):
+    """A worker past limit + grace is killed: time_limit, the incumbent's routes, bound <= f."""
+    from taopt.capability.instances import STUDY_CELL
+    from taopt.models import capability
+    from taopt.studies.capability import make_scenario
+
+    settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
+    problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+    dtaa = taopt.solve(problem, "DTAA")
+    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
+    monkeypatch.setattr(capability, "WORKER_GRACE", -29.0)  # "past" 1 s into a 30 s limit
+    result = solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
+    assert result.runtime < 10.0
+    assert result.status == "time_limit"
+    assert 2 not in capability._POOLS
+    killed = [c for c in result.info["classes"] if c["status"] == "time_limit"]
+    assert killed
+    assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)
+    assert result.objective <= dtaa.objective * (1 + 1e-9)
+    assert result.bound <= result.objective
