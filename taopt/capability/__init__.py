@@ -13,6 +13,7 @@ scorer :func:`evaluate_capability`, bounds ``arborescence``, ``thesis_mcga`` and
 
 from typing import Any
 
+from taopt.bounds import capability_lower
 from taopt.capability.bounds import arborescence_bound, doubled_arborescence, thesis_mcga
 from taopt.capability.problem import CapabilityClass, CapabilityProblem, evaluate_capability
 from taopt.registry import register_family
@@ -65,6 +66,7 @@ register_family(
         "arborescence": arborescence_bound,
         "thesis_mcga": thesis_mcga,
         "doubled_arborescence": doubled_arborescence,
+        "lower": capability_lower,
     },
     plots={"routes": _plot_routes},
 )

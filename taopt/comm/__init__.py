@@ -7,6 +7,7 @@ Registers the family :class:`CommProblem` (payload :class:`Trajectories`, scorer
 optimum f_o is ``taopt.solve(problem, "exact")`` (:mod:`taopt.models.comm`).
 """
 
+from taopt.bounds import comm_lower
 from taopt.comm.bounds import mst_bound
 from taopt.comm.problem import CommProblem, random_problem
 from taopt.comm.trajectories import Trajectories, evaluate_trajectories
@@ -28,7 +29,7 @@ register_family(
     payload=Trajectories,
     title="task assignment under a limited communication range (chapter 4)",
     evaluate=evaluate_trajectories,
-    bounds={"mst": mst_bound},
+    bounds={"mst": mst_bound, "lower": comm_lower},
     plots={"run": _plot_run},
 )
 

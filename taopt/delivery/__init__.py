@@ -13,7 +13,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from taopt.delivery.bounds import arborescence_bound
+from taopt.bounds import sop_lower
+from taopt.delivery.bounds import arborescence_bound, delivery_lower
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.sop import SopProblem, evaluate_order, sop_arborescence_bound
@@ -52,7 +53,7 @@ register_family(
     payload=Plan,
     title="precedence-constrained truck-drone delivery (chapter 5)",
     evaluate=evaluate_plan,
-    bounds={"arborescence": arborescence_bound},
+    bounds={"arborescence": arborescence_bound, "lower": delivery_lower},
     plots={"plan": _plot_plan, "gantt": _plot_gantt},
 )
 register_family(
@@ -61,7 +62,7 @@ register_family(
     payload=Order,
     title="sequential ordering, TSPLIB SOP (chapter 5 certification)",
     evaluate=evaluate_order,
-    bounds={"arborescence": sop_arborescence_bound},
+    bounds={"arborescence": sop_arborescence_bound, "lower": sop_lower},
     plots={"order": _plot_order},
 )
 

@@ -426,4 +426,20 @@ def decomposition_bound(
     return float(best)
 
 
-__all__ = ["arborescence_bound", "path_bound", "service_gap_matrix", "decomposition_bound"]
+def delivery_lower(instance: DeliveryInstance, strength: str) -> float:
+    """:func:`taopt.bounds.lower` for chapter 5: Proposition 5.3 ("fast"), else the larger of
+    :func:`decomposition_bound`, :func:`path_bound` and Proposition 5.3."""
+    if strength == "fast":
+        return arborescence_bound(instance)
+    return float(
+        max(decomposition_bound(instance), path_bound(instance), arborescence_bound(instance))
+    )
+
+
+__all__ = [
+    "delivery_lower",
+    "arborescence_bound",
+    "path_bound",
+    "service_gap_matrix",
+    "decomposition_bound",
+]

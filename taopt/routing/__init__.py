@@ -6,6 +6,7 @@ scorer :func:`evaluate_routes`, bounds ``arborescence`` and ``thesis_mcga``).
 
 from typing import Any
 
+from taopt.bounds import routing_lower
 from taopt.registry import register_family
 from taopt.result import Routes
 from taopt.routing.bounds import arborescence_bound, thesis_mcga
@@ -48,7 +49,11 @@ register_family(
     payload=Routes,
     title="open multi-vehicle routing on a travel-time matrix (chapter 2)",
     evaluate=evaluate_routes,
-    bounds={"arborescence": arborescence_bound, "thesis_mcga": thesis_mcga},
+    bounds={
+        "arborescence": arborescence_bound,
+        "thesis_mcga": thesis_mcga,
+        "lower": routing_lower,
+    },
     plots={"routes": _plot_routes},
 )
 
