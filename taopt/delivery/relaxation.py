@@ -36,28 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from taopt.arborescence import _cycles  # the one cycle finder of Edmonds' algorithm
 from taopt.errors import InstanceError
 
 #: Subgradient iterations of :func:`degree_penalised_arborescence` by default.
 DEFAULT_ITERATIONS = 300
-
-
-def _cycles(parent: np.ndarray, root: int) -> list[list[int]]:
-    """Cycles of the functional graph ``v -> parent[v]``."""
-    state = np.zeros(len(parent), dtype=np.int8)  # 0 new, 1 on the walk, 2 done
-    state[root] = 2
-    found = []
-    for start in range(len(parent)):
-        walk = []
-        v = start
-        while state[v] == 0:
-            state[v] = 1
-            walk.append(v)
-            v = int(parent[v])
-        if state[v] == 1:
-            found.append(walk[walk.index(v) :])
-        state[walk] = 2
-    return found
 
 
 def min_arborescence_tree(weights: np.ndarray, root: int) -> tuple[float, np.ndarray | None]:
