@@ -13,13 +13,15 @@ Importing this package registers every heuristic in :mod:`taopt.registry`:
 Run one with :func:`taopt.solve` (or :func:`run`, kept for older scripts).
 """
 
-from taopt.heuristics.registry import run  # noqa: I001
+import importlib
+import pkgutil
 
-# Importing the modules registers their methods.
-from taopt.heuristics import clustering, ga_routing, sequencing, ga_delivery  # noqa: F401, E402
-from taopt.heuristics import ils_delivery  # noqa: F401, E402  (ILS over orders, chapter 5)
-from taopt.heuristics import comm  # noqa: F401, E402
-from taopt.heuristics import peers  # noqa: F401, E402  (PyVRP, OR-Tools: run in worker processes)
-from taopt.heuristics import dtaa, capability  # noqa: F401, E402  (chapter 3)
+from taopt.heuristics.registry import run
+
+# Importing every module of this package registers its methods (where they are defined); the
+# peers' worker module (leading underscore) is imported by the worker process only.
+for _module in pkgutil.iter_modules(__path__):
+    if not _module.name.startswith("_"):
+        importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = ["run"]

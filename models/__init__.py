@@ -14,7 +14,8 @@
   because every ordering heuristic is scored through the same DP; registered here with
   the other exact methods.
 
-Importing this package registers every exact method in :mod:`taopt.registry`
+Importing this package imports every module in it, and so registers every exact method in
+:mod:`taopt.registry`
 (``taopt.solve(problem, "exact")``); no other import is needed for any of them. They never run a heuristic themselves: the registry's
 ``warm_start`` names the heuristic(s) whose best result :func:`taopt.solve` passes in as
 ``incumbent``.
@@ -22,6 +23,8 @@ Importing this package registers every exact method in :mod:`taopt.registry`
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 from typing import Any
 
 from taopt.capability.problem import CapabilityProblem
@@ -35,10 +38,11 @@ from taopt.models.comm import solve_comm  # registers CommProblem "exact"
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
-from taopt.registry import register_method
+from taopt.registry import register_method, register_relaxation
 from taopt.routing.problem import AssignmentProblem
 
 
+@register_relaxation(AssignmentProblem)  # taopt.lower(problem, "strong") takes it
 def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> float:
     """Valid lower bound from the LP relaxation of the exact model (2.2)–(2.5).
 
@@ -130,6 +134,11 @@ register_method(
     default=False,
     not_default="the joint MILP runs only when named (--methods joint): 'exact' is faster",
 )(solve_joint)
+
+# every other module of this package registers its own methods where they are defined (a new
+# family's exact model is found here without a line in this file)
+for _module in pkgutil.iter_modules(__path__):
+    importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = [
     "solve_capability",

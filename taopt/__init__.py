@@ -17,7 +17,8 @@ Quick tour
 ['exact', 'VN', 'VM']
 
 Every public name is imported on first use: ``import taopt`` is light, and
-``taopt.__all__`` lists the problem types, payloads, entry points and errors.
+``taopt.__all__`` lists the entry points, payloads and errors, and every family's problem
+type (each family's spec names what it exports).
 """
 
 from __future__ import annotations
@@ -75,13 +76,9 @@ _LAZY: dict[str, tuple[str, str]] = {
     "available_methods": ("taopt.pipeline", "available_methods"),
     "evaluate": ("taopt.scoring", "evaluate"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
-    "lower": ("taopt.bounds", "lower"),
-    # problem types, one per family (DESIGN.md), and the instance file's parts
-    "AssignmentProblem": ("taopt.routing.problem", "AssignmentProblem"),
-    "CapabilityProblem": ("taopt.capability", "CapabilityProblem"),
-    "CommProblem": ("taopt.comm", "CommProblem"),
-    "DeliveryInstance": ("taopt.delivery", "DeliveryInstance"),
-    "SopProblem": ("taopt.delivery", "SopProblem"),
+    "lower": ("taopt.pipeline", "lower"),
+    # the instance file's parts (each family's problem type and payload are in its spec:
+    # ``exports``, found by __getattr__)
     "Instance": ("taopt.instance", "Instance"),
     "Vehicle": ("taopt.instance", "Vehicle"),
     "Target": ("taopt.instance", "Target"),
@@ -91,8 +88,6 @@ _LAZY: dict[str, tuple[str, str]] = {
     "Status": ("taopt.result", "Status"),
     "Routes": ("taopt.result", "Routes"),
     "Order": ("taopt.result", "Order"),
-    "Plan": ("taopt.delivery", "Plan"),
-    "Trajectories": ("taopt.comm", "Trajectories"),
     # drift fields
     "UniformField": ("taopt.fields", "UniformField"),
     "LinearField": ("taopt.fields", "LinearField"),
@@ -106,37 +101,33 @@ _LAZY: dict[str, tuple[str, str]] = {
     "ConvergenceError": ("taopt.errors", "ConvergenceError"),
 }
 
-#: Subpackages reachable as attributes (``taopt.bounds.arborescence(problem)``).
-_SUBMODULES = (
-    "bounds",
-    "navigation",
-    "registry",
-    "models",
-    "heuristics",
-    "routing",
-    "delivery",
-    "capability",
-    "comm",
-    "plot",
-    "fields",
-    "instance",
-    "result",
-    "errors",
-    "scoring",
-    "schemas",
-    "pipeline",
-    "solving",
-    "studies",
-)
+
+def _family_exports() -> dict[str, Any]:
+    """Public names each family's spec exports (its problem type, payload, ...)."""
+    from taopt.registry import families
+
+    return {name: value for family in families() for name, value in family.exports.items()}
+
+
+def _subpackage(name: str) -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec(f"taopt.{name}") is not None
 
 
 def __getattr__(name: str) -> Any:
     import importlib
 
-    if name in _LAZY:
+    if name == "__all__":
+        value = [*_PUBLIC, *sorted(set(_family_exports()) - set(_PUBLIC))]
+    elif name in _LAZY:
         module, attr = _LAZY[name]
         value = getattr(importlib.import_module(module), attr)
-    elif name in _SUBMODULES:
+    elif name.startswith("_"):
+        raise AttributeError(f"module 'taopt' has no attribute {name!r}")
+    elif name[:1].isupper() and name in _family_exports():
+        value = _family_exports()[name]
+    elif name.isidentifier() and _subpackage(name):  # taopt.bounds, taopt.routing, ...
         value = importlib.import_module(f"taopt.{name}")
     else:
         raise AttributeError(f"module 'taopt' has no attribute {name!r}")
@@ -145,22 +136,18 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))
+    return sorted(set(globals()) | set(_LAZY))
 
 
-__all__ = [
+#: The public names that are not a family's (``taopt.__all__`` adds every family's exports).
+_PUBLIC = [
     # entry points
     "solve",
     "available_methods",
     "evaluate",
     "schedule",
     "lower",
-    # problem types
-    "AssignmentProblem",
-    "CapabilityProblem",
-    "CommProblem",
-    "DeliveryInstance",
-    "SopProblem",
+    # the instance file
     "Instance",
     "Vehicle",
     "Target",
@@ -170,8 +157,6 @@ __all__ = [
     "Status",
     "Routes",
     "Order",
-    "Plan",
-    "Trajectories",
     # fields
     "UniformField",
     "LinearField",

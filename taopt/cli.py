@@ -1,7 +1,7 @@
 """The ``taopt`` command line (the only module that uses argparse).
 
 Subcommands: ``navigate``, ``demo``, ``solve``, ``verify``, ``claims``, ``simulate``, and
-``study drift | delivery | capability | comm``. One grammar: the same flag means the same
+``study NAME`` (one per study a family declares). One grammar: the same flag means the same
 thing, with the same default, in every command that has it:
 
 ``--seed`` (default 0), ``--methods`` (a comma list; ``exact`` is a method),
@@ -106,7 +106,7 @@ def parse_field(spec: str) -> Any:
     raise InstanceError(f"unknown field {spec!r}; {FIELD_HELP}")
 
 
-def _folder(path: str) -> Any:
+def folder(path: str) -> Any:
     """``pathlib.Path(path)``, imported when a command writes files (not for ``--version``)."""
     from pathlib import Path
 
@@ -159,7 +159,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _methods(text: str | None) -> tuple[str, ...] | None:
+def method_list(text: str | None) -> tuple[str, ...] | None:
     if not text:
         return None
     methods = tuple(dict.fromkeys(m.strip() for m in text.split(",") if m.strip()))
@@ -177,7 +177,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
     result = solve_file(
         args.file,
-        methods=_methods(args.methods),
+        methods=method_list(args.methods),
         seed=args.seed,
         time_limit=args.time_limit,
         plot=args.plot,
@@ -213,128 +213,6 @@ def cmd_claims(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_study_drift(args: argparse.Namespace) -> int:
-    """Body of ``taopt study drift``: run, print the summary and the tests, plot."""
-    import pandas as pd
-
-    from taopt.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
-
-    options = (
-        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
-    )
-    df = drift_study(
-        args.n,
-        args.m,
-        args.scenarios,
-        methods=args.methods,
-        seed=args.seed,
-        out_dir=args.out,
-        jobs=args.jobs,
-        dask=args.dask,
-        progress=not args.quiet,
-        time_limit=args.time_limit,
-        method_options=options,
-        field="thesis" if args.field == "thesis" else parse_field(args.field),
-    )
-    table = summarize(df)
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table.round(4).to_string())
-        print()
-        print(wilcoxon_pairs(df).round(4).to_string(index=False))
-    table.to_csv(_folder(args.out) / "summary.csv")
-    if args.plot:
-        plot_gaps(df, path=args.plot)
-        print(f"plot written to {args.plot}")
-    return 0
-
-
-def cmd_study_delivery(args: argparse.Namespace) -> int:
-    """Body of ``taopt study delivery``: run, print Tables 5.1-5.7's averages, plot."""
-    import pandas as pd
-
-    from taopt.studies.delivery import delivery_study, plot_study, thesis_table
-
-    ratios = tuple(parse_numbers(args.ratios, len(args.ratios.split(",")), "--ratios"))
-    options = (
-        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
-    )
-    df = delivery_study(
-        setup=args.setup,
-        instances=args.instances,
-        ratios=ratios,
-        methods=_methods(args.methods) or (),
-        seed=args.seed,
-        out_dir=args.out,
-        jobs=args.jobs,
-        dask=args.dask,
-        progress=not args.quiet,
-        exact_max_n=args.exact_max_n,
-        vd_ratio=args.vd_ratio,
-        method_options=options,
-        time_limit=args.time_limit,
-    )
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print("average makespan f (5.1):")
-        print(thesis_table(df, "makespan").round(1).to_string())
-        print("\naverage q = f / f_a (5.19):")
-        print(thesis_table(df, "q").round(4).to_string())
-        print("\naverage run time (s):")
-        print(thesis_table(df, "runtime").round(3).to_string())
-        if df["optimum"].notna().any():
-            print("\naverage gap to the optimum f / f_o - 1:")
-            print(thesis_table(df, "gap_to_optimum").round(4).to_string())
-    print(f"\nrows: {_folder(args.out) / f'delivery_{args.setup}.csv'}")
-    if args.plot:
-        plot_study(df, "q", path=args.plot)
-        print(f"plot written to {args.plot}")
-    return 0
-
-
-def cmd_study_capability(args: argparse.Namespace) -> int:
-    """Body of ``taopt study capability``: run, print Tables 3.1-3.2 beside taopt's, plot."""
-    import pandas as pd
-
-    from taopt.studies.capability import (
-        capability_study,
-        plot_figures,
-        summarize,
-        thesis_comparison,
-    )
-
-    ga = {"operators": args.ga_operators} if args.ga_operators != "default" else {}
-    if args.ga_generations is not None:
-        ga["generations"] = args.ga_generations
-    options = {"GA": ga} if ga else None
-    df = capability_study(
-        instances=[i.strip() for i in args.sizes.split(",") if i.strip()],
-        capabilities=args.capabilities,  # parsed and checked by capability_study
-        scenarios=args.scenarios,
-        methods=args.methods,
-        seed=args.seed,
-        out_dir=args.out,
-        jobs=args.jobs,
-        dask=args.dask,
-        time_limit=args.time_limit,
-        method_options=options,
-        cell=args.cell,
-        neighbours=args.neighbours,
-        first_scenario=args.first_scenario,
-        progress=not args.quiet,
-    )
-    table = summarize(df)
-    shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table[shown].round(4).to_string())
-        for name in ("3.1", "3.2"):
-            print(f"\nTable {name}, thesis beside taopt:")
-            print(thesis_comparison(df, name).round(4).to_string())
-    table.to_csv(_folder(args.out) / "summary.csv")
-    if args.plot:
-        plot_figures(df, path=args.plot)
-        print(f"plot written to {args.plot}")
-    return 0
-
-
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Body of ``taopt simulate FILE``: one chapter 4 run, its bytes, routes and pictures."""
     from taopt.comm import CommProblem
@@ -355,10 +233,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     for j, d in enumerate(result.solution.lengths()):
         print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
     if args.out:
-        folder = _folder(args.out)
-        folder.mkdir(parents=True, exist_ok=True)
-        result.save(folder / f"{args.algorithm}.json")
-        print(f"solution written to {folder / f'{args.algorithm}.json'}")
+        where = folder(args.out)
+        where.mkdir(parents=True, exist_ok=True)
+        result.save(where / f"{args.algorithm}.json")
+        print(f"solution written to {where / f'{args.algorithm}.json'}")
     if args.save_file:
         result.save(args.save_file)
         print(f"solution written to {args.save_file}")
@@ -368,52 +246,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.animate:
         animate_run(problem, result, args.animate, frames=args.frames)
         print(f"animation written to {args.animate}")
-    return 0
-
-
-def cmd_study_comm(args: argparse.Namespace) -> int:
-    """Body of ``taopt study comm``: run a §4.4 preset, print q, bytes and the true gap."""
-    import pandas as pd
-
-    from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
-    from taopt.studies.comm import summary as summarize
-
-    preset = PRESETS[args.preset]
-    named = list(_methods(args.methods) or preset.methods)
-    exact = "exact" in named or args.exact_alias
-    if not [m for m in named if m != "exact"]:
-        raise InstanceError(
-            "--methods: name an algorithm (CAA, DAA, HDA) beside 'exact': f_o is certified once "
-            "per scenario for the true gap of the algorithms"
-        )
-    df = comm_study(
-        args.preset,
-        args.scenarios,
-        args.out,
-        methods=[m for m in named if m != "exact"],
-        exact=exact,
-        seed=args.seed,
-        jobs=args.jobs,
-        dask=args.dask,
-        time_limit=args.time_limit,
-        progress=not args.quiet,
-    )
-    table = summarize(df)
-    table.to_csv(_folder(args.out) / f"summary_{args.preset}.csv", index=False)
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(preset.title)
-        for n, m in preset.sizes:
-            print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
-            print(q_table(table, n, m).round(4).to_string())
-            if table["certified"].sum():
-                print("\nmean true gap f / f_o (certified scenarios)")
-                print(q_table(table, n, m, value="gap").round(4).to_string())
-            print("\nmean bytes relayed (10^5 bytes)")
-            print(bytes_table(table, n, m).round(4).to_string())
-    if args.plot:
-        n, m = preset.sizes[0]
-        plot_study(table, n, m, path=args.plot)
-        print(f"plot written to {args.plot}")
     return 0
 
 
@@ -571,8 +403,13 @@ SOLVE_DESCRIPTION = (
 )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``taopt`` parser with every subcommand (builds without importing numpy)."""
+def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
+    """The ``taopt`` parser with every subcommand.
+
+    The study commands come from the family specs (:func:`add_studies`), which imports the
+    families; ``with_studies=False`` leaves them out so that ``taopt --version``, ``--help``
+    and every other command parse without importing numpy.
+    """
     from taopt import __version__
 
     parser = argparse.ArgumentParser(
@@ -710,141 +547,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
     studies = study.add_subparsers(dest="study", metavar="STUDY")
     studies.required = True
+    if with_studies:
+        add_studies(studies)
 
-    drift = add_subcommand(
-        studies,
-        "drift",
-        cmd_study_drift,
-        "chapter 2 (§2.5, Tables 2.1-2.2): heuristics vs f_a, a valid bound and the optimum",
-    )
-    drift.add_argument("--n", type=int, required=True, help="number of targets")
-    drift.add_argument("--m", type=int, required=True, help="number of vehicles")
-    drift.add_argument("--scenarios", type=int, default=400, help="random scenarios (a count)")
-    drift.add_argument(
-        "--methods",
-        default="VN,VM,EVN,EVM,MC,GA,exact",
-        metavar="LIST",
-        help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
-    )
-    drift.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
-    drift.add_argument(
-        "--ga-generations",
-        type=int,
-        default=None,
-        help="GA generations (default: none: the GA's own, the thesis's 350)",
-    )
-    _study_flags(drift, "drift.csv")
-
-    delivery = add_subcommand(
-        studies,
-        "delivery",
-        cmd_study_delivery,
-        "chapter 5 (§5.5, Tables 5.1-5.7): truck-drone heuristics vs the bound",
-    )
-    delivery.add_argument(
-        "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
-    )
-    delivery.add_argument(
-        "--instances", type=int, default=10, help="random instances per setup (a count)"
-    )
-    delivery.add_argument(
-        "--methods",
-        default="NIA,MMA,SMMA,GA",
-        metavar="LIST",
-        help="comma-separated: NIA,MMA,SMMA,GA,exact (DP over order ideals),subset-dp,milp",
-    )
-    delivery.add_argument(
-        "--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9", help="comma-separated L/L0 values"
-    )
-    delivery.add_argument(
-        "--vd-ratio",
-        type=float,
-        default=None,
-        help="override v_d / v_t (default: none: the setup's)",
-    )
-    delivery.add_argument(
-        "--exact-max-n",
-        type=int,
-        default=8,
-        help="compute optima (ideal DP) per scenario when n <= this; beyond, from 'exact' rows",
-    )
-    delivery.add_argument(
-        "--ga-generations",
-        type=int,
-        default=None,
-        help="GA generations (default: none: the GA's own)",
-    )
-    _study_flags(delivery, "delivery_<setup>.csv")
-
-    capability = add_subcommand(
-        studies,
-        "capability",
-        cmd_study_capability,
-        "chapter 3 (§3.7, Figs. 3.4-3.6, Tables 3.1-3.2): DTAA and GA vs f^a, a valid bound "
-        "and the certified optimum",
-    )
-    capability.add_argument(
-        "--sizes", default="n50m10,n70m10,n90m10", help="comma-separated nNmM sizes"
-    )
-    deprecated(capability, "--instances", "sizes", "--sizes (a list of nNmM sizes)")
-    capability.add_argument("--capabilities", default="1,3,5,7,10", help="comma-separated |A|")
-    capability.add_argument(
-        "--scenarios", type=int, default=50, help="scenarios per (size, |A|) (a count)"
-    )
-    capability.add_argument(
-        "--first-scenario", type=int, default=0, help="index of the first scenario"
-    )
-    capability.add_argument(
-        "--methods",
-        default="DTAA,GA,exact",
-        metavar="LIST",
-        help="comma-separated: DTAA,GA,exact,MC,joint",
-    )
-    capability.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
-    capability.add_argument(
-        "--neighbours", type=int, choices=[8, 16], default=16, help="grid moves"
-    )
-    capability.add_argument(
-        "--ga-generations",
-        type=int,
-        default=None,
-        help="GA generations (default: none: the GA's own, 350)",
-    )
-    capability.add_argument(
-        "--ga-operators",
-        default="ox-inversion",
-        help="chapter 2 GA operator set: 'ox-inversion' (the thesis's plain GA, as in "
-        "docs/reproduction/chapter3.md), 'memetic', or 'default' (the GA's own default)",
-    )
-    _study_flags(capability, "capability.csv")
-
-    comm = add_subcommand(
-        studies,
-        "comm",
-        cmd_study_comm,
-        "chapter 4 (§4.4, Tables 4.1-4.4, Figs. 4.5-4.8): CAA/DAA/HDA, q, bytes, true gap",
-    )
-    comm.add_argument(
-        "--preset",
-        choices=["table", "table100", "homogeneous15", "homogeneous30", "scalability"],
-        default="table",
-        help="the experiment (table: Tables 4.1-4.2; table100: 4.3-4.4; homogeneous15/30: "
-        "Figs. 4.5/4.6; scalability: Figs. 4.7-4.8)",
-    )
-    comm.add_argument(
-        "--scenarios", type=int, default=500, help="scenarios per (n, m, |A|) (a count)"
-    )
-    comm.add_argument(
-        "--methods",
-        default=None,
-        metavar="LIST",
-        help="comma-separated: CAA,DAA,HDA and 'exact' (certifies f_o once per scenario, for "
-        "the true gap) (default: none named: the preset's algorithms, no exact)",
-    )
-    deprecated(comm, "--exact", "exact_alias", "--methods ...,exact", nargs=0)
-    comm.set_defaults(exact_alias=False)
-    _study_flags(comm, "comm.csv")
     return parser
+
+
+def add_studies(studies: Any) -> None:
+    """One ``taopt study NAME`` per study a family's spec declares
+    (:class:`taopt.registry.Study`): its module's ``HELP``, ``add_arguments`` and ``run``, and
+    the flags every study takes."""
+    import importlib
+
+    from taopt.registry import families
+
+    for spec in sorted((s for f in families() for s in f.studies), key=lambda s: s.name):
+        module = importlib.import_module(spec.module)
+        parser = add_subcommand(studies, spec.name, module.run, module.HELP)
+        module.add_arguments(parser)
+        _study_flags(parser, module.CSV)
 
 
 def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
@@ -913,7 +634,8 @@ def _end_after_interrupt(script: bool, study: bool) -> None:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = build_parser()
+    words = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(with_studies="study" in words)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse already printed usage and the error

@@ -227,6 +227,22 @@ def no_optimum_note(problem: Any) -> str:
     return f"no certified optimum: {first.why_not_default(problem)}"
 
 
+def lower(problem: Any, strength: str = "auto") -> float:
+    """:func:`taopt.bounds.lower` with every relaxation of the exact models registered (the
+    LP relaxations that ``strength="strong"`` adds live in ``taopt.models``, imported here).
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    >>> taopt.lower(p, "strong") <= taopt.solve(p, "exact").objective
+    True
+    """
+    from taopt.bounds import lower as core_lower
+
+    return core_lower(problem, strength)
+
+
 def load_problem(data: Any) -> Any:
     """Build the problem of a JSON document by its ``kind`` (the registry's loaders)."""
     ensure_families()
@@ -243,5 +259,6 @@ __all__ = [
     "default_methods",
     "no_optimum_note",
     "load_problem",
+    "lower",
     "family_of",
 ]

@@ -12,8 +12,9 @@ A *method* (an exact model, a heuristic, a peer, a simulation policy) registers 
 ``taopt.heuristics``); :func:`taopt.solve` looks it up by (problem class, name). A method is
 a callable ``method(problem, **options) -> Solution``.
 
-Adding a family touches its own modules and one line of
-:data:`taopt.families.FAMILY_PACKAGES`.
+Adding a family changes no existing file: its spec is found by
+:func:`taopt.families.ensure_families` and its methods by the packages ``taopt.models`` and
+``taopt.heuristics``, which import every module they hold.
 
 Example
 -------
@@ -36,49 +37,147 @@ from typing import Any
 
 from taopt.errors import InstanceError
 
-# FAMILY_PACKAGES and ensure_families live in taopt.families (which imports nothing of taopt,
-# so taopt.result can use it without importing this module); re-exported here.
-from taopt.families import FAMILY_PACKAGES, ensure_families
+# ensure_families lives in taopt.families (which imports nothing of taopt, so taopt.result can
+# use it without importing this module); re-exported here.
+from taopt.families import ensure_families
 from taopt.result import Solution
 
 #: Method categories: how a method's result may be read.
 CATEGORIES = ("exact", "heuristic", "peer", "simulation", "relaxation")
 
 
+#: Sides of a bound: below the optimum (lower) or above it (upper).
+SIDES = ("lower", "upper")
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A bound a family declares, and what it may be used for (DESIGN invariant 3).
+
+    Attributes
+    ----------
+    func : callable
+        ``func(problem) -> float``; for the name ``"lower"`` it is
+        ``func(problem, strength) -> float`` (see :func:`taopt.bounds.lower`).
+    valid : bool
+        True when proven for every instance of the family; False for a value kept "as
+        printed" by the thesis (e.g. Algorithm 1 on asymmetric costs), never quoted as a bound.
+    side : {"lower", "upper"}
+        A lower bound never exceeds the optimum; an upper bound is never below it.
+    column : str
+        The column of ``taopt solve``'s table holding f / this bound ("" for none; the table
+        always has ``q_valid``, f over the family's fast valid lower bound).
+    description : str
+        One line (the function's docstring's first line by default).
+    """
+
+    func: Callable[..., float]
+    valid: bool = True
+    side: str = "lower"
+    column: str = ""
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if self.side not in SIDES:
+            raise InstanceError(f"a bound's side is one of {SIDES}, got {self.side!r}")
+        if not self.description:
+            doc = (inspect.getdoc(self.func) or "").strip().splitlines()
+            object.__setattr__(self, "description", doc[0] if doc else "")
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study command a family offers (``taopt study NAME``).
+
+    Attributes
+    ----------
+    name : str
+        The subcommand.
+    module : str
+        The orchestration module that runs it, imported only when the CLI is built: it
+        defines ``add_arguments(parser)`` (its own options; the CLI adds ``--out``,
+        ``--seed``, ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``), ``run(args) ->
+        int`` and the constants ``HELP`` (one line) and ``CSV`` (its output file name).
+        A string, so the core never imports the orchestration.
+    """
+
+    name: str
+    module: str
+
+
 @dataclass(frozen=True)
 class Family:
-    """A registered problem family.
+    """A problem family's spec: everything generic code needs to know of it.
+
+    Each family declares ONE such object in its own core package (``taopt/<pkg>/family.py``,
+    found by :func:`taopt.families.ensure_families`) and registers it with
+    :func:`register_family`. The CLI, ``taopt solve``/``verify``, the schema list, the
+    study commands and the file-format tests are generated from these specs.
 
     Attributes
     ----------
     problem_type : type
         The problem class (instances of subclasses belong to it too).
     kind : str
-        The ``kind`` of its JSON files (``"assignment_problem"``, ...).
+        The ``kind`` of its JSON files (``"assignment_problem"``, ...); its JSON Schema is
+        ``taopt/schemas/<kind>.schema.json`` and its example ``taopt/data/examples/<kind>.json``.
     payload : type
         The class of its solutions' payload (``Routes``, ``Plan``, ``Order``, ...).
     title : str
         A short human name ("open multi-vehicle routing, chapter 2").
+    evaluate : callable
+        ``evaluate(problem, payload) -> float``: the ONE scorer, which checks feasibility.
     load : callable
-        ``load(dict) -> problem``: build a validated problem from JSON data.
-    bounds : tuple of str
-        Names of the generic bounds of :mod:`taopt.bounds` it implements.
+        ``load(dict) -> problem``: build a validated problem from JSON data
+        (default ``problem_type.from_dict``).
+    to_dict : callable
+        ``to_dict(problem) -> dict`` (default ``problem.to_dict()``).
+    bounds : dict
+        ``name -> Bound``. The name ``"lower"`` is the family's strongest valid lower bound
+        at a given cost (:func:`taopt.bounds.lower`); the others are reached by
+        :func:`taopt.bounds.bound`.
     plots : dict
         ``name -> plot(problem, payload, path, instance=None, method="")`` writing a PNG
         (the first one is what ``taopt solve --plot`` draws; ``instance`` gives positions and
         the field when the problem came from an instance file, ``method`` is named in the
-        title). Every family draws something for every file of its kind (a problem without
-        positions on a schematic layout, said in the caption), so ``--plot`` never fails
-        after the solve.
+        title; a plot named ``gantt`` is what ``--gantt`` draws). Every family draws
+        something for every file of its kind, so ``--plot`` never fails after the solve.
+    adapter : callable, optional
+        ``adapter(instance, progress) -> problem or None``: the family's problem built from an
+        ``instance`` file (vehicles, targets, field), or None when the instance is not of
+        this family (exactly one family accepts any instance).
+    studies : tuple of Study
+        Its ``taopt study`` commands.
+    exports : dict
+        Public names reachable as ``taopt.<name>`` (the problem type at least).
     """
 
     problem_type: type
     kind: str
     payload: type
     title: str
-    load: Callable[[Mapping[str, Any]], Any]
-    bounds: tuple[str, ...] = ()
+    evaluate: Callable[[Any, Any], float]
+    load: Callable[[Mapping[str, Any]], Any] | None = None
+    to_dict: Callable[[Any], dict[str, Any]] | None = None
+    bounds: Mapping[str, Bound] = field(default_factory=dict)
     plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+    adapter: Callable[..., Any] | None = None
+    studies: tuple[Study, ...] = ()
+    exports: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.load is None:
+            object.__setattr__(self, "load", self.problem_type.from_dict)
+        if self.to_dict is None:
+            object.__setattr__(self, "to_dict", lambda problem: problem.to_dict())
+        bounds = {name: b if isinstance(b, Bound) else Bound(b) for name, b in self.bounds.items()}
+        object.__setattr__(self, "bounds", bounds)
+        exports = {self.problem_type.__name__: self.problem_type, **dict(self.exports)}
+        object.__setattr__(self, "exports", exports)
+
+    def valid_bounds(self, side: str = "lower") -> dict[str, Bound]:
+        """Its valid bounds of one side (``"lower"`` included when declared)."""
+        return {k: b for k, b in self.bounds.items() if b.valid and b.side == side}
 
 
 @dataclass(frozen=True)
@@ -188,61 +287,37 @@ _FAMILIES: dict[type, Family] = {}
 _METHODS: dict[type, dict[str, Method]] = {}
 
 
-def register_family(
-    problem_type: type,
-    *,
-    kind: str,
-    payload: type,
-    title: str,
-    evaluate: Callable[[Any, Any], float],
-    bounds: Mapping[str, Callable[[Any], float]] | None = None,
-    load: Callable[[Mapping[str, Any]], Any] | None = None,
-    plots: Mapping[str, Callable[..., Any]] | None = None,
-) -> Family:
-    """Register a problem family: its scorer, bounds, file kind and payload.
+def register_family(family: Family | type, **spec: Any) -> Family:
+    """Register a family's spec: its scorer, bounds, file kind, payload, plots and studies.
 
     Parameters
     ----------
-    problem_type : type
-    kind : str
-        The JSON ``kind`` of the family's files.
-    payload : type
-        Its solutions' payload class.
-    title : str
-    evaluate : callable
-        ``evaluate(problem, payload) -> float``: the ONE scorer, which checks feasibility.
-    bounds : dict, optional
-        ``name -> bound(problem)`` for names of the generic functions in
-        :mod:`taopt.bounds` ("arborescence", "thesis_mcga", ...).
-    load : callable, optional
-        ``load(dict) -> problem`` (default ``problem_type.from_dict``).
-    plots : dict, optional
-        ``name -> plot(problem, payload, path, instance=None, method="")`` (see
-        :class:`Family`).
+    family : Family
+        The spec (see :class:`Family`). For brevity a problem class with the spec's fields as
+        keywords is accepted too: ``register_family(P, kind=..., payload=..., ...)``.
+
+    Returns
+    -------
+    Family
+        The registered spec.
+
+    Raises
+    ------
+    InstanceError
+        Another family already has this file kind.
     """
-    from taopt import bounds as bound_functions
     from taopt.scoring import evaluate as generic_evaluate
 
+    if not isinstance(family, Family):
+        family = Family(problem_type=family, **spec)
+    elif spec:
+        raise InstanceError("register_family takes a Family or a problem type with keywords")
     for other in _FAMILIES.values():
-        if other.kind == kind and other.problem_type is not problem_type:
-            raise InstanceError(f"file kind {kind!r} is already registered")
-    family = Family(
-        problem_type=problem_type,
-        kind=kind,
-        payload=payload,
-        title=title,
-        load=load or problem_type.from_dict,
-        bounds=tuple(bounds or {}),
-        plots=dict(plots or {}),
-    )
-    _FAMILIES[problem_type] = family
-    _METHODS.setdefault(problem_type, {})
-    generic_evaluate.register(problem_type)(_scorer(evaluate, payload))
-    for name, func in (bounds or {}).items():
-        generic = getattr(bound_functions, name, None)
-        if generic is None or not hasattr(generic, "register"):
-            raise InstanceError(f"taopt.bounds has no generic bound {name!r}")
-        generic.register(problem_type)(func)
+        if other.kind == family.kind and other.problem_type is not family.problem_type:
+            raise InstanceError(f"file kind {family.kind!r} is already registered")
+    _FAMILIES[family.problem_type] = family
+    _METHODS.setdefault(family.problem_type, {})
+    generic_evaluate.register(family.problem_type)(_scorer(family.evaluate, family.payload))
     return family
 
 
@@ -326,6 +401,32 @@ def register_method(
         return func
 
     return wrap
+
+
+_RELAXATIONS: dict[type, list[Callable[[Any], float]]] = {}
+
+
+def register_relaxation(
+    problem_type: type,
+) -> Callable[[Callable[..., float]], Callable[..., float]]:
+    """Decorator: ``func(problem) -> float`` is a valid lower bound from a relaxation of an
+    exact model (an LP); :func:`taopt.bounds.lower` with ``strength="strong"`` takes it.
+
+    Exact-model modules register theirs where they are defined, so the core never imports them.
+    """
+
+    def wrap(func: Callable[..., float]) -> Callable[..., float]:
+        found = _RELAXATIONS.setdefault(problem_type, [])
+        if func not in found:
+            found.append(func)
+        return func
+
+    return wrap
+
+
+def relaxations(problem: Any) -> list[Callable[[Any], float]]:
+    """The relaxation bounds registered for the family of ``problem`` (imported modules only)."""
+    return list(_RELAXATIONS.get(family_of(problem).problem_type, []))
 
 
 def family_of(item: Any) -> Family:
@@ -412,12 +513,16 @@ def get_method(problem: Any, name: str) -> Method:
 
 
 __all__ = [
-    "FAMILY_PACKAGES",
     "CATEGORIES",
+    "SIDES",
+    "Bound",
+    "Study",
     "Family",
     "Method",
     "register_family",
     "register_method",
+    "register_relaxation",
+    "relaxations",
     "ensure_families",
     "family_of",
     "family_for_kind",

@@ -6,9 +6,8 @@ Schema before anything is built; see ``docs/file-formats.md``):
 * ``"instance"`` (:class:`taopt.Instance`): vehicles, targets, region, a drift field and
   obstacles; its travel-time matrix is computed by navigation and it becomes the chapter 2
   problem (one capability, one speed, no obstacles) or the chapter 3 problem;
-* the kind of any registered family: ``"assignment_problem"``, ``"delivery_instance"``,
-  ``"sop_problem"``, ``"capability_problem"``, ``"comm_problem"`` (see
-  :func:`taopt.registry.file_kinds`).
+* the kind of any registered family (:func:`taopt.registry.file_kinds`; each family's spec
+  names its kind, schema and loader).
 
 Every method is run through :func:`taopt.solve` (which re-scores the result with the
 family's one scorer) and printed in one table with its status, proven bound and gap, its
@@ -33,15 +32,14 @@ from typing import IO, Any
 
 import pandas as pd
 
-from taopt import bounds as bound_functions
+from taopt.bounds import lower
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError
 from taopt.instance import Instance
 from taopt.io import load_json
 from taopt.limits import check_memory, navigation_bytes
 from taopt.pipeline import default_methods, no_optimum_note, solve
-from taopt.registry import certifying_method, family_for_kind, family_of, get_method
+from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
 from taopt.result import ERROR, OPTIMAL, Solution, Status
-from taopt.routing.problem import AssignmentProblem
 from taopt.schemas import naming
 from taopt.scoring import evaluate
 
@@ -59,36 +57,26 @@ __all__ = [
 
 
 def problem_from_instance(instance: Instance, progress: bool = True) -> Any:
-    """The problem of an :class:`Instance`: its travel-time matrix by navigation.
+    """The problem of an :class:`Instance`, built by the family whose spec accepts it.
 
-    One capability, one speed and no obstacles give the chapter 2 problem (2.2)–(2.5);
-    anything else the chapter 3 problem (3.1)–(3.3), when chapter 3 is installed.
+    Each family with an ``adapter`` (:class:`taopt.registry.Family`) is asked in turn; e.g.
+    one capability, one speed and no obstacles give the chapter 2 problem (2.2)–(2.5) (travel
+    times by navigation), anything else the chapter 3 problem (3.1)–(3.3).
+
+    Raises
+    ------
+    InstanceError
+        No family accepts the instance.
     """
-    from taopt.navigation import travel_time_matrix
-
-    # the size guard: the matrix and navigation's work arrays, before navigating
-    points = instance.n_targets + len(instance.vehicles)
-    check_memory(
-        navigation_bytes(points),
-        f"the travel-time matrix of {instance.name or 'this instance'} "
-        f"({instance.n_targets:,} targets + {len(instance.vehicles)} vehicles = "
-        f"{points:,} points, {points**2:,} pairs)",
+    for family in families():
+        if family.adapter is not None:
+            problem = family.adapter(instance, progress=progress)
+            if problem is not None:
+                return problem
+    raise InstanceError(
+        f"no problem family accepts the instance {instance.name or ''!r}: "
+        "none of the installed families builds a problem from it"
     )
-    speeds = {v.speed for v in instance.vehicles}
-    capabilities = {v.capability for v in instance.vehicles}
-    if len(speeds) == 1 and len(capabilities) == 1 and not instance.obstacles:
-        matrix = travel_time_matrix(
-            instance.field, instance.points, speeds.pop(), progress=progress
-        )
-        return AssignmentProblem(matrix, n_targets=instance.n_targets, name=instance.name)
-    try:
-        from taopt.capability.instances import capability_problem_from_instance
-    except ImportError:
-        raise InstanceError(
-            "this instance has several capabilities, speeds or obstacles: it needs the "
-            "chapter 3 problem (3.1)-(3.3), which this taopt cannot build"
-        ) from None
-    return capability_problem_from_instance(instance)
 
 
 def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Instance | None]:
@@ -112,10 +100,18 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
         return family.load(data), None
 
 
-def _bound(name: str, problem: Any) -> float:
-    if name not in family_of(problem).bounds:
-        return math.nan
-    return float(getattr(bound_functions, name)(problem))
+def _ratio_columns(problem: Any) -> dict[str, float]:
+    """Denominators of the table's ratio columns, from the family's spec.
+
+    ``q_valid``: the family's fast valid lower bound (:func:`taopt.bounds.lower`); then one
+    column per bound whose spec names a ``column`` (e.g. ``q_thesis``, the thesis's
+    Algorithm 1 value as printed).
+    """
+    columns = {"q_valid": lower(problem, "fast")}
+    for bound in family_of(problem).bounds.values():
+        if bound.column:
+            columns[bound.column] = float(bound.func(problem))
+    return columns
 
 
 def method_table(
@@ -128,10 +124,10 @@ def method_table(
 
     Columns: method, status, objective, ``bound`` and ``gap`` (what the method proves),
     ``gap_to_optimum`` (f / f_o − 1 against a certified optimum found in this run — the
-    true gap the thesis could not measure), ``q_valid`` (f / the family's valid
-    arborescence bound), ``q_thesis`` (f / the thesis's Algorithm 1 value, where the family
-    has one; not a valid bound on asymmetric costs), ``seconds`` and, when some method
-    failed, ``message``.
+    true gap the thesis could not measure), ``q_valid`` (f / the family's fast valid lower
+    bound, :func:`taopt.bounds.lower`), one ratio per bound the family's spec gives a column
+    (``q_thesis``: f / the thesis's Algorithm 1 value, not a valid bound on asymmetric costs),
+    ``seconds`` and, when some method failed, ``message``.
 
     A method that raises does not sink the table: its row has status "error", objective
     NaN and the exception's first line in ``message`` (its Solution carries it in
@@ -142,8 +138,7 @@ def method_table(
     for method in methods:  # an unknown name is the user's error: refuse before running any
         get_method(problem, method)
     solutions = {m: _run_method(problem, m, seed, time_limit) for m in methods}
-    valid = _bound("arborescence", problem)
-    thesis = _bound("thesis_mcga", problem)
+    ratios = _ratio_columns(problem)
     optima = [s.objective for s in solutions.values() if s.status == OPTIMAL]
     optimum = min(optima) if optima else math.nan
     rows = []
@@ -156,8 +151,10 @@ def method_table(
                 "bound": math.nan if sol.bound is None else sol.bound,
                 "gap": math.nan if sol.gap is None else sol.gap,
                 "gap_to_optimum": sol.objective / optimum - 1.0 if optimum > 0 else math.nan,
-                "q_valid": sol.objective / valid if valid > 0 else math.nan,
-                "q_thesis": sol.objective / thesis if thesis > 0 else math.nan,
+                **{
+                    column: sol.objective / value if value > 0 else math.nan
+                    for column, value in ratios.items()
+                },
                 "seconds": sol.runtime,
                 "message": _short(sol.info.get("error", "")) if sol.status == ERROR else "",
             }
@@ -370,9 +367,9 @@ def load_certificate(path: str | Path) -> Solution:
 
 
 def _valid_lower_bound(problem: Any) -> float:
-    """The family's valid arborescence bound (NaN without one, or when it cannot be built)."""
+    """The family's fast valid lower bound (NaN without one, or when it cannot be built)."""
     try:
-        return _bound("arborescence", problem)
+        return lower(problem, "fast")
     except (TaoptError, ValueError, ArithmeticError):
         return math.nan
 
@@ -425,15 +422,18 @@ def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -
         return
     data = load_json(path)
     kind = data.get("kind") if isinstance(data, dict) else None
-    if kind == "instance":  # becomes a chapter 2 or 3 problem: both draw routes, neither a Gantt
-        plots: tuple[str, ...] = ("routes",)
+    if kind == "instance":  # becomes the problem of a family with an adapter: what can it draw?
+        plots: tuple[str, ...] = tuple(
+            {name for f in families() if f.adapter is not None for name in f.plots}
+        )
     else:
         try:
             plots = tuple(family_for_kind(kind).plots)
         except InstanceError:  # an unknown kind: the loader says so, with the schema's words
             return
     if gantt and "gantt" not in plots:
-        raise OutputError(f"--gantt draws delivery plans (truck and drone); {path} is a {kind}")
+        drawn = ", ".join(f.kind for f in families() if "gantt" in f.plots)
+        raise OutputError(f"--gantt draws a Gantt chart of a {drawn} only; {path} is a {kind}")
     if plot and not plots:
         raise OutputError(f"--plot: no plot for a {kind} file ({path})")
 
@@ -493,7 +493,7 @@ def verify_file(
     ``time_limit`` seconds; a re-solve stopped by the limit still refutes a claim its
     incumbent beats, and proves one its bound reaches, and leaves the rest
     ``[not checked]``. Without ``exact``, a bound (or an optimum) at most the family's
-    valid arborescence bound is proven by it.
+    fast valid lower bound (:func:`taopt.bounds.lower`) is proven by it.
 
     Returns
     -------

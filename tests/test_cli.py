@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import io
 import json
 
@@ -380,12 +381,29 @@ def test_every_exact_method_is_registered_by_taopt_models():
     assert {"exact", "subset-dp", "milp"} <= set(method_names(taopt.DeliveryInstance, "exact"))
 
 
+def test_every_family_package_is_discovered():
+    """Each taopt subpackage with a family.py is found, and each declares a registered spec."""
+    from pathlib import Path
+
+    import taopt
+    from taopt import families, registry
+
+    root = Path(taopt.__file__).parent
+    on_disk = {p.parent.name for p in root.glob("*/family.py")}
+    assert {m.split(".")[1] for m in families.family_modules()} == on_disk
+    kinds = {f.kind for f in registry.families()}
+    assert len(kinds) >= len(on_disk)
+    for module in families.family_modules():
+        spec = importlib.import_module(module).FAMILY
+        assert spec.kind in kinds and registry.family_of(spec.problem_type) is spec
+
+
 def test_a_family_that_fails_to_import_fails_loudly(monkeypatch):
     """ensure_families raises the ImportError of a broken family instead of skipping it."""
     from taopt import families, registry
 
-    broken = (*families.FAMILY_PACKAGES, "taopt._no_such_family")
-    monkeypatch.setattr(families, "FAMILY_PACKAGES", broken)
+    broken = (*families.family_modules(), "taopt._no_such_family.family")
+    monkeypatch.setattr(families, "family_modules", lambda: broken)
     with pytest.raises(ImportError, match="_no_such_family"):
         registry.file_kinds()
 

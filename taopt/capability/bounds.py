@@ -44,4 +44,16 @@ def doubled_arborescence(problem: CapabilityProblem) -> float:
     return sum(routing_bounds.f_da(c.problem) for c in problem.classes if c.problem)
 
 
-__all__ = ["arborescence_bound", "thesis_mcga", "doubled_arborescence"]
+def capability_lower(problem: CapabilityProblem, strength: str) -> float:
+    """:func:`taopt.bounds.lower` for chapter 3: the arborescence ("fast"), or the sum over
+    the classes of chapter 2's bound at that strength (the classes are independent)."""
+    from taopt.routing.bounds import routing_lower
+
+    if strength == "fast":
+        return float(arborescence_bound(problem))
+    return float(
+        sum(routing_lower(c.problem, strength) for c in problem.classes if c.problem is not None)
+    )
+
+
+__all__ = ["arborescence_bound", "thesis_mcga", "doubled_arborescence", "capability_lower"]

@@ -52,4 +52,9 @@ def mst_bound(problem: CommProblem) -> float:
     return float(sum(class_mst(problem, code) for code in range(len(problem.attributes))))
 
 
-__all__ = ["mst_bound", "class_mst"]
+def comm_lower(problem: CommProblem, strength: str) -> float:
+    """:func:`taopt.bounds.lower` for chapter 4: Lemma 4.8's MST bound at every strength."""
+    return float(mst_bound(problem))
+
+
+__all__ = ["mst_bound", "class_mst", "comm_lower"]

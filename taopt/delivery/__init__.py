@@ -13,62 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from taopt.bounds import sop_lower
-from taopt.delivery.bounds import arborescence_bound, delivery_lower
-from taopt.delivery.evaluate import evaluate_plan
+from taopt.delivery import family as _family  # noqa: F401  (registers the family)
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.delivery.sop import SopProblem, evaluate_order, sop_arborescence_bound
-from taopt.registry import register_family
-from taopt.result import Order
-
-
-def _plot_plan(
-    problem: DeliveryInstance, plan: Plan, path: str, method: str = "", **_: Any
-) -> None:
-    """The truck path and drone sorties on the street network."""
-    from taopt.delivery.plot import plot_plan
-
-    plot_plan(problem, plan, method=method).figure.savefig(path, dpi=120, bbox_inches="tight")
-
-
-def _plot_gantt(
-    problem: DeliveryInstance, plan: Plan, path: str, method: str = "", **_: Any
-) -> None:
-    """The truck's and the drone's timelines (Gantt chart)."""
-    from taopt.delivery.plot import plot_gantt
-
-    plot_gantt(problem, plan, method=method).figure.savefig(path, dpi=120, bbox_inches="tight")
-
-
-def _plot_order(problem: SopProblem, order: Order, path: str, method: str = "", **_: Any) -> None:
-    """The order as a position/cost chart with the precedence arcs."""
-    from taopt.delivery.plot import plot_order
-
-    plot_order(problem, order, method=method, path=path)
-
-
-register_family(
-    DeliveryInstance,
-    kind="delivery_instance",
-    payload=Plan,
-    title="precedence-constrained truck-drone delivery (chapter 5)",
-    evaluate=evaluate_plan,
-    bounds={"arborescence": arborescence_bound, "lower": delivery_lower},
-    plots={"plan": _plot_plan, "gantt": _plot_gantt},
-)
-register_family(
-    SopProblem,
-    kind="sop_problem",
-    payload=Order,
-    title="sequential ordering, TSPLIB SOP (chapter 5 certification)",
-    evaluate=evaluate_order,
-    bounds={"arborescence": sop_arborescence_bound, "lower": sop_lower},
-    plots={"order": _plot_order},
-)
-
-# the fixed-order schedule DP (the scorer of every ordering heuristic); imported with the family so
-# it is known before any method look-up (taopt solve, taopt verify --exact)
-from taopt.delivery import schedule as _schedule  # noqa: E402, F401
+from taopt.sop.problem import SopProblem  # noqa: F401  (its own family since issue 17)
 
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 

@@ -240,6 +240,38 @@ def f_da(problem: AssignmentProblem, tree: str = "thesis") -> float:
     return float((cost[parent, targets] + cost[targets, parent]).sum())
 
 
+def path_bound(problem: AssignmentProblem) -> float:
+    """Chapter 2: the degree-penalised arborescence (targets out-degree <= 1, vehicles <= m).
+
+    Validity: a feasible solution of (2.2)–(2.5) with the vehicles merged into one root
+    (root -> target k costs min_j t(p_j, k), as in the dense arborescence bound) is a
+    spanning arborescence in which every target has out-degree <= 1 and the root <= m, of
+    weight <= f; the Lagrangian with π >= 0 on these rows is <= f
+    (:mod:`taopt.delivery.relaxation`).
+    """
+    import numpy as np
+
+    from taopt.delivery.relaxation import degree_penalised_arborescence
+
+    n, m = problem.n, problem.m
+    if n == 0:
+        return 0.0
+    weight = np.full((n + 1, n + 1), np.inf)
+    weight[:n, :n] = problem.cost[:n, :n]
+    weight[n, :n] = problem.cost[n:, :n].min(axis=0)
+    capacity = np.r_[np.ones(n), float(m)]
+    result = degree_penalised_arborescence(weight, n, capacity, np.zeros(n + 1, dtype=bool))
+    return max(result.value, arborescence_bound(problem))
+
+
+def routing_lower(problem: AssignmentProblem, strength: str) -> float:
+    """:func:`taopt.bounds.lower` for chapter 2: the arborescence ("fast"), else
+    :func:`path_bound` (the LP relaxation that "strong" adds is registered by ``taopt.models``)."""
+    if strength == "fast":
+        return float(arborescence_bound(problem))
+    return float(path_bound(problem))
+
+
 __all__ = [
     "GrowthTree",
     "mcga_tree",
@@ -247,4 +279,6 @@ __all__ = [
     "arborescence_bound",
     "arborescence_graph",
     "f_da",
+    "path_bound",
+    "routing_lower",
 ]

@@ -32,6 +32,7 @@ Example
 
 from __future__ import annotations
 
+import argparse
 import os
 import re
 from collections.abc import Sequence
@@ -48,6 +49,7 @@ from taopt.capability.instances import (
     thesis_scenario,
 )
 from taopt.capability.problem import CapabilityProblem
+from taopt.cli import deprecated, folder
 from taopt.errors import InstanceError
 from taopt.navigation.grid import NEIGHBOURHOODS
 from taopt.study import (
@@ -84,6 +86,97 @@ THESIS_TABLE_3_2 = {
     ("n90m10", "GA"): (104.55, 134.19, 172.45, 213.34, 273.92),
     ("n90m10", "DTAA"): (0.38, 1.19, 2.29, 3.20, 4.40),
 }
+
+
+# -- the command ``taopt study capability`` (found through the family's spec) ----------------------
+
+#: One line for ``taopt study --help``.
+HELP = (
+    "chapter 3 (§3.7, Figs. 3.4-3.6, Tables 3.1-3.2): DTAA and GA vs f^a, a valid bound "
+    "and the certified optimum"
+)
+#: The file the study writes in ``--out``.
+CSV = "capability.csv"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``taopt study capability`` (the CLI adds ``--out``, ``--seed``,
+    ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``)."""
+    parser.add_argument(
+        "--sizes", default="n50m10,n70m10,n90m10", help="comma-separated nNmM sizes"
+    )
+    deprecated(parser, "--instances", "sizes", "--sizes (a list of nNmM sizes)")
+    parser.add_argument("--capabilities", default="1,3,5,7,10", help="comma-separated |A|")
+    parser.add_argument(
+        "--scenarios", type=int, default=50, help="scenarios per (size, |A|) (a count)"
+    )
+    parser.add_argument("--first-scenario", type=int, default=0, help="index of the first scenario")
+    parser.add_argument(
+        "--methods",
+        default="DTAA,GA,exact",
+        metavar="LIST",
+        help="comma-separated: DTAA,GA,exact,MC,joint",
+    )
+    parser.add_argument("--cell", type=float, default=10.0, help="grid cell side (m)")
+    parser.add_argument("--neighbours", type=int, choices=[8, 16], default=16, help="grid moves")
+    parser.add_argument(
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own, 350)",
+    )
+    parser.add_argument(
+        "--ga-operators",
+        default="ox-inversion",
+        help="chapter 2 GA operator set: 'ox-inversion' (the thesis's plain GA, as in "
+        "docs/reproduction/chapter3.md), 'memetic', or 'default' (the GA's own default)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Body of ``taopt study capability``: run, print Tables 3.1-3.2 beside taopt's, plot."""
+    import pandas as pd
+
+    from taopt.studies.capability import (
+        capability_study,
+        plot_figures,
+        summarize,
+        thesis_comparison,
+    )
+
+    ga = {"operators": args.ga_operators} if args.ga_operators != "default" else {}
+    if args.ga_generations is not None:
+        ga["generations"] = args.ga_generations
+    options = {"GA": ga} if ga else None
+    df = capability_study(
+        instances=[i.strip() for i in args.sizes.split(",") if i.strip()],
+        capabilities=args.capabilities,  # parsed and checked by capability_study
+        scenarios=args.scenarios,
+        methods=args.methods,
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        time_limit=args.time_limit,
+        method_options=options,
+        cell=args.cell,
+        neighbours=args.neighbours,
+        first_scenario=args.first_scenario,
+        progress=not args.quiet,
+    )
+    table = summarize(df)
+    shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(table[shown].round(4).to_string())
+        for name in ("3.1", "3.2"):
+            print(f"\nTable {name}, thesis beside taopt:")
+            print(thesis_comparison(df, name).round(4).to_string())
+    table.to_csv(folder(args.out) / "summary.csv")
+    if args.plot:
+        plot_figures(df, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
 
 __all__ = [
     "INSTANCES",

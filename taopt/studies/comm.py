@@ -31,6 +31,7 @@ Example
 
 from __future__ import annotations
 
+import argparse
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -40,6 +41,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from taopt.cli import deprecated, folder, method_list
 from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
@@ -60,6 +62,85 @@ INFO_COLUMNS = (
     "projected_increases",
     "initial_total",
 )
+
+
+# -- the command ``taopt study comm`` (found through the family's spec) ----------------------
+
+#: One line for ``taopt study --help``.
+HELP = "chapter 4 (§4.4, Tables 4.1-4.4, Figs. 4.5-4.8): CAA/DAA/HDA, q, bytes, true gap"
+#: The file the study writes in ``--out``.
+CSV = "comm.csv"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``taopt study comm`` (the CLI adds ``--out``, ``--seed``,
+    ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``)."""
+    parser.add_argument(
+        "--preset",
+        choices=["table", "table100", "homogeneous15", "homogeneous30", "scalability"],
+        default="table",
+        help="the experiment (table: Tables 4.1-4.2; table100: 4.3-4.4; homogeneous15/30: "
+        "Figs. 4.5/4.6; scalability: Figs. 4.7-4.8)",
+    )
+    parser.add_argument(
+        "--scenarios", type=int, default=500, help="scenarios per (n, m, |A|) (a count)"
+    )
+    parser.add_argument(
+        "--methods",
+        default=None,
+        metavar="LIST",
+        help="comma-separated: CAA,DAA,HDA and 'exact' (certifies f_o once per scenario, for "
+        "the true gap) (default: none named: the preset's algorithms, no exact)",
+    )
+    deprecated(parser, "--exact", "exact_alias", "--methods ...,exact", nargs=0)
+    parser.set_defaults(exact_alias=False)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Body of ``taopt study comm``: run a §4.4 preset, print q, bytes and the true gap."""
+    import pandas as pd
+
+    from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
+    from taopt.studies.comm import summary as summarize
+
+    preset = PRESETS[args.preset]
+    named = list(method_list(args.methods) or preset.methods)
+    exact = "exact" in named or args.exact_alias
+    if not [m for m in named if m != "exact"]:
+        raise InstanceError(
+            "--methods: name an algorithm (CAA, DAA, HDA) beside 'exact': f_o is certified once "
+            "per scenario for the true gap of the algorithms"
+        )
+    df = comm_study(
+        args.preset,
+        args.scenarios,
+        args.out,
+        methods=[m for m in named if m != "exact"],
+        exact=exact,
+        seed=args.seed,
+        jobs=args.jobs,
+        dask=args.dask,
+        time_limit=args.time_limit,
+        progress=not args.quiet,
+    )
+    table = summarize(df)
+    table.to_csv(folder(args.out) / f"summary_{args.preset}.csv", index=False)
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(preset.title)
+        for n, m in preset.sizes:
+            print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
+            print(q_table(table, n, m).round(4).to_string())
+            if table["certified"].sum():
+                print("\nmean true gap f / f_o (certified scenarios)")
+                print(q_table(table, n, m, value="gap").round(4).to_string())
+            print("\nmean bytes relayed (10^5 bytes)")
+            print(bytes_table(table, n, m).round(4).to_string())
+    if args.plot:
+        n, m = preset.sizes[0]
+        plot_study(table, n, m, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
 
 __all__ = [
     "SPEC",

@@ -34,6 +34,7 @@ one writer, any executor (process pool or Dask). A re-run computes only the miss
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import math
 from collections.abc import Sequence
@@ -44,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import lower
+from taopt.cli import folder, method_list, parse_numbers
 from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.ideal_dp import ideal_dp
@@ -357,6 +359,94 @@ def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | N
         ax.figure.tight_layout()
         ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     return ax
+
+
+# -- the command ``taopt study delivery`` (found through the family's spec) ----------------------
+
+#: One line for ``taopt study --help``.
+HELP = "chapter 5 (§5.5, Tables 5.1-5.7): truck-drone heuristics vs the bound"
+#: The file the study writes in ``--out``.
+CSV = "delivery_<setup>.csv"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``taopt study delivery`` (the CLI adds ``--out``, ``--seed``,
+    ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``)."""
+    parser.add_argument(
+        "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
+    )
+    parser.add_argument(
+        "--instances", type=int, default=10, help="random instances per setup (a count)"
+    )
+    parser.add_argument(
+        "--methods",
+        default="NIA,MMA,SMMA,GA",
+        metavar="LIST",
+        help="comma-separated: NIA,MMA,SMMA,GA,exact (DP over order ideals),subset-dp,milp",
+    )
+    parser.add_argument(
+        "--ratios", default="0.15,0.3,0.45,0.6,0.75,0.9", help="comma-separated L/L0 values"
+    )
+    parser.add_argument(
+        "--vd-ratio",
+        type=float,
+        default=None,
+        help="override v_d / v_t (default: none: the setup's)",
+    )
+    parser.add_argument(
+        "--exact-max-n",
+        type=int,
+        default=8,
+        help="compute optima (ideal DP) per scenario when n <= this; beyond, from 'exact' rows",
+    )
+    parser.add_argument(
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Body of ``taopt study delivery``: run, print Tables 5.1-5.7's averages, plot."""
+    import pandas as pd
+
+    from taopt.studies.delivery import delivery_study, plot_study, thesis_table
+
+    ratios = tuple(parse_numbers(args.ratios, len(args.ratios.split(",")), "--ratios"))
+    options = (
+        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    )
+    df = delivery_study(
+        setup=args.setup,
+        instances=args.instances,
+        ratios=ratios,
+        methods=method_list(args.methods) or (),
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        progress=not args.quiet,
+        exact_max_n=args.exact_max_n,
+        vd_ratio=args.vd_ratio,
+        method_options=options,
+        time_limit=args.time_limit,
+    )
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print("average makespan f (5.1):")
+        print(thesis_table(df, "makespan").round(1).to_string())
+        print("\naverage q = f / f_a (5.19):")
+        print(thesis_table(df, "q").round(4).to_string())
+        print("\naverage run time (s):")
+        print(thesis_table(df, "runtime").round(3).to_string())
+        if df["optimum"].notna().any():
+            print("\naverage gap to the optimum f / f_o - 1:")
+            print(thesis_table(df, "gap_to_optimum").round(4).to_string())
+    print(f"\nrows: {folder(args.out) / f'delivery_{args.setup}.csv'}")
+    if args.plot:
+        plot_study(df, "q", path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
 
 
 __all__ = [

@@ -24,6 +24,7 @@ Example
 
 from __future__ import annotations
 
+import argparse
 import os
 from collections.abc import Sequence
 from itertools import combinations
@@ -34,12 +35,78 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import arborescence, thesis_mcga
+from taopt.cli import FIELD_HELP, folder, parse_field
 from taopt.errors import InstanceError
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 from taopt.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 
 METHODS = ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact")
+
+
+# -- the command ``taopt study drift`` (found through the family's spec) ----------------------
+
+#: One line for ``taopt study --help``.
+HELP = "chapter 2 (§2.5, Tables 2.1-2.2): heuristics vs f_a, a valid bound and the optimum"
+#: The file the study writes in ``--out``.
+CSV = "drift.csv"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``taopt study drift`` (the CLI adds ``--out``, ``--seed``,
+    ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``)."""
+    parser.add_argument("--n", type=int, required=True, help="number of targets")
+    parser.add_argument("--m", type=int, required=True, help="number of vehicles")
+    parser.add_argument("--scenarios", type=int, default=400, help="random scenarios (a count)")
+    parser.add_argument(
+        "--methods",
+        default="VN,VM,EVN,EVM,MC,GA,exact",
+        metavar="LIST",
+        help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
+    )
+    parser.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
+    parser.add_argument(
+        "--ga-generations",
+        type=int,
+        default=None,
+        help="GA generations (default: none: the GA's own, the thesis's 350)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Body of ``taopt study drift``: run, print the summary and the tests, plot."""
+    import pandas as pd
+
+    from taopt.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
+
+    options = (
+        {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
+    )
+    df = drift_study(
+        args.n,
+        args.m,
+        args.scenarios,
+        methods=args.methods,
+        seed=args.seed,
+        out_dir=args.out,
+        jobs=args.jobs,
+        dask=args.dask,
+        progress=not args.quiet,
+        time_limit=args.time_limit,
+        method_options=options,
+        field="thesis" if args.field == "thesis" else parse_field(args.field),
+    )
+    table = summarize(df)
+    with pd.option_context("display.width", 160, "display.max_columns", 20):
+        print(table.round(4).to_string())
+        print()
+        print(wilcoxon_pairs(df).round(4).to_string(index=False))
+    table.to_csv(folder(args.out) / "summary.csv")
+    if args.plot:
+        plot_gaps(df, path=args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
 
 __all__ = [
     "METHODS",
