@@ -22,8 +22,17 @@ ROOT = HERE.parent
 # The checkout root makes ``import taopt`` (with taopt.models and taopt.heuristics mapped by
 # taopt/__init__.py) resolve to this checkout, installed or not.
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE))
 
 import taopt  # noqa: E402
+
+
+from generated import generated_pages  # noqa: E402  (docs/generated.py)
+
+for _name, _text in generated_pages().items():
+    _page = HERE / _name
+    if not _page.is_file() or _page.read_text(encoding="utf-8") != _text:
+        _page.write_text(_text, encoding="utf-8")
 
 project = "taopt"
 author = "the taopt developers"

@@ -196,6 +196,29 @@ def cmd_verify(args: argparse.Namespace) -> int:
     return verdict.exit_code
 
 
+def cmd_kinds(args: argparse.Namespace) -> int:
+    """Body of ``taopt kinds``: every problem family's file kind, from its spec."""
+    from taopt.pipeline import available_methods
+    from taopt.registry import families
+
+    for family in sorted(families(), key=lambda f: f.kind):
+        bounds = ", ".join(
+            f"{name} ({'valid' if b.valid else 'as printed'} {b.side})"
+            for name, b in family.bounds.items()
+        )
+        print(f"{family.kind}: {family.title}")
+        print(f"  problem {family.problem_type.__name__}, payload {family.payload.__name__}")
+        print(
+            f"  schema taopt/schemas/{family.kind}.schema.json, example "
+            f"taopt/data/examples/{family.kind}.json"
+        )
+        print(f"  bounds: {bounds or 'none'}")
+        print(f"  methods: {', '.join(available_methods(family.problem_type))}")
+        if family.studies:
+            print(f"  studies: {', '.join('taopt study ' + s.name for s in family.studies)}")
+    return 0
+
+
 def cmd_claims(args: argparse.Namespace) -> int:
     """Check chapter 2's lemmas and theorems on random instances."""
     from taopt.studies.routing_claims import check_claims
@@ -394,9 +417,8 @@ SOLVE_DESCRIPTION = (
     "optimum, ratio to a valid bound. The certified optimum is computed by default where it\n"
     "is affordable; one line says why when it is not.\n\n"
     "File kinds (docs/file-formats.md; schemas in taopt/schemas/): 'instance' (positions,\n"
-    "field, obstacles: travel times by navigation), 'assignment_problem' (a travel-time\n"
-    "matrix), 'delivery_instance' (truck-drone, chapter 5), 'sop_problem',\n"
-    "'capability_problem' (chapter 3) and 'comm_problem' (chapter 4). Examples ship with the\n"
+    "field, obstacles: travel times by navigation) and the kind of every problem family\n"
+    "('taopt kinds' lists them). Examples ship with the\n"
     "package: taopt/data/demo.json (an instance, 10 targets, 3 vehicles),\n"
     "taopt/data/delivery_example_20.json (20 customers) and taopt/data/examples/*.json (one\n"
     "small file of each kind)."
@@ -495,6 +517,11 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         help="also re-solve exactly here and compare (small problems)",
     )
     _common(verify, "time-limit")
+
+    kinds = add_subcommand(
+        sub, "kinds", cmd_kinds, "list the problem families: file kind, schema, bounds, methods"
+    )
+    kinds.set_defaults(quiet=False, verbose=False)
 
     claims = add_subcommand(
         sub, "claims", cmd_claims, "check chapter 2's lemmas and theorems on random instances"

@@ -232,7 +232,7 @@ def test_lower_rejects_unknown_inputs():
     """An unknown strength or problem type raises InstanceError."""
     with pytest.raises(InstanceError, match="strength"):
         taopt.bounds.lower(REFERENCES[0]().problem, "best")
-    with pytest.raises(InstanceError, match="does not know"):
+    with pytest.raises(InstanceError, match="not a registered problem type"):
         taopt.bounds.lower(object())
 
 

@@ -30,8 +30,10 @@ from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
 from taopt.instance import Instance
 from taopt.io import load_json
+from taopt.registry import families
 from taopt.result import Solution
 from taopt.routing.problem import AssignmentProblem
+from taopt.schemas import naming
 
 DATA = Path(resources.files("taopt").joinpath("data"))
 DEMO_PATH = DATA / "demo.json"
@@ -48,30 +50,35 @@ def field_loader(data: Any) -> Any:
     return field_from_dict(data)
 
 
-#: kind -> (from_dict-like loader, file loader, shipped document)
+def _family_loaders() -> dict[str, tuple[Callable[[Any], Any], Callable[[Path], Any], Path]]:
+    """Every registered family's kind, from its spec: its loader, a file loader (the class's
+    ``load``, or the schema of its kind then the spec's loader) and its shipped example
+    ``examples/<kind>.json``."""
+    found = {}
+    for family in families():
+
+        def load_file(path: Path, family: Any = family) -> Any:
+            with naming(str(path)):
+                return family.load(load_json(path, family.kind))
+
+        load = getattr(family.problem_type, "load", load_file)  # the class's own, if it has one
+        found[family.kind] = (family.load, load, EXAMPLES / f"{family.kind}.json")
+    return found
+
+
+#: kind -> (from_dict-like loader, file loader, shipped document): the kinds that are not a
+#: family's (an instance, a field, a solution), then every family's from its spec.
 LOADERS: dict[str, tuple[Callable[[Any], Any], Callable[[Path], Any], Path]] = {
     "instance": (Instance.from_dict, Instance.load, DEMO_PATH),
-    "assignment_problem": (
-        AssignmentProblem.from_dict,
-        AssignmentProblem.load,
-        EXAMPLES / "assignment_problem.json",
-    ),
-    "delivery_instance": (DeliveryInstance.from_dict, DeliveryInstance.load, EXAMPLE_PATH),
     "field": (
         field_loader,
         lambda p: field_from_dict(load_json(p, "field")),
         EXAMPLES / "field.json",
     ),
-    "capability_problem": (
-        CapabilityProblem.from_dict,
-        CapabilityProblem.load,
-        EXAMPLES / "capability_problem.json",
-    ),
-    "comm_problem": (CommProblem.from_dict, CommProblem.load, EXAMPLES / "comm_problem.json"),
-    "sop_problem": (SopProblem.from_dict, SopProblem.load, EXAMPLES / "sop_problem.json"),
     "solution": (Solution.from_dict, Solution.load, EXAMPLES / "solution.json"),
+    **_family_loaders(),
 }
-#: The seven file kinds a user hands to taopt (``field`` is also read inside an instance).
+#: The file kinds a user hands to taopt (``field`` is also read inside an instance).
 FILE_KINDS = [kind for kind in sorted(LOADERS) if kind != "field"]
 
 

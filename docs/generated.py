@@ -1,0 +1,62 @@
+"""Pages of the documentation site written from the family specs at every build."""
+
+from __future__ import annotations
+
+
+def generated_pages() -> dict[str, str]:
+    """The pages written from the family specs and the schema folder at every build (not kept
+    in git): ``kinds.md`` (one row per family: kind, problem type, payload, bounds, methods,
+    studies) and ``schemas.md`` (every shipped schema). A new family appears in both without
+    an edit to any page."""
+    from taopt import schemas
+    from taopt.pipeline import available_methods
+    from taopt.registry import families
+
+    rows = []
+    for family in sorted(families(), key=lambda f: f.kind):
+        bounds = ", ".join(
+            f"`{name}` ({'valid' if b.valid else 'as printed'}, {b.side})"
+            for name, b in family.bounds.items()
+        )
+        studies = ", ".join(f"`taopt study {s.name}`" for s in family.studies) or "—"
+        rows.append(
+            f"| `{family.kind}` | {family.title} | `{family.problem_type.__name__}` | "
+            f"`{family.payload.__name__}` | {bounds} | "
+            f"{', '.join(available_methods(family.problem_type))} | {studies} |"
+        )
+    kinds = "\n".join(
+        [
+            "# Problem families and their file kinds",
+            "",
+            "Generated from the family specs (`taopt.registry.families()`; the same list as "
+            "`taopt kinds`). Each kind's schema is on [](schemas.md) and a small example ships in "
+            "`taopt/data/examples/<kind>.json`.",
+            "",
+            "| kind | family | problem | payload | bounds | methods | studies |",
+            "|---|---|---|---|---|---|---|",
+            *rows,
+            "",
+        ]
+    )
+    parts = [
+        "# JSON Schemas",
+        "",
+        "The schemas (JSON Schema draft 2020-12) that every file is checked against before any "
+        "object is built; [](file-formats.md) explains the kinds field by field and [](kinds.md) "
+        "lists the families. They ship with the package in `taopt/schemas/`, and "
+        "`taopt.schemas.validate` applies them. This page is generated from that folder.",
+        "",
+    ]
+    for kind in schemas.kinds():
+        parts += [
+            f"(schema-{kind})=",
+            f"## `{kind}`",
+            "",
+            f"`taopt/schemas/{kind}.schema.json`:",
+            "",
+            f"```{{literalinclude}} ../taopt/schemas/{kind}.schema.json",
+            ":language: json",
+            "```",
+            "",
+        ]
+    return {"kinds.md": kinds, "schemas.md": "\n".join(parts)}
