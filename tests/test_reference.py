@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import pytest
 from conftest import UPPER_BOUNDS, upper_bounds, valid_lower_bounds
 from reference import REFERENCES, REL, cases, check_method  # noqa: I001
@@ -11,8 +13,9 @@ import taopt
 from taopt.registry import families, family_of
 
 
+@functools.cache
 def _references_by_family() -> dict[type, list]:
-    """problem type -> the references of that family."""
+    """problem type -> the references of that family (built once)."""
     out: dict[type, list] = {}
     for make in REFERENCES:
         reference = make()
@@ -80,3 +83,22 @@ def test_every_family_has_a_reference():
     registered = {f.problem_type for f in families()}
     missing = sorted(t.__name__ for t in registered - covered)
     assert not missing, f"no reference problem for {missing}"
+
+
+NAMED = [
+    "ref_routing_small", "ref_routing_quick_tour", "ref_routing_one_way",
+    "ref_routing_idle_vehicle", "ref_routing_asymmetric", "ref_capability", "ref_comm",
+    "ref_delivery", "ref_sop", "ref_sop_esc12",
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("name", NAMED)
+def test_named_fixture_is_consistent(name, request):
+    """A named reference's stored optimal payload scores exactly its optimum, and its optimum is
+    never below the family's valid lower bound."""
+    reference = request.getfixturevalue(name)
+    if reference.solution is not None:
+        assert taopt.evaluate(reference.problem, reference.solution) == pytest.approx(
+            reference.optimum, rel=REL
+        )
+    assert taopt.bounds.lower(reference.problem, "fast") <= reference.optimum * (1 + REL) + 1e-9
