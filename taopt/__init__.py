@@ -53,7 +53,7 @@ def _map_source_tree_packages() -> None:
         return
 
     class _SourceTreeFinder:  # a meta path finder (importlib.abc is not imported: it is slow)
-        def find_spec(self, fullname, path=None, target=None):
+        def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> Any:
             folder = mapped.get(fullname)
             if folder is None:
                 return None

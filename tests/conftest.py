@@ -1,9 +1,16 @@
-"""Shared fixtures: named instances with known answers (files in tests/data/)."""
+"""Shared fixtures: named reference instances with known answers, and the bound-validity rule.
+
+The instances come from :mod:`reference` (tests/reference.py), where each optimum is computed
+by hand, by an independent brute force, or taken from TSPLIB95, never from a solver under
+test. Each fixture is session-scoped: the problems are immutable, build them once.
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import pytest
@@ -11,10 +18,94 @@ import pytest
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+import reference  # noqa: E402  (tests/ is on sys.path: pytest's rootdir conftest insertion)
+
 DATA = Path(__file__).parent / "data"
+
+def valid_lower_bounds(family: Any) -> dict[str, Callable[..., float]]:
+    """``name -> bound`` for every bound the family's spec marks a valid lower bound (never
+    above the optimum); ``"lower"`` takes ``(problem, strength)``, the others ``(problem)``."""
+    return {name: b.func for name, b in family.bounds.items() if b.valid and b.side == "lower"}
+
+
+def upper_bounds(family: Any) -> dict[str, Callable[[Any], float]]:
+    """``name -> bound(problem)`` for the bounds the family's spec declares as upper bounds
+    (valid, or as printed: Lemma 3.6's f^da needs the triangle inequality, which the
+    reference problems have)."""
+    return {name: b.func for name, b in family.bounds.items() if b.side == "upper"}
 
 
 @pytest.fixture(scope="session")
 def data_dir() -> Path:
     """Folder of the test instance files."""
     return DATA
+
+
+# -- named reference instances -----------------------------------------------------------------
+@pytest.fixture(scope="session")
+def ref_routing_small() -> reference.Reference:
+    """Chapter 2 on a line: targets at 1, 2, 4, vehicles at 0 and 5 (symmetric |x_i - x_j|);
+    optimum 3 by the routes [[0, 1], [2]] (by hand)."""
+    return reference.routing_line()
+
+
+@pytest.fixture(scope="session")
+def ref_routing_quick_tour() -> reference.Reference:
+    """The package docstring's matrix [[0, 2, 9], [1, 0, 9], [4, 3, 0]], 2 targets and 1
+    vehicle; optimum 4 by the route [1, 0] (by hand)."""
+    return reference.routing_quick_tour()
+
+
+@pytest.fixture(scope="session")
+def ref_routing_one_way() -> reference.Reference:
+    """One vehicle, two targets, 0 -> 1 costs 1 but 1 -> 0 costs 100: direction matters;
+    optimum 2 by [0, 1] (by hand)."""
+    return reference.routing_one_way()
+
+
+@pytest.fixture(scope="session")
+def ref_routing_idle_vehicle() -> reference.Reference:
+    """Targets at 1, 2, 3, vehicles at 0 and 100 on a line: the far vehicle stays idle;
+    optimum 3 by [[0, 1, 2], []] (by hand)."""
+    return reference.routing_idle_vehicle()
+
+
+@pytest.fixture(scope="session")
+def ref_routing_asymmetric() -> reference.Reference:
+    """A random asymmetric 5-target, 2-vehicle matrix (seed 11); optimum by brute force over
+    every assignment and visiting order."""
+    return reference.routing_asymmetric()
+
+
+@pytest.fixture(scope="session")
+def ref_capability() -> reference.Reference:
+    """Chapter 3: 4 targets (one demanding two capabilities), 3 vehicles of capabilities a, a,
+    b; optimum by brute force per capability class (the §3.6 split)."""
+    return reference.capability_small()
+
+
+@pytest.fixture(scope="session")
+def ref_comm() -> reference.Reference:
+    """Chapter 4: 5 targets of two attributes, 3 vehicles, r = 30 m; the "optimum" is f_o, the
+    full-information optimum by brute force per class (every simulation drives at least it)."""
+    return reference.comm_small()
+
+
+@pytest.fixture(scope="session")
+def ref_delivery() -> reference.Reference:
+    """Chapter 5: 5 customers on a 3 x 3 street grid, precedences 0 -> 1 and 2 -> 3; optimum
+    by scheduling every topological order with the exact DP."""
+    return reference.delivery_small()
+
+
+@pytest.fixture(scope="session")
+def ref_sop() -> reference.Reference:
+    """TSPLIB's ESC07 sequential ordering problem (9 nodes); optimum 2125
+    (TSPLIB95)."""
+    return reference.sop_esc07()
+
+
+@pytest.fixture(scope="session")
+def ref_sop_esc12() -> reference.Reference:
+    """TSPLIB's ESC12 sequential ordering problem (14 nodes); optimum 1675 (TSPLIB95)."""
+    return reference.sop_esc12()

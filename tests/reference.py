@@ -35,6 +35,8 @@ class Reference:
     optimum: float
     source: str
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: An optimal payload when it is unique (routes, order, ...), else None.
+    solution: Any = None
 
 
 # -- independent brute force ----------------------------------------------------------------
@@ -85,7 +87,28 @@ def routing_line() -> Reference:
     """Targets at 1, 2, 4 and vehicles at 0 and 5 on a line: 0→1→2 and 5→4, total 3."""
     x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
     problem = taopt.AssignmentProblem(abs(x[:, None] - x[None, :]), n_targets=3, name="line")
-    return Reference("routing-line", problem, 3.0, "by hand")
+    return Reference("routing-line", problem, 3.0, "by hand", solution=[[0, 1], [2]])
+
+
+def routing_quick_tour() -> Reference:
+    """The package docstring's 2-target, 1-vehicle matrix: the optimum 4 by the route [1, 0]."""
+    cost = np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]], dtype=float)
+    problem = taopt.AssignmentProblem(cost, n_targets=2, name="quick-tour")
+    return Reference("routing-quick-tour", problem, 4.0, "by hand", solution=[[1, 0]])
+
+
+def routing_one_way() -> Reference:
+    """One vehicle, two targets: 0 -> 1 costs 1 but 1 -> 0 costs 100; optimum 2 by [0, 1]."""
+    cost = np.array([[0, 1, 50], [100, 0, 50], [1, 1, 0]], dtype=float)
+    problem = taopt.AssignmentProblem(cost, n_targets=2, name="one-way")
+    return Reference("routing-one-way", problem, 2.0, "by hand", solution=[[0, 1]])
+
+
+def routing_idle_vehicle() -> Reference:
+    """Targets at 1, 2, 3 and vehicles at 0 and 100 on a line: the far one stays idle; 3."""
+    x = np.array([1.0, 2.0, 3.0, 0.0, 100.0])
+    problem = taopt.AssignmentProblem(abs(x[:, None] - x[None, :]), n_targets=3, name="idle")
+    return Reference("routing-idle-vehicle", problem, 3.0, "by hand", solution=[[0, 1, 2], []])
 
 
 def routing_asymmetric() -> Reference:
@@ -116,6 +139,11 @@ def delivery_small() -> Reference:
 def sop_esc07() -> Reference:
     """TSPLIB's ESC07 sequential ordering instance, optimum 2125 (TSPLIB95)."""
     return Reference("sop-ESC07", taopt.SopProblem.load("ESC07"), 2125.0, "TSPLIB95")
+
+
+def sop_esc12() -> Reference:
+    """TSPLIB's ESC12 sequential ordering instance (14 nodes), optimum 1675 (TSPLIB95)."""
+    return Reference("sop-ESC12", taopt.SopProblem.load("ESC12"), 1675.0, "TSPLIB95")
 
 
 def capability_small() -> Reference:
@@ -160,6 +188,21 @@ REFERENCES: list[Callable[[], Reference]] = [
     capability_small,
     comm_small,
 ]
+
+
+def _discovered_references() -> list[Callable[[], Reference]]:
+    """The references of families added later: each ``tests/reference_<family>.py`` holds a
+    ``REFERENCES`` list of its own (so a new family adds a file, not a line here)."""
+    import importlib
+    from pathlib import Path
+
+    found: list[Callable[[], Reference]] = []
+    for path in sorted(Path(__file__).parent.glob("reference_*.py")):
+        found += list(importlib.import_module(path.stem).REFERENCES)
+    return found
+
+
+REFERENCES += _discovered_references()
 
 
 def cases() -> list[tuple[Callable[[], Reference], str]]:

@@ -353,14 +353,14 @@ def test_top_level_api_is_complete_and_lazy():
 # -- methods: discovered, only what is usable here -----------------------------------------------
 
 
-def test_available_methods_lists_installed_peers_only(monkeypatch):
+def test_available_methods_lists_installed_peers_only(monkeypatch, ref_routing_quick_tour):
     """A peer is listed only when its package is installed (found, never imported)."""
     import importlib.util
 
     import taopt
     from taopt import registry
 
-    problem = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    problem = ref_routing_quick_tour.problem
     listed = taopt.available_methods(problem)
     assert listed[0] == "exact" and {"VN", "VM", "EVN", "EVM", "MC", "GA"} <= set(listed)
     for peer in ("pyvrp", "ortools"):

@@ -163,10 +163,11 @@ def test_path_bound_beats_prop_5_3_on_every_pairs120_instance(vd_ratio):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not DAG40_EXACT.exists(), reason="delivery_dag40_exact.csv not produced yet")
 def test_lower_below_every_certified_dag40_optimum():
-    """lower() never exceeds a certified dag40 optimum (the exact-DP helper's CSV)."""
+    """lower() never exceeds a certified dag40 optimum (the exact-DP helper's CSV, shipped)."""
     import pandas as pd
+
+    assert DAG40_EXACT.exists(), f"{DAG40_EXACT} is shipped with the reproduction data"
 
     from taopt.studies.delivery import study_instance
 
@@ -219,19 +220,18 @@ def test_lower_never_above_the_reference_optimum(make, strength):
     ) * (1 + REL)
 
 
-def test_lower_strong_routing_includes_the_lp():
+def test_lower_strong_routing_includes_the_lp(ref_routing_asymmetric):
     """strength="strong" on chapter 2 is >= the DFJ LP bound and <= the optimum."""
-    pytest.importorskip("cvxpy")
-    reference = REFERENCES[1]()
+    reference = ref_routing_asymmetric  # cvxpy is a core dependency: no skip when it is missing
     value = taopt.bounds.lower(reference.problem, "strong")
     assert value >= taopt.models.lp_bound(reference.problem) * (1 - 1e-6)
     assert value <= reference.optimum * (1 + 1e-6)
 
 
-def test_lower_rejects_unknown_inputs():
+def test_lower_rejects_unknown_inputs(ref_routing_small):
     """An unknown strength or problem type raises InstanceError."""
     with pytest.raises(InstanceError, match="strength"):
-        taopt.bounds.lower(REFERENCES[0]().problem, "best")
+        taopt.bounds.lower(ref_routing_small.problem, "best")
     with pytest.raises(InstanceError, match="not a registered problem type"):
         taopt.bounds.lower(object())
 

@@ -24,7 +24,7 @@ def _modules() -> list[str]:
     import taopt.heuristics
     import taopt.models
 
-    names = ["taopt"]
+    names = ["taopt", "taopt.models", "taopt.heuristics"]
     for package in (taopt, taopt.models, taopt.heuristics):
         for info in pkgutil.walk_packages(package.__path__, package.__name__ + "."):
             if info.name not in EXCLUDED:
@@ -41,3 +41,28 @@ def test_docstring_examples(name):
     module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed in {name}"
+
+
+def test_every_source_folder_is_collected():
+    """Every folder of the installed package holding modules is a regular package whose modules
+    are collected here (a folder without __init__.py, once taopt/studies, is silently skipped
+    by pkgutil)."""
+    from pathlib import Path
+
+    import taopt
+    import taopt.heuristics
+    import taopt.models
+
+    collected = set(_modules())
+    for package in (taopt, taopt.models, taopt.heuristics):
+        root = Path(package.__path__[0])
+        for path in root.rglob("*.py"):
+            if "__pycache__" in path.parts:
+                continue
+            parts = path.relative_to(root).with_suffix("").parts
+            folder = path.parent
+            assert (folder / "__init__.py").exists(), f"{folder} has modules but no __init__.py"
+            name = ".".join([package.__name__, *parts]).removesuffix(".__init__")
+            if name not in EXCLUDED:
+                assert name in collected, f"{name} is not collected"
+    assert "taopt.studies.drift" in collected

@@ -339,13 +339,24 @@ def test_shipped_examples_load_and_round_trip(kind):
 
 
 def test_shipped_data_files_pass_their_schemas():
-    """The demo instance, the delivery example and the saved counterexamples are all valid."""
+    """The demo instance, the delivery example and every saved counterexample (each chapter's
+    folder too) load with their family's loader; every folder holds at least one."""
+    from taopt.registry import family_for_kind
+
     Instance.load(DEMO_PATH)
     DeliveryInstance.load(EXAMPLE_PATH)
     folder = Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "counterexamples"
-    files = sorted(folder.glob("*.json"))
+    files = sorted(folder.glob("**/*.json"))
+    folders = {folder} | {p for p in folder.rglob("*") if p.is_dir()}
+    empty = sorted(str(f.relative_to(folder)) for f in folders if not any(f.glob("*.json")))
+    assert not empty, f"counterexample folders without a JSON file: {empty}"
+    kinds = set()
     for path in files:
-        AssignmentProblem.load(path)
+        kind = read(path)["kind"]
+        problem = family_for_kind(kind).problem_type.load(path)
+        assert family_for_kind(kind).problem_type is type(problem)
+        kinds.add(kind)
+    assert {"assignment_problem", "capability_problem", "comm_problem"} <= kinds
 
 
 @settings(max_examples=25, deadline=None, derandomize=True)

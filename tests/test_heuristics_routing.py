@@ -111,7 +111,7 @@ def test_vn_worked_example():
     assert solution.routes == [[0, 1, 2]] and solution.objective == 4.0
 
 
-def test_mc_worked_example():
+def test_mc_worked_example(ref_routing_small):
     """Targets at x = 1, 2, 4, vehicles at 0 and 5.
 
     (2.15) step 1: target 0 from vehicle 0 and target 2 from vehicle 1 both
@@ -121,9 +121,10 @@ def test_mc_worked_example():
     target 2 costs 1 from vehicle 1 (2 at vehicle 0's end). Routes [[0, 1], [2]],
     total 3 (= the optimum).
     """
-    problem = line_problem([1, 2, 4, 0, 5], 3)
+    problem = ref_routing_small.problem
     solution = taopt.heuristics.run("MC", problem)
-    assert solution.routes == [[0, 1], [2]] and solution.objective == 3.0
+    assert solution.routes == ref_routing_small.solution
+    assert solution.objective == ref_routing_small.optimum == 3.0
     assert exact_optimum(problem)[0] == 3.0
 
 

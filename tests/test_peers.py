@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import routing_idle_vehicle, routing_one_way, routing_quick_tour
 
 import taopt
 from taopt.delivery.sop import evaluate_order
@@ -46,25 +47,8 @@ def uniform_current_problem(n: int, m: int, seed: int) -> taopt.AssignmentProble
     return taopt.AssignmentProblem(times, n, name=f"uniform-n{n}m{m}-seed{seed}")
 
 
-def one_way_problem() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
-    """One vehicle, two targets: 0 -> 1 costs 1 but 1 -> 0 costs 100; optimum 2 via [0, 1]."""
-    cost = np.array([[0, 1, 50], [100, 0, 50], [1, 1, 0]], dtype=float)
-    return taopt.AssignmentProblem(cost, 2), 2.0, [[0, 1]]
-
-
-def idle_vehicle_problem() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
-    """Targets on a line at 1, 2, 3; vehicles at 0 and 100: the far one stays idle; optimum 3."""
-    x = np.array([1.0, 2.0, 3.0, 0.0, 100.0])
-    return taopt.AssignmentProblem(np.abs(x[:, None] - x[None, :]), 3), 3.0, [[0, 1, 2], []]
-
-
-def thesis_quick_tour() -> tuple[taopt.AssignmentProblem, float, list[list[int]]]:
-    """The package docstring's 2-target example: optimum 4 by [1, 0]."""
-    cost = np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]], dtype=float)
-    return taopt.AssignmentProblem(cost, 2), 4.0, [[1, 0]]
-
-
-REFERENCES = [one_way_problem, idle_vehicle_problem, thesis_quick_tour]
+#: The hand-made chapter 2 references with a unique optimal routing (tests/reference.py).
+REFERENCES = [routing_one_way, routing_idle_vehicle, routing_quick_tour]
 
 
 def assert_not_below(solution: taopt.Solution, exact: taopt.Solution) -> None:
@@ -83,7 +67,8 @@ def stop_workers():
 @pytest.mark.parametrize("reference", REFERENCES, ids=lambda f: f.__name__)
 def test_reference_problems_hit_known_optimum(peer, reference):
     """Each peer returns the known optimum and routes of the hand-made reference problems."""
-    problem, optimum, routes = reference()
+    ref = reference()
+    problem, optimum, routes = ref.problem, ref.optimum, ref.solution
     solution = SOLVERS[peer](problem)
     assert solution.status == "feasible" and solution.method == peer and solution.bound is None
     assert solution.objective == pytest.approx(optimum, rel=RELATIVE)
@@ -218,9 +203,10 @@ def test_script_importing_models_at_top_can_use_ortools(tmp_path: Path):
 
 
 def missing_package_message(monkeypatch, peer: str) -> str:
+    """The SolverError message of ``peer`` when its package is not found."""
     monkeypatch.setattr(peers, "_find_spec", lambda name: None if name == peer else object())
     with pytest.raises(SolverError) as info:
-        SOLVERS[peer](thesis_quick_tour()[0])
+        SOLVERS[peer](routing_quick_tour().problem)
     return str(info.value)
 
 
@@ -231,7 +217,9 @@ def test_missing_package_says_how_to_install(monkeypatch, peer):
     assert peer in message and 'pip install "taopt[peers]"' in message
 
 
-def test_broken_package_in_worker_says_how_to_install(monkeypatch, tmp_path: Path):
+def test_broken_package_in_worker_says_how_to_install(
+    monkeypatch, tmp_path: Path, ref_routing_quick_tour
+):
     """A peer package that fails to import inside the worker gives the same pip hint."""
     fake = tmp_path / "pyvrp"
     fake.mkdir()
@@ -240,11 +228,11 @@ def test_broken_package_in_worker_says_how_to_install(monkeypatch, tmp_path: Pat
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     try:
         with pytest.raises(SolverError, match=r'pyvrp.*broken.*pip install "taopt\[peers\]"'):
-            SOLVERS["pyvrp"](thesis_quick_tour()[0])
+            SOLVERS["pyvrp"](ref_routing_quick_tour.problem)
     finally:
         monkeypatch.delenv("PYTHONPATH")
         peers.shutdown()
-    assert SOLVERS["pyvrp"](thesis_quick_tour()[0]).objective == 4.0
+    assert SOLVERS["pyvrp"](ref_routing_quick_tour.problem).objective == 4.0
 
 
 def test_worker_crash_is_a_solver_error_and_worker_restarts():
@@ -288,10 +276,10 @@ def test_threads_share_a_worker():
     assert [found[k] for k in range(4)] == expected
 
 
-def test_solver_failure_names_the_peer():
+def test_solver_failure_names_the_peer(ref_routing_quick_tour):
     """An option the solver rejects comes back as a SolverError naming OR-Tools."""
     with pytest.raises(SolverError, match="(?s)ortools failed.*unknown metaheuristic 'NOPE'"):
-        ortools_solve(thesis_quick_tour()[0], metaheuristic="NOPE")
+        ortools_solve(ref_routing_quick_tour.problem, metaheuristic="NOPE")
 
 
 @pytest.mark.parametrize(
@@ -306,10 +294,10 @@ def test_solver_failure_names_the_peer():
         (lambda p: pyvrp_solve(p.cost), "AssignmentProblem"),
     ],
 )
-def test_bad_arguments_are_clear(call, match):
+def test_bad_arguments_are_clear(call, match, ref_routing_quick_tour):
     """Bad limits, seed, scale or problem type raise InstanceError before any worker runs."""
     with pytest.raises(InstanceError, match=match):
-        call(thesis_quick_tour()[0])
+        call(ref_routing_quick_tour.problem)
 
 
 def process_gone(pid: int) -> bool:
@@ -400,11 +388,14 @@ def test_cpsat_agrees_with_exact_on_small_sop(seed):
     assert solution.bound == pytest.approx(exact.objective)
 
 
-def test_cpsat_certifies_a_shipped_tsplib_sop():
+def test_cpsat_certifies_a_shipped_tsplib_sop(ref_sop_esc12):
     """cpsat proves TSPLIB's optimum 1675 of ESC12 (bound = objective, integer scale 1)."""
-    problem = taopt.SopProblem.load("ESC12")
+    problem = ref_sop_esc12.problem
     solution = taopt.solve(problem, "cpsat", time_limit=30)
-    assert solution.status == "optimal" and solution.objective == 1675.0 == solution.bound
+    assert (
+        solution.status == "optimal"
+        and solution.objective == ref_sop_esc12.optimum == solution.bound
+    )
     assert solution.info["scale"] == 1.0 and solution.info["exact_scaling"]
 
 
@@ -424,7 +415,8 @@ def test_cpsat_agrees_with_exact_on_small_routing(n, m, seed):
 def test_cpsat_keeps_idle_vehicles_and_direction():
     """The hand-made references (idle vehicle, one-way arcs) come out at their optima."""
     for reference in REFERENCES:
-        problem, optimum, routes = reference()
+        ref = reference()
+        problem, optimum, routes = ref.problem, ref.optimum, ref.solution
         solution = taopt.solve(problem, "cpsat", time_limit=30)
         assert solution.objective == pytest.approx(optimum, rel=RELATIVE)
         assert solution.routes == routes
@@ -458,16 +450,16 @@ def test_cpsat_status_and_bound_mapping():
     assert peers._scaled_bound({"best_bound": None}, 10.0, 0.0) is None
 
 
-def test_cpsat_missing_ortools_fails_loudly(monkeypatch):
+def test_cpsat_missing_ortools_fails_loudly(monkeypatch, ref_sop):
     """Without OR-Tools, cpsat raises a SolverError with the install hint (never a skip)."""
     monkeypatch.setattr(peers, "_find_spec", lambda name: None)
     with pytest.raises(SolverError, match=r"cpsat is not installed.*taopt\[peers\]"):
-        peers.cpsat_solve(taopt.SopProblem.load("ESC07"))
+        peers.cpsat_solve(ref_sop.problem)
 
 
-def test_cpsat_bad_arguments_are_clear():
+def test_cpsat_bad_arguments_are_clear(ref_sop):
     """A wrong problem type, seed or worker count is an InstanceError before any worker runs."""
-    problem = taopt.SopProblem.load("ESC07")
+    problem = ref_sop.problem
     with pytest.raises(InstanceError, match="SopProblem or an AssignmentProblem"):
         peers.cpsat_solve(problem.cost)
     with pytest.raises(InstanceError, match="num_workers"):

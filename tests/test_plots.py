@@ -160,12 +160,11 @@ def test_delivery_plan_and_gantt_read_on_their_own():
     assert any("not part of (5.1)" in text for text in labels)
 
 
-def test_sop_order_chart_draws_precedences():
+def test_sop_order_chart_draws_precedences(ref_sop):
     """The SOP chart labels every node, shows cumulative cost and one arc per precedence."""
     from taopt.delivery.plot import plot_order
-    from taopt.delivery.sop import SopProblem
 
-    problem = SopProblem.load("ESC07")
+    problem = ref_sop.problem
     solution = taopt.solve(problem, "NIA")
     ax = plot_order(problem, solution, method="NIA")
     readable(ax, ids=[str(v) for v in range(problem.n)])

@@ -60,10 +60,10 @@ def brute_force(problem: SopProblem) -> float:
 
 @st.composite
 def sop_with_forbidden_arcs(draw: st.DrawFn) -> SopProblem:
-    """Random asymmetric integer costs, 10-60 % forbidden arcs, random acyclic precedences."""
+    """Random asymmetric integer costs, 0-60 % forbidden arcs, random acyclic precedences."""
     n = draw(st.integers(3, 7))
     costs = draw(st.lists(st.integers(0, 9), min_size=n * n, max_size=n * n))
-    forbidden_share = draw(st.sampled_from([0.1, 0.3, 0.45, 0.6]))
+    forbidden_share = draw(st.sampled_from([0.0, 0.1, 0.3, 0.45, 0.6]))
     mask = draw(st.lists(st.floats(0, 1), min_size=n * n, max_size=n * n))
     cost = np.array(costs, dtype=float).reshape(n, n)
     cost[np.array(mask).reshape(n, n) < forbidden_share] = np.inf
@@ -93,7 +93,10 @@ def test_heuristics_feasible_or_report(problem):
         try:
             result = taopt.solve(problem, method, seed=0, **OPTIONS.get(method, {}))
         except SolverError as exc:
-            assert "found no feasible order" in str(exc) and method in str(exc)
+            assert f"{method} found no feasible order" in str(exc)
+            # a heuristic may fail only where arcs are forbidden: on a complete matrix any
+            # precedence-respecting insertion/decoding is a path
+            assert not np.isfinite(problem.cost).all(), f"{method} failed on a complete matrix"
             continue
         assert np.isfinite(optimum), f"{method} returned an order where none exists"
         assert evaluate_order(problem, result.order) == pytest.approx(result.objective)

@@ -18,8 +18,15 @@ optimal) and gives, per method, the mean of ``q_thesis = f / f_a`` (Table 2.1's 
 
 Example
 -------
->>> df = drift_study(6, 2, 3, methods=["MC", "exact"], seed=1, out_dir=tmp)  # doctest: +SKIP
->>> summarize(df)  # doctest: +SKIP
+>>> import tempfile
+>>> from taopt.studies.drift import drift_study, summarize
+>>> with tempfile.TemporaryDirectory() as tmp:
+...     df = drift_study(4, 2, 2, methods=["MC", "exact"], seed=1, out_dir=tmp, progress=False)
+>>> len(df), sorted(df["method"].unique())
+(4, ['MC', 'exact'])
+>>> table = summarize(df)
+>>> int(table.loc["exact", "optimal"]), bool(table.loc["MC", "q_exact"] >= 1 - 1e-9)
+(2, True)
 """
 
 from __future__ import annotations
