@@ -118,6 +118,7 @@ def _subpackage(name: str) -> bool:
 def __getattr__(name: str) -> Any:
     import importlib
 
+    value: Any
     if name == "__all__":
         value = [*_PUBLIC, *sorted(set(_family_exports()) - set(_PUBLIC))]
     elif name in _LAZY:

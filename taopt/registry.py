@@ -152,7 +152,7 @@ class Family:
         Public names reachable as ``taopt.<name>`` (the problem type at least).
     """
 
-    problem_type: type
+    problem_type: type[Any]
     kind: str
     payload: type
     title: str
@@ -287,7 +287,7 @@ _FAMILIES: dict[type, Family] = {}
 _METHODS: dict[type, dict[str, Method]] = {}
 
 
-def register_family(family: Family | type, **spec: Any) -> Family:
+def register_family(family: Family | type[Any], **spec: Any) -> Family:
     """Register a family's spec: its scorer, bounds, file kind, payload, plots and studies.
 
     Parameters
