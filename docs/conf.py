@@ -24,10 +24,9 @@ ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(HERE))
 
-import taopt  # noqa: E402
-
-
 from generated import generated_pages  # noqa: E402  (docs/generated.py)
+
+import taopt  # noqa: E402
 
 for _name, _text in generated_pages().items():
     _page = HERE / _name

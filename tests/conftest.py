@@ -22,6 +22,7 @@ import reference  # noqa: E402  (tests/ is on sys.path: pytest's rootdir conftes
 
 DATA = Path(__file__).parent / "data"
 
+
 def valid_lower_bounds(family: Any) -> dict[str, Callable[..., float]]:
     """``name -> bound`` for every bound the family's spec marks a valid lower bound (never
     above the optimum); ``"lower"`` takes ``(problem, strength)``, the others ``(problem)``."""

@@ -313,8 +313,14 @@ def test_solve_prints_the_plotted_routes_with_the_plotted_ids(tmp_path, capsys):
     [
         (["solve", "sop_problem.json", "--plot", "x.jpg"], "must end in .png"),
         (["solve", "delivery_instance.json", "--gantt", "x.svg"], "must end in .png"),
-        (["solve", "sop_problem.json", "--gantt", "x.png"], "--gantt draws a Gantt chart of a delivery_instance only"),
-        (["solve", "instance.json", "--gantt", "x.png"], "--gantt draws a Gantt chart of a delivery_instance only"),
+        (
+            ["solve", "sop_problem.json", "--gantt", "x.png"],
+            "--gantt draws a Gantt chart of a delivery_instance only",
+        ),
+        (
+            ["solve", "instance.json", "--gantt", "x.png"],
+            "--gantt draws a Gantt chart of a delivery_instance only",
+        ),
         (["simulate", "comm_problem.json", "--animate", "x.mp4"], "must end in .gif"),
         (["simulate", "comm_problem.json", "--plot", "x.pdf"], "must end in .png"),
         (["demo", "--plot", "x.jpeg"], "must end in .png"),
