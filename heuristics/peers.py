@@ -85,6 +85,7 @@ from taopt.registry import register_method
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Routes, Solution
 from taopt.routing.problem import AssignmentProblem
 from taopt.scoring import evaluate
+from taopt.status import outcome
 
 __all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
 
@@ -516,11 +517,6 @@ def _sop_integer_costs(problem: SopProblem, scale: float | None) -> tuple[np.nda
     return matrix, scale, exact
 
 
-def _cpsat_status(reply: dict[str, Any]) -> str:
-    """CP-SAT's status as taopt's: OPTIMAL -> optimal, INFEASIBLE -> infeasible, else a limit."""
-    return {"OPTIMAL": OPTIMAL, "INFEASIBLE": INFEASIBLE}.get(reply["cpsat_status"], TIME_LIMIT)
-
-
 def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> float | None:
     """CP-SAT's proven bound in the problem's units, rounded down (valid after rounding)."""
     bound = reply.get("best_bound")
@@ -561,8 +557,10 @@ def cpsat_solve(
     Returns
     -------
     Solution
-        Method "cpsat". Status: CP-SAT's OPTIMAL -> "optimal", FEASIBLE -> "time_limit",
-        no solution -> "time_limit" with objective ``inf``, INFEASIBLE -> "infeasible".
+        Method "cpsat". Status by :func:`taopt.status.outcome` (the one rule): CP-SAT's
+        OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
+        else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
+        objective ``inf``; INFEASIBLE -> "infeasible".
         ``objective`` is re-scored by taopt's scorer (:func:`taopt.delivery.sop.evaluate_order` or
         :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
         rounded down and lowered by the rounding error of a path when the scaling is not
@@ -620,7 +618,6 @@ def cpsat_solve(
         request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
         slack = 0.0 if exact else 0.5 * problem.n
     reply, runtime, worker, startup = _call("cpsat", request, time_limit)
-    status = _cpsat_status(reply)
     info = {
         "cpsat_status": reply["cpsat_status"],
         "solver_objective": reply["objective"],
@@ -646,12 +643,21 @@ def cpsat_solve(
             objective = evaluate(problem, reply["routes"])
     except Exception as exc:
         raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
+    if reply["cpsat_status"] == "OPTIMAL" and payload is None:
+        raise SolverError("cpsat reported OPTIMAL without a solution")
+    status, stopped_by = outcome(
+        "cpsat",
+        reply["cpsat_status"],
+        objective=objective,
+        bound=bound,
+        time_limited=time_limit is not None,
+        has_point=payload is not None,
+    )
+    info["stopped_by"] = stopped_by
     if status == INFEASIBLE:
         bound = np.inf
     elif bound is not None:
         bound = min(bound, objective)
-    if status == OPTIMAL and payload is None:
-        raise SolverError("cpsat reported OPTIMAL without a solution")
     return Solution(
         objective=objective,
         status=status,
