@@ -79,12 +79,11 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.sop import SopProblem, evaluate_order
+from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Routes, Solution
+from taopt.result import FEASIBLE, INFEASIBLE, Order, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
-from taopt.scoring import evaluate
 from taopt.status import outcome
 
 __all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
@@ -302,7 +301,18 @@ def _solve(
         **{key: value for key, value in options.items() if key != "seed"},
         **{key: value for key, value in reply.items() if key != "routes"},
     }
-    return _solution(problem, reply["routes"], peer, seed, runtime, info)
+    try:  # the one scorer, once (taopt.solve does not score it again)
+        return make_solution(
+            problem,
+            Routes(reply["routes"]),
+            method=peer,
+            status=FEASIBLE,
+            runtime=runtime,
+            seed=int(seed),
+            info=info,
+        )
+    except Exception as exc:
+        raise SolverError(f"{peer} returned routes that fail the check: {exc}") from None
 
 
 def _call(
@@ -321,31 +331,6 @@ def _call(
     else:
         raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
     return reply, time.perf_counter() - started, worker, startup
-
-
-def _solution(
-    problem: AssignmentProblem,
-    routes: list[list[int]],
-    method: str,
-    seed: int,
-    runtime: float,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution; the objective is ``taopt.evaluate``'s."""
-    try:
-        objective = evaluate(problem, routes)
-    except Exception as exc:
-        raise SolverError(f"{method} returned routes that fail the check: {exc}") from None
-    return Solution(
-        objective=objective,
-        status=FEASIBLE,
-        bound=None,
-        runtime=runtime,
-        method=method,
-        seed=int(seed),
-        solution=Routes(routes),
-        info=info,
-    )
 
 
 @register_method(AssignmentProblem, "pyvrp", category="peer", requires="pyvrp")
@@ -633,18 +618,19 @@ def cpsat_solve(
     }
     bound = _scaled_bound(reply, scale, slack)
     payload: Order | Routes | None = None
-    objective = np.inf
-    try:
-        if isinstance(problem, SopProblem) and reply.get("order") is not None:
-            payload = Order(reply["order"])
-            objective = evaluate_order(problem, reply["order"])
-        elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
-            payload = Routes(reply["routes"])
-            objective = evaluate(problem, reply["routes"])
-    except Exception as exc:
-        raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
+    if isinstance(problem, SopProblem) and reply.get("order") is not None:
+        payload = Order(reply["order"])
+    elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
+        payload = Routes(reply["routes"])
     if reply["cpsat_status"] == "OPTIMAL" and payload is None:
         raise SolverError("cpsat reported OPTIMAL without a solution")
+    try:  # scored once by taopt's scorer; the status follows from that objective
+        result = make_solution(
+            problem, payload, method="cpsat", status=FEASIBLE, runtime=runtime, seed=int(seed)
+        )
+    except Exception as exc:
+        raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
+    objective = result.objective
     status, stopped_by = outcome(
         "cpsat",
         reply["cpsat_status"],
@@ -658,16 +644,7 @@ def cpsat_solve(
         bound = np.inf
     elif bound is not None:
         bound = min(bound, objective)
-    return Solution(
-        objective=objective,
-        status=status,
-        bound=bound,
-        runtime=runtime,
-        method="cpsat",
-        seed=int(seed),
-        solution=payload,
-        info=info,
-    )
+    return result.replace(status=status, bound=bound, info=info)
 
 
 register_method(SopProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)
