@@ -29,8 +29,8 @@ from taopt.errors import InstanceError, SolverError
 from taopt.heuristics import peers
 from taopt.heuristics.peers import ortools_solve, pyvrp_solve
 from taopt.models import solve_routing
-from taopt.status import outcome
 from taopt.navigation import uniform_travel_times
+from taopt.status import outcome
 
 # Deterministic limits (iterations / solutions, not time) for everything but the n50m10 check.
 SOLVERS = {
