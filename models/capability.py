@@ -78,9 +78,10 @@ from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, milp_bytes, register_footprint
-from taopt.models.highs import certify, solve_highs
+from taopt.models.highs import solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 

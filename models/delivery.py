@@ -106,8 +106,9 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
-from taopt.models.highs import certify, solve_highs
+from taopt.models.highs import solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 

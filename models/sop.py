@@ -69,8 +69,9 @@ from scipy.optimize import linear_sum_assignment
 from taopt.delivery.sop import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
-from taopt.models.highs import HighsModel, certify, solve_highs
+from taopt.models.highs import HighsModel, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from taopt.errors import SolverError
-from taopt.models.highs import HighsModel, certify
+from taopt.models.highs import HighsModel
 from taopt.models.routing.formulation import (
     RoutingModel,
     assignment_bound,
@@ -28,6 +28,7 @@ from taopt.models.routing.formulation import (
 )
 from taopt.result import Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.status import certify
 
 #: Seconds per arc to build and compile the MTZ / flow model through cvxpy and for
 #: HiGHS's MIP presolve, which does not stop at its time limit (flow at n = 150, m = 5,

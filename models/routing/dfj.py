@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import SolverError
-from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
+from taopt.models.highs import HighsModel
 from taopt.models.routing.compact import (
     ASSIGNMENT_SECONDS_PER_CUBE,
     _first_incumbent,
@@ -40,6 +40,7 @@ from taopt.models.routing.formulation import (
 from taopt.models.routing.separation import cut_rows, separate_subtours
 from taopt.result import Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.status import OPTIMALITY_TOLERANCE, certify, relative_gap
 
 #: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
 CORE_SIZE = 4
