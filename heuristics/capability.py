@@ -25,13 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from taopt.capability.problem import CapabilityProblem, evaluate_capability
+from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import mc
 from taopt.heuristics.ga_routing import genetic_algorithm
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, Routes, Solution, make_solution
 
 __all__ = ["class_seed", "ga_per_class", "mc_per_class"]
 
@@ -43,26 +43,6 @@ def class_seed(seed: int | None, q: int) -> int | None:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InstanceError(f"seed must be a non-negative integer or None, got {seed!r}")
     return int(np.random.SeedSequence([int(seed), int(q)]).generate_state(1)[0])
-
-
-def _solution(
-    problem: CapabilityProblem,
-    routes: list[list[int]],
-    method: str,
-    seed: Any,
-    start: float,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution."""
-    return Solution(
-        objective=evaluate_capability(problem, routes),
-        status=FEASIBLE,
-        solution=Routes(routes),
-        runtime=time.perf_counter() - start,
-        method=method,
-        seed=seed,
-        info=info,
-    )
 
 
 @register_method(CapabilityProblem, "GA")
@@ -143,7 +123,15 @@ def ga_per_class(
             }
         )
     routes = problem.join(class_routes)
-    return _solution(problem, routes, "GA", seed, start, {"per_class": per_class})
+    return make_solution(
+        problem,
+        Routes(routes),
+        method="GA",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+        info={"per_class": per_class},
+    )
 
 
 @register_method(CapabilityProblem, "MC")
@@ -153,4 +141,11 @@ def mc_per_class(problem: CapabilityProblem, seed: int | None = 0) -> Solution:
     class_routes = {
         cls.capability: mc(cls.problem).routes for cls in problem.classes if cls.problem
     }
-    return _solution(problem, problem.join(class_routes), "MC", seed, start, {})
+    return make_solution(
+        problem,
+        Routes(problem.join(class_routes)),
+        method="MC",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+    )

@@ -41,9 +41,9 @@ import numpy as np
 
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, Routes, Solution, make_solution
 from taopt.routing.bounds import mcga_tree
-from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.routing.problem import AssignmentProblem
 
 # -- clustering strategies ------------------------------------------------------------
 
@@ -241,21 +241,6 @@ def append_nearest(
 # -- the registered methods ------------------------------------------------------------
 
 
-def _solution(
-    problem: AssignmentProblem, routes: list[list[int]], method: str, seed, start: float
-) -> Solution:
-    objective = evaluate_routes(problem, routes)
-    return Solution(
-        objective=objective,
-        status=FEASIBLE,
-        bound=None,
-        runtime=time.perf_counter() - start,
-        method=method,
-        seed=seed,
-        solution=Routes(routes),
-    )
-
-
 def cluster_then_sequence(
     problem: AssignmentProblem, clusters: np.ndarray, metric: str
 ) -> list[list[int]]:
@@ -290,8 +275,13 @@ def vn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     """
     start = time.perf_counter()
     clusters = voronoi_clusters(problem, seed)
-    return _solution(
-        problem, cluster_then_sequence(problem, clusters, "nearest"), "VN", seed, start
+    return make_solution(
+        problem,
+        Routes(cluster_then_sequence(problem, clusters, "nearest")),
+        method="VN",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
     )
 
 
@@ -300,8 +290,13 @@ def vm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     """VM: Voronoi clustering (2.11) + smallest marginal cost principle (2.18)–(2.19)."""
     start = time.perf_counter()
     clusters = voronoi_clusters(problem, seed)
-    return _solution(
-        problem, cluster_then_sequence(problem, clusters, "marginal"), "VM", seed, start
+    return make_solution(
+        problem,
+        Routes(cluster_then_sequence(problem, clusters, "marginal")),
+        method="VM",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
     )
 
 
@@ -313,8 +308,13 @@ def evn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     """
     start = time.perf_counter()
     clusters = extended_voronoi_clusters(problem)
-    return _solution(
-        problem, cluster_then_sequence(problem, clusters, "nearest"), "EVN", seed, start
+    return make_solution(
+        problem,
+        Routes(cluster_then_sequence(problem, clusters, "nearest")),
+        method="EVN",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
     )
 
 
@@ -326,8 +326,13 @@ def evm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     """
     start = time.perf_counter()
     clusters = extended_voronoi_clusters(problem)
-    return _solution(
-        problem, cluster_then_sequence(problem, clusters, "marginal"), "EVM", seed, start
+    return make_solution(
+        problem,
+        Routes(cluster_then_sequence(problem, clusters, "marginal")),
+        method="EVM",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
     )
 
 
@@ -345,7 +350,14 @@ def vm_transposed(
     start = time.perf_counter()
     clusters = voronoi_clusters(problem, seed)
     routes = cluster_then_sequence(problem, clusters, "marginal-transposed")
-    return _solution(problem, routes, "VM-transposed", seed, start)
+    return make_solution(
+        problem,
+        Routes(routes),
+        method="VM-transposed",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+    )
 
 
 @register_method(AssignmentProblem, "EVM-transposed", default=False)
@@ -357,7 +369,14 @@ def evm_transposed(
     start = time.perf_counter()
     clusters = extended_voronoi_clusters(problem)
     routes = cluster_then_sequence(problem, clusters, "marginal-transposed")
-    return _solution(problem, routes, "EVM-transposed", seed, start)
+    return make_solution(
+        problem,
+        Routes(routes),
+        method="EVM-transposed",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+    )
 
 
 @register_method(AssignmentProblem, "MC")
@@ -392,7 +411,14 @@ def mc(
     start = time.perf_counter()
     deadline = Deadline(time_limit)
     routes = marginal_cost_routes(problem, deadline if deadline.limited else None)
-    solution = _solution(problem, routes, "MC", seed, start)
+    solution = make_solution(
+        problem,
+        Routes(routes),
+        method="MC",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+    )
     if deadline.limited and deadline.expired():
         solution = solution.replace(info={"stopped_by": "time_limit"})
     return solution

@@ -69,13 +69,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.comm.engine import Group, Run, Simulation, SimulationStopped
+from taopt.comm.engine import Group, Simulation, SimulationStopped
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
 
 #: Savings below this (metres) do not count as an improvement (HDA's stopping rule).
 SAVING_TOLERANCE = 1e-9
@@ -470,19 +470,6 @@ class HDA(_Auction):
 # -- registered methods ------------------------------------------------------------------------
 
 
-def _solution(run: Run, method: str, seed: int, runtime: float) -> Solution:
-    """The one place this module builds a Solution (a simulation: status "feasible")."""
-    return Solution(
-        objective=run.objective,
-        status=FEASIBLE,
-        solution=run.trajectories,
-        runtime=runtime,
-        method=method,
-        seed=seed,
-        info=run.info,
-    )
-
-
 def _run(
     problem: CommProblem,
     policy: _Auction,
@@ -501,17 +488,26 @@ def _run(
         simulation.deadline = deadline
         run = simulation.run()
     except SimulationStopped as exc:
-        return Solution(
-            objective=math.inf,
+        return make_solution(
+            problem,
+            None,
+            method=policy.name,
             status=TIME_LIMIT,
             runtime=time.perf_counter() - began,
-            method=policy.name,
             seed=seed,
             info={"stopped_by": "time_limit", "message": str(exc)},
         )
     finally:
         _DEADLINE.reset(token)
-    return _solution(run, policy.name, seed, time.perf_counter() - began)
+    return make_solution(
+        problem,
+        run.trajectories,
+        method=policy.name,
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+        info=run.info,
+    )
 
 
 @register_method(CommProblem, "DAA", category="simulation")

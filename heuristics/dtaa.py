@@ -53,10 +53,10 @@ from typing import Any
 import networkx as nx
 import numpy as np
 
-from taopt.capability.problem import CapabilityProblem, evaluate_capability
+from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, Routes, Solution, make_solution
 
 #: Header bytes of one message (sender id, class index: two 32-bit integers).
 HEADER_BYTES = 8
@@ -394,21 +394,6 @@ def _order(problem: CapabilityProblem, auction: AuctionResult) -> list[list[int]
     return routes
 
 
-def _solution(
-    problem: CapabilityProblem, routes: list[list[int]], seed: Any, start: float, info: dict
-) -> Solution:
-    """The one place this module builds a Solution."""
-    return Solution(
-        objective=evaluate_capability(problem, routes),
-        status=FEASIBLE,
-        solution=Routes(routes),
-        runtime=time.perf_counter() - start,
-        method="DTAA",
-        seed=seed,
-        info=info,
-    )
-
-
 @register_method(CapabilityProblem, "DTAA")
 def dtaa(problem: CapabilityProblem, graph: Any = None, seed: int | None = 0) -> Solution:
     """DTAA: Algorithm 2's auction per class, then the ordering principle (3.10)–(3.11).
@@ -473,4 +458,12 @@ def dtaa(problem: CapabilityProblem, graph: Any = None, seed: int | None = 0) ->
             for c in auction.classes
         ],
     }
-    return _solution(problem, routes, seed, start, info)
+    return make_solution(
+        problem,
+        Routes(routes),
+        method="DTAA",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+        info=info,
+    )

@@ -49,11 +49,10 @@ from taopt.heuristics.sequencing import (
     _validate,
     delivery_cost_matrix,
     schedule_order,
-    sop_solution,
 )
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import Solution
+from taopt.result import FEASIBLE, Order, Solution, make_solution
 
 __all__ = ["ga_order", "ga_search"]
 
@@ -295,5 +294,12 @@ def ga_sop(
         time_limit=time_limit,
         **options,
     )
-    solution = sop_solution(problem, path, "GA", seed, began)
-    return solution.replace(info={"history": history.tolist()})
+    return make_solution(
+        problem,
+        Order(path),
+        method="GA",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+        info={"history": history.tolist()},
+    )

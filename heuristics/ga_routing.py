@@ -85,8 +85,8 @@ from taopt.errors import InstanceError
 from taopt.heuristics.ga_local_search import NEIGHBOURHOOD, local_search
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Routes, Solution
-from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.result import FEASIBLE, Routes, Solution, make_solution
+from taopt.routing.problem import AssignmentProblem
 
 MARKERS = ("position", "vehicle")
 CROSSOVERS = ("ox", "obx")
@@ -355,20 +355,6 @@ def nodes_to_genes(problem: AssignmentProblem, nodes: np.ndarray) -> np.ndarray:
 # -- the algorithm ----------------------------------------------------------------------
 
 
-def _solution(
-    problem: AssignmentProblem, routes: list[list[int]], seed, start: float, info: dict
-) -> Solution:
-    return Solution(
-        objective=evaluate_routes(problem, routes),
-        status=FEASIBLE,
-        runtime=time.perf_counter() - start,
-        method="GA",
-        seed=seed,
-        solution=Routes(routes),
-        info=info,
-    )
-
-
 def _operator_set(operators: str | OperatorSet) -> OperatorSet:
     if isinstance(operators, OperatorSet):
         return operators
@@ -570,7 +556,15 @@ def genetic_algorithm(
     }
     if done < generations:
         info.update(stopped_by="time_limit", generations_done=done)
-    return _solution(problem, routes, seed, start, info)
+    return make_solution(
+        problem,
+        Routes(routes),
+        method="GA",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        seed=seed,
+        info=info,
+    )
 
 
 __all__ = [

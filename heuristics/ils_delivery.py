@@ -69,11 +69,10 @@ from taopt.heuristics.sequencing import (
     nia_order,
     path_cost,
     smma_order,
-    sop_solution,
 )
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import Solution
+from taopt.result import FEASIBLE, Order, Solution, make_solution
 
 __all__ = ["ScheduleStates", "PathStates", "Screen", "ils_search", "forward_states"]
 
@@ -736,5 +735,12 @@ def ils_sop(
         accept_worse,
     )
     path = [start, *order.tolist()] + ([] if end is None else [end])
-    solution = sop_solution(problem, path, "ILS", seed, began)
-    return solution.replace(info=info)
+    return make_solution(
+        problem,
+        Order(path),
+        method="ILS",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+        info=info,
+    )

@@ -79,12 +79,12 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.sop import SopProblem, evaluate_order
+from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Routes, Solution
+from taopt.result import FEASIBLE, INFEASIBLE, Order, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
-from taopt.scoring import evaluate
+from taopt.status import outcome
 
 __all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
 
@@ -301,7 +301,18 @@ def _solve(
         **{key: value for key, value in options.items() if key != "seed"},
         **{key: value for key, value in reply.items() if key != "routes"},
     }
-    return _solution(problem, reply["routes"], peer, seed, runtime, info)
+    try:  # the one scorer, once (taopt.solve does not score it again)
+        return make_solution(
+            problem,
+            Routes(reply["routes"]),
+            method=peer,
+            status=FEASIBLE,
+            runtime=runtime,
+            seed=int(seed),
+            info=info,
+        )
+    except Exception as exc:
+        raise SolverError(f"{peer} returned routes that fail the check: {exc}") from None
 
 
 def _call(
@@ -320,31 +331,6 @@ def _call(
     else:
         raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
     return reply, time.perf_counter() - started, worker, startup
-
-
-def _solution(
-    problem: AssignmentProblem,
-    routes: list[list[int]],
-    method: str,
-    seed: int,
-    runtime: float,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution; the objective is ``taopt.evaluate``'s."""
-    try:
-        objective = evaluate(problem, routes)
-    except Exception as exc:
-        raise SolverError(f"{method} returned routes that fail the check: {exc}") from None
-    return Solution(
-        objective=objective,
-        status=FEASIBLE,
-        bound=None,
-        runtime=runtime,
-        method=method,
-        seed=int(seed),
-        solution=Routes(routes),
-        info=info,
-    )
 
 
 @register_method(AssignmentProblem, "pyvrp", category="peer", requires="pyvrp")
@@ -516,11 +502,6 @@ def _sop_integer_costs(problem: SopProblem, scale: float | None) -> tuple[np.nda
     return matrix, scale, exact
 
 
-def _cpsat_status(reply: dict[str, Any]) -> str:
-    """CP-SAT's status as taopt's: OPTIMAL -> optimal, INFEASIBLE -> infeasible, else a limit."""
-    return {"OPTIMAL": OPTIMAL, "INFEASIBLE": INFEASIBLE}.get(reply["cpsat_status"], TIME_LIMIT)
-
-
 def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> float | None:
     """CP-SAT's proven bound in the problem's units, rounded down (valid after rounding)."""
     bound = reply.get("best_bound")
@@ -561,8 +542,10 @@ def cpsat_solve(
     Returns
     -------
     Solution
-        Method "cpsat". Status: CP-SAT's OPTIMAL -> "optimal", FEASIBLE -> "time_limit",
-        no solution -> "time_limit" with objective ``inf``, INFEASIBLE -> "infeasible".
+        Method "cpsat". Status by :func:`taopt.status.outcome` (the one rule): CP-SAT's
+        OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
+        else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
+        objective ``inf``; INFEASIBLE -> "infeasible".
         ``objective`` is re-scored by taopt's scorer (:func:`taopt.delivery.sop.evaluate_order` or
         :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
         rounded down and lowered by the rounding error of a path when the scaling is not
@@ -620,7 +603,6 @@ def cpsat_solve(
         request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
         slack = 0.0 if exact else 0.5 * problem.n
     reply, runtime, worker, startup = _call("cpsat", request, time_limit)
-    status = _cpsat_status(reply)
     info = {
         "cpsat_status": reply["cpsat_status"],
         "solver_objective": reply["objective"],
@@ -636,32 +618,33 @@ def cpsat_solve(
     }
     bound = _scaled_bound(reply, scale, slack)
     payload: Order | Routes | None = None
-    objective = np.inf
-    try:
-        if isinstance(problem, SopProblem) and reply.get("order") is not None:
-            payload = Order(reply["order"])
-            objective = evaluate_order(problem, reply["order"])
-        elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
-            payload = Routes(reply["routes"])
-            objective = evaluate(problem, reply["routes"])
+    if isinstance(problem, SopProblem) and reply.get("order") is not None:
+        payload = Order(reply["order"])
+    elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
+        payload = Routes(reply["routes"])
+    if reply["cpsat_status"] == "OPTIMAL" and payload is None:
+        raise SolverError("cpsat reported OPTIMAL without a solution")
+    try:  # scored once by taopt's scorer; the status follows from that objective
+        result = make_solution(
+            problem, payload, method="cpsat", status=FEASIBLE, runtime=runtime, seed=int(seed)
+        )
     except Exception as exc:
         raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
+    objective = result.objective
+    status, stopped_by = outcome(
+        "cpsat",
+        reply["cpsat_status"],
+        objective=objective,
+        bound=bound,
+        time_limited=time_limit is not None,
+        has_point=payload is not None,
+    )
+    info["stopped_by"] = stopped_by
     if status == INFEASIBLE:
         bound = np.inf
     elif bound is not None:
         bound = min(bound, objective)
-    if status == OPTIMAL and payload is None:
-        raise SolverError("cpsat reported OPTIMAL without a solution")
-    return Solution(
-        objective=objective,
-        status=status,
-        bound=bound,
-        runtime=runtime,
-        method="cpsat",
-        seed=int(seed),
-        solution=payload,
-        info=info,
-    )
+    return result.replace(status=status, bound=bound, info=info)
 
 
 register_method(SopProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)

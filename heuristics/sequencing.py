@@ -39,10 +39,10 @@ import numpy as np
 
 from taopt.delivery.dags import cycle_path
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.sop import SopProblem, evaluate_order
+from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, Order, Solution
+from taopt.result import FEASIBLE, Order, Solution, make_solution
 
 # path_cost is defined in taopt.tsplib; re-exported here (heuristics and tests import it from
 # this module).
@@ -664,22 +664,17 @@ def smma_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     return _delivery_method("SMMA", instance, seed, **options)
 
 
-def sop_solution(problem: SopProblem, path: Sequence[int], name: str, seed: Any, began: float):
-    """A :class:`Solution` for an SOP order, scored by :func:`evaluate_order`."""
-    return Solution(
-        objective=evaluate_order(problem, path),
-        status=FEASIBLE,
-        solution=Order(path),
-        runtime=time.perf_counter() - began,
-        method=name,
-        seed=seed,
-    )
-
-
 def _sop_method(name: str, problem: SopProblem, seed: int = 0, **options: Any) -> Solution:
     began = time.perf_counter()
     path = _RULES[name](problem.cost, problem.precedences, problem.start, problem.end, **options)
-    return sop_solution(problem, path, name, seed, began)
+    return make_solution(
+        problem,
+        Order(path),
+        method=name,
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+    )
 
 
 @register_method(SopProblem, "NIA")

@@ -78,10 +78,10 @@ from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, milp_bytes, register_footprint
-from taopt.models.highs import certify, solve_highs
+from taopt.models.highs import solve_highs
 from taopt.models.routing import solve_routing
-from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution
-from taopt.routing.problem import evaluate_routes
+from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -101,6 +101,8 @@ __all__ = [
     "solve_capability",
     "solve_exact",
     "class_incumbents",
+    "ClassSolve",
+    "solve_classes",
 ]
 
 
@@ -350,9 +352,25 @@ def _solve_printed(
     }
     if decoded.is_routing and run.status == OPTIMAL:
         # the relaxation's optimum is a feasible routing: it is the true optimum
-        objective = evaluate_capability(problem, decoded.routes)
-        return _solution(objective, OPTIMAL, decoded.routes, objective, start, "printed", info)
-    return _solution(value, RELAXATION, None, bound, start, "printed", info)
+        solution = make_solution(
+            problem,
+            decoded.routes,
+            method="exact-printed",
+            status=OPTIMAL,
+            runtime=time.perf_counter() - start,
+            info=info,
+        )
+        return solution.replace(bound=solution.objective)
+    return make_solution(
+        problem,
+        None,
+        method="exact-printed",
+        status=RELAXATION,
+        objective=value,
+        bound=bound,
+        runtime=time.perf_counter() - start,
+        info=info,
+    )
 
 
 # --------------------------------------------------------------------------- corrected
@@ -566,29 +584,95 @@ def _solve_classes_parallel(
     return results
 
 
-def _solve_corrected(
-    problem: CapabilityProblem,
-    time_limit: float | None,
-    incumbent: Any,
-    sec: str,
-    mip_gap: float,
-    verbose: bool,
-    start: float,
-    workers: int | None = None,
-) -> Solution:
-    """One certified (2.2)–(2.5) per class; a time limit is shared between the classes.
+@dataclass
+class ClassSolve:
+    """The classes of a split problem, each certified by :func:`solve_routing`.
 
+    Attributes
+    ----------
+    results : dict
+        Capability -> the class's :class:`Solution` (routes in the class problem's
+        indexing); only classes with targets.
+    per_class : list of dict
+        One row per class (empty ones included): capability, targets, vehicles, status,
+        objective, bound, runtime.
+    bound : float
+        Σ of the classes' proven bounds (0 for a class without one).
+    stopped_by : str
+        "optimal" when every class is; else the first unfinished class's reason.
+    workers : int
+        Processes used (1: in this process).
+    """
+
+    results: dict[Hashable, Solution]
+    per_class: list[dict[str, Any]]
+    bound: float
+    stopped_by: str
+    workers: int
+
+    @property
+    def complete(self) -> bool:
+        """Whether every class has routes (a class may have none at a time limit)."""
+        return all(r.routes is not None for r in self.results.values())
+
+    def class_routes(self) -> dict[Hashable, list[list[int]]]:
+        """Capability -> the class's routes (class indexing), for ``CapabilityProblem.join``."""
+        return {cap: r.routes for cap, r in self.results.items()}
+
+
+def solve_classes(
+    classes: Any,
+    *,
+    time_limit: float | None,
+    start: float,
+    incumbents: Any = None,
+    sec: str = "dfj",
+    mip_gap: float = 1e-6,
+    verbose: bool = False,
+    workers: int | None = None,
+) -> ClassSolve:
+    """One certified (2.2)–(2.5) per class; a wall-clock limit shared between the classes.
+
+    Parameters
+    ----------
+    classes : sequence of CapabilityClass
+        The exact split (§3.6): ``capability``, ``targets``, ``vehicles`` and the class's
+        chapter 2 ``problem`` (None for a class without targets).
+    time_limit : float, optional
+        Seconds for all classes together, counted from ``start``.
+    start : float
+        ``time.perf_counter()`` when the caller's clock started.
+    incumbents : mapping, optional
+        Capability -> routes in the class's indexing (or None), offered to each class.
+    sec, mip_gap, verbose
+        Passed to :func:`solve_routing`.
+    workers : int, optional
+        Processes (default: :func:`_auto_workers`).
+
+    Returns
+    -------
+    ClassSolve
+
+    Notes
+    -----
     Serially (``workers == 1``) classes are solved smallest first, each with an equal share
     of the time left (so a hard class cannot starve the others); in worker processes,
     largest first, each with the time left over the waves still to come. With time to
     spare, classes stopped by their share are solved again with the rest (their best routes
-    and largest proven bound are kept).
+    and largest proven bound are kept). A class killed past its limit keeps its incumbent
+    (if any) with bound 0 and status "time_limit". Shared by chapter 3's corrected model
+    and chapter 4's certified optimum f_o.
+
+    References
+    ----------
+    Thesis §3.4.2 and §3.6 (the split by class); §4.3 (f_o).
     """
-    starts = class_incumbents(problem, incumbent)
-    classes = sorted((c for c in problem.classes if c.problem), key=lambda c: len(c.targets))
+    classes = list(classes)
+    starts = dict(incumbents or {})
+    solvable = sorted((c for c in classes if c.problem), key=lambda c: len(c.targets))
     if workers is None:
-        workers = _auto_workers(classes)
-    workers = min(workers, max(len(classes), 1))
+        workers = _auto_workers(solvable)
+    workers = min(workers, max(len(solvable), 1))
 
     def left() -> float:
         return time_limit - (time.perf_counter() - start) if time_limit is not None else math.inf
@@ -601,20 +685,20 @@ def _solve_corrected(
             return _solve_classes_parallel(jobs, left, options, workers)
         return _solve_classes_serial(jobs, left, options, least)
 
-    results = solve([(cls, starts[cls.capability]) for cls in classes])
-    for cls in classes:  # a class killed past its limit: its incumbent (if any), bound 0
+    results = solve([(cls, starts.get(cls.capability)) for cls in solvable])
+    for cls in solvable:  # a class killed past its limit: its incumbent (if any), bound 0
         if cls.capability not in results:
-            given = starts[cls.capability]
-            results[cls.capability] = Solution(
-                objective=math.inf if given is None else evaluate_routes(cls.problem, given),
+            given = starts.get(cls.capability)
+            results[cls.capability] = make_solution(
+                cls.problem,
+                None if given is None else Routes(given),
+                method="exact-dfj",
                 status=TIME_LIMIT,
-                solution=None if given is None else Routes(given),
                 bound=0.0,
                 runtime=time.perf_counter() - start,
-                method="exact-dfj",
                 info={"stopped_by": "time_limit", "killed": True},
             )
-    unfinished = [c for c in classes if results[c.capability].status != OPTIMAL]
+    unfinished = [c for c in solvable if results[c.capability].status != OPTIMAL]
     if unfinished and left() >= 0.05:
         again_all = solve([(cls, results[cls.capability].routes) for cls in unfinished], 0.05)
         for cls in unfinished:
@@ -633,7 +717,7 @@ def _solve_corrected(
     stopped_by = "optimal"
     bound = 0.0
     per_class = []
-    for cls in problem.classes:
+    for cls in classes:
         if cls.problem is None:
             per_class.append({"capability": str(cls.capability), "targets": 0})
             continue
@@ -652,27 +736,57 @@ def _solve_corrected(
                 "runtime": result.runtime,
             }
         )
-    if any(r.routes is None for r in results.values()):  # a class has no plan in time
-        info = {
-            "formulation": "corrected",
-            "sec": sec,
-            "workers": workers,
-            "classes": per_class,
-            "stopped_by": "time_limit",
-        }
-        return _solution(math.inf, TIME_LIMIT, None, bound, start, "corrected", info)
-    routes = problem.join({cap: r.routes for cap, r in results.items()})
-    objective = evaluate_capability(problem, routes)
-    bound = min(bound, objective)
-    status, stopped_by = certify(objective, bound, stopped_by)
+    return ClassSolve(results, per_class, bound, stopped_by, workers)
+
+
+def _solve_corrected(
+    problem: CapabilityProblem,
+    time_limit: float | None,
+    incumbent: Any,
+    sec: str,
+    mip_gap: float,
+    verbose: bool,
+    start: float,
+    workers: int | None = None,
+) -> Solution:
+    """One certified (2.2)–(2.5) per class (:func:`solve_classes`), joined."""
+    split = solve_classes(
+        problem.classes,
+        time_limit=time_limit,
+        start=start,
+        incumbents=class_incumbents(problem, incumbent),
+        sec=sec,
+        mip_gap=mip_gap,
+        verbose=verbose,
+        workers=workers,
+    )
     info = {
         "formulation": "corrected",
         "sec": sec,
-        "workers": workers,
-        "stopped_by": stopped_by,
-        "classes": per_class,
+        "workers": split.workers,
+        "classes": split.per_class,
     }
-    return _solution(objective, status, Routes(routes), bound, start, "corrected", info)
+    if not split.complete:  # a class has no plan in time
+        return make_solution(
+            problem,
+            None,
+            method="exact-corrected",
+            status=TIME_LIMIT,
+            bound=split.bound,
+            runtime=time.perf_counter() - start,
+            info={**info, "stopped_by": "time_limit"},
+        )
+    routes = Routes(problem.join(split.class_routes()))
+    solution = make_solution(  # certified on the scored objective (gap 0 when bound >= it)
+        problem,
+        routes,
+        method="exact-corrected",
+        stopped_by=split.stopped_by,
+        bound=split.bound,
+        runtime=time.perf_counter() - start,
+        info=info,
+    )
+    return solution.replace(bound=min(split.bound, solution.objective))
 
 
 # ------------------------------------------------------------------------------- joint
@@ -918,37 +1032,32 @@ def _solve_joint(
         # no plan in time: status time_limit, objective inf, the bound stands
         bound = max(best_bound, float(arborescence_lower(problem)))
         info = joint_info("time_limit")
-        return _solution(math.inf, TIME_LIMIT, None, bound, start, "joint", info)
+        return make_solution(
+            problem,
+            None,
+            method="exact-joint",
+            status=TIME_LIMIT,
+            bound=bound,
+            runtime=time.perf_counter() - start,
+            info=info,
+        )
     if stopped_by == "time_limit":  # a valid bound of the family keeps the gap honest
         best_bound = max(best_bound, float(arborescence_lower(problem)))
     bound = min(best_bound, best_value)
     status, stopped_by = certify(best_value, bound, stopped_by)
     info = joint_info(stopped_by)
-    return _solution(best_value, status, Routes(best_routes), bound, start, "joint", info)
-
-
-# ------------------------------------------------------------------------------ public
-def _solution(
-    objective: float,
-    status: Any,
-    routes: Routes | None,
-    bound: float | None,
-    start: float,
-    formulation: str,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution."""
-    return Solution(
-        objective=objective,
+    return make_solution(
+        problem,
+        Routes(best_routes),
+        method="exact-joint",
         status=status,
-        solution=routes,
         bound=bound,
         runtime=time.perf_counter() - start,
-        method=f"exact-{formulation}",
         info=info,
     )
 
 
+# ------------------------------------------------------------------------------ public
 def solve_capability(
     problem: CapabilityProblem,
     formulation: str = "corrected",

@@ -5,10 +5,12 @@ distances, split exactly by attribute (each target needs one vehicle of its attr
 the classes share no vehicle): :meth:`~taopt.comm.problem.CommProblem.full_information` gives chapter 2's
 :class:`~taopt.AssignmentProblem` (one attribute) or chapter 3's
 :class:`~taopt.CapabilityProblem` with one demand per target, whose ``classes`` are
-chapter 2 problems. Each class is solved by chapter 2's exact model
-:func:`taopt.models.solve_routing`; the classes' routes are joined and driven as straight
-lines, which is what (4.1) scores. The status is "optimal" only if every class is, and the
-bound is the sum of the classes' proven bounds.
+chapter 2 problems. The classes are solved by chapter 3's decomposition,
+:func:`taopt.models.capability.solve_classes` (chapter 2's exact model
+:func:`taopt.models.solve_routing` per class, one shared wall-clock limit); the classes'
+routes are joined and driven as straight lines, which is what (4.1) scores. The bound is
+the sum of the classes' proven bounds, and the status is :func:`taopt.status.certify`'s
+("optimal" only when the gap is closed).
 
 Any simulation's trajectories are at least f_o long (its first visits form routes that
 serve every target once and are no longer than the trajectories, by the triangle
@@ -17,20 +19,20 @@ inequality), so ``f / f_o`` is the true gap of CAA, DAA and HDA.
 
 from __future__ import annotations
 
-import inspect
 import time
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from taopt.capability.problem import CapabilityClass
 from taopt.comm.problem import CommProblem
-from taopt.comm.trajectories import Trajectories, evaluate_trajectories
+from taopt.comm.trajectories import Trajectories
 from taopt.errors import InstanceError
 from taopt.limits import milp_bytes, register_footprint
-from taopt.models.routing import solve_routing
+from taopt.models.capability import solve_classes
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Routes, Solution, Status
+from taopt.result import TIME_LIMIT, Routes, Solution, make_solution
 
 
 def drive(problem: CommProblem, routes: Sequence[Sequence[int]]) -> Trajectories:
@@ -64,33 +66,13 @@ def _class_incumbent(incumbent: Any, problem: CommProblem) -> list[list[int]] | 
     return list(Routes(incumbent))
 
 
-def _solution(
-    problem: CommProblem,
-    routes: list[list[int]],
-    status: Status,
-    bound: float | None,
-    runtime: float,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution."""
-    trajectories = drive(problem, routes)
-    return Solution(
-        objective=evaluate_trajectories(problem, trajectories),
-        status=status,
-        solution=trajectories,
-        bound=bound,
-        runtime=runtime,
-        method="exact",
-        info=info,
-    )
-
-
 def solve_comm(
     problem: CommProblem,
     *,
     time_limit: float | None = None,
     incumbent: Any = None,
     sec: str = "dfj",
+    workers: int | None = None,
 ) -> Solution:
     """Certified optimum f_o of (4.1)–(4.2) without communication limits.
 
@@ -104,61 +86,75 @@ def solve_comm(
         :func:`solve_routing` per class when that function takes an incumbent.
     sec : str
         Subtour elimination of the chapter 2 model ("dfj", "mtz", "flow").
+    workers : int, optional
+        Processes for the classes (as :func:`taopt.models.capability.solve_capability`;
+        default: one per core for two or more large classes, else 1).
 
     Returns
     -------
     Solution
-        Payload: the trajectories of driving the optimal routes; status "optimal" when
-        every class is certified, else "time_limit" (or "feasible" when a class stopped by a gap
-        or round limit); bound = Σ class bounds; ``info``
-        holds ``routes`` and per-class statuses.
+        Payload: the trajectories of driving the optimal routes; status by
+        :func:`taopt.status.certify` of their length against bound = Σ class bounds:
+        "optimal" when the gap is closed, else "time_limit" (or "feasible" when the first
+        unfinished class stopped by a gap or round limit); with a class without routes
+        in time, "time_limit", objective ``inf`` and no payload. ``info`` holds
+        ``routes``, ``class_status``, ``per_class`` and ``workers``.
+
+    Notes
+    -----
+    The classes are solved by :func:`taopt.models.capability.solve_classes`, chapter 3's
+    per-class decomposition with its shared wall-clock limit (serial smallest first, or
+    worker processes; a second pass for classes stopped by their share).
     """
     began = time.perf_counter()
     full = problem.full_information()
     if hasattr(full, "classes"):
-        parts = [(c.problem, list(c.vehicles), list(c.targets)) for c in full.classes]
-    else:
-        parts = [(full, list(range(problem.m)), list(range(problem.n)))]
-    parts = [p for p in parts if p[0] is not None]
+        classes = list(full.classes)
+    else:  # one attribute: one class, every vehicle and target
+        label = problem.attributes[0]
+        classes = [CapabilityClass(label, tuple(range(problem.n)), tuple(range(problem.m)), full)]
     start_routes = _class_incumbent(incumbent, problem)
-    takes_incumbent = "incumbent" in inspect.signature(solve_routing).parameters
-    routes: list[list[int]] = [[] for _ in range(problem.m)]
-    statuses, bounds = [], []
-    for index, (sub, vehicles, targets) in enumerate(parts):
-        options: dict[str, Any] = {"sec": sec}
-        if time_limit is not None:
-            left = time_limit - (time.perf_counter() - began)
-            options["time_limit"] = max(left / (len(parts) - index), 1e-3)
-        if takes_incumbent and start_routes is not None:
-            local = {t: i for i, t in enumerate(targets)}
-            options["incumbent"] = [
-                [local[t] for t in start_routes[j] if t in local] for j in vehicles
+    starts = {}
+    for cls in classes:
+        if cls.problem is not None and start_routes is not None:
+            local = {t: i for i, t in enumerate(cls.targets)}
+            starts[cls.capability] = [
+                [local[t] for t in start_routes[j] if t in local] for j in cls.vehicles
             ]
-        result = solve_routing(sub, **options)
-        for j, route in zip(vehicles, result.routes, strict=True):
-            routes[j] = [targets[t] for t in route]
-        statuses.append(result.status)
-        bounds.append(result.bound)
-    if all(s == OPTIMAL for s in statuses):
-        status = OPTIMAL
-    elif any(s == TIME_LIMIT for s in statuses):
-        status = TIME_LIMIT
-    else:  # a class stopped by a gap or round limit: feasible with its proven bound
-        status = FEASIBLE
-    bound = None if any(b is None for b in bounds) else float(sum(bounds))
-    info = {
-        "routes": routes,
-        "class_status": [str(s) for s in statuses],
-        "classes": len(parts),
-    }
-    return _solution(
-        problem,
-        routes,
-        status,
-        bound,
-        time.perf_counter() - began,
-        info,
+    split = solve_classes(
+        classes, time_limit=time_limit, start=began, incumbents=starts, sec=sec, workers=workers
     )
+    solved = [cls for cls in classes if cls.problem is not None]
+    info: dict[str, Any] = {
+        "class_status": [str(split.results[cls.capability].status) for cls in solved],
+        "classes": len(solved),
+        "per_class": split.per_class,
+        "workers": split.workers,
+    }
+    if not split.complete:  # a class has no routes in time: no trajectories
+        return make_solution(
+            problem,
+            None,
+            method="exact",
+            status=TIME_LIMIT,
+            bound=split.bound,
+            runtime=time.perf_counter() - began,
+            info={**info, "routes": None, "stopped_by": "time_limit"},
+        )
+    routes: list[list[int]] = [[] for _ in range(problem.m)]
+    for cls in solved:
+        for j, route in cls.lift(split.results[cls.capability].routes).items():
+            routes[j] = route
+    solution = make_solution(  # certified on the scored length (4.1) of the driven routes
+        problem,
+        drive(problem, routes),
+        method="exact",
+        stopped_by=split.stopped_by,
+        bound=split.bound,
+        runtime=time.perf_counter() - began,
+        info={**info, "routes": routes},
+    )
+    return solution.replace(bound=min(split.bound, solution.objective))
 
 
 register_method(CommProblem, "exact", category="exact", warm_start=("DAA",))(solve_comm)

@@ -106,8 +106,9 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
-from taopt.models.highs import certify, solve_highs
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution
+from taopt.models.highs import solve_highs
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -603,13 +604,13 @@ def _stopped(
     tree = arborescence_bound(instance)
     bound = tree if bound is None else max(bound, tree)
     objective = math.inf if known is None else known[0]
-    return Solution(
-        objective=objective,
+    return make_solution(
+        instance,
+        None if known is None else known[1],
+        method="exact-milp",
         status=TIME_LIMIT,
         bound=min(bound, objective),
         runtime=time.perf_counter() - began,
-        method="exact-milp",
-        solution=None if known is None else known[1],
         info={"stopped_by": "time_limit", **info},
     )
 
@@ -755,13 +756,13 @@ def solve_delivery(
     bound = None if bound is None else min(bound, objective)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(objective, bound, stopped_by)
-    return Solution(
-        objective=objective,
+    return make_solution(
+        instance,
+        plan,
+        method="exact-milp",
         status=status,
         bound=bound,
         runtime=time.perf_counter() - began,
-        method="exact-milp",
-        solution=plan,
         info={
             "model_objective": model_objective,
             "binaries": int(model.sortie.size),

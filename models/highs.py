@@ -12,7 +12,8 @@ through :func:`solve_highs`, so the three agree on what "optimal" means
 * a run stopped by ``time_limit`` with a point is **time_limit**, with the
   proven bound.
 
-The same rule, :func:`certify`, is what the models apply to their final
+The rule is :func:`taopt.status.outcome` (on HiGHS's raw status) and
+:func:`taopt.status.certify` (re-exported here), which the models apply to their final
 answer, after they combine the solver's bound with their own valid bounds
 and re-score the decoded solution.
 
@@ -63,10 +64,9 @@ import scipy.sparse as sp
 from highspy._core import _Highs
 
 from taopt.errors import SolverError
-from taopt.result import ERROR, FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT
+from taopt.result import ERROR
+from taopt.status import OPTIMALITY_TOLERANCE, certify, outcome, relative_gap
 
-#: "optimal" only when (objective − bound) / |objective| is at most this.
-OPTIMALITY_TOLERANCE = 1e-6
 #: A MIP run whose reported objective differs from ``c·x + offset`` of its own point by more
 #: than this (relative, at least 1e-6 absolute) is not trusted (see :meth:`HighsModel.solve`).
 CONSISTENCY_TOLERANCE = 1e-6
@@ -340,44 +340,6 @@ class HighsRun:
     info: Any = field(default=None, repr=False)
 
 
-def relative_gap(objective: float, bound: float | None) -> float:
-    """``max(0, objective − bound) / |objective|`` (0 when both are 0; inf without a bound)."""
-    if bound is None or not math.isfinite(objective) or not math.isfinite(bound):
-        return math.inf
-    difference = max(0.0, objective - bound)
-    if difference == 0.0:
-        return 0.0
-    return math.inf if objective == 0 else difference / abs(objective)
-
-
-def certify(objective: float, bound: float | None, stopped_by: str) -> tuple[str, str]:
-    """The one status rule: ``(status, stopped_by)`` of a solution with a proven bound.
-
-    Parameters
-    ----------
-    objective : float
-        The incumbent's value (re-scored by the problem's scorer when the
-        caller has one).
-    bound : float or None
-        A proven lower bound.
-    stopped_by : str
-        Why the search ended if the gap is not closed: "time_limit",
-        "mip_gap", "max_rounds", "solver_limit", ...
-
-    Returns
-    -------
-    tuple of str
-        ``("optimal", "optimal")`` when :func:`relative_gap` is at most
-        :data:`OPTIMALITY_TOLERANCE`; else ``("time_limit", stopped_by)`` for
-        a time limit, ``("feasible", stopped_by)`` for anything else.
-    """
-    if relative_gap(objective, bound) <= OPTIMALITY_TOLERANCE:
-        return OPTIMAL, "optimal"
-    if stopped_by in ("time_limit", "solver_limit"):
-        return TIME_LIMIT, stopped_by
-    return FEASIBLE, stopped_by
-
-
 def _number(info: Any, name: str, default: float = math.nan) -> float:
     value = getattr(info, name, default) if info is not None else default
     return float(value)
@@ -457,18 +419,14 @@ def solve_highs(
         bound = dual_bound if math.isfinite(dual_bound) else None
     elif solver_status == "optimal" and has_point:
         bound = _number(info, "objective_function_value")  # an LP at its optimum
-    if solver_status in ("infeasible", "infeasible_inaccurate", "infeasible_or_unbounded"):
-        status, stopped_by = INFEASIBLE, "infeasible"
-    elif solver_status in ("optimal", "optimal_inaccurate", "user_limit") and has_point:
-        if solver_status == "user_limit":
-            reason = "time_limit" if time_limit is not None else "solver_limit"
-        else:
-            reason = "mip_gap"
-        status, stopped_by = certify(objective, bound, reason)
-    elif solver_status == "user_limit":  # a limit before any feasible point
-        status, stopped_by = TIME_LIMIT, "time_limit" if time_limit is not None else "solver_limit"
-    else:
-        status, stopped_by = ERROR, "error"
+    status, stopped_by = outcome(
+        "highs",
+        solver_status,
+        objective=objective,
+        bound=bound,
+        time_limited=time_limit is not None,
+        has_point=has_point,
+    )
     return HighsRun(
         status=status,
         stopped_by=stopped_by,
@@ -514,18 +472,14 @@ def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> 
         bound = dual_bound if math.isfinite(dual_bound) else None
     elif solver_status == "optimal" and has_point:
         bound = objective  # an LP at its optimum
-    if solver_status in ("infeasible", "infeasible_or_unbounded"):
-        status, stopped_by = INFEASIBLE, "infeasible"
-    elif solver_status in ("optimal", "user_limit") and has_point:
-        if solver_status == "user_limit":
-            reason = "time_limit" if time_limit is not None else "solver_limit"
-        else:
-            reason = "mip_gap"
-        status, stopped_by = certify(objective, bound, reason)
-    elif solver_status == "user_limit":  # a limit before any feasible point
-        status, stopped_by = TIME_LIMIT, "time_limit" if time_limit is not None else "solver_limit"
-    else:
-        status, stopped_by = ERROR, "error"
+    status, stopped_by = outcome(
+        "highs",
+        solver_status,
+        objective=objective,
+        bound=bound,
+        time_limited=time_limit is not None,
+        has_point=has_point,
+    )
     return HighsRun(
         status=status,
         stopped_by=stopped_by,

@@ -69,8 +69,9 @@ from scipy.optimize import linear_sum_assignment
 from taopt.delivery.sop import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
-from taopt.models.highs import HighsModel, certify, solve_highs
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution
+from taopt.models.highs import HighsModel, solve_highs
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution, make_solution
+from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -506,13 +507,13 @@ def _stopped(
     tree = _cheap_bound(problem)
     bound = tree if bound is None or not np.isfinite(bound) else max(bound, tree)
     objective = np.inf if known is None else known[0]
-    return Solution(
-        objective=objective,
+    return make_solution(
+        problem,
+        None if known is None else Order(known[1]),
+        method=f"exact-sop-{formulation}",
         status=TIME_LIMIT,
         bound=min(bound, objective),
         runtime=time.perf_counter() - began,
-        method=f"exact-sop-{formulation}",
-        solution=None if known is None else Order(known[1]),
         info={"stopped_by": "time_limit", **info},
     )
 
@@ -536,13 +537,13 @@ def _unreachable(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) ->
 
 def _infeasible(began: float, formulation: str, proof: str) -> Solution:
     """Status "infeasible" (no path exists), with the reason as ``info["proof"]``."""
-    return Solution(
-        objective=np.inf,
+    return make_solution(
+        None,  # no payload to score
+        None,
+        method=f"exact-sop-{formulation}",
         status=INFEASIBLE,
         bound=np.inf,
         runtime=time.perf_counter() - began,
-        method=f"exact-sop-{formulation}",
-        solution=None,
         info={"stopped_by": "infeasible", "proof": proof},
     )
 
@@ -557,6 +558,7 @@ def solve_sop(
     mip_gap: float = 1e-9,
     verbose: bool = False,
     incumbent=None,
+    problem: SopProblem | None = None,
 ) -> Solution:
     """Exact sequential ordering: cheapest precedence-respecting Hamiltonian path.
 
@@ -588,6 +590,9 @@ def solve_sop(
     incumbent : Order, list of int or Solution, optional
         A feasible order (e.g. from SMMA), returned when HiGHS finds nothing better in
         time; an infeasible one is ignored.
+    problem : SopProblem, optional
+        The problem these arrays are (its scorer scores the returned order, once); built
+        from the arrays when needed and not given.
 
     Returns
     -------
@@ -623,9 +628,9 @@ def solve_sop(
     if unreachable is not None:
         return _infeasible(began, formulation, unreachable)
     known = _known_order(checked, closure, start, end, incumbent)
-    problem = None
-    if deadline.limited:
+    if deadline.limited and problem is None:
         problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
+    if deadline.limited:
         columns = column_count(checked, closure, start, formulation)
         estimate = columns * SECONDS_PER_COLUMN
         if estimate > deadline.remaining() - MARGIN:  # cannot build and compile in time
@@ -679,13 +684,15 @@ def solve_sop(
     bound = None if bound is None else min(bound, objective)
     # the one rule of taopt.models.highs: optimal only when proven within 1e-6
     status, stopped_by = certify(objective, bound, run.stopped_by)
-    return Solution(
-        objective=objective,
+    if problem is None:
+        problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
+    return make_solution(
+        problem,
+        Order(order),
+        method=f"exact-sop-{formulation}",
         status=status,
         bound=bound,
         runtime=time.perf_counter() - began,
-        method=f"exact-sop-{formulation}",
-        solution=Order(order),
         info={
             "arcs": len(model.tails),
             "variables": sum(v.size for v in model.problem.variables()),
@@ -794,6 +801,7 @@ def solve_sop_problem(
             mip_gap=mip_gap,
             verbose=verbose,
             incumbent=known,
+            problem=problem,
         )
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)

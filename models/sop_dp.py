@@ -87,7 +87,8 @@ import numpy as np
 from taopt.delivery.sop import SopProblem, path_cost
 from taopt.errors import InstanceError
 from taopt.limits import MARGIN, Deadline
-from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution
+from taopt.result import Order, Solution, make_solution
+from taopt.status import outcome
 
 __all__ = [
     "MAX_NODES",
@@ -815,24 +816,26 @@ def solve_sop_dp(
     if stopped_by is None:
         pruned_min = done.pruned_min
         if known is None and not np.isfinite(pruned_min):  # no state can reach the end
-            return Solution(
-                objective=np.inf,
-                status=INFEASIBLE,
+            status, stopped_by = outcome("dp", "infeasible", objective=None, bound=None)
+            return make_solution(
+                problem,
+                None,
+                method="exact-sop-dp",
+                status=status,
                 bound=np.inf,
                 runtime=runtime,
-                method="exact-sop-dp",
-                solution=None,
-                info={**info, "stopped_by": "infeasible", "proof": "every ideal expanded"},
+                info={**info, "stopped_by": stopped_by, "proof": "every ideal expanded"},
             )
         # every cheaper path was pruned within tolerance: proven to 1e-9 relative
-        proven = min(objective, pruned_min)
-        return Solution(
-            objective=objective,
-            status=OPTIMAL,
-            bound=min(proven, objective),
-            runtime=runtime,
+        bound = min(objective, pruned_min)
+        status, _ = outcome("dp", "complete", objective=objective, bound=bound)
+        return make_solution(
+            problem,
+            Order(known[1]),
             method="exact-sop-dp",
-            solution=Order(known[1]),
+            status=status,
+            bound=bound,
+            runtime=runtime,
             info={**info, "stopped_by": None},
         )
     # stopped: the open layer and the dropped states hold every cheaper path
@@ -841,12 +844,20 @@ def solve_sop_dp(
     if cheap_bound is None:
         cheap_bound = _cheap_bound(problem)
     proven = max(proven, cheap_bound) if np.isfinite(proven) else max(cheap_bound, 0.0)
-    return Solution(
+    bound = min(proven, objective)
+    status, _ = outcome(
+        "dp",
+        "stopped",
         objective=objective,
-        status=TIME_LIMIT,
-        bound=min(proven, objective),
-        runtime=time.perf_counter() - began,
+        bound=bound,
+        time_limited=stopped_by == "time_limit",
+    )
+    return make_solution(
+        problem,
+        None if known is None else Order(known[1]),
         method="exact-sop-dp",
-        solution=None if known is None else Order(known[1]),
+        status=status,
+        bound=bound,
+        runtime=time.perf_counter() - began,
         info={**info, "stopped_by": stopped_by},
     )

@@ -3,7 +3,9 @@
 It only wires (as PyVRP's ``solve.py``): it looks the method up in :mod:`taopt.registry`,
 passes the options the method takes, gives an exact model its incumbent from the
 registered warm-start heuristics (the models never run heuristics themselves), and
-re-scores the payload with the family's one scorer :func:`taopt.evaluate` before returning.
+checks the payload with the family's one scorer :func:`taopt.evaluate` before returning:
+a Solution built by :func:`taopt.result.make_solution` for this problem was scored there,
+once; any other (hand-built) one is re-scored here.
 
 This module is the orchestration layer: it imports the method packages (which register
 their methods on import).
@@ -153,7 +155,12 @@ def solve(
     if not isinstance(result, Solution):
         raise SolverError(f"method {method!r} returned {type(result).__name__}, not a Solution")
     runtime = deadline.elapsed()
-    if result.solution is not None and result.status not in (RELAXATION, ERROR, INFEASIBLE):
+    scored = result.is_scored_for(problem)  # built by make_solution: scored once already
+    if (
+        result.solution is not None
+        and result.status not in (RELAXATION, ERROR, INFEASIBLE)
+        and not scored
+    ):
         value = evaluate(problem, result.solution)  # the one scorer, never the method's word
         if abs(value - result.objective) > SCORE_TOLERANCE * max(1.0, abs(value)):
             raise SolverError(

@@ -277,6 +277,11 @@ class Solution:
     method: str = ""
     seed: int | None = None
     info: dict[str, Any] = field(default_factory=dict)
+    #: Set by :func:`make_solution` only: (process id, ``id(problem)``) of the problem whose
+    #: scorer gave ``objective``, so :func:`taopt.solve` does not score it again. Not data:
+    #: left out of ``to_dict``, equality and repr; reset by :meth:`replace` when the
+    #: objective or payload changes.
+    scored_for: tuple[int, int] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -338,8 +343,18 @@ class Solution:
         return self.status is Status.OPTIMAL
 
     def replace(self, **changes: Any) -> Solution:
-        """A copy with some fields changed (the solution itself is frozen)."""
+        """A copy with some fields changed (the solution itself is frozen).
+
+        A new ``objective`` or ``solution`` drops the mark of :func:`make_solution` (the
+        copy is scored again by :func:`taopt.solve`).
+        """
+        if ("objective" in changes or "solution" in changes) and "scored_for" not in changes:
+            changes["scored_for"] = None
         return dataclasses.replace(self, **changes)
+
+    def is_scored_for(self, problem: Any) -> bool:
+        """Whether :func:`make_solution` scored this payload on ``problem`` (this process)."""
+        return self.scored_for is not None and self.scored_for == _score_key(problem)
 
     def summary(self) -> str:
         """One line: method, status, objective, bound, gap and runtime."""
@@ -445,9 +460,111 @@ class Solution:
     __hash__ = object.__hash__
 
 
+def _score_key(problem: Any) -> tuple[int, int]:
+    return (os.getpid(), id(problem))
+
+
+def make_solution(
+    problem: Any,
+    payload: Any,
+    *,
+    method: str,
+    status: Status | str | None = None,
+    stopped_by: str | None = None,
+    bound: float | None = None,
+    runtime: float = 0.0,
+    seed: int | None = None,
+    info: Mapping[str, Any] | None = None,
+    objective: float | None = None,
+) -> Solution:
+    """The one way a method builds its :class:`Solution`: the payload scored once.
+
+    Parameters
+    ----------
+    problem : a registered problem
+        The problem the payload solves (its family's scorer, :func:`taopt.evaluate`,
+        gives the objective).
+    payload : Routes, Plan, Order, trajectories or None
+        The domain solution; None for a relaxation, an error or a limit with no incumbent.
+    method : str
+        The method's (or variant's) name.
+    status : Status or str, optional
+        The status, when the method knows it (a heuristic's "feasible").
+    stopped_by : str, optional
+        Instead of ``status``: why an exact search ended; the status is then
+        :func:`taopt.status.certify` of the scored objective and ``bound``, and
+        ``info["stopped_by"]`` records its answer.
+    bound : float, optional
+        A proven lower bound (the gap, :attr:`Solution.gap`, follows from it).
+    runtime : float
+        Wall-clock seconds.
+    seed : int, optional
+    info : mapping, optional
+    objective : float, optional
+        Only without a payload: a relaxation's value (default ``inf``: no incumbent).
+
+    Returns
+    -------
+    Solution
+        Marked as scored for ``problem``, so :func:`taopt.solve` does not score it again
+        (DESIGN invariant 1 holds by construction: objective == evaluate(problem, payload)).
+
+    Raises
+    ------
+    TypeError
+        Both or neither of ``status`` and ``stopped_by``; an ``objective`` with a payload.
+    FeasibilityError
+        The payload is not feasible for ``problem`` (the scorer's check).
+
+    Notes
+    -----
+    One call of the family's scorer (O(payload) for every family here).
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    >>> s = make_solution(p, Routes([[1, 0]]), method="MC", status="feasible")
+    >>> s.objective, s.is_scored_for(p)
+    (4.0, True)
+    >>> make_solution(p, Routes([[1, 0]]), method="x", stopped_by="time_limit", bound=4).status
+    'optimal'
+    """
+    if (status is None) == (stopped_by is None):
+        raise TypeError("make_solution takes exactly one of status and stopped_by")
+    details = dict(info or {})
+    if payload is not None:
+        if objective is not None:
+            raise TypeError("make_solution scores the payload: pass no objective with it")
+        from taopt.scoring import evaluate
+
+        value = float(evaluate(problem, payload))
+        key: tuple[int, int] | None = _score_key(problem)
+    else:
+        value = math.inf if objective is None else float(objective)
+        key = None
+    if stopped_by is not None:
+        from taopt.status import certify
+
+        status, stopped_by = certify(value, bound, stopped_by)
+        details["stopped_by"] = stopped_by
+    return Solution(
+        objective=value,
+        status=status,
+        solution=payload,
+        bound=bound,
+        runtime=runtime,
+        method=method,
+        seed=seed,
+        info=details,
+        scored_for=key,
+    )
+
+
 __all__ = [
     "Status",
     "Solution",
+    "make_solution",
     "Routes",
     "Order",
     "register_payload",

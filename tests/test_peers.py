@@ -7,6 +7,7 @@ show that the two never meet in one process.
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import subprocess
@@ -30,6 +31,7 @@ from taopt.heuristics import peers
 from taopt.heuristics.peers import ortools_solve, pyvrp_solve
 from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
+from taopt.status import outcome
 
 # Deterministic limits (iterations / solutions, not time) for everything but the n50m10 check.
 SOLVERS = {
@@ -440,11 +442,16 @@ def test_cpsat_infeasible_sop_is_a_status():
 
 
 def test_cpsat_status_and_bound_mapping():
-    """OPTIMAL -> optimal, FEASIBLE/UNKNOWN -> time_limit; the bound is scaled back rounded down."""
-    assert peers._cpsat_status({"cpsat_status": "OPTIMAL"}) == "optimal"
-    assert peers._cpsat_status({"cpsat_status": "FEASIBLE"}) == "time_limit"
-    assert peers._cpsat_status({"cpsat_status": "UNKNOWN"}) == "time_limit"
-    assert peers._cpsat_status({"cpsat_status": "INFEASIBLE"}) == "infeasible"
+    """OPTIMAL -> optimal (gap closed), FEASIBLE/UNKNOWN -> time_limit; bound scaled back down."""
+
+    def status(raw, objective=10.0, bound=10.0):
+        return outcome("cpsat", raw, objective=objective, bound=bound, time_limited=True)[0]
+
+    assert status("OPTIMAL") == "optimal"
+    assert status("OPTIMAL", bound=9.0) == "feasible"  # the one rule: a gap is not optimal
+    assert status("FEASIBLE", bound=9.0) == "time_limit"
+    assert status("UNKNOWN", objective=math.inf, bound=None) == "time_limit"
+    assert status("INFEASIBLE") == "infeasible"
     assert peers._scaled_bound({"best_bound": 1234.7}, 10.0, 0.0) == 123.4
     assert peers._scaled_bound({"best_bound": 1234.7}, 10.0, 2.0) == 123.2
     assert peers._scaled_bound({"best_bound": None}, 10.0, 0.0) is None

@@ -135,16 +135,17 @@ def test_objective_is_the_scorers_value(seed):
 
 
 def test_scorer_disagreement_raises_solver_error(monkeypatch):
-    import taopt.delivery.schedule as module
+    import taopt.scoring as scoring
 
     inst = random_small_instance(4, n=3, s=4)
     good = schedule(inst, [0, 1, 2])
     true_value = evaluate_plan(inst, good.plan)
     # a disagreement within the tolerance is accepted, and the scorer's value is returned
-    monkeypatch.setattr(module, "evaluate_plan", lambda i, p: true_value * (1 + 1e-12))
+    # (the DPs score their plan once, with taopt.evaluate, through make_solution)
+    monkeypatch.setattr(scoring, "evaluate", lambda i, p: true_value * (1 + 1e-12))
     assert schedule(inst, [0, 1, 2]).objective == true_value * (1 + 1e-12)
     # beyond it, both DPs refuse to return a number the scorer does not confirm
-    monkeypatch.setattr(module, "evaluate_plan", lambda i, p: evaluate_plan(i, p) * (1 + 1e-6))
+    monkeypatch.setattr(scoring, "evaluate", lambda i, p: evaluate_plan(i, p) * (1 + 1e-6))
     with pytest.raises(SolverError, match="differs from evaluate_plan"):
         schedule(inst, [0, 1, 2])
     with pytest.raises(SolverError, match="differs from evaluate_plan"):

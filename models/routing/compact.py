@@ -13,12 +13,11 @@ Thesis §2.2.1, (2.2)–(2.5).
 from __future__ import annotations
 
 import time
-from typing import Any
 
 import numpy as np
 
 from taopt.errors import SolverError
-from taopt.models.highs import HighsModel, certify
+from taopt.models.highs import HighsModel
 from taopt.models.routing.formulation import (
     RoutingModel,
     assignment_bound,
@@ -27,8 +26,9 @@ from taopt.models.routing.formulation import (
     entry_bound,
     greedy_routes,
 )
-from taopt.result import Routes, Solution
+from taopt.result import Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.status import certify
 
 #: Seconds per arc to build and compile the MTZ / flow model through cvxpy and for
 #: HiGHS's MIP presolve, which does not stop at its time limit (flow at n = 150, m = 5,
@@ -45,28 +45,6 @@ HIGHS_OVERRUN = 0.25
 
 #: Seconds per ``n^2 (n + m)`` of :func:`assignment_bound` (an upper estimate, as above).
 ASSIGNMENT_SECONDS_PER_CUBE = 3e-10
-
-
-def _solution(
-    problem: AssignmentProblem,
-    objective: float,
-    status: str,
-    bound: float | None,
-    started: float,
-    method: str,
-    routes: list[list[int]] | None,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a :class:`taopt.Solution`."""
-    return Solution(
-        objective=objective,
-        status=status,
-        bound=bound,
-        runtime=time.perf_counter() - started,
-        method=method,
-        solution=None if routes is None else Routes(routes),
-        info=info,
-    )
 
 
 def _first_incumbent(
@@ -125,8 +103,15 @@ def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -
         status, stopped_by = certify(best_value, bound, "time_limit")
         info = {"rounds": 0, "cuts": 0, "stopped_by": stopped_by, "solver_status": ""}
         info.update(stage="build", mip_gap=mip_gap)
-        method = f"exact-{sec}"
-        return _solution(problem, best_value, status, bound, started, method, best_routes, info)
+        return make_solution(
+            problem,
+            None if best_routes is None else Routes(best_routes),
+            method=f"exact-{sec}",
+            status=status,
+            bound=bound,
+            runtime=time.perf_counter() - started,
+            info=info,
+        )
     formulation = build(problem, sec)
     model = HighsModel(formulation.problem, verbose=verbose)
     left = remaining()
@@ -154,7 +139,15 @@ def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
     }
-    return _solution(problem, best_value, status, bound, started, f"exact-{sec}", best_routes, info)
+    return make_solution(
+        problem,
+        None if best_routes is None else Routes(best_routes),
+        method=f"exact-{sec}",
+        status=status,
+        bound=bound,
+        runtime=time.perf_counter() - started,
+        info=info,
+    )
 
 
 __all__ = ["COMPACT_SECONDS_PER_ARC", "HIGHS_OVERRUN", "ASSIGNMENT_SECONDS_PER_CUBE"]

@@ -20,12 +20,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import SolverError
-from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
+from taopt.models.highs import HighsModel
 from taopt.models.routing.compact import (
     ASSIGNMENT_SECONDS_PER_CUBE,
     _first_incumbent,
     _highs_limit,
-    _solution,
     _solve_compact,
 )
 from taopt.models.routing.formulation import (
@@ -39,8 +38,9 @@ from taopt.models.routing.formulation import (
     repair,
 )
 from taopt.models.routing.separation import cut_rows, separate_subtours
-from taopt.result import Solution
+from taopt.result import Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.status import OPTIMALITY_TOLERANCE, certify, relative_gap
 
 #: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
 CORE_SIZE = 4
@@ -289,8 +289,14 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         status, stopped_by = certify(best_value, bound, "time_limit")
         info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": stopped_by}
         info.update(solver_status="", stage="build", mip_gap=mip_gap)
-        return _solution(
-            problem, best_value, status, bound, started, "exact-dfj", best_routes, info
+        return make_solution(
+            problem,
+            None if best_routes is None else Routes(best_routes),
+            method="exact-dfj",
+            status=status,
+            bound=bound,
+            runtime=time.perf_counter() - started,
+            info=info,
         )
     dfj = DfjModel(problem, verbose=verbose)
     # 1. root LP with exact separation; at most half of a time limit
@@ -428,7 +434,15 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         "reruns": dfj.model.reruns,
         "fallback": FALLBACK_SEC if stall else None,
     }
-    return _solution(problem, best_value, status, bound, started, "exact-dfj", best_routes, info)
+    return make_solution(
+        problem,
+        None if best_routes is None else Routes(best_routes),
+        method="exact-dfj",
+        status=status,
+        bound=bound,
+        runtime=time.perf_counter() - started,
+        info=info,
+    )
 
 
 __all__ = [

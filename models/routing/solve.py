@@ -20,10 +20,10 @@ from typing import Any
 
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import HighsModel
-from taopt.models.routing.compact import _solution, _solve_compact
+from taopt.models.routing.compact import _solve_compact
 from taopt.models.routing.dfj import DfjModel, _solve_dfj
 from taopt.models.routing.formulation import _check, build
-from taopt.result import RELAXATION, Solution
+from taopt.result import RELAXATION, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 
@@ -178,7 +178,16 @@ def _solve_relaxation(problem, sec, started, verbose) -> Solution:
             raise SolverError(f"LP relaxation ended with status {run.solver_status!r}")
         value, rounds, cuts = float(run.bound), 1, 0
     info = {"rounds": rounds, "cuts": cuts}
-    return _solution(problem, value, RELAXATION, value, started, f"lp-{sec}", None, info)
+    return make_solution(
+        problem,
+        None,
+        method=f"lp-{sec}",
+        status=RELAXATION,
+        objective=value,
+        bound=value,
+        runtime=time.perf_counter() - started,
+        info=info,
+    )
 
 
 __all__ = ["solve_routing"]

@@ -35,7 +35,8 @@ from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.schedule import _scored, _sortie_data, schedule
 from taopt.errors import InstanceError
 from taopt.limits import Deadline, max_memory_gb
-from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, Solution, make_solution
+from taopt.status import outcome
 
 #: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
 MAX_CUSTOMERS = 63
@@ -396,14 +397,17 @@ def _stopped(
     the DP's proven bound and Proposition 5.3's arborescence bound."""
     from taopt.delivery.bounds import arborescence_bound
 
-    bound = max(proven, arborescence_bound(instance))
-    return Solution(
-        objective=incumbent_value,
-        status=TIME_LIMIT,
-        bound=min(bound, incumbent_value),
-        runtime=time.perf_counter() - start,
+    bound = min(max(proven, arborescence_bound(instance)), incumbent_value)
+    status, _ = outcome(
+        "dp", "stopped", objective=incumbent_value, bound=bound, time_limited=why == "time_limit"
+    )
+    return make_solution(
+        instance,
+        incumbent_plan,
         method="exact",
-        solution=incumbent_plan,
+        status=status,
+        bound=bound,
+        runtime=time.perf_counter() - start,
         info={"stopped_by": why, **info},
     )
 
@@ -690,24 +694,28 @@ def ideal_dp(
     if not best_value < inc_value:
         if inc_plan is None:
             raise InstanceError("ideal_dp: no complete plan exists (no customers?)")
-        return Solution(
-            objective=inc_value,
-            status=OPTIMAL if _beam is None else FEASIBLE,
+        if _beam is None:  # every state expanded: the incumbent is proven optimal
+            status, _ = outcome("dp", "complete", objective=inc_value, bound=inc_value)
+        return make_solution(
+            instance,
+            inc_plan,
+            method="exact",
+            status=status if _beam is None else FEASIBLE,
             bound=inc_value if _beam is None else None,
             runtime=time.perf_counter() - start,
-            method="exact",
-            solution=inc_plan,
             info={**info, "dp_objective": inc_value, "incumbent_optimal": True},
         )
     order = _rebuild(history, s, best_state, best_j)
     if _start is not None:
-        return Solution(
+        status, _ = outcome("dp", "complete", objective=best_value, bound=best_value)
+        return make_solution(  # a partial start: the value only, no plan to score
+            instance,
+            None,
+            method="exact",
+            status=status,
             objective=best_value,
-            status=OPTIMAL,
             bound=best_value,
             runtime=time.perf_counter() - start,
-            method="exact",
-            solution=None,
             info={**info, "dp_objective": best_value, "order": order},
         )
     plan = schedule(instance, order).plan
@@ -715,21 +723,22 @@ def ideal_dp(
     if objective >= inc_value:  # equal up to rounding: keep the incumbent
         plan, objective = inc_plan, inc_value
     if _beam is not None:  # a restricted pass proves nothing
-        return Solution(
-            objective=objective,
+        return make_solution(
+            instance,
+            plan,
+            method="exact-beam",
             status=FEASIBLE,
             runtime=time.perf_counter() - start,
-            method="exact-beam",
-            solution=plan,
             info=info,
         )
-    return Solution(
-        objective=objective,
-        status=OPTIMAL,
+    status, _ = outcome("dp", "complete", objective=objective, bound=objective)
+    return make_solution(
+        instance,
+        plan,
+        method="exact",
+        status=status,
         bound=objective,
         runtime=time.perf_counter() - start,
-        method="exact",
-        solution=plan,
         info={**info, "dp_objective": best_value},
     )
 

@@ -18,7 +18,6 @@ DP's own value agrees (relative :data:`MATCH_TOLERANCE`).
 
 from __future__ import annotations
 
-import math
 import time
 import weakref
 from collections.abc import Sequence
@@ -30,7 +29,7 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.limits import Deadline
-from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution
+from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution, make_solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9
@@ -150,12 +149,17 @@ def _scored(instance: DeliveryInstance, plan: Plan, dp_value: float, who: str) -
         :func:`taopt.delivery.evaluate.evaluate_plan` disagree on the timing semantics).
     """
     value = evaluate_plan(instance, plan)
+    _matches(value, dp_value, who, plan)
+    return value
+
+
+def _matches(value: float, dp_value: float, who: str, plan: Plan) -> None:
+    """Raise :class:`SolverError` when the scorer's ``value`` and the DP's differ."""
     if abs(value - dp_value) > MATCH_TOLERANCE * max(abs(value), abs(dp_value)):
         raise SolverError(
             f"{who}: the DP's makespan {dp_value!r} differs from evaluate_plan's {value!r} "
             f"by more than {MATCH_TOLERANCE:g} relative (order {list(plan.order)})"
         )
-    return value
 
 
 def _check_order(instance: DeliveryInstance, order: np.ndarray, complete: bool) -> None:
@@ -284,15 +288,25 @@ def schedule(instance: DeliveryInstance, order: Sequence[int], complete: bool = 
             landing[p - 1] = stops_of[p - 1][k_pos]
             launch[p - 1] = stops_of[p - 1][i_pos]
     plan = Plan(tuple(order_arr.tolist()), tuple(launch.tolist()), tuple(landing.tolist()))
-    objective = _scored(instance, plan, dp_value, "schedule") if complete else dp_value
-    return Solution(
-        objective=objective,
+    if not complete:  # a partial plan: the DP's value, not a plan the scorer accepts
+        return Solution(
+            objective=dp_value,
+            status=FEASIBLE,
+            runtime=time.perf_counter() - start,
+            method="schedule",
+            solution=plan,
+            info={"dp_objective": dp_value},
+        )
+    solution = make_solution(
+        instance,
+        plan,
+        method="schedule",
         status=FEASIBLE,
         runtime=time.perf_counter() - start,
-        method="schedule",
-        solution=plan,
         info={"dp_objective": dp_value},
     )
+    _matches(solution.objective, dp_value, "schedule", plan)
+    return solution
 
 
 def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: dict) -> Solution:
@@ -301,16 +315,15 @@ def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: 
     from taopt.delivery.bounds import arborescence_bound
 
     plan = getattr(incumbent, "plan", incumbent)
-    objective = math.inf if plan is None else evaluate_plan(instance, plan)
-    return Solution(
-        objective=objective,
-        status=TIME_LIMIT,
-        bound=min(arborescence_bound(instance), objective),
-        runtime=time.perf_counter() - start,
+    solution = make_solution(
+        instance,
+        plan,
         method="subset-dp",
-        solution=plan,
+        status=TIME_LIMIT,
+        runtime=time.perf_counter() - start,
         info={"stopped_by": "time_limit", **info},
     )
+    return solution.replace(bound=min(arborescence_bound(instance), solution.objective))
 
 
 def optimal_plan(
@@ -431,16 +444,16 @@ def optimal_plan(
         prev = int(back_prev[mask, prev])
         mask &= ~(1 << j)
     plan = Plan(tuple(order[::-1]), tuple(launch[::-1]), tuple(landing[::-1]))
-    objective = _scored(instance, plan, makespan, "optimal_plan")
-    return Solution(
-        objective=objective,
-        status=OPTIMAL,
-        bound=objective,
-        runtime=time.perf_counter() - start,
+    solution = make_solution(
+        instance,
+        plan,
         method="subset-dp",
-        solution=plan,
+        status=OPTIMAL,  # every subset expanded: the DP's optimum, bound = itself
+        runtime=time.perf_counter() - start,
         info={"dp_objective": makespan},
     )
+    _matches(solution.objective, makespan, "optimal_plan", plan)
+    return solution.replace(bound=solution.objective)
 
 
 __all__ = ["schedule", "optimal_plan"]
