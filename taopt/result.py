@@ -92,7 +92,7 @@ def register_payload(name: str) -> Callable[[type], type]:
     return wrap
 
 
-def payload_type(name: str) -> type:
+def payload_type(name: str) -> type[Any]:
     """The payload class registered under ``name`` (families register theirs on import)."""
     ensure_families()
     try:
