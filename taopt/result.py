@@ -548,9 +548,10 @@ def make_solution(
 
         status, stopped_by = certify(value, bound, stopped_by)
         details["stopped_by"] = stopped_by
+    assert status is not None  # exactly one of status and stopped_by (checked above)
     return Solution(
         objective=value,
-        status=status,
+        status=Status(status),
         solution=payload,
         bound=bound,
         runtime=runtime,
