@@ -32,7 +32,7 @@ import numpy as np
 
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.delivery.schedule import _scored, _sortie_data, schedule
+from taopt.delivery.schedule import _matches, _sortie_data, schedule
 from taopt.errors import InstanceError
 from taopt.limits import Deadline, max_memory_gb
 from taopt.result import FEASIBLE, Solution, make_solution
@@ -718,23 +718,17 @@ def ideal_dp(
             runtime=time.perf_counter() - start,
             info={**info, "dp_objective": best_value, "order": order},
         )
-    plan = schedule(instance, order).plan
-    objective = _scored(instance, plan, best_value, "ideal_dp")
-    if objective >= inc_value:  # equal up to rounding: keep the incumbent
-        plan, objective = inc_plan, inc_value
+    scheduled = schedule(instance, order)  # the plan, scored once (make_solution)
+    _matches(scheduled.objective, best_value, "ideal_dp", scheduled.plan)
+    if scheduled.objective >= inc_value:  # equal up to rounding: keep the incumbent
+        scheduled = make_solution(instance, inc_plan, method="exact", status=FEASIBLE)
     if _beam is not None:  # a restricted pass proves nothing
-        return make_solution(
-            instance,
-            plan,
-            method="exact-beam",
-            status=FEASIBLE,
-            runtime=time.perf_counter() - start,
-            info=info,
+        return scheduled.replace(
+            method="exact-beam", status=FEASIBLE, runtime=time.perf_counter() - start, info=info
         )
+    objective = scheduled.objective
     status, _ = outcome("dp", "complete", objective=objective, bound=objective)
-    return make_solution(
-        instance,
-        plan,
+    return scheduled.replace(
         method="exact",
         status=status,
         bound=objective,

@@ -29,7 +29,8 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.limits import Deadline
-from taopt.result import FEASIBLE, OPTIMAL, TIME_LIMIT, Solution, make_solution
+from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
+from taopt.status import outcome
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9
@@ -323,7 +324,11 @@ def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: 
         runtime=time.perf_counter() - start,
         info={"stopped_by": "time_limit", **info},
     )
-    return solution.replace(bound=min(arborescence_bound(instance), solution.objective))
+    bound = min(arborescence_bound(instance), solution.objective)
+    status, _ = outcome(
+        "dp", "stopped", objective=solution.objective, bound=bound, time_limited=True
+    )
+    return solution.replace(status=status, bound=bound)
 
 
 def optimal_plan(
@@ -444,11 +449,13 @@ def optimal_plan(
         prev = int(back_prev[mask, prev])
         mask &= ~(1 << j)
     plan = Plan(tuple(order[::-1]), tuple(launch[::-1]), tuple(landing[::-1]))
+    # every subset expanded: the DP's optimum, its own bound
+    status, _ = outcome("dp", "complete", objective=makespan, bound=makespan)
     solution = make_solution(
         instance,
         plan,
         method="subset-dp",
-        status=OPTIMAL,  # every subset expanded: the DP's optimum, bound = itself
+        status=status,
         runtime=time.perf_counter() - start,
         info={"dp_objective": makespan},
     )
