@@ -413,6 +413,10 @@ WORKER_ENV = {
 #: ones are certified in milliseconds: not worth starting a process for).
 PARALLEL_MIN_TARGETS = 20
 
+#: A time limit below this many seconds solves the classes in this process (default
+#: ``workers``): starting worker processes takes 1-3 s, more on a loaded machine.
+PARALLEL_MIN_SECONDS = 10.0
+
 _POOLS: dict[int, ProcessPoolExecutor] = {}
 
 
@@ -671,7 +675,10 @@ def solve_classes(
     starts = dict(incumbents or {})
     solvable = sorted((c for c in classes if c.problem), key=lambda c: len(c.targets))
     if workers is None:
-        workers = _auto_workers(solvable)
+        # a limit shorter than the workers' start-up (seconds, more under load) is kept only
+        # in this process: the wall-clock limit counts the start-up too
+        short = time_limit is not None and time_limit < PARALLEL_MIN_SECONDS
+        workers = 1 if short else _auto_workers(solvable)
     workers = min(workers, max(len(solvable), 1))
 
     def left() -> float:
