@@ -36,6 +36,20 @@ def generated_pages() -> dict[str, str]:
             "|---|---|---|---|---|---|---|",
             *rows,
             "",
+            *[
+                line
+                for family in sorted(families(), key=lambda f: f.kind)
+                for line in (
+                    f"## `{family.kind}`",
+                    "",
+                    f"{family.title}. Example `taopt/data/examples/{family.kind}.json`:",
+                    "",
+                    f"```{{literalinclude}} ../taopt/data/examples/{family.kind}.json",
+                    ":language: json",
+                    "```",
+                    "",
+                )
+            ],
         ]
     )
     parts = [
