@@ -1,0 +1,652 @@
+"""Chapter 2's heuristics made limit-aware for :class:`~taopt.budgeted.BudgetedProblem` (§6.2).
+
+The thesis's future work (§6.2) asks whether its task-assignment algorithms keep their
+performance when "each vehicle can visit a maximum number of target locations" (capacity
+``Q_k``) or "has a maximum travel time" (``T_k``). Three of chapter 2's methods are made
+aware of the limits here, each the smallest change that keeps the printed algorithm:
+
+* "MC" — marginal-cost clustering (2.15): the global cheapest insertion, where a vehicle
+  whose route would exceed ``Q_k`` or ``T_k`` by taking a target is refused (its marginal
+  cost is ``inf``). Without limits it is chapter 2's MC, step for step.
+* "EVM" — extended Voronoi clustering (2.12)–(2.14) + smallest marginal cost sequencing
+  (2.18)–(2.19): the Prim-like growth refuses a (vehicle, target) pair when the vehicle is
+  full or when its cluster with the target, sequenced by (2.18), would take longer than
+  ``T_k``. Without limits it is chapter 2's EVM.
+* "GA" — the memetic GA of §2.5 (:mod:`taopt.heuristics.ga_routing`: its encoding,
+  crossover, mutations and local search), with a *penalty* for violated limits.
+
+A heuristic cannot prove that no feasible answer exists. When MC or EVM is left with
+targets no vehicle can take, or the GA never met a feasible chromosome, the answer is
+status ``"error"`` (taopt's only status for "no solution"; none is invented here) with
+``solution=None``, ``objective=inf``, ``info["unassigned"]`` (how many targets were left,
+for MC and EVM) and ``info["error"]`` saying that this is not a proof of infeasibility.
+Never a fake feasible answer: every returned payload is scored by
+:func:`~taopt.budgeted.evaluate_budgeted`, which re-checks the limits.
+
+Limits are checked with ``time <= T_k (1 + 1e-9)``, stricter than the scorer's tolerance
+(:data:`taopt.budgeted.problem.TIME_TOLERANCE`), so an accepted route always passes it.
+
+References
+----------
+Thesis §2.4 (2.11)–(2.19), §2.5 (the GA), §6.2 (future work).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted
+from taopt.errors import InstanceError
+from taopt.heuristics.clustering import insertion_costs, marginal_cost_sequence
+from taopt.heuristics.ga_local_search import local_search
+from taopt.heuristics.ga_routing import (
+    OPERATOR_SETS,
+    _mutate,
+    decode,
+    encode,
+    nodes_to_genes,
+    order_crossover,
+    path_matrix,
+    path_nodes,
+)
+from taopt.limits import Deadline
+from taopt.registry import register_method
+from taopt.result import ERROR, FEASIBLE, Routes, Solution
+
+#: Relative slack of the heuristics' own travel-time check (stricter than the scorer's).
+SLACK = 1e-9
+
+__all__ = [
+    "limited_marginal_cost_routes",
+    "limited_extended_voronoi_routes",
+    "repair",
+    "route_times",
+    "penalised_cost",
+    "mc",
+    "evm",
+    "genetic_algorithm",
+]
+
+
+def _fits(time_needed: Any, limit: float) -> Any:
+    """Whether a travel time is within ``limit`` (``inf``: no limit), with :data:`SLACK`."""
+    return time_needed <= limit + SLACK * max(1.0, limit) if math.isfinite(limit) else True
+
+
+def _answer(
+    problem: BudgetedProblem,
+    routes: list[list[int]] | None,
+    method: str,
+    seed: Any,
+    start: float,
+    info: dict[str, Any],
+) -> Solution:
+    """A scored Solution, or the "no solution" answer when ``routes`` is None."""
+    if routes is None:
+        return Solution(
+            objective=math.inf,
+            status=ERROR,
+            solution=None,
+            runtime=time.perf_counter() - start,
+            method=method,
+            seed=seed,
+            info=info,
+        )
+    return Solution(
+        objective=evaluate_budgeted(problem, routes),  # the one scorer re-checks every limit
+        status=FEASIBLE,
+        runtime=time.perf_counter() - start,
+        method=method,
+        seed=seed,
+        solution=Routes(routes),
+        info=info,
+    )
+
+
+def _no_solution(method: str, left: int) -> dict[str, Any]:
+    return {
+        "unassigned": int(left),
+        "error": (
+            f"{method} left {left} target(s) that no vehicle can take within its capacity and "
+            "maximum travel time (a heuristic's failure, not a proof that the instance is "
+            "infeasible)"
+        ),
+    }
+
+
+# -- MC (2.15), limit-aware ----------------------------------------------------------------
+
+
+def limited_marginal_cost_routes(
+    problem: BudgetedProblem,
+    deadline: Deadline | None = None,
+    initial: list[list[int]] | None = None,
+) -> tuple[list[list[int]], np.ndarray]:
+    """Marginal-cost clustering (2.15) where a vehicle at its limit is refused.
+
+    Each step inserts the (target k, vehicle j, gap q) with the smallest marginal cost
+    ``t(o_j ⊕_q k) − t(o_j)`` among the insertions that keep ``|o_j| + 1 <= Q_j`` and
+    ``t(o_j) + marginal cost <= T_j``; an insertion that breaks a limit costs ``inf``.
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    deadline : Deadline, optional
+        When it expires, the remaining targets are reported as left over (no cheap
+        completion: a completion that ignored the limits would not be an answer).
+
+    Returns
+    -------
+    routes : list of m lists
+        The (partial, if targets were left) routes; every one within its limits.
+    left : (r,) int array
+        Targets no vehicle could take (empty when the routes are complete).
+
+    Notes
+    -----
+    As chapter 2's MC (:func:`taopt.heuristics.clustering.marginal_cost_routes`): the
+    cheapest feasible insertion of every target into every route is kept in ``best`` (m, n)
+    and only the row of the vehicle that changed is recomputed, O(|o_j| n) per step,
+    O(n^2 max|o_j|) in all. The gap is the cheapest *feasible* one, which may not be the
+    cheapest one. A vehicle's insertions only get dearer as its route grows (in a metric),
+    so a refusal is never revisited wrongly: the row is recomputed after every change.
+    Ties: lowest target, then lowest vehicle, then earliest gap (as chapter 2's MC).
+    """
+    n, m = problem.n, problem.m
+    cost = problem.cost
+    all_targets = np.arange(n)
+    capacity, max_time = problem.capacity, problem.max_time
+    initial = initial if initial is not None else [[] for _ in range(m)]
+    routes = [np.array([n + j, *initial[j]], dtype=int) for j in range(m)]
+    times = np.array([problem.route_cost(j, initial[j]) for j in range(m)])
+    best = np.full((m, n), np.inf)
+    where = np.zeros((m, n), dtype=int)
+
+    def refresh(j: int) -> None:
+        if routes[j].size - 1 + 1 > capacity[j]:
+            best[j] = np.inf
+            return
+        costs = insertion_costs(cost, routes[j], all_targets)  # (L, n)
+        if math.isfinite(max_time[j]):
+            limit = max_time[j] + SLACK * max(1.0, max_time[j])
+            costs = np.where(times[j] + costs <= limit, costs, np.inf)
+        where[j] = np.argmin(costs, axis=0)  # earliest feasible gap on ties
+        best[j] = costs[where[j], all_targets]
+
+    for j in range(m):
+        refresh(j)
+    done = np.zeros(n, dtype=bool)
+    done[[k for route in initial for k in route]] = True
+    for _ in range(int((~done).sum())):
+        if deadline is not None and deadline.expired():
+            break
+        masked = np.where(done[None, :], np.inf, best)
+        flat = int(np.argmin(masked.T))  # target-major: lowest k, then lowest j
+        k, j = divmod(flat, m)
+        if not np.isfinite(masked[j, k]):
+            break  # no vehicle can take any remaining target
+        times[j] += best[j, k]
+        routes[j] = np.insert(routes[j], where[j, k] + 1, k)
+        done[k] = True
+        refresh(j)
+    return [[int(k) for k in route[1:]] for route in routes], np.flatnonzero(~done)
+
+
+def repair(problem: BudgetedProblem, routes: list[list[int]]) -> list[list[int]] | None:
+    """Routes within every limit made from ``routes``, or None when the repair fails.
+
+    Each route is cut to its longest prefix within ``Q_k`` and ``T_k`` (travel times are
+    non-negative, so every prefix of a feasible route is feasible), and the targets cut off
+    are put back by the limit-aware cheapest insertion (:func:`limited_marginal_cost_routes`
+    started from the cut routes). Routes already within their limits come back unchanged.
+    O(n^2 max|o_j|) at worst.
+    """
+    cut = []
+    for j, route in enumerate(routes):
+        keep = min(len(route), int(min(problem.capacity[j], len(route))))
+        if math.isfinite(problem.max_time[j]) and keep:
+            points = [problem.n + j, *route[:keep]]
+            elapsed = np.cumsum(problem.cost[points[:-1], points[1:]])
+            keep = int(np.sum(_fits(elapsed, problem.max_time[j])))
+            # the prefix times grow, so the fitting ones are a prefix
+        cut.append([int(k) for k in route[:keep]])
+    if all(len(a) == len(b) for a, b in zip(cut, routes, strict=True)):
+        return [list(route) for route in routes]
+    repaired, left = limited_marginal_cost_routes(problem, initial=cut)
+    return None if left.size else repaired
+
+
+# -- EVM (2.12)–(2.14) + (2.18)–(2.19), limit-aware ------------------------------------------
+
+
+def limited_extended_voronoi_routes(
+    problem: BudgetedProblem,
+) -> tuple[list[list[int]], np.ndarray, int]:
+    """Extended Voronoi clustering whose growth refuses a vehicle at its limit, then (2.18).
+
+    ``T_j`` starts as ``{p_j}``; repeatedly the pair (vehicle j*, unclustered target k*)
+    minimising ``t(i, k)`` over ``i in T_j`` (2.12)–(2.14) is proposed. It is accepted when
+    ``|T_j*| + 1 <= Q_j*`` and the cluster ``T_j* ∪ {k*}`` sequenced by the smallest marginal
+    cost principle (2.18)–(2.19) takes at most ``T_j*``; otherwise the pair is refused for
+    good and the next cheapest pair is proposed. Each vehicle's route is the (2.18) sequence
+    of its final cluster, the one checked at its last acceptance, so it is within limits.
+
+    Returns
+    -------
+    routes : list of m lists
+        One route per vehicle (partial when targets were left).
+    left : (r,) int array
+        Targets every vehicle refused.
+    refusals : int
+        Pairs refused.
+
+    Notes
+    -----
+    Without limits no pair is refused and the clusters are chapter 2's
+    (:func:`taopt.heuristics.clustering.extended_voronoi_clusters`, equal on instances
+    without ties). A refusal is final: a cluster only grows, so a full vehicle stays full,
+    and a longer cluster's sequence is (in a metric, for the exact order) no shorter.
+    Each proposal re-sequences one cluster, O(|T_j|^3) numpy work; at most ``n m``
+    proposals.
+    """
+    n, m = problem.n, problem.m
+    cost = problem.cost
+    capacity, max_time = problem.capacity, problem.max_time
+    reach = cost[n:, :n].copy()  # reach[j, k] = min over i in T_j of t(i, k)
+    refused = np.zeros((m, n), dtype=bool)
+    done = np.zeros(n, dtype=bool)
+    clusters: list[list[int]] = [[] for _ in range(m)]
+    routes: list[list[int]] = [[] for _ in range(m)]
+    refusals = 0
+    while not done.all():
+        masked = np.where(done[None, :] | refused, np.inf, reach)
+        flat = int(np.argmin(masked.T))  # lowest target, then lowest vehicle
+        k, j = divmod(flat, m)
+        if not np.isfinite(masked[j, k]):
+            break
+        accepted = len(clusters[j]) + 1 <= capacity[j]
+        if accepted:
+            route = marginal_cost_sequence(problem.routing, j, [*clusters[j], k])
+            accepted = bool(_fits(problem.route_cost(j, route), max_time[j]))
+        if not accepted:
+            refused[j, k] = True
+            refusals += 1
+            continue
+        clusters[j].append(k)
+        routes[j] = route
+        done[k] = True
+        reach[j] = np.minimum(reach[j], cost[k, :n])
+    return routes, np.flatnonzero(~done), refusals
+
+
+# -- the registered methods --------------------------------------------------------------------
+
+
+@register_method(BudgetedProblem, "MC", category="heuristic")
+def mc(
+    problem: BudgetedProblem,
+    seed: int | np.random.Generator | None = 0,
+    time_limit: float | None = None,
+) -> Solution:
+    """MC made limit-aware: cheapest insertion (2.15) where a vehicle at its limit is refused.
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    seed : int
+        Recorded only (deterministic).
+    time_limit : float, optional
+        Wall-clock seconds; when it expires the insertions stop and the targets not yet
+        placed are reported unassigned (``info["stopped_by"] = "time_limit"``).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" with the routes, or status "error", ``objective = inf`` and
+        ``info["unassigned"]`` when some target could not be placed (not a proof of
+        infeasibility).
+
+    Example
+    -------
+    Targets on a line at 1, 2, 4; vehicles at 0 and 5. Without limits MC gives vehicle 0
+    targets 0 and 1 (cost 3); with ``Q = 1`` vehicle 0 takes only target 0 and vehicle 1
+    takes 2 then 1 (cost 1 + 1 + 2 = 4).
+
+    >>> import numpy as np
+    >>> from taopt.budgeted import BudgetedProblem
+    >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    >>> cost = abs(x[:, None] - x[None, :])
+    >>> mc(BudgetedProblem(cost, 3)).routes
+    [[0, 1], [2]]
+    >>> s = mc(BudgetedProblem(cost, 3, capacity=[1, 2]))
+    >>> s.routes, s.objective
+    ([[0], [2, 1]], 4.0)
+
+    Notes
+    -----
+    O(n^2 max|o_j|) (:func:`limited_marginal_cost_routes`).
+
+    References
+    ----------
+    Thesis (2.15), Theorem 2.7; §6.2.
+    """
+    start = time.perf_counter()
+    deadline = Deadline(time_limit)
+    routes, left = limited_marginal_cost_routes(problem, deadline if deadline.limited else None)
+    info: dict[str, Any] = {}
+    if deadline.limited and deadline.expired() and left.size:
+        info["stopped_by"] = "time_limit"
+    if left.size:
+        return _answer(problem, None, "MC", seed, start, {**info, **_no_solution("MC", left.size)})
+    return _answer(problem, routes, "MC", seed, start, info)
+
+
+@register_method(BudgetedProblem, "EVM", category="heuristic")
+def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) -> Solution:
+    """EVM made limit-aware: extended Voronoi growth that refuses a vehicle at its limit.
+
+    See :func:`limited_extended_voronoi_routes`. Deterministic (``seed`` is recorded only).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" with the routes (``info["refusals"]``: pairs refused), or status
+        "error", ``objective = inf`` and ``info["unassigned"]`` when some target was refused
+        by every vehicle (not a proof of infeasibility).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt.budgeted import BudgetedProblem
+    >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    >>> cost = abs(x[:, None] - x[None, :])
+    >>> evm(BudgetedProblem(cost, 3, max_time=[1.5, None])).routes
+    [[0], [2, 1]]
+
+    References
+    ----------
+    Thesis (2.12)–(2.14), (2.18)–(2.19), Theorem 2.6; §6.2.
+    """
+    start = time.perf_counter()
+    routes, left, refusals = limited_extended_voronoi_routes(problem)
+    info: dict[str, Any] = {"refusals": refusals}
+    if left.size:
+        return _answer(
+            problem, None, "EVM", seed, start, {**info, **_no_solution("EVM", left.size)}
+        )
+    return _answer(problem, routes, "EVM", seed, start, info)
+
+
+# -- the GA with a penalty -----------------------------------------------------------------------
+
+
+def route_times(problem: BudgetedProblem, genes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-vehicle travel times and target counts of chromosomes with vehicle markers.
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    genes : (P, n + m − 1) int array
+        Chromosomes as :mod:`taopt.heuristics.ga_routing` reads them with
+        ``markers="vehicle"`` (marker gene ``n + k − 1`` starts vehicle k's route).
+
+    Returns
+    -------
+    times : (P, m) array
+        Travel time of each vehicle's open route.
+    counts : (P, m) int array
+        Targets on each vehicle's route.
+
+    Notes
+    -----
+    Vectorised: O(P (n + m)) numpy work (``np.bincount`` over (row, vehicle) cells).
+    """
+    n, m = problem.n, problem.m
+    genes = np.atleast_2d(genes)
+    rows, length = genes.shape
+    nodes = path_nodes(problem.routing, genes)
+    targets = nodes[:, 1:-1]
+    is_target = targets < n
+    step = np.where(is_target, problem.cost[nodes[:, :-2], np.where(is_target, targets, 0)], 0.0)
+    # vehicle of each gene: the vehicle of the last marker at or before it (0 before any)
+    marker_vehicle = np.where(is_target, 0, genes - n + 1)
+    last_marker = np.maximum.accumulate(np.where(is_target, -1, np.arange(length)), axis=1)
+    vehicle = np.where(
+        last_marker >= 0,
+        np.take_along_axis(marker_vehicle, np.maximum(last_marker, 0), axis=1),
+        0,
+    )
+    cell = (np.arange(rows)[:, None] * m + vehicle).ravel()
+    times = np.bincount(cell, weights=step.ravel(), minlength=rows * m).reshape(rows, m)
+    counts = np.bincount(cell, weights=is_target.ravel(), minlength=rows * m).reshape(rows, m)
+    return times, counts.astype(int)
+
+
+def penalised_cost(
+    problem: BudgetedProblem, genes: np.ndarray, weight: float, unit: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Total travel time (2.2) + ``weight`` × total violation of each chromosome.
+
+    The violation is ``Σ_k max(0, t_k − T_k) + unit · Σ_k max(0, |o_k| − Q_k)``: excess time
+    in time units, and each target beyond a capacity priced at ``unit`` time units.
+
+    Returns
+    -------
+    penalised : (P,) array
+    cost : (P,) array
+        The plain total travel time.
+    violation : (P,) array
+        0 exactly for the chromosomes that keep every limit (with :data:`SLACK`).
+    """
+    times, counts = route_times(problem, genes)
+    limit = np.where(
+        np.isfinite(problem.max_time),
+        problem.max_time + SLACK * np.maximum(1.0, problem.max_time),
+        np.inf,
+    )
+    over_time = np.where(times > limit, times - problem.max_time, 0.0)
+    over_count = np.maximum(counts - problem.capacity, 0.0)
+    violation = over_time.sum(axis=1) + unit * over_count.sum(axis=1)
+    total = times.sum(axis=1)
+    return total + weight * violation, total, violation
+
+
+@register_method(BudgetedProblem, "GA", category="heuristic")
+def genetic_algorithm(
+    problem: BudgetedProblem,
+    seed: int | np.random.Generator | None = 0,
+    population: int = 120,
+    generations: int = 350,
+    crossover_rate: float = 0.9,
+    mutation_rate: float = 0.1,
+    penalty: float = 10.0,
+    time_limit: float | None = None,
+) -> Solution:
+    """The memetic GA of §2.5 with a penalty for violated limits.
+
+    Chapter 2's GA (:func:`taopt.heuristics.ga_routing.genetic_algorithm`, operator set
+    "memetic": vehicle markers, binary tournament, OX1, inversion / swap / slide mutation,
+    elitism, local search on the 2 best distinct children) run on the *penalised* fitness
+    :func:`penalised_cost`: ``f + penalty × violation``.
+
+    A penalty for the population, a repair in the memetic step. Why: the GA's crossover,
+    mutations and local search work on the whole chromosome and price moves by their exact
+    O(1) change of (2.2); repairing every child would re-insert targets after every
+    crossover with a rule of its own and shrink the search to the feasible region, while a
+    penalty keeps every operator unchanged and lets infeasible chromosomes carry good genes
+    across a tight limit. But a penalty alone rarely *reaches* the feasible region when the
+    limits bite (with ``Q_k = n / m`` exactly, random chromosomes almost never have the
+    right route lengths: none in 100 generations on a drift n50m10 scenario). So the
+    children that get the local search (which minimises (2.2) and ignores the limits) are
+    then repaired (:func:`repair`: cut each route to its longest prefix within limits,
+    re-insert the rest by the limit-aware cheapest insertion), and the result replaces the
+    child only when the *penalised* fitness improves. The answer is the best *feasible*
+    chromosome ever seen (not the best penalised one).
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    seed : int or numpy.random.Generator
+        Same seed, same result.
+    population, generations, crossover_rate, mutation_rate
+        As chapter 2's GA (thesis: 120, 350, 0.9, 0.1).
+    penalty : float
+        λ, time units of penalty per time unit of excess; a target over a capacity counts
+        as the median travel time between targets (``info["unit"]``) of excess.
+    time_limit : float, optional
+        Wall-clock seconds; the run stops after the generation during which it expires
+        (``info["stopped_by"] = "time_limit"``).
+
+    Returns
+    -------
+    Solution
+        The best feasible chromosome, decoded; status "error" and ``objective = inf`` when
+        no chromosome ever kept every limit (not a proof of infeasibility). ``info``:
+        ``history`` (best feasible cost per generation, ``inf`` until one is found),
+        ``first_feasible`` (generation of the first feasible chromosome), ``evaluations``,
+        ``moves``, ``repairs`` (repairs tried), ``repaired`` (repairs that succeeded),
+        ``penalty``, ``unit``.
+
+    Raises
+    ------
+    InstanceError
+        population < 2, generations < 0, a rate outside [0, 1], or a negative penalty.
+
+    Notes
+    -----
+    O(generations × population × (n + m)) numpy work plus the local search
+    (O((n + m)^2) per move), as chapter 2's GA.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt.budgeted import BudgetedProblem
+    >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    >>> p = BudgetedProblem(abs(x[:, None] - x[None, :]), 3, capacity=[1, 2])
+    >>> genetic_algorithm(p, seed=0, population=10, generations=20).objective
+    4.0
+
+    References
+    ----------
+    Thesis §2.5 (the GA), §6.2.
+    """
+    if population < 2 or generations < 0:
+        raise InstanceError(
+            f"need population >= 2 and generations >= 0, got {population}, {generations}"
+        )
+    for label, rate in (("crossover_rate", crossover_rate), ("mutation_rate", mutation_rate)):
+        if not 0.0 <= rate <= 1.0:
+            raise InstanceError(f"{label} must be in [0, 1], got {rate}")
+    if not (math.isfinite(penalty) and penalty >= 0):
+        raise InstanceError(f"penalty must be a number >= 0, got {penalty}")
+    start = time.perf_counter()
+    deadline = Deadline(time_limit)
+    ops = OPERATOR_SETS["memetic"]
+    rng = np.random.default_rng(seed)
+    n, m = problem.n, problem.m
+    length = n + m - 1
+    between = problem.cost[:n, :n][~np.eye(n, dtype=bool)]
+    unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
+    matrix = path_matrix(problem.routing)
+    counters = {"moves": 0, "move_evaluations": 0, "repairs": 0, "repaired": 0}
+
+    genes = rng.permuted(np.tile(np.arange(length), (population, 1)), axis=1)
+    fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
+    best_feasible: np.ndarray | None = None
+    best_cost = math.inf
+    first_feasible = None
+
+    def keep_feasible(generation: int) -> None:
+        nonlocal best_feasible, best_cost, first_feasible
+        ok = violation == 0
+        if ok.any():
+            row = int(np.flatnonzero(ok)[np.argmin(plain[ok])])
+            if plain[row] < best_cost:
+                best_feasible, best_cost = genes[row].copy(), float(plain[row])
+            if first_feasible is None:
+                first_feasible = generation
+
+    keep_feasible(0)
+    history = [best_cost]
+    elite = genes[int(np.argmin(fitness))].copy()
+    half = (population + 1) // 2
+    done = 0
+    for generation in range(1, generations + 1):
+        if deadline.limited and deadline.expired():
+            break
+        done += 1
+        contenders = rng.integers(0, population, size=(2 * half, ops.tournament))
+        winners = contenders[np.arange(2 * half), np.argmin(fitness[contenders], axis=1)]
+        mothers, fathers = genes[winners[:half]], genes[winners[half:]]
+        cross = rng.random(half) < crossover_rate
+        children = np.concatenate([mothers, fathers])
+        if cross.any():
+            children[:half][cross] = order_crossover(mothers[cross], fathers[cross], rng)
+            children[half:][cross] = order_crossover(fathers[cross], mothers[cross], rng)
+        children = _mutate(children[:population], ops, mutation_rate, rng)
+        children[0] = elite  # elitism on the penalised fitness
+        genes = children
+        fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
+        _polish(problem, matrix, genes, fitness, plain, violation, penalty, unit, ops, counters)
+        elite = genes[int(np.argmin(fitness))].copy()
+        keep_feasible(generation)
+        history.append(best_cost)
+    info: dict[str, Any] = {
+        "history": history,
+        "first_feasible": first_feasible,
+        "population": population,
+        "generations": generations,
+        "evaluations": population * (done + 1),
+        "penalty": penalty,
+        "unit": unit,
+        **counters,
+    }
+    if done < generations:
+        info.update(stopped_by="time_limit", generations_done=done)
+    if best_feasible is None:
+        info["error"] = (
+            "GA met no chromosome that keeps every capacity and maximum travel time (a "
+            "heuristic's failure, not a proof that the instance is infeasible)"
+        )
+        return _answer(problem, None, "GA", seed, start, info)
+    routes = decode(problem.routing, best_feasible, "vehicle")
+    return _answer(problem, routes, "GA", seed, start, info)
+
+
+def _polish(
+    problem: BudgetedProblem,
+    matrix: np.ndarray,
+    genes: np.ndarray,
+    fitness: np.ndarray,
+    plain: np.ndarray,
+    violation: np.ndarray,
+    penalty: float,
+    unit: float,
+    ops: Any,
+    counters: dict[str, int],
+) -> None:
+    """Chapter 2's local search, then :func:`repair`, on the best distinct children; the
+    result replaces the child only where the penalised fitness improves (in place)."""
+    values, first = np.unique(fitness, return_index=True)
+    for row in [int(r) for r in first[: ops.polish]]:
+        nodes, moves, evaluations = local_search(
+            matrix, path_nodes(problem.routing, genes[row])[0], ops.max_moves, ops.neighbourhood
+        )
+        counters["moves"] += moves
+        counters["move_evaluations"] += evaluations
+        candidate = nodes_to_genes(problem.routing, nodes)
+        value, total, over = penalised_cost(problem, candidate, penalty, unit)
+        if over[0] > 0:
+            fixed = repair(problem, decode(problem.routing, candidate, "vehicle"))
+            counters["repairs"] += 1
+            if fixed is not None:
+                counters["repaired"] += 1
+                candidate = encode(problem.routing, fixed)
+                value, total, over = penalised_cost(problem, candidate, penalty, unit)
+        if value[0] < fitness[row]:
+            genes[row] = candidate
+            fitness[row], plain[row], violation[row] = value[0], total[0], over[0]

@@ -1,0 +1,311 @@
+"""PyVRP and OR-Tools on :class:`~taopt.budgeted.BudgetedProblem`: capacity and route time.
+
+The general vehicle-routing solvers a user would reach for, given the §6.2 limits
+natively: each target has demand 1 and vehicle k capacity ``Q_k`` (PyVRP's load
+dimension, OR-Tools' "Load" dimension), and vehicle k's route travel time is at most
+``T_k`` (PyVRP's ``max_distance``, distance being the travel time; OR-Tools' "Time"
+dimension). The routes are open as in :mod:`taopt.heuristics.peers`: a dummy end point
+reachable from everywhere at cost 0.
+
+Each runs in its own worker process (``_budgeted_peer_worker.py``, which serves with
+``_peer_worker.py``'s protocol), for the reason given in :mod:`taopt.heuristics.peers`
+(DESIGN.md "Known trap"). The worker management (start-up handshake, Ctrl-C, crashes,
+hangs) is :mod:`taopt.heuristics.peers`'s ``_Worker``, pointed at the other script.
+
+Integer units
+-------------
+The travel times are scaled and rounded as for the chapter-2 peers
+(:func:`taopt.heuristics.peers.integer_costs`); each arc is then off by at most 0.5 units.
+``T_k`` is passed as ``floor(T_k · scale − 0.5 n)``: a route of at most n arcs within that
+in integer units is within ``T_k`` in true travel time, so the solver's limit is never
+looser than the real one (and tighter by at most ``n / scale`` time units, a relative
+``1e-7 n`` of the largest entry).
+
+Answers
+-------
+Every answer is re-checked by :func:`taopt.budgeted.violations` and scored by
+:func:`taopt.budgeted.evaluate_budgeted`. A route set that breaks a limit (PyVRP's best
+may, when it never found a feasible one) or no route set at all (OR-Tools' first-solution
+strategy failing) is reported, not hidden: status ``"error"``, ``objective = inf``,
+``solution = None`` and ``info["violations"]`` (the scorer's messages, "; "-joined) or
+``info["error"]``.
+
+References
+----------
+Thesis §6.2; Wouda, Lan and Kool (2024), PyVRP; Perron and Didier, OR-Tools routing.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
+from taopt.errors import InstanceError, SolverError
+from taopt.heuristics import peers
+from taopt.registry import register_method
+from taopt.result import ERROR, FEASIBLE, Routes, Solution
+
+__all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown"]
+
+WORKER_SCRIPT = Path(__file__).with_name("_budgeted_peer_worker.py")
+
+
+class _Worker(peers._Worker):
+    """:class:`taopt.heuristics.peers._Worker` running ``_budgeted_peer_worker.py``."""
+
+    def __init__(self, peer: str) -> None:  # the parent's __init__ with the other script
+        self.peer = peer
+        self.owner = os.getpid()
+        self.lock = threading.Lock()
+        started = time.perf_counter()
+        main = "1" if threading.current_thread() is threading.main_thread() else "0"
+        self.process = subprocess.Popen(
+            [sys.executable, str(WORKER_SCRIPT), peer, str(os.getpid()), main],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            start_new_session=os.name == "posix",
+        )
+        self.replies: queue.Queue = queue.Queue()
+        threading.Thread(target=self._read, name=f"{peer}-budgeted", daemon=True).start()
+        try:
+            kind, payload = self._wait(peers.STARTUP_TIMEOUT, "start")
+        except BaseException:
+            self.stop()
+            raise
+        if kind != "ready":
+            self.stop()
+            raise SolverError(
+                f"{peer} could not be imported in its worker process ({payload.strip()}); "
+                f"install the peers with {peers.INSTALL_HINT}"
+            )
+        self.version = payload["version"]
+        self.startup = time.perf_counter() - started
+
+
+_WORKERS: dict[str, _Worker] = {}
+_WORKERS_LOCK = threading.Lock()
+
+
+def _worker(peer: str) -> tuple[_Worker, float]:
+    if peers._find_spec(peers.PEERS[peer]) is None:
+        raise SolverError(f"{peer} is not installed; install the peers with {peers.INSTALL_HINT}")
+    with _WORKERS_LOCK:
+        worker = _WORKERS.get(peer)
+        if worker is not None and worker.alive():
+            return worker, 0.0
+        worker = _Worker(peer)
+        _WORKERS[peer] = worker
+        return worker, worker.startup
+
+
+def shutdown() -> None:
+    """Stop this module's workers (they restart on the next call)."""
+    with _WORKERS_LOCK:
+        for worker in _WORKERS.values():
+            worker.stop()
+        _WORKERS.clear()
+
+
+atexit.register(shutdown)
+
+
+def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
+    """``Q_k`` and ``T_k`` for the solvers: integers, None for "no limit".
+
+    ``T_k`` becomes ``floor(T_k · scale − 0.5 n)`` (never below 0), so an integer route
+    within it is within ``T_k`` (module docstring).
+    """
+    capacity = [None if not math.isfinite(q) else int(q) for q in problem.capacity]
+    max_time = [
+        None if not math.isfinite(t) else max(0, int(math.floor(t * scale - 0.5 * problem.n)))
+        for t in problem.max_time
+    ]
+    return capacity, max_time
+
+
+def _call(peer: str, request: dict[str, Any], time_limit: float | None) -> tuple:
+    timeout = None if time_limit is None else time_limit + peers.GRACE
+    for _attempt in range(3):
+        worker, startup = _worker(peer)
+        started = time.perf_counter()
+        try:
+            reply = worker.call(request, timeout)
+            break
+        except peers._Stopped:
+            continue
+    else:
+        raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
+    return reply, time.perf_counter() - started, worker, startup
+
+
+def _solve(
+    peer: str, problem: BudgetedProblem, seed: int, scale: float | None, options: dict[str, Any]
+) -> Solution:
+    if not isinstance(problem, BudgetedProblem):
+        raise InstanceError(f"expected a BudgetedProblem, got {type(problem).__name__}")
+    cost, scale = peers.integer_costs(problem.routing, scale)
+    capacity, max_time = integer_limits(problem, scale)
+    request = {
+        "cost": cost,
+        "n": problem.n,
+        "m": problem.m,
+        "options": {**options, "capacity": capacity, "max_time": max_time},
+    }
+    reply, runtime, worker, startup = _call(peer, request, options.get("time_limit"))
+    routes = reply.pop("routes")
+    info: dict[str, Any] = {
+        "solver_objective": reply.pop("objective"),
+        "scale": scale,
+        "version": worker.version,
+        "startup": startup,
+        **{key: value for key, value in options.items() if key != "seed"},
+        **reply,
+    }
+    method = peer
+    if routes is None:
+        info["error"] = f"{peer} found no route set (routing status {reply.get('routing_status')})"
+        return Solution(math.inf, ERROR, None, runtime=runtime, method=method, seed=seed, info=info)
+    broken = violations(problem, routes)
+    if broken:
+        info["violations"] = "; ".join(broken)
+        info["violation_count"] = len(broken)
+        info["error"] = f"{peer}'s best route set breaks {len(broken)} limit(s)"
+        return Solution(math.inf, ERROR, None, runtime=runtime, method=method, seed=seed, info=info)
+    return Solution(
+        objective=evaluate_budgeted(problem, routes),
+        status=FEASIBLE,
+        solution=Routes(routes),
+        runtime=runtime,
+        method=method,
+        seed=int(seed),
+        info=info,
+    )
+
+
+@register_method(BudgetedProblem, "pyvrp", category="peer", requires=("pyvrp",))
+def pyvrp_budgeted(
+    problem: BudgetedProblem,
+    time_limit: float | None = 1.0,
+    seed: int = 0,
+    *,
+    max_iterations: int | None = None,
+    scale: float | None = None,
+) -> Solution:
+    """PyVRP's iterated local search with capacity ``Q_k`` and maximum route time ``T_k``.
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    time_limit : float or None
+        Seconds of search; None for no time limit (then give ``max_iterations``).
+    seed : int
+        PyVRP's seed; with ``time_limit=None`` the same seed gives the same result.
+    max_iterations : int, optional
+        Stop after this many iterations.
+    scale : float, optional
+        Integer units per unit of travel time (default: largest entry -> 1e7).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" with routes scored by :func:`~taopt.budgeted.evaluate_budgeted`,
+        or status "error" (``info["violations"]``) when PyVRP's best breaks a limit.
+        ``info["solver_feasible"]`` is PyVRP's own verdict.
+
+    Raises
+    ------
+    InstanceError
+        Bad limits, seed or scale.
+    SolverError
+        PyVRP missing or failing in its worker.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt.budgeted import BudgetedProblem
+    >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    >>> p = BudgetedProblem(abs(x[:, None] - x[None, :]), 3, capacity=[1, 2])
+    >>> pyvrp_budgeted(p, time_limit=None, max_iterations=50).objective
+    4.0
+
+    References
+    ----------
+    Thesis §6.2; Wouda, Lan and Kool (2024).
+    """
+    peers._check(problem.routing, time_limit, seed, "max_iterations", max_iterations)
+    options = {"time_limit": time_limit, "max_iterations": max_iterations, "seed": int(seed)}
+    return _solve("pyvrp", problem, seed, scale, options)
+
+
+@register_method(BudgetedProblem, "ortools", category="peer", requires=("ortools",))
+def ortools_budgeted(
+    problem: BudgetedProblem,
+    time_limit: float | None = 1.0,
+    seed: int = 0,
+    *,
+    solution_limit: int | None = None,
+    first_solution: str = "PATH_CHEAPEST_ARC",
+    metaheuristic: str = "GUIDED_LOCAL_SEARCH",
+    scale: float | None = None,
+) -> Solution:
+    """OR-Tools routing with a load dimension (``Q_k``) and a time dimension (``T_k``).
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    time_limit : float or None
+        Seconds of search; None for no time limit (then give ``solution_limit``).
+    seed : int
+        Recorded only (OR-Tools' routing search has no seed).
+    solution_limit : int, optional
+        Stop after this many solutions.
+    first_solution, metaheuristic : str
+        OR-Tools' ``FirstSolutionStrategy`` / ``LocalSearchMetaheuristic`` names.
+    scale : float, optional
+        Integer units per unit of travel time (default: largest entry -> 1e7).
+
+    Returns
+    -------
+    Solution
+        Status "feasible" with routes scored by :func:`~taopt.budgeted.evaluate_budgeted`,
+        or status "error" when OR-Tools found no route set (``info["routing_status"]``) or
+        one that breaks a limit (``info["violations"]``).
+
+    Raises
+    ------
+    InstanceError
+        Bad limits, seed or scale.
+    SolverError
+        OR-Tools missing, an unknown strategy name, or a failure in its worker.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from taopt.budgeted import BudgetedProblem
+    >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
+    >>> p = BudgetedProblem(abs(x[:, None] - x[None, :]), 3, max_time=[1.5, None])
+    >>> ortools_budgeted(p, time_limit=0.2).objective
+    4.0
+
+    References
+    ----------
+    Thesis §6.2; OR-Tools routing library (Google).
+    """
+    peers._check(problem.routing, time_limit, seed, "solution_limit", solution_limit)
+    options = {
+        "time_limit": time_limit,
+        "solution_limit": solution_limit,
+        "first_solution": str(first_solution),
+        "metaheuristic": str(metaheuristic),
+        "seed": int(seed),
+    }
+    return _solve("ortools", problem, seed, scale, options)

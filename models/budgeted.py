@@ -1,0 +1,685 @@
+"""Exact model of the budgeted family: (2.2)–(2.5) plus capacity and travel-time rows.
+
+Thesis §2.2.1 (2.2)–(2.5) with §6.2's limits (:class:`~taopt.budgeted.BudgetedProblem`):
+vehicle k serves at most ``Q_k`` targets and travels at most ``T_k``.
+
+Form: a three-index (arc, vehicle) model
+-----------------------------------------
+One binary ``x[i, j, k]`` per arc ``i -> j`` (``j`` a target) and vehicle ``k``: arcs out
+of a target for every vehicle, arcs out of a start point only for its own vehicle. With
+``in_k(j) = Σ_i x[i, j, k]`` and ``out_k(j) = Σ_l x[j, l, k]``:
+
+* (2.2) ``min Σ t(i, j) x[i, j, k]``
+* (2.3) ``Σ_k in_k(j) = 1`` for every target j
+* (2.4) ``out_k(j) <= in_k(j)`` for every target j and vehicle k (a vehicle leaves only a
+  target it entered; summed over k this is (2.4), and it keeps a route on one vehicle),
+  and ``Σ_j x[p_k, j, k] <= 1`` at every start point
+* capacity ``Σ_{i,j} x[i, j, k] <= Q_k`` (each arc of k enters one target of k)
+* travel time ``Σ_{i,j} t(i, j) x[i, j, k] <= T_k``
+* (2.5) DFJ rows on the aggregated ``σ_ij = Σ_k x[i, j, k]``, added lazily: the root LP is
+  separated exactly (:func:`taopt.models.routing.separate_subtours`, rows written by
+  :func:`taopt.models.routing.cut_rows`), then MIP rounds add the cycles of every
+  solution HiGHS reports until the round's optimum has none.
+
+Why this form: both limits are plain rows of the LP (no big-M, no arrival-time variable),
+so the LP bound sees them and the MIP rounds never return a limit-violating answer; only
+(2.5) is lazy, as in chapter 2, and every row of the model is valid for every feasible
+solution, so a MIP that HiGHS proves infeasible is a proof that no assignment meets the
+limits. The alternatives considered: an assignment ``y[j, k]`` linked to chapter 2's
+two-index σ (``σ_ij + y_ik - y_jk <= 1``: ``n^2 m`` rows, and the travel time still needs
+arc–vehicle products); MTZ arrival times (big-M, a weak LP); infeasible-path cuts on the
+two-index model (one cut removes one path: many rounds when a limit binds). Columns that
+cannot be on a feasible route of vehicle k are never created
+(:func:`taopt.budgeted.bounds.usable_arcs`): ``x[i, j, k]`` is dropped when
+``d_k(i) + t(i, j) > T_k``, ``d_k`` the shortest travel time from ``p_k``, every
+target-to-target arc of k when ``Q_k <= 1``, and all of k's columns when ``Q_k = 0``.
+Measurements (n50m10 drift scenarios, ``benchmarks/bench_budgeted.py``) are in
+``docs/families/budgeted.md``.
+
+Reused from chapter 2 (:mod:`taopt.models.routing`): the arc list, exact separation and
+row writing of (2.5), the Karp patching of a MIP answer's cycles, the first bounds; and
+the live HiGHS model (:class:`taopt.models.highs.HighsModel`) with its status rule
+:func:`~taopt.models.highs.certify`. A problem without any finite limit is chapter 2's:
+it is solved by :func:`~taopt.models.routing.solve_routing` on ``problem.routing``.
+
+References
+----------
+Thesis §2.2.1 (2.2)–(2.5), §6.2.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from taopt.budgeted.bounds import usable_arcs
+from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
+from taopt.errors import InstanceError, SolverError
+from taopt.limits import Deadline, milp_bytes, register_footprint
+from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
+from taopt.models.routing import (
+    HIGHS_OVERRUN,
+    arc_list,
+    assignment_bound,
+    cut_rows,
+    decode,
+    entry_bound,
+    repair,
+    separate_subtours,
+    solve_routing,
+)
+from taopt.registry import register_method
+from taopt.result import INFEASIBLE, Routes, Solution
+from taopt.routing.bounds import arborescence_bound
+
+#: HiGHS options of the MIP rounds (as chapter 2's DFJ loop).
+MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+
+#: The models :func:`solve_budgeted` can build (``form``).
+FORMS = ("resource", "arc-vehicle")
+
+#: Seconds per column before HiGHS first checks its clock (an upper estimate): a stage is
+#: not started under a time limit when this exceeds the time left.
+SECONDS_PER_COLUMN = 4e-6
+
+
+class BudgetedModel:
+    """The three-index model (module docstring) on one live HiGHS model.
+
+    Attributes
+    ----------
+    arc : (columns,) int array
+        Index of each column's arc in chapter 2's arc list (``tails``, ``heads``).
+    vehicle : (columns,) int array
+        Each column's vehicle.
+    aggregate : (arcs, columns) csr_matrix
+        σ = ``aggregate @ x``: the two-index arc values of a column vector.
+    """
+
+    def __init__(self, problem: BudgetedProblem, verbose: bool = False) -> None:
+        self.problem = problem
+        n, m = problem.n, problem.m
+        routing = problem.routing
+        self.tails, self.heads = arc_list(routing)
+        arcs = np.arange(len(self.tails))
+        usable = usable_arcs(problem)
+        arc_parts, vehicle_parts = [], []
+        for k in range(m):
+            own = usable[k, self.tails, self.heads]
+            arc_parts.append(arcs[own])
+            vehicle_parts.append(np.full(int(own.sum()), k))
+        self.arc = np.concatenate(arc_parts) if arc_parts else np.zeros(0, dtype=np.int64)
+        self.vehicle = (
+            np.concatenate(vehicle_parts) if vehicle_parts else np.zeros(0, dtype=np.int64)
+        )
+        columns = len(self.arc)
+        self.n_columns = columns
+        tail, head = self.tails[self.arc], self.heads[self.arc]
+        cost = routing.cost[tail, head]
+        index = np.arange(columns)
+        self.aggregate = sp.csr_matrix(
+            (np.ones(columns), (self.arc, index)), shape=(len(self.tails), columns)
+        )
+        blocks, lower, upper = [], [], []
+        # (2.3): every target entered once, over all vehicles
+        blocks.append(sp.csr_matrix((np.ones(columns), (head, index)), shape=(n, columns)))
+        lower.append(np.ones(n))
+        upper.append(np.ones(n))
+        # (2.4) per vehicle: out_k(j) - in_k(j) <= 0 (row j * m + k)
+        target_tail = tail < n
+        rows = np.concatenate(
+            [tail[target_tail] * m + self.vehicle[target_tail], head * m + self.vehicle]
+        )
+        cols = np.concatenate([index[target_tail], index])
+        data = np.concatenate([np.ones(int(target_tail.sum())), -np.ones(columns)])
+        blocks.append(sp.csr_matrix((data, (rows, cols)), shape=(n * m, columns)))
+        lower.append(np.full(n * m, -np.inf))
+        upper.append(np.zeros(n * m))
+        # (2.4) at the start points: each vehicle leaves its start at most once
+        start = ~target_tail
+        blocks.append(
+            sp.csr_matrix(
+                (np.ones(int(start.sum())), (self.vehicle[start], index[start])),
+                shape=(m, columns),
+            )
+        )
+        lower.append(np.full(m, -np.inf))
+        upper.append(np.ones(m))
+        # capacity and travel time, one row per vehicle with a finite limit
+        for limits, weights in ((problem.capacity, np.ones(columns)), (problem.max_time, cost)):
+            limited = np.flatnonzero(np.isfinite(limits))
+            if len(limited) == 0:
+                continue
+            position = np.full(m, -1)
+            position[limited] = np.arange(len(limited))
+            keep = position[self.vehicle] >= 0
+            blocks.append(
+                sp.csr_matrix(
+                    (weights[keep], (position[self.vehicle[keep]], index[keep])),
+                    shape=(len(limited), columns),
+                )
+            )
+            lower.append(np.full(len(limited), -np.inf))
+            upper.append(limits[limited])
+        self.model = HighsModel.from_arrays(
+            cost=cost,
+            matrix=sp.vstack(blocks).tocsr(),
+            lower=np.concatenate(lower),
+            upper=np.concatenate(upper),
+            column_lower=np.zeros(columns),
+            column_upper=np.ones(columns),
+            integers=index,
+            verbose=verbose,
+        )
+        self.column_of = np.full((m, len(self.tails)), -1, dtype=np.int64)
+        self.column_of[self.vehicle, self.arc] = index
+        self.arc_index = np.full((n + m, n), -1, dtype=np.int64)
+        self.arc_index[self.tails, self.heads] = arcs
+        self._known: set[tuple[int, ...]] = set()
+        self.cuts: list[tuple[int, ...]] = []
+
+    def sigma(self, solution: np.ndarray) -> np.ndarray:
+        """Chapter 2's σ (one value per two-index arc) of a column vector."""
+        return self.aggregate @ np.asarray(solution, dtype=float)
+
+    def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
+        """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
+        new = []
+        for subset in cuts:
+            subset = tuple(sorted(int(v) for v in subset))
+            if len(subset) >= 2 and subset not in self._known:
+                self._known.add(subset)
+                new.append(subset)
+        if new:
+            rows, low, high = cut_rows(self.problem.routing, new, self.tails, self.heads)
+            self.model.add_rows(rows @ self.aggregate, low, high)
+            self.cuts.extend(new)
+        return len(new)
+
+    def start_vector(self, routes: list[list[int]]) -> np.ndarray | None:
+        """The column vector of ``routes`` (None if a route uses a column not in the model)."""
+        vector = np.zeros(self.n_columns)
+        n = self.problem.n
+        for k, route in enumerate(routes):
+            points = [n + k, *route]
+            columns = self.column_of[k, self.arc_index[points[:-1], points[1:]]]
+            if (columns < 0).any():
+                return None
+            vector[columns] = 1.0
+        return vector
+
+    def decode(self, solution: np.ndarray) -> tuple[list[list[int]], list[list[int]]] | None:
+        """Routes (from each start, on its own vehicle's columns) and leftover cycles of an
+        integral column vector; None if it is not integral enough to read."""
+        n = self.problem.n
+        used = np.flatnonzero(np.asarray(solution) > 0.5)
+        successor: dict[int, int] = {}
+        for column in used:
+            a = int(self.arc[column])
+            tail = int(self.tails[a])
+            if tail in successor:
+                return None
+            successor[tail] = int(self.heads[a])
+        routes, reached = [], set()
+        for k in range(self.problem.m):
+            route, point = [], n + k
+            while point in successor:
+                point = successor[point]
+                if point in reached:
+                    return None
+                route.append(point)
+                reached.add(point)
+            routes.append(route)
+        cycles = []
+        for first in range(n):
+            if first in reached:
+                continue
+            cycle, point = [], first
+            while point not in reached:
+                reached.add(point)
+                cycle.append(point)
+                if point not in successor:
+                    return None
+                point = successor[point]
+            cycles.append(cycle)
+        return routes, cycles
+
+
+class ResourceModel:
+    """Chapter 2's two-index model with one capacity and one time resource per target.
+
+    Columns: σ of chapter 2's arcs (:func:`~taopt.models.routing.arc_list`), then
+    ``r_j`` (capacity left after serving j, ``0 <= r_j <= Q - 1``) if a vehicle has a
+    capacity, then ``s_j`` (travel time left on arrival at j, ``0 <= s_j <= T``) if a
+    vehicle has a time limit; ``Q``, ``T`` the largest effective limits (an unlimited
+    capacity counts as n, an unlimited time as ``Σ_j max_i t(i, j)``, more than any open
+    route takes). Rows: (2.3), (2.4), and
+
+    * ``r_j + (Q − Q_k) σ[p_k, j] <= Q − 1`` (a route of k starts with ``Q_k − 1`` left),
+    * ``r_j − r_i + Q σ_ij + (Q − 2) σ_ji <= Q − 1`` (one unit per target; the σ_ji term
+      is Desrochers and Laporte's lifting),
+    * ``s_j + (T − T_k + t(p_k, j)) σ[p_k, j] <= T`` and
+      ``s_j − s_i + (T + t(i, j)) σ_ij <= T`` (the time left falls by t(i, j) on each leg).
+
+    For an integral σ these hold exactly when every route meets its limits (set r and s
+    along each route); the r rows also forbid every cycle among targets, the s rows every
+    cycle of positive travel time. Arcs no vehicle may use (:func:`usable_arcs`) are fixed
+    to 0; an arc out of ``p_k`` is usable only by k.
+    """
+
+    def __init__(self, problem: BudgetedProblem, verbose: bool = False) -> None:
+        self.problem = problem
+        n, m = problem.n, problem.m
+        routing = problem.routing
+        self.tails, self.heads = arc_list(routing)
+        n_arcs = len(self.tails)
+        self.arcs = np.arange(n_arcs)
+        cost = routing.cost[self.tails, self.heads]
+        usable = usable_arcs(problem)
+        is_start = self.tails >= n
+        allowed = np.where(
+            is_start,
+            usable[np.clip(self.tails - n, 0, m - 1), self.tails, self.heads],
+            usable.any(axis=0)[self.tails, self.heads],
+        )
+        size = n + m
+        index = self.arcs
+        blocks = [
+            sp.csr_matrix((np.ones(n_arcs), (self.heads, index)), shape=(n, n_arcs)),
+            sp.csr_matrix((np.ones(n_arcs), (self.tails, index)), shape=(size, n_arcs)),
+        ]
+        lower = [np.ones(n), np.full(size, -np.inf)]
+        upper = [np.ones(n), np.ones(size)]
+        column_upper = [allowed.astype(float)]
+        costs = [cost]
+        reverse = np.full(n_arcs, -1, dtype=np.int64)  # arc j -> i of each target arc i -> j
+        inner = np.flatnonzero(~is_start)
+        arc_index = np.full((size, n), -1, dtype=np.int64)
+        arc_index[self.tails, self.heads] = index
+        reverse[inner] = arc_index[self.heads[inner], self.tails[inner]]
+        starts = np.flatnonzero(is_start)
+        vehicle = self.tails[starts] - n
+        capacity = np.minimum(problem.capacity, n)
+        time_cap = float(routing.cost[:, :n].max(axis=0).sum())
+        duration = np.minimum(problem.max_time, time_cap)
+        self.limits = {"capacity": capacity, "time": duration}
+        #: resource name -> first column of its n values
+        self.offsets: dict[str, int] = {}
+        extra = []  # (rows as (data, row, column) triplets, row count, right-hand side)
+        columns = n_arcs
+        for name, limits, active in (
+            ("capacity", capacity, bool((capacity < n).any())),
+            ("time", duration, problem.has_max_time),
+        ):
+            if not active:
+                continue
+            offset, top = columns, float(limits.max())
+            self.offsets[name] = offset
+            columns += n
+            if name == "capacity":
+                column_upper.append(np.full(n, max(top - 1.0, 0.0)))
+                start_coef, start_rhs = top - limits[vehicle], top - 1.0
+                inner_coef, inner_rhs, lift = np.full(len(inner), top), top - 1.0, top - 2.0
+            else:
+                column_upper.append(np.full(n, top))
+                start_coef, start_rhs = top - limits[vehicle] + cost[starts], top
+                inner_coef, inner_rhs, lift = top + cost[inner], top, 0.0
+            costs.append(np.zeros(n))
+            # start rows: resource_j + coef σ[p_k, j] <= rhs
+            count = len(starts)
+            rows = np.tile(np.arange(count), 2)
+            cols = np.concatenate([offset + self.heads[starts], starts])
+            extra.append(
+                ((np.concatenate([np.ones(count), start_coef]), rows, cols), count, start_rhs)
+            )
+            # inner rows: resource_j − resource_i + coef σ_ij (+ lift σ_ji) <= rhs
+            count = len(inner)
+            data = [np.ones(count), -np.ones(count), inner_coef]
+            cols = [offset + self.heads[inner], offset + self.tails[inner], inner]
+            if lift > 0:
+                data.append(np.full(count, lift))
+                cols.append(reverse[inner])
+            rows = np.tile(np.arange(count), len(data))
+            extra.append(((np.concatenate(data), rows, np.concatenate(cols)), count, inner_rhs))
+        self.n_columns = columns
+        pad = columns - n_arcs
+        matrix = [sp.hstack([b, sp.csr_matrix((b.shape[0], pad))]) for b in blocks]
+        for (data, rows, cols), count, rhs in extra:
+            matrix.append(sp.csr_matrix((data, (rows, cols)), shape=(count, columns)))
+            lower.append(np.full(count, -np.inf))
+            upper.append(np.full(count, float(rhs)))
+        self.model = HighsModel.from_arrays(
+            cost=np.concatenate(costs),
+            matrix=sp.vstack(matrix).tocsr(),
+            lower=np.concatenate(lower),
+            upper=np.concatenate(upper),
+            column_lower=np.zeros(columns),
+            column_upper=np.concatenate(column_upper),
+            integers=index,
+            verbose=verbose,
+        )
+        self.arc_index = arc_index
+        self._known: set[tuple[int, ...]] = set()
+        self.cuts: list[tuple[int, ...]] = []
+
+    def sigma(self, solution: np.ndarray) -> np.ndarray:
+        """σ (one value per arc) of a column vector."""
+        return np.asarray(solution, dtype=float)[: len(self.tails)]
+
+    def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
+        """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
+        new = []
+        for subset in cuts:
+            subset = tuple(sorted(int(v) for v in subset))
+            if len(subset) >= 2 and subset not in self._known:
+                self._known.add(subset)
+                new.append(subset)
+        if new:
+            rows, low, high = cut_rows(self.problem.routing, new, self.tails, self.heads)
+            pad = sp.csr_matrix((rows.shape[0], self.n_columns - len(self.tails)))
+            self.model.add_rows(sp.hstack([rows, pad]).tocsr(), low, high)
+            self.cuts.extend(new)
+        return len(new)
+
+    def start_vector(self, routes: list[list[int]]) -> np.ndarray | None:
+        """σ, r and s of ``routes`` as a MIP start."""
+        n = self.problem.n
+        vector = np.zeros(self.n_columns)
+        cost = self.problem.cost
+        for k, route in enumerate(routes):
+            points = np.array([n + k, *route], dtype=np.int64)
+            vector[self.arc_index[points[:-1], points[1:]]] = 1.0
+            if "capacity" in self.offsets:
+                offset = self.offsets["capacity"]
+                left = self.limits["capacity"][k] - np.arange(1, len(route) + 1)
+                vector[offset + points[1:]] = np.maximum(left, 0.0)
+            if "time" in self.offsets:
+                offset = self.offsets["time"]
+                spent = np.cumsum(cost[points[:-1], points[1:]])
+                vector[offset + points[1:]] = np.maximum(self.limits["time"][k] - spent, 0.0)
+        return vector
+
+    def decode(self, solution: np.ndarray) -> tuple[list[list[int]], list[list[int]]] | None:
+        """Routes and leftover cycles of an integral σ; None if it cannot be read."""
+        try:
+            return decode(self.problem.routing, self, self.sigma(solution))
+        except SolverError:
+            return None
+
+
+def greedy_budgeted(problem: BudgetedProblem) -> list[list[int]] | None:
+    """A quick feasible start: repeatedly append the cheapest (route end, target) pair that
+    keeps every limit; None if it gets stuck (this proves nothing)."""
+    n, m = problem.n, problem.m
+    cost = problem.cost[:, :n]
+    routes: list[list[int]] = [[] for _ in range(m)]
+    ends = np.arange(n, n + m)
+    times = np.zeros(m)
+    left = np.ones(n, dtype=bool)
+    for _ in range(n):
+        price = np.where(left[None, :], cost[ends], np.inf)
+        price[np.array([len(r) for r in routes]) >= problem.capacity] = np.inf
+        price[times[:, None] + price > problem.max_time[:, None]] = np.inf
+        k, target = np.unravel_index(int(np.argmin(price)), price.shape)
+        if not np.isfinite(price[k, target]):
+            return None
+        routes[k].append(int(target))
+        times[k] += price[k, target]
+        ends[k] = target
+        left[target] = False
+    return routes
+
+
+def _as_routes(problem: BudgetedProblem, incumbent: Any) -> tuple[list[list[int]] | None, str]:
+    """The incumbent's routes if they meet every constraint; else None and why not."""
+    if incumbent is None:
+        return None, ""
+    routes = getattr(incumbent, "routes", incumbent)
+    routes = [[int(t) for t in route] for route in routes]
+    found = violations(problem, routes)
+    if found:  # a heuristic that missed a limit: its answer is no start, and no error
+        return None, "; ".join(found)
+    return routes, ""
+
+
+def _result(
+    problem: BudgetedProblem,
+    routes: list[list[int]] | None,
+    status: str,
+    bound: float | None,
+    deadline: Deadline,
+    info: dict[str, Any],
+) -> Solution:
+    """The one place this module builds a Solution: the objective by the one scorer."""
+    objective = math.inf if routes is None else evaluate_budgeted(problem, routes)
+    return Solution(
+        objective=objective,
+        status=status,
+        bound=bound,
+        runtime=deadline.elapsed(),
+        method="exact-budgeted",
+        solution=None if routes is None else Routes(routes),
+        info=info,
+    )
+
+
+@register_method(
+    BudgetedProblem, "exact", category="exact", certifies=True, warm_start=("MC", "EVM")
+)
+def solve_budgeted(
+    problem: BudgetedProblem,
+    time_limit: float | None = None,
+    mip_gap: float = 1e-6,
+    verbose: bool = False,
+    max_rounds: int = 10_000,
+    incumbent: Any = None,
+    form: str = "resource",
+) -> Solution:
+    """Solve (2.2)–(2.5) with per-vehicle capacity and travel-time limits exactly (HiGHS).
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    time_limit : float, optional
+        Wall-clock seconds for the whole call (:class:`taopt.limits.Deadline`): it returns
+        with status "time_limit", the best routes found (None if none) and a proven bound.
+    mip_gap : float
+        HiGHS's ``mip_rel_gap``; "optimal" only when the final gap is at most 1e-6.
+    verbose : bool
+        HiGHS log.
+    max_rounds : int
+        Cap on MIP rounds (status "feasible", ``info["stopped_by"] == "max_rounds"``).
+    incumbent : list of routes or Solution, optional
+        A start (e.g. MC's or EVM's routes). Used only if it meets every limit (a heuristic
+        may miss one: ``info["incumbent_rejected"]`` says why); never raises for that.
+    form : {"resource", "arc-vehicle"}
+        The model (module docstring): chapter 2's two-index σ with capacity and time
+        resources per target (:class:`ResourceModel`, default), or the three-index model
+        (:class:`BudgetedModel`), kept for comparison.
+
+    Returns
+    -------
+    Solution
+        ``routes`` and ``objective`` = :func:`~taopt.budgeted.evaluate_budgeted`; status
+        "optimal", "infeasible" (no assignment meets the limits: ``info["proof"]``),
+        "time_limit" or "feasible" (loose ``mip_gap`` / ``max_rounds``); ``bound`` a proven
+        lower bound, never above the objective.
+
+    Raises
+    ------
+    InstanceError
+        Not a BudgetedProblem, or a non-positive ``time_limit``.
+
+    Notes
+    -----
+    The model and why it is written so: module docstring. The loop: (1) the root LP with
+    (2.5) separated exactly until no row is violated; (2) MIP rounds, each a relaxation
+    of the problem (every row valid), the cycles among targets of its answer and of every
+    solution HiGHS reports added as (2.5) rows, each answer (its cycles patched in by
+    :func:`~taopt.models.routing.repair`, kept if it meets the limits) a candidate
+    incumbent and the next MIP start. It stops when a round's optimum has no cycle (then
+    it is feasible and optimal), or the gap is closed. Each round's dual bound is valid:
+    the rows only remove infeasible solutions. Size: at most ``(n + 1) n m`` columns and
+    ``n (m + 1) + 3 m`` rows before the cuts.
+
+    References
+    ----------
+    Thesis §2.2.1 (2.2)–(2.5), §6.2.
+    """
+    if not isinstance(problem, BudgetedProblem):
+        raise InstanceError(f"solve_budgeted needs a BudgetedProblem, got {type(problem).__name__}")
+    if time_limit is not None and time_limit <= 0:
+        raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    if form not in FORMS:
+        raise InstanceError(f"form must be one of {FORMS}, got {form!r}")
+    deadline = Deadline(time_limit)
+    given, rejected = _as_routes(problem, incumbent)
+    info: dict[str, Any] = {"incumbent_rejected": rejected} if rejected else {}
+    n, m = problem.n, problem.m
+    if not (problem.has_capacity or problem.has_max_time):
+        # no limit: chapter 2's problem, chapter 2's exact loop
+        plain = solve_routing(
+            problem.routing, time_limit=time_limit, mip_gap=mip_gap, verbose=verbose,
+            max_rounds=max_rounds, incumbent=given,
+        )  # fmt: skip
+        info.update(plain.info, model="chapter 2 (no finite limit)")
+        return _result(problem, plain.routes, plain.status.value, plain.bound, deadline, info)
+    if problem.capacity.sum() < n:
+        info.update(stopped_by="infeasible", proof=f"the capacities sum to {problem.capacity.sum():g} < n = {n}")  # fmt: skip
+        return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
+                        method="exact-budgeted", info=info)  # fmt: skip
+    best_routes = given
+    greedy = greedy_budgeted(problem)
+    best_value = math.inf if given is None else evaluate_budgeted(problem, given)
+    if greedy is not None and evaluate_budgeted(problem, greedy) < best_value:
+        best_routes, best_value = greedy, evaluate_budgeted(problem, greedy)
+    best_bound = max(entry_bound(problem.routing), arborescence_bound(problem.routing))
+    if not deadline.limited or deadline.remaining() > 3e-10 * n**2 * (n + m):
+        best_bound = max(best_bound, assignment_bound(problem.routing))
+
+    def stop(stopped_by: str, extra: dict[str, Any]) -> Solution:
+        bound = best_bound if best_routes is None else min(best_bound, best_value)
+        status, why = certify(best_value, bound, stopped_by)
+        info.update(extra, stopped_by=why, mip_gap=mip_gap)
+        return _result(problem, best_routes, status, bound, deadline, info)
+
+    if deadline.limited and deadline.remaining() < SECONDS_PER_COLUMN * (n + 1) * n * m:
+        return stop("time_limit", {"stage": "build"})
+    model = (ResourceModel if form == "resource" else BudgetedModel)(problem, verbose=verbose)
+    info.update(columns=model.n_columns, rows=model.model.n_rows)
+    # 1. root LP, (2.5) separated exactly, at most half of the time left
+    model.model.relax(True)
+    root_rounds, root_bound = 0, -math.inf
+    budget = deadline.share(0.5)
+    root_end = None if budget is None else time.perf_counter() + budget
+    try:
+        while True:
+            left = None if root_end is None else root_end - time.perf_counter()
+            if left is not None and left < SECONDS_PER_COLUMN * model.n_columns:
+                break
+            root_rounds += 1
+            run = model.model.solve(time_limit=left)
+            if run.solver_status == "infeasible":
+                break  # the MIP below proves it
+            if run.solver_status != "optimal" or run.objective is None:
+                break
+            root_bound, _ = model.model.lagrangian_bound()
+            sigma = model.sigma(model.model.highs.getSolution().col_value)
+            found = separate_subtours(problem.routing, model.tails, model.heads, sigma,
+                                      deadline=root_end)  # fmt: skip
+            if not model.add_cuts(found):
+                break
+    finally:
+        model.model.relax(False)
+    best_bound = max(best_bound, root_bound)
+    info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound)
+    # 2. MIP rounds
+    harvested: list[tuple[int, ...]] = []
+    candidates: list[tuple[float, list[list[int]]]] = []
+
+    def consider(solution: np.ndarray) -> list[list[int]]:
+        """Cycles of a MIP solution (harvested as cuts); a feasible patch is a candidate."""
+        read = model.decode(solution)
+        if read is None:
+            return []
+        routes, cycles = read
+        if cycles:
+            routes = repair(problem.routing, routes, cycles)
+        if not violations(problem, routes):
+            candidates.append((evaluate_budgeted(problem, routes), routes))
+        return cycles
+
+    def harvest(solution: np.ndarray) -> None:
+        harvested.extend(tuple(sorted(c)) for c in consider(solution))
+
+    target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
+    rounds, stopped_by = 0, "time_limit"
+    while True:
+        left = deadline.remaining()
+        if left is not None and left < SECONDS_PER_COLUMN * model.n_columns + HIGHS_OVERRUN:
+            stopped_by = "time_limit"
+            break
+        if rounds >= max_rounds:
+            stopped_by = "max_rounds"
+            break
+        rounds += 1
+        if best_routes is not None:
+            start = model.start_vector(best_routes)
+            if start is not None:
+                model.model.set_start(start)
+        harvested.clear()
+        candidates.clear()
+        run = model.model.solve(
+            time_limit=None if left is None else max(left - HIGHS_OVERRUN, 1e-3),
+            mip_rel_gap=mip_gap,
+            on_solution=harvest,
+            options=MIP_OPTIONS,
+        )
+        if run.solver_status == "infeasible":
+            if best_routes is not None:  # cannot be: every feasible solution is in the model
+                raise SolverError(
+                    "HiGHS calls the budgeted model infeasible below a known solution"
+                )
+            info.update(rounds=rounds, cuts=len(model.cuts), stopped_by="infeasible",
+                        proof="HiGHS proved the model infeasible; every row is valid")  # fmt: skip
+            return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
+                            method="exact-budgeted", info=info)  # fmt: skip
+        if run.solver_status not in ("optimal", "user_limit"):
+            raise SolverError(f"HiGHS returned status {run.solver_status!r} on the budgeted model")
+        if run.bound is not None:
+            best_bound = max(best_bound, run.bound)
+        cycles: list[list[int]] = []
+        if run.has_point:
+            cycles = consider(np.asarray(model.model.highs.getSolution().col_value))
+        for value, routes in candidates:
+            if value < best_value:
+                best_routes, best_value = routes, value
+        model.add_cuts([*map(tuple, cycles), *harvested])
+        stopped_by = run.stopped_by
+        if (
+            best_routes is not None
+            and relative_gap(best_value, min(best_bound, best_value)) <= target_gap
+        ):
+            break
+        if run.stopped_by in ("time_limit", "solver_limit"):
+            break
+        if run.has_point and not cycles and run.stopped_by == "optimal":
+            break  # cannot happen with an open gap: the answer is feasible and optimal
+    return stop(stopped_by, {"rounds": rounds, "cuts": len(model.cuts)})
+
+
+@register_footprint(BudgetedProblem, "exact")
+def _budgeted_footprint(problem: BudgetedProblem, options: dict[str, Any]) -> tuple[float, str]:
+    """The three-index model has at most (n + 1) n m columns."""
+    columns = float(problem.n + 1) * problem.n * problem.m
+    return milp_bytes(columns), (
+        f"the budgeted exact model of {problem.n:,} targets and {problem.m} vehicles "
+        f"(at most {columns:,.0f} columns)"
+    )
+
+
+__all__ = ["BudgetedModel", "solve_budgeted", "greedy_budgeted"]

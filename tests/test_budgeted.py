@@ -1,0 +1,247 @@
+"""The budgeted family (§6.2): data, scorer, JSON, bounds and the exact model."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+
+import taopt
+from taopt.budgeted import BudgetedProblem, evaluate_budgeted, violations
+from taopt.budgeted.bounds import (
+    arborescence_bound,
+    lower,
+    min_routes,
+    pruned_routing,
+    start_count_bound,
+    usable_arcs,
+)
+from taopt.errors import FeasibilityError, InstanceError
+from taopt.models.budgeted import solve_budgeted
+from taopt.registry import family_of
+
+
+def random_problem(n: int, m: int, seed: int, tight: float = 1.0) -> BudgetedProblem:
+    """Random asymmetric matrix; capacities and time limits near each vehicle's fair share
+    (``tight`` > 1 makes them tighter), some vehicles without one."""
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(1.0, 10.0, size=(n + m, n + m)).round(2)
+    share = n / m
+    capacity = [
+        int(math.ceil(share * rng.uniform(1.0, 2.0) / tight)) if rng.random() < 0.8 else None
+        for _ in range(m)
+    ]
+    max_time = [
+        round(float(5.5 * (share + 1) * rng.uniform(0.5, 1.5) / tight), 1)
+        if rng.random() < 0.6
+        else None
+        for _ in range(m)
+    ]
+    return BudgetedProblem(cost, n, capacity, max_time, name=f"random{seed}")
+
+
+def brute_force(problem: BudgetedProblem) -> float:
+    """Optimum by enumeration of every order of the targets cut into m routes (inf if none)."""
+    n, m = problem.n, problem.m
+    best = math.inf
+    for order in itertools.permutations(range(n)):
+        for cuts in itertools.combinations_with_replacement(range(n + 1), m - 1):
+            bounds = (0, *cuts, n)
+            routes = [list(order[bounds[k] : bounds[k + 1]]) for k in range(m)]
+            if not violations(problem, routes):
+                best = min(best, evaluate_budgeted(problem, routes))
+    return best
+
+
+SMALL = np.array([[0, 2, 9, 9], [1, 0, 9, 9], [4, 3, 0, 9], [5, 5, 9, 0]], dtype=float)
+
+
+def test_validation_names_the_item():
+    """A bad limit is refused with a message naming its entry."""
+    with pytest.raises(InstanceError, match=r"capacity\[1\] = -1"):
+        BudgetedProblem(SMALL, 2, capacity=[1, -1])
+    with pytest.raises(InstanceError, match=r"max_time\[0\] = nan"):
+        BudgetedProblem(SMALL, 2, max_time=[float("nan"), None])
+    with pytest.raises(InstanceError, match=r"capacity\[0\] = 1.5 is not a whole"):
+        BudgetedProblem(SMALL, 2, capacity=[1.5, None])
+    with pytest.raises(InstanceError, match="capacity has 3 entries but there are 2 vehicles"):
+        BudgetedProblem(SMALL, 2, capacity=[1, 1, 1])
+    with pytest.raises(InstanceError, match=r"cost\[0, 1\]"):
+        BudgetedProblem(np.where(np.eye(4) > 0, 0.0, -1.0), 2)
+
+
+def test_limits_are_stored_with_inf_for_no_limit():
+    """None (whole list or one entry) is stored as inf; the routing relaxation has no limit."""
+    p = BudgetedProblem(SMALL, 2, capacity=[1, None])
+    assert p.capacity.tolist() == [1.0, math.inf]
+    assert p.max_time.tolist() == [math.inf, math.inf]
+    assert isinstance(p.routing, taopt.AssignmentProblem) and p.routing.n == p.n == 2
+    assert not isinstance(p, taopt.AssignmentProblem)
+
+
+def test_json_round_trip(tmp_path):
+    """save/load keeps matrix and limits (null for no limit) and goes through the registry."""
+    p = BudgetedProblem(SMALL, 2, capacity=[1, None], max_time=[None, 7.5], name="tiny")
+    data = p.to_dict()
+    assert data["capacity"] == [1, None] and data["max_time"] == [None, 7.5]
+    path = tmp_path / "p.json"
+    p.save(path)
+    q = BudgetedProblem.load(path)
+    assert np.array_equal(q.cost, p.cost) and q.name == "tiny"
+    assert np.array_equal(q.capacity, p.capacity) and np.array_equal(q.max_time, p.max_time)
+    assert family_of(q).kind == "budgeted_problem"
+    assert BudgetedProblem.from_dict(BudgetedProblem(SMALL, 2).to_dict()).capacity[0] == math.inf
+
+
+def test_schema_rejects_bad_files(tmp_path):
+    """The schema refuses a negative or fractional capacity and an unknown key, naming it."""
+    data = BudgetedProblem(SMALL, 2, capacity=[1, None]).to_dict()
+    for key, value, words in (
+        ("capacity", [-1, None], "capacity[0]"),
+        ("capacity", [1.5, None], "capacity[0]"),
+        ("max_time", ["5", None], "max_time[0]"),
+        ("speed", 3, "speed"),
+    ):
+        bad = json.loads(json.dumps(data))
+        bad[key] = value
+        with pytest.raises(InstanceError, match=words.replace("[", r"\[").replace("]", r"\]")):
+            BudgetedProblem.from_dict(bad)
+
+
+def test_shipped_example_loads_and_a_limit_binds():
+    """The example file loads, and its optimum differs from the unlimited one."""
+    from taopt.data import examples
+
+    path = examples.__path__[0] + "/budgeted_problem.json"
+    p = BudgetedProblem.load(path)
+    limited = solve_budgeted(p)
+    free = taopt.solve(p.routing, "exact")
+    assert limited.status == "optimal"
+    assert limited.objective > free.objective + 1e-9
+
+
+def test_evaluate_names_each_violation():
+    """The scorer raises naming every broken limit; violations() lists them without raising."""
+    p = BudgetedProblem(SMALL, 2, capacity=[1, None], max_time=[3, None])
+    routes = [[1, 0], []]
+    with pytest.raises(FeasibilityError) as caught:
+        evaluate_budgeted(p, routes)
+    assert "vehicle 0 serves 2 targets, capacity 1" in str(caught.value)
+    assert "vehicle 0 travels 4 s, max_time 3" in str(caught.value)
+    assert violations(p, routes) == [
+        "vehicle 0 serves 2 targets, capacity 1",
+        "vehicle 0 travels 4 s, max_time 3",
+    ]
+    assert violations(p, [[1], [0]]) == []
+    assert evaluate_budgeted(p, [[1], [0]]) == pytest.approx(3.0 + 5.0)
+    assert "never visited" in violations(p, [[1], []])[0]
+    assert taopt.evaluate(p, taopt.Routes([[1], [0]])) == pytest.approx(8.0)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_exact_equals_brute_force(seed):
+    """The exact model's optimum equals enumeration on random n <= 6, m <= 3 with limits."""
+    rng = np.random.default_rng(1000 + seed)
+    n, m = int(rng.integers(3, 7)), int(rng.integers(2, 4))
+    p = random_problem(n, m, seed, tight=1.5)
+    expected = brute_force(p)
+    result = solve_budgeted(p)
+    if math.isinf(expected):
+        assert result.status == "infeasible"
+        assert result.routes is None
+        return
+    assert result.status == "optimal"
+    assert result.objective == pytest.approx(expected, rel=1e-6)
+    assert evaluate_budgeted(p, result.routes) == pytest.approx(result.objective)
+    assert result.bound <= result.objective + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_arc_vehicle_form_agrees(seed):
+    """The three-index model gives the resource model's optimum."""
+    p = random_problem(5, 2, 50 + seed, tight=1.5)
+    a, b = solve_budgeted(p), solve_budgeted(p, form="arc-vehicle")
+    assert a.status == b.status
+    if a.status == "optimal":
+        assert a.objective == pytest.approx(b.objective, rel=1e-6)
+
+
+def test_infeasible_is_a_status_not_an_exception():
+    """Too little capacity, or a target out of every vehicle's time, gives status infeasible."""
+    short = solve_budgeted(BudgetedProblem(SMALL, 2, capacity=[1, 0]))
+    assert short.status == "infeasible" and "sum" in short.info["proof"]
+    far = solve_budgeted(BudgetedProblem(SMALL, 2, max_time=[3.5, 4.0]))  # target 0 needs >= 4
+    assert far.status == "infeasible" and far.routes is None
+    assert far.info["proof"]
+
+
+def test_no_limit_is_chapter_two():
+    """Without any finite limit the optimum is chapter 2's."""
+    p = random_problem(6, 2, 3).replace(capacity=None, max_time=None)
+    assert solve_budgeted(p).objective == pytest.approx(taopt.solve(p.routing, "exact").objective)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_bounds_never_above_the_optimum(seed):
+    """Every bound of the family is at most the brute-force optimum."""
+    rng = np.random.default_rng(seed)
+    p = random_problem(int(rng.integers(3, 7)), int(rng.integers(2, 4)), 200 + seed, tight=1.2)
+    optimum = brute_force(p)
+    values = {
+        "arborescence": arborescence_bound(p),
+        "start_count": start_count_bound(p),
+        "fast": lower(p, "fast"),
+        "auto": lower(p, "auto"),
+        "generic": taopt.bounds.lower(p),
+        "routing": taopt.bounds.arborescence(p.routing),
+    }
+    for name, value in values.items():
+        assert value <= optimum + 1e-6, name
+    assert values["auto"] >= values["fast"] - 1e-9
+    assert values["arborescence"] >= values["routing"] - 1e-9
+
+
+def test_capacity_bound_sees_forced_routes():
+    """With capacity 1 everywhere every target is first on a route: the bound is the optimum."""
+    p = BudgetedProblem(SMALL, 2, capacity=[1, 1])
+    assert min_routes(p) == 2
+    assert start_count_bound(p) == pytest.approx(brute_force(p))
+    assert lower(p, "auto") > taopt.bounds.lower(p.routing) + 1e-9
+
+
+def test_usable_arcs_keep_every_feasible_route():
+    """No arc of an optimal route is pruned, and pruned_routing prices it the same."""
+    p = random_problem(6, 2, 7, tight=1.5)
+    result = solve_budgeted(p)
+    usable = usable_arcs(p)
+    pruned = pruned_routing(p)
+    if result.status == "optimal":
+        for k, route in enumerate(result.routes):
+            points = [p.n + k, *route]
+            assert all(usable[k, a, b] for a, b in zip(points, points[1:], strict=False))
+        assert pruned.evaluate(result.routes) == pytest.approx(result.objective)
+
+
+def test_time_limit_returns_time_limit_with_valid_bound():
+    """A tiny limit on a hard instance gives status time_limit, bound <= objective."""
+    p = random_problem(40, 4, 11, tight=2.0).replace(capacity=[11, 11, 11, 11])
+    result = solve_budgeted(p, time_limit=0.3)
+    assert result.status in ("time_limit", "optimal")
+    assert result.runtime < 2.0
+    if result.status == "time_limit":
+        assert result.bound is not None
+        assert result.bound <= result.objective + 1e-9
+        if result.routes is not None:
+            assert evaluate_budgeted(p, result.routes) == pytest.approx(result.objective)
+
+
+def test_solve_through_the_registry_rejects_bad_incumbent_quietly():
+    """taopt.solve runs 'exact'; an incumbent breaking a limit is ignored, and said."""
+    p = BudgetedProblem(SMALL, 2, capacity=[1, None], max_time=[3, None])
+    result = solve_budgeted(p, incumbent=[[1, 0], []])
+    assert result.status == "optimal"
+    assert "capacity" in result.info["incumbent_rejected"]
+    assert taopt.solve(p, "exact").objective == pytest.approx(result.objective)
