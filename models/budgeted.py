@@ -403,6 +403,14 @@ class ResourceModel:
                 vector[offset + points[1:]] = np.maximum(self.limits["time"][k] - spent, 0.0)
         return vector
 
+    def route_arcs(self, routes: list[list[int]]) -> np.ndarray:
+        """Arc indices (= σ columns) used by ``routes``."""
+        n = self.problem.n
+        arcs = [
+            self.arc_index[[n + k, *route][:-1], route] for k, route in enumerate(routes) if route
+        ]
+        return np.concatenate(arcs) if arcs else np.zeros(0, dtype=np.int64)
+
     def decode(self, solution: np.ndarray) -> tuple[list[list[int]], list[list[int]]] | None:
         """Routes and leftover cycles of an integral σ; None if it cannot be read."""
         try:
@@ -432,6 +440,70 @@ def greedy_budgeted(problem: BudgetedProblem) -> list[list[int]] | None:
         ends[k] = target
         left[target] = False
     return routes
+
+
+def repaired_routes(
+    problem: BudgetedProblem, routes: list[list[int]], passes: int = 3
+) -> list[list[int]] | None:
+    """A feasible start from any routes (e.g. chapter 2's optimum, which ignores the
+    limits): cut every route back until it meets its limits, insert the targets cut off
+    where they cost least without breaking a limit, then move single targets while that
+    lowers the total (``passes`` sweeps). None if a target fits nowhere (proves nothing).
+
+    Notes
+    -----
+    O(passes · n · (n + m)) insertion prices; only a start for the MIP rounds.
+    """
+    cost = problem.cost
+    n = problem.n
+    routes = [list(r) for r in routes]
+    loose: list[int] = []
+    for k, route in enumerate(routes):
+        while route and (
+            len(route) > problem.capacity[k] or problem.route_cost(k, route) > problem.max_time[k]
+        ):
+            loose.append(route.pop())
+
+    def best_place(target: int, exclude: tuple[int, int] | None = None):
+        best = (math.inf, -1, -1)
+        for k, route in enumerate(routes):
+            if len(route) + 1 > problem.capacity[k]:
+                continue
+            time_k = problem.route_cost(k, route)
+            points = [n + k, *route]
+            for q, a in enumerate(points):
+                if exclude == (k, q):
+                    continue
+                b = route[q] if q < len(route) else None
+                delta = cost[a, target] + (0.0 if b is None else cost[target, b] - cost[a, b])
+                if time_k + delta <= problem.max_time[k] and delta < best[0]:
+                    best = (delta, k, q)
+        return best
+
+    for target in sorted(loose, key=lambda t: -cost[:, t].min()):
+        delta, k, q = best_place(target)
+        if k < 0:
+            return None
+        routes[k].insert(q, target)
+    for _ in range(passes):
+        improved = False
+        for target in range(n):
+            k = next(v for v, route in enumerate(routes) if target in route)
+            q = routes[k].index(target)
+            points = [n + k, *routes[k]]
+            a = points[q]
+            b = routes[k][q + 1] if q + 1 < len(routes[k]) else None
+            saving = cost[a, target] + (0.0 if b is None else cost[target, b] - cost[a, b])
+            del routes[k][q]
+            delta, k2, q2 = best_place(target)
+            if k2 >= 0 and delta < saving - 1e-9:
+                routes[k2].insert(q2, target)
+                improved = True
+            else:
+                routes[k].insert(q, target)
+        if not improved:
+            break
+    return routes if not violations(problem, routes) else None
 
 
 def _as_routes(problem: BudgetedProblem, incumbent: Any) -> tuple[list[list[int]] | None, str]:
@@ -553,13 +625,22 @@ def solve_budgeted(
         return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
                         method="exact-budgeted", info=info)  # fmt: skip
     best_routes = given
-    greedy = greedy_budgeted(problem)
     best_value = math.inf if given is None else evaluate_budgeted(problem, given)
-    if greedy is not None and evaluate_budgeted(problem, greedy) < best_value:
-        best_routes, best_value = greedy, evaluate_budgeted(problem, greedy)
     best_bound = max(entry_bound(problem.routing), arborescence_bound(problem.routing))
     if not deadline.limited or deadline.remaining() > 3e-10 * n**2 * (n + m):
         best_bound = max(best_bound, assignment_bound(problem.routing))
+    # chapter 2's optimum without the limits: a valid bound (limits only remove solutions)
+    # and, cut back to the limits and repaired, a start
+    free = solve_routing(problem.routing, time_limit=deadline.share(0.2), max_rounds=max_rounds)
+    if free.bound is not None:
+        best_bound = max(best_bound, free.bound)
+    info["unlimited_optimum"] = free.objective if free.status == "optimal" else None
+    starts = [greedy_budgeted(problem)]
+    if free.routes is not None:
+        starts.append(repaired_routes(problem, free.routes))
+    for start in starts:
+        if start is not None and evaluate_budgeted(problem, start) < best_value:
+            best_routes, best_value = start, evaluate_budgeted(problem, start)
 
     def stop(stopped_by: str, extra: dict[str, Any]) -> Solution:
         bound = best_bound if best_routes is None else min(best_bound, best_value)
@@ -574,6 +655,7 @@ def solve_budgeted(
     # 1. root LP, (2.5) separated exactly, at most half of the time left
     model.model.relax(True)
     root_rounds, root_bound = 0, -math.inf
+    root_reduced: np.ndarray | None = None
     budget = deadline.share(0.5)
     root_end = None if budget is None else time.perf_counter() + budget
     try:
@@ -587,7 +669,7 @@ def solve_budgeted(
                 break  # the MIP below proves it
             if run.solver_status != "optimal" or run.objective is None:
                 break
-            root_bound, _ = model.model.lagrangian_bound()
+            root_bound, root_reduced = model.model.lagrangian_bound()
             sigma = model.sigma(model.model.highs.getSolution().col_value)
             found = separate_subtours(problem.routing, model.tails, model.heads, sigma,
                                       deadline=root_end)  # fmt: skip
@@ -597,6 +679,20 @@ def solve_budgeted(
         model.model.relax(False)
     best_bound = max(best_bound, root_bound)
     info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound)
+    fixed = 0
+    if form == "resource" and math.isfinite(root_bound) and best_routes is not None:
+        # reduced-cost fixing: a solution using arc a costs at least L + d_a
+        # (HighsModel.lagrangian_bound), so an arc with L + d_a > UB is in no solution
+        # better than the incumbent; the incumbent's own arcs stay
+        if root_reduced is not None:
+            arcs = root_reduced[: len(model.tails)]
+            slack = 1e-9 * max(1.0, abs(best_value))
+            off = arcs > best_value - root_bound + slack
+            off[model.route_arcs(best_routes)] = False
+            off &= model.model.column_upper[: len(model.tails)] > 0
+            model.model.set_upper(np.flatnonzero(off), 0.0)
+            fixed = int(off.sum())
+    info["fixed_arcs"] = fixed
     # 2. MIP rounds
     harvested: list[tuple[int, ...]] = []
     candidates: list[tuple[float, list[list[int]]]] = []
