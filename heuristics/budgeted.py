@@ -13,7 +13,8 @@ aware of the limits here, each the smallest change that keeps the printed algori
   full or when its cluster with the target, sequenced by (2.18), would take longer than
   ``T_k``. Without limits it is chapter 2's EVM.
 * "GA" — the memetic GA of §2.5 (:mod:`taopt.heuristics.ga_routing`: its encoding,
-  crossover, mutations and local search), with a *penalty* for violated limits.
+  crossover, mutations and local search), with a *penalty* for violated limits and, in
+  its memetic step, a repair and a limit-aware local search (:func:`genetic_algorithm`).
 
 A heuristic cannot prove that no feasible answer exists. When MC or EVM is left with
 targets no vehicle can take, or the GA never met a feasible chromosome, the answer is
@@ -46,6 +47,7 @@ from taopt.heuristics.ga_local_search import local_search
 from taopt.heuristics.ga_routing import (
     OPERATOR_SETS,
     _mutate,
+    _separate_clones,
     decode,
     encode,
     nodes_to_genes,
@@ -64,6 +66,7 @@ __all__ = [
     "limited_marginal_cost_routes",
     "limited_extended_voronoi_routes",
     "repair",
+    "limited_local_search",
     "route_times",
     "penalised_cost",
     "mc",
@@ -218,6 +221,113 @@ def repair(problem: BudgetedProblem, routes: list[list[int]]) -> list[list[int]]
         return [list(route) for route in routes]
     repaired, left = limited_marginal_cost_routes(problem, initial=cut)
     return None if left.size else repaired
+
+
+def limited_local_search(
+    problem: BudgetedProblem, routes: list[list[int]], max_moves: int = 1000
+) -> tuple[list[list[int]], int]:
+    """Best-improvement descent that never leaves the limits: relocate one target, or
+    exchange two targets of different routes.
+
+    Written here because chapter 2's :func:`~taopt.heuristics.ga_local_search.local_search`
+    prices moves on one path and knows no route's count or time; its moves are the same
+    kind (or-opt of one gene, exchange).
+
+    Parameters
+    ----------
+    problem : BudgetedProblem
+    routes : list of m lists
+        Routes within every limit.
+    max_moves : int
+        Stop after this many improving moves.
+
+    Returns
+    -------
+    routes : list of m lists
+        Still within every limit; total travel time never higher.
+    moves : int
+        Improving moves made.
+
+    Notes
+    -----
+    With ``s(u)`` the successor of point u on its route (a free end point after the last
+    target), removing target k changes its route's time by
+    ``r_k = t(p_k, s_k) − t(p_k, k) − t(k, s_k)`` and inserting it after u by
+    ``t(u, k) + t(k, s(u)) − t(u, s(u))``; a relocation is allowed when the receiving route
+    keeps ``|o| + 1 <= Q`` and both routes keep their ``T``. Exchanging k and l (different
+    routes) replaces k by l between ``p_k`` and ``s_k`` and vice versa; counts do not change,
+    so it is the only move left when every vehicle is full. O(n (n + m)) numpy work per
+    move.
+    """
+    n, m = problem.n, problem.m
+    size = n + m
+    cost = np.zeros((size + 1, size + 1))  # point ``size`` is the free end of every route
+    cost[:size, :size] = problem.cost
+    capacity = problem.capacity
+    limit = np.where(
+        np.isfinite(problem.max_time),
+        problem.max_time + SLACK * np.maximum(1.0, problem.max_time),
+        np.inf,
+    )
+    routes = [list(route) for route in routes]
+    targets = np.arange(n)
+    moves = 0
+    while moves < max_moves:
+        route_of = np.empty(size, dtype=int)
+        successor = np.full(size, size)
+        predecessor = np.empty(n, dtype=int)
+        times = np.zeros(m)
+        counts = np.array([len(route) for route in routes])
+        for j, route in enumerate(routes):
+            points = [n + j, *route]
+            route_of[points] = j
+            successor[points[:-1]] = points[1:]
+            predecessor[route] = points[:-1]
+            times[j] = cost[points[:-1], points[1:]].sum()
+        after = successor[:n]
+        removal = (
+            cost[predecessor, after] - cost[predecessor, targets] - cost[targets, after]
+        )  # (n,)
+        points = np.arange(size)
+        insertion = (
+            cost[points[None, :], targets[:, None]]
+            + cost[targets[:, None], successor[None, :]]
+            - cost[points, successor][None, :]
+        )  # (n, n + m): target k after point u
+        home, there = route_of[:n][:, None], route_of[None, :]
+        same = home == there
+        relocate = removal[:, None] + insertion
+        fits_same = times[home] + relocate <= limit[home]
+        fits_other = (
+            (counts[there] + 1 <= capacity[there])
+            & (times[there] + insertion <= limit[there])
+            & (times[home] + removal[:, None] <= limit[home])
+        )
+        blocked = (points[None, :] == targets[:, None]) | (points[None, :] == predecessor[:, None])
+        relocate = np.where(np.where(same, fits_same, fits_other) & ~blocked, relocate, np.inf)
+        # exchange k (route a) and l (route b): l takes k's place and k takes l's
+        into = cost[predecessor[:, None], targets[None, :]] + cost[targets[None, :], after[:, None]]
+        change = into - (cost[predecessor, targets] + cost[targets, after])[:, None]  # (k, l)
+        a, b = route_of[:n][:, None], route_of[:n][None, :]
+        exchange = change + change.T
+        fits = (times[a] + change <= limit[a]) & (times[b] + change.T <= limit[b]) & (a != b)
+        exchange = np.where(fits, exchange, np.inf)
+        tolerance = 1e-10 * max(float(times.sum()), 1.0)
+        best_relocate = int(np.argmin(relocate))
+        best_exchange = int(np.argmin(exchange))
+        if min(relocate.flat[best_relocate], exchange.flat[best_exchange]) >= -tolerance:
+            break
+        if relocate.flat[best_relocate] <= exchange.flat[best_exchange]:
+            k, u = divmod(best_relocate, size)
+            routes[route_of[k]].remove(k)
+            target_route = routes[route_of[u]]
+            target_route.insert(0 if u >= n else target_route.index(u) + 1, k)
+        else:
+            k, l = divmod(best_exchange, n)
+            ra, rb = routes[route_of[k]], routes[route_of[l]]
+            ra[ra.index(k)], rb[rb.index(l)] = l, k
+        moves += 1
+    return routes, moves
 
 
 # -- EVM (2.12)–(2.14) + (2.18)–(2.19), limit-aware ------------------------------------------
@@ -480,11 +590,19 @@ def genetic_algorithm(
     penalty keeps every operator unchanged and lets infeasible chromosomes carry good genes
     across a tight limit. But a penalty alone rarely *reaches* the feasible region when the
     limits bite (with ``Q_k = n / m`` exactly, random chromosomes almost never have the
-    right route lengths: none in 100 generations on a drift n50m10 scenario). So the
-    children that get the local search (which minimises (2.2) and ignores the limits) are
-    then repaired (:func:`repair`: cut each route to its longest prefix within limits,
-    re-insert the rest by the limit-aware cheapest insertion), and the result replaces the
-    child only when the *penalised* fitness improves. The answer is the best *feasible*
+    right route lengths: none in 100 generations on a drift n50m10 scenario), and chapter
+    2's local search, which minimises (2.2) and ignores the limits, walks straight out of
+    it. So the memetic step makes two candidates from each of the 2 best distinct
+    children: chapter 2's local search then :func:`repair` (cut each route to its longest
+    prefix within limits, re-insert the rest by the limit-aware cheapest insertion) then
+    :func:`limited_local_search` (relocations and exchanges that keep every limit), and the
+    child itself repaired then :func:`limited_local_search`; the better replaces the child
+    when the *penalised* fitness improves. The population is kept free of clones (chapter
+    2's ``distinct`` option), without which it collapsed onto one infeasible chromosome on
+    a 6-target instance. Without limits the memetic step is chapter 2's alone. Measured on
+    the drift n50m10 scenario of seed 7 with ``Q = 5``: 8279 with the penalty and repair
+    only, 7518 with the limit-aware descent after the repair, 6630 with both candidates
+    (PyVRP, 2 s: 6139). The answer is the best *feasible*
     chromosome ever seen (not the best penalised one).
 
     Parameters
@@ -553,6 +671,8 @@ def genetic_algorithm(
     unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
     matrix = path_matrix(problem.routing)
     counters = {"moves": 0, "move_evaluations": 0, "repairs": 0, "repaired": 0}
+    # clone fingerprints, as chapter 2's GA (fixed weights: they draw nothing from ``rng``)
+    weights = np.random.default_rng(0x6A).integers(1, 2**62, size=length, dtype=np.int64)
 
     genes = rng.permuted(np.tile(np.arange(length), (population, 1)), axis=1)
     fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
@@ -589,6 +709,7 @@ def genetic_algorithm(
             children[half:][cross] = order_crossover(fathers[cross], mothers[cross], rng)
         children = _mutate(children[:population], ops, mutation_rate, rng)
         children[0] = elite  # elitism on the penalised fitness
+        _separate_clones(children, weights, ops, rng)  # keep the population diverse
         genes = children
         fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
         _polish(problem, matrix, genes, fitness, plain, violation, penalty, unit, ops, counters)
@@ -629,8 +750,10 @@ def _polish(
     ops: Any,
     counters: dict[str, int],
 ) -> None:
-    """Chapter 2's local search, then :func:`repair`, on the best distinct children; the
-    result replaces the child only where the penalised fitness improves (in place)."""
+    """On the best distinct children: two candidates, chapter 2's local search then
+    :func:`repair` then :func:`limited_local_search`, and the child itself repaired then
+    :func:`limited_local_search`; the better replaces the child where the penalised fitness
+    improves (in place). Without limits: chapter 2's local search only."""
     values, first = np.unique(fitness, return_index=True)
     for row in [int(r) for r in first[: ops.polish]]:
         nodes, moves, evaluations = local_search(
@@ -638,15 +761,31 @@ def _polish(
         )
         counters["moves"] += moves
         counters["move_evaluations"] += evaluations
-        candidate = nodes_to_genes(problem.routing, nodes)
-        value, total, over = penalised_cost(problem, candidate, penalty, unit)
-        if over[0] > 0:
-            fixed = repair(problem, decode(problem.routing, candidate, "vehicle"))
-            counters["repairs"] += 1
-            if fixed is not None:
+        best = None
+        limited = problem.has_capacity or problem.has_max_time
+        starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
+        if not limited:  # no limit: chapter 2's memetic step exactly
+            candidate = nodes_to_genes(problem.routing, nodes)
+            value, total, over = penalised_cost(problem, candidate, penalty, unit)
+            best = (candidate, value[0], total[0], over[0])
+        for start in starts:
+            candidate = start
+            value, total, over = penalised_cost(problem, candidate, penalty, unit)
+            routes = decode(problem.routing, candidate, "vehicle")
+            if over[0] > 0:
+                counters["repairs"] += 1
+                routes = repair(problem, routes)
+                if routes is None:
+                    if best is None or value[0] < best[1]:
+                        best = (candidate, value[0], total[0], over[0])
+                    continue
                 counters["repaired"] += 1
-                candidate = encode(problem.routing, fixed)
-                value, total, over = penalised_cost(problem, candidate, penalty, unit)
-        if value[0] < fitness[row]:
-            genes[row] = candidate
-            fitness[row], plain[row], violation[row] = value[0], total[0], over[0]
+            routes, more = limited_local_search(problem, routes, ops.max_moves)
+            counters["moves"] += more
+            candidate = encode(problem.routing, routes)
+            value, total, over = penalised_cost(problem, candidate, penalty, unit)
+            if best is None or value[0] < best[1]:
+                best = (candidate, value[0], total[0], over[0])
+        if best is not None and best[1] < fitness[row]:
+            genes[row] = best[0]
+            fitness[row], plain[row], violation[row] = best[1], best[2], best[3]

@@ -14,12 +14,15 @@ hangs) is :mod:`taopt.heuristics.peers`'s ``_Worker``, pointed at the other scri
 
 Integer units
 -------------
-The travel times are scaled and rounded as for the chapter-2 peers
-(:func:`taopt.heuristics.peers.integer_costs`); each arc is then off by at most 0.5 units.
-``T_k`` is passed as ``floor(T_k · scale − 0.5 n)``: a route of at most n arcs within that
-in integer units is within ``T_k`` in true travel time, so the solver's limit is never
-looser than the real one (and tighter by at most ``n / scale`` time units, a relative
-``1e-7 n`` of the largest entry).
+Both solvers take integers. The travel times are scaled so that the largest becomes
+:data:`LARGEST_ENTRY` = 1e10 (not the chapter-2 peers' 1e7: a travel-time limit needs the
+finer grid) and rounded (:func:`taopt.heuristics.peers.integer_costs`), so a route of at
+most n arcs is off by at most ``0.5 n`` units, a relative ``5e-11 n`` of the largest
+entry. ``T_k`` is passed as ``floor(T_k · scale · (1 + TIME_TOLERANCE / 2))``: a route
+that takes exactly ``T_k`` (the boundary case, e.g. the unlimited optimum at ``τ = 1``)
+stays feasible for the solver, and a route the solver accepts is within the scorer's
+tolerance unless ``0.5 n`` units exceed ``T_k · scale · TIME_TOLERANCE / 2`` (only for a
+``T_k`` below ``1e-4 n`` times the largest entry). Either way the answer is re-checked.
 
 Answers
 -------
@@ -48,15 +51,17 @@ import time
 from pathlib import Path
 from typing import Any
 
-from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
+from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_budgeted, violations
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics import peers
 from taopt.registry import register_method
 from taopt.result import ERROR, FEASIBLE, Routes, Solution
 
-__all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown"]
+__all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown", "LARGEST_ENTRY"]
 
 WORKER_SCRIPT = Path(__file__).with_name("_budgeted_peer_worker.py")
+#: The largest travel time becomes this integer when ``scale`` is not given.
+LARGEST_ENTRY = 10**10
 
 
 class _Worker(peers._Worker):
@@ -121,12 +126,12 @@ atexit.register(shutdown)
 def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
     """``Q_k`` and ``T_k`` for the solvers: integers, None for "no limit".
 
-    ``T_k`` becomes ``floor(T_k · scale − 0.5 n)`` (never below 0), so an integer route
-    within it is within ``T_k`` (module docstring).
+    ``T_k`` becomes ``floor(T_k · scale · (1 + TIME_TOLERANCE / 2))`` (module docstring).
     """
     capacity = [None if not math.isfinite(q) else int(q) for q in problem.capacity]
+    stretch = 1.0 + TIME_TOLERANCE / 2
     max_time = [
-        None if not math.isfinite(t) else max(0, int(math.floor(t * scale - 0.5 * problem.n)))
+        None if not math.isfinite(t) else int(math.floor(t * scale * stretch))
         for t in problem.max_time
     ]
     return capacity, max_time
@@ -152,6 +157,9 @@ def _solve(
 ) -> Solution:
     if not isinstance(problem, BudgetedProblem):
         raise InstanceError(f"expected a BudgetedProblem, got {type(problem).__name__}")
+    if scale is None:
+        largest = float(problem.cost.max())
+        scale = LARGEST_ENTRY / largest if largest > 0 else 1.0
     cost, scale = peers.integer_costs(problem.routing, scale)
     capacity, max_time = integer_limits(problem, scale)
     request = {
@@ -212,7 +220,7 @@ def pyvrp_budgeted(
     max_iterations : int, optional
         Stop after this many iterations.
     scale : float, optional
-        Integer units per unit of travel time (default: largest entry -> 1e7).
+        Integer units per unit of travel time (default: largest entry -> 1e10).
 
     Returns
     -------
@@ -271,7 +279,7 @@ def ortools_budgeted(
     first_solution, metaheuristic : str
         OR-Tools' ``FirstSolutionStrategy`` / ``LocalSearchMetaheuristic`` names.
     scale : float, optional
-        Integer units per unit of travel time (default: largest entry -> 1e7).
+        Integer units per unit of travel time (default: largest entry -> 1e10).
 
     Returns
     -------

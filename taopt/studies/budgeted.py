@@ -273,11 +273,12 @@ def budgeted_study(
         options.setdefault("pyvrp", {}).setdefault("max_iterations", peer_iterations)
     if "ortools" in methods:
         options.setdefault("ortools", {}).setdefault("solution_limit", peer_iterations // 10)
+    # scenario-major: a study stopped early has every level of its first scenarios
     keys = [
         {"size": size, "level": level, "scenario": k}
         for size in sizes
-        for level in levels
         for k in range(int(scenarios))
+        for level in levels
     ]
     df = run_study(
         SPEC,
@@ -308,7 +309,11 @@ def _with_measures(df: pd.DataFrame) -> pd.DataFrame:
     answered = (df["status"].isin(["feasible", "optimal", "time_limit"])) & np.isfinite(
         df["objective"].to_numpy(float)
     )
+    objective = df["objective"].where(answered, np.nan)
+    best_known = objective.groupby([df[k] for k in keys]).transform("min")
     return df.assign(
+        known_feasible=np.isfinite(best_known.to_numpy(float)),
+        vs_best_pct=100 * (objective / best_known - 1),
         proven_infeasible=exact_status == "infeasible",
         answered=answered.to_numpy(),
         gap_pct=100 * (df["objective"] / df["optimum"] - 1),
@@ -322,11 +327,14 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
     """Per (size, level, method): gaps, answers and time.
 
     Columns: ``scenarios``; ``proven_infeasible`` (scenarios the exact method proved
-    infeasible); ``no_answer_pct`` (% of the other scenarios where the method gave no
-    feasible answer); ``certified`` (scenarios with a certified optimum, answered by the
-    method); ``gap_pct`` (mean ``100 (f / f_o − 1)`` over those); ``gap_ub_pct`` (mean
+    infeasible); ``unknown`` (scenarios neither proven infeasible nor answered by any
+    method); ``no_answer_pct`` (% of the scenarios known to be feasible, i.e. answered by
+    some method, where this method gave no feasible answer); ``certified`` (scenarios with
+    a certified optimum, answered by the method); ``gap_pct`` (mean ``100 (f / f_o − 1)`` over those); ``gap_ub_pct`` (mean
     ``100 (f / bound − 1)`` over the answered scenarios with an exact bound: an upper bound
-    on the gap); ``time_s`` (mean runtime, without a peer's
+    on the gap); ``vs_best_pct`` (mean ``100 (f / f_best − 1)`` over the answered
+    scenarios, ``f_best`` the best answer of any method on the scenario: the measure left
+    where the exact method certifies nothing); ``time_s`` (mean runtime, without a peer's
     one-off worker start-up) and ``time_vs_none`` (its ratio to the same
     method's mean time at level "none", when that level was run).
     """
@@ -334,7 +342,8 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
     rows = []
     keys = ["size", "level", "method"]
     for (size, level, method), group in data.groupby(keys, sort=False):
-        open_ = group[~group["proven_infeasible"]]
+        known = group[group["known_feasible"]]
+        unknown = group[~group["known_feasible"] & ~group["proven_infeasible"]]
         answered = group[group["answered"]]
         certified = answered.dropna(subset=["gap_pct"])
         bounded = answered[np.isfinite(answered["gap_ub_pct"].to_numpy(float))]
@@ -345,10 +354,12 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
                 "method": method,
                 "scenarios": group["scenario"].nunique(),
                 "proven_infeasible": int(group["proven_infeasible"].sum()),
-                "no_answer_pct": 100 * float((~open_["answered"]).mean()) if len(open_) else np.nan,
+                "unknown": unknown["scenario"].nunique(),
+                "no_answer_pct": 100 * float((~known["answered"]).mean()) if len(known) else np.nan,
                 "certified": len(certified),
                 "gap_pct": float(certified["gap_pct"].mean()) if len(certified) else np.nan,
                 "gap_ub_pct": float(bounded["gap_ub_pct"].mean()) if len(bounded) else np.nan,
+                "vs_best_pct": float(answered["vs_best_pct"].mean()) if len(answered) else np.nan,
                 "time_s": float(group["work_s"].mean()),
             }
         )
@@ -368,7 +379,8 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def plot_study(table: pd.DataFrame, path: str | None = None, exclude: Sequence[str] = ()) -> Any:
-    """Gap and no-answer fraction vs tightness, one line per method, one row per size.
+    """True gap, gap to the best answer and no-answer fraction vs tightness, one line per
+    method, one row of panels per size.
 
     Parameters
     ----------
@@ -386,8 +398,13 @@ def plot_study(table: pd.DataFrame, path: str | None = None, exclude: Sequence[s
     from matplotlib.figure import Figure
 
     sizes = list(dict.fromkeys(table["size"]))
-    figure = Figure(figsize=(11, 3.6 * len(sizes)))
-    axes = figure.subplots(len(sizes), 2, squeeze=False)
+    panels = (
+        ("gap_pct", "true gap 100 (f / f_o - 1), certified f_o (%)"),
+        ("vs_best_pct", "gap to the best answer found 100 (f / f_best - 1) (%)"),
+        ("no_answer_pct", "no feasible answer (% of scenarios known feasible)"),
+    )
+    figure = Figure(figsize=(16, 4.2 * len(sizes)))
+    axes = figure.subplots(len(sizes), len(panels), squeeze=False)
     for row, size in zip(axes, sizes, strict=True):
         part = table[table["size"] == size]
         levels = list(dict.fromkeys(part["level"]))
@@ -396,19 +413,12 @@ def plot_study(table: pd.DataFrame, path: str | None = None, exclude: Sequence[s
             if method in exclude:
                 continue
             line = part[part["method"] == method].set_index("level").reindex(levels)
-            row[0].plot(x, line["gap_pct"], marker="o", label=method)
-            row[1].plot(x, line["no_answer_pct"], marker="o", label=method)
-        for ax, label in zip(
-            row,
-            (
-                "mean true gap 100 (f / f_o - 1) (%)",
-                "no feasible answer (% of feasible scenarios)",
-            ),
-            strict=True,
-        ):
+            for ax, (column, _label) in zip(row, panels, strict=True):
+                ax.plot(x, line[column], marker="o", label=method)
+        for ax, (_column, label) in zip(row, panels, strict=True):
             ax.set_xticks(x, levels)
             ax.set_xlabel("tightness level (Q<s>: Q = ceil(s n / m); T<tau>: T = tau T*)")
-            ax.set_ylabel(label)
+            ax.set_ylabel(label, fontsize=9)
             ax.set_title(f"{size}", fontsize=10)
             ax.grid(alpha=0.3)
         row[0].legend(fontsize=8)
