@@ -19,7 +19,7 @@ Targets (issue 9, two cores):
   scenario serially (1) and with the classes in worker processes (0: one per core) in the
   same run, after the pool's start-up (timed first, on a tiny instance, cold and warm).
 
-Scenarios are the study's (:func:`taopt.studies.capability.make_scenario`, seed 1); only the
+Scenarios are the study's (:func:`taopt.orchestration.studies.capability.make_scenario`, seed 1); only the
 method is timed (the matrix is built first). Times are the median of ``--repeat`` runs for
 the fast methods.
 """
@@ -35,7 +35,7 @@ import numpy as np
 import taopt
 from taopt.capability.instances import STUDY_CELL, THESIS_OBSTACLES
 from taopt.navigation.grid import GridGraph
-from taopt.studies.capability import make_scenario
+from taopt.orchestration.studies.capability import make_scenario
 
 SETTINGS = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
 TARGETS = {"grid8": 2.0, "grid16": 4.0, "dtaa": 0.05, "ga": 10.0, "exact": 3.0}

@@ -25,7 +25,7 @@ import time
 from taopt.comm import random_problem
 from taopt.comm.engine import simulate
 from taopt.heuristics.comm import POLICIES
-from taopt.studies.comm import PRESETS, comm_study
+from taopt.orchestration.studies.comm import PRESETS, comm_study
 
 
 def timed_runs(n: int, m: int, r_c: float, attributes: list[int], count: int, algorithm: str):

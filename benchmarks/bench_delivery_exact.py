@@ -113,7 +113,7 @@ def compare(sizes: list[int], seeds: int, grid: int, flight_range: float, limit:
 
 def dag40(count: int, ratios: tuple[float, ...], trace: bool) -> None:
     """The ideal DP on the dag40 instances (Tables 5.1-5.2), SMMA's plan as incumbent."""
-    from taopt.studies.delivery import study_instance
+    from taopt.orchestration.studies.delivery import study_instance
 
     rows = []
     for i in range(count):

@@ -27,9 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-LAUNCH = (
-    "import sys, taopt.cli, taopt.solving\nprint('ready', flush=True)\nsys.exit(taopt.cli.main())\n"
-)
+LAUNCH = "import sys, taopt.orchestration.cli, taopt.orchestration.solving\nprint('ready', flush=True)\nsys.exit(taopt.orchestration.cli.main())\n"
 
 
 def delivery_file(folder: Path, n: int) -> Path:

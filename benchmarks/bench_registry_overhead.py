@@ -22,7 +22,7 @@ from taopt.fields import UniformField
 from taopt.heuristics.clustering import mc
 from taopt.heuristics.sequencing import smma_delivery
 from taopt.navigation import travel_time_matrix
-from taopt.studies.delivery import study_instance
+from taopt.orchestration.studies.delivery import study_instance
 
 
 def timed(call, repeat: int) -> list[float]:

@@ -29,8 +29,8 @@ import argparse
 import time
 from pathlib import Path
 
-from taopt.delivery.sop import KNOWN_OPTIMA, load_sop, path_cost
 from taopt.models import solve_sop
+from taopt.sop.problem import KNOWN_OPTIMA, load_sop, path_cost
 
 DEFAULT = ["ESC07", "ESC11", "ESC12", "br17.10", "br17.12"]
 
@@ -72,7 +72,7 @@ SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / 
 
 
 def load_problem(name: str):
-    from taopt.delivery.sop import SopProblem, shipped_sop
+    from taopt.sop.problem import SopProblem, shipped_sop
 
     if name in shipped_sop():
         return SopProblem.load(name)
@@ -82,7 +82,7 @@ def load_problem(name: str):
 def compare(names: list[str], limit: float) -> None:
     """The side-by-side table of ``--compare`` (see the module docstring)."""
     import taopt
-    from taopt.delivery.sop import evaluate_order
+    from taopt.sop.problem import evaluate_order
 
     runs = {
         "portfolio": lambda p: taopt.solve(p, "exact", time_limit=limit),

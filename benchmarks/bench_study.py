@@ -51,7 +51,17 @@ def alive(pid: int) -> bool:
 def one(mode: list[str]) -> tuple[float, int, int]:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "study"
-        argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "30", "--m", "4"]
+        argv = [
+            sys.executable,
+            "-m",
+            "taopt.orchestration.cli",
+            "study",
+            "drift",
+            "--n",
+            "30",
+            "--m",
+            "4",
+        ]
         argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
         process = subprocess.Popen(
             argv,

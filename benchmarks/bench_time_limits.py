@@ -37,7 +37,7 @@ def assignment(n: int, m: int = 3, seed: int = 0) -> taopt.AssignmentProblem:
 
 def sop(name: str):
     """A TSPLIB SOP instance: shipped, or from the shared benchmark folder."""
-    from taopt.delivery.sop import SopProblem, shipped_sop
+    from taopt.sop.problem import SopProblem, shipped_sop
 
     if name in shipped_sop():
         return SopProblem.load(name)

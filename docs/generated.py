@@ -9,7 +9,7 @@ def generated_pages() -> dict[str, str]:
     studies) and ``schemas.md`` (every shipped schema). A new family appears in both without
     an edit to any page."""
     from taopt import schemas
-    from taopt.pipeline import available_methods
+    from taopt.orchestration.pipeline import available_methods
     from taopt.registry import families
 
     rows = []
@@ -73,4 +73,44 @@ def generated_pages() -> dict[str, str]:
             "```",
             "",
         ]
-    return {"kinds.md": kinds, "schemas.md": "\n".join(parts)}
+    return {"kinds.md": kinds, "schemas.md": "\n".join(parts), "api/index.md": api_index()}
+
+
+def api_index() -> str:
+    """The API reference's index: every public module and package of taopt, found with
+    pkgutil (a new family's package is documented without an edit)."""
+    import pkgutil
+
+    import taopt
+
+    names = sorted(
+        f"taopt.{module.name}"
+        for module in pkgutil.iter_modules(taopt.__path__)
+        if not module.name.startswith("_")
+    )
+    names = sorted({*names, "taopt.models", "taopt.heuristics"})
+    return "\n".join(
+        [
+            "# API reference",
+            "",
+            "Generated from the docstrings (numpydoc). The top-level package {mod}`taopt` holds "
+            "the entry",
+            "points used on every page of this site; each package below documents its own "
+            "modules (this list is generated from the package, docs/generated.py).",
+            "",
+            "```{toctree}",
+            ":maxdepth: 1",
+            "",
+            "taopt",
+            "```",
+            "",
+            "```{eval-rst}",
+            ".. autosummary::",
+            "   :toctree: generated",
+            "   :recursive:",
+            "",
+            *[f"   {name}" for name in names],
+            "```",
+            "",
+        ]
+    )

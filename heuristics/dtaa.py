@@ -32,7 +32,7 @@ its bid ``c_jr`` (an IEEE-754 double, 8 bytes) and bidder ``β_jr`` (a 32-bit in
 each round; the counts include every one of Algorithm 2's ``|T_q| |R|`` rounds per class.
 
 Theorem 3.5 says the assignment equals Algorithm 1's ("MCGA") per class on every connected
-graph: :mod:`taopt.studies.capability_claims` checks it. On a disconnected graph the vehicles of
+graph: :mod:`taopt.orchestration.studies.capability_claims` checks it. On a disconnected graph the vehicles of
 different components reach different "consensus" values: a component holding vehicles of
 class q assigns every target of T_q to its own vehicles, so a target is served once per
 such component, and (3.2) fails; :func:`distributed_auction` returns those assignments,

@@ -43,7 +43,6 @@ from typing import Any
 import numpy as np
 
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.sequencing import (
     _validate,
@@ -53,6 +52,7 @@ from taopt.heuristics.sequencing import (
 from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution, make_solution
+from taopt.sop.problem import SopProblem
 
 __all__ = ["ga_order", "ga_search"]
 

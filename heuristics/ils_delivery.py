@@ -61,7 +61,6 @@ import numpy as np
 
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import _sortie_data, _sortie_step, schedule
-from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.sequencing import (
     delivery_cost_matrix,
@@ -73,6 +72,7 @@ from taopt.heuristics.sequencing import (
 from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution, make_solution
+from taopt.sop.problem import SopProblem
 
 __all__ = ["ScheduleStates", "PathStates", "Screen", "ils_search", "forward_states"]
 

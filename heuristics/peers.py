@@ -79,11 +79,11 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, INFEASIBLE, Order, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
+from taopt.sop.problem import SopProblem
 from taopt.status import outcome
 
 __all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
@@ -546,7 +546,7 @@ def cpsat_solve(
         OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
         else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
         objective ``inf``; INFEASIBLE -> "infeasible".
-        ``objective`` is re-scored by taopt's scorer (:func:`taopt.delivery.sop.evaluate_order` or
+        ``objective`` is re-scored by taopt's scorer (:func:`taopt.sop.problem.evaluate_order` or
         :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
         rounded down and lowered by the rounding error of a path when the scaling is not
         exact (so it stays valid). ``info`` has ``cpsat_status``, ``solver_objective``,

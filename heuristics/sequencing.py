@@ -39,10 +39,10 @@ import numpy as np
 
 from taopt.delivery.dags import cycle_path
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution, make_solution
+from taopt.sop.problem import SopProblem
 
 # path_cost is defined in taopt.tsplib; re-exported here (heuristics and tests import it from
 # this module).

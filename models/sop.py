@@ -5,7 +5,7 @@ arc), find the cheapest Hamiltonian PATH ``start -> ... -> end`` visiting every
 node once such that every precedence pair ``(r, j)`` has r before j. It is the
 ordering core of chapter 5: with the drone cost matrix t* (5.11) and the
 precedences of (5.7) it is the problem NIA, MMA and SMMA (§5.4) solve
-heuristically; TSPLIB's .sop instances (:mod:`taopt.delivery.sop`) certify it.
+heuristically; TSPLIB's .sop instances (:mod:`taopt.sop.problem`) certify it.
 
 Sets and data: nodes ``V = {0..n-1}``; ``P`` the transitive closure of the
 precedence pairs with ``start ≺ v ≺ end`` for every inner v; ``pred(v)`` /
@@ -48,7 +48,7 @@ ended at bound 47; with them the LP bound is the optimum 55. "flow" is therefore
 
 Example
 -------
->>> from taopt.delivery.sop import load_sop
+>>> from taopt.sop.problem import load_sop
 >>> cost, precedences, start, end, name = load_sop("ESC07")
 >>> solve_sop(cost, precedences, start, end).objective
 2125.0
@@ -66,11 +66,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
-from taopt.delivery.sop import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.models.highs import HighsModel, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution, make_solution
+from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.status import certify
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger

@@ -84,10 +84,10 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.sop import SopProblem, path_cost
 from taopt.errors import InstanceError
 from taopt.limits import MARGIN, Deadline
 from taopt.result import Order, Solution, make_solution
+from taopt.sop.problem import SopProblem, path_cost
 from taopt.status import outcome
 
 __all__ = [

@@ -72,11 +72,11 @@ __version__ = "0.1.0"
 #: ``taopt --version``) loads no numpy, cvxpy or matplotlib.
 _LAZY: dict[str, tuple[str, str]] = {
     # the one entry point (the orchestration layer: imports taopt.models, taopt.heuristics)
-    "solve": ("taopt.pipeline", "solve"),
-    "available_methods": ("taopt.pipeline", "available_methods"),
+    "solve": ("taopt.orchestration.pipeline", "solve"),
+    "available_methods": ("taopt.orchestration.pipeline", "available_methods"),
     "evaluate": ("taopt.scoring", "evaluate"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
-    "lower": ("taopt.pipeline", "lower"),
+    "lower": ("taopt.orchestration.pipeline", "lower"),
     # the instance file's parts (each family's problem type and payload are in its spec:
     # ``exports``, found by __getattr__)
     "Instance": ("taopt.instance", "Instance"),

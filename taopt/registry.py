@@ -468,7 +468,7 @@ def methods(problem: Any, category: str | None = None) -> dict[str, Method]:
     Methods register where they are defined, in ``taopt.models`` (every exact method) and
     ``taopt.heuristics`` (heuristics, peers, simulation policies); the core never imports
     those packages, so this lists what has been imported. The orchestration imports both
-    (:mod:`taopt.pipeline`), so :func:`taopt.available_methods` and :func:`taopt.solve`
+    (:mod:`taopt.orchestration.pipeline`), so :func:`taopt.available_methods` and :func:`taopt.solve`
     always see every method. Peers whose package is missing are listed here but not by
     :func:`taopt.available_methods`.
     """

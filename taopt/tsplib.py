@@ -3,7 +3,7 @@
 TSPLIB95 files (Reinelt 1991) are a header of ``KEY: value`` lines followed by
 sections; taopt reads the explicit-matrix kinds, asymmetric TSP (``.atsp``,
 :func:`taopt.routing.tsplib.load_atsp`) and sequential ordering (``.sop``,
-:func:`taopt.delivery.sop.load_sop`). Both are read here, by :func:`read_tsplib`,
+:func:`taopt.sop.problem.load_sop`). Both are read here, by :func:`read_tsplib`,
 into the header and the numbers of the ``EDGE_WEIGHT_SECTION``; each loader then
 checks what its kind requires (``TYPE``, the matrix format, the dimension).
 

@@ -207,7 +207,7 @@ REFERENCES += _discovered_references()
 
 def cases() -> list[tuple[Callable[[], Reference], str]]:
     """Every (reference, registered method) pair."""
-    import taopt.pipeline  # noqa: F401  (registers every method)
+    import taopt.orchestration.pipeline  # noqa: F401  (registers every method)
 
     out = []
     for make in REFERENCES:

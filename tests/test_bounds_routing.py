@@ -9,8 +9,8 @@ import taopt
 import taopt.bounds
 import taopt.heuristics
 from taopt.errors import InstanceError
+from taopt.orchestration.studies.routing_claims import exact_optimum
 from taopt.routing import bounds
-from taopt.studies.routing_claims import exact_optimum
 
 
 def small_problems(count: int, seed: int, symmetric: bool | None = None, max_n: int = 7):

@@ -153,14 +153,14 @@ def test_json_round_trip_and_schema():
     data["demands"][1] = []
     with pytest.raises(InstanceError, match=r"demands\[1\]"):
         CapabilityProblem.from_dict(data)
-    from taopt.pipeline import load_problem
+    from taopt.orchestration.pipeline import load_problem
 
     assert load_problem(p.to_dict()).n == 2
 
 
 def test_bounds_order_on_a_metric_instance():
     """arborescence <= optimum <= f^da; f^da = 2 f^a on symmetric costs."""
-    from taopt.studies.capability_claims import exact_optimum
+    from taopt.orchestration.studies.capability_claims import exact_optimum
 
     x = np.random.default_rng(3).uniform(0, 100, (9, 2))
     cost = np.linalg.norm(x[:, None] - x[None], axis=2)

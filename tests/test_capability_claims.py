@@ -10,7 +10,12 @@ import pytest
 from taopt.bounds import arborescence
 from taopt.capability import CapabilityProblem
 from taopt.models import solve_capability
-from taopt.studies.capability_claims import check_claims, claim_values, split_graph, triangle_excess
+from taopt.orchestration.studies.capability_claims import (
+    check_claims,
+    claim_values,
+    split_graph,
+    triangle_excess,
+)
 
 FOLDER = Path(__file__).parent.parent / "docs" / "reproduction" / "counterexamples" / "chapter3"
 FILES = sorted(FOLDER.glob("*.json"))

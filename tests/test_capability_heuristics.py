@@ -18,9 +18,13 @@ from taopt.heuristics.dtaa import (
     dtaa,
     ordering_principle,
 )
+from taopt.orchestration.studies.capability_claims import (
+    communication_graphs,
+    random_problem,
+    split_graph,
+)
 from taopt.routing.bounds import mcga_tree
 from taopt.routing.problem import AssignmentProblem
-from taopt.studies.capability_claims import communication_graphs, random_problem, split_graph
 
 
 def algorithm1_clusters(problem: CapabilityProblem) -> dict:

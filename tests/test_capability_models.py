@@ -18,7 +18,7 @@ from taopt.capability.instances import capability_problem_from_instance, thesis_
 from taopt.errors import InstanceError
 from taopt.models import solve_capability
 from taopt.models.capability import build_printed, decode_printed, describe
-from taopt.studies.capability_claims import exact_optimum, random_problem
+from taopt.orchestration.studies.capability_claims import exact_optimum, random_problem
 
 EXAMPLE = (
     Path(__file__).parent.parent
@@ -242,7 +242,7 @@ def test_killed_worker_is_a_clear_error():
     from taopt.capability.instances import STUDY_CELL
     from taopt.errors import SolverError
     from taopt.models import capability
-    from taopt.studies.capability import make_scenario
+    from taopt.orchestration.studies.capability import make_scenario
 
     # the benchmark's n90m10 |A| = 5 scenario: its hardest class takes about 10 s
     settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
@@ -271,7 +271,7 @@ CTRL_C_SCRIPT = """
 import os, sys, threading, time
 from taopt.capability.instances import STUDY_CELL
 from taopt.models import capability, solve_capability
-from taopt.studies.capability import make_scenario
+from taopt.orchestration.studies.capability import make_scenario
 
 settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
 problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
@@ -351,7 +351,7 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     """A worker past limit + grace is killed: time_limit, the incumbent's routes, bound <= f."""
     from taopt.capability.instances import STUDY_CELL
     from taopt.models import capability
-    from taopt.studies.capability import make_scenario
+    from taopt.orchestration.studies.capability import make_scenario
 
     settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
     problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem

@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from taopt.cli import main
 from taopt.errors import InstanceError
-from taopt.studies.capability import (
+from taopt.orchestration.cli import main
+from taopt.orchestration.studies.capability import (
     SPEC,
     capability_study,
     make_scenario,
@@ -143,7 +143,7 @@ def test_cli_runs_the_study(tmp_path, capsys):
 
 def test_markdown_report(study):
     """The doc's tables render from the rows: every section, thesis rows beside ours."""
-    from taopt.studies.capability import markdown_report
+    from taopt.orchestration.studies.capability import markdown_report
 
     _, df = study
     text = markdown_report(df)

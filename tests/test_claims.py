@@ -13,8 +13,8 @@ import pytest
 
 import taopt
 import taopt.heuristics
+from taopt.orchestration.studies import routing_claims as claims
 from taopt.routing import bounds
-from taopt.studies import routing_claims as claims
 
 
 @pytest.fixture(scope="module")

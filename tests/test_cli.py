@@ -9,10 +9,10 @@ import json
 import numpy as np
 import pytest
 
-from taopt.cli import build_parser, main, parse_field
 from taopt.errors import InstanceError
 from taopt.fields import LinearField, UniformField, thesis_field
 from taopt.instance import Instance
+from taopt.orchestration.cli import build_parser, main, parse_field
 
 
 def test_navigate_prints_both_directions(capsys, tmp_path):
@@ -106,8 +106,8 @@ def test_run_demo_matrix_matches_navigation():
     """The demo's matrix equals shooting on an entry; no heuristic beats its optimum."""
     import io
 
-    from taopt.demo import load_demo_instance, run_demo
     from taopt.navigation import min_time_path
+    from taopt.orchestration.demo import load_demo_instance, run_demo
 
     result = run_demo(out=io.StringIO(), progress=False)
     inst = load_demo_instance()
@@ -146,7 +146,7 @@ def test_solve_command_on_each_file_kind(tmp_path, capsys):
     """`taopt solve` reads the JSON kinds; no method beats the certified optimum."""
     import taopt
     from taopt.delivery.instance import DeliveryInstance
-    from taopt.solving import solve_file
+    from taopt.orchestration.solving import solve_file
 
     # chapter 2, from a cost matrix
     rng = np.random.default_rng(5)
@@ -430,7 +430,7 @@ def test_solve_delivery_example_shows_the_certified_optimum(capsys):
 def test_solve_says_why_no_optimum_is_computed():
     """Past 2,000,000 order ideals the exact DP is left out by default; the reason names n."""
     from taopt.delivery.instance import DeliveryInstance
-    from taopt.pipeline import default_methods, no_optimum_note
+    from taopt.orchestration.pipeline import default_methods, no_optimum_note
 
     rng = np.random.default_rng(0)
 
@@ -452,8 +452,8 @@ def test_cli_sends_library_logs_to_stderr(capsys, flags, shown):
     """Library messages go to the taopt logger; the CLI shows INFO on stderr unless --quiet."""
     import logging
 
-    from taopt.cli import setup_logging
     from taopt.models.routing import describe
+    from taopt.orchestration.cli import setup_logging
 
     parser = build_parser()
     args = parser.parse_args(["demo", *flags])

@@ -198,7 +198,7 @@ def test_figs_4_3_and_4_4_longer_range_longer_total() -> None:
 
     At r = 28 m vehicles 0 and 1 are linked at t = 0; at r = 30 m vehicles 0, 1 and 2 are.
     The longer range drives further (Remark 4.6), for DAA and CAA alike (instance found by
-    :func:`taopt.studies.comm_claims.search_remark_4_6`-style search; coordinates in metres).
+    :func:`taopt.orchestration.studies.comm_claims.search_remark_4_6`-style search; coordinates in metres).
     """
     short = CommProblem(FIG_4_3_TARGETS, FIG_4_3_VEHICLES, [0] * 5, [0] * 4, 28.0)
     long = short.replace(comm_range=30.0)

@@ -185,7 +185,7 @@ def test_mst_bound_with_coincident_points() -> None:
 
 def test_mst_bound_below_the_dp_optimum() -> None:
     """Lemma 4.8: f_MST <= f_o, f_o from an independent dynamic programme (n <= 7)."""
-    from taopt.studies.routing_claims import exact_optimum
+    from taopt.orchestration.studies.routing_claims import exact_optimum
 
     for seed in range(20):
         p = random_problem(3 + seed % 5, 1 + seed % 3, 1 + (seed % 2 if seed % 3 else 0), 1.0, seed)

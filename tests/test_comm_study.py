@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 
 import taopt
-from taopt.cli import main
 from taopt.comm import CommProblem, random_problem
 from taopt.comm.plot import animate_run, plot_pair, plot_run
-from taopt.studies.comm import (
+from taopt.orchestration.cli import main
+from taopt.orchestration.studies.comm import (
     PRESETS,
     Preset,
     bytes_table,
@@ -147,7 +147,7 @@ def test_thesis_r_c_is_the_asymptotic_formula_not_099() -> None:
     0.81 / 0.75 in 10^5 samples; here a quick 3000-sample check)."""
     import math
 
-    from taopt.studies.comm_claims import connectivity_probability
+    from taopt.orchestration.studies.comm_claims import connectivity_probability
 
     for m, r_c in [(4, 712.8), (6, 600.0), (10, 482.0)]:
         c = math.pi * (r_c / 1000.0) ** 2 * m - math.log(m)

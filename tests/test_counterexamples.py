@@ -1,6 +1,6 @@
 """The counterexamples shipped in docs/reproduction/counterexamples/ still refute the thesis.
 
-They were found by ``taopt claims --samples 300 --seed 0`` (``taopt.studies.routing_claims``); each is
+They were found by ``taopt claims --samples 300 --seed 0`` (``taopt.orchestration.studies.routing_claims``); each is
 reloaded from JSON and re-checked with the certified MILP optimum (not the DP that found it).
 """
 
@@ -13,7 +13,7 @@ import pytest
 from taopt import AssignmentProblem
 from taopt.bounds import arborescence
 from taopt.models import solve_routing
-from taopt.studies.routing_claims import claim_values
+from taopt.orchestration.studies.routing_claims import claim_values
 
 FOLDER = Path(__file__).parent.parent / "docs" / "reproduction" / "counterexamples"
 FILES = sorted(FOLDER.glob("*.json"))

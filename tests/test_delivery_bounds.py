@@ -144,7 +144,7 @@ def test_service_gap_is_at_least_tstar_and_below_every_real_gap(seed):
 
 def test_path_bound_beats_prop_5_3_on_a_pairs120_instance():
     """Strictly stronger than Proposition 5.3 on pairs120 instance 0 (L/L0 = 0.3)."""
-    from taopt.studies.delivery import study_instance
+    from taopt.orchestration.studies.delivery import study_instance
 
     inst = study_instance("pairs120", 0, ratio=0.3)
     assert path_bound(inst) > 1.05 * taopt.bounds.arborescence(inst)
@@ -155,7 +155,7 @@ def test_path_bound_beats_prop_5_3_on_a_pairs120_instance():
 @pytest.mark.parametrize("vd_ratio", [None, 1.0])
 def test_path_bound_beats_prop_5_3_on_every_pairs120_instance(vd_ratio):
     """lower() > Proposition 5.3 on all 10 pairs120 instances x 6 ratios (both v_d / v_t)."""
-    from taopt.studies.delivery import DEFAULT_RATIOS, study_instance
+    from taopt.orchestration.studies.delivery import DEFAULT_RATIOS, study_instance
 
     for i, ratio in itertools.product(range(10), DEFAULT_RATIOS):
         inst = study_instance("pairs120", i, ratio=ratio, vd_ratio=vd_ratio)
@@ -169,7 +169,7 @@ def test_lower_below_every_certified_dag40_optimum():
 
     assert DAG40_EXACT.exists(), f"{DAG40_EXACT} is shipped with the reproduction data"
 
-    from taopt.studies.delivery import study_instance
+    from taopt.orchestration.studies.delivery import study_instance
 
     table = pd.read_csv(DAG40_EXACT)
     certified = table["optimum"] if "optimum" in table else pd.Series(np.nan, table.index)
@@ -253,7 +253,7 @@ def test_degree_penalised_arborescence_finds_a_forced_path():
 
 def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):
     """The delivery study's strong_bound column: valid_bound <= strong_bound <= optimum."""
-    from taopt.studies.delivery import delivery_study
+    from taopt.orchestration.studies.delivery import delivery_study
 
     df = delivery_study(
         "small", instances=2, ratios=[0.3], methods=["NIA"], out_dir=tmp_path, progress=False

@@ -17,7 +17,7 @@ from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import _sortie_data, _sortie_step, optimal_plan
 from taopt.errors import InstanceError
 from taopt.models.delivery import solve_delivery
-from taopt.pipeline import default_methods
+from taopt.orchestration.pipeline import default_methods
 from taopt.registry import certifying_method
 
 REL = 1e-9
@@ -207,7 +207,7 @@ def test_example_instance_is_certified_and_below_every_heuristic():
 
 def test_study_takes_the_optimum_from_exact_rows(tmp_path):
     """Beyond exact_max_n the study's optimum comes from the certified 'exact' rows."""
-    from taopt.studies.delivery import delivery_study
+    from taopt.orchestration.studies.delivery import delivery_study
 
     df = delivery_study(
         "small",

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from taopt.cli import main
 from taopt.errors import InstanceError
-from taopt.studies.delivery import SPEC, delivery_study, study_instance, summarize
+from taopt.orchestration.cli import main
+from taopt.orchestration.studies.delivery import SPEC, delivery_study, study_instance, summarize
 
 COLUMNS = SPEC.columns
 
@@ -72,7 +72,7 @@ def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
     assert (mma >= optimum * (1 - 1e-9)).all()
 
 
-# -- the resumable CSV (taopt.studyio): method sets, settings, torn lines, order --------------
+# -- the resumable CSV (taopt.orchestration.studyio): method sets, settings, torn lines, order --------------
 STABLE = [c for c in COLUMNS if c != "runtime"]
 TINY = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
 

@@ -65,4 +65,4 @@ def test_every_source_folder_is_collected():
             name = ".".join([package.__name__, *parts]).removesuffix(".__init__")
             if name not in EXCLUDED:
                 assert name in collected, f"{name} is not collected"
-    assert "taopt.studies.drift" in collected
+    assert "taopt.orchestration.studies.drift" in collected

@@ -270,8 +270,8 @@ def test_generators_cover_the_hard_cases():
 
 def test_study_flags_uncertified_exact_rows(caplog):
     """The study runner warns about an exact row neither optimal nor infeasible without a limit."""
-    from taopt.studies.drift import SPEC as spec
-    from taopt.study import _flag_uncertified
+    from taopt.orchestration.studies.drift import SPEC as spec
+    from taopt.orchestration.study import _flag_uncertified
 
     key = {c: 1 for c in spec.key_columns}
     rows = [

@@ -25,7 +25,6 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.comm.problem import CommProblem
 from taopt.delivery import EXAMPLE_PATH
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.sop import SopProblem
 from taopt.errors import InstanceError, TaoptError
 from taopt.fields import field_from_dict
 from taopt.instance import Instance
@@ -34,6 +33,7 @@ from taopt.registry import families
 from taopt.result import Solution
 from taopt.routing.problem import AssignmentProblem
 from taopt.schemas import naming
+from taopt.sop.problem import SopProblem
 
 DATA = Path(resources.files("taopt").joinpath("data"))
 DEMO_PATH = DATA / "demo.json"
@@ -372,7 +372,7 @@ def test_other_kinds_round_trip_through_their_schemas():
     """CapabilityProblem (one matrix with an untravellable pair, or one per capability),
     SopProblem and Solution: to_dict is valid and from_dict rebuilds the same data."""
     from taopt.capability.problem import CapabilityProblem
-    from taopt.delivery.sop import SopProblem
+    from taopt.sop.problem import SopProblem
 
     cost = np.full((5, 5), 3.0)
     cost[0, 2] = np.inf  # written as null

@@ -21,7 +21,12 @@ def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     """``taopt ARGS`` in a fresh interpreter (a new process builds its first HiGHS object)."""
     env = dict(os.environ, MPLBACKEND="Agg")
     return subprocess.run(
-        [sys.executable, "-c", "import sys; from taopt.cli import main; sys.exit(main())", *args],
+        [
+            sys.executable,
+            "-c",
+            "import sys; from taopt.orchestration.cli import main; sys.exit(main())",
+            *args,
+        ],
         cwd=cwd,
         capture_output=True,
         text=True,

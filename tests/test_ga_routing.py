@@ -1,7 +1,7 @@
 """The chapter 2 GA (§2.5): encodings, operators, local search and both operator sets.
 
 Solutions are re-scored by the one scorer and compared with an exact optimum
-from the subset DP (:func:`taopt.studies.routing_claims.exact_optimum`) or the MILP;
+from the subset DP (:func:`taopt.orchestration.studies.routing_claims.exact_optimum`) or the MILP;
 local optimality is checked by enumerating every move.
 """
 
@@ -20,7 +20,7 @@ from taopt.errors import InstanceError
 from taopt.heuristics import ga_routing
 from taopt.heuristics.ga_routing import OperatorSet, genetic_algorithm
 from taopt.navigation.uniform import uniform_travel_times
-from taopt.studies.routing_claims import exact_optimum
+from taopt.orchestration.studies.routing_claims import exact_optimum
 
 SETS = ["memetic", "ox-inversion"]
 SMALL = {"population": 30, "generations": 40}

@@ -207,7 +207,7 @@ def test_ga_reproducible_and_elitist() -> None:
 
 @pytest.mark.parametrize("name", ["ESC07", "ESC11", "ESC12", "br17.10"])
 def test_sop_orders_not_below_optimum(name: str) -> None:
-    from taopt.delivery.sop import KNOWN_OPTIMA, load_sop
+    from taopt.sop.problem import KNOWN_OPTIMA, load_sop
 
     cost, pairs, start, end, _ = load_sop(name)
     for order in (

@@ -16,7 +16,7 @@ import taopt
 import taopt.heuristics
 from taopt.errors import InstanceError
 from taopt.heuristics import clustering, ga_routing
-from taopt.studies.routing_claims import exact_optimum
+from taopt.orchestration.studies.routing_claims import exact_optimum
 
 ROUTING = ["VN", "VM", "EVN", "EVM", "MC", "GA"]
 GA_SMALL = {"population": 30, "generations": 40}

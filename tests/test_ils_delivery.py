@@ -16,7 +16,6 @@ from hypothesis import strategies as st
 
 import taopt
 from taopt.delivery.schedule import optimal_plan, schedule
-from taopt.delivery.sop import SopProblem, evaluate_order
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.ils_delivery import (
     TOLERANCE,
@@ -27,7 +26,8 @@ from taopt.heuristics.ils_delivery import (
     forward_states,
 )
 from taopt.heuristics.sequencing import delivery_cost_matrix, path_cost
-from taopt.studies.delivery import study_instance
+from taopt.orchestration.studies.delivery import study_instance
+from taopt.sop.problem import SopProblem, evaluate_order
 
 SMALL = [(i, r) for i in range(4) for r in (0.15, 0.45, 0.9)]
 

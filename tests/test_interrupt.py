@@ -32,9 +32,9 @@ STOP_BOUND = 6.0
 #: ``taopt ARGS`` after the heavy imports (cvxpy, the models), so that "ready" means the
 #: command starts its work at once.
 LAUNCH = (
-    "import sys, taopt.cli, taopt.solving\n"
+    "import sys, taopt.orchestration.cli, taopt.orchestration.solving\n"
     "print('ready', flush=True)\n"
-    "sys.exit(taopt.cli.main())\n"  # as the `taopt` script: arguments from sys.argv
+    "sys.exit(taopt.orchestration.cli.main())\n"  # as the `taopt` script: arguments from sys.argv
 )
 
 

@@ -199,7 +199,7 @@ def test_time_limited_run_on_many_stops_is_no_worse_than_the_heuristics():
     plan (never worse than NIA/MMA/SMMA) with a bound below the subset-DP optimum."""
     import taopt.heuristics
     from taopt.delivery.schedule import optimal_plan
-    from taopt.studies.delivery import study_instance
+    from taopt.orchestration.studies.delivery import study_instance
 
     inst = study_instance("small", 0, seed=3, ratio=0.3)
     sol = taopt.solve(inst, "milp", time_limit=2.0)

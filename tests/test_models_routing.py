@@ -257,7 +257,7 @@ def navigation_problem(n: int, m: int, seed: int) -> AssignmentProblem:
 
 def test_drift_field_instance_matches_independent_dp() -> None:
     """A true drift-field matrix (asymmetric, from navigation): MILP == subset DP (claims module)."""
-    from taopt.studies.routing_claims import exact_optimum
+    from taopt.orchestration.studies.routing_claims import exact_optimum
 
     problem = navigation_problem(10, 3, seed=11)
     assert not problem.is_symmetric

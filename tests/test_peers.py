@@ -25,12 +25,12 @@ from hypothesis import strategies as st
 from reference import routing_idle_vehicle, routing_one_way, routing_quick_tour
 
 import taopt
-from taopt.delivery.sop import evaluate_order
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics import peers
 from taopt.heuristics.peers import ortools_solve, pyvrp_solve
 from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
+from taopt.sop.problem import evaluate_order
 from taopt.status import outcome
 
 # Deterministic limits (iterations / solutions, not time) for everything but the n50m10 check.

@@ -14,8 +14,8 @@ import pandas as pd
 import pytest
 
 import taopt
-from taopt.cli import main
 from taopt.errors import OutputError
+from taopt.orchestration.cli import main
 from taopt.plot import check_output, method_style, schematic_layout
 
 EXAMPLES = Path(taopt.__file__).parent / "data" / "examples"
@@ -43,15 +43,15 @@ def readable(ax, ids=(), legend=True, categorical=""):
 
 def no_work(monkeypatch):
     """Make any load or solve fail loudly: a refusal must come before them."""
-    import taopt.pipeline
-    import taopt.solving
+    import taopt.orchestration.pipeline
+    import taopt.orchestration.solving
 
     def boom(*args, **kwargs):
         raise AssertionError("work started before the refusal")
 
-    monkeypatch.setattr(taopt.solving, "load_problem_file", boom)
-    monkeypatch.setattr(taopt.solving, "method_table", boom)
-    monkeypatch.setattr(taopt.pipeline, "solve", boom)
+    monkeypatch.setattr(taopt.orchestration.solving, "load_problem_file", boom)
+    monkeypatch.setattr(taopt.orchestration.solving, "method_table", boom)
+    monkeypatch.setattr(taopt.orchestration.pipeline, "solve", boom)
 
 
 # -- shared helpers -----------------------------------------------------------------------------
@@ -208,9 +208,9 @@ def test_comm_range_curves_tell_daa_from_hda():
 def test_study_plots_are_labelled():
     """Drift boxplot, delivery curves, capability quality and comm figures carry units."""
     from taopt.capability.plot import plot_quality
-    from taopt.studies.comm import plot_homogeneous, plot_scalability
-    from taopt.studies.delivery import plot_study
-    from taopt.studies.drift import plot_gaps
+    from taopt.orchestration.studies.comm import plot_homogeneous, plot_scalability
+    from taopt.orchestration.studies.delivery import plot_study
+    from taopt.orchestration.studies.drift import plot_gaps
 
     rng = np.random.default_rng(1)
     drift = pd.DataFrame(
@@ -329,9 +329,11 @@ def test_solve_prints_the_plotted_routes_with_the_plotted_ids(tmp_path, capsys):
 def test_bad_outputs_are_refused_before_any_work(args, message, tmp_path, monkeypatch, capsys):
     """A wrong extension or an impossible plot fails with rc 2 before loading or solving."""
     no_work(monkeypatch)
-    import taopt.demo
+    import taopt.orchestration.demo
 
-    monkeypatch.setattr(taopt.demo, "load_demo_instance", lambda: pytest.fail("demo started"))
+    monkeypatch.setattr(
+        taopt.orchestration.demo, "load_demo_instance", lambda: pytest.fail("demo started")
+    )
     argv = [str(EXAMPLES / a) if a.endswith(".json") else a for a in args]
     argv = [str(tmp_path / a) if a.startswith("x.") else a for a in argv]
     assert main(argv) == 2

@@ -72,7 +72,7 @@ def _commands() -> list[list[str]]:
 
 def test_readme_command_lines_parse_without_deprecated_flags(capsys) -> None:
     """Every taopt command the README shows is valid in today's grammar and warns of nothing."""
-    from taopt.cli import build_parser
+    from taopt.orchestration.cli import build_parser
 
     commands = _commands()
     named = {argv[0] if argv[0] != "study" else " ".join(argv[:2]) for argv in commands}
@@ -97,7 +97,7 @@ def test_readme_command_lines_parse_without_deprecated_flags(capsys) -> None:
 def test_readme_method_table_is_what_available_methods_lists(kind: str) -> None:
     """The README's table of methods is taopt.available_methods of each family (peers aside)."""
     import taopt
-    from taopt.solving import load_problem_file
+    from taopt.orchestration.solving import load_problem_file
 
     problem, _ = load_problem_file(ROOT / "taopt" / "data" / "examples" / f"{kind}.json")
     name = type(problem).__name__

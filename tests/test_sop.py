@@ -12,11 +12,11 @@ import itertools
 import numpy as np
 import pytest
 
-from taopt.delivery.sop import KNOWN_OPTIMA, load_sop, path_cost, shipped_sop
 from taopt.errors import InstanceError, SolverError
 from taopt.models import solve_sop
 from taopt.models.highs import OPTIMALITY_TOLERANCE
 from taopt.models.sop import _check_path, build, describe
+from taopt.sop.problem import KNOWN_OPTIMA, load_sop, path_cost, shipped_sop
 
 
 # ----------------------------------------------------------------------------- helpers

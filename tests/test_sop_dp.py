@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import taopt
-from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, evaluate_order, shipped_sop
 from taopt.models.sop import solve_sop, solve_sop_problem
 from taopt.models.sop_dp import (
     beam_order,
@@ -24,6 +23,7 @@ from taopt.models.sop_dp import (
     solve_sop_dp,
 )
 from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT
+from taopt.sop.problem import KNOWN_OPTIMA, SopProblem, evaluate_order, shipped_sop
 
 
 def random_problem(seed: int, n: int, forbidden: float, density: float) -> SopProblem:

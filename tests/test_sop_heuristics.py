@@ -18,11 +18,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import taopt
-from taopt.cli import main
-from taopt.delivery.sop import SopProblem, evaluate_order
 from taopt.errors import SolverError
 from taopt.heuristics.ga_delivery import ga_order
 from taopt.heuristics.sequencing import mma_order, nia_order, smma_order
+from taopt.orchestration.cli import main
+from taopt.sop.problem import SopProblem, evaluate_order
 
 HEURISTICS = ("NIA", "MMA", "SMMA", "GA")
 OPTIONS = {"GA": {"generations": 20}}

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 import taopt
-import taopt.pipeline as pipeline
+import taopt.orchestration.pipeline as pipeline
 from taopt.comm.problem import random_problem as comm_problem
 from taopt.errors import SolverError
 from taopt.models.capability import solve_capability, solve_classes
+from taopt.orchestration.studies.capability_claims import random_problem as capability_problem
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
 from taopt.status import OPTIMALITY_TOLERANCE, RAW_OUTCOMES, certify, outcome, relative_gap
-from taopt.studies.capability_claims import random_problem as capability_problem
 
 
 def brute_force(problem: taopt.AssignmentProblem) -> float:

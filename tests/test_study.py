@@ -14,10 +14,10 @@ import pytest
 
 from taopt.errors import InstanceError
 from taopt.fields import UniformField
-from taopt.studies.capability import capability_study
-from taopt.studies.delivery import delivery_study
-from taopt.studies.drift import drift_study
-from taopt.studyio import LOCK, StudyLocked, folder_lock
+from taopt.orchestration.studies.capability import capability_study
+from taopt.orchestration.studies.delivery import delivery_study
+from taopt.orchestration.studies.drift import drift_study
+from taopt.orchestration.studyio import LOCK, StudyLocked, folder_lock
 
 FIELD = UniformField(0.3, 0.1)  # closed-form travel times: scenarios are cheap
 METHODS = "MC,EVM,GA,exact"
@@ -130,7 +130,7 @@ def test_finished_folder_is_read_without_writing(tmp_path, monkeypatch):
     def no_lock(folder):
         raise AssertionError("a finished folder must not be locked")
 
-    monkeypatch.setattr("taopt.study.folder_lock", no_lock)
+    monkeypatch.setattr("taopt.orchestration.study.folder_lock", no_lock)
     again = small(out, methods="MC,EVM")
     pd.testing.assert_frame_equal(stable(first), stable(again))
     assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before
@@ -208,7 +208,17 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     so the cost is mostly two interpreter starts; the resume runs in this process.
     """
     out = tmp_path / "study"
-    argv = [sys.executable, "-m", "taopt.cli", "study", "drift", "--n", "8", "--m", "2"]
+    argv = [
+        sys.executable,
+        "-m",
+        "taopt.orchestration.cli",
+        "study",
+        "drift",
+        "--n",
+        "8",
+        "--m",
+        "2",
+    ]
     argv += ["--scenarios", "400", "--methods", "GA", "--ga-generations", "30"]
     argv += ["--field", "uniform:0.3,0.1", "--out", str(out), "--quiet", *mode]
     # outside the checkout: `python -m` puts the working folder first on sys.path
@@ -248,7 +258,7 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     assert 0 < len(done) < 400 and (done["complete"] == 1).all()
     # the same command resumes: here with a smaller count, so that it finishes quickly, and
     # in this process (the command line is the same; only the interpreter start is saved)
-    from taopt.cli import main
+    from taopt.orchestration.cli import main
 
     total = len(done) + 1
     rerun = argv[: argv.index("--scenarios") + 1] + [str(total)] + argv[argv.index("400") + 1 :]

@@ -1,4 +1,4 @@
-"""The chapter-6 study (taopt.studies.budgeted): levels, a tiny run, its summary and plot."""
+"""The chapter-6 study (taopt.orchestration.studies.budgeted): levels, a tiny run, its summary and plot."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from taopt.errors import InstanceError
-from taopt.studies import budgeted as study
+from taopt.orchestration.studies import budgeted as study
 
 
 def test_levels_parse_and_sort():

@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 
 import taopt
-from taopt.cli import main
 from taopt.errors import InstanceError
+from taopt.orchestration.cli import main
+from taopt.orchestration.studies.drift import SPEC, drift_study, summarize, wilcoxon_pairs
 from taopt.routing.scenarios import drift_scenario, scenario_seed
-from taopt.studies.drift import SPEC, drift_study, summarize, wilcoxon_pairs
 
 METHODS = "VN,VM,EVN,EVM,MC,GA,exact"
 OPTIONS = {"GA": {"generations": 15, "population": 16}}
@@ -140,7 +140,7 @@ def test_cli_and_plots(tmp_path, capsys):
     assert np.isfinite(solution.objective)
 
 
-# -- the resumable CSV (taopt.studyio): method sets, settings, torn lines -----------------------
+# -- the resumable CSV (taopt.orchestration.studyio): method sets, settings, torn lines -----------------------
 def small(tmp, methods, scenarios=2, **kw):
     return drift_study(5, 2, scenarios, methods=methods, seed=4, out_dir=tmp, progress=False, **kw)
 

@@ -14,7 +14,7 @@ import pytest
 
 from taopt.errors import InstanceError
 from taopt.io import save_json, unique_temp
-from taopt.studyio import LOCK, ResultsStore, StudyLocked, folder_lock, normalize_key
+from taopt.orchestration.studyio import LOCK, ResultsStore, StudyLocked, folder_lock, normalize_key
 
 COLUMNS = ["k", "ratio", "method", "value", "status"]
 KEY = ["k", "ratio", "method"]
@@ -166,7 +166,7 @@ def test_lock_held_by_another_process_is_refused_and_freed_when_it_dies(tmp_path
     folder = tmp_path / "study"
     code = (
         "import sys, time\n"
-        "from taopt.studyio import folder_lock\n"
+        "from taopt.orchestration.studyio import folder_lock\n"
         f"with folder_lock({str(folder)!r}):\n"
         "    print('held', flush=True)\n"
         "    time.sleep(60)\n"

@@ -137,7 +137,7 @@ def test_assignment_exact_under_a_tiny_limit():
 
 def test_sop_exact_returns_a_bound_not_an_error():
     """SOP exact on ESC25 at T = 0.2: time_limit with SMMA's order and a bound, no SolverError."""
-    from taopt.delivery.sop import SopProblem
+    from taopt.sop.problem import SopProblem
 
     result, _ = run(SopProblem.load("ESC25"), "exact")
     assert result.status == TIME_LIMIT and result.solution is not None
@@ -146,7 +146,7 @@ def test_sop_exact_returns_a_bound_not_an_error():
 def test_sop_exact_without_incumbent_stops_with_a_bound():
     """Without a warm start and with almost no time, SOP exact stops with a bound and either
     no plan (objective inf) or a feasible one, never a raise."""
-    from taopt.delivery.sop import SopProblem, evaluate_order
+    from taopt.sop.problem import SopProblem, evaluate_order
 
     problem = SopProblem.load("ESC47")  # 2-5 s to prove: 10 ms cannot
     result, _ = run(problem, "exact", time_limit=0.01, incumbent=None)
@@ -197,7 +197,7 @@ def test_comm_exact_under_a_tiny_limit():
 
 def test_failing_warm_start_is_skipped():
     """A warm-start heuristic that fails is skipped; the exact method still certifies."""
-    from taopt.delivery.sop import SopProblem
+    from taopt.sop.problem import SopProblem
 
     cost = [
         [0, 3, 5, 9, -1],
@@ -241,7 +241,7 @@ def test_large_assignment_exact_is_refused_fast():
 
 def test_instance_of_ten_thousand_targets_is_refused_fast(tmp_path, monkeypatch):
     """An instance file of 10,000 targets is refused before validation and navigation."""
-    from taopt.solving import load_problem_file
+    from taopt.orchestration.solving import load_problem_file
 
     monkeypatch.delenv(MEMORY_ENV, raising=False)
     data = {
@@ -264,7 +264,7 @@ def test_instance_of_ten_thousand_targets_is_refused_fast(tmp_path, monkeypatch)
 
 def test_matrix_of_numeric_strings_is_refused_fast(tmp_path):
     """A 400 x 400 cost matrix of numeric strings is refused in well under a second or two."""
-    from taopt.solving import load_problem_file
+    from taopt.orchestration.solving import load_problem_file
 
     n = 400
     cost = [[str(float(i + j)) for j in range(n)] for i in range(n)]
@@ -280,7 +280,7 @@ def test_matrix_of_numeric_strings_is_refused_fast(tmp_path):
 @pytest.mark.parametrize("family", ["assignment", "sop", "delivery"])
 def test_genetic_algorithms_stop_on_their_limit(family):
     """Each GA stops on a tiny time_limit with its best so far, feasible and scored."""
-    from taopt.delivery.sop import SopProblem
+    from taopt.sop.problem import SopProblem
 
     problem = {
         "assignment": lambda: euclidean(200),
@@ -297,8 +297,8 @@ def test_genetic_algorithms_stop_on_their_limit(family):
 
 def test_sop_assignment_bound_is_valid_and_beats_the_tree_on_esc():
     """The assignment relaxation never exceeds the optimum of the shipped SOP files."""
-    from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem, shipped_sop, sop_arborescence_bound
     from taopt.models.sop import assignment_bound
+    from taopt.sop.problem import KNOWN_OPTIMA, SopProblem, shipped_sop, sop_arborescence_bound
 
     for name in shipped_sop():
         p = SopProblem.load(name)
@@ -310,7 +310,7 @@ def test_sop_assignment_bound_is_valid_and_beats_the_tree_on_esc():
 
 def test_sop_under_a_generous_limit_still_certifies():
     """With time to spare, the limited path (compiled apart, then solved) proves the optimum."""
-    from taopt.delivery.sop import KNOWN_OPTIMA, SopProblem
+    from taopt.sop.problem import KNOWN_OPTIMA, SopProblem
 
     for name in ("ESC07", "ESC11", "ESC12"):
         result = taopt.solve(SopProblem.load(name), "exact", time_limit=60)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from taopt.cli import main
+from taopt.orchestration.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "taopt" / "data" / "examples"
 
@@ -58,7 +58,7 @@ def _last_line(text: str) -> str:
 def _worse_routes() -> dict:
     """The shipped optimal certificate with other feasible routes, objective re-scored."""
     import taopt
-    from taopt.solving import load_problem_file
+    from taopt.orchestration.solving import load_problem_file
 
     good = json.loads((EXAMPLES / "solution.json").read_text())
     problem, _ = load_problem_file(EXAMPLES / "assignment_problem.json")

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from taopt.studies.drift import SPEC, summarize, wilcoxon_pairs
-from taopt.study import with_optimum
+from taopt.orchestration.studies.drift import SPEC, summarize, wilcoxon_pairs
+from taopt.orchestration.study import with_optimum
 
 # Thesis Table 2.1 / 2.2 rows printed in our copy (VN, VM, EVN, EVM, MC, GA).
 THESIS_Q = {

@@ -24,7 +24,7 @@ FAMILY = register_family(
         evaluate=evaluate_budgeted,
         bounds={"arborescence": Bound(arborescence_bound), "lower": Bound(lower)},
         plots={"routes": plot_budgeted_routes},
-        studies=(Study("budgeted", "taopt.studies.budgeted"),),
+        studies=(Study("budgeted", "taopt.orchestration.studies.budgeted"),),
     )
 )
 

@@ -6,8 +6,8 @@ scorer :func:`evaluate_capability`, bounds ``arborescence``, ``thesis_mcga`` and
 
 * :mod:`taopt.capability.instances` — an :class:`~taopt.Instance` to a problem (grid
   planner with obstacles), and §3.7's scenario generator.
-* :mod:`taopt.studies.capability_claims` — checks of Theorems 3.4, 3.5, 3.7 and Lemma 3.6.
-* :mod:`taopt.studies.capability` — the §3.7 study (Figs. 3.4–3.6, Tables 3.1–3.2).
+* :mod:`taopt.orchestration.studies.capability_claims` — checks of Theorems 3.4, 3.5, 3.7 and Lemma 3.6.
+* :mod:`taopt.orchestration.studies.capability` — the §3.7 study (Figs. 3.4–3.6, Tables 3.1–3.2).
 * :mod:`taopt.capability.plot` — field, obstacles, grid paths, routes by capability.
 """
 

@@ -7,7 +7,7 @@ chapter 2 bound of class q's problem (targets T_q, vehicles R_q):
   arborescence (:func:`taopt.routing.bounds.arborescence_bound`).
 * :func:`thesis_mcga` — Theorem 3.4's ``f^a = Σ_q f^a_q`` with Algorithm 1 ("MCGA") per
   class, as printed; NOT a valid lower bound on asymmetric costs (as Lemma 2.4;
-  :mod:`taopt.studies.capability_claims` finds instances where it exceeds the optimum). It is the
+  :mod:`taopt.orchestration.studies.capability_claims` finds instances where it exceeds the optimum). It is the
   denominator of the thesis's quality ratio (3.15).
 * :func:`doubled_arborescence` — Lemma 3.6's ``f^da = Σ_q f^da_q``: every edge of Algorithm
   1's tree of class q doubled in the opposite direction. An upper bound on the optimum when

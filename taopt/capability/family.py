@@ -84,6 +84,6 @@ FAMILY = register_family(
         },
         plots={"routes": _plot_routes},
         adapter=_from_instance,
-        studies=(Study("capability", "taopt.studies.capability"),),
+        studies=(Study("capability", "taopt.orchestration.studies.capability"),),
     )
 )

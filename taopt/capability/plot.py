@@ -400,7 +400,7 @@ def plot_quality(
     Parameters
     ----------
     table : pandas.DataFrame
-        :func:`taopt.studies.capability.summarize`'s output (columns ``instance``, ``A``,
+        :func:`taopt.orchestration.studies.capability.summarize`'s output (columns ``instance``, ``A``,
         ``method`` and the mean of ``column``).
     column : str
         "q_thesis" (f / f^a, the thesis's (3.15)), "q_valid" (f / arborescence) or

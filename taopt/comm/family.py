@@ -31,7 +31,7 @@ FAMILY = register_family(
         evaluate=evaluate_trajectories,
         bounds={"mst": Bound(mst_bound), "lower": Bound(comm_lower)},
         plots={"run": _plot_run},
-        studies=(Study("comm", "taopt.studies.comm"),),
+        studies=(Study("comm", "taopt.orchestration.studies.comm"),),
         exports={"Trajectories": Trajectories},
     )
 )

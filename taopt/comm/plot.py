@@ -267,7 +267,7 @@ def plot_range_curves(
     """``value`` (a column of a study summary: mean q, bytes, ...) against r, one line per |A|.
 
     ``summary`` has columns ``A``, ``r``, ``method`` and ``value`` (e.g.
-    :func:`taopt.studies.comm.summary`).
+    :func:`taopt.orchestration.studies.comm.summary`).
     """
     ax = _axes(ax, (7.0, 4.5))
     for a_index, (attributes, part) in enumerate(summary.groupby("A")):

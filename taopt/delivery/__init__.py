@@ -5,7 +5,7 @@ Modules: :mod:`~taopt.delivery.instance` (DeliveryInstance, Plan),
 :mod:`~taopt.delivery.schedule` (exact DP for a fixed order),
 :mod:`~taopt.delivery.costs` (t* of (5.8)–(5.11), E^d),
 :mod:`~taopt.delivery.bounds` (Proposition 5.3), :mod:`~taopt.delivery.dags`
-(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.studies.delivery`.
+(precedence generators), :mod:`~taopt.delivery.plot`, :mod:`~taopt.orchestration.studies.delivery`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from typing import Any
 
 from taopt.delivery import family as _family  # noqa: F401  (registers the family)
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.sop.problem import SopProblem  # noqa: F401  (its own family since issue 17)
 
 EXAMPLE_PATH = Path(__file__).resolve().parent.parent / "data" / "delivery_example_20.json"
 
@@ -61,7 +60,6 @@ def example_instance(L: float = 250.0) -> Any:
 __all__ = [
     "DeliveryInstance",
     "Plan",
-    "SopProblem",
     "example_instance",
     "build_example_instance",
     "EXAMPLE_PATH",

@@ -42,7 +42,7 @@ FAMILY = register_family(
         evaluate=evaluate_plan,
         bounds={"arborescence": Bound(arborescence_bound), "lower": Bound(delivery_lower)},
         plots={"plan": _plot_plan, "gantt": _plot_gantt},
-        studies=(Study("delivery", "taopt.studies.delivery"),),
+        studies=(Study("delivery", "taopt.orchestration.studies.delivery"),),
         exports={"Plan": Plan},
     )
 )

@@ -11,7 +11,7 @@ Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
   the vehicle set. On a symmetric matrix it is a minimum spanning forest
   rooted at the vehicles, hence valid (Lemma 2.4). On an asymmetric matrix
   Prim's greedy growth is *not* a minimum-cost arborescence, and its value can
-  exceed f_o (Lemma 2.4 fails there; :mod:`taopt.studies.routing_claims` finds such
+  exceed f_o (Lemma 2.4 fails there; :mod:`taopt.orchestration.studies.routing_claims` finds such
   instances). Kept because the thesis's quality ratio q = f / f_a (2.26) uses it.
 * :func:`f_da` — Lemma 2.5's upper bound: the MCGA with every edge duplicated
   in the opposite direction.

@@ -82,6 +82,6 @@ FAMILY = register_family(
         },
         plots={"routes": _plot_routes},
         adapter=_from_instance,
-        studies=(Study("drift", "taopt.studies.drift"),),
+        studies=(Study("drift", "taopt.orchestration.studies.drift"),),
     )
 )

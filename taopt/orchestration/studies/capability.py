@@ -26,7 +26,7 @@ mean true ratio ``q_exact = f / f^o`` where the optimum is certified, and the me
 Example
 -------
 >>> import tempfile
->>> from taopt.studies.capability import capability_study, thesis_table
+>>> from taopt.orchestration.studies.capability import capability_study, thesis_table
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     df = capability_study(instances=("n6m2",), capabilities=(1, 2), scenarios=1,
 ...                           methods=["DTAA", "exact"], out_dir=tmp, progress=False)
@@ -56,10 +56,10 @@ from taopt.capability.instances import (
     thesis_scenario,
 )
 from taopt.capability.problem import CapabilityProblem
-from taopt.cli import deprecated, folder
 from taopt.errors import InstanceError
 from taopt.navigation.grid import NEIGHBOURHOODS
-from taopt.study import (
+from taopt.orchestration.cli import deprecated, folder
+from taopt.orchestration.study import (
     Scenario,
     StudySpec,
     check_integer,
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     """Body of ``taopt study capability``: run, print Tables 3.1-3.2 beside taopt's, plot."""
     import pandas as pd
 
-    from taopt.studies.capability import (
+    from taopt.orchestration.studies.capability import (
         capability_study,
         plot_figures,
         summarize,
@@ -284,7 +284,7 @@ def capability_study(
         Study seed.
     out_dir : path
         Folder of ``capability.csv`` and its settings.
-    jobs, dask : see :func:`taopt.study.run_study`
+    jobs, dask : see :func:`taopt.orchestration.study.run_study`
     time_limit : float, optional
         Seconds per exact solve; a stopped solve leaves ``optimum`` NaN for its scenario.
     method_options : dict, optional

@@ -6,7 +6,7 @@ per-scenario data and reference values, e.g. a bound) deterministically from the
 settings, and which ``Solution.info`` entries to keep. :func:`run_study` runs every
 (scenario, method) pair that the output folder does not hold yet, through
 :func:`taopt.solve`, and appends one row per pair to ``<out>/<name>.csv`` through
-:class:`taopt.studyio.ResultsStore` (settings checked, torn lines dropped, resumable).
+:class:`taopt.orchestration.studyio.ResultsStore` (settings checked, torn lines dropped, resumable).
 
 Execution
 ---------
@@ -22,9 +22,9 @@ Execution
   folder as it was. Method options with a known meaning (``generations``, ``population``,
   rates, ...) are checked here too (:data:`OPTION_RULES`), and a Dask scheduler address is
   probed with a short connect timeout (:data:`DASK_CONNECT_TIMEOUT`) before the folder is made.
-* One writer per folder: the run holds :func:`taopt.studyio.folder_lock` (an OS-level lock)
+* One writer per folder: the run holds :func:`taopt.orchestration.studyio.folder_lock` (an OS-level lock)
   while it writes; a second run on the same folder is refused at once
-  (:class:`~taopt.studyio.StudyLocked`, naming the holder's pid). A folder whose rows are all
+  (:class:`~taopt.orchestration.studyio.StudyLocked`, naming the holder's pid). A folder whose rows are all
   finished is only read: no lock, nothing written (a read-only folder can be reported on).
 * Ctrl-C (SIGINT) or SIGTERM stops the study at once: pending tasks are cancelled, worker processes are
   killed (pool workers also die with their parent if it is killed: ``PR_SET_PDEATHSIG`` on
@@ -58,9 +58,9 @@ import numpy as np
 import pandas as pd
 
 from taopt.errors import InstanceError, TaoptError
-from taopt.pipeline import solve
+from taopt.orchestration.pipeline import solve
+from taopt.orchestration.studyio import ResultsStore, StudyLocked, folder_lock, normalize_key
 from taopt.registry import get_method
-from taopt.studyio import ResultsStore, StudyLocked, folder_lock, normalize_key
 
 logger = logging.getLogger("taopt")
 

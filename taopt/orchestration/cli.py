@@ -153,7 +153,7 @@ def cmd_navigate(args: argparse.Namespace) -> int:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """The embedded instance: matrix, exact optimum and every chapter 2 heuristic."""
-    from taopt.demo import run_demo
+    from taopt.orchestration.demo import run_demo
 
     run_demo(plot=args.plot, progress=not args.quiet, seed=args.seed)
     return 0
@@ -173,7 +173,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
     Exit code 1 when some method failed (its row says "error" and why), 0 otherwise.
     """
-    from taopt.solving import solve_file
+    from taopt.orchestration.solving import solve_file
 
     result = solve_file(
         args.file,
@@ -190,7 +190,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a saved solution from the problem file alone (exit codes in the help)."""
-    from taopt.solving import verify_file
+    from taopt.orchestration.solving import verify_file
 
     verdict = verify_file(args.solution, args.problem, exact=args.exact, time_limit=args.time_limit)
     return verdict.exit_code
@@ -198,7 +198,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
 def cmd_kinds(args: argparse.Namespace) -> int:
     """Body of ``taopt kinds``: every problem family's file kind, from its spec."""
-    from taopt.pipeline import available_methods
+    from taopt.orchestration.pipeline import available_methods
     from taopt.registry import families
 
     for family in sorted(families(), key=lambda f: f.kind):
@@ -221,7 +221,7 @@ def cmd_kinds(args: argparse.Namespace) -> int:
 
 def cmd_claims(args: argparse.Namespace) -> int:
     """Check chapter 2's lemmas and theorems on random instances."""
-    from taopt.studies.routing_claims import check_claims
+    from taopt.orchestration.studies.routing_claims import check_claims
 
     if args.samples < 1:
         raise InstanceError(f"--samples must be >= 1, got {args.samples}")
@@ -240,7 +240,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     """Body of ``taopt simulate FILE``: one chapter 4 run, its bytes, routes and pictures."""
     from taopt.comm import CommProblem
     from taopt.comm.plot import animate_run, plot_run
-    from taopt.pipeline import solve
+    from taopt.orchestration.pipeline import solve
 
     problem = CommProblem.load(args.file)
     if args.range is not None:

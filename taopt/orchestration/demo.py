@@ -15,8 +15,8 @@ from typing import IO, Any
 import numpy as np
 
 from taopt.instance import Instance
+from taopt.orchestration.solving import method_table
 from taopt.routing.problem import AssignmentProblem
-from taopt.solving import method_table
 
 
 def load_demo_instance() -> Instance:

@@ -26,7 +26,7 @@ when n <= ``exact_max_n``; beyond, :func:`with_measures` takes it from the rows 
 ``--methods exact`` run into the same folder, or a CSV of them joined with
 :func:`with_optimum`).
 
-Rows go through the one study runner (:func:`taopt.study.run_study`) into
+Rows go through the one study runner (:func:`taopt.orchestration.study.run_study`) into
 ``out_dir/delivery_<setup>.csv`` (settings in ``delivery_<setup>.config.json``): resumable,
 one writer, any executor (process pool or Dask). A re-run computes only the missing
 (instance, ratio, method) rows.
@@ -34,7 +34,7 @@ one writer, any executor (process pool or Dask). A re-run computes only the miss
 Example
 -------
 >>> import tempfile
->>> from taopt.studies.delivery import delivery_study, summarize
+>>> from taopt.orchestration.studies.delivery import delivery_study, summarize
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     df = delivery_study("small", instances=1, ratios=(0.6,), methods=("NIA", "exact"),
 ...                         out_dir=tmp, progress=False)
@@ -56,13 +56,13 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import lower
-from taopt.cli import folder, method_list, parse_numbers
 from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
-from taopt.study import Scenario, StudySpec, check_integer, check_positive, run_study
+from taopt.orchestration.cli import folder, method_list, parse_numbers
+from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 L0 = 1000.0
 GRID_K = 11
@@ -422,7 +422,7 @@ def run(args: argparse.Namespace) -> int:
     """Body of ``taopt study delivery``: run, print Tables 5.1-5.7's averages, plot."""
     import pandas as pd
 
-    from taopt.studies.delivery import delivery_study, plot_study, thesis_table
+    from taopt.orchestration.studies.delivery import delivery_study, plot_study, thesis_table
 
     ratios = tuple(parse_numbers(args.ratios, len(args.ratios.split(",")), "--ratios"))
     options = (

@@ -29,7 +29,7 @@ This module is orchestration (it runs the registered methods through :func:`taop
 
 Example
 -------
->>> from taopt.studies.comm_claims import check_claims
+>>> from taopt.orchestration.studies.comm_claims import check_claims
 >>> table = check_claims(samples=2, seed=0, n_range=(2, 4), m_range=(1, 2))
 >>> bool((table["holds"] <= table["total"]).all()), "Lemma 4.8" in " ".join(table["claim"])
 (True, True)
@@ -48,8 +48,8 @@ from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import components, initially_connected
 from taopt.comm.problem import CommProblem, random_problem
 from taopt.errors import ConvergenceError, InstanceError
-from taopt.pipeline import solve
-from taopt.studies.routing_claims import claims_table
+from taopt.orchestration.pipeline import solve
+from taopt.orchestration.studies.routing_claims import claims_table
 
 ALGORITHMS = ("CAA", "DAA", "HDA")
 

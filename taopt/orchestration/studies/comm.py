@@ -26,7 +26,7 @@ Presets (:data:`PRESETS`, the thesis's setups; 1000 m square, 500 scenarios each
 Example
 -------
 >>> import tempfile
->>> from taopt.studies.comm import comm_study
+>>> from taopt.orchestration.studies.comm import comm_study
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     df = comm_study("homogeneous15", scenarios=1, out_dir=tmp, progress=False)
 >>> len(df), df["method"].unique().tolist()  # one scenario at the preset's 7 ranges
@@ -49,12 +49,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from taopt.cli import deprecated, folder, method_list
 from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
 from taopt.errors import InstanceError
-from taopt.study import Scenario, StudySpec, check_integer, check_positive, run_study
+from taopt.orchestration.cli import deprecated, folder, method_list
+from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 ALGORITHMS = ("DAA", "HDA", "CAA")
 INFO_COLUMNS = (
@@ -108,8 +108,14 @@ def run(args: argparse.Namespace) -> int:
     """Body of ``taopt study comm``: run a §4.4 preset, print q, bytes and the true gap."""
     import pandas as pd
 
-    from taopt.studies.comm import PRESETS, bytes_table, comm_study, plot_study, q_table
-    from taopt.studies.comm import summary as summarize
+    from taopt.orchestration.studies.comm import (
+        PRESETS,
+        bytes_table,
+        comm_study,
+        plot_study,
+        q_table,
+    )
+    from taopt.orchestration.studies.comm import summary as summarize
 
     preset = PRESETS[args.preset]
     named = list(method_list(args.methods) or preset.methods)
@@ -355,7 +361,7 @@ def comm_study(
     seed : int
         Study seed (scenario data: :func:`scenario_seed`).
     jobs, dask :
-        Worker processes or a Dask cluster (:func:`taopt.study.run_study`).
+        Worker processes or a Dask cluster (:func:`taopt.orchestration.study.run_study`).
     time_limit : float
         Seconds per exact solve (the simulations take none).
 

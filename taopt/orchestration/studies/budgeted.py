@@ -4,7 +4,7 @@ Thesis §6.2 leaves open what happens to the task-assignment algorithms when "ea
 can visit a maximum number of target locations" or "has a maximum travel time"; it says
 their performance "might no longer be guaranteed". This study measures it on the drift
 scenarios of Table 2.1 (:func:`taopt.routing.scenarios.drift_scenario`, the generator of
-:mod:`taopt.studies.drift`), with the limits tightened step by step.
+:mod:`taopt.orchestration.studies.drift`), with the limits tightened step by step.
 
 Tightness levels
 ----------------
@@ -22,7 +22,7 @@ A level is a name (``--levels``), the same limit for every vehicle:
 
 Rows and summary
 ----------------
-Rows are the study runner's (:func:`taopt.study.run_study`: resumable CSV
+Rows are the study runner's (:func:`taopt.orchestration.study.run_study`: resumable CSV
 ``<out>/budgeted.csv``, jobs, seeds) keyed by (size, level, scenario, method), with the
 scenario's ``n, m, Q, T`` and references ``T_star`` (``T*``) and ``f_unlimited`` (the
 unlimited optimum). :func:`summarize` gives per (size, level, method): the mean true gap
@@ -57,8 +57,8 @@ import pandas as pd
 
 from taopt.budgeted.problem import BudgetedProblem
 from taopt.errors import InstanceError
+from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
-from taopt.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 
 METHODS = ("MC", "EVM", "GA", "pyvrp", "ortools", "exact")
 LEVELS = ("none", "Q2", "Q1.5", "Q1.2", "Q1", "T1", "T0.8", "T0.6", "T0.5")
@@ -142,7 +142,7 @@ def unlimited_reference(problem: Any, seed: int, cache_dir: str | None) -> dict[
         path = Path(cache_dir) / f"unlimited_n{problem.n}m{problem.m}_s{seed}.json"
         if path.exists():
             return json.loads(path.read_text())
-    from taopt.pipeline import solve
+    from taopt.orchestration.pipeline import solve
 
     solution = solve(problem, "exact", time_limit=REFERENCE_TIME_LIMIT)
     times = [problem.route_cost(j, route) for j, route in enumerate(solution.routes)]
@@ -245,13 +245,13 @@ def budgeted_study(
     progress : bool
         A progress bar.
     dask : str, optional
-        As :func:`taopt.study.run_study`.
+        As :func:`taopt.orchestration.study.run_study`.
 
     Returns
     -------
     pandas.DataFrame
         The rows, plus ``optimum`` and ``exact_bound`` per scenario
-        (:func:`taopt.study.with_optimum`).
+        (:func:`taopt.orchestration.study.with_optimum`).
 
     Raises
     ------

@@ -2,7 +2,7 @@
 
 For each random scenario (§2.5 setup, :mod:`taopt.routing.scenarios`) every requested
 method is run through :func:`taopt.solve` and one row per method is appended to
-``<out>/drift.csv`` by :func:`taopt.study.run_study` (resumable, any executor). Each row
+``<out>/drift.csv`` by :func:`taopt.orchestration.study.run_study` (resumable, any executor). Each row
 carries the scenario's reference values:
 
 * ``f_a`` — the thesis's Algorithm 1 value ("MCGA", :func:`taopt.bounds.thesis_mcga`), the
@@ -19,7 +19,7 @@ optimal) and gives, per method, the mean of ``q_thesis = f / f_a`` (Table 2.1's 
 Example
 -------
 >>> import tempfile
->>> from taopt.studies.drift import drift_study, summarize
+>>> from taopt.orchestration.studies.drift import drift_study, summarize
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     df = drift_study(4, 2, 2, methods=["MC", "exact"], seed=1, out_dir=tmp, progress=False)
 >>> len(df), sorted(df["method"].unique())
@@ -42,11 +42,11 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import arborescence, thesis_mcga
-from taopt.cli import FIELD_HELP, folder, parse_field
 from taopt.errors import InstanceError
+from taopt.orchestration.cli import FIELD_HELP, folder, parse_field
+from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
-from taopt.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 
 METHODS = ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact")
 
@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     """Body of ``taopt study drift``: run, print the summary and the tests, plot."""
     import pandas as pd
 
-    from taopt.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
+    from taopt.orchestration.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
 
     options = (
         {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
@@ -197,7 +197,7 @@ def drift_study(
     field : Field, None or "thesis"
         The drift (default: the thesis's §2.5 field).
     dask : str, optional
-        "local" or a scheduler address (see :func:`taopt.study.run_study`).
+        "local" or a scheduler address (see :func:`taopt.orchestration.study.run_study`).
 
     Returns
     -------

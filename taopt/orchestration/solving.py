@@ -37,7 +37,7 @@ from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptErro
 from taopt.instance import Instance
 from taopt.io import load_json
 from taopt.limits import check_memory, navigation_bytes
-from taopt.pipeline import default_methods, no_optimum_note, solve
+from taopt.orchestration.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
 from taopt.result import ERROR, OPTIMAL, Solution, Status
 from taopt.schemas import naming
@@ -212,7 +212,7 @@ def solve_file(
         A JSON problem file (see the module docstring).
     methods : tuple of str, optional
         Registered methods of the file's problem type (default: its exact methods and
-        heuristics; see :func:`taopt.pipeline.default_methods`).
+        heuristics; see :func:`taopt.orchestration.pipeline.default_methods`).
     seed : int
         For randomised methods.
     time_limit : float, optional

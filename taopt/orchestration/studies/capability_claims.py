@@ -45,9 +45,9 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.dtaa import distributed_auction, dtaa
 from taopt.models import solve_capability
+from taopt.orchestration.studies.routing_claims import claims_table, euclidean_costs, metric_costs
+from taopt.orchestration.studies.routing_claims import exact_optimum as routing_optimum
 from taopt.routing.bounds import mcga_tree
-from taopt.studies.routing_claims import claims_table, euclidean_costs, metric_costs
-from taopt.studies.routing_claims import exact_optimum as routing_optimum
 
 #: The instance classes the claims are checked on.
 CLASSES = ("euclidean", "metric", "grid-drift")

@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import InstanceError, SolverError
-from taopt.pipeline import solve
+from taopt.orchestration.pipeline import solve
 from taopt.routing.bounds import f_da, thesis_mcga
 from taopt.routing.problem import AssignmentProblem
 

@@ -1,9 +1,0 @@
-"""The thesis's studies and claim checks (orchestration: they run the registered methods).
-
-One module per study or claim set: :mod:`~taopt.studies.drift` (chapter 2, §2.5),
-:mod:`~taopt.studies.capability` (chapter 3, §3.7), :mod:`~taopt.studies.comm` (chapter 4,
-§4.4), :mod:`~taopt.studies.delivery` (chapter 5, §5.5), and the executable claim checks
-:mod:`~taopt.studies.routing_claims`, :mod:`~taopt.studies.capability_claims` and
-:mod:`~taopt.studies.comm_claims`. A regular package (not a namespace one), so the docstring
-examples of its modules are collected by ``tests/test_doctests.py``.
-"""
