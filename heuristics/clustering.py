@@ -258,7 +258,7 @@ def cluster_then_sequence(
     ]
 
 
-@register_method(AssignmentProblem, "VN")
+@register_method(AssignmentProblem, "VN", style=("-", "o"))
 def vn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """VN: Voronoi clustering (2.11) + nearest inserting principle (2.16)–(2.17).
 
@@ -285,7 +285,7 @@ def vn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     )
 
 
-@register_method(AssignmentProblem, "VM")
+@register_method(AssignmentProblem, "VM", style=("--", "s"))
 def vm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """VM: Voronoi clustering (2.11) + smallest marginal cost principle (2.18)–(2.19)."""
     start = time.perf_counter()
@@ -300,7 +300,7 @@ def vm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -
     )
 
 
-@register_method(AssignmentProblem, "EVN")
+@register_method(AssignmentProblem, "EVN", style=("-.", "D"))
 def evn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """EVN: extended Voronoi clustering (2.12)–(2.14) + nearest inserting (2.16)–(2.17).
 
@@ -318,7 +318,7 @@ def evn(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) 
     )
 
 
-@register_method(AssignmentProblem, "EVM")
+@register_method(AssignmentProblem, "EVM", style=(":", "^"))
 def evm(problem: AssignmentProblem, seed: int | np.random.Generator | None = 0) -> Solution:
     """EVM: extended Voronoi clustering (2.12)–(2.14) + smallest marginal cost (2.18)–(2.19).
 
@@ -379,7 +379,7 @@ def evm_transposed(
     )
 
 
-@register_method(AssignmentProblem, "MC")
+@register_method(AssignmentProblem, "MC", style=("--", "v"))
 def mc(
     problem: AssignmentProblem,
     seed: int | np.random.Generator | None = 0,

@@ -510,7 +510,7 @@ def _run(
     )
 
 
-@register_method(CommProblem, "DAA", category="simulation")
+@register_method(CommProblem, "DAA", category="simulation", style=("-", "o"))
 def daa(
     problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
 ) -> Solution:
@@ -521,7 +521,7 @@ def daa(
     return _run(problem, DAA(), seed, strict, time_limit)
 
 
-@register_method(CommProblem, "CAA", category="simulation")
+@register_method(CommProblem, "CAA", category="simulation", style=(":", "^"))
 def caa(
     problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
 ) -> Solution:
@@ -532,7 +532,7 @@ def caa(
     return _run(problem, CAA(), seed, strict, time_limit)
 
 
-@register_method(CommProblem, "HDA", category="simulation")
+@register_method(CommProblem, "HDA", category="simulation", style=("--", "s"))
 def hda(
     problem: CommProblem, *, seed: int = 0, strict: bool = False, time_limit: float | None = None
 ) -> Solution:

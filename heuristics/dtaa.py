@@ -394,7 +394,7 @@ def _order(problem: CapabilityProblem, auction: AuctionResult) -> list[list[int]
     return routes
 
 
-@register_method(CapabilityProblem, "DTAA")
+@register_method(CapabilityProblem, "DTAA", style=("-", "d"))
 def dtaa(problem: CapabilityProblem, graph: Any = None, seed: int | None = 0) -> Solution:
     """DTAA: Algorithm 2's auction per class, then the ordering principle (3.10)–(3.11).
 

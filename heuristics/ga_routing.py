@@ -421,7 +421,7 @@ def _polish(
             fitness[row] = population_cost(problem, genes[row], "vehicle")[0]
 
 
-@register_method(AssignmentProblem, "GA")
+@register_method(AssignmentProblem, "GA", style=("-.", "h"))
 def genetic_algorithm(
     problem: AssignmentProblem,
     seed: int | np.random.Generator | None = 0,

@@ -620,6 +620,7 @@ def _tstar_order(rule: Any, cost: np.ndarray, pairs: list, start: int) -> list[i
     "ILS",
     default=False,
     not_default="ILS runs only when named (--methods ILS): a search with a budget",
+    style=(":", "P"),
 )
 def ils_delivery(
     instance: Any,

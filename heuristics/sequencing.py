@@ -638,7 +638,7 @@ def _delivery_method(name: str, instance: Any, seed: int = 0, **options: Any) ->
     )
 
 
-@register_method(DeliveryInstance, "NIA")
+@register_method(DeliveryInstance, "NIA", style=("-", "o"))
 def nia_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """NIA (5.12)–(5.13) on t* from the depot, then the exact schedule of the order.
 
@@ -649,13 +649,13 @@ def nia_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     return _delivery_method("NIA", instance, seed, **options)
 
 
-@register_method(DeliveryInstance, "MMA")
+@register_method(DeliveryInstance, "MMA", style=("--", "s"))
 def mma_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """MMA (5.14)–(5.16) on t* from the depot, then the exact schedule (see NIA)."""
     return _delivery_method("MMA", instance, seed, **options)
 
 
-@register_method(DeliveryInstance, "SMMA")
+@register_method(DeliveryInstance, "SMMA", style=("-.", "D"))
 def smma_delivery(instance: Any, seed: int = 0, **options: Any) -> Solution:
     """SMMA (5.17)–(5.18) on t* from the depot, then the exact schedule (see NIA).
 

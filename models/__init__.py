@@ -56,7 +56,9 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
     return float(result.bound if result.bound is not None else result.objective)
 
 
-register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",))(solve_routing)
+register_method(AssignmentProblem, "exact", category="exact", warm_start=("MC",), style=("-", "*"))(
+    solve_routing
+)
 
 
 @register_footprint(AssignmentProblem, "exact")
@@ -108,6 +110,7 @@ register_method(
     warm_start=("NIA", "MMA", "SMMA"),
     default=False,
     not_default="the subset DP (2^n states) runs only when named (--methods subset-dp)",
+    style=("-", "X"),
 )(optimal_plan)
 # the teaching MILP (5.1)-(5.7) does not scale past a handful of customers
 register_method(
@@ -117,6 +120,7 @@ register_method(
     warm_start=("NIA", "MMA", "SMMA"),
     default=False,
     not_default="the MILP (5.1)-(5.7) runs only when named (--methods milp): exact is faster",
+    style=("--", "*"),
 )(solve_delivery)
 # the SOP portfolio: the ideal DP (dense precedence) then the flow MILP (sparse); the fast
 # orderings of chapter 5 give the incumbent that prunes the DP and is kept on a time limit

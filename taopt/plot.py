@@ -29,39 +29,21 @@ Region = tuple[float, float, float, float]
 #: each method its own pair; ``method_style(name)`` picks it).
 LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">")
-_FIXED_STYLES = {
-    # the thesis's methods keep one look in every figure of taopt; the methods one chapter
-    # compares never share a pair
-    "exact": ("-", "*"),
-    "subset-dp": ("-", "X"),
-    "milp": ("--", "*"),
-    "VN": ("-", "o"),
-    "VM": ("--", "s"),
-    "EVN": ("-.", "D"),
-    "EVM": (":", "^"),
-    "MC": ("--", "v"),
-    "GA": ("-.", "h"),
-    "GA-memetic": (":", "p"),
-    "DTAA": ("-", "d"),
-    "DAA": ("-", "o"),
-    "HDA": ("--", "s"),
-    "CAA": (":", "^"),
-    "NIA": ("-", "o"),
-    "MMA": ("--", "s"),
-    "SMMA": ("-.", "D"),
-    "ILS": (":", "P"),
-}
+#: Looks of study labels that are not a registered method (a variant of one).
+_VARIANT_STYLES = {"GA-memetic": (":", "p")}
 
 
 def method_style(method: str, k: int = 0) -> dict[str, Any]:
     """Matplotlib keywords (``linestyle``, ``marker``) that identify ``method`` in black and white.
 
-    The thesis's methods have fixed styles; any other gets the ``k``-th pair of
-    :data:`LINESTYLES` x :data:`MARKERS`.
+    A method keeps the style its registration declares (``register_method(..., style=)``),
+    in every figure of taopt; any other gets the ``k``-th pair of :data:`LINESTYLES` x
+    :data:`MARKERS`.
     """
-    linestyle, marker = _FIXED_STYLES.get(
-        str(method), (LINESTYLES[k % len(LINESTYLES)], MARKERS[k % len(MARKERS)])
-    )
+    from taopt.registry import method_style as registered_style
+
+    fixed = registered_style(str(method)) or _VARIANT_STYLES.get(str(method))
+    linestyle, marker = fixed or (LINESTYLES[k % len(LINESTYLES)], MARKERS[k % len(MARKERS)])
     return {"linestyle": linestyle, "marker": marker}
 
 

@@ -211,6 +211,9 @@ class Method:
     requires : tuple of str
         Top-level packages the method needs (an optional extra such as ``pyvrp``); the
         method is :attr:`available` only when every one is installed.
+    style : (linestyle, marker), optional
+        How the method is drawn in every comparison plot, in black and white
+        (:func:`taopt.plot.method_style`); the same name keeps one look in every family.
     certifies : bool or callable
         Whether this exact method is the family's *certifying method* for the problem: the
         fastest exact method, which ``taopt verify --exact`` re-solves with (a callable
@@ -230,6 +233,7 @@ class Method:
     not_default: str | Callable[[Any], str] = ""
     requires: tuple[str, ...] = ()
     certifies: bool | Callable[[Any], bool] = False
+    style: tuple[str, str] | None = None
 
     def is_default_for(self, problem: Any) -> bool:
         """Whether ``taopt solve`` runs this method on ``problem`` when none are named."""
@@ -343,6 +347,7 @@ def register_method(
     not_default: str | Callable[[Any], str] = "",
     requires: tuple[str, ...] | str = (),
     certifies: bool | Callable[[Any], bool] = False,
+    style: tuple[str, str] | None = None,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Decorator: register ``func(problem, **options) -> Solution`` as method ``name``.
 
@@ -365,6 +370,8 @@ def register_method(
     certifies : bool or callable
         Exact methods only: marks the family's fastest exact method where it applies
         (``taopt verify --exact`` re-solves with it); see :func:`certifying_method`.
+    style : (linestyle, marker), optional
+        Its look in comparison plots (:func:`taopt.plot.method_style`).
 
     Example
     -------
@@ -397,6 +404,7 @@ def register_method(
             not_default=not_default,
             requires=(requires,) if isinstance(requires, str) else tuple(requires),
             certifies=certifies,
+            style=style,
         )
         return func
 
@@ -427,6 +435,15 @@ def register_relaxation(
 def relaxations(problem: Any) -> list[Callable[[Any], float]]:
     """The relaxation bounds registered for the family of ``problem`` (imported modules only)."""
     return list(_RELAXATIONS.get(family_of(problem).problem_type, []))
+
+
+def method_style(name: str) -> tuple[str, str] | None:
+    """The (linestyle, marker) some registration of method ``name`` declares (None if none)."""
+    for found in _METHODS.values():
+        method = found.get(name)
+        if method is not None and method.style is not None:
+            return method.style
+    return None
 
 
 def family_of(item: Any) -> Family:
@@ -531,5 +548,6 @@ __all__ = [
     "methods",
     "method_names",
     "certifying_method",
+    "method_style",
     "get_method",
 ]

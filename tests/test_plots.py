@@ -77,7 +77,10 @@ def test_schematic_layout_recovers_planar_distances():
 
 
 def test_method_styles_differ_without_colour():
-    """The methods each chapter compares get distinct line style / marker pairs."""
+    """The methods each chapter compares get distinct line style / marker pairs (declared by
+    their registrations)."""
+    import taopt.orchestration.pipeline  # noqa: F401  (registers every method)
+
     chapters = (
         ("VN", "VM", "EVN", "EVM", "MC", "GA", "exact"),
         ("DTAA", "GA", "GA-memetic", "MC", "exact"),
