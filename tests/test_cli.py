@@ -354,6 +354,24 @@ def test_top_level_api_is_complete_and_lazy():
     assert done.stdout.strip() == "False", done.stderr
 
 
+def test_the_core_imports_no_method_or_orchestration_module():
+    """Importing taopt and every family (problem data, scorers, bounds, plots' modules) loads no
+    module of taopt.models, taopt.heuristics or taopt.orchestration (the layers of DESIGN.md)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, taopt\n"
+        "from taopt.registry import families\n"
+        "[f.kind for f in families()]\n"
+        "bad = ('taopt.models', 'taopt.heuristics', 'taopt.orchestration')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(bad)))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]", done.stdout
+
+
 # -- methods: discovered, only what is usable here -----------------------------------------------
 
 
