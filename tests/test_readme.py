@@ -84,16 +84,13 @@ def test_readme_command_lines_parse_without_deprecated_flags(capsys) -> None:
     assert capsys.readouterr().err == ""
 
 
-@pytest.mark.parametrize(
-    "kind",
-    [
-        "assignment_problem",
-        "capability_problem",
-        "comm_problem",
-        "delivery_instance",
-        "sop_problem",
-    ],
-)
+def _kinds() -> list[str]:
+    from taopt.registry import file_kinds
+
+    return sorted(file_kinds())
+
+
+@pytest.mark.parametrize("kind", _kinds())
 def test_readme_method_table_is_what_available_methods_lists(kind: str) -> None:
     """The README's table of methods is taopt.available_methods of each family (peers aside)."""
     import taopt
