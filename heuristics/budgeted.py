@@ -789,6 +789,10 @@ def _polish(
         counters["move_evaluations"] += evaluations
         best = None
         starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
+        if not limited:  # no limit: chapter 2's memetic step exactly
+            candidate = nodes_to_genes(problem.routing, nodes)
+            value, total, over = penalised_cost(problem, candidate, penalty, unit)
+            best = (candidate, value[0], total[0], over[0])
         for start in starts:
             candidate = start
             value, total, over = penalised_cost(problem, candidate, penalty, unit)
