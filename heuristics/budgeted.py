@@ -271,47 +271,55 @@ def limited_local_search(
     )
     routes = [list(route) for route in routes]
     targets = np.arange(n)
+    points = np.arange(size)
+    into_target = cost[:size, :n].T  # (n, n + m): t(u, k), fixed
+    itself = points[None, :] == targets[:, None]  # relocating k after k
+    route_of = np.empty(size, dtype=int)
+    successor = np.full(size, size)
+    predecessor = np.empty(n, dtype=int)
+    times = np.zeros(m)
+    counts = np.zeros(m, dtype=int)
+
+    def book(j: int) -> None:  # route j's successors, predecessors, time and count
+        path = [n + j, *routes[j]]
+        route_of[path] = j
+        successor[path[:-1]] = path[1:]
+        successor[path[-1]] = size
+        predecessor[routes[j]] = path[:-1]
+        times[j] = cost[path[:-1], path[1:]].sum()
+        counts[j] = len(routes[j])
+
+    for j in range(m):
+        book(j)
     moves = 0
     while moves < max_moves:
-        route_of = np.empty(size, dtype=int)
-        successor = np.full(size, size)
-        predecessor = np.empty(n, dtype=int)
-        times = np.zeros(m)
-        counts = np.array([len(route) for route in routes])
-        for j, route in enumerate(routes):
-            points = [n + j, *route]
-            route_of[points] = j
-            successor[points[:-1]] = points[1:]
-            predecessor[route] = points[:-1]
-            times[j] = cost[points[:-1], points[1:]].sum()
         after = successor[:n]
         removal = (
             cost[predecessor, after] - cost[predecessor, targets] - cost[targets, after]
         )  # (n,)
-        points = np.arange(size)
         insertion = (
-            cost[points[None, :], targets[:, None]]
-            + cost[targets[:, None], successor[None, :]]
-            - cost[points, successor][None, :]
+            into_target + cost[:n, successor] - cost[points, successor][None, :]
         )  # (n, n + m): target k after point u
         home, there = route_of[:n][:, None], route_of[None, :]
         same = home == there
         relocate = removal[:, None] + insertion
-        fits_same = times[home] + relocate <= limit[home]
-        fits_other = (
+        fits = np.where(
+            same,
+            times[home] + relocate <= limit[home],
             (counts[there] + 1 <= capacity[there])
             & (times[there] + insertion <= limit[there])
-            & (times[home] + removal[:, None] <= limit[home])
+            & (times[home] + removal[:, None] <= limit[home]),
         )
-        blocked = (points[None, :] == targets[:, None]) | (points[None, :] == predecessor[:, None])
-        relocate = np.where(np.where(same, fits_same, fits_other) & ~blocked, relocate, np.inf)
+        fits &= ~itself & (points[None, :] != predecessor[:, None])
+        relocate = np.where(fits, relocate, np.inf)
         # exchange k (route a) and l (route b): l takes k's place and k takes l's
-        into = cost[predecessor[:, None], targets[None, :]] + cost[targets[None, :], after[:, None]]
+        into = cost[predecessor, :n] + cost[:n, after].T
         change = into - (cost[predecessor, targets] + cost[targets, after])[:, None]  # (k, l)
-        a, b = route_of[:n][:, None], route_of[:n][None, :]
-        exchange = change + change.T
-        fits = (times[a] + change <= limit[a]) & (times[b] + change.T <= limit[b]) & (a != b)
-        exchange = np.where(fits, exchange, np.inf)
+        a = route_of[:n]
+        time_a = times[a][:, None] + change
+        fits = (time_a <= limit[a][:, None]) & (time_a.T <= limit[a][None, :])
+        fits &= a[:, None] != a[None, :]
+        exchange = np.where(fits, change + change.T, np.inf)
         tolerance = 1e-10 * max(float(times.sum()), 1.0)
         best_relocate = int(np.argmin(relocate))
         best_exchange = int(np.argmin(exchange))
@@ -319,13 +327,18 @@ def limited_local_search(
             break
         if relocate.flat[best_relocate] <= exchange.flat[best_exchange]:
             k, u = divmod(best_relocate, size)
-            routes[route_of[k]].remove(k)
-            target_route = routes[route_of[u]]
+            old, new = int(route_of[k]), int(route_of[u])
+            routes[old].remove(k)
+            target_route = routes[new]
             target_route.insert(0 if u >= n else target_route.index(u) + 1, k)
         else:
             k, l = divmod(best_exchange, n)
-            ra, rb = routes[route_of[k]], routes[route_of[l]]
+            old, new = int(route_of[k]), int(route_of[l])
+            ra, rb = routes[old], routes[new]
             ra[ra.index(k)], rb[rb.index(l)] = l, k
+        book(old)
+        if new != old:
+            book(new)
         moves += 1
     return routes, moves
 
@@ -637,7 +650,10 @@ def genetic_algorithm(
     Notes
     -----
     O(generations × population × (n + m)) numpy work plus the local search
-    (O((n + m)^2) per move), as chapter 2's GA.
+    (O((n + m)^2) per move), as chapter 2's GA. With limits the memetic step is a
+    deterministic function of the chromosome, so its answer is memoised per chromosome
+    (``info["memo_hits"]``): the elite, polished again generation after generation, costs
+    nothing after the first time (same answers, about half the local searches at n50m10).
 
     Example
     -------
@@ -670,7 +686,8 @@ def genetic_algorithm(
     between = problem.cost[:n, :n][~np.eye(n, dtype=bool)]
     unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
     matrix = path_matrix(problem.routing)
-    counters = {"moves": 0, "move_evaluations": 0, "repairs": 0, "repaired": 0}
+    counters = {"moves": 0, "move_evaluations": 0, "repairs": 0, "repaired": 0, "memo_hits": 0}
+    memo: dict[bytes, Any] = {}  # polished chromosome -> its memetic step's best candidate
     # clone fingerprints, as chapter 2's GA (fixed weights: they draw nothing from ``rng``)
     weights = np.random.default_rng(0x6A).integers(1, 2**62, size=length, dtype=np.int64)
 
@@ -712,7 +729,9 @@ def genetic_algorithm(
         _separate_clones(children, weights, ops, rng)  # keep the population diverse
         genes = children
         fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
-        _polish(problem, matrix, genes, fitness, plain, violation, penalty, unit, ops, counters)
+        _polish(
+            problem, matrix, genes, fitness, plain, violation, penalty, unit, ops, counters, memo
+        )
         elite = genes[int(np.argmin(fitness))].copy()
         keep_feasible(generation)
         history.append(best_cost)
@@ -749,20 +768,29 @@ def _polish(
     unit: float,
     ops: Any,
     counters: dict[str, int],
+    memo: dict[bytes, Any],
 ) -> None:
     """On the best distinct children: two candidates, chapter 2's local search then
     :func:`repair` then :func:`limited_local_search`, and the child itself repaired then
     :func:`limited_local_search`; the better replaces the child where the penalised fitness
     improves (in place). Without limits: chapter 2's local search only."""
     values, first = np.unique(fitness, return_index=True)
+    limited = problem.has_capacity or problem.has_max_time
     for row in [int(r) for r in first[: ops.polish]]:
+        key = genes[row].tobytes()
+        if limited and key in memo:  # polished before (often the elite): same answer
+            counters["memo_hits"] += 1
+            best = memo[key]
+            if best is not None and best[1] < fitness[row]:
+                genes[row] = best[0]
+                fitness[row], plain[row], violation[row] = best[1], best[2], best[3]
+            continue
         nodes, moves, evaluations = local_search(
             matrix, path_nodes(problem.routing, genes[row])[0], ops.max_moves, ops.neighbourhood
         )
         counters["moves"] += moves
         counters["move_evaluations"] += evaluations
         best = None
-        limited = problem.has_capacity or problem.has_max_time
         starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
         if not limited:  # no limit: chapter 2's memetic step exactly
             candidate = nodes_to_genes(problem.routing, nodes)
@@ -786,6 +814,8 @@ def _polish(
             value, total, over = penalised_cost(problem, candidate, penalty, unit)
             if best is None or value[0] < best[1]:
                 best = (candidate, value[0], total[0], over[0])
+        if limited:
+            memo[key] = None if best is None else (best[0].copy(), *best[1:])
         if best is not None and best[1] < fitness[row]:
             genes[row] = best[0]
             fitness[row], plain[row], violation[row] = best[1], best[2], best[3]

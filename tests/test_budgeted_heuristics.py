@@ -250,3 +250,47 @@ def test_peers_keep_a_route_that_takes_exactly_the_limit():
         if label.endswith("-time") and problem.max_time[0] > 0:
             for _name, run in PEERS:
                 assert run(problem).status == "feasible", label
+
+
+def _improving_moves(problem: BudgetedProblem, routes: list[list[int]]) -> list:
+    """Every relocate / exchange that keeps the limits and lowers the total, by re-walking."""
+    total = evaluate_budgeted(problem, routes)
+    found = []
+    spots = [(j, i) for j, route in enumerate(routes) for i in range(len(route))]
+    for j, i in spots:
+        k = routes[j][i]
+        for dest in range(problem.m):  # relocate k into every gap of every route
+            for gap in range(len(routes[dest]) + (dest != j)):
+                trial = [list(r) for r in routes]
+                trial[j].pop(i)
+                trial[dest].insert(gap, k)
+                if (
+                    not violations(problem, trial)
+                    and evaluate_budgeted(problem, trial) < total - 1e-7
+                ):
+                    found.append(("relocate", k, dest, gap))
+        for j2, i2 in spots:  # exchange with a target of another route
+            if j2 != j:
+                trial = [list(r) for r in routes]
+                trial[j][i], trial[j2][i2] = routes[j2][i2], k
+                if (
+                    not violations(problem, trial)
+                    and evaluate_budgeted(problem, trial) < total - 1e-7
+                ):
+                    found.append(("exchange", k, routes[j2][i2]))
+    return found
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_limited_local_search_ends_at_a_local_optimum(seed):
+    """After the descent no relocate/exchange found by re-walking every route improves."""
+    n, m = 12, 3
+    cost = random_cost(n, m, 20 + seed)
+    start = budgeted.mc(BudgetedProblem(cost, n, capacity=[5] * m)).routes
+    longest = max(AssignmentProblem(cost, n).route_cost(j, r) for j, r in enumerate(start))
+    problem = BudgetedProblem(cost, n, capacity=[5] * m, max_time=[longest] * m)
+    assert violations(problem, start) == []
+    routes, _moves = budgeted.limited_local_search(problem, start)
+    assert violations(problem, routes) == []
+    assert sorted(k for r in routes for k in r) == list(range(n))
+    assert _improving_moves(problem, routes) == []
