@@ -7,11 +7,11 @@ Run from the repository root::
     python benchmarks/bench_budgeted_heuristics.py --json before.json    # keep every run
 
 Issue 17's target: every heuristic within 2x of its unlimited time. Instances are the
-chapter-6 study's (:func:`taopt.studies.budgeted.make_scenario`: the thesis-field drift
+chapter-6 study's (:func:`taopt.orchestration.studies.budgeted.make_scenario`: the thesis-field drift
 scenarios of §2.5, study seed 1, scenario k seeded ``scenario_seed(1, k)``, every level on
 the same matrix; ``T*`` from the unlimited certified optimum, cached in
 ``benchmarks/.cache/budgeted``), and each method runs with the study's seed
-(:func:`taopt.studies.budgeted.method_seed`) and its default options. Scenario-major: the
+(:func:`taopt.orchestration.studies.budgeted.method_seed`) and its default options. Scenario-major: the
 levels of one scenario run one after the other, so a change of machine load hits every
 level alike. Printed per (size, level, method): the median wall time over the scenarios,
 the median of the per-scenario ratio to the same scenario's ``none`` time, and the median
@@ -30,7 +30,7 @@ from pathlib import Path
 
 from taopt.budgeted import evaluate_budgeted
 from taopt.heuristics import budgeted
-from taopt.studies.budgeted import make_scenario, method_seed
+from taopt.orchestration.studies.budgeted import make_scenario, method_seed
 
 CACHE = Path(__file__).resolve().parent / ".cache" / "budgeted"
 LEVELS = "none,Q2,Q1.5,Q1.2,Q1,T1,T0.8,T0.6"
