@@ -49,7 +49,7 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
     Calls ``solve_routing(problem, sec=sec, relax=True, **options)`` and returns its
     objective (the relaxation's value). With "dfj" (all of (2.5)) the LP lies inside the
     arborescence polytope (in-degree 1 plus the subtour constraints imply a cut into every
-    target set), so it is never below :func:`taopt.bounds.arborescence`; "mtz" and "flow"
+    target set), so it is never below ``taopt.bounds.arborescence``; "mtz" and "flow"
     give weaker LPs.
     """
     result = solve_routing(problem, sec=sec, relax=True, **options)

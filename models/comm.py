@@ -83,7 +83,7 @@ def solve_comm(
         Seconds for all classes together (shared out evenly over the classes still to solve).
     incumbent : Trajectories, Routes or Solution, optional
         A feasible solution (e.g. DAA's): its first-visit routes are offered to
-        :func:`solve_routing` per class when that function takes an incumbent.
+        :func:`~taopt.models.routing.solve_routing` per class when that function takes an incumbent.
     sec : str
         Subtour elimination of the chapter 2 model ("dfj", "mtz", "flow").
     workers : int, optional

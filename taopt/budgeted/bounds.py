@@ -4,7 +4,7 @@ Every bound here is **valid** (never above the optimum; DESIGN invariant 3). Two
 
 * *Limits only remove solutions.* Every feasible solution of a
   :class:`~taopt.budgeted.BudgetedProblem` is a feasible solution of chapter 2's problem
-  :attr:`~taopt.budgeted.BudgetedProblem.routing` with the same cost, so every valid
+  ``BudgetedProblem.routing`` with the same cost, so every valid
   chapter-2 bound is valid here. Better: an arc that no vehicle can use on a route within
   its limits (:func:`usable_arcs`) is in no feasible solution, so pricing it above any
   route (:func:`pruned_routing`) changes no feasible solution's cost and keeps every

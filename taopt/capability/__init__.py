@@ -1,6 +1,6 @@
 """Chapter 3: heterogeneous vehicles and multi-capability demands, (3.1)–(3.3).
 
-The family's spec is :data:`taopt.capability.family.FAMILY`: :class:`CapabilityProblem` (payload :class:`~taopt.result.Routes`,
+The family's spec is :mod:`taopt.capability.family`: :class:`CapabilityProblem` (payload :class:`~taopt.result.Routes`,
 scorer :func:`evaluate_capability`, bounds ``arborescence``, ``thesis_mcga`` and
 ``doubled_arborescence`` per class).
 

@@ -1,6 +1,6 @@
 """Chapter 4: task assignment under a limited communication range.
 
-The family's spec is :data:`taopt.comm.family.FAMILY`: :class:`CommProblem` (payload :class:`Trajectories`, scorer
+The family's spec is :mod:`taopt.comm.family`: :class:`CommProblem` (payload :class:`Trajectories`, scorer
 :func:`evaluate_trajectories`, bound ``mst`` (Lemma 4.8)). The simulation engine is
 :mod:`taopt.comm.engine`; the algorithms CAA, DAA and HDA are its policies in
 :mod:`taopt.heuristics.comm` (``taopt.solve(problem, "DAA", seed=0)``), the certified

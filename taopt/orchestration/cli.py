@@ -19,7 +19,7 @@ imports what it needs.
 :func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
 on stderr and exit code 2; Ctrl-C prints one line (``taopt solve: interrupted``; a study
 says where its rows are) and exits with 130, no traceback: a HiGHS run stops through its
-interrupt callbacks (:func:`taopt.models.highs.interruptible`), Python code between
+interrupt callbacks (:mod:`taopt.models.highs`), Python code between
 bytecodes.
 """
 

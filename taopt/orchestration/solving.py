@@ -227,15 +227,15 @@ def solve_file(
         ids.
     gantt : str, optional
         PNG of the truck and drone timelines (delivery instances).
+    save : path, optional
+        Folder: each method's solution is written there as ``<method>.json``, which
+        ``taopt verify`` re-checks.
 
     Raises
     ------
     OutputError
         ``plot`` or ``gantt`` not a ``.png`` file, or a Gantt chart asked of a file that is
         not a delivery instance: raised before the file is loaded or anything solved.
-    save : path, optional
-        Folder: each method's solution is written there as ``<method>.json``, which
-        ``taopt verify`` re-checks.
 
     Returns
     -------

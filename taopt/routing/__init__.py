@@ -1,6 +1,6 @@
 """Chapter 2: open multi-vehicle routing on an asymmetric travel-time matrix.
 
-The family's spec is :data:`taopt.routing.family.FAMILY` (payload
+The family's spec is :mod:`taopt.routing.family` (payload
 :class:`~taopt.result.Routes`, scorer :func:`evaluate_routes`, bounds ``arborescence``,
 ``thesis_mcga`` as printed and ``lower``).
 """

@@ -3,7 +3,7 @@
 :class:`SopProblem` (precedence-constrained Hamiltonian path from ``start`` to ``end``), the
 shipped TSPLIB files with their proven optima (:data:`~taopt.sop.problem.KNOWN_OPTIMA`), the
 one scorer :func:`evaluate_order` and the bounds of :mod:`taopt.sop.bounds`. The family's spec
-is :data:`taopt.sop.family.FAMILY`; the exact DP and the flow MILP are in
+is :mod:`taopt.sop.family`; the exact DP and the flow MILP are in
 :mod:`taopt.models.sop_dp` and :mod:`taopt.models.sop`.
 """
 

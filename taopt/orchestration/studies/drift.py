@@ -5,7 +5,7 @@ method is run through :func:`taopt.solve` and one row per method is appended to
 ``<out>/drift.csv`` by :func:`taopt.orchestration.study.run_study` (resumable, any executor). Each row
 carries the scenario's reference values:
 
-* ``f_a`` — the thesis's Algorithm 1 value ("MCGA", :func:`taopt.bounds.thesis_mcga`), the
+* ``f_a`` — the thesis's Algorithm 1 value ("MCGA", ``taopt.bounds.thesis_mcga``), the
   denominator of the thesis's quality ratio ``q = f / f_a`` (2.26). On an asymmetric matrix
   it is *not* a valid lower bound, so q can dip below 1.
 * ``valid_bound`` — the minimum-cost arborescence (Edmonds), a valid bound.
