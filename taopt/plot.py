@@ -37,8 +37,8 @@ def method_style(method: str, k: int = 0) -> dict[str, Any]:
     """Matplotlib keywords (``linestyle``, ``marker``) that identify ``method`` in black and white.
 
     A method keeps the style its registration declares (``register_method(..., style=)``),
-    in every figure of taopt; any other gets the ``k``-th pair of :data:`LINESTYLES` x
-    :data:`MARKERS`.
+    in every figure of taopt; any other gets the ``k``-th pair of ``LINESTYLES`` x
+    ``MARKERS``.
     """
     from taopt.registry import method_style as registered_style
 
