@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from taopt.budgeted.bounds import usable_arcs
 from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
@@ -181,6 +182,8 @@ class BudgetedModel:
         self.arc_index[self.tails, self.heads] = arcs
         self._known: set[tuple[int, ...]] = set()
         self.cuts: list[tuple[int, ...]] = []
+        self._known_capacity: set[tuple[tuple[int, ...], int]] = set()
+        self.capacity_cuts: list[tuple[tuple[int, ...], int]] = []
 
     def sigma(self, solution: np.ndarray) -> np.ndarray:
         """Chapter 2's σ (one value per two-index arc) of a column vector."""
@@ -198,6 +201,16 @@ class BudgetedModel:
             rows, low, high = cut_rows(self.problem.routing, new, self.tails, self.heads)
             self.model.add_rows(rows @ self.aggregate, low, high)
             self.cuts.extend(new)
+        return len(new)
+
+    def add_capacity_cuts(self, cuts: list[tuple[tuple[int, ...], int]]) -> int:
+        """Add rounded capacity rows (:func:`separate_capacity`) not in the model yet."""
+        new = [(subset, k) for subset, k in cuts if (subset, k) not in self._known_capacity]
+        if new:
+            self._known_capacity.update(new)
+            rows, low, high = capacity_rows(self.problem, new, self.tails, self.heads)
+            self.model.add_rows(rows @ self.aggregate, low, high)
+            self.capacity_cuts.extend(new)
         return len(new)
 
     def start_vector(self, routes: list[list[int]]) -> np.ndarray | None:
@@ -365,6 +378,8 @@ class ResourceModel:
         self.arc_index = arc_index
         self._known: set[tuple[int, ...]] = set()
         self.cuts: list[tuple[int, ...]] = []
+        self._known_capacity: set[tuple[tuple[int, ...], int]] = set()
+        self.capacity_cuts: list[tuple[tuple[int, ...], int]] = []
 
     def sigma(self, solution: np.ndarray) -> np.ndarray:
         """σ (one value per arc) of a column vector."""
@@ -383,6 +398,17 @@ class ResourceModel:
             pad = sp.csr_matrix((rows.shape[0], self.n_columns - len(self.tails)))
             self.model.add_rows(sp.hstack([rows, pad]).tocsr(), low, high)
             self.cuts.extend(new)
+        return len(new)
+
+    def add_capacity_cuts(self, cuts: list[tuple[tuple[int, ...], int]]) -> int:
+        """Add rounded capacity rows (:func:`separate_capacity`) not in the model yet."""
+        new = [(subset, k) for subset, k in cuts if (subset, k) not in self._known_capacity]
+        if new:
+            self._known_capacity.update(new)
+            rows, low, high = capacity_rows(self.problem, new, self.tails, self.heads)
+            pad = sp.csr_matrix((rows.shape[0], self.n_columns - len(self.tails)))
+            self.model.add_rows(sp.hstack([rows, pad]).tocsr(), low, high)
+            self.capacity_cuts.extend(new)
         return len(new)
 
     def start_vector(self, routes: list[list[int]]) -> np.ndarray | None:
@@ -417,6 +443,134 @@ class ResourceModel:
             return decode(self.problem.routing, self, self.sigma(solution))
         except SolverError:
             return None
+
+
+def route_counts(problem: BudgetedProblem) -> np.ndarray:
+    """``k[s]``: the fewest vehicles whose capacities together hold ``s`` targets
+    (``s = 0..n``; an unlimited capacity holds n).
+
+    Every route serves at most ``Q_k`` targets, so a set S of targets is served by at
+    least ``k[|S|]`` routes, each entering S at least once: the rounded capacity
+    inequality ``σ(δ⁻(S)) >= k[|S|]`` holds for every feasible σ. With equal
+    capacities ``k[s] = ceil(s / Q)``.
+    """
+    n = problem.n
+    held = np.cumsum(np.sort(np.minimum(problem.capacity, n))[::-1])
+    sizes = np.arange(n + 1)
+    return np.where(sizes > 0, np.searchsorted(held, sizes, side="left") + 1, 0)
+
+
+def separate_capacity(
+    problem: BudgetedProblem,
+    tails: np.ndarray,
+    heads: np.ndarray,
+    sigma: np.ndarray,
+    tolerance: float = 1e-6,
+) -> list[tuple[tuple[int, ...], int]]:
+    """Target sets S whose rounded capacity inequality ``σ(δ⁻(S)) >= k(|S|)``
+    (:func:`route_counts`) is violated by σ, found heuristically.
+
+    Under (2.3) ``σ(δ⁻(S)) = |S| − σ(A(S))`` with ``A(S)`` the arcs inside S, so along a
+    growing S the inflow is updated in O(n). Candidates: the connected components of
+    the support of σ among targets, and from every target a set grown greedily by
+    adding the target most joined to S (largest ``Σ_{i∈S} σ_ij + σ_ji``) while it is
+    joined at all; the most violated set of each growth is kept.
+
+    Returns
+    -------
+    list of (subset, k)
+        Sorted target tuples and their right-hand sides ``k(|S|) >= 2``, each violated
+        by more than ``tolerance``; no duplicates.
+
+    Notes
+    -----
+    O(n^3) numpy work per call (n growths of n steps); a heuristic, as in CVRP codes
+    (exact separation of rounded capacity inequalities is NP-hard), so an empty answer
+    proves nothing. Sets needing one route are (2.5)'s, separated exactly elsewhere.
+
+    References
+    ----------
+    Thesis §6.2 (capacity); Laporte and Nobert's rounded capacity inequalities for the
+    CVRP, here for open routes from distinct start points.
+    """
+    n = problem.n
+    need = route_counts(problem)
+    if need[n] < 2:
+        return []
+    inner = (tails < n) & (heads < n) & (sigma > 1e-9)
+    weight = np.zeros((n, n))
+    np.add.at(weight, (tails[inner], heads[inner]), sigma[inner])
+    joined = weight + weight.T
+    found: dict[tuple[int, ...], int] = {}
+
+    def offer(members: list[int] | np.ndarray, inside_sum: float) -> float:
+        size = len(members)
+        violation = need[size] - (size - inside_sum)
+        if need[size] >= 2 and violation > tolerance:
+            found[tuple(sorted(int(v) for v in members))] = int(need[size])
+        return violation
+
+    support = sp.csr_matrix(joined > 0)
+    count, label = connected_components(support, directed=False)
+    for component in range(count):
+        members = np.flatnonzero(label == component)
+        offer(members, float(weight[np.ix_(members, members)].sum()))
+    for seed in range(n):
+        members = [seed]
+        inside = np.zeros(n, dtype=bool)
+        inside[seed] = True
+        link = joined[seed].copy()
+        inside_sum, best, best_members = 0.0, tolerance, None
+        while True:
+            link[inside] = -1.0
+            j = int(np.argmax(link))
+            if link[j] <= 1e-9:
+                break
+            inside_sum += link[j]
+            inside[j] = True
+            members.append(j)
+            link += joined[j]
+            size = len(members)
+            violation = need[size] - (size - inside_sum)
+            if need[size] >= 2 and violation > best:
+                best, best_members = violation, list(members)
+        if best_members is not None:
+            found[tuple(sorted(best_members))] = int(need[len(best_members)])
+    return sorted(found.items())
+
+
+def capacity_rows(
+    problem: BudgetedProblem,
+    cuts: list[tuple[tuple[int, ...], int]],
+    tails: np.ndarray,
+    heads: np.ndarray,
+) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """Rows of rounded capacity inequalities, each in its sparser equivalent form:
+    ``σ(δ⁻(S)) >= k`` or, by (2.3), ``σ(A(S)) <= |S| − k`` (as :func:`cut_rows`)."""
+    size = problem.n + problem.m
+    rows, columns = [], []
+    lower = np.empty(len(cuts))
+    upper = np.empty(len(cuts))
+    for r, (subset, k) in enumerate(cuts):
+        inside = np.zeros(size, dtype=bool)
+        inside[list(subset)] = True
+        s = len(subset)
+        if s * (s - 1) <= (size - s) * s:
+            arcs = np.flatnonzero(inside[tails] & inside[heads])
+            lower[r], upper[r] = -np.inf, s - k
+        else:
+            arcs = np.flatnonzero(~inside[tails] & inside[heads])
+            lower[r], upper[r] = float(k), np.inf
+        rows.append(np.full(len(arcs), r))
+        columns.append(arcs)
+    matrix = sp.csr_matrix(
+        (
+            np.ones(sum(len(c) for c in columns)),
+            (np.concatenate(rows) if rows else [], np.concatenate(columns) if columns else []),
+        ),
+        shape=(len(cuts), len(tails)),
+    )
+    return matrix, lower, upper
 
 
 def greedy_budgeted(problem: BudgetedProblem) -> list[list[int]] | None:
@@ -550,6 +704,7 @@ def solve_budgeted(
     max_rounds: int = 10_000,
     incumbent: Any = None,
     form: str = "resource",
+    capacity_cuts: bool = True,
 ) -> Solution:
     """Solve (2.2)–(2.5) with per-vehicle capacity and travel-time limits exactly (HiGHS).
 
@@ -673,12 +828,19 @@ def solve_budgeted(
             sigma = model.sigma(model.model.highs.getSolution().col_value)
             found = separate_subtours(problem.routing, model.tails, model.heads, sigma,
                                       deadline=root_end)  # fmt: skip
-            if not model.add_cuts(found):
+            if model.add_cuts(found):
+                continue
+            if not capacity_cuts or not problem.has_capacity:
+                break
+            if not model.add_capacity_cuts(
+                separate_capacity(problem, model.tails, model.heads, sigma)
+            ):
                 break
     finally:
         model.model.relax(False)
     best_bound = max(best_bound, root_bound)
-    info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound)
+    info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound,
+                capacity_cuts=len(model.capacity_cuts))  # fmt: skip
     fixed = 0
     if form == "resource" and math.isfinite(root_bound) and best_routes is not None:
         # reduced-cost fixing: a solution using arc a costs at least L + d_a
