@@ -58,7 +58,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from taopt.budgeted.bounds import usable_arcs
-from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
+from taopt.budgeted.problem import (
+    TIME_TOLERANCE,
+    BudgetedProblem,
+    evaluate_budgeted,
+    violations,
+)
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import Deadline, milp_bytes, register_footprint
 from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
@@ -460,15 +465,44 @@ def route_counts(problem: BudgetedProblem) -> np.ndarray:
     return np.where(sizes > 0, np.searchsorted(held, sizes, side="left") + 1, 0)
 
 
+def entry_times(problem: BudgetedProblem) -> np.ndarray:
+    """``e_j``: the least travel time of an arc into target j that some vehicle may use
+    (:func:`~taopt.budgeted.bounds.usable_arcs`); 0 without any time limit."""
+    if not problem.has_max_time:
+        return np.zeros(problem.n)
+    usable = usable_arcs(problem).any(axis=0)
+    priced = np.where(usable, problem.cost[:, : problem.n], np.inf)
+    least = priced.min(axis=0)
+    return np.where(np.isfinite(least), least, 0.0)
+
+
+def time_counts(problem: BudgetedProblem, total: np.ndarray | float) -> np.ndarray:
+    """The fewest vehicles whose time limits (with the scorer's tolerance) sum to at
+    least ``total`` (0 for ``total <= 0``); 1 when a vehicle has no time limit.
+
+    Routes touching a set S of targets enter each ``j ∈ S`` by a distinct arc of at
+    least ``e_j`` (:func:`entry_times`), so together they take at least ``Σ_{j∈S} e_j``,
+    and each takes at most its ``T_k``: S is served by at least this many routes.
+    """
+    limits = np.sort(problem.max_time * (1.0 + TIME_TOLERANCE))[::-1]
+    held = np.cumsum(limits)
+    total = np.asarray(total, dtype=float)
+    return np.where(total > 0, np.searchsorted(held, total, side="left") + 1, 0)
+
+
 def separate_capacity(
     problem: BudgetedProblem,
     tails: np.ndarray,
     heads: np.ndarray,
     sigma: np.ndarray,
     tolerance: float = 1e-6,
+    entry: np.ndarray | None = None,
 ) -> list[tuple[tuple[int, ...], int]]:
-    """Target sets S whose rounded capacity inequality ``σ(δ⁻(S)) >= k(|S|)``
-    (:func:`route_counts`) is violated by σ, found heuristically.
+    """Target sets S whose rounded route-count inequality ``σ(δ⁻(S)) >= k(S)`` is
+    violated by σ, found heuristically; ``k(S)`` the larger of the capacity count
+    ``route_counts(problem)[|S|]`` and the time count ``time_counts(problem, Σ_{j∈S}
+    e_j)`` (:func:`route_counts`, :func:`time_counts`, ``e = entry`` from
+    :func:`entry_times`, or no time count when None).
 
     Under (2.3) ``σ(δ⁻(S)) = |S| − σ(A(S))`` with ``A(S)`` the arcs inside S, so along a
     growing S the inflow is updated in O(n). Candidates: the connected components of
@@ -479,7 +513,7 @@ def separate_capacity(
     Returns
     -------
     list of (subset, k)
-        Sorted target tuples and their right-hand sides ``k(|S|) >= 2``, each violated
+        Sorted target tuples and their right-hand sides ``k(S) >= 2``, each violated
         by more than ``tolerance``; no duplicates.
 
     Notes
@@ -490,12 +524,17 @@ def separate_capacity(
 
     References
     ----------
-    Thesis §6.2 (capacity); Laporte and Nobert's rounded capacity inequalities for the
-    CVRP, here for open routes from distinct start points.
+    Thesis §6.2 (capacity, travel time); Laporte and Nobert's rounded capacity
+    inequalities for the CVRP, here for open routes from distinct start points.
     """
     n = problem.n
-    need = route_counts(problem)
-    if need[n] < 2:
+    by_size = route_counts(problem)
+    entry = np.zeros(n) if entry is None else np.asarray(entry, dtype=float)
+
+    def need(size: int, time_sum: float) -> int:
+        return max(int(by_size[size]), int(time_counts(problem, time_sum)))
+
+    if need(n, float(entry.sum())) < 2:
         return []
     inner = (tails < n) & (heads < n) & (sigma > 1e-9)
     weight = np.zeros((n, n))
@@ -503,39 +542,37 @@ def separate_capacity(
     joined = weight + weight.T
     found: dict[tuple[int, ...], int] = {}
 
-    def offer(members: list[int] | np.ndarray, inside_sum: float) -> float:
-        size = len(members)
-        violation = need[size] - (size - inside_sum)
-        if need[size] >= 2 and violation > tolerance:
-            found[tuple(sorted(int(v) for v in members))] = int(need[size])
-        return violation
-
     support = sp.csr_matrix(joined > 0)
     count, label = connected_components(support, directed=False)
     for component in range(count):
         members = np.flatnonzero(label == component)
-        offer(members, float(weight[np.ix_(members, members)].sum()))
+        size, k = len(members), need(len(members), float(entry[members].sum()))
+        if k >= 2 and k - (size - weight[np.ix_(members, members)].sum()) > tolerance:
+            found[tuple(int(v) for v in members)] = k
     for seed in range(n):
         members = [seed]
         inside = np.zeros(n, dtype=bool)
         inside[seed] = True
         link = joined[seed].copy()
-        inside_sum, best, best_members = 0.0, tolerance, None
+        inside_sum, time_sum = 0.0, float(entry[seed])
+        best, best_members, best_need = tolerance, None, 0
         while True:
             link[inside] = -1.0
             j = int(np.argmax(link))
             if link[j] <= 1e-9:
                 break
             inside_sum += link[j]
+            time_sum += float(entry[j])
             inside[j] = True
             members.append(j)
             link += joined[j]
             size = len(members)
-            violation = need[size] - (size - inside_sum)
-            if need[size] >= 2 and violation > best:
-                best, best_members = violation, list(members)
+            k = need(size, time_sum)
+            violation = k - (size - inside_sum)
+            if k >= 2 and violation > best:
+                best, best_members, best_need = violation, list(members), k
         if best_members is not None:
-            found[tuple(sorted(best_members))] = int(need[len(best_members)])
+            found[tuple(sorted(best_members))] = best_need
     return sorted(found.items())
 
 
@@ -705,6 +742,8 @@ def solve_budgeted(
     incumbent: Any = None,
     form: str = "resource",
     capacity_cuts: bool = True,
+    time_cuts: bool = True,
+    lp_start: bool = True,
 ) -> Solution:
     """Solve (2.2)–(2.5) with per-vehicle capacity and travel-time limits exactly (HiGHS).
 
@@ -809,7 +848,9 @@ def solve_budgeted(
     info.update(columns=model.n_columns, rows=model.model.n_rows)
     # 1. root LP, (2.5) separated exactly, at most half of the time left
     model.model.relax(True)
+    entry = entry_times(problem) if time_cuts else None
     root_rounds, root_bound = 0, -math.inf
+    root_sigma: np.ndarray | None = None
     root_reduced: np.ndarray | None = None
     budget = deadline.share(0.5)
     root_end = None if budget is None else time.perf_counter() + budget
@@ -826,21 +867,36 @@ def solve_budgeted(
                 break
             root_bound, root_reduced = model.model.lagrangian_bound()
             sigma = model.sigma(model.model.highs.getSolution().col_value)
+            root_sigma = sigma
             found = separate_subtours(problem.routing, model.tails, model.heads, sigma,
                                       deadline=root_end)  # fmt: skip
             if model.add_cuts(found):
                 continue
-            if not capacity_cuts or not problem.has_capacity:
+            if not capacity_cuts:
                 break
             if not model.add_capacity_cuts(
-                separate_capacity(problem, model.tails, model.heads, sigma)
+                separate_capacity(problem, model.tails, model.heads, sigma, entry=entry)
             ):
                 break
     finally:
         model.model.relax(False)
     best_bound = max(best_bound, root_bound)
     info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound,
+                root_seconds=deadline.elapsed(),
                 capacity_cuts=len(model.capacity_cuts))  # fmt: skip
+    if lp_start and root_sigma is not None:
+        # an LP-guided start: chapter 2's optimum on travel times scaled by 1 − σ of the
+        # root LP (arcs the LP uses are cheap), cut back to the limits and repaired
+        scale = np.ones_like(problem.cost)
+        scale[model.tails, model.heads] = 1.0 - 0.9 * np.clip(root_sigma, 0.0, 1.0)
+        guided = solve_routing(problem.routing.replace(cost=problem.cost * scale),
+                               time_limit=deadline.share(0.1), max_rounds=50)  # fmt: skip
+        start = None if guided.routes is None else repaired_routes(problem, guided.routes)
+        if start is not None:
+            value = evaluate_budgeted(problem, start)
+            info["lp_start"] = value
+            if value < best_value:
+                best_routes, best_value = start, value
     fixed = 0
     if form == "resource" and math.isfinite(root_bound) and best_routes is not None:
         # reduced-cost fixing: a solution using arc a costs at least L + d_a

@@ -271,12 +271,23 @@ def sigma_of(problem: BudgetedProblem, arcs: dict[tuple[int, int], float]):
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3, 4, 6])
 def test_capacity_inequalities_hold_for_feasible_routes(seed):
-    """Every rounded capacity inequality holds for feasible routes; separation finds none."""
-    from taopt.models.budgeted import greedy_budgeted, route_counts, separate_capacity
+    """Every rounded capacity and time inequality holds for feasible routes (each route
+    exactly at its time limit); separation finds none."""
+    from taopt.models.budgeted import (
+        entry_times,
+        greedy_budgeted,
+        route_counts,
+        separate_capacity,
+        time_counts,
+    )
 
     p = random_problem(6, 3, 300 + seed, tight=1.5)
     routes = greedy_budgeted(p)
     assert routes is not None and not violations(p, routes)
+    p = p.replace(max_time=[max(p.route_cost(k, r), 0.01) for k, r in enumerate(routes)])
+    assert not violations(p, routes)
+    entry = entry_times(p)
+    assert time_counts(p, 1.01 * p.max_time.max()) >= 2 and time_counts(p, 0.0) == 0
     arcs = {}
     for k, route in enumerate(routes):
         points = [p.n + k, *route]
@@ -287,7 +298,8 @@ def test_capacity_inequalities_hold_for_feasible_routes(seed):
         for subset in itertools.combinations(range(p.n), size):
             into = sigma[np.isin(heads, subset) & ~np.isin(tails, subset)].sum()
             assert into >= need[size] - 1e-9, subset
-    assert separate_capacity(p, tails, heads, sigma) == []
+            assert into >= time_counts(p, entry[list(subset)].sum()) - 1e-9, subset
+    assert separate_capacity(p, tails, heads, sigma, entry=entry) == []
 
 
 def test_capacity_separation_finds_a_cut_subtours_miss():
