@@ -57,7 +57,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from taopt.budgeted.bounds import usable_arcs
+from taopt.budgeted.bounds import shortest_times, usable_arcs
 from taopt.budgeted.problem import (
     TIME_TOLERANCE,
     BudgetedProblem,
@@ -343,9 +343,15 @@ class ResourceModel:
                 start_coef, start_rhs = top - limits[vehicle], top - 1.0
                 inner_coef, inner_rhs, lift = np.full(len(inner), top), top - 1.0, top - 2.0
             else:
-                column_upper.append(np.full(n, top))
-                start_coef, start_rhs = top - limits[vehicle] + cost[starts], top
-                inner_coef, inner_rhs, lift = top + cost[inner], top, 0.0
+                # time left on arrival at j: at most U_j = max_k (T_k − d_k(j)), d_k the
+                # shortest time from p_k; the big-M of each row is U of its head
+                reach = shortest_times(problem)[:, :n]
+                most = np.clip((limits[:, None] - reach).max(axis=0), 0.0, top)
+                column_upper.append(most)
+                start_rhs = most[self.heads[starts]]
+                start_coef = np.maximum(start_rhs - limits[vehicle] + cost[starts], 0.0)
+                inner_rhs = most[self.heads[inner]]
+                inner_coef, lift = inner_rhs + cost[inner], 0.0
             costs.append(np.zeros(n))
             # start rows: resource_j + coef σ[p_k, j] <= rhs
             count = len(starts)
@@ -369,7 +375,7 @@ class ResourceModel:
         for (data, rows, cols), count, rhs in extra:
             matrix.append(sp.csr_matrix((data, (rows, cols)), shape=(count, columns)))
             lower.append(np.full(count, -np.inf))
-            upper.append(np.full(count, float(rhs)))
+            upper.append(np.broadcast_to(np.asarray(rhs, dtype=float), (count,)).copy())
         self.model = HighsModel.from_arrays(
             cost=np.concatenate(costs),
             matrix=sp.vstack(matrix).tocsr(),
@@ -931,7 +937,7 @@ def solve_budgeted(
         harvested.extend(tuple(sorted(c)) for c in consider(solution))
 
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
-    rounds, stopped_by = 0, "time_limit"
+    rounds, stopped_by, nodes = 0, "time_limit", 0
     while True:
         left = deadline.remaining()
         if left is not None and left < SECONDS_PER_COLUMN * model.n_columns + HIGHS_OVERRUN:
@@ -966,6 +972,7 @@ def solve_budgeted(
             raise SolverError(f"HiGHS returned status {run.solver_status!r} on the budgeted model")
         if run.bound is not None:
             best_bound = max(best_bound, run.bound)
+        nodes += max(run.nodes, 0)
         cycles: list[list[int]] = []
         if run.has_point:
             cycles = consider(np.asarray(model.model.highs.getSolution().col_value))
@@ -983,7 +990,7 @@ def solve_budgeted(
             break
         if run.has_point and not cycles and run.stopped_by == "optimal":
             break  # cannot happen with an open gap: the answer is feasible and optimal
-    return stop(stopped_by, {"rounds": rounds, "cuts": len(model.cuts)})
+    return stop(stopped_by, {"rounds": rounds, "cuts": len(model.cuts), "nodes": nodes})
 
 
 @register_footprint(BudgetedProblem, "exact")
