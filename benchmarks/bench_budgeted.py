@@ -5,6 +5,7 @@ Run from the repository root::
     python benchmarks/bench_budgeted.py                                   # n50m10, mid
     python benchmarks/bench_budgeted.py --sizes 20x4,30x5,50x10 --tightness loose,mid,tight
     python benchmarks/bench_budgeted.py --form arc-vehicle --time-limit 20
+    python benchmarks/bench_budgeted.py --options '{"capacity_cuts": false}'   # one idea off
 
 Instances: the thesis-field drift scenarios of §2.5 (:func:`taopt.routing.scenarios.drift_scenario`,
 study seed 2024, scenarios 0..``--scenarios``-1), the travel times of the drift study. For
@@ -31,6 +32,7 @@ be shared: quote ratios, measured in the same run.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import statistics
 import time
@@ -68,7 +70,9 @@ def main() -> None:
     parser.add_argument("--tightness", default="mid", help=f"comma separated of {list(LEVELS)}")
     parser.add_argument("--time-limit", type=float, default=60.0)
     parser.add_argument("--form", default="resource", choices=FORMS)
+    parser.add_argument("--options", default="{}", help="JSON of further solve_budgeted keywords")
     args = parser.parse_args()
+    options = json.loads(args.options)
     for size in args.sizes.split(","):
         n, m = (int(v) for v in size.split("x"))
         rows: dict[str, list[tuple[float, float, str]]] = {}
@@ -81,7 +85,9 @@ def main() -> None:
                 capacity, max_time = limits(n, m, free.objective, level)
                 budgeted = BudgetedProblem.from_routing(problem, capacity, max_time)
                 began = time.perf_counter()
-                result = solve_budgeted(budgeted, time_limit=args.time_limit, form=args.form)
+                result = solve_budgeted(
+                    budgeted, time_limit=args.time_limit, form=args.form, **options
+                )
                 seconds = time.perf_counter() - began
                 if result.routes is not None:
                     assert abs(evaluate_budgeted(budgeted, result.routes) - result.objective) <= (

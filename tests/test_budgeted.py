@@ -245,3 +245,87 @@ def test_solve_through_the_registry_rejects_bad_incumbent_quietly():
     assert result.status == "optimal"
     assert "capacity" in result.info["incumbent_rejected"]
     assert taopt.solve(p, "exact").objective == pytest.approx(result.objective)
+
+
+def test_route_counts_fewest_vehicles():
+    """route_counts gives the fewest vehicles whose capacities hold s targets."""
+    from taopt.models.budgeted import route_counts
+
+    cost = np.ones((9, 9))
+    p = BudgetedProblem(cost, 6, capacity=[1, 3, 2])
+    assert route_counts(p).tolist() == [0, 1, 1, 1, 2, 2, 3]
+    q = BudgetedProblem(cost, 6, capacity=[2, None, 2])  # no limit holds all n
+    assert route_counts(q).tolist() == [0, 1, 1, 1, 1, 1, 1]
+
+
+def sigma_of(problem: BudgetedProblem, arcs: dict[tuple[int, int], float]):
+    """Chapter 2's arc list of ``problem`` and σ with the given arc values."""
+    from taopt.models.routing import arc_list
+
+    tails, heads = arc_list(problem.routing)
+    sigma = np.zeros(len(tails))
+    for (a, b), value in arcs.items():
+        sigma[np.flatnonzero((tails == a) & (heads == b))[0]] = value
+    return tails, heads, sigma
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4, 6])
+def test_capacity_inequalities_hold_for_feasible_routes(seed):
+    """Every rounded capacity and time inequality holds for feasible routes (each route
+    exactly at its time limit); separation finds none."""
+    from taopt.models.budgeted import (
+        entry_times,
+        greedy_budgeted,
+        route_counts,
+        separate_capacity,
+        time_counts,
+    )
+
+    p = random_problem(6, 3, 300 + seed, tight=1.5)
+    routes = greedy_budgeted(p)
+    assert routes is not None and not violations(p, routes)
+    p = p.replace(max_time=[max(p.route_cost(k, r), 0.01) for k, r in enumerate(routes)])
+    assert not violations(p, routes)
+    entry = entry_times(p)
+    assert time_counts(p, 1.01 * p.max_time.max()) >= 2 and time_counts(p, 0.0) == 0
+    arcs = {}
+    for k, route in enumerate(routes):
+        points = [p.n + k, *route]
+        arcs.update({(a, b): 1.0 for a, b in zip(points, points[1:], strict=False)})
+    tails, heads, sigma = sigma_of(p, arcs)
+    need = route_counts(p)
+    for size in range(1, p.n + 1):
+        for subset in itertools.combinations(range(p.n), size):
+            into = sigma[np.isin(heads, subset) & ~np.isin(tails, subset)].sum()
+            assert into >= need[size] - 1e-9, subset
+            assert into >= time_counts(p, entry[list(subset)].sum()) - 1e-9, subset
+    assert separate_capacity(p, tails, heads, sigma, entry=entry) == []
+
+
+def test_capacity_separation_finds_a_cut_subtours_miss():
+    """A fractional σ meeting every (2.5) row but not capacity 2 gets a violated k=2 cut."""
+    from taopt.models.budgeted import separate_capacity
+    from taopt.models.routing import separate_subtours
+
+    p = BudgetedProblem(np.ones((6, 6)), 4, capacity=[2, 2])
+    tails, heads, sigma = sigma_of(
+        p, {(4, 0): 0.5, (5, 2): 0.5, (0, 1): 1.0, (1, 2): 0.5, (2, 3): 1.0, (3, 0): 0.5}
+    )
+    assert separate_subtours(p.routing, tails, heads, sigma) == []
+    found = separate_capacity(p, tails, heads, sigma)
+    assert found
+    for subset, k in found:
+        into = sigma[np.isin(heads, subset) & ~np.isin(tails, subset)].sum()
+        assert k == 2 and into < k - 1e-6
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_capacity_cuts_keep_the_optimum_and_raise_the_root_bound(seed):
+    """With capacity cuts the optimum is the same and the root LP bound is no lower."""
+    p = random_problem(7, 2, 400 + seed, tight=1.6).replace(max_time=None)
+    with_cuts, without = solve_budgeted(p), solve_budgeted(p, capacity_cuts=False)
+    assert with_cuts.status == without.status
+    if with_cuts.status == "optimal":
+        assert with_cuts.objective == pytest.approx(without.objective, rel=1e-6)
+        assert with_cuts.info["lp_bound"] >= without.info["lp_bound"] - 1e-6
+        assert with_cuts.info["lp_bound"] <= with_cuts.objective + 1e-6
