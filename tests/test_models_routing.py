@@ -555,11 +555,13 @@ def test_lifted_rows_hold_for_every_solution_of_tiny_instances():
         assert worst <= lhs_and_rhs(cut, [], n)[1] + 1e-9, cut
 
 
-@pytest.mark.parametrize("kind,n,m,seed", [("drift", 9, 1, 3), ("metric", 9, 2, 5), *CASES[:3]])
-def test_root_lifted_rows_keep_the_dp_optimum(kind, n, m, seed):
+@pytest.mark.parametrize("kind,n,m,seed", [("drift", 12, 1, 2), ("metric", 9, 2, 5), *CASES[:3]])
+def test_root_lifted_rows_keep_the_dp_optimum(kind, n, m, seed, monkeypatch):
     """Every lifted row separated at the root holds at the DP optimum's solution; optimum kept."""
+    import taopt.models.routing.dfj as dfj_module
     from taopt.models.routing import DfjModel
 
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 0.0)  # keep every lifted row
     problem = make(kind, n, m, seed)
     optimum = dp_optimum(problem)
     solution = solve_routing(problem, sec="dfj")
@@ -595,3 +597,27 @@ def test_lifted_separation_finds_violated_rows_on_a_half_integral_point():
         arcs_in = sum(values[index[a, b]] for a in handle for b in handle if a != b)
         tooth = sum(values[index[a, b]] + values[index[b, a]] for a, b in teeth if max(a, b) < 6)
         assert arcs_in + tooth > len(handle) + (len(teeth) - 1) / 2
+
+
+def test_lifted_rows_that_do_not_pay_are_rolled_back(monkeypatch):
+    """Below LIFTED_MIN_GAIN the model and root are exactly those without lifted rows."""
+    import taopt.models.routing.dfj as dfj_module
+    from taopt.models.routing import DfjModel
+
+    problem = make("drift", 12, 1, 2)  # its root LP violates two blossom rows
+    plain = DfjModel(problem)
+    base = plain.root(lifted=0)
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 0.0)
+    kept = DfjModel(problem)
+    strong = kept.root()
+    assert kept.lifted and strong.bound >= base.bound - 1e-9
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 1.0)
+    rolled = DfjModel(problem)
+    back = rolled.root()
+    assert not rolled.lifted and rolled.cuts == plain.cuts
+    assert rolled.model.n_rows == plain.model.n_rows == rolled.model.highs.getNumRow()
+    assert back.bound == pytest.approx(base.bound) and back.rounds == base.rounds
+    np.testing.assert_allclose(back.reduced_costs, base.reduced_costs)
+    solution = solve_routing(problem)
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(dp_optimum(problem), rel=1e-9)

@@ -80,7 +80,15 @@ LIFTED_ROUNDS = 10
 #: The families of lifted rows separated at the root: ``"dk"`` (D_k^+ / D_k^-,
 #: :func:`~taopt.models.routing.separation.lifted_cycle_arcs`) and ``"blossom"``
 #: (2-matching inequalities on σ + σ^T, :func:`~taopt.models.routing.separation.blossom_arcs`).
-LIFTED_FAMILIES = ("dk", "blossom")
+LIFTED_FAMILIES = ("blossom",)
+
+
+#: The lifted rows are kept only when they raise the root bound L (the DFJ bound before
+#: them) by at least this fraction of ``|L|``; otherwise the model is put back as it was
+#: before them. Rows that barely move the bound only slow HiGHS's rounds down (p43, ry48p,
+#: ftv55: +0–0.2 % bound, +30 % time with them; chapter 3's n90m10 classes: +0.4–1 % bound,
+#: up to −40 % time; benchmarks/bench_routing_exact.py, docs/benchmarks.md, Chapter 3).
+LIFTED_MIN_GAIN = 0.0025
 
 
 #: Compact formulation that finishes a DFJ loop which stalls with an open gap.
@@ -223,6 +231,26 @@ class DfjModel:
         self.lifted.extend(new)
         return len(new)
 
+    def _rollback(self, n_rows: int, n_cuts: int) -> None:
+        """Delete every row added after the model had ``n_rows`` rows and ``n_cuts`` cuts."""
+        extra = self.model.n_rows - n_rows
+        if extra > 0:
+            rows = np.arange(n_rows, n_rows + extra, dtype=np.int32)
+            self.model.highs.deleteRows(extra, rows)
+            # HighsModel keeps the rows in blocks (one per add_rows) for its Lagrangian
+            # bound: drop the blocks added since, so the two stay in step
+            blocks, total, kept = self.model._row_blocks, 0, 0
+            for block in blocks:
+                if total + block[0].shape[0] > n_rows:
+                    break
+                total, kept = total + block[0].shape[0], kept + 1
+            del blocks[kept:]
+        for subset in self.cuts[n_cuts:]:
+            self._known.discard(subset)
+        del self.cuts[n_cuts:]
+        self._known_lifted.clear()
+        self.lifted.clear()
+
     def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
         """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
         if solution is None:
@@ -256,12 +284,19 @@ class DfjModel:
         binary σ at the end. Each re-solve after new rows starts from the last
         basis. Stops early after ``budget`` seconds or ``max_rounds`` LPs
         (``complete`` False).
+
+        Once no (2.5) row is violated, up to ``lifted`` (default :data:`LIFTED_ROUNDS`)
+        more rounds add lifted rows (:data:`LIFTED_FAMILIES`) and separate (2.5) again.
+        The lifted rows are kept only if they raise the bound L by at least
+        :data:`LIFTED_MIN_GAIN` ``|L|``; otherwise every row added since is deleted and
+        the LP before them returned.
         """
         began = time.perf_counter()
         deadline = None if budget is None else began + budget
         self.model.relax(True)
         rounds, value, complete = 0, -np.inf, False
         lifted_rounds = LIFTED_ROUNDS if lifted is None else lifted
+        snapshot = None  # the model and LP when no (2.5) row was violated the first time
         bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
         try:
             while max_rounds is None or rounds < max_rounds:
@@ -290,6 +325,9 @@ class DfjModel:
                     complete = False
                     continue
                 complete = True  # no (2.5) row violated: the DFJ bound
+                if snapshot is None:
+                    snapshot = (self.model.n_rows, len(self.cuts), value, bound, reduced, values)
+                    snapshot += (rounds,)
                 if lifted_rounds <= 0 or (deadline is not None and time.perf_counter() >= deadline):
                     break
                 lifted_rounds -= 1
@@ -302,6 +340,12 @@ class DfjModel:
                     lifted_cuts += separate_blossoms(self.problem, self.tails, self.heads, values)
                 if not self.add_lifted(lifted_cuts):
                     break
+            if snapshot is not None and self.lifted and complete:
+                n_rows, n_cuts, *before = snapshot
+                closed = bound - before[1]
+                if closed < LIFTED_MIN_GAIN * abs(before[1]):
+                    self._rollback(n_rows, n_cuts)
+                    value, bound, reduced, values, rounds = before
         finally:
             self.model.relax(False)
         return RootRelaxation(
