@@ -119,6 +119,8 @@ class RootRelaxation:
     complete : bool
         The last separation found no violated (2.5) row: ``value`` is the LP
         bound of the full (2.2)–(2.5).
+        With lifted rows kept (:meth:`DfjModel.root`) the LP is stronger and
+        ``value`` is at least that bound.
     """
 
     cuts: list[tuple[int, ...]]
@@ -559,6 +561,9 @@ __all__ = [
     "BUILD_SECONDS_PER_ARC",
     "LP_SECONDS_PER_ARC",
     "FALLBACK_SEC",
+    "LIFTED_FAMILIES",
+    "LIFTED_MIN_GAIN",
+    "LIFTED_ROUNDS",
     "RootRelaxation",
     "DfjModel",
     "dfj_root",
