@@ -288,7 +288,8 @@ class DfjModel:
         (``complete`` False).
 
         Once no (2.5) row is violated, up to ``lifted`` (default :data:`LIFTED_ROUNDS`)
-        more rounds add lifted rows (:data:`LIFTED_FAMILIES`) and separate (2.5) again.
+        more rounds add lifted rows (:data:`LIFTED_FAMILIES`) and separate (2.5) again,
+        while each raises the bound by at least a tenth of :data:`LIFTED_MIN_GAIN` ``|L|``.
         The lifted rows are kept only if they raise the bound L by at least
         :data:`LIFTED_MIN_GAIN` ``|L|``; otherwise every row added since is deleted and
         the LP before them returned.
@@ -299,6 +300,7 @@ class DfjModel:
         rounds, value, complete = 0, -np.inf, False
         lifted_rounds = LIFTED_ROUNDS if lifted is None else lifted
         snapshot = None  # the model and LP when no (2.5) row was violated the first time
+        last_bound = -np.inf  # the bound when no (2.5) row was violated the last time
         bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
         try:
             while max_rounds is None or rounds < max_rounds:
@@ -330,6 +332,9 @@ class DfjModel:
                 if snapshot is None:
                     snapshot = (self.model.n_rows, len(self.cuts), value, bound, reduced, values)
                     snapshot += (rounds,)
+                elif bound - last_bound < 0.1 * LIFTED_MIN_GAIN * abs(snapshot[3]):
+                    break  # the last lifted round barely moved the bound: stop here
+                last_bound = bound
                 if lifted_rounds <= 0 or (deadline is not None and time.perf_counter() >= deadline):
                     break
                 lifted_rounds -= 1
