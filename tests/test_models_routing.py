@@ -497,3 +497,127 @@ def test_time_limit_below_build_estimate_returns_bounds_without_model(monkeypatc
         assert limited.bound == pytest.approx(routing.assignment_bound(problem))
         assert limited.bound <= optimum + 1e-9 <= limited.objective + 2e-9
         assert limited.runtime < 5.0
+
+
+# ---------------------------------------------- lifted rows at the root (issue 18 item 1)
+def feasible_successors(problem: AssignmentProblem):
+    """Every solution of (2.2)–(2.5) of a tiny instance, as its list of used arcs."""
+    from itertools import product
+
+    n, m = problem.n, problem.m
+    for predecessor in product(range(n + m), repeat=n):
+        if any(p == j for j, p in enumerate(predecessor)):
+            continue
+        if len(set(predecessor)) < n:  # (2.4): every point left at most once
+            continue
+        ok = True
+        for j in range(n):  # (2.5): following predecessors from j reaches a start point
+            point, steps = j, 0
+            while point < n and steps <= n:
+                point, steps = predecessor[point], steps + 1
+            ok &= point >= n
+        if ok:
+            yield [(p, j) for j, p in enumerate(predecessor)]
+
+
+def lhs_and_rhs(cut, arcs, n):
+    """Left-hand side of a lifted row on a solution's arcs, and its right-hand side."""
+    from taopt.models.routing.separation import blossom_arcs, lifted_cycle_arcs
+
+    if cut[0] == "blossom":
+        coefficients, rhs = blossom_arcs(cut[1], cut[2])
+    else:
+        coefficients, rhs = lifted_cycle_arcs(cut[0], cut[1]), len(cut[1]) - 1
+    used = set(arcs)
+    return sum(c for a, b, c in coefficients if b < n and (a, b) in used), rhs
+
+
+def test_lifted_rows_hold_for_every_solution_of_tiny_instances():
+    """D_k^± and blossom rows on random sequences / handles never cut a feasible solution."""
+    rng = np.random.default_rng(7)
+    n, m = 5, 2
+    problem = metric_problem(n, m, 0)
+    solutions = list(feasible_successors(problem))
+    assert len(solutions) > 100
+    cuts = []
+    for _ in range(40):
+        k = int(rng.integers(3, n + 1))
+        sequence = tuple(int(v) for v in rng.permutation(n)[:k])
+        cuts += [("+", sequence), ("-", sequence)]
+        handle = sorted(int(v) for v in rng.choice(n + m, size=rng.integers(1, 5), replace=False))
+        outside = [v for v in range(n + m) if v not in handle]
+        pairs = [(h, o) for h in handle for o in outside]
+        t = min(len(pairs), int(rng.choice([1, 3, 5])))
+        teeth = tuple(pairs[i] for i in rng.choice(len(pairs), size=t, replace=False))
+        cuts.append(("blossom", tuple(handle), teeth))
+    for cut in cuts:
+        worst = max(lhs_and_rhs(cut, arcs, n)[0] for arcs in solutions)
+        assert worst <= lhs_and_rhs(cut, [], n)[1] + 1e-9, cut
+
+
+@pytest.mark.parametrize("kind,n,m,seed", [("drift", 12, 1, 2), ("metric", 9, 2, 5), *CASES[:3]])
+def test_root_lifted_rows_keep_the_dp_optimum(kind, n, m, seed, monkeypatch):
+    """Every lifted row separated at the root holds at the DP optimum's solution; optimum kept."""
+    import taopt.models.routing.dfj as dfj_module
+    from taopt.models.routing import DfjModel
+
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 0.0)  # keep every lifted row
+    problem = make(kind, n, m, seed)
+    optimum = dp_optimum(problem)
+    solution = solve_routing(problem, sec="dfj")
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(optimum, rel=1e-9)
+    dfj = DfjModel(problem)
+    root = dfj.root()
+    assert root.bound <= optimum * (1 + 1e-9)
+    arcs = used_arcs(problem, solution.routes)
+    for cut in dfj.lifted:
+        lhs, rhs = lhs_and_rhs(cut, arcs, n)
+        assert lhs <= rhs + 1e-9, cut
+    # the thesis's DFJ LP (no lifted rows) is never above the strengthened root
+    assert root.bound >= solve_routing(problem, relax=True).objective - 1e-6 * optimum
+
+
+def test_lifted_separation_finds_violated_rows_on_a_half_integral_point():
+    """Two 0.5 directed triangles joined by three half 2-cycles (y = 1): a violated blossom."""
+    from taopt.models.routing import arc_list
+    from taopt.models.routing.separation import separate_blossoms
+
+    problem = metric_problem(6, 1, 0)
+    tails, heads = arc_list(problem)
+    values = np.zeros(len(tails))
+    index = {(int(a), int(b)): i for i, (a, b) in enumerate(zip(tails, heads, strict=True))}
+    for a, b in [(0, 1), (1, 2), (2, 0), (4, 3), (3, 5), (5, 4)]:
+        values[index[a, b]] = 0.5
+    for a, b in [(0, 3), (1, 4), (2, 5)]:
+        values[index[a, b]] = values[index[b, a]] = 0.5
+    found = separate_blossoms(problem, tails, heads, values)
+    assert found
+    for _, handle, teeth in found:
+        arcs_in = sum(values[index[a, b]] for a in handle for b in handle if a != b)
+        tooth = sum(values[index[a, b]] + values[index[b, a]] for a, b in teeth if max(a, b) < 6)
+        assert arcs_in + tooth > len(handle) + (len(teeth) - 1) / 2
+
+
+def test_lifted_rows_that_do_not_pay_are_rolled_back(monkeypatch):
+    """Below LIFTED_MIN_GAIN the model and root are exactly those without lifted rows."""
+    import taopt.models.routing.dfj as dfj_module
+    from taopt.models.routing import DfjModel
+
+    problem = make("drift", 12, 1, 2)  # its root LP violates two blossom rows
+    plain = DfjModel(problem)
+    base = plain.root(lifted=0)
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 0.0)
+    kept = DfjModel(problem)
+    strong = kept.root()
+    assert kept.lifted and strong.bound >= base.bound - 1e-9
+    monkeypatch.setattr(dfj_module, "LIFTED_MIN_GAIN", 1.0)
+    rolled = DfjModel(problem)
+    back = rolled.root()
+    assert not rolled.lifted and rolled.cuts == plain.cuts
+    assert rolled.model.n_rows == plain.model.n_rows == rolled.model.highs.getNumRow()
+    assert back.bound == pytest.approx(base.bound) and back.rounds == base.rounds
+    np.testing.assert_allclose(back.reduced_costs, base.reduced_costs)
+    solution = solve_routing(problem)
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(dp_optimum(problem), rel=1e-9)

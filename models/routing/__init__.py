@@ -57,6 +57,9 @@ from taopt.models.routing.dfj import (
     BUILD_SECONDS_PER_ARC,
     CORE_SIZE,
     FALLBACK_SEC,
+    LIFTED_FAMILIES,
+    LIFTED_MIN_GAIN,
+    LIFTED_ROUNDS,
     LP_SECONDS_PER_ARC,
     MIP_OPTIONS,
     DfjModel,
@@ -76,7 +79,15 @@ from taopt.models.routing.formulation import (
     greedy_routes,
     repair,
 )
-from taopt.models.routing.separation import CUT_TOLERANCE, cut_rows, separate_subtours
+from taopt.models.routing.separation import (
+    CUT_TOLERANCE,
+    blossom_arcs,
+    cut_rows,
+    lifted_cycle_arcs,
+    separate_blossoms,
+    separate_lifted_cycles,
+    separate_subtours,
+)
 from taopt.models.routing.solve import solve_routing
 
 __all__ = [
@@ -88,6 +99,9 @@ __all__ = [
     "CORE_SIZE",
     "FALLBACK_SEC",
     "HIGHS_OVERRUN",
+    "LIFTED_FAMILIES",
+    "LIFTED_MIN_GAIN",
+    "LIFTED_ROUNDS",
     "LP_SECONDS_PER_ARC",
     "MIP_OPTIONS",
     "arc_list",
@@ -98,6 +112,7 @@ __all__ = [
     "RootRelaxation",
     "assignment_bound",
     "RoutingModel",
+    "blossom_arcs",
     "build",
     "cut_rows",
     "decode",
@@ -106,7 +121,10 @@ __all__ = [
     "entry_bound",
     "find_subtours",
     "greedy_routes",
+    "lifted_cycle_arcs",
     "repair",
+    "separate_blossoms",
+    "separate_lifted_cycles",
     "separate_subtours",
     "solve_routing",
 ]

@@ -167,7 +167,7 @@ def solve_routing(
 def _solve_relaxation(problem, sec, started, verbose) -> Solution:
     """LP value of (2.2)–(2.5): DFJ with all of (2.5) (exact separation), or MTZ / flow."""
     if sec == "dfj":
-        root = DfjModel(problem, verbose=verbose).root()
+        root = DfjModel(problem, verbose=verbose).root(lifted=0)
         if not root.complete:
             raise SolverError("the DFJ LP relaxation did not finish")
         value, rounds, cuts = float(root.value), root.rounds, len(root.cuts)
