@@ -40,13 +40,7 @@ Thesis §6.2; Wouda, Lan and Kool (2024), PyVRP; Perron and Didier, OR-Tools rou
 
 from __future__ import annotations
 
-import atexit
 import math
-import os
-import queue
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -67,60 +61,17 @@ LARGEST_ENTRY = 10**10
 class _Worker(peers._Worker):
     """:class:`taopt.heuristics.peers._Worker` running ``_budgeted_peer_worker.py``."""
 
-    def __init__(self, peer: str) -> None:  # the parent's __init__ with the other script
-        self.peer = peer
-        self.owner = os.getpid()
-        self.lock = threading.Lock()
-        started = time.perf_counter()
-        main = "1" if threading.current_thread() is threading.main_thread() else "0"
-        self.process = subprocess.Popen(
-            [sys.executable, str(WORKER_SCRIPT), peer, str(os.getpid()), main],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            start_new_session=os.name == "posix",
-        )
-        self.replies: queue.Queue = queue.Queue()
-        threading.Thread(target=self._read, name=f"{peer}-budgeted", daemon=True).start()
-        try:
-            kind, payload = self._wait(peers.STARTUP_TIMEOUT, "start")
-        except BaseException:
-            self.stop()
-            raise
-        if kind != "ready":
-            self.stop()
-            raise SolverError(
-                f"{peer} could not be imported in its worker process ({payload.strip()}); "
-                f"install the peers with {peers.INSTALL_HINT}"
-            )
-        self.version = payload["version"]
-        self.startup = time.perf_counter() - started
+    script = WORKER_SCRIPT
+    label = "-budgeted"
 
 
-_WORKERS: dict[str, _Worker] = {}
-_WORKERS_LOCK = threading.Lock()
+def _worker(peer: str) -> tuple[peers._Worker, float]:
+    """The live budgeted worker of ``peer`` (kept beside the chapter 2 ones)."""
+    return peers._worker(peer, _Worker)
 
 
-def _worker(peer: str) -> tuple[_Worker, float]:
-    if peers._find_spec(peers.PEERS[peer]) is None:
-        raise SolverError(f"{peer} is not installed; install the peers with {peers.INSTALL_HINT}")
-    with _WORKERS_LOCK:
-        worker = _WORKERS.get(peer)
-        if worker is not None and worker.alive():
-            return worker, 0.0
-        worker = _Worker(peer)
-        _WORKERS[peer] = worker
-        return worker, worker.startup
-
-
-def shutdown() -> None:
-    """Stop this module's workers (they restart on the next call)."""
-    with _WORKERS_LOCK:
-        for worker in _WORKERS.values():
-            worker.stop()
-        _WORKERS.clear()
-
-
-atexit.register(shutdown)
+#: Stops every peer worker, these included (they restart on the next call).
+shutdown = peers.shutdown
 
 
 def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
