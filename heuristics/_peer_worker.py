@@ -1,4 +1,6 @@
-"""Worker process that runs one peer solver (PyVRP, OR-Tools routing or CP-SAT) for :mod:`taopt.heuristics.peers`.
+"""Worker process that runs one peer solver (PyVRP, OR-Tools routing or CP-SAT) for :mod:`taopt.heuristics.peers`
+and :mod:`taopt.heuristics.budgeted_peers` (the same routing models plus capacity and
+route-time limits when a request carries them).
 
 This file is started as a script (``python _peer_worker.py <peer> <parent pid>
 <die with parent>``) in a fresh interpreter, never imported into a process
@@ -52,6 +54,18 @@ def open_routes_matrix(cost: Any) -> Any:
     return matrix
 
 
+def _limits(options: dict[str, Any], key: str, m: int, default: int) -> list[int]:
+    """``options[key]`` (one integer or None per vehicle) with None as ``default``."""
+    values = options.get(key) or [None] * m
+    return [default if value is None else int(value) for value in values]
+
+
+def _limited(options: dict[str, Any]) -> bool:
+    """Whether the request carries the budgeted family's limits (``capacity``,
+    ``max_time``; :mod:`taopt.heuristics.budgeted_peers`)."""
+    return "capacity" in options or "max_time" in options
+
+
 def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
     """Solve with PyVRP's iterated local search: one depot per vehicle start, one free end depot.
 
@@ -59,19 +73,45 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
     depots, ``n+m`` the shared end depot; vehicle type ``k`` (one vehicle)
     starts at depot ``k`` and ends at depot ``m``. The distance and duration
     matrices are both the scaled travel times; only distance is charged.
+
+    With the budgeted family's limits (``options["capacity"]``, ``options["max_time"]``,
+    one integer or None per vehicle): every target has a load of ``unit`` (the largest
+    arc cost; PyVRP's penalties are bounded, so a load of 1 beside arc costs near 1e10
+    would never be worth repairing) and vehicle k ``capacity=[Q_k unit]`` and
+    ``max_distance=T_k``. PyVRP penalises violations during its search and its best may
+    still break a limit: the reply then says ``solver_feasible=False`` (and ``routes``
+    is None when the solution is incomplete) instead of raising.
     """
     import pyvrp
     from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria
 
     matrix = open_routes_matrix(cost)
+    limited = _limited(options)
     locations = [pyvrp.Location(0, 0, name=f"point {i}") for i in range(n + m + 1)]
-    clients = [pyvrp.Client(location=j, name=f"target {j}") for j in range(n)]
     depots = [pyvrp.Depot(location=n + k, name=f"start {k}") for k in range(m)]
     depots.append(pyvrp.Depot(location=n + m, name="free end"))
-    vehicle_types = [
-        pyvrp.VehicleType(num_available=1, start_depot=k, end_depot=m, name=f"vehicle {k}")
-        for k in range(m)
-    ]
+    if limited:
+        unit = max(1, int(matrix.max()))
+        capacity = _limits(options, "capacity", m, n)
+        max_time = _limits(options, "max_time", m, int(matrix.sum()) + 1)
+        clients = [pyvrp.Client(location=j, delivery=[unit], name=f"target {j}") for j in range(n)]
+        vehicle_types = [
+            pyvrp.VehicleType(
+                num_available=1,
+                capacity=[min(capacity[k], n) * unit],
+                start_depot=k,
+                end_depot=m,
+                max_distance=max_time[k],
+                name=f"vehicle {k}",
+            )
+            for k in range(m)
+        ]
+    else:
+        clients = [pyvrp.Client(location=j, name=f"target {j}") for j in range(n)]
+        vehicle_types = [
+            pyvrp.VehicleType(num_available=1, start_depot=k, end_depot=m, name=f"vehicle {k}")
+            for k in range(m)
+        ]
     data = pyvrp.ProblemData(locations, clients, depots, vehicle_types, [matrix], [matrix])
     criteria = []
     if options.get("time_limit") is not None:
@@ -83,17 +123,20 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
     result = pyvrp.solve(data, stop, seed=int(options["seed"]), collect_stats=False, display=False)
     runtime = time.perf_counter() - started
     best = result.best
-    if not best.is_feasible() or not best.is_complete():
+    if not limited and (not best.is_feasible() or not best.is_complete()):
         raise RuntimeError(f"PyVRP returned an incomplete or infeasible solution: {best!r}")
     routes: list[list[int]] = [[] for _ in range(m)]
     for route in best.routes():
         routes[route.vehicle_type()] = [int(act.idx) for act in route if act.is_client()]
-    return {
-        "routes": routes,
-        "objective": int(result.cost()),
+    reply = {
+        "routes": routes if best.is_complete() else None,
+        "objective": int(result.cost()) if best.is_feasible() else None,
         "iterations": int(result.num_iterations),
         "solver_runtime": runtime,
     }
+    if limited:
+        reply["solver_feasible"] = bool(best.is_feasible())
+    return reply
 
 
 def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
@@ -102,6 +145,13 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     Nodes ``0..n-1`` are targets, ``n..n+m-1`` the vehicle starts, ``n+m`` the
     dummy end shared by every vehicle (zero-cost arcs into it, so routes are
     open and a vehicle may go straight from its start to the end: idle).
+
+    With the budgeted family's limits (``options["capacity"]``, ``options["max_time"]``):
+    a "Load" dimension (demand 1 per target, capacity Q_k) and a "Time" dimension
+    (transit = travel time, capacity T_k, no slack; the free arc into the dummy end makes
+    the cumul at a vehicle's end its route's travel time). When the first-solution
+    strategy finds nothing under limits, the reply has ``routes = None`` and
+    ``solver_feasible = False`` instead of raising.
     """
     from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
@@ -123,6 +173,14 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     routing = pywrapcp.RoutingModel(manager)
     transit = routing.RegisterTransitMatrix(matrix.tolist())
     routing.SetArcCostEvaluatorOfAllVehicles(transit)
+    limited = _limited(options)
+    if any(value is not None for value in options.get("capacity") or []):
+        demand = routing.RegisterUnaryTransitVector([1] * n + [0] * (m + 1))
+        capacity = _limits(options, "capacity", m, n)
+        routing.AddDimensionWithVehicleCapacity(demand, 0, capacity, True, "Load")
+    if any(value is not None for value in options.get("max_time") or []):
+        max_time = _limits(options, "max_time", m, int(matrix.sum()) + 1)
+        routing.AddDimensionWithVehicleCapacity(transit, 0, max_time, True, "Time")
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = strategies.Value(first)
     params.local_search_metaheuristic = metaheuristics.Value(meta)
@@ -133,6 +191,14 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     started = time.perf_counter()
     assignment = routing.SolveWithParameters(params)
     runtime = time.perf_counter() - started
+    if assignment is None and limited:
+        return {
+            "routes": None,
+            "objective": None,
+            "solver_feasible": False,
+            "routing_status": int(routing.status()),
+            "solver_runtime": runtime,
+        }
     if assignment is None:
         raise RuntimeError(f"OR-Tools found no solution (routing status {routing.status()})")
     routes = []
@@ -145,12 +211,15 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
                 route.append(int(node))
             index = assignment.Value(routing.NextVar(index))
         routes.append(route)
-    return {
+    reply = {
         "routes": routes,
         "objective": int(assignment.ObjectiveValue()),
         "routing_status": int(routing.status()),
         "solver_runtime": runtime,
     }
+    if limited:
+        reply["solver_feasible"] = True
+    return reply
 
 
 def _cpsat_solver(options: dict[str, Any]) -> Any:

@@ -7,10 +7,11 @@ dimension, OR-Tools' "Load" dimension), and vehicle k's route travel time is at 
 dimension). The routes are open as in :mod:`taopt.heuristics.peers`: a dummy end point
 reachable from everywhere at cost 0.
 
-Each runs in its own worker process (``_budgeted_peer_worker.py``, which serves with
-``_peer_worker.py``'s protocol), for the reason given in :mod:`taopt.heuristics.peers`
-(DESIGN.md "Known trap"). The worker management (start-up handshake, Ctrl-C, crashes,
-hangs) is :mod:`taopt.heuristics.peers`'s ``_Worker``, pointed at the other script.
+Each runs in the chapter 2 peers' worker process (``_peer_worker.py``, whose PyVRP and
+OR-Tools models add the load and time dimensions when a request carries ``capacity`` and
+``max_time``), for the reason given in :mod:`taopt.heuristics.peers` (DESIGN.md "Known
+trap"); the worker management (start-up handshake, Ctrl-C, crashes, hangs) is that
+module's.
 
 Integer units
 -------------
@@ -41,8 +42,6 @@ Thesis §6.2; Wouda, Lan and Kool (2024), PyVRP; Perron and Didier, OR-Tools rou
 from __future__ import annotations
 
 import math
-import time
-from pathlib import Path
 from typing import Any
 
 from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_budgeted, violations
@@ -53,24 +52,11 @@ from taopt.result import ERROR, FEASIBLE, Routes, Solution
 
 __all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown", "LARGEST_ENTRY"]
 
-WORKER_SCRIPT = Path(__file__).with_name("_budgeted_peer_worker.py")
 #: The largest travel time becomes this integer when ``scale`` is not given.
 LARGEST_ENTRY = 10**10
 
 
-class _Worker(peers._Worker):
-    """:class:`taopt.heuristics.peers._Worker` running ``_budgeted_peer_worker.py``."""
-
-    script = WORKER_SCRIPT
-    label = "-budgeted"
-
-
-def _worker(peer: str) -> tuple[peers._Worker, float]:
-    """The live budgeted worker of ``peer`` (kept beside the chapter 2 ones)."""
-    return peers._worker(peer, _Worker)
-
-
-#: Stops every peer worker, these included (they restart on the next call).
+#: Stops every peer worker (they restart on the next call).
 shutdown = peers.shutdown
 
 
@@ -86,21 +72,6 @@ def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
         for t in problem.max_time
     ]
     return capacity, max_time
-
-
-def _call(peer: str, request: dict[str, Any], time_limit: float | None) -> tuple:
-    timeout = None if time_limit is None else time_limit + peers.GRACE
-    for _attempt in range(3):
-        worker, startup = _worker(peer)
-        started = time.perf_counter()
-        try:
-            reply = worker.call(request, timeout)
-            break
-        except peers._Stopped:
-            continue
-    else:
-        raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
-    return reply, time.perf_counter() - started, worker, startup
 
 
 def _solve(
@@ -119,7 +90,7 @@ def _solve(
         "m": problem.m,
         "options": {**options, "capacity": capacity, "max_time": max_time},
     }
-    reply, runtime, worker, startup = _call(peer, request, options.get("time_limit"))
+    reply, runtime, worker, startup = peers._call(peer, request, options.get("time_limit"))
     routes = reply.pop("routes")
     info: dict[str, Any] = {
         "solver_objective": reply.pop("objective"),

@@ -103,14 +103,7 @@ GRACE = 60.0
 
 
 class _Worker:
-    """One live worker process for one peer, with its reply queue.
-
-    A subclass runs another worker script (``script``) and keeps its own workers (``label``
-    is added to the peer's key in ``_WORKERS``), e.g. the budgeted family's peers.
-    """
-
-    script: Path = WORKER_SCRIPT
-    label: str = ""
+    """One live worker process for one peer, with its reply queue."""
 
     def __init__(self, peer: str) -> None:
         self.peer = peer
@@ -121,13 +114,13 @@ class _Worker:
         # so it is only asked for from the main thread (which lives as long as us).
         main = "1" if threading.current_thread() is threading.main_thread() else "0"
         self.process = subprocess.Popen(
-            [sys.executable, str(self.script), peer, str(os.getpid()), main],
+            [sys.executable, str(WORKER_SCRIPT), peer, str(os.getpid()), main],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             start_new_session=os.name == "posix",  # the terminal's Ctrl-C is ours, not its
         )
         self.replies: queue.Queue = queue.Queue()
-        threading.Thread(target=self._read, name=f"{peer}{self.label}-reader", daemon=True).start()
+        threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
         try:
             kind, payload = self._wait(STARTUP_TIMEOUT, "start")
         except BaseException:  # Ctrl-C while it starts: do not leave it behind
@@ -225,18 +218,16 @@ def _find_spec(name: str) -> Any:
     return importlib.util.find_spec(name)
 
 
-def _worker(peer: str, kind: type[_Worker] = _Worker) -> tuple[_Worker, float]:
-    """The live worker of ``peer`` (of class ``kind``, started if needed) and the seconds spent
-    starting it."""
+def _worker(peer: str) -> tuple[_Worker, float]:
+    """The live worker of ``peer`` (started if needed) and the seconds spent starting it."""
     if _find_spec(PEERS[peer]) is None:
         raise SolverError(f"{peer} is not installed; install the peers with {INSTALL_HINT}")
-    key = peer + kind.label
     with _WORKERS_LOCK:
-        worker = _WORKERS.get(key)
+        worker = _WORKERS.get(peer)
         if worker is not None and worker.alive():
             return worker, 0.0
-        worker = kind(peer)
-        _WORKERS[key] = worker
+        worker = _Worker(peer)
+        _WORKERS[peer] = worker
         return worker, worker.startup
 
 

@@ -228,7 +228,7 @@ def test_a_peer_answer_that_breaks_a_limit_is_reported(monkeypatch):
         assert request["options"]["capacity"] == [1, 3]
         return {"routes": [[0, 1], [2, 3]], "objective": 1}, 0.0, Fake(), 0.0
 
-    monkeypatch.setattr(budgeted_peers, "_call", fake_call)
+    monkeypatch.setattr(budgeted_peers.peers, "_call", fake_call)
     solution = budgeted_peers.ortools_budgeted(problem, time_limit=1.0)
     assert solution.status == "error" and solution.solution is None
     assert "vehicle 0 serves 2 targets, capacity 1" in solution.info["violations"]
