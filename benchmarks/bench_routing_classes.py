@@ -25,7 +25,7 @@ import taopt.models.routing.dfj as dfj
 from taopt.capability.instances import STUDY_CELL
 from taopt.models.capability import class_incumbents
 from taopt.models.routing import solve_routing
-from taopt.studies.capability import make_scenario
+from taopt.orchestration.studies.capability import make_scenario
 
 SETTINGS = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
 
