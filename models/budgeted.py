@@ -740,6 +740,35 @@ def _result(
     )
 
 
+def total_time_cap(problem: BudgetedProblem) -> float | None:
+    """``Σ_k T_k`` (with the scorer's tolerance) when every vehicle has a time limit, else
+    None: no feasible answer takes longer in total, so a lower bound above it proves that
+    no assignment meets the limits."""
+    if not np.isfinite(problem.max_time).all():
+        return None
+    slack = TIME_TOLERANCE * np.maximum(1.0, problem.max_time)
+    return float(np.sum(problem.max_time + slack)) * (1 + 1e-9)
+
+
+def _too_long(
+    problem: BudgetedProblem,
+    bound: float,
+    cutoff: float,
+    deadline: Deadline,
+    info: dict[str, Any],
+) -> Solution:
+    """Status "infeasible": a proven lower bound on the total exceeds ``Σ_k T_k``."""
+    info.update(
+        stopped_by="infeasible",
+        proof=(
+            f"a proven lower bound on the total travel time, {bound:.6g}, exceeds the most "
+            f"any answer within the time limits can take, Σ_k T_k = {cutoff:.6g}"
+        ),
+    )
+    return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
+                    method="exact-budgeted", info=info)  # fmt: skip
+
+
 @register_method(
     BudgetedProblem, "exact", category="exact", certifies=True, warm_start=("MC", "EVM")
 )
@@ -845,6 +874,10 @@ def solve_budgeted(
                         method="exact-budgeted", info=info)  # fmt: skip
     best_routes = given
     best_value = math.inf if given is None else evaluate_budgeted(problem, given)
+    # every vehicle time-limited: a feasible answer's total is at most Σ_k T_k (the
+    # scorer's tolerance included), a cut-off for the MIP rounds and, below a proven lower
+    # bound, a proof that no assignment meets the limits
+    cutoff = total_time_cap(problem)
     best_bound = max(entry_bound(problem.routing), arborescence_bound(problem.routing))
     if not deadline.limited or deadline.remaining() > 3e-10 * n**2 * (n + m):
         best_bound = max(best_bound, assignment_bound(problem.routing))
@@ -854,6 +887,8 @@ def solve_budgeted(
     if free.bound is not None:
         best_bound = max(best_bound, free.bound)
     info["unlimited_optimum"] = free.objective if free.status == "optimal" else None
+    if cutoff is not None and best_bound > cutoff:
+        return _too_long(problem, best_bound, cutoff, deadline, info)
     starts = [greedy_budgeted(problem)]
     if free.routes is not None:
         starts.append(repaired_routes(problem, free.routes))
@@ -906,6 +941,8 @@ def solve_budgeted(
     finally:
         model.model.relax(False)
     best_bound = max(best_bound, root_bound)
+    if cutoff is not None and best_bound > cutoff:
+        return _too_long(problem, best_bound, cutoff, deadline, info)
     info.update(root_rounds=root_rounds, root_cuts=len(model.cuts), lp_bound=root_bound,
                 root_seconds=deadline.elapsed(),
                 capacity_cuts=len(model.capacity_cuts))  # fmt: skip
@@ -972,19 +1009,28 @@ def solve_budgeted(
                 model.model.set_start(start)
         harvested.clear()
         candidates.clear()
+        options = dict(MIP_OPTIONS)
+        if cutoff is not None:
+            options["objective_bound"] = cutoff
         run = model.model.solve(
             time_limit=None if left is None else max(left - HIGHS_OVERRUN, 1e-3),
             mip_rel_gap=mip_gap,
             on_solution=harvest,
-            options=MIP_OPTIONS,
+            options=options,
         )
         if run.solver_status == "infeasible":
             if best_routes is not None:  # cannot be: every feasible solution is in the model
                 raise SolverError(
                     "HiGHS calls the budgeted model infeasible below a known solution"
                 )
+            proof = "HiGHS proved the model infeasible; every row is valid"
+            if cutoff is not None:
+                proof += (
+                    f" (searched below the cut-off Σ_k T_k = {cutoff:.6g}, the most a "
+                    "feasible answer's total can be)"
+                )
             info.update(rounds=rounds, cuts=len(model.cuts), stopped_by="infeasible",
-                        proof="HiGHS proved the model infeasible; every row is valid")  # fmt: skip
+                        proof=proof)  # fmt: skip
             return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
                             method="exact-budgeted", info=info)  # fmt: skip
         if run.solver_status not in ("optimal", "user_limit"):
@@ -1009,6 +1055,11 @@ def solve_budgeted(
             break
         if run.has_point and not cycles and run.stopped_by == "optimal":
             break  # cannot happen with an open gap: the answer is feasible and optimal
+        if not run.has_point and not harvested:  # nothing learned: the next round is this one
+            raise SolverError(
+                f"HiGHS stopped with status {run.solver_status!r}, no answer and no proof "
+                "on the budgeted model"
+            )
     return stop(stopped_by, {"rounds": rounds, "cuts": len(model.cuts), "nodes": nodes})
 
 
@@ -1031,4 +1082,5 @@ __all__ = [
     "separate_capacity",
     "solve_budgeted",
     "time_counts",
+    "total_time_cap",
 ]

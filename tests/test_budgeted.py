@@ -178,6 +178,45 @@ def test_infeasible_is_a_status_not_an_exception():
     assert far.info["proof"]
 
 
+@pytest.mark.parametrize("seed", range(10))
+def test_every_vehicle_time_limited_matches_brute_force(seed):
+    """With a time limit on every vehicle the total-time cut-off (Σ_k T_k) keeps the optimum
+    and proves infeasibility only where enumeration finds nothing."""
+    from taopt.models.budgeted import total_time_cap
+
+    rng = np.random.default_rng(7000 + seed)
+    n, m = int(rng.integers(3, 6)), int(rng.integers(2, 4))
+    cost = rng.uniform(1.0, 10.0, size=(n + m, n + m)).round(2)
+    free = taopt.solve(BudgetedProblem(cost, n).routing, "exact").objective
+    # from "the unlimited optimum barely fits in total" to "it does not fit"
+    share = free / m * rng.uniform(0.9, 2.5)  # 5 of the 10 seeds are infeasible
+    p = BudgetedProblem(cost, n, max_time=[round(share, 2)] * m)
+    assert total_time_cap(p) >= sum(p.max_time)
+    expected = brute_force(p)
+    result = solve_budgeted(p)
+    if math.isinf(expected):
+        assert result.status == "infeasible" and result.routes is None
+        assert result.info["proof"]
+        return
+    assert result.status == "optimal"
+    assert result.objective == pytest.approx(expected, rel=1e-6)
+    assert result.objective <= total_time_cap(p)
+
+
+def test_total_time_proof_names_both_sides():
+    """Σ_k T_k below the unlimited optimum: infeasible at once, the proof quotes both numbers."""
+    from taopt.models.budgeted import total_time_cap
+
+    # two targets 1 apart, 3 from both starts: the unlimited optimum is 4 (one vehicle);
+    # vehicle 0 reaches either target within 3.2 but not both, vehicle 1 none within 0.5
+    cost = np.array([[0, 1, 9, 9], [1, 0, 9, 9], [3, 3, 0, 9], [3, 3, 9, 0]], dtype=float)
+    assert total_time_cap(BudgetedProblem(cost, 2, max_time=[3.2, None])) is None
+    result = solve_budgeted(BudgetedProblem(cost, 2, max_time=[3.2, 0.5]))
+    assert result.status == "infeasible" and result.bound == math.inf
+    assert "Σ_k T_k = 3.7" in result.info["proof"] and "exceeds" in result.info["proof"]
+    assert brute_force(BudgetedProblem(cost, 2, max_time=[3.2, 0.5])) == math.inf
+
+
 def test_no_limit_is_chapter_two():
     """Without any finite limit the optimum is chapter 2's."""
     p = random_problem(6, 2, 3).replace(capacity=None, max_time=None)
