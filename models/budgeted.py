@@ -843,7 +843,10 @@ def solve_budgeted(
     :func:`~taopt.models.routing.repair`, kept if it meets the limits) a candidate
     incumbent and the next MIP start. It stops when a round's optimum has no cycle (then
     it is feasible and optimal), or the gap is closed. Each round's dual bound is valid:
-    the rows only remove infeasible solutions. Size: at most ``(n + 1) n m`` columns and
+    the rows only remove infeasible solutions. When every vehicle has a time limit,
+    :func:`total_time_cap` (``Σ_k T_k``) is HiGHS's ``objective_bound`` in every round and
+    a proven lower bound above it is an infeasibility proof at once. Size: at most
+    ``(n + 1) n m`` columns and
     ``n (m + 1) + 3 m`` rows before the cuts.
 
     References
