@@ -18,8 +18,8 @@ aware of the limits here, each the smallest change that keeps the printed algori
 
 A heuristic cannot prove that no feasible answer exists. When MC or EVM is left with
 targets no vehicle can take, or the GA never met a feasible chromosome, the answer is
-status ``"error"`` (taopt's only status for "no solution"; none is invented here) with
-``solution=None``, ``objective=inf``, ``info["unassigned"]`` (how many targets were left,
+status ``"no_solution"`` (:data:`taopt.result.NO_SOLUTION`: the heuristic's outcome, not a
+failure and not a proof) with ``solution=None``, ``objective=inf``, ``info["unassigned"]`` (how many targets were left,
 for MC and EVM) and ``info["error"]`` saying that this is not a proof of infeasibility.
 Never a fake feasible answer: every returned payload is scored by
 :func:`~taopt.budgeted.evaluate_budgeted`, which re-checks the limits.
@@ -57,7 +57,7 @@ from taopt.heuristics.ga_routing import (
 )
 from taopt.limits import Deadline
 from taopt.registry import register_method
-from taopt.result import ERROR, FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
 
 #: Relative slack of the heuristics' own travel-time check (stricter than the scorer's).
 SLACK = 1e-9
@@ -88,11 +88,11 @@ def _answer(
     start: float,
     info: dict[str, Any],
 ) -> Solution:
-    """A scored Solution, or the "no solution" answer when ``routes`` is None."""
+    """A scored Solution, or status "no_solution" when ``routes`` is None."""
     if routes is None:
         return Solution(
             objective=math.inf,
-            status=ERROR,
+            status=NO_SOLUTION,
             solution=None,
             runtime=time.perf_counter() - start,
             method=method,
@@ -429,7 +429,7 @@ def mc(
     Returns
     -------
     Solution
-        Status "feasible" with the routes, or status "error", ``objective = inf`` and
+        Status "feasible" with the routes, or status "no_solution", ``objective = inf`` and
         ``info["unassigned"]`` when some target could not be placed (not a proof of
         infeasibility).
 
@@ -478,7 +478,7 @@ def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) ->
     -------
     Solution
         Status "feasible" with the routes (``info["refusals"]``: pairs refused), or status
-        "error", ``objective = inf`` and ``info["unassigned"]`` when some target was refused
+        "no_solution", ``objective = inf`` and ``info["unassigned"]`` when some target was refused
         by every vehicle (not a proof of infeasibility).
 
     Example
@@ -635,7 +635,7 @@ def genetic_algorithm(
     Returns
     -------
     Solution
-        The best feasible chromosome, decoded; status "error" and ``objective = inf`` when
+        The best feasible chromosome, decoded; status "no_solution" and ``objective = inf`` when
         no chromosome ever kept every limit (not a proof of infeasibility). ``info``:
         ``history`` (best feasible cost per generation, ``inf`` until one is found),
         ``first_feasible`` (generation of the first feasible chromosome), ``evaluations``,

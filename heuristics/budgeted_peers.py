@@ -30,7 +30,7 @@ Answers
 Every answer is re-checked by :func:`taopt.budgeted.violations` and scored by
 :func:`taopt.budgeted.evaluate_budgeted`. A route set that breaks a limit (PyVRP's best
 may, when it never found a feasible one) or no route set at all (OR-Tools' first-solution
-strategy failing) is reported, not hidden: status ``"error"``, ``objective = inf``,
+strategy failing) is reported, not hidden: status ``"no_solution"``, ``objective = inf``,
 ``solution = None`` and ``info["violations"]`` (the scorer's messages, "; "-joined) or
 ``info["error"]``.
 
@@ -48,7 +48,7 @@ from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_bud
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics import peers
 from taopt.registry import register_method
-from taopt.result import ERROR, FEASIBLE, Routes, Solution
+from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
 
 __all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown", "LARGEST_ENTRY"]
 
@@ -103,13 +103,17 @@ def _solve(
     method = peer
     if routes is None:
         info["error"] = f"{peer} found no route set (routing status {reply.get('routing_status')})"
-        return Solution(math.inf, ERROR, None, runtime=runtime, method=method, seed=seed, info=info)
+        return Solution(
+            math.inf, NO_SOLUTION, None, runtime=runtime, method=method, seed=seed, info=info
+        )
     broken = violations(problem, routes)
     if broken:
         info["violations"] = "; ".join(broken)
         info["violation_count"] = len(broken)
         info["error"] = f"{peer}'s best route set breaks {len(broken)} limit(s)"
-        return Solution(math.inf, ERROR, None, runtime=runtime, method=method, seed=seed, info=info)
+        return Solution(
+            math.inf, NO_SOLUTION, None, runtime=runtime, method=method, seed=seed, info=info
+        )
     return Solution(
         objective=evaluate_budgeted(problem, routes),
         status=FEASIBLE,
@@ -148,7 +152,7 @@ def pyvrp_budgeted(
     -------
     Solution
         Status "feasible" with routes scored by :func:`~taopt.budgeted.evaluate_budgeted`,
-        or status "error" (``info["violations"]``) when PyVRP's best breaks a limit.
+        or status "no_solution" (``info["violations"]``) when PyVRP's best breaks a limit.
         ``info["solver_feasible"]`` is PyVRP's own verdict.
 
     Raises
@@ -207,7 +211,7 @@ def ortools_budgeted(
     -------
     Solution
         Status "feasible" with routes scored by :func:`~taopt.budgeted.evaluate_budgeted`,
-        or status "error" when OR-Tools found no route set (``info["routing_status"]``) or
+        or status "no_solution" when OR-Tools found no route set (``info["routing_status"]``) or
         one that breaks a limit (``info["violations"]``).
 
     Raises

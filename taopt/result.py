@@ -50,6 +50,9 @@ class Status(str, enum.Enum):
     FEASIBLE = "feasible"  # a feasible solution with no optimality claim (heuristics)
     RELAXATION = "relaxation"  # the value of a relaxation: a bound, not a solution
     INFEASIBLE = "infeasible"
+    # a heuristic or peer ended without a feasible answer: its outcome, not a proof that
+    # none exists, and not a failure of the method (the reason is in ``info["error"]``)
+    NO_SOLUTION = "no_solution"
     ERROR = "error"
 
     def __str__(self) -> str:
@@ -67,6 +70,7 @@ TIME_LIMIT = Status.TIME_LIMIT
 FEASIBLE = Status.FEASIBLE
 RELAXATION = Status.RELAXATION
 INFEASIBLE = Status.INFEASIBLE
+NO_SOLUTION = Status.NO_SOLUTION
 ERROR = Status.ERROR
 STATUSES = tuple(Status)
 
@@ -575,6 +579,7 @@ __all__ = [
     "FEASIBLE",
     "RELAXATION",
     "INFEASIBLE",
+    "NO_SOLUTION",
     "ERROR",
     "STATUSES",
 ]

@@ -91,7 +91,7 @@ def test_heuristics_feasible_and_never_below_the_optimum(label, problem, optimum
     assert math.isfinite(optimum), f"{label}: the reference instance should be feasible"
     answered = 0
     for name, solution in heuristic_runs(problem):
-        if solution.status == "error":
+        if solution.status == "no_solution":
             assert solution.solution is None and math.isinf(solution.objective), name
             continue
         answered += 1
@@ -150,13 +150,13 @@ def test_a_vehicle_with_no_time_takes_nothing():
 
 
 def test_no_vehicle_can_take_a_target_gives_no_solution():
-    """Capacities summing below n: status "error", no payload, the unassigned count; never feasible."""
+    """Capacities summing below n: status "no_solution", no payload, the unassigned count; never feasible."""
     problem = BudgetedProblem(random_cost(6, 2, 1), 6, capacity=[2, 2])
     for solution in (budgeted.mc(problem), budgeted.evm(problem)):
-        assert solution.status == "error" and solution.solution is None
+        assert solution.status == "no_solution" and solution.solution is None
         assert solution.info["unassigned"] == 2 and "not a proof" in solution.info["error"]
     ga = budgeted.genetic_algorithm(problem, seed=0, population=10, generations=5)
-    assert ga.status == "error" and math.isinf(ga.objective)
+    assert ga.status == "no_solution" and math.isinf(ga.objective)
 
 
 def test_ga_same_seed_same_result():
@@ -218,7 +218,7 @@ def test_pyvrp_same_seed_same_result():
 
 
 def test_a_peer_answer_that_breaks_a_limit_is_reported(monkeypatch):
-    """Routes breaking a capacity come back as status "error" with the violation named."""
+    """Routes breaking a capacity come back as status "no_solution" with the violation named."""
     problem = BudgetedProblem(random_cost(4, 2, 0), 4, capacity=[1, 3])
 
     class Fake:
@@ -230,7 +230,7 @@ def test_a_peer_answer_that_breaks_a_limit_is_reported(monkeypatch):
 
     monkeypatch.setattr(budgeted_peers.peers, "_call", fake_call)
     solution = budgeted_peers.ortools_budgeted(problem, time_limit=1.0)
-    assert solution.status == "error" and solution.solution is None
+    assert solution.status == "no_solution" and solution.solution is None
     assert "vehicle 0 serves 2 targets, capacity 1" in solution.info["violations"]
 
 

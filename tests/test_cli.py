@@ -175,6 +175,21 @@ def test_solve_command_on_each_file_kind(tmp_path, capsys):
     assert table.loc["MMA", "objective"] >= exact * (1 - 1e-9)
 
 
+def test_a_heuristic_without_an_answer_is_not_a_failure(tmp_path, capsys):
+    """The budgeted example: EVM finds no feasible answer (status no_solution, the reason in
+    the message column), the exact optimum stands, the exit code is 0; saved and verified,
+    the no-answer file claims nothing and passes."""
+    from taopt.data import examples
+
+    example = examples.__path__[0] + "/budgeted_problem.json"
+    argv = ["solve", example, "--methods", "exact,EVM", "--quiet", "--save", str(tmp_path)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "no_solution" in out and "no feasible answer: EVM" in out and "failed" not in out
+    assert main(["verify", str(tmp_path / "EVM.json"), example]) == 0
+    assert "carries no payload" not in capsys.readouterr().out
+
+
 def test_solve_command_rejects_unknown_kind(tmp_path, capsys):
     """An unknown file kind is a one-line error naming it, exit code 2."""
     bad = tmp_path / "x.json"

@@ -29,7 +29,7 @@ import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.errors import InstanceError, SolverError, TaoptError
 from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.registry import CATEGORIES, ensure_families, family_of, get_method, methods
-from taopt.result import ERROR, INFEASIBLE, RELAXATION, Solution
+from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
 from taopt.scoring import evaluate
 
 #: Relative tolerance between a method's reported objective and the scorer's value.
@@ -158,7 +158,7 @@ def solve(
     scored = result.is_scored_for(problem)  # built by make_solution: scored once already
     if (
         result.solution is not None
-        and result.status not in (RELAXATION, ERROR, INFEASIBLE)
+        and result.status not in (RELAXATION, ERROR, INFEASIBLE, NO_SOLUTION)
         and not scored
     ):
         value = evaluate(problem, result.solution)  # the one scorer, never the method's word

@@ -39,7 +39,7 @@ from taopt.io import load_json
 from taopt.limits import check_memory, navigation_bytes
 from taopt.orchestration.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
-from taopt.result import ERROR, OPTIMAL, Solution, Status
+from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
 from taopt.schemas import naming
 from taopt.scoring import evaluate
 
@@ -156,7 +156,9 @@ def method_table(
                     for column, value in ratios.items()
                 },
                 "seconds": sol.runtime,
-                "message": _short(sol.info.get("error", "")) if sol.status == ERROR else "",
+                "message": (
+                    _short(sol.info.get("error", "")) if sol.status in (ERROR, NO_SOLUTION) else ""
+                ),
             }
         )
     table = pd.DataFrame(rows).dropna(axis=1, how="all")
@@ -257,6 +259,7 @@ def solve_file(
     found = [s for s in solutions.values() if s.solution is not None and s.status != ERROR]
     best = min(found, key=lambda s: s.objective) if found else None
     failed = [m for m, s in solutions.items() if s.status == ERROR]
+    unanswered = [m for m, s in solutions.items() if s.status == NO_SOLUTION]
     if save:
         folder = Path(save)
         folder.mkdir(parents=True, exist_ok=True)
@@ -275,6 +278,12 @@ def solve_file(
     if gantt:
         family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
+    if unanswered:
+        print(
+            f"no feasible answer: {', '.join(unanswered)} (their outcome, not a proof that "
+            "none exists; see the message column)",
+            file=out,
+        )
     if failed:
         print(f"failed: {', '.join(failed)} (see the message column)", file=out)
     print(f"({time.perf_counter() - tic:.2f} s)", file=out)
@@ -534,7 +543,7 @@ def verify_file(
     payload = solution.solution
     value = math.nan
     if payload is None:
-        if status not in (Status.INFEASIBLE, Status.TIME_LIMIT):
+        if status not in (Status.INFEASIBLE, Status.TIME_LIMIT, Status.NO_SOLUTION):
             report(False, f"a solution with status {status.value!r} carries no payload to check")
             return finish()
         report(True, f"no payload, as status {status.value!r} allows")
