@@ -45,7 +45,7 @@ import math
 from typing import Any
 
 from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_budgeted, violations
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError
 from taopt.heuristics import peers
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
