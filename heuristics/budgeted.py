@@ -18,7 +18,7 @@ aware of the limits here, each the smallest change that keeps the printed algori
 
 A heuristic cannot prove that no feasible answer exists. When MC or EVM is left with
 targets no vehicle can take, or the GA never met a feasible chromosome, the answer is
-status ``"no_solution"`` (:data:`taopt.result.NO_SOLUTION`: the heuristic's outcome, not a
+status ``"no_solution"`` (``taopt.result.NO_SOLUTION``: the heuristic's outcome, not a
 failure and not a proof) with ``solution=None``, ``objective=inf``, ``info["unassigned"]`` (how many targets were left,
 for MC and EVM) and ``info["error"]`` saying that this is not a proof of infeasibility.
 Never a fake feasible answer: every returned payload is scored by
