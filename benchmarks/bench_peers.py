@@ -28,11 +28,11 @@ import numpy as np
 
 import taopt
 import taopt.heuristics
-from taopt.heuristics.peers import cpsat_solve, ortools_solve, pyvrp_solve, shutdown
+from taopt.heuristics.peers import cpsat_routing, ortools_solve, pyvrp_solve, shutdown
 from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
 
-PEERS = {"pyvrp": pyvrp_solve, "ortools": ortools_solve, "cpsat": cpsat_solve}
+PEERS = {"pyvrp": pyvrp_solve, "ortools": ortools_solve, "cpsat": cpsat_routing}
 
 
 def uniform_current_problem(n: int, m: int, seed: int) -> taopt.AssignmentProblem:

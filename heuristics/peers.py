@@ -86,7 +86,15 @@ from taopt.routing.problem import AssignmentProblem
 from taopt.sop.problem import SopProblem
 from taopt.status import outcome
 
-__all__ = ["LARGEST_ENTRY", "PEERS", "cpsat_solve", "pyvrp_solve", "ortools_solve", "shutdown"]
+__all__ = [
+    "LARGEST_ENTRY",
+    "PEERS",
+    "cpsat_routing",
+    "cpsat_sop",
+    "pyvrp_solve",
+    "ortools_solve",
+    "shutdown",
+]
 
 #: The largest travel time becomes this integer when ``scale`` is not given.
 LARGEST_ENTRY = 10**7
@@ -510,98 +518,34 @@ def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> fl
     return (np.floor(bound + 1e-9) - slack_units) / scale
 
 
-def cpsat_solve(
-    problem: SopProblem | AssignmentProblem,
-    time_limit: float | None = 10.0,
-    seed: int = 0,
-    *,
-    num_workers: int = 2,
-    scale: float | None = None,
-) -> Solution:
-    """OR-Tools CP-SAT on an SOP or on the chapter 2 routing problem, in its worker process.
-
-    SOP: one ``AddCircuit`` over the usable arcs plus a dummy ``end -> start`` arc, with
-    position variables for the precedences (``_peer_worker.solve_cpsat_sop``). Routing
-    (2.2)-(2.5): one circuit through a dummy node that chains the vehicles' open routes,
-    targets first then the vehicles' start points as in :class:`AssignmentProblem`
-    (``_peer_worker.solve_cpsat_routing``).
-
-    Parameters
-    ----------
-    problem : SopProblem or AssignmentProblem
-    time_limit : float or None
-        CP-SAT's ``max_time_in_seconds``; None: until it proves the optimum.
-    seed : int
-        CP-SAT's ``random_seed``.
-    num_workers : int
-        CP-SAT's ``num_workers`` (default 2: this machine's cores).
-    scale : float, optional
-        Integer units per unit of cost. Default: 1 for an SOP with whole-number costs
-        (exact), else the largest entry becomes :data:`LARGEST_ENTRY`.
-
-    Returns
-    -------
-    Solution
-        Method "cpsat". Status by :func:`taopt.status.outcome` (the one rule): CP-SAT's
-        OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
-        else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
-        objective ``inf``; INFEASIBLE -> "infeasible".
-        ``objective`` is re-scored by taopt's scorer (:func:`taopt.sop.problem.evaluate_order` or
-        :func:`taopt.evaluate`); ``bound`` is CP-SAT's proven bound divided by the scale,
-        rounded down and lowered by the rounding error of a path when the scaling is not
-        exact (so it stays valid). ``info`` has ``cpsat_status``, ``solver_objective``,
-        ``best_bound`` (CP-SAT's units), ``scale``, ``branches``, ``solver_runtime``.
-
-    Raises
-    ------
-    InstanceError
-        Another problem type, or bad limits, seed, workers or scale.
-    SolverError
-        OR-Tools missing (the message says ``pip install "taopt[peers]"``), or a failure
-        or crash in the worker.
-
-    Example
-    -------
-    >>> from taopt.heuristics.peers import cpsat_solve
-    >>> s = cpsat_solve(SopProblem.load("ESC07"), time_limit=10)
-    >>> str(s.status), s.objective, s.bound
-    ('optimal', 2125.0, 2125.0)
-
-    References
-    ----------
-    Thesis §2.2.1 and §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
-    """
-    if not isinstance(problem, (SopProblem, AssignmentProblem)):
-        raise InstanceError(
-            f"cpsat solves a SopProblem or an AssignmentProblem, got {type(problem).__name__}"
-        )
+def _cpsat_options(time_limit: float | None, seed: int, num_workers: int) -> dict[str, Any]:
+    """The worker's common CP-SAT options, checked (InstanceError naming the bad one)."""
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:
         raise InstanceError(f"seed must be an integer in [0, 2**31), got {seed}")
     if isinstance(num_workers, bool) or int(num_workers) != num_workers or num_workers < 1:
         raise InstanceError(f"num_workers must be a positive integer, got {num_workers}")
-    options: dict[str, Any] = {
-        "time_limit": time_limit,
-        "seed": int(seed),
-        "num_workers": int(num_workers),
-    }
-    if isinstance(problem, SopProblem):
-        cost, scale, exact = _sop_integer_costs(problem, scale)
-        options.update(
-            kind="sop",
-            start=problem.start,
-            end=problem.end,
-            precedences=[(int(r), int(j)) for r, j in problem.precedences],
-        )
-        request = {"cost": cost, "n": problem.n, "m": 0, "options": options}
-        slack = 0.0 if exact else 0.5 * (problem.n - 1)
-    else:
-        cost, scale = integer_costs(problem, scale)
-        exact = bool(np.all(problem.cost * scale == cost))
-        options["kind"] = "routing"
-        request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
-        slack = 0.0 if exact else 0.5 * problem.n
+    return {"time_limit": time_limit, "seed": int(seed), "num_workers": int(num_workers)}
+
+
+def _cpsat_run(
+    problem: SopProblem | AssignmentProblem,
+    request: dict[str, Any],
+    *,
+    scale: float,
+    exact: bool,
+    slack: float,
+    payload_type: type[Order] | type[Routes],
+    payload_key: str,
+) -> Solution:
+    """Send one CP-SAT request to the worker and turn its reply into a Solution.
+
+    Shared by both families' registrations: scored once by taopt's scorer, status by
+    :func:`taopt.status.outcome`, bound in the problem's units (see :func:`cpsat_sop`).
+    """
+    options = request["options"]
+    time_limit = options["time_limit"]
     reply, runtime, worker, startup = _call("cpsat", request, time_limit)
     info = {
         "cpsat_status": reply["cpsat_status"],
@@ -611,22 +555,20 @@ def cpsat_solve(
         "exact_scaling": exact,
         "branches": reply["branches"],
         "solver_runtime": reply["solver_runtime"],
-        "num_workers": int(num_workers),
+        "num_workers": options["num_workers"],
         "time_limit": time_limit,
         "version": worker.version,
         "startup": startup,
     }
     bound = _scaled_bound(reply, scale, slack)
-    payload: Order | Routes | None = None
-    if isinstance(problem, SopProblem) and reply.get("order") is not None:
-        payload = Order(reply["order"])
-    elif isinstance(problem, AssignmentProblem) and reply.get("routes") is not None:
-        payload = Routes(reply["routes"])
+    found = reply.get(payload_key)
+    payload = None if found is None else payload_type(found)
     if reply["cpsat_status"] == "OPTIMAL" and payload is None:
         raise SolverError("cpsat reported OPTIMAL without a solution")
+    seed = options["seed"]
     try:  # scored once by taopt's scorer; the status follows from that objective
         result = make_solution(
-            problem, payload, method="cpsat", status=FEASIBLE, runtime=runtime, seed=int(seed)
+            problem, payload, method="cpsat", status=FEASIBLE, runtime=runtime, seed=seed
         )
     except Exception as exc:
         raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
@@ -647,5 +589,116 @@ def cpsat_solve(
     return result.replace(status=status, bound=bound, info=info)
 
 
-register_method(SopProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)
-register_method(AssignmentProblem, "cpsat", category="peer", requires="ortools")(cpsat_solve)
+@register_method(SopProblem, "cpsat", category="peer", requires="ortools")
+def cpsat_sop(
+    problem: SopProblem,
+    time_limit: float | None = 10.0,
+    seed: int = 0,
+    *,
+    num_workers: int = 2,
+    scale: float | None = None,
+) -> Solution:
+    """OR-Tools CP-SAT on a sequential ordering problem, in its worker process.
+
+    One ``AddCircuit`` over the usable arcs plus a dummy ``end -> start`` arc, with position
+    variables for the precedences (``_peer_worker.solve_cpsat_sop``).
+
+    Parameters
+    ----------
+    problem : SopProblem
+    time_limit : float or None
+        CP-SAT's ``max_time_in_seconds``; None: until it proves the optimum.
+    seed : int
+        CP-SAT's ``random_seed``.
+    num_workers : int
+        CP-SAT's ``num_workers`` (default 2: this machine's cores).
+    scale : float, optional
+        Integer units per unit of cost. Default: 1 when the costs are whole numbers
+        (exact), else the largest entry becomes :data:`LARGEST_ENTRY`.
+
+    Returns
+    -------
+    Solution
+        Method "cpsat". Status by :func:`taopt.status.outcome` (the one rule): CP-SAT's
+        OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
+        else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
+        objective ``inf``; INFEASIBLE -> "infeasible".
+        ``objective`` is re-scored by taopt's scorer; ``bound`` is CP-SAT's proven bound
+        divided by the scale, rounded down and lowered by the rounding error of a path when
+        the scaling is not exact (so it stays valid). ``info`` has ``cpsat_status``,
+        ``solver_objective``, ``best_bound`` (CP-SAT's units), ``scale``, ``branches``,
+        ``solver_runtime``.
+
+    Raises
+    ------
+    InstanceError
+        Bad limits, seed, workers or scale.
+    SolverError
+        OR-Tools missing (the message says ``pip install "taopt[peers]"``), or a failure
+        or crash in the worker.
+
+    Example
+    -------
+    >>> from taopt.heuristics.peers import cpsat_sop
+    >>> s = cpsat_sop(SopProblem.load("ESC07"), time_limit=10)
+    >>> str(s.status), s.objective, s.bound
+    ('optimal', 2125.0, 2125.0)
+
+    References
+    ----------
+    Thesis §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
+    """
+    options = _cpsat_options(time_limit, seed, num_workers)
+    cost, scale, exact = _sop_integer_costs(problem, scale)
+    options.update(
+        kind="sop",
+        start=problem.start,
+        end=problem.end,
+        precedences=[(int(r), int(j)) for r, j in problem.precedences],
+    )
+    request = {"cost": cost, "n": problem.n, "m": 0, "options": options}
+    slack = 0.0 if exact else 0.5 * (problem.n - 1)
+    return _cpsat_run(
+        problem, request, scale=scale, exact=exact, slack=slack,
+        payload_type=Order, payload_key="order",
+    )  # fmt: skip
+
+
+@register_method(AssignmentProblem, "cpsat", category="peer", requires="ortools")
+def cpsat_routing(
+    problem: AssignmentProblem,
+    time_limit: float | None = 10.0,
+    seed: int = 0,
+    *,
+    num_workers: int = 2,
+    scale: float | None = None,
+) -> Solution:
+    """OR-Tools CP-SAT on the chapter 2 routing problem (2.2)-(2.5), in its worker process.
+
+    One circuit through a dummy node that chains the vehicles' open routes, targets first
+    then the vehicles' start points as in :class:`AssignmentProblem`
+    (``_peer_worker.solve_cpsat_routing``). Parameters, result and errors as
+    :func:`cpsat_sop`; the default ``scale`` makes the largest entry :data:`LARGEST_ENTRY`.
+
+    Example
+    -------
+    >>> from taopt.heuristics.peers import cpsat_routing
+    >>> cost = np.array([[0, 4, 9], [4, 0, 9], [2, 3, 0.0]])
+    >>> s = cpsat_routing(AssignmentProblem(cost, n_targets=2), time_limit=10)
+    >>> str(s.status), s.routes
+    ('optimal', [[0, 1]])
+
+    References
+    ----------
+    Thesis §2.2.1; Perron and Didier, CP-SAT (OR-Tools, Google).
+    """
+    options = _cpsat_options(time_limit, seed, num_workers)
+    cost, scale = integer_costs(problem, scale)
+    exact = bool(np.all(problem.cost * scale == cost))
+    options["kind"] = "routing"
+    request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
+    slack = 0.0 if exact else 0.5 * problem.n
+    return _cpsat_run(
+        problem, request, scale=scale, exact=exact, slack=slack,
+        payload_type=Routes, payload_key="routes",
+    )  # fmt: skip

@@ -750,6 +750,15 @@ def total_time_cap(problem: BudgetedProblem) -> float | None:
     return float(np.sum(problem.max_time + slack)) * (1 + 1e-9)
 
 
+def _infeasible(
+    problem: BudgetedProblem, proof: str, deadline: Deadline, info: dict[str, Any]
+) -> Solution:
+    """The one way this module reports status "infeasible": no answer, the reason in
+    ``info["proof"]``, and the bound +inf (no assignment meets the limits)."""
+    info.update(stopped_by="infeasible", proof=proof)
+    return _result(problem, None, INFEASIBLE.value, math.inf, deadline, info)
+
+
 def _too_long(
     problem: BudgetedProblem,
     bound: float,
@@ -758,15 +767,11 @@ def _too_long(
     info: dict[str, Any],
 ) -> Solution:
     """Status "infeasible": a proven lower bound on the total exceeds ``Σ_k T_k``."""
-    info.update(
-        stopped_by="infeasible",
-        proof=(
-            f"a proven lower bound on the total travel time, {bound:.6g}, exceeds the most "
-            f"any answer within the time limits can take, Σ_k T_k = {cutoff:.6g}"
-        ),
+    proof = (
+        f"a proven lower bound on the total travel time, {bound:.6g}, exceeds the most "
+        f"any answer within the time limits can take, Σ_k T_k = {cutoff:.6g}"
     )
-    return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
-                    method="exact-budgeted", info=info)  # fmt: skip
+    return _infeasible(problem, proof, deadline, info)
 
 
 @register_method(
@@ -872,9 +877,8 @@ def solve_budgeted(
         info.update(plain.info, model="chapter 2 (no finite limit)")
         return _result(problem, plain.routes, plain.status.value, plain.bound, deadline, info)
     if problem.capacity.sum() < n:
-        info.update(stopped_by="infeasible", proof=f"the capacities sum to {problem.capacity.sum():g} < n = {n}")  # fmt: skip
-        return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
-                        method="exact-budgeted", info=info)  # fmt: skip
+        proof = f"the capacities sum to {problem.capacity.sum():g} < n = {n}"
+        return _infeasible(problem, proof, deadline, info)
     best_routes = given
     best_value = math.inf if given is None else evaluate_budgeted(problem, given)
     # every vehicle time-limited: a feasible answer's total is at most Σ_k T_k (the
@@ -1032,10 +1036,8 @@ def solve_budgeted(
                     f" (searched below the cut-off Σ_k T_k = {cutoff:.6g}, the most a "
                     "feasible answer's total can be)"
                 )
-            info.update(rounds=rounds, cuts=len(model.cuts), stopped_by="infeasible",
-                        proof=proof)  # fmt: skip
-            return Solution(math.inf, INFEASIBLE, bound=math.inf, runtime=deadline.elapsed(),
-                            method="exact-budgeted", info=info)  # fmt: skip
+            info.update(rounds=rounds, cuts=len(model.cuts))
+            return _infeasible(problem, proof, deadline, info)
         if run.solver_status not in ("optimal", "user_limit"):
             raise SolverError(f"HiGHS returned status {run.solver_status!r} on the budgeted model")
         if run.bound is not None:

@@ -30,6 +30,7 @@ from taopt.heuristics import peers
 from taopt.heuristics.peers import ortools_solve, pyvrp_solve
 from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
+from taopt.registry import get_method
 from taopt.sop.problem import evaluate_order
 from taopt.status import outcome
 
@@ -461,15 +462,24 @@ def test_cpsat_missing_ortools_fails_loudly(monkeypatch, ref_sop):
     """Without OR-Tools, cpsat raises a SolverError with the install hint (never a skip)."""
     monkeypatch.setattr(peers, "_find_spec", lambda name: None)
     with pytest.raises(SolverError, match=r"cpsat is not installed.*taopt\[peers\]"):
-        peers.cpsat_solve(ref_sop.problem)
+        peers.cpsat_sop(ref_sop.problem)
+
+
+def test_cpsat_is_one_registration_per_family(ref_sop):
+    """Each family's "cpsat" is its own registered function; neither takes the other's type."""
+    routing = taopt.AssignmentProblem(np.array([[0, 4, 9], [4, 0, 9], [2, 3, 0.0]]), n_targets=2)
+    assert get_method(ref_sop.problem, "cpsat").func is peers.cpsat_sop
+    assert get_method(routing, "cpsat").func is peers.cpsat_routing
+    with pytest.raises(InstanceError, match="no method 'cpsat' for BudgetedProblem"):
+        get_method(taopt.BudgetedProblem(routing.cost, n_targets=2, capacity=[2]), "cpsat")
 
 
 def test_cpsat_bad_arguments_are_clear(ref_sop):
-    """A wrong problem type, seed or worker count is an InstanceError before any worker runs."""
+    """A bad seed, worker count or time limit is an InstanceError before any worker runs."""
     problem = ref_sop.problem
-    with pytest.raises(InstanceError, match="SopProblem or an AssignmentProblem"):
-        peers.cpsat_solve(problem.cost)
     with pytest.raises(InstanceError, match="num_workers"):
-        peers.cpsat_solve(problem, num_workers=0)
+        peers.cpsat_sop(problem, num_workers=0)
     with pytest.raises(InstanceError, match="seed"):
-        peers.cpsat_solve(problem, seed=-1)
+        peers.cpsat_sop(problem, seed=-1)
+    with pytest.raises(InstanceError, match="time_limit"):
+        peers.cpsat_routing(routing_quick_tour().problem, time_limit=0)
