@@ -518,8 +518,19 @@ def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> fl
     return (np.floor(bound + 1e-9) - slack_units) / scale
 
 
-def _cpsat_options(time_limit: float | None, seed: int, num_workers: int) -> dict[str, Any]:
-    """The worker's common CP-SAT options, checked (InstanceError naming the bad one)."""
+def _cpsat_options(
+    problem: Any, expected: type, time_limit: float | None, seed: int, num_workers: int
+) -> dict[str, Any]:
+    """The worker's common CP-SAT options, checked (InstanceError naming the bad one).
+
+    ``problem`` must be an ``expected`` (each family's CP-SAT function takes its own type;
+    ``taopt.solve`` picks the right one).
+    """
+    if not isinstance(problem, expected):
+        raise InstanceError(
+            f"this CP-SAT model solves taopt.{expected.__name__}, got {type(problem).__name__}"
+            " (taopt.solve(problem, 'cpsat') picks the family's own)"
+        )
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:
@@ -648,7 +659,7 @@ def cpsat_sop(
     ----------
     Thesis §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
     """
-    options = _cpsat_options(time_limit, seed, num_workers)
+    options = _cpsat_options(problem, SopProblem, time_limit, seed, num_workers)
     cost, scale, exact = _sop_integer_costs(problem, scale)
     options.update(
         kind="sop",
@@ -692,7 +703,7 @@ def cpsat_routing(
     ----------
     Thesis §2.2.1; Perron and Didier, CP-SAT (OR-Tools, Google).
     """
-    options = _cpsat_options(time_limit, seed, num_workers)
+    options = _cpsat_options(problem, AssignmentProblem, time_limit, seed, num_workers)
     cost, scale = integer_costs(problem, scale)
     exact = bool(np.all(problem.cost * scale == cost))
     options["kind"] = "routing"

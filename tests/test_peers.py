@@ -474,6 +474,20 @@ def test_cpsat_is_one_registration_per_family(ref_sop):
         get_method(taopt.BudgetedProblem(routing.cost, n_targets=2, capacity=[2]), "cpsat")
 
 
+def test_cpsat_wrong_problem_type_is_clear(ref_sop):
+    """A direct call with another family's problem (or a bare matrix) names the expected type."""
+    routing = taopt.AssignmentProblem(np.array([[0, 4, 9], [4, 0, 9], [2, 3, 0.0]]), n_targets=2)
+    budgeted = taopt.BudgetedProblem(routing.cost, n_targets=2, capacity=[2])
+    with pytest.raises(InstanceError, match="solves taopt.SopProblem, got ndarray"):
+        peers.cpsat_sop(ref_sop.problem.cost)
+    with pytest.raises(InstanceError, match="solves taopt.SopProblem, got AssignmentProblem"):
+        peers.cpsat_sop(routing)
+    with pytest.raises(InstanceError, match="AssignmentProblem, got BudgetedProblem"):
+        peers.cpsat_routing(budgeted)
+    with pytest.raises(InstanceError, match="AssignmentProblem, got SopProblem"):
+        peers.cpsat_routing(ref_sop.problem)
+
+
 def test_cpsat_bad_arguments_are_clear(ref_sop):
     """A bad seed, worker count or time limit is an InstanceError before any worker runs."""
     problem = ref_sop.problem
