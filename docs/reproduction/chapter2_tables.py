@@ -1,7 +1,10 @@
 """Markdown tables of docs/reproduction/chapter2.md from `taopt study drift` output folders.
 
-Usage: python docs/reproduction/chapter2_tables.py RUNS/n50m10 RUNS/n100m10 ...
-(study folders, or their CSVs such as docs/reproduction/data/chapter2/n50m10.csv.gz)
+Usage: python docs/reproduction/chapter2_tables.py [--exact-from DIR] RUNS/n50m10 ...
+(study folders, or their CSVs such as docs/reproduction/data/chapter2/n50m10.csv.gz).
+--exact-from DIR takes every "exact" row from DIR/<same file name> instead (an exact-only
+re-run of the same draw, such as data/chapter2/exact_rerun_seed1); it fails unless that file
+has the same scenarios with the same f_a, so only a re-run of the same matrices is accepted.
 Prints Table 2.1 (q = f / f_a, thesis values in brackets), the true gaps f / f_o, Table 2.2
 (mean seconds), and per row: exact solves proven optimal, scenarios where the thesis's f_a
 exceeds the optimum (Lemma 2.4 fails), scenarios where f_MC > f_EVM (Theorem 2.7 fails), and
@@ -36,13 +39,30 @@ METHODS = ["VN", "VM", "EVN", "EVM", "MC", "GA", "exact"]
 TRANSPOSED = ["VM-transposed", "EVM-transposed"]
 
 
-def tables(folders: list[str]) -> str:
+def _replace_exact(df: pd.DataFrame, path: Path) -> pd.DataFrame:
+    """``df`` with its "exact" rows taken from the re-run in ``path`` (same scenarios, same f_a)."""
+    rerun = pd.read_csv(path)
+    rerun = rerun[(rerun.method == "exact") & (rerun["complete"] == 1)]
+    old = df[df.method == "exact"].set_index("scenario")
+    new = rerun.set_index("scenario")
+    if set(old.index) != set(new.index):
+        raise SystemExit(f"{path}: the re-run's scenarios differ from the tables' rows")
+    drift = (old["f_a"] - new.loc[old.index, "f_a"]).abs().max()
+    if drift > 1e-6 * old["f_a"].abs().max():
+        raise SystemExit(f"{path}: f_a differs by {drift:g}: not a re-run of the same matrices")
+    return pd.concat([df[df.method != "exact"], rerun[df.columns]], ignore_index=True)
+
+
+def tables(folders: list[str], exact_from: str | None = None) -> str:
     q_rows, true_rows, time_rows, check_rows, transposed_rows = [], [], [], [], []
     for folder in folders:
         path = Path(folder)
         df = pd.read_csv(path / "drift.csv" if path.is_dir() else path)
         if "complete" in df:
             df = df[df["complete"] == 1]
+        if exact_from is not None:
+            name = "drift.csv" if path.is_dir() else path.name
+            df = _replace_exact(df, Path(exact_from) / name)
         if "optimum" not in df:
             df = with_optimum(df, SPEC)
         extra = df[df.method.isin(TRANSPOSED)]
@@ -149,4 +169,8 @@ def tables(folders: list[str]) -> str:
 
 
 if __name__ == "__main__":
-    print(tables(sys.argv[1:]))
+    args = sys.argv[1:]
+    source = None
+    if args[:1] == ["--exact-from"]:
+        source, args = args[1], args[2:]
+    print(tables(args, source))
