@@ -53,10 +53,15 @@ from taopt.status import OPTIMALITY_TOLERANCE, certify, relative_gap
 CORE_SIZE = 4
 
 
-#: HiGHS options of the DFJ rounds. A smaller cut pool than HiGHS's default (10000)
-#: roughly halved the time of the hard rounds (p43, ry48p, n120m5; benchmarks/
-#: bench_routing_exact.py); the optimum and its proof do not depend on it.
-MIP_OPTIONS = {"mip_pool_soft_limit": 500}
+#: HiGHS options of the DFJ rounds; the optimum and its proof depend on neither.
+#: A smaller cut pool than HiGHS's default (10000) roughly halved the time of the hard
+#: rounds (p43, ry48p, n120m5; benchmarks/bench_routing_exact.py). No restart of the
+#: root after HiGHS fixes columns by reduced cost: a round on a core is a small MIP whose
+#: time went mostly to repeated root work (four restarts and five nodes in a 6 s round of
+#: a 57-target chapter-3 class); without restarts chapter 3's n90m10 classes took 0.60x
+#: the CPU time and the slowest chapter-2 scenarios 0.72x, TSPLIB the same
+#: (docs/benchmarks.md, "No restarts in the DFJ rounds").
+MIP_OPTIONS = {"mip_pool_soft_limit": 500, "mip_allow_restart": False}
 
 
 #: Seconds per arc to build :class:`DfjModel` (arrays and HiGHS's ``passModel``), and per
