@@ -363,6 +363,57 @@ def test_separation_is_exact_on_random_fractional_points(seed):
     assert set(found) <= set(violated)
 
 
+def _violated_subsets(n, m, tails, heads, values, tolerance):
+    violated = []
+    for size in range(2, n + 1):
+        for subset in combinations(range(n), size):
+            inside = np.zeros(n + m, dtype=bool)
+            inside[list(subset)] = True
+            if values[~inside[tails] & inside[heads]].sum() < 1 - tolerance:
+                violated.append(subset)
+    return violated
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_separation_is_exact_along_chains_of_whole_arcs(seed):
+    """Points where most targets are entered by one arc at σ = 1 (chains, and a cycle of
+    such arcs that a tiny arc reaches): separation still finds a violated row iff one exists.
+    Only the first target of a chain gets a flow, so this is the case that could miss one."""
+    from taopt.models.routing import CUT_TOLERANCE, arc_list, separate_subtours
+
+    rng = np.random.default_rng(100 + seed)
+    n, m = 8, 2
+    problem = metric_problem(n, m, seed)
+    tails, heads = arc_list(problem)
+    index = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(tails, heads, strict=True))}
+    values = np.zeros(len(tails))
+    order = rng.permutation(n)
+    rest = order
+    if seed % 2:
+        # a cycle of whole arcs on three targets, reached by a 1e-7 arc, the others on
+        # whole paths from the start points: the cycle is the only violated set
+        cycle, rest = order[:3], []
+        for a, b in zip(cycle, np.roll(cycle, -1), strict=True):
+            values[index[int(a), int(b)]] = 1.0
+        values[index[n, int(cycle[0])]] = 1e-7
+        for k, path in enumerate(np.array_split(order[3:], m)):
+            for a, b in zip([n + k, *path[:-1]], path, strict=True):
+                values[index[int(a), int(b)]] = 1.0
+    for j in rest:
+        into = np.flatnonzero(heads == j)
+        if rng.random() < 0.6:  # one whole arc: chains of σ = 1
+            values[rng.choice(into)] = 1.0
+        else:
+            chosen = rng.choice(into, size=rng.integers(2, 4), replace=False)
+            weights = np.round(rng.dirichlet(np.ones(len(chosen))), 3)
+            values[chosen] = weights
+            values[chosen[0]] += 1.0 - weights.sum()
+    violated = _violated_subsets(n, m, tails, heads, values, CUT_TOLERANCE)
+    found = separate_subtours(problem, tails, heads, values)
+    assert bool(found) == bool(violated)
+    assert set(found) <= set(violated)
+
+
 @pytest.mark.parametrize("kind,n,m,seed", [("drift", 12, 2, 9), ("metric", 10, 3, 1)])
 def test_root_cuts_are_valid_and_root_bound_is_below_optimum(kind, n, m, seed):
     """Every root cut is a (2.5) row the optimum satisfies; the root LP bounds the optimum."""
