@@ -45,7 +45,7 @@ import math
 from typing import Any
 
 from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_budgeted, violations
-from taopt.errors import InstanceError
+from taopt.errors import require
 from taopt.heuristics import peers
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
@@ -77,8 +77,7 @@ def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
 def _solve(
     peer: str, problem: BudgetedProblem, seed: int, scale: float | None, options: dict[str, Any]
 ) -> Solution:
-    if not isinstance(problem, BudgetedProblem):
-        raise InstanceError(f"expected a BudgetedProblem, got {type(problem).__name__}")
+    require(problem, BudgetedProblem, f"the {peer} peer")
     if scale is None:
         largest = float(problem.cost.max())
         scale = LARGEST_ENTRY / largest if largest > 0 else 1.0

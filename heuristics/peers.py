@@ -79,7 +79,7 @@ from typing import Any
 
 import numpy as np
 
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError, SolverError, require
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, INFEASIBLE, Order, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
@@ -276,10 +276,7 @@ def integer_costs(problem: AssignmentProblem, scale: float | None) -> tuple[np.n
 
 
 def _check(problem: Any, time_limit: float | None, seed: int, limit_name: str, limit: Any) -> None:
-    if not isinstance(problem, AssignmentProblem):
-        raise InstanceError(
-            f"the peers solve taopt.AssignmentProblem, got {type(problem).__name__}"
-        )
+    require(problem, AssignmentProblem, "the routing peers")
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
     if limit is not None and (isinstance(limit, bool) or int(limit) != limit or limit < 1):
@@ -526,11 +523,12 @@ def _cpsat_options(
     ``problem`` must be an ``expected`` (each family's CP-SAT function takes its own type;
     ``taopt.solve`` picks the right one).
     """
-    if not isinstance(problem, expected):
-        raise InstanceError(
-            f"this CP-SAT model solves taopt.{expected.__name__}, got {type(problem).__name__}"
-            " (taopt.solve(problem, 'cpsat') picks the family's own)"
-        )
+    require(
+        problem,
+        expected,
+        "this CP-SAT model",
+        "taopt.solve(problem, 'cpsat') picks the family's own",
+    )
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**31:

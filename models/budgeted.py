@@ -64,7 +64,7 @@ from taopt.budgeted.problem import (
     evaluate_budgeted,
     violations,
 )
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError, SolverError, require
 from taopt.limits import Deadline, milp_bytes, register_footprint
 from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
 from taopt.models.routing import (
@@ -858,8 +858,7 @@ def solve_budgeted(
     ----------
     Thesis §2.2.1 (2.2)–(2.5), §6.2.
     """
-    if not isinstance(problem, BudgetedProblem):
-        raise InstanceError(f"solve_budgeted needs a BudgetedProblem, got {type(problem).__name__}")
+    require(problem, BudgetedProblem, "solve_budgeted")
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
     if form not in FORMS:

@@ -76,7 +76,7 @@ import scipy.sparse as sp
 
 from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError, SolverError, require
 from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import solve_highs
 from taopt.models.routing import solve_routing
@@ -142,11 +142,12 @@ def _class_index(problem: CapabilityProblem) -> dict[Hashable, int]:
 
 
 def _check(problem: Any) -> None:
-    if not isinstance(problem, CapabilityProblem):
-        raise InstanceError(
-            f"expected a CapabilityProblem, got {type(problem).__name__}; chapter 2 problems "
-            "are solved by taopt.models.solve_routing"
-        )
+    require(
+        problem,
+        CapabilityProblem,
+        "solve_capability",
+        "chapter 2 problems are solved by taopt.models.solve_routing",
+    )
 
 
 # ----------------------------------------------------------------------------- printed

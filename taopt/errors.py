@@ -29,3 +29,24 @@ class ConvergenceError(SolverError):
 
 class OutputError(TaoptError, ValueError):
     """An output file cannot be written as asked (e.g. ``--plot x.jpg`` where PNG is drawn)."""
+
+
+def require(value: object, expected: type, who: str, hint: str = "") -> None:
+    """Raise :class:`InstanceError` unless ``value`` is an ``expected``.
+
+    The one guard of the entry points that take one family's problem (``taopt.solve``
+    picks the right one by registration; a direct call can still be handed another
+    family's problem or a bare matrix). The message names the caller, the type it
+    takes and the type it got, e.g. ``solve_routing needs a taopt.AssignmentProblem,
+    got ndarray``; ``hint`` (optional) follows after a semicolon.
+
+    Example
+    -------
+    >>> require([[0.0]], dict, "f")
+    Traceback (most recent call last):
+    ...
+    taopt.errors.InstanceError: f needs a taopt.dict, got list
+    """
+    if not isinstance(value, expected):
+        message = f"{who} needs a taopt.{expected.__name__}, got {type(value).__name__}"
+        raise InstanceError(f"{message}; {hint}" if hint else message)

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
-from taopt.errors import InstanceError, SolverError
+from taopt.errors import InstanceError, SolverError, require
 from taopt.routing.problem import AssignmentProblem
 
 if TYPE_CHECKING:
@@ -94,10 +94,7 @@ class RoutingModel:
 
 
 def _check(problem: Any, sec: str) -> None:
-    if not isinstance(problem, AssignmentProblem):
-        raise InstanceError(
-            f"solve_routing needs an AssignmentProblem, got {type(problem).__name__}"
-        )
+    require(problem, AssignmentProblem, "solve_routing")
     if sec not in SUBTOUR_ELIMINATIONS:
         raise InstanceError(f"sec must be one of {SUBTOUR_ELIMINATIONS}, got {sec!r}")
 

@@ -26,7 +26,7 @@ from scipy.sparse.csgraph import csgraph_from_dense, dijkstra
 from taopt.bounds import arborescence as generic_arborescence
 from taopt.bounds import lower as generic_lower
 from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem
-from taopt.errors import InstanceError
+from taopt.errors import require
 from taopt.routing.problem import AssignmentProblem
 
 
@@ -163,8 +163,7 @@ def lower(problem: BudgetedProblem, strength: str = "auto") -> float:
     ----------
     Thesis §2.4.3 (the arborescence bound), §6.2.
     """
-    if not isinstance(problem, BudgetedProblem):
-        raise InstanceError(f"lower() needs a BudgetedProblem, got {type(problem).__name__}")
+    require(problem, BudgetedProblem, "lower()")
     if problem.capacity.sum() < problem.n:
         return math.inf
     if strength == "fast":
