@@ -28,9 +28,9 @@ import numpy as np
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import mc
-from taopt.heuristics.ga_routing import genetic_algorithm
+from taopt.heuristics.ga_routing import genetic_algorithm, improve_routes
 from taopt.limits import Deadline
-from taopt.registry import register_method
+from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
 
 __all__ = ["class_seed", "ga_per_class", "mc_per_class"]
@@ -43,6 +43,10 @@ def class_seed(seed: int | None, q: int) -> int | None:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InstanceError(f"seed must be a non-negative integer or None, got {seed!r}")
     return int(np.random.SeedSequence([int(seed), int(q)]).generate_state(1)[0])
+
+
+# the exact model of chapter 3 solves each class as a chapter-2 problem: the same improver
+register_improver(CapabilityProblem)(improve_routes)
 
 
 @register_method(CapabilityProblem, "GA")

@@ -73,8 +73,9 @@ from taopt.comm.engine import Group, Simulation, SimulationStopped
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
+from taopt.heuristics.ga_routing import improve_routes
 from taopt.limits import Deadline
-from taopt.registry import register_method
+from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
 
 #: Savings below this (metres) do not count as an improvement (HDA's stopping rule).
@@ -508,6 +509,10 @@ def _run(
         seed=seed,
         info=run.info,
     )
+
+
+# the exact f_o solves each attribute class as a chapter-2 problem: the same improver
+register_improver(CommProblem)(improve_routes)
 
 
 @register_method(CommProblem, "DAA", category="simulation", style=("-", "o"))

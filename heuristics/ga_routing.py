@@ -84,7 +84,7 @@ from taopt.errors import InstanceError
 # re-exported here, where it was defined before
 from taopt.heuristics.ga_local_search import NEIGHBOURHOOD, local_search
 from taopt.limits import Deadline
-from taopt.registry import register_method
+from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
 
@@ -245,6 +245,32 @@ def encode(problem: AssignmentProblem, routes: list[list[int]]) -> np.ndarray:
         genes.append(problem.n + vehicle - 1)
         genes.extend(routes[vehicle])
     return np.asarray(genes, dtype=np.intp)
+
+
+#: Improving moves :func:`improve_routes` makes at most (about 7.5 ms each at n400m50).
+IMPROVE_MAX_MOVES = 100
+
+
+@register_improver(AssignmentProblem)
+def improve_routes(
+    problem: AssignmentProblem, routes: list[list[int]], max_moves: int = IMPROVE_MAX_MOVES
+) -> list[list[int]]:
+    """``routes`` after the memetic GA's local search (:func:`local_search`, every move).
+
+    The improver of the exact DFJ loop: :func:`taopt.solve` passes it to
+    :func:`taopt.models.solve_routing` as ``improve``, which calls it on the patched answer of
+    each MIP round (the exact model imports no heuristic). Never worse than ``routes``.
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> problem = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), 2)
+    >>> improve_routes(problem, [[0, 1]])
+    [[1, 0]]
+    """
+    nodes = path_nodes(problem, encode(problem, routes))[0]
+    improved, _, _ = local_search(path_matrix(problem), nodes, max_moves)
+    return decode(problem, nodes_to_genes(problem, improved), "vehicle")
 
 
 # -- crossover and mutation (vectorised over rows) --------------------------------------
@@ -582,4 +608,6 @@ __all__ = [
     "swap_mutation",
     "slide_mutation",
     "local_search",
+    "improve_routes",
+    "IMPROVE_MAX_MOVES",
 ]

@@ -516,9 +516,11 @@ def _solve_class(problem: Any, options: dict[str, Any], submitted: float) -> Sol
 
 
 def _class_options(
-    sec: str, mip_gap: float, verbose: bool, share: float | None, given: Any
+    sec: str, mip_gap: float, verbose: bool, share: float | None, given: Any, improve: Any = None
 ) -> dict[str, Any]:
     options: dict[str, Any] = {"sec": sec, "mip_gap": mip_gap, "verbose": verbose}
+    if improve is not None:
+        options["improve"] = improve
     if share is not None:
         options["time_limit"] = max(share, 0.01)
     if given is not None and _routing_takes_incumbent():
@@ -635,6 +637,7 @@ def solve_classes(
     mip_gap: float = 1e-6,
     verbose: bool = False,
     workers: int | None = None,
+    improve: Any = None,
 ) -> ClassSolve:
     """One certified (2.2)–(2.5) per class; a wall-clock limit shared between the classes.
 
@@ -649,8 +652,9 @@ def solve_classes(
         ``time.perf_counter()`` when the caller's clock started.
     incumbents : mapping, optional
         Capability -> routes in the class's indexing (or None), offered to each class.
-    sec, mip_gap, verbose
-        Passed to :func:`solve_routing`.
+    sec, mip_gap, verbose, improve
+        Passed to :func:`solve_routing` (``improve`` must be a module-level function when
+        the classes run in worker processes).
     workers : int, optional
         Processes (default: :func:`_auto_workers`).
 
@@ -686,7 +690,7 @@ def solve_classes(
         return time_limit - (time.perf_counter() - start) if time_limit is not None else math.inf
 
     def options(share: float | None, given: Any) -> dict[str, Any]:
-        return _class_options(sec, mip_gap, verbose, share, given)
+        return _class_options(sec, mip_gap, verbose, share, given, improve)
 
     def solve(jobs: list[tuple[Any, Any]], least: float = -math.inf) -> dict[Hashable, Solution]:
         if workers > 1 and len(jobs) > 1:
@@ -756,6 +760,7 @@ def _solve_corrected(
     verbose: bool,
     start: float,
     workers: int | None = None,
+    improve: Any = None,
 ) -> Solution:
     """One certified (2.2)–(2.5) per class (:func:`solve_classes`), joined."""
     split = solve_classes(
@@ -767,6 +772,7 @@ def _solve_corrected(
         mip_gap=mip_gap,
         verbose=verbose,
         workers=workers,
+        improve=improve,
     )
     info = {
         "formulation": "corrected",
@@ -1075,6 +1081,7 @@ def solve_capability(
     mip_gap: float = 1e-6,
     verbose: bool = False,
     workers: int | None = None,
+    improve: Any = None,
 ) -> Solution:
     """Solve chapter 3's problem (3.1)–(3.3) with one of three formulations.
 
@@ -1108,6 +1115,11 @@ def solve_capability(
         :data:`PARALLEL_MIN_TARGETS` targets, so 1 when fewer than two classes are that
         large, and 1 inside a study's task (``TAOPT_SOLVER_THREADS=1``); 1 solves the
         classes one after another in this process. The optimum does not depend on it.
+    improve : callable, optional
+        "corrected": passed to each class's :func:`taopt.models.solve_routing`
+        (``improve(class_problem, routes) -> routes`` on the class's chapter-2 problem).
+        Never computed here: :func:`taopt.solve` passes the registered improver
+        (:func:`taopt.registry.improver`).
 
     Returns
     -------
@@ -1144,7 +1156,7 @@ def solve_capability(
         return _solve_printed(problem, time_limit, verbose, start)
     if formulation == "corrected":
         return _solve_corrected(
-            problem, time_limit, incumbent, sec, mip_gap, verbose, start, workers
+            problem, time_limit, incumbent, sec, mip_gap, verbose, start, workers, improve
         )
     return _solve_joint(problem, time_limit, incumbent, sec, mip_gap, verbose, start)
 
@@ -1179,10 +1191,11 @@ def solve_exact(
     incumbent: Any = None,
     sec: str = "dfj",
     workers: int | None = None,
+    improve: Any = None,
 ) -> Solution:
     """Certified optimum of (3.1)–(3.3): the corrected model, one (2.2)–(2.5) per class,
-    the classes in ``workers`` processes (default: one per core; see
-    :func:`solve_capability`)."""
+    the classes in ``workers`` processes (default: one per core), each class's incumbents
+    improved by ``improve`` (see :func:`solve_capability`)."""
     return solve_capability(
         problem,
         "corrected",
@@ -1190,6 +1203,7 @@ def solve_exact(
         incumbent=incumbent,
         sec=sec,
         workers=workers,
+        improve=improve,
     )
 
 

@@ -73,6 +73,7 @@ def solve_comm(
     incumbent: Any = None,
     sec: str = "dfj",
     workers: int | None = None,
+    improve: Any = None,
 ) -> Solution:
     """Certified optimum f_o of (4.1)–(4.2) without communication limits.
 
@@ -89,6 +90,10 @@ def solve_comm(
     workers : int, optional
         Processes for the classes (as :func:`taopt.models.capability.solve_capability`;
         default: one per core for two or more large classes, else 1).
+    improve : callable, optional
+        Passed to each class's :func:`~taopt.models.routing.solve_routing`
+        (``improve(class_problem, routes) -> routes``); :func:`taopt.solve` passes the
+        registered improver (:func:`taopt.registry.improver`).
 
     Returns
     -------
@@ -122,7 +127,13 @@ def solve_comm(
                 [local[t] for t in start_routes[j] if t in local] for j in cls.vehicles
             ]
     split = solve_classes(
-        classes, time_limit=time_limit, start=began, incumbents=starts, sec=sec, workers=workers
+        classes,
+        time_limit=time_limit,
+        start=began,
+        incumbents=starts,
+        sec=sec,
+        workers=workers,
+        improve=improve,
     )
     solved = [cls for cls in classes if cls.problem is not None]
     info: dict[str, Any] = {

@@ -437,6 +437,31 @@ def relaxations(problem: Any) -> list[Callable[[Any], float]]:
     return list(_RELAXATIONS.get(family_of(problem).problem_type, []))
 
 
+_IMPROVERS: dict[type, Callable[..., Any]] = {}
+
+
+def register_improver(problem_type: type) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Decorator: ``func`` improves the incumbents inside the exact model of ``problem_type``.
+
+    An exact model that takes an ``improve`` argument calls it on the feasible answers its
+    own rounds produce (its docstring gives the signature); :func:`taopt.solve` passes the
+    registered one. Heuristic modules register theirs where they are defined, so an exact
+    model never imports a heuristic (an incumbent and an improver are passed in). The last
+    registration for a type wins.
+    """
+
+    def wrap(func: Callable[..., Any]) -> Callable[..., Any]:
+        _IMPROVERS[problem_type] = func
+        return func
+
+    return wrap
+
+
+def improver(problem: Any) -> Callable[..., Any] | None:
+    """The improver registered for the family of ``problem`` (imported modules only), or None."""
+    return _IMPROVERS.get(family_of(problem).problem_type)
+
+
 def method_style(name: str) -> tuple[str, str] | None:
     """The (linestyle, marker) some registration of method ``name`` declares (None if none)."""
     for found in _METHODS.values():
@@ -540,6 +565,8 @@ __all__ = [
     "register_method",
     "register_relaxation",
     "relaxations",
+    "register_improver",
+    "improver",
     "ensure_families",
     "family_of",
     "family_for_kind",

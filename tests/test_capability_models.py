@@ -367,3 +367,23 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)
     assert result.objective <= dtaa.objective * (1 + 1e-9)
     assert result.bound <= result.objective
+
+
+def test_corrected_model_hands_the_improver_to_every_class():
+    """``improve`` reaches each class's DFJ loop (serially here, so a closure will do) and
+    the certified optimum is the same as without it."""
+    from taopt.heuristics.ga_routing import improve_routes
+
+    problem = random_problem("grid-drift", 14, 4, 2, np.random.default_rng(7))
+    seen = []
+
+    def improve(class_problem, routes):
+        seen.append(class_problem.n)
+        return improve_routes(class_problem, routes)
+
+    with_it = solve_capability(problem, workers=1, improve=improve)
+    without = solve_capability(problem, workers=1)
+    assert with_it.status == without.status == "optimal"
+    assert with_it.objective == pytest.approx(without.objective, rel=1e-9)
+    solvable = {c.problem.n for c in problem.classes if c.problem is not None}
+    assert set(seen) == solvable

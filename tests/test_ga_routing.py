@@ -326,3 +326,20 @@ def test_bad_options_are_instance_errors():
         OperatorSet(mutations=("scramble",))
     with pytest.raises(InstanceError, match='markers="vehicle"'):
         OperatorSet(markers="position", polish=1)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_improve_routes_is_feasible_and_never_worse(seed):
+    """The exact loop's improver: every target once, each route from its own start, and a
+    value no worse than the routes it was given (random routes of a random matrix)."""
+    from taopt.heuristics.ga_routing import improve_routes
+
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(2, 30)), int(rng.integers(1, 6))
+    cost = rng.random((n + m, n + m)) * 100
+    problem = taopt.AssignmentProblem(cost, n_targets=n)
+    cuts = np.sort(rng.integers(0, n + 1, size=m - 1))
+    routes = [part.tolist() for part in np.split(rng.permutation(n), cuts)]
+    better = improve_routes(problem, routes)
+    assert len(better) == m and sorted(t for r in better for t in r) == list(range(n))
+    assert taopt.evaluate(problem, better) <= taopt.evaluate(problem, routes) + 1e-9

@@ -672,3 +672,58 @@ def test_lifted_rows_that_do_not_pay_are_rolled_back(monkeypatch):
     solution = solve_routing(problem)
     assert solution.status == "optimal"
     assert solution.objective == pytest.approx(dp_optimum(problem), rel=1e-9)
+
+
+class _CountingImprover:
+    """The registered improver, counting its calls and what it was given."""
+
+    def __init__(self):
+        from taopt.heuristics.ga_routing import improve_routes
+
+        self.improve, self.calls = improve_routes, 0
+
+    def __call__(self, problem, routes):
+        self.calls += 1
+        taopt.evaluate(problem, routes)  # it is only ever handed feasible routes
+        return self.improve(problem, routes)
+
+
+@pytest.mark.parametrize("kind,n,m,seed", [("drift", 10, 2, 3), ("metric", 9, 3, 5)])
+def test_improver_is_called_and_the_optimum_is_unchanged(kind, n, m, seed):
+    """``improve`` sees feasible routes on the first incumbent and after the rounds; the
+    certified optimum is the brute-force one with and without it."""
+    problem = make(kind, n, m, seed)
+    optimum = dp_optimum(problem)
+    improver = _CountingImprover()
+    with_it = solve_routing(problem, improve=improver)
+    without = solve_routing(problem)
+    assert improver.calls >= 1
+    assert 0 <= with_it.info["improved"] <= improver.calls
+    assert without.info["improved"] == 0
+    for solution in (with_it, without):
+        assert solution.status == "optimal"
+        assert solution.objective == pytest.approx(optimum, rel=1e-9)
+
+
+def test_improver_returning_infeasible_routes_is_a_solver_error():
+    """An improver that drops a target is caught, named, and never becomes the incumbent."""
+    from taopt.errors import SolverError
+
+    problem = make("metric", 6, 2, 1)
+    with pytest.raises(SolverError, match="improve returned routes that are not feasible"):
+        solve_routing(problem, improve=lambda p, routes: [routes[0][1:], *routes[1:]])
+
+
+def test_taopt_solve_passes_the_registered_improver():
+    """taopt.solve hands the exact DFJ loop the family's improver (the GA's local search);
+    ``improve=None`` switches it off; both certify the same optimum."""
+    from taopt.heuristics.ga_routing import improve_routes
+    from taopt.registry import improver
+
+    problem = make("drift", 12, 2, 9)
+    assert improver(problem) is improve_routes
+    on = taopt.solve(problem, "exact")
+    off = taopt.solve(problem, "exact", improve=None)
+    assert on.status == off.status == "optimal"
+    assert on.objective == pytest.approx(off.objective, rel=1e-9)
+    assert off.info["improved"] == 0 and "improved" in on.info

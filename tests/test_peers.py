@@ -480,7 +480,9 @@ def test_cpsat_wrong_problem_type_is_clear(ref_sop):
     budgeted = taopt.BudgetedProblem(routing.cost, n_targets=2, capacity=[2])
     with pytest.raises(InstanceError, match="CP-SAT model needs a taopt.SopProblem, got ndarray"):
         peers.cpsat_sop(ref_sop.problem.cost)
-    with pytest.raises(InstanceError, match="CP-SAT model needs a taopt.SopProblem, got AssignmentProblem"):
+    with pytest.raises(
+        InstanceError, match="CP-SAT model needs a taopt.SopProblem, got AssignmentProblem"
+    ):
         peers.cpsat_sop(routing)
     with pytest.raises(InstanceError, match="AssignmentProblem, got BudgetedProblem"):
         peers.cpsat_routing(budgeted)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from taopt.errors import SolverError
+from taopt.errors import FeasibilityError, SolverError
 from taopt.models.highs import HighsModel
 from taopt.models.routing.compact import (
     ASSIGNMENT_SECONDS_PER_CUBE,
@@ -94,6 +94,11 @@ LIFTED_FAMILIES = ("blossom",)
 #: ftv55: +0–0.2 % bound, +30 % time with them; chapter 3's n90m10 classes: +0.4–1 % bound,
 #: up to −40 % time; benchmarks/bench_routing_exact.py, docs/benchmarks.md, Chapter 3).
 LIFTED_MIN_GAIN = 0.0025
+
+
+#: Seconds that must be left under a time limit for ``improve`` to be called (a local
+#: search of 100 moves takes about 0.75 s at n400m50).
+IMPROVE_MIN_SECONDS = 1.0
 
 
 #: Compact formulation that finishes a DFJ loop which stalls with an open gap.
@@ -390,12 +395,35 @@ def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> Roo
     return DfjModel(problem).root(budget=time_limit, lifted=0)
 
 
-def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started) -> Solution:
+def _solve_dfj(
+    problem, time_limit, mip_gap, verbose, max_rounds, given, started, improve=None
+) -> Solution:
     def remaining() -> float | None:
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
 
+    improved = 0
+
+    def improved_routes(routes: Routes | list[list[int]] | None) -> tuple[list, float] | None:
+        """``improve(problem, routes)`` and its value, if time allows and it is feasible."""
+        left = remaining()
+        if improve is None or routes is None or (left is not None and left < IMPROVE_MIN_SECONDS):
+            return None
+        better = [[int(t) for t in route] for route in improve(problem, routes)]
+        try:
+            return better, evaluate_routes(problem, better)
+        except FeasibilityError as exc:
+            raise SolverError(f"improve returned routes that are not feasible: {exc}") from exc
+
+    def offer(routes: Routes | list[list[int]] | None) -> None:
+        """Improve ``routes``; keep the answer if it beats the incumbent."""
+        nonlocal best_routes, best_value, improved
+        found = improved_routes(routes)
+        if found is not None and found[1] < best_value:
+            (best_routes, best_value), improved = found, improved + 1
+
     n, m = problem.n, problem.m
     best_routes, best_value = _first_incumbent(problem, given)
+    offer(best_routes)
     best_bound = entry_bound(problem)
     left = remaining()
     if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
@@ -505,8 +533,11 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
             routes, subtours = decode(problem, dfj, dfj.arc_values())
             candidate = repair(problem, routes, subtours) if subtours else routes
             value = evaluate_routes(problem, candidate)
+            candidates.append((value, candidate))
             if value < best_value:
                 best_routes, best_value = candidate, value
+        if candidates:  # the round's best answer, improved (often to the next round's optimum)
+            offer(min(candidates, key=lambda pair: pair[0])[1])
         dfj.add_cuts([*map(tuple, subtours), *harvested])
         stopped_by = run.stopped_by
         if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
@@ -553,6 +584,7 @@ def _solve_dfj(problem, time_limit, mip_gap, verbose, max_rounds, given, started
         "stopped_by": stopped_by,
         "reruns": dfj.model.reruns,
         "fallback": FALLBACK_SEC if stall else None,
+        "improved": improved,
     }
     return make_solution(
         problem,
@@ -571,6 +603,7 @@ __all__ = [
     "BUILD_SECONDS_PER_ARC",
     "LP_SECONDS_PER_ARC",
     "FALLBACK_SEC",
+    "IMPROVE_MIN_SECONDS",
     "LIFTED_FAMILIES",
     "LIFTED_MIN_GAIN",
     "LIFTED_ROUNDS",

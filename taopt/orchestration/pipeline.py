@@ -28,7 +28,14 @@ import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.errors import InstanceError, SolverError, TaoptError
 from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
-from taopt.registry import CATEGORIES, ensure_families, family_of, get_method, methods
+from taopt.registry import (
+    CATEGORIES,
+    ensure_families,
+    family_of,
+    get_method,
+    improver,
+    methods,
+)
 from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
 from taopt.scoring import evaluate
 
@@ -148,6 +155,8 @@ def solve(
     warm_info = None
     if spec.warm_start and spec.accepts("incumbent") and "incumbent" not in kwargs:
         warm_info = _warm_start(problem, spec.warm_start, seed, deadline, kwargs)
+    if spec.category == "exact" and spec.accepts("improve") and "improve" not in kwargs:
+        kwargs["improve"] = improver(problem)  # the family's, registered by a heuristic
     if "time_limit" in kwargs:
         # the method gets what is left: warm start and checks above were on the clock
         kwargs["time_limit"] = max(deadline.remaining() - MARGIN, MIN_SECONDS)
