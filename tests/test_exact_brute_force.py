@@ -218,9 +218,14 @@ def test_issue_15_stalled_loop_falls_back_to_compact_model(monkeypatch, tmp_path
     monkeypatch.setattr(HighsModel, "_consistent", lambda self, run: True)
     path = tmp_path / "issue15.json"
     path.write_text(__import__("json").dumps(ISSUE_15))
-    solution = taopt.solve(taopt.AssignmentProblem.load(path), "exact")
+    problem = taopt.AssignmentProblem.load(path)
+    # without the improver: it would polish MC's start (value 4) to the optimum at once,
+    # and the loop would not stall
+    solution = taopt.solve(problem, "exact", improve=None)
     assert solution.info["fallback"] == "flow"
     assert solution.status == "optimal" and solution.objective == pytest.approx(3.0)
+    improved = taopt.solve(problem, "exact")
+    assert improved.status == "optimal" and improved.objective == pytest.approx(3.0)
 
 
 def test_highs_model_rejects_start_valued_in_presolved_space(tmp_path):
