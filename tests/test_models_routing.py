@@ -351,19 +351,14 @@ def test_separation_is_exact_on_random_fractional_points(seed):
         weights = rng.dirichlet(np.ones(len(chosen)))
         values[chosen] = np.round(weights, 3)
         values[chosen[0]] += 1.0 - values[chosen].sum()
-    violated = []
-    for size in range(2, n + 1):
-        for subset in combinations(range(n), size):
-            inside = np.zeros(n + m, dtype=bool)
-            inside[list(subset)] = True
-            if values[~inside[tails] & inside[heads]].sum() < 1 - CUT_TOLERANCE:
-                violated.append(subset)
+    violated = _violated_subsets(n, m, tails, heads, values, CUT_TOLERANCE)
     found = separate_subtours(problem, tails, heads, values)
     assert bool(found) == bool(violated)
     assert set(found) <= set(violated)
 
 
 def _violated_subsets(n, m, tails, heads, values, tolerance):
+    """Every subset of targets whose (2.5) row σ = ``values`` violates, by brute force."""
     violated = []
     for size in range(2, n + 1):
         for subset in combinations(range(n), size):
