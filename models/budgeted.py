@@ -78,6 +78,7 @@ from taopt.models.routing import (
     separate_subtours,
     solve_routing,
 )
+from taopt.models.routing.dfj import IMPROVE_MIN_SECONDS
 from taopt.registry import register_method
 from taopt.result import INFEASIBLE, Routes, Solution
 from taopt.routing.bounds import arborescence_bound
@@ -788,6 +789,7 @@ def solve_budgeted(
     capacity_cuts: bool = True,
     time_cuts: bool = True,
     lp_start: bool = True,
+    improve: Any = None,
 ) -> Solution:
     """Solve (2.2)–(2.5) with per-vehicle capacity and travel-time limits exactly (HiGHS).
 
@@ -815,6 +817,15 @@ def solve_budgeted(
         the count the time limits force to the capacities' count.
     lp_start : bool
         Build a start from the root LP (Notes).
+    improve : callable, optional
+        ``improve(problem, routes) -> routes`` within every limit and never worse, called on
+        every start before reduced-cost fixing (the better start fixes more arcs) and on
+        each MIP round's best answer; a returned plan outside the limits is a SolverError.
+        :func:`taopt.solve` passes the family's registered improver
+        (:func:`taopt.registry.improver`: the GA's memetic step,
+        :func:`taopt.heuristics.budgeted.improve_budgeted`), as it passes a warm start; not
+        called with less than :data:`~taopt.models.routing.dfj.IMPROVE_MIN_SECONDS` left.
+        ``info["improved"]`` counts the answers it bettered.
 
     Returns
     -------
@@ -828,6 +839,9 @@ def solve_budgeted(
     ------
     InstanceError
         Not a BudgetedProblem, or a non-positive ``time_limit``.
+    SolverError
+        HiGHS returned an unexpected status, or ``improve`` returned routes outside the
+        limits.
 
     Notes
     -----
@@ -895,17 +909,38 @@ def solve_budgeted(
     info["unlimited_optimum"] = free.objective if free.status == "optimal" else None
     if cutoff is not None and best_bound > cutoff:
         return _too_long(problem, best_bound, cutoff, deadline, info)
-    starts = [greedy_budgeted(problem)]
+    improved = 0
+
+    def better(routes: list[list[int]] | None) -> list[list[int]] | None:
+        """``improve(problem, routes)`` if given, time allows and it betters ``routes``."""
+        nonlocal improved
+        left = deadline.remaining()
+        if improve is None or routes is None or (left is not None and left < IMPROVE_MIN_SECONDS):
+            return routes
+        found = [[int(t) for t in route] for route in improve(problem, routes)]
+        broken = violations(problem, found)
+        if broken:
+            raise SolverError(f"improve returned routes outside the limits: {'; '.join(broken)}")
+        if evaluate_budgeted(problem, found) < evaluate_budgeted(problem, routes):
+            improved += 1
+            return found
+        return routes
+
+    def consider_start(routes: list[list[int]] | None) -> None:
+        nonlocal best_routes, best_value
+        routes = better(routes)
+        if routes is not None and evaluate_budgeted(problem, routes) < best_value:
+            best_routes, best_value = routes, evaluate_budgeted(problem, routes)
+
+    consider_start(best_routes)
+    consider_start(greedy_budgeted(problem))
     if free.routes is not None:
-        starts.append(repaired_routes(problem, free.routes))
-    for start in starts:
-        if start is not None and evaluate_budgeted(problem, start) < best_value:
-            best_routes, best_value = start, evaluate_budgeted(problem, start)
+        consider_start(repaired_routes(problem, free.routes))
 
     def stop(stopped_by: str, extra: dict[str, Any]) -> Solution:
         bound = best_bound if best_routes is None else min(best_bound, best_value)
         status, why = certify(best_value, bound, stopped_by)
-        info.update(extra, stopped_by=why, mip_gap=mip_gap)
+        info.update(extra, stopped_by=why, mip_gap=mip_gap, improved=improved)
         return _result(problem, best_routes, status, bound, deadline, info)
 
     if deadline.limited and deadline.remaining() < SECONDS_PER_COLUMN * (n + 1) * n * m:
@@ -961,10 +996,8 @@ def solve_budgeted(
                                time_limit=deadline.share(0.1), max_rounds=50)  # fmt: skip
         start = None if guided.routes is None else repaired_routes(problem, guided.routes)
         if start is not None:
-            value = evaluate_budgeted(problem, start)
-            info["lp_start"] = value
-            if value < best_value:
-                best_routes, best_value = start, value
+            info["lp_start"] = evaluate_budgeted(problem, start)
+            consider_start(start)
     fixed = 0
     if form == "resource" and math.isfinite(root_bound) and best_routes is not None:
         # reduced-cost fixing: a solution using arc a costs at least L + d_a
@@ -1045,9 +1078,8 @@ def solve_budgeted(
         cycles: list[list[int]] = []
         if run.has_point:
             cycles = consider(np.asarray(model.model.highs.getSolution().col_value))
-        for value, routes in candidates:
-            if value < best_value:
-                best_routes, best_value = routes, value
+        if candidates:  # the round's best answer, improved
+            consider_start(min(candidates, key=lambda pair: pair[0])[1])
         model.add_cuts([*map(tuple, cycles), *harvested])
         stopped_by = run.stopped_by
         if (

@@ -19,7 +19,7 @@ from taopt.budgeted.bounds import (
     start_count_bound,
     usable_arcs,
 )
-from taopt.errors import FeasibilityError, InstanceError
+from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.models.budgeted import solve_budgeted
 from taopt.registry import family_of
 
@@ -167,6 +167,37 @@ def test_arc_vehicle_form_agrees(seed):
     assert a.status == b.status
     if a.status == "optimal":
         assert a.objective == pytest.approx(b.objective, rel=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_improver_leaves_the_optimum_and_is_called(seed):
+    """With an improver the exact model gives the optimum it gives without one, and calls it
+    on its starts."""
+    p = random_problem(6, 2, 300 + seed, tight=1.4)
+    calls = []
+
+    def spy(problem, routes):
+        calls.append([list(route) for route in routes])
+        return routes
+
+    plain, spied = solve_budgeted(p), solve_budgeted(p, improve=spy)
+    assert plain.status == spied.status
+    if plain.status == "optimal":
+        assert spied.objective == pytest.approx(plain.objective, rel=1e-9)
+        assert calls and all(violations(p, routes) == [] for routes in calls)
+        assert spied.info["improved"] == 0  # the spy never betters
+
+
+def test_improver_outside_the_limits_is_an_error():
+    """An improver that returns routes breaking a limit is a SolverError naming it."""
+    p = random_problem(6, 2, 301, tight=1.4)
+    assert solve_budgeted(p).status == "optimal"
+
+    def overload(problem, routes):
+        return [[t for route in routes for t in route], *([] for _ in routes[1:])]
+
+    with pytest.raises(SolverError, match="outside the limits: vehicle 0"):
+        solve_budgeted(p, improve=overload)
 
 
 def test_infeasible_is_a_status_not_an_exception():

@@ -12,6 +12,7 @@ from taopt.budgeted import BudgetedProblem, evaluate_budgeted, violations
 from taopt.budgeted.problem import TIME_TOLERANCE
 from taopt.heuristics import budgeted, budgeted_peers, clustering, ga_routing
 from taopt.heuristics.ga_routing import encode
+from taopt.registry import improver
 from taopt.routing.problem import AssignmentProblem
 
 GA_SMALL = {"population": 30, "generations": 40}
@@ -128,6 +129,35 @@ def test_limited_local_search_keeps_limits_and_never_worsens():
         routes, _moves = budgeted.limited_local_search(problem, start.routes)
         assert violations(problem, routes) == []
         assert optimum - 1e-9 <= evaluate_budgeted(problem, routes) <= start.objective + 1e-9
+
+
+def test_improver_keeps_limits_never_worsens_and_is_registered():
+    """The exact model's improver (the GA's memetic step) stays within every limit, is never
+    worse than its input and never better than the optimum; it is the family's improver."""
+    improved = 0
+    for _label, problem, optimum in REFERENCES:
+        assert improver(problem) is budgeted.improve_budgeted
+        start = budgeted.mc(problem)
+        if start.status != "feasible":
+            continue
+        routes = budgeted.improve_budgeted(problem, start.routes)
+        assert violations(problem, routes) == []
+        value = evaluate_budgeted(problem, routes)
+        assert optimum - 1e-9 <= value <= start.objective + 1e-9
+        improved += value < start.objective - 1e-9
+    assert improved  # it does something on the references
+
+
+def test_one_limited_descent_serves_many_starts():
+    """A :class:`LimitedDescent` kept across calls (as the GA keeps one) gives what a fresh
+    :func:`limited_local_search` gives, start after start."""
+    for _label, problem, _optimum in REFERENCES:
+        descent = budgeted.LimitedDescent(problem)
+        for method in (budgeted.mc, budgeted.evm):
+            start = method(problem)
+            if start.status != "feasible":
+                continue
+            assert descent.run(start.routes) == budgeted.limited_local_search(problem, start.routes)
 
 
 def test_mc_refuses_a_vehicle_at_its_capacity():
