@@ -49,6 +49,7 @@ Thesis §2.2.1 (2.2)–(2.5), §6.2.
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from typing import Any
@@ -495,10 +496,13 @@ def time_counts(problem: BudgetedProblem, total: np.ndarray | float) -> np.ndarr
     least ``e_j`` (:func:`entry_times`), so together they take at least ``Σ_{j∈S} e_j``,
     and each takes at most its ``T_k``: S is served by at least this many routes.
     """
-    limits = np.sort(problem.max_time * (1.0 + TIME_TOLERANCE))[::-1]
-    held = np.cumsum(limits)
     total = np.asarray(total, dtype=float)
-    return np.where(total > 0, np.searchsorted(held, total, side="left") + 1, 0)
+    return np.where(total > 0, np.searchsorted(_time_held(problem), total, side="left") + 1, 0)
+
+
+def _time_held(problem: BudgetedProblem) -> np.ndarray:
+    """Cumulative sums of the time limits (with the scorer's tolerance), longest first."""
+    return np.cumsum(np.sort(problem.max_time * (1.0 + TIME_TOLERANCE))[::-1])
 
 
 def separate_capacity(
@@ -539,11 +543,14 @@ def separate_capacity(
     inequalities for the CVRP, here for open routes from distinct start points.
     """
     n = problem.n
-    by_size = route_counts(problem)
+    by_size = route_counts(problem).tolist()
+    held = _time_held(problem).tolist()
     entry = np.zeros(n) if entry is None else np.asarray(entry, dtype=float)
 
     def need(size: int, time_sum: float) -> int:
-        return max(int(by_size[size]), int(time_counts(problem, time_sum)))
+        # time_counts(problem, time_sum) for one number (bisect_left is searchsorted "left")
+        by_time = bisect.bisect_left(held, time_sum) + 1 if time_sum > 0 else 0
+        return max(int(by_size[size]), by_time)
 
     if need(n, float(entry.sum())) < 2:
         return []
