@@ -1040,6 +1040,10 @@ def solve_budgeted(
 
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
     rounds, stopped_by, nodes = 0, "time_limit", 0
+    if best_routes is not None and relative_gap(best_value, min(best_bound, best_value)) <= (
+        target_gap
+    ):  # a start meets the root bound: proven without a MIP
+        return stop("optimal", {"rounds": 0, "cuts": len(model.cuts), "nodes": 0})
     while True:
         left = deadline.remaining()
         if left is not None and left < SECONDS_PER_COLUMN * model.n_columns + HIGHS_OVERRUN:

@@ -797,19 +797,25 @@ class HighsModel:
         try:
             run_interruptibly(highs)  # Ctrl-C: HiGHS stops, then KeyboardInterrupt
             run = _highs_run(highs, is_mip, time_limit)
-            if is_mip and not self._consistent(run):
+            if is_mip and (run.solver_status == "solver_error" or not self._consistent(run)):
                 # HiGHS 1.16 can map a MIP start into its presolved space with the wrong
                 # objective (e.g. "feasible in the reduced space: objective value is 1" for a
                 # start of value 4) and then stop at node 0 calling that start "Optimal",
-                # with objective and dual bound both in the wrong space. Neither number is a
-                # proof, so the same run is done again without presolve, start included.
+                # with objective and dual bound both in the wrong space. And when its
+                # presolve reduces a MIP to nothing, its postsolve can leave violations
+                # ("untransformed violations") and end with a solve error (a 4-target
+                # budgeted model of zero costs). Neither outcome is a proof, so the same run
+                # is done again without presolve, start included.
                 self.reruns += 1
-                logger.info(
-                    "HiGHS reported objective %.10g for a point of value %.10g; solving "
-                    "again without presolve",
-                    run.objective,
-                    self.point_objective(),
-                )
+                if run.solver_status == "solver_error":
+                    logger.info("HiGHS ended with %s; solving again without presolve", run.message)
+                else:
+                    logger.info(
+                        "HiGHS reported objective %.10g for a point of value %.10g; solving "
+                        "again without presolve",
+                        run.objective,
+                        self.point_objective(),
+                    )
                 left = limit - (time.perf_counter() - began)
                 highs.setOptionValue("time_limit", max(left, 1e-3))
                 highs.setOptionValue("presolve", "off")
@@ -820,6 +826,8 @@ class HighsModel:
                 finally:
                     highs.setOptionValue("presolve", "choose")
                 run = _highs_run(highs, is_mip, time_limit)
+                if run.solver_status == "solver_error":
+                    raise SolverError(f"HiGHS ended with {run.message}, also without presolve")
                 if not self._consistent(run):
                     raise SolverError(
                         f"HiGHS reported objective {run.objective} for a point of value "

@@ -1,7 +1,8 @@
 """Every family's exact methods against brute force on seeded random small instances.
 
-DESIGN invariant 4: without a time limit an exact method ends "optimal" (here every instance
-is feasible), with the brute-force value. The default run checks a few hundred instances; the
+DESIGN invariant 4: without a time limit an exact method ends "optimal" with the brute-force
+value (every instance is feasible but the budgeted family's, whose limits may admit no
+assignment: then "infeasible", proven). The default run checks a few hundred instances; the
 ``slow`` run checks more than 2,000 (``pytest -m slow tests/test_exact_brute_force.py``).
 Generators favour the cases that broke the DFJ loop: asymmetric costs, zero and equal costs,
 1–7 vehicles.
@@ -16,9 +17,11 @@ import networkx as nx
 import numpy as np
 import pytest
 from reference import brute_force_delivery, brute_force_routing
+from reference_budgeted import brute_force_budgeted
 from test_models_routing import dp_optimum
 
 import taopt
+from taopt.budgeted import BudgetedProblem
 from taopt.comm.problem import random_problem
 
 REL = 1e-6
@@ -123,12 +126,40 @@ def comm_brute_force(problem: taopt.CommProblem) -> float:
     return sum(dp_optimum(c.problem) for c in classes if c.problem)
 
 
+def budgeted_instance(seed: int) -> BudgetedProblem:
+    """§6.2: 2–6 targets, 1–3 vehicles, the three cost kinds; per vehicle a capacity and a
+    time limit around its share of the targets (or none), so that on some instances a limit
+    binds and on some no assignment meets the limits."""
+    rng = np.random.default_rng([20, seed])
+    n, m = int(rng.integers(2, 7)), int(rng.integers(1, 4))
+    cost = _costs(rng, n + m, seed % 3)
+    leg = float(np.median(cost)) + 1.0
+    share = n / m
+    capacity = [
+        max(1, math.ceil(share * rng.uniform(0.5, 1.5))) if rng.random() < 0.8 else None
+        for _ in range(m)
+    ]
+    max_time = [
+        float(leg * share * rng.uniform(0.3, 1.2)) if rng.random() < 0.7 else None for _ in range(m)
+    ]
+    return BudgetedProblem(cost, n, capacity, max_time, name=f"budgeted-{seed}")
+
+
 # -------------------------------------------------------------------------- checking
 def _failures(cases, method: str) -> list[str]:
-    """Run ``method`` without a time limit on each (problem, optimum); describe every miss."""
+    """Run ``method`` without a time limit on each (problem, optimum); describe every miss.
+    An infinite optimum (no assignment within a family's limits) must be status
+    "infeasible" with no answer."""
     failures = []
     for problem, optimum in cases:
         solution = taopt.solve(problem, method)
+        if math.isinf(optimum):
+            if solution.status != "infeasible" or solution.solution is not None:
+                failures.append(
+                    f"{problem.name}: {solution.status} {solution.objective}, brute force: "
+                    "no assignment within the limits"
+                )
+            continue
         value = taopt.evaluate(problem, solution.solution)
         tolerance = REL * max(1.0, abs(optimum))
         if (
@@ -169,9 +200,23 @@ def _comm_cases(seeds):
     return [(p, comm_brute_force(p)) for p in map(comm_instance, seeds)]
 
 
-# default run: 100 + 30 + 10 + 40 + 20 + 10 + 20 = 230 instances
-FAST = {"routing": 100, "dp": 30, "milp": 10, "sop": 40, "capability": 20, "joint": 10, "comm": 20}
-# slow run: 1,200 + 250 + 60 + 250 + 150 + 60 + 100 = 2,070 instances (seeds disjoint from FAST)
+def _budgeted_cases(seeds):
+    return [(p, brute_force_budgeted(p)) for p in map(budgeted_instance, seeds)]
+
+
+# default run: 100 + 30 + 10 + 40 + 20 + 10 + 20 + 40 = 270 instances
+FAST = {
+    "routing": 100,
+    "dp": 30,
+    "milp": 10,
+    "sop": 40,
+    "capability": 20,
+    "joint": 10,
+    "comm": 20,
+    "budgeted": 40,
+}
+# slow run: 1,200 + 250 + 60 + 250 + 150 + 60 + 100 + 600 = 2,670 instances (seeds disjoint
+# from FAST)
 SLOW = {
     "routing": 1200,
     "dp": 250,
@@ -180,6 +225,7 @@ SLOW = {
     "capability": 150,
     "joint": 60,
     "comm": 100,
+    "budgeted": 600,
 }
 
 
@@ -196,6 +242,8 @@ def _run_family(family: str, seeds) -> list[str]:
         return _failures(_capability_cases(seeds), "exact")
     if family == "joint":
         return _failures(_capability_cases(seeds), "joint")
+    if family == "budgeted":
+        return _failures(_budgeted_cases(seeds), "exact")
     return _failures(_comm_cases(seeds), "exact")
 
 
@@ -247,6 +295,37 @@ def test_highs_model_rejects_start_valued_in_presolved_space(tmp_path):
     assert run.objective == pytest.approx(dfj.model.point_objective()) == pytest.approx(3.0)
 
 
+def test_highs_model_solves_again_after_a_solve_error(monkeypatch, tmp_path):
+    """A MIP run that ends in a HiGHS solve error (HiGHS 1.16 after presolving a budgeted
+    model of zero costs to nothing, budgeted instance 593) is run again without presolve;
+    a second solve error is a SolverError, never a status."""
+    import dataclasses
+
+    from taopt.errors import SolverError
+    from taopt.models import highs
+    from taopt.models.routing import DfjModel
+
+    path = tmp_path / "issue15.json"
+    path.write_text(__import__("json").dumps(ISSUE_15))
+    dfj = DfjModel(taopt.AssignmentProblem.load(path))
+    real = highs._highs_run
+    failing = {"left": 1}
+
+    def first_fails(highs_, is_mip, time_limit):
+        run = real(highs_, is_mip, time_limit)
+        if failing["left"] > 0:
+            failing["left"] -= 1
+            return dataclasses.replace(run, solver_status="solver_error", message="kSolveError")
+        return run
+
+    monkeypatch.setattr(highs, "_highs_run", first_fails)
+    run = dfj.model.solve(mip_rel_gap=1e-6)
+    assert dfj.model.reruns == 1 and run.solver_status == "optimal"
+    failing["left"] = 2
+    with pytest.raises(SolverError, match="also without presolve"):
+        dfj.model.solve(mip_rel_gap=1e-6)
+
+
 @pytest.mark.parametrize("family", sorted(FAST))
 def test_exact_equals_brute_force(family):
     """Exact method of each family: optimal with the brute-force value on every instance."""
@@ -257,7 +336,7 @@ def test_exact_equals_brute_force(family):
 @pytest.mark.slow
 @pytest.mark.parametrize("family", sorted(SLOW))
 def test_exact_equals_brute_force_on_two_thousand(family):
-    """The same on 2,070 more instances in all (seeds after the default run's)."""
+    """The same on 2,670 more instances in all (seeds after the default run's)."""
     seeds = range(FAST[family], FAST[family] + SLOW[family])
     failures = _run_family(family, seeds)
     assert not failures, f"{len(failures)} of {SLOW[family]}:\n" + "\n".join(failures[:10])
@@ -271,6 +350,13 @@ def test_generators_cover_the_hard_cases():
     assert any(len(np.unique(p.cost)) <= 4 for p in problems)
     assert any(sop_instance(s).precedences for s in range(10))
     assert nx.is_directed_acyclic_graph(delivery_instance(0, 5).precedence_graph)
+    budgeted = [budgeted_instance(s) for s in range(FAST["budgeted"])]
+    optima = [brute_force_budgeted(p) for p in budgeted]
+    assert any(math.isinf(o) for o in optima)  # no assignment within the limits
+    assert any(  # a limit binds: the optimum is above the unlimited one
+        math.isfinite(o) and o > dp_optimum(p.routing) + 1e-9
+        for p, o in zip(budgeted, optima, strict=True)
+    )
 
 
 def test_study_flags_uncertified_exact_rows(caplog):
