@@ -54,6 +54,9 @@ WARM_START_SHARE = 0.25
 #: Seconds a method keeps in hand for what follows its last check (decoding, scoring).
 MARGIN = 0.05
 
+#: The least budget :meth:`Deadline.share` hands out (seconds).
+MIN_SHARE = 1e-3
+
 #: Bytes per ordered pair of points when a travel-time matrix is built by navigation: the
 #: float64 matrix and the vectorised solvers' work arrays (an instance of 10,000 targets
 #: failed at 7.6 GB, about 76 bytes per pair).
@@ -99,9 +102,12 @@ class Deadline:
         return time.perf_counter() + margin >= self.end
 
     def share(self, fraction: float) -> float | None:
-        """``fraction`` of the remaining seconds (None without a limit)."""
+        """``fraction`` of the remaining seconds, at least :data:`MIN_SHARE` (None without a
+        limit): a stage started once the time is spent gets the least positive limit, which
+        every solver here accepts and stops on at once (a limit of 0 is refused as bad
+        input, and a time-limited run must end with a status, never an exception)."""
         left = self.remaining()
-        return None if left is None else left * fraction
+        return None if left is None else max(left * fraction, MIN_SHARE)
 
     def __repr__(self) -> str:
         return f"Deadline({self.seconds!r}, remaining={self.remaining()!r})"
@@ -216,6 +222,7 @@ __all__ = [
     "MEMORY_ENV",
     "WARM_START_SHARE",
     "MARGIN",
+    "MIN_SHARE",
     "Deadline",
     "max_memory_gb",
     "check_memory",

@@ -21,6 +21,7 @@ from taopt.errors import InstanceError
 from taopt.limits import (
     DEFAULT_MAX_MEMORY_GB,
     MEMORY_ENV,
+    MIN_SHARE,
     Deadline,
     check_footprint,
     check_memory,
@@ -89,6 +90,32 @@ def test_deadline_counts_down_and_none_is_unlimited():
     assert d.remaining() == 0.0 and d.expired()
     unlimited = Deadline(None)
     assert unlimited.remaining() is None and not unlimited.expired() and not unlimited.limited
+
+
+def test_a_share_of_a_spent_deadline_is_still_a_valid_limit():
+    """Once the time is spent a share is MIN_SHARE, which every solver takes as a limit."""
+    d = Deadline(0.01)
+    assert 0 < d.share(0.5) <= 0.005
+    time.sleep(0.02)
+    assert d.share(0.2) == MIN_SHARE > 0 and Deadline(None).share(0.5) is None
+
+
+@pytest.mark.parametrize("time_limit", [0.001, 0.01, 0.05])
+def test_budgeted_exact_under_a_spent_limit(time_limit):
+    """The budgeted model's sub-solves get a positive share when the warm start and the
+    bounds have used the whole limit (60 targets: it raised "time_limit must be positive,
+    got 0.0" before)."""
+    from taopt.budgeted import BudgetedProblem
+
+    n, m = 60, 5
+    cost = np.random.default_rng(103).uniform(0.0, 100.0, size=(n + m, n + m))
+    problem = BudgetedProblem(cost, n, capacity=[15] * m, max_time=[900.0] * (m - 1) + [None])
+    result, elapsed = timed(problem, "exact", time_limit)
+    assert result.status in (TIME_LIMIT, OPTIMAL)
+    assert elapsed < time_limit + SLACK
+    if result.solution is not None:
+        assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+        assert result.bound is None or result.bound <= result.objective + 1e-9
 
 
 def test_solve_rejects_a_bad_time_limit():
