@@ -150,8 +150,9 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     a "Load" dimension (demand 1 per target, capacity Q_k) and a "Time" dimension
     (transit = travel time, capacity T_k, no slack; the free arc into the dummy end makes
     the cumul at a vehicle's end its route's travel time). When the first-solution
-    strategy finds nothing under limits, the reply has ``routes = None`` and
-    ``solver_feasible = False`` instead of raising.
+    strategy finds nothing under limits, or the time limit ends the search before a first
+    solution, the reply has ``routes = None`` and ``solver_feasible = False`` instead of
+    raising.
     """
     from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
@@ -191,7 +192,9 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     started = time.perf_counter()
     assignment = routing.SolveWithParameters(params)
     runtime = time.perf_counter() - started
-    if assignment is None and limited:
+    if assignment is None and (limited or options.get("time_limit") is not None):
+        # nothing within the limits, or the time ran out before a first solution: an
+        # outcome of the run (status "no_solution" in taopt), not a failure
         return {
             "routes": None,
             "objective": None,

@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import atexit
 import importlib.util
+import math
 import os
 import pickle
 import queue
@@ -81,7 +82,15 @@ import numpy as np
 
 from taopt.errors import InstanceError, SolverError, require
 from taopt.registry import register_method
-from taopt.result import FEASIBLE, INFEASIBLE, Order, Routes, Solution, make_solution
+from taopt.result import (
+    FEASIBLE,
+    INFEASIBLE,
+    NO_SOLUTION,
+    Order,
+    Routes,
+    Solution,
+    make_solution,
+)
 from taopt.routing.problem import AssignmentProblem
 from taopt.sop.problem import SopProblem
 from taopt.status import outcome
@@ -306,6 +315,14 @@ def _solve(
         **{key: value for key, value in options.items() if key != "seed"},
         **{key: value for key, value in reply.items() if key != "routes"},
     }
+    if reply["routes"] is None:  # the time limit ended the search before a first solution
+        info["error"] = (
+            f"{peer} found no route set within time_limit = {options.get('time_limit')} s "
+            f"(routing status {reply.get('routing_status')}); not a proof that none exists"
+        )
+        return Solution(
+            math.inf, NO_SOLUTION, None, runtime=runtime, method=peer, seed=int(seed), info=info
+        )
     try:  # the one scorer, once (taopt.solve does not score it again)
         return make_solution(
             problem,
@@ -444,7 +461,9 @@ def ortools_solve(
         Status "feasible" (no bound), method "ortools", ``routes``,
         ``objective = taopt.evaluate(routes)``; ``info`` has
         ``solver_objective``, ``scale``, ``routing_status``,
-        ``solver_runtime``, ``startup`` and ``version``.
+        ``solver_runtime``, ``startup`` and ``version``. Status "no_solution"
+        (``objective = inf``, no routes, ``info["error"]``) when the time limit
+        ends the search before OR-Tools' first solution (e.g. 1 ms).
 
     Raises
     ------

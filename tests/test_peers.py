@@ -285,6 +285,21 @@ def test_solver_failure_names_the_peer(ref_routing_quick_tour):
         ortools_solve(ref_routing_quick_tour.problem, metaheuristic="NOPE")
 
 
+def test_a_time_limit_before_the_first_solution_is_a_status():
+    """OR-Tools stopped by a 1 ms limit before its first route set gives status no_solution
+    (objective inf, the reason in info["error"]), not an exception; given more time, it
+    answers."""
+    rng = np.random.default_rng(4)
+    problem = taopt.AssignmentProblem(rng.uniform(1.0, 100.0, size=(70, 70)), 60)
+    stopped = taopt.solve(problem, "ortools", time_limit=0.001)
+    if stopped.status == "no_solution":
+        assert stopped.solution is None and math.isinf(stopped.objective)
+        assert "no route set within time_limit" in stopped.info["error"]
+    else:  # a machine fast enough to find one in 1 ms: then it is a checked answer
+        assert taopt.evaluate(problem, stopped.solution) == pytest.approx(stopped.objective)
+    assert taopt.solve(problem, "ortools", time_limit=0.5).status == "feasible"
+
+
 @pytest.mark.parametrize(
     "call, match",
     [
