@@ -13,7 +13,15 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "taopt" / "data" / "examples"
 
 
 @pytest.mark.parametrize(
-    "kind", ["assignment_problem", "delivery_instance", "sop_problem", "comm_problem"]
+    "kind",
+    [
+        "assignment_problem",
+        "delivery_instance",
+        "sop_problem",
+        "comm_problem",
+        "capability_problem",
+        "budgeted_problem",
+    ],
 )
 def test_saved_solutions_verify(tmp_path, kind, capsys):
     """Every solution `taopt solve --out` writes passes `taopt verify --exact`."""
@@ -24,6 +32,13 @@ def test_saved_solutions_verify(tmp_path, kind, capsys):
     for path in saved:
         assert main(["verify", str(path), str(problem), "--exact"]) == 0, path.name
     assert "NOT VALID" not in capsys.readouterr().out
+
+
+def test_swapped_arguments_say_the_order(capsys):
+    """`taopt verify PROBLEM SOLUTION` (swapped) is exit 2 with the right order named."""
+    problem, solution = EXAMPLES / "assignment_problem.json", EXAMPLES / "solution.json"
+    assert main(["verify", str(problem), str(solution)]) == 2
+    assert "takes the solution first, then the problem" in capsys.readouterr().err
 
 
 def test_tampered_solutions_fail(tmp_path, capsys):

@@ -95,6 +95,11 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
             )
         instance = Instance.from_dict(data, source=str(path))
         return problem_from_instance(instance, progress=progress), instance
+    if data.get("kind") == "solution":  # e.g. `taopt verify PROBLEM SOLUTION`, swapped
+        raise InstanceError(
+            f"{path} is a solution file (kind 'solution'), not a problem; `taopt verify` takes "
+            "the solution first, then the problem it solves"
+        )
     family = family_for_kind(data.get("kind"))
     with naming(str(path)):  # the schema's and the constructor's errors name the file
         return family.load(data), None
