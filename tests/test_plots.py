@@ -325,6 +325,10 @@ def test_solve_prints_the_plotted_routes_with_the_plotted_ids(tmp_path, capsys):
             "--gantt draws a Gantt chart of a delivery_instance only",
         ),
         (["simulate", "comm_problem.json", "--animate", "x.mp4"], "must end in .gif"),
+        (
+            ["simulate", "comm_problem.json", "--animate", "x.gif", "--frames", "0"],
+            "an animation needs frames >= 2",
+        ),
         (["simulate", "comm_problem.json", "--plot", "x.pdf"], "must end in .png"),
         (["demo", "--plot", "x.jpeg"], "must end in .png"),
     ],

@@ -14,6 +14,7 @@ import numpy as np
 
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories
+from taopt.errors import InstanceError
 from taopt.plot import LINESTYLES, legend_outside, method_style
 
 _MARKERS = "so^DvP*Xhp<>"
@@ -188,6 +189,16 @@ def plot_pair(
     return fig
 
 
+def check_frames(frames: Any, fps: Any = 12) -> None:
+    """InstanceError unless ``frames`` is an integer >= 2 and ``fps`` one >= 1 (a GIF of
+    one frame is no animation, and matplotlib fails on none)."""
+    for label, value, least in (("frames", frames, 2), ("fps", fps, 1)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+            raise InstanceError(
+                f"an animation needs {label} >= {least} (an integer), got {value!r}"
+            )
+
+
 def animate_run(
     problem: CommProblem,
     solution: Any,
@@ -204,10 +215,16 @@ def animate_run(
     Returns
     -------
     matplotlib.animation.FuncAnimation
+
+    Raises
+    ------
+    InstanceError
+        ``frames`` below 2 or ``fps`` below 1 (checked before anything is drawn or written).
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 
+    check_frames(frames, fps)
     tr = _payload(solution)
     name = getattr(solution, "method", "") or "run"
     end = max(tr.end_time, 1e-9)
@@ -292,4 +309,11 @@ def plot_range_curves(
     return ax
 
 
-__all__ = ["plot_points", "plot_run", "plot_pair", "animate_run", "plot_range_curves"]
+__all__ = [
+    "plot_points",
+    "plot_run",
+    "plot_pair",
+    "animate_run",
+    "check_frames",
+    "plot_range_curves",
+]

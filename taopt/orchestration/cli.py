@@ -239,9 +239,11 @@ def cmd_claims(args: argparse.Namespace) -> int:
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Body of ``taopt simulate FILE``: one chapter 4 run, its bytes, routes and pictures."""
     from taopt.comm import CommProblem
-    from taopt.comm.plot import animate_run, plot_run
+    from taopt.comm.plot import animate_run, check_frames, plot_run
     from taopt.orchestration.pipeline import solve
 
+    if args.animate:
+        check_frames(args.frames)  # before the run: nothing printed or written on bad input
     problem = CommProblem.load(args.file)
     if args.range is not None:
         problem = problem.replace(comm_range=args.range)
