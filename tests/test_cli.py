@@ -68,6 +68,20 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     assert len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["demo", "--seed", "-3"], "--seed: expected an integer in [0, 2**32), got '-3'"),
+        (["claims", "--seed", "x"], "--seed: expected an integer, got 'x'"),
+    ],
+)
+def test_a_bad_seed_is_refused_before_any_work(capsys, argv, message):
+    """A seed numpy would refuse inside each method (rows of "error") is an argument error."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
 def test_argparse_errors_exit_2(capsys):
     assert main(["bogus"]) == 2
     assert main(["navigate", "--to", "1,2"]) == 2

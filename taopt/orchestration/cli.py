@@ -334,6 +334,17 @@ def _seconds(text: str) -> float | None:
     return value
 
 
+def _seed(text: str) -> int:
+    """``--seed`` value: an integer in [0, 2**32) (numpy's and the peers' seed range)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"expected an integer in [0, 2**32), got {text!r}")
+    return value
+
+
 def add_subcommand(parent: Any, name: str, handler: Any, help_text: str) -> argparse.ArgumentParser:
     """A subcommand of ``parent`` (a subparsers group) handled by ``handler(args) -> int``.
 
@@ -356,7 +367,7 @@ def add_subcommand(parent: Any, name: str, handler: Any, help_text: str) -> argp
 def _common(parser: argparse.ArgumentParser, *names: str) -> None:
     """The shared flags, with the same names, meanings, defaults and help everywhere."""
     if "seed" in names:
-        parser.add_argument("--seed", type=int, default=SEED, help="seed of randomised methods")
+        parser.add_argument("--seed", type=_seed, default=SEED, help="seed of randomised methods")
     if "methods" in names:
         parser.add_argument(
             "--methods",
