@@ -918,26 +918,26 @@ def solve_budgeted(
         return _too_long(problem, best_bound, cutoff, deadline, info)
     improved = 0
 
-    def better(routes: list[list[int]] | None) -> list[list[int]] | None:
-        """``improve(problem, routes)`` if given, time allows and it betters ``routes``."""
-        nonlocal improved
-        left = deadline.remaining()
-        if improve is None or routes is None or (left is not None and left < IMPROVE_MIN_SECONDS):
-            return routes
-        found = [[int(t) for t in route] for route in improve(problem, routes)]
-        broken = violations(problem, found)
-        if broken:
-            raise SolverError(f"improve returned routes outside the limits: {'; '.join(broken)}")
-        if evaluate_budgeted(problem, found) < evaluate_budgeted(problem, routes):
-            improved += 1
-            return found
-        return routes
-
     def consider_start(routes: list[list[int]] | None) -> None:
-        nonlocal best_routes, best_value
-        routes = better(routes)
-        if routes is not None and evaluate_budgeted(problem, routes) < best_value:
-            best_routes, best_value = routes, evaluate_budgeted(problem, routes)
+        """Keep ``routes`` if it beats the incumbent, after ``improve`` (when given and time
+        allows); each plan is scored once."""
+        nonlocal best_routes, best_value, improved
+        if routes is None:
+            return
+        value = evaluate_budgeted(problem, routes)
+        left = deadline.remaining()
+        if improve is not None and (left is None or left >= IMPROVE_MIN_SECONDS):
+            found = [[int(t) for t in route] for route in improve(problem, routes)]
+            broken = violations(problem, found)
+            if broken:
+                raise SolverError(
+                    f"improve returned routes outside the limits: {'; '.join(broken)}"
+                )
+            found_value = evaluate_budgeted(problem, found)
+            if found_value < value:
+                routes, value, improved = found, found_value, improved + 1
+        if value < best_value:
+            best_routes, best_value = routes, value
 
     consider_start(best_routes)
     consider_start(greedy_budgeted(problem))
