@@ -156,37 +156,39 @@ def limited_marginal_cost_routes(
     -----
     As chapter 2's MC (:func:`taopt.heuristics.clustering.marginal_cost_routes`): the
     cheapest feasible insertion of every target into every route is kept in ``best`` (m, n)
-    and only the row of the vehicle that changed is recomputed, O(|o_j| n) per step,
-    O(n^2 max|o_j|) in all. The gap is the cheapest *feasible* one, which may not be the
+    and only the row of the vehicle that changed is recomputed, over the targets still
+    open: O(|o_j| r) per step with r of them, O(n^2 max|o_j|) in all (a repair, which
+    re-inserts the few targets it cut off, pays only for those). The gap is the cheapest *feasible* one, which may not be the
     cheapest one. A vehicle's insertions only get dearer as its route grows (in a metric),
     so a refusal is never revisited wrongly: the row is recomputed after every change.
     Ties: lowest target, then lowest vehicle, then earliest gap (as chapter 2's MC).
     """
     n, m = problem.n, problem.m
     cost = problem.cost
-    all_targets = np.arange(n)
     capacity, max_time = problem.capacity, problem.max_time
     initial = initial if initial is not None else [[] for _ in range(m)]
     routes = [np.array([n + j, *initial[j]], dtype=int) for j in range(m)]
     times = np.array([problem.route_cost(j, initial[j]) for j in range(m)])
     best = np.full((m, n), np.inf)
     where = np.zeros((m, n), dtype=int)
+    done = np.zeros(n, dtype=bool)
+    done[[k for route in initial for k in route]] = True
 
     def refresh(j: int) -> None:
+        best[j] = np.inf  # a served target's entries are never read (masked below)
         if routes[j].size - 1 + 1 > capacity[j]:
-            best[j] = np.inf
             return
-        costs = insertion_costs(cost, routes[j], all_targets)  # (L, n)
+        open_targets = np.flatnonzero(~done)
+        costs = insertion_costs(cost, routes[j], open_targets)  # (L, open targets)
         if math.isfinite(max_time[j]):
             limit = max_time[j] + SLACK * max(1.0, max_time[j])
             costs = np.where(times[j] + costs <= limit, costs, np.inf)
-        where[j] = np.argmin(costs, axis=0)  # earliest feasible gap on ties
-        best[j] = costs[where[j], all_targets]
+        gaps = np.argmin(costs, axis=0)  # earliest feasible gap on ties
+        where[j, open_targets] = gaps
+        best[j, open_targets] = costs[gaps, np.arange(open_targets.size)]
 
     for j in range(m):
         refresh(j)
-    done = np.zeros(n, dtype=bool)
-    done[[k for route in initial for k in route]] = True
     for _ in range(int((~done).sum())):
         if deadline is not None and deadline.expired():
             break
