@@ -44,6 +44,7 @@ from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import insertion_costs, marginal_cost_sequence
 from taopt.heuristics.ga_local_search import local_search
+from taopt.heuristics.ga_penalised_search import PenalisedSearch
 from taopt.heuristics.ga_routing import (
     OPERATOR_SETS,
     _mutate,
@@ -62,6 +63,9 @@ from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
 
 #: Relative slack of the heuristics' own travel-time check (stricter than the scorer's).
 SLACK = 1e-9
+
+#: The GA's memetic steps under limits (:func:`genetic_algorithm`, ``memetic``).
+MEMETIC_STEPS = ("penalised", "chapter2")
 
 __all__ = [
     "limited_marginal_cost_routes",
@@ -375,7 +379,10 @@ def improve_budgeted(problem: BudgetedProblem, routes: list[list[int]]) -> list[
 
     The improver of the exact model (:func:`taopt.models.budgeted.solve_budgeted` takes it
     as ``improve``; :func:`taopt.solve` passes it, the model imports no heuristic). The
-    better of two candidates, as :func:`genetic_algorithm` polishes a child: chapter 2's
+    better of two candidates, as :func:`genetic_algorithm` polishes a child with
+    ``memetic="chapter2"`` (a penalised-search candidate added to these made no difference
+    to the exact model's time at n50m10 mid tightness, scenarios 0–4: median 1.89 s
+    against 2.26 s, within this machine's noise, every optimum equal): chapter 2's
     local search (limits ignored, :func:`~taopt.heuristics.ga_routing.improve_routes`),
     :func:`repair`, then :func:`limited_local_search`; and :func:`limited_local_search`
     from ``routes`` itself. A few milliseconds at n50m10.
@@ -647,6 +654,7 @@ def genetic_algorithm(
     mutation_rate: float = 0.1,
     penalty: float = 10.0,
     time_limit: float | None = None,
+    memetic: str = "penalised",
 ) -> Solution:
     """The memetic GA of §2.5 with a penalty for violated limits.
 
@@ -664,17 +672,28 @@ def genetic_algorithm(
     limits bite (with ``Q_k = n / m`` exactly, random chromosomes almost never have the
     right route lengths: none in 100 generations on a drift n50m10 scenario), and chapter
     2's local search, which minimises (2.2) and ignores the limits, walks straight out of
-    it. So the memetic step makes two candidates from each of the 2 best distinct
-    children: chapter 2's local search then :func:`repair` (cut each route to its longest
-    prefix within limits, re-insert the rest by the limit-aware cheapest insertion) then
-    :func:`limited_local_search` (relocations and exchanges that keep every limit), and the
-    child itself repaired then :func:`limited_local_search`; the better replaces the child
-    when the *penalised* fitness improves. The population is kept free of clones (chapter
-    2's ``distinct`` option), without which it collapsed onto one infeasible chromosome on
-    a 6-target instance. Without limits the memetic step is chapter 2's alone. Measured on
-    the drift n50m10 scenario of seed 7 with ``Q = 5``: 8279 with the penalty and repair
-    only, 7518 with the limit-aware descent after the repair, 6630 with both candidates
-    (PyVRP, 2 s: 6139). The answer is the best *feasible*
+    it. So the memetic step (``memetic="penalised"``, the default) polishes each of the 2
+    best distinct children with the **penalised local search**
+    (:class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch`: chapter 2's moves that
+    keep the route starts in place, each priced by its exact change of the penalised
+    fitness), then, if a limit is still broken, :func:`repair` (cut each route to its
+    longest prefix within limits, re-insert the rest by the limit-aware cheapest
+    insertion), then :func:`limited_local_search` (relocations and exchanges that keep every
+    limit); the result replaces the child when the *penalised* fitness improves. The
+    population is kept free of clones (chapter 2's ``distinct`` option), without which it
+    collapsed onto one infeasible chromosome on a 6-target instance. Without limits the
+    memetic step is chapter 2's alone.
+
+    ``memetic="chapter2"`` is the step this GA had first: two candidates per child, chapter
+    2's local search (limits ignored) then the repair then the limit-aware descent, and the
+    child itself repaired then the descent; the better one is kept. Measured on the drift
+    n50m10 scenario of seed 7 with ``Q = 5``: 8279 with the penalty and repair only, 7518
+    with the limit-aware descent after the repair, 6630 with both candidates (PyVRP, 2 s:
+    6139). The penalised search replaced it (2026-11-26) because chapter 2's search spent
+    most of the time walking to the unconstrained optimum that the repair then cut back:
+    on the chapter-6 study's n50m10 scenarios 0–4 (study seeds, same run) it gives answers
+    0.5–3.0 % lower on average at Q2–Q1, the same at T1–T0.6, in less time at the
+    capacity levels (``docs/reproduction/chapter6.md``). The answer is the best *feasible*
     chromosome ever seen (not the best penalised one).
 
     Parameters
@@ -690,6 +709,8 @@ def genetic_algorithm(
     time_limit : float, optional
         Wall-clock seconds; the run stops after the generation during which it expires
         (``info["stopped_by"] = "time_limit"``).
+    memetic : {"penalised", "chapter2"}
+        The memetic step under limits (above); ``info["memetic"]``.
 
     Returns
     -------
@@ -699,12 +720,13 @@ def genetic_algorithm(
         ``history`` (best feasible cost per generation, ``inf`` until one is found),
         ``first_feasible`` (generation of the first feasible chromosome), ``evaluations``,
         ``moves``, ``repairs`` (repairs tried), ``repaired`` (repairs that succeeded),
-        ``penalty``, ``unit``.
+        ``penalty``, ``unit``, ``memetic``.
 
     Raises
     ------
     InstanceError
-        population < 2, generations < 0, a rate outside [0, 1], or a negative penalty.
+        population < 2, generations < 0, a rate outside [0, 1], a negative penalty, or an
+        unknown memetic step.
 
     Notes
     -----
@@ -740,6 +762,8 @@ def genetic_algorithm(
             raise InstanceError(f"{label} must be in [0, 1], got {rate}")
     if not (math.isfinite(penalty) and penalty >= 0):
         raise InstanceError(f"penalty must be a number >= 0, got {penalty}")
+    if memetic not in MEMETIC_STEPS:
+        raise InstanceError(f"memetic must be one of {MEMETIC_STEPS}, got {memetic!r}")
     start = time.perf_counter()
     deadline = Deadline(time_limit)
     ops = OPERATOR_SETS["memetic"]
@@ -750,6 +774,7 @@ def genetic_algorithm(
     unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
     matrix = path_matrix(problem.routing)
     descent = LimitedDescent(problem)
+    penalised = PenalisedSearch(problem, penalty, unit) if memetic == "penalised" else None
     counters = {
         "moves": 0,
         "move_evaluations": 0,
@@ -803,8 +828,8 @@ def genetic_algorithm(
         genes = children
         fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
         _polish(
-            problem, (matrix, descent), genes, fitness, plain, violation, penalty, unit, ops,
-            counters, memo,
+            problem, (matrix, descent, penalised), genes, fitness, plain, violation, penalty,
+            unit, ops, counters, memo,
         )  # fmt: skip
         elite = genes[int(np.argmin(fitness))].copy()
         keep_feasible(generation)
@@ -817,6 +842,7 @@ def genetic_algorithm(
         "evaluations": population * (done + 1),
         "penalty": penalty,
         "unit": unit,
+        "memetic": memetic,
         **counters,
     }
     if done < generations:
@@ -833,7 +859,7 @@ def genetic_algorithm(
 
 def _polish(
     problem: BudgetedProblem,
-    searches: tuple[np.ndarray, LimitedDescent],
+    searches: tuple[np.ndarray, LimitedDescent, PenalisedSearch | None],
     genes: np.ndarray,
     fitness: np.ndarray,
     plain: np.ndarray,
@@ -844,12 +870,17 @@ def _polish(
     counters: dict[str, int],
     memo: dict[Any, Any],
 ) -> None:
-    """On the best distinct children: two candidates, chapter 2's local search then
-    :func:`repair` then :func:`limited_local_search`, and the child itself repaired then
-    :func:`limited_local_search`; the better replaces the child where the penalised fitness
-    improves (in place). Without limits: chapter 2's local search only. ``searches``: the
-    path matrix of chapter 2's local search and the run's :class:`LimitedDescent`."""
-    matrix, descent = searches
+    """On the best distinct children, in place, where the penalised fitness improves.
+
+    With ``memetic="penalised"`` (``searches[2]`` set): the penalised local search
+    (:class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch`), then :func:`repair`
+    if a limit is still broken, then :func:`limited_local_search`. With "chapter2": the
+    better of two candidates, chapter 2's local search then :func:`repair` then
+    :func:`limited_local_search`, and the child itself repaired then
+    :func:`limited_local_search`. Without limits: chapter 2's local search only.
+    ``searches``: the path matrix, the run's :class:`LimitedDescent` and its
+    :class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch` (or None)."""
+    matrix, descent, penalised = searches
     values, first = np.unique(fitness, return_index=True)
     limited = problem.has_capacity or problem.has_max_time
     for row in [int(r) for r in first[: ops.polish]]:
@@ -861,13 +892,16 @@ def _polish(
                 genes[row] = best[0]
                 fitness[row], plain[row], violation[row] = best[1], best[2], best[3]
             continue
-        nodes, moves, evaluations = local_search(
-            matrix, path_nodes(problem.routing, genes[row])[0], ops.max_moves, ops.neighbourhood
-        )
+        path = path_nodes(problem.routing, genes[row])[0]
+        if limited and penalised is not None:  # one candidate: the penalised search's
+            nodes, moves = penalised.run(matrix, path, ops.max_moves)
+            starts: tuple[np.ndarray, ...] = (nodes_to_genes(problem.routing, nodes),)
+        else:
+            nodes, moves, evaluations = local_search(matrix, path, ops.max_moves, ops.neighbourhood)
+            counters["move_evaluations"] += evaluations
+            starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
         counters["moves"] += moves
-        counters["move_evaluations"] += evaluations
         best = None
-        starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
         if not limited:  # no limit: chapter 2's memetic step exactly
             candidate = nodes_to_genes(problem.routing, nodes)
             value, total, over = penalised_cost(problem, candidate, penalty, unit)

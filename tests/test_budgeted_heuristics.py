@@ -10,6 +10,7 @@ import pytest
 
 from taopt.budgeted import BudgetedProblem, evaluate_budgeted, violations
 from taopt.budgeted.problem import TIME_TOLERANCE
+from taopt.errors import InstanceError
 from taopt.heuristics import budgeted, budgeted_peers, clustering, ga_routing
 from taopt.heuristics.ga_routing import encode
 from taopt.registry import improver
@@ -81,7 +82,11 @@ REFERENCES = reference_problems()
 def heuristic_runs(problem: BudgetedProblem):
     yield "MC", budgeted.mc(problem)
     yield "EVM", budgeted.evm(problem)
-    yield "GA", budgeted.genetic_algorithm(problem, seed=3, **GA_SMALL)
+    for memetic in budgeted.MEMETIC_STEPS:
+        yield (
+            f"GA {memetic}",
+            budgeted.genetic_algorithm(problem, seed=3, memetic=memetic, **GA_SMALL),
+        )
 
 
 @pytest.mark.parametrize(
@@ -102,13 +107,23 @@ def test_heuristics_feasible_and_never_below_the_optimum(label, problem, optimum
     assert answered >= 1, f"{label}: no heuristic answered"
 
 
+@pytest.mark.parametrize("memetic", budgeted.MEMETIC_STEPS)
 @pytest.mark.parametrize(
     ("label", "problem", "optimum"), REFERENCES, ids=[r[0] for r in REFERENCES]
 )
-def test_ga_reaches_the_optimum_on_small_instances(label, problem, optimum):
-    """With a modest budget the GA finds the brute-force optimum of a 5-6 target instance."""
-    solution = budgeted.genetic_algorithm(problem, seed=0, population=40, generations=60)
+def test_ga_reaches_the_optimum_on_small_instances(label, problem, optimum, memetic):
+    """With a modest budget the GA finds the brute-force optimum of a 5-6 target instance,
+    with either memetic step."""
+    solution = budgeted.genetic_algorithm(
+        problem, seed=0, population=40, generations=60, memetic=memetic
+    )
     assert solution.objective == pytest.approx(optimum)
+    assert solution.info["memetic"] == memetic
+
+
+def test_ga_memetic_step_is_checked():
+    with pytest.raises(InstanceError, match="memetic must be one of"):
+        budgeted.genetic_algorithm(REFERENCES[0][1], memetic="chapter 2")
 
 
 def test_without_limits_mc_and_evm_are_chapter_2s():
