@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from taopt.budgeted import BudgetedProblem
+from taopt.errors import InstanceError
 from taopt.heuristics.budgeted import penalised_cost
 from taopt.heuristics.ga_local_search import _apply
-from taopt.heuristics.ga_penalised_search import PenalisedSearch
+from taopt.heuristics.ga_penalised_search import PenalisedSearch, _apply_all, _independent
 from taopt.heuristics.ga_routing import nodes_to_genes, path_matrix, path_nodes
 
 
@@ -106,3 +107,46 @@ def test_the_penalty_pulls_a_route_back_within_its_capacity():
     nodes = path_nodes(problem.routing, np.array([0, 1, 2]))[0]
     moved, _ = PenalisedSearch(problem, 10.0, 1.0).run(path_matrix(problem.routing), nodes)
     assert penalised_cost(problem, nodes_to_genes(problem.routing, moved), 10.0, 1.0)[2][0] == 0
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_moves_on_disjoint_routes_add_up(seed):
+    """One pass makes every improving move it kept whose routes no better move touches: the
+    penalised fitness falls by exactly the sum of their own changes, and each one applied
+    alone gives what chapter 2's ``_apply`` gives."""
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(6, 11)), int(rng.integers(3, 6))
+    weight, unit = float(rng.choice([1.0, 10.0])), float(rng.choice([1.0, 3.5]))
+    cost = rng.integers(0, 20, size=(n + m, n + m)).astype(float)
+    np.fill_diagonal(cost, 0.0)
+    problem = BudgetedProblem(
+        cost, n, capacity=[int(rng.integers(1, 4))] * m, max_time=[float(rng.integers(10, 40))] * m
+    )
+    nodes = path_nodes(problem.routing, rng.permutation(n + m - 1))[0]
+    search = PenalisedSearch(problem, weight, unit)
+    found = search._improving_moves(path_matrix(problem.routing), nodes)
+    chosen = _independent(found, nodes >= n, 1000)
+    if not chosen:
+        return
+    value = dict((move, change) for change, move in reversed(found))
+    after = _apply_all(nodes, chosen, n)
+    change = fitness(problem, after, weight, unit) - fitness(problem, nodes, weight, unit)
+    assert change == pytest.approx(sum(value[move] for move in chosen), abs=1e-7)
+    for move in chosen:
+        alone = _apply_all(nodes, [move], n)
+        assert alone.tolist() == _apply(nodes.copy(), *move).tolist()
+
+
+def test_neighbourhood_is_checked_and_kept():
+    problem, nodes, weight, unit = random_case(3)
+    with pytest.raises(InstanceError, match="unknown local-search moves"):
+        PenalisedSearch(problem, weight, unit, neighbourhood=("swap",))
+    # exchanges only: every route keeps its number of targets
+    moved, _ = PenalisedSearch(problem, 10.0, 1.0, neighbourhood=("exchange",)).run(
+        path_matrix(problem.routing), nodes
+    )
+
+    def sizes(path):
+        return np.diff(np.flatnonzero(path >= problem.n)).tolist()
+
+    assert sizes(moved) == sizes(nodes)
