@@ -178,15 +178,17 @@ class PenalisedSearch:
         weight, per_target = self.weight, self.weight * self.unit
         base_time = weight * np.where(over_limit > 0, over_time, 0.0)
         base_count = per_target * np.maximum(room, 0.0)
+        # the time penalty change is weight * (change + over_time) - base_time above the
+        # limit and -base_time below it: per route, the threshold and the constant part
+        threshold = -over_limit
+        above = weight * np.where(np.isfinite(over_time), over_time, 0.0) - base_time
+        below = -base_time
 
         def time_change(r: np.ndarray, change: np.ndarray) -> np.ndarray:
             """Change of route r's time penalty when its time changes by ``change``."""
             if not self.timed:  # no finite travel-time limit: never a change (and cheap)
                 return np.zeros(r.shape)
-            return (
-                weight * np.where(change > -over_limit[r], change + over_time[r], 0.0)
-                - base_time[r]
-            )
+            return np.where(change > threshold[r], weight * change + above[r], below[r])
 
         def count_change(r: np.ndarray, change: Any) -> np.ndarray:
             """Change of route r's capacity penalty when its count changes by ``change``."""
