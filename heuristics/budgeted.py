@@ -162,8 +162,8 @@ def limited_marginal_cost_routes(
     cheapest feasible insertion of every target into every route is kept in ``best`` (m, n)
     and only the row of the vehicle that changed is recomputed, over the targets still
     open: O(|o_j| r) per step with r of them, O(n^2 max|o_j|) in all (a repair, which
-    re-inserts the few targets it cut off, pays only for those). The gap is the cheapest *feasible* one, which may not be the
-    cheapest one. A vehicle's insertions only get dearer as its route grows (in a metric),
+    re-inserts the few targets it cut off, pays only for those). The gap is the cheapest
+    *feasible* one, which may not be the cheapest one. A vehicle's insertions only get dearer as its route grows (in a metric),
     so a refusal is never revisited wrongly: the row is recomputed after every change.
     Ties: lowest target, then lowest vehicle, then earliest gap (as chapter 2's MC).
     """
@@ -692,8 +692,8 @@ def genetic_algorithm(
     6139). The penalised search replaced it (2026-11-26) because chapter 2's search spent
     most of the time walking to the unconstrained optimum that the repair then cut back:
     on the chapter-6 study's n50m10 scenarios 0–4 (study seeds, same run) it gives answers
-    0.5–3.0 % lower on average at Q2–Q1, the same at T1–T0.6, in less time at the
-    capacity levels (``docs/reproduction/chapter6.md``). The answer is the best *feasible*
+    0.5–2.3 % lower on average at Q2–Q1 and T0.6 and within 0.2 % at T1–T0.8, in less time
+    at every level (``docs/reproduction/chapter6.md``). The answer is the best *feasible*
     chromosome ever seen (not the best penalised one).
 
     Parameters
