@@ -44,7 +44,7 @@ from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import insertion_costs, marginal_cost_sequence
 from taopt.heuristics.ga_local_search import local_search
-from taopt.heuristics.ga_penalised_search import PenalisedSearch
+from taopt.heuristics.ga_penalised_search import SLACK, PenalisedSearch, slack_limits
 from taopt.heuristics.ga_routing import (
     OPERATOR_SETS,
     _mutate,
@@ -60,9 +60,6 @@ from taopt.heuristics.ga_routing import (
 from taopt.limits import Deadline
 from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
-
-#: Relative slack of the heuristics' own travel-time check (stricter than the scorer's).
-SLACK = 1e-9
 
 #: The GA's memetic steps under limits (:func:`genetic_algorithm`, ``memetic``).
 MEMETIC_STEPS = ("penalised", "chapter2")
@@ -290,11 +287,7 @@ class LimitedDescent:
         cost[:size, :size] = problem.cost
         self.cost = cost
         self.capacity = problem.capacity
-        self.limit = np.where(
-            np.isfinite(problem.max_time),
-            problem.max_time + SLACK * np.maximum(1.0, problem.max_time),
-            np.inf,
-        )
+        self.limit = slack_limits(problem.max_time)
         self.targets = np.arange(n)
         self.points = np.arange(size)
         self.into_target = np.ascontiguousarray(cost[:size, :n].T)  # (n, n + m): t(u, k)
@@ -632,11 +625,7 @@ def penalised_cost(
         0 exactly for the chromosomes that keep every limit (with :data:`SLACK`).
     """
     times, counts = route_times(problem, genes)
-    limit = np.where(
-        np.isfinite(problem.max_time),
-        problem.max_time + SLACK * np.maximum(1.0, problem.max_time),
-        np.inf,
-    )
+    limit = slack_limits(problem.max_time)
     over_time = np.where(times > limit, times - problem.max_time, 0.0)
     over_count = np.maximum(counts - problem.capacity, 0.0)
     violation = over_time.sum(axis=1) + unit * over_count.sum(axis=1)

@@ -66,8 +66,14 @@ Move = tuple[str, int, int, int]
 #: Best moves kept per table and pass; the improving ones on disjoint routes are all made.
 CANDIDATES = 8
 
-#: Relative slack on a travel-time limit, as :func:`taopt.heuristics.budgeted.penalised_cost`.
+#: Relative slack of the budgeted heuristics' own travel-time check (stricter than the
+#: scorer's): the GA's penalty, this search and the limit-aware descent all use it.
 SLACK = 1e-9
+
+
+def slack_limits(max_time: np.ndarray) -> np.ndarray:
+    """Each travel-time limit ``T_k`` plus :data:`SLACK` (relative; ``inf`` stays ``inf``)."""
+    return np.where(np.isfinite(max_time), max_time + SLACK * np.maximum(1.0, max_time), np.inf)
 
 
 class PenalisedSearch:
@@ -118,11 +124,7 @@ class PenalisedSearch:
         self.weight, self.unit = float(weight), float(unit)
         # per vehicle, plus a sentinel for the end point (never a route of a move)
         self.max_time = np.append(problem.max_time, np.inf)
-        self.time_limit = np.where(
-            np.isfinite(self.max_time),
-            self.max_time + SLACK * np.maximum(1.0, self.max_time),
-            np.inf,
-        )
+        self.time_limit = slack_limits(self.max_time)
         self.capacity = np.append(problem.capacity, np.inf)
         self.timed = bool(np.isfinite(problem.max_time).any())
         self.counted = bool(np.isfinite(problem.capacity).any())
@@ -197,7 +199,7 @@ class PenalisedSearch:
             return per_target * np.maximum(room[r] + change, 0.0) - base_count[r]
 
         tolerance = 1e-10 * max(float(forward.sum()), 1.0)
-        found: list[tuple[float, tuple[str, int, int, int]]] = []
+        found: list[tuple[float, Move]] = []
 
         def keep(kind: str, length: int, table: np.ndarray) -> None:
             flat = table.ravel()
@@ -338,18 +340,15 @@ def _apply_all(nodes: np.ndarray, moves: list[Move], n: int) -> np.ndarray:
             a[i], b[j] = b[j], a[i]
         elif kind == "relocate":
             (a, i), (b, p) = where(row + 1), where(column)
-            segment = a[i : i + length]
-            if a is b:  # as ``_apply`` on one route
-                rest = a[:i] + a[i + length :]
-                at = p + 1 if p < i else p + 1 - length
-                a[:] = rest[:at] + segment + rest[at:]
+            if a is b:  # chapter 2's relocation, on this route alone
+                a[:] = _apply(np.array(a), kind, i - 1, p, length).tolist()
             else:
+                b[p + 1 : p + 1] = a[i : i + length]
                 del a[i : i + length]
-                b[p + 1 : p + 1] = segment
         else:  # tails: cuts after positions c - 1 and d - 1
             (a, i), (b, j) = where(row), where(column)
             a[i + 1 :], b[j + 1 :] = b[j + 1 :], a[i + 1 :]
     return np.array([point for path in routes for point in path] + [int(nodes[-1])], dtype=np.intp)
 
 
-__all__ = ["PenalisedSearch"]
+__all__ = ["SLACK", "PenalisedSearch", "slack_limits"]
