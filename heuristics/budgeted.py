@@ -80,7 +80,8 @@ __all__ = [
 
 
 def _fits(time_needed: Any, limit: float) -> Any:
-    """Whether a travel time is within ``limit`` (``inf``: no limit), with :data:`SLACK`."""
+    """Whether a travel time is within ``limit`` (``inf``: no limit), with the heuristics'
+    :data:`~taopt.heuristics.ga_penalised_search.SLACK`."""
     return time_needed <= limit + SLACK * max(1.0, limit) if math.isfinite(limit) else True
 
 
@@ -622,7 +623,8 @@ def penalised_cost(
     cost : (P,) array
         The plain total travel time.
     violation : (P,) array
-        0 exactly for the chromosomes that keep every limit (with :data:`SLACK`).
+        0 exactly for the chromosomes that keep every limit (with
+        :data:`~taopt.heuristics.ga_penalised_search.SLACK`).
     """
     times, counts = route_times(problem, genes)
     limit = slack_limits(problem.max_time)
