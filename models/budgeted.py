@@ -797,6 +797,7 @@ def solve_budgeted(
     time_cuts: bool = True,
     lp_start: bool = True,
     improve: Any = None,
+    improve_during: bool = True,
 ) -> Solution:
     """Solve (2.2)–(2.5) with per-vehicle capacity and travel-time limits exactly (HiGHS).
 
@@ -833,6 +834,13 @@ def solve_budgeted(
         :func:`taopt.heuristics.budgeted.improve_budgeted`), as it passes a warm start; not
         called with less than :data:`~taopt.models.routing.dfj.IMPROVE_MIN_SECONDS` left.
         ``info["improved"]`` counts the answers it bettered.
+    improve_during : bool
+        With ``improve``: also inside a MIP round, each answer HiGHS finds that beats every
+        answer seen (its cycles patched, within the limits) is improved at once and offered
+        back to HiGHS (:meth:`~taopt.models.highs.HighsModel.solve`'s ``offer``), which
+        takes it as its incumbent when it is better; ``info["offered"]`` counts them. Off,
+        the improver sees a round's answers only when the round ends, which under a time
+        limit can be never (one round of 30 s).
 
     Returns
     -------
@@ -1035,15 +1043,40 @@ def solve_budgeted(
             candidates.append((evaluate_budgeted(problem, routes), routes))
         return cycles
 
+    # improve_during: an answer HiGHS finds that beats every answer seen is improved at once
+    # and the result offered back to HiGHS at its next call for a user solution
+    offered: dict[str, Any] = {"value": best_value, "routes": None, "broken": None, "count": 0}
+
     def harvest(solution: np.ndarray) -> None:
+        count = len(candidates)
         harvested.extend(tuple(sorted(c)) for c in consider(solution))
+        if not improve_during or improve is None or len(candidates) == count:
+            return
+        value, routes = candidates[-1]
+        left = deadline.remaining()
+        if value >= offered["value"] or (left is not None and left < IMPROVE_MIN_SECONDS):
+            return
+        offered["value"] = value
+        found = [[int(t) for t in route] for route in improve(problem, routes)]
+        broken = violations(problem, found)
+        if broken:
+            offered["broken"] = broken  # raised after the run (not inside HiGHS's callback)
+            return
+        found_value = evaluate_budgeted(problem, found)
+        if found_value < value:
+            candidates.append((found_value, found))
+            offered.update(value=found_value, routes=found, count=offered["count"] + 1)
+
+    def offer() -> np.ndarray | None:
+        routes, offered["routes"] = offered["routes"], None
+        return None if routes is None else model.start_vector(routes)
 
     target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
     rounds, stopped_by, nodes = 0, "time_limit", 0
     if best_routes is not None and relative_gap(best_value, min(best_bound, best_value)) <= (
         target_gap
     ):  # a start meets the root bound: proven without a MIP
-        return stop("optimal", {"rounds": 0, "cuts": len(model.cuts), "nodes": 0})
+        return stop("optimal", {"rounds": 0, "cuts": len(model.cuts), "nodes": 0, "offered": 0})
     while True:
         left = deadline.remaining()
         if left is not None and left < SECONDS_PER_COLUMN * model.n_columns + HIGHS_OVERRUN:
@@ -1059,6 +1092,7 @@ def solve_budgeted(
                 model.model.set_start(start)
         harvested.clear()
         candidates.clear()
+        offered.update(value=min(offered["value"], best_value), routes=None)
         options = dict(MIP_OPTIONS)
         if cutoff is not None:
             options["objective_bound"] = cutoff
@@ -1067,7 +1101,12 @@ def solve_budgeted(
             mip_rel_gap=mip_gap,
             on_solution=harvest,
             options=options,
+            offer=offer if improve_during and improve is not None else None,
         )
+        if offered["broken"]:
+            raise SolverError(
+                f"improve returned routes outside the limits: {'; '.join(offered['broken'])}"
+            )
         if run.solver_status == "infeasible":
             if best_routes is not None:  # cannot be: every feasible solution is in the model
                 raise SolverError(
@@ -1107,7 +1146,10 @@ def solve_budgeted(
                 f"HiGHS stopped with status {run.solver_status!r}, no answer and no proof "
                 "on the budgeted model"
             )
-    return stop(stopped_by, {"rounds": rounds, "cuts": len(model.cuts), "nodes": nodes})
+    return stop(
+        stopped_by,
+        {"rounds": rounds, "cuts": len(model.cuts), "nodes": nodes, "offered": offered["count"]},
+    )
 
 
 @register_footprint(BudgetedProblem, "exact")

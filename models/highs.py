@@ -746,6 +746,7 @@ class HighsModel:
         mip_rel_gap: float | None = None,
         on_solution: Any = None,
         options: dict[str, Any] | None = None,
+        offer: Any = None,
     ) -> HighsRun:
         """Run HiGHS on the model as it stands; never raises for a solver outcome.
 
@@ -760,6 +761,11 @@ class HighsModel:
             solution HiGHS's MIP search finds (``kCallbackMipSolution``).
         options : dict, optional
             Further HiGHS options for this and later runs (name -> value).
+        offer : callable, optional
+            ``offer() -> full column vector or None``, asked whenever HiGHS's MIP search
+            takes a solution from the user (``kCallbackMipUserSolution``: after setup and
+            before its dives); a vector returned is passed to HiGHS, which keeps it as
+            its incumbent if it is feasible and better.
 
         Returns
         -------
@@ -791,8 +797,16 @@ class HighsModel:
         if time_limit is not None:
             for callback in interrupts:
                 callback.subscribe(stop_at_deadline)
+
+        def give(event: Any) -> None:
+            vector = offer()
+            if vector is not None:
+                event.data_in.setSolution(np.asarray(vector, dtype=float))
+
         if on_solution is not None and is_mip:
             highs.cbMipSolution.subscribe(forward)
+        if offer is not None and is_mip:
+            highs.cbMipUserSolution.subscribe(give)
         start, self._start = self._start, None
         try:
             run_interruptibly(highs)  # Ctrl-C: HiGHS stops, then KeyboardInterrupt
@@ -836,6 +850,8 @@ class HighsModel:
         finally:
             if on_solution is not None and is_mip:
                 highs.cbMipSolution.unsubscribe(forward)
+            if offer is not None and is_mip:
+                highs.cbMipUserSolution.unsubscribe(give)
             if time_limit is not None:
                 for callback in interrupts:
                     callback.unsubscribe(stop_at_deadline)

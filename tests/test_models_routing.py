@@ -335,6 +335,61 @@ def test_highs_model_adds_rows_and_relaxes_in_place():
     assert problem.value == pytest.approx(8.0)
 
 
+def _knapsack(seed: int, n: int = 40):
+    """A 0-1 knapsack HiGHS does not settle in presolve, and its optimum by dynamic
+    programming over weights: (values, weights, capacity, optimal item vector)."""
+    rng = np.random.default_rng(seed)
+    weight = rng.integers(20, 60, n).astype(float)
+    value = weight + rng.integers(0, 10, n)
+    capacity = float(weight.sum() // 2)
+    best = {0.0: (0.0, ())}  # weight -> (value, items)
+    for i in range(n):
+        for w, (v, items) in list(best.items()):
+            w2 = w + weight[i]
+            if w2 <= capacity and (w2 not in best or best[w2][0] < v + value[i]):
+                best[w2] = (v + value[i], (*items, i))
+    chosen = np.zeros(n)
+    chosen[list(max(best.values())[1])] = 1.0
+    return value, weight, capacity, chosen
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_highs_model_takes_an_offered_solution(seed):
+    """solve(offer=...): HiGHS asks for a user solution, takes the offered optimum as its
+    first incumbent (the first solution it reports), and one it cannot use changes nothing."""
+    import scipy.sparse as sp
+
+    from taopt.models.highs import HighsModel
+
+    value, weight, capacity, optimum = _knapsack(seed)
+    n = len(value)
+
+    def build():
+        return HighsModel.from_arrays(
+            cost=-value, matrix=sp.csr_matrix(weight[None, :]), lower=np.array([-np.inf]),
+            upper=np.array([capacity]), column_lower=np.zeros(n), column_upper=np.ones(n),
+            integers=np.arange(n),
+        )  # fmt: skip
+
+    for offered, first_value in ((optimum, -value @ optimum), (np.ones(n), None)):
+        asked, reported = [], []
+
+        def offer(vector=offered, asked=asked):
+            asked.append(1)
+            return vector if len(asked) == 1 else None
+
+        def report(x, reported=reported):
+            reported.append(-value @ x)
+
+        run = build().solve(offer=offer, on_solution=report)
+        assert asked, "HiGHS never asked for a user solution"
+        assert run.status == "optimal" and run.objective == pytest.approx(-value @ optimum)
+        if first_value is not None:  # the offered optimum, taken before any search
+            assert reported[0] == pytest.approx(first_value)
+        else:  # all items exceed the capacity: refused, the search as without an offer
+            assert all(v >= -value @ optimum - 1e-6 for v in reported)
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_separation_is_exact_on_random_fractional_points(seed):
     """separate_subtours finds a violated (2.5) row iff brute force over all subsets does."""
