@@ -386,7 +386,7 @@ def test_highs_model_takes_an_offered_solution(seed):
         assert run.status == "optimal" and run.objective == pytest.approx(-value @ optimum)
         if first_value is not None:  # the offered optimum, taken before any search
             assert reported[0] == pytest.approx(first_value)
-        else:  # all items exceed the capacity: refused, the search as without an offer
+        else:  # all items exceed the capacity: never taken (its value is below the optimum)
             assert all(v >= -value @ optimum - 1e-6 for v in reported)
 
 
