@@ -526,3 +526,19 @@ def test_study_comm_takes_exact_as_a_method(tmp_path, capsys):
     assert "mean true gap" in capsys.readouterr().out
     assert main([*argv, "--methods", "exact", "--out", str(tmp_path / "x")]) == 2
     assert "beside 'exact'" in capsys.readouterr().err
+
+
+def test_solve_shows_which_method_runs_and_its_limit(capsys):
+    """`taopt solve` shows a bar on stderr naming each method as it runs, with the time limit
+    an exact method may take; `--quiet` shows none; stdout has the table either way."""
+    from pathlib import Path
+
+    path = Path(__file__).parent.parent / "taopt/data/examples/budgeted_problem.json"
+    assert main(["solve", str(path), "--methods", "exact,MC", "--time-limit", "7"]) == 0
+    captured = capsys.readouterr()
+    assert "exact (up to 7 s)" in captured.err
+    assert "MC" in captured.err and "MC (up to" not in captured.err  # a heuristic: no limit
+    assert "optimal" in captured.out
+    assert main(["solve", str(path), "--methods", "MC", "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert "MC" not in captured.err and "feasible" in captured.out

@@ -124,6 +124,7 @@ def method_table(
     methods: tuple[str, ...] | list[str] | None = None,
     seed: int = 0,
     time_limit: float | None = None,
+    progress: bool = False,
 ) -> tuple[pd.DataFrame, dict[str, Solution]]:
     """Solve ``problem`` with each method; a table of objectives, bounds and gaps.
 
@@ -138,11 +139,20 @@ def method_table(
     NaN and the exception's first line in ``message`` (its Solution carries it in
     ``info["error"]``); the other rows stand. An unknown method name is still refused
     (InstanceError) before anything runs. Ctrl-C (KeyboardInterrupt) stops the whole run.
+
+    ``progress``: a bar on stderr over the methods, naming the one running and, for an exact
+    method or a peer, the time limit it may take (a peer proves nothing, so it runs to it).
     """
     methods = list(methods) if methods else default_methods(problem)
-    for method in methods:  # an unknown name is the user's error: refuse before running any
-        get_method(problem, method)
-    solutions = {m: _run_method(problem, m, seed, time_limit) for m in methods}
+    specs = {m: get_method(problem, m) for m in methods}  # an unknown name: refused first
+    from tqdm.auto import tqdm
+
+    solutions = {}
+    with tqdm(methods, unit="method", disable=not progress, leave=False) as bar:
+        for method in bar:
+            limited = time_limit is not None and specs[method].category in ("exact", "peer")
+            bar.set_description(f"{method}" + (f" (up to {time_limit:g} s)" if limited else ""))
+            solutions[method] = _run_method(problem, method, seed, time_limit)
     ratios = _ratio_columns(problem)
     optima = [s.objective for s in solutions.values() if s.status == OPTIMAL]
     optimum = min(optima) if optima else math.nan
@@ -237,6 +247,9 @@ def solve_file(
     save : path, optional
         Folder: each method's solution is written there as ``<method>.json``, which
         ``taopt verify`` re-checks.
+    progress : bool
+        Progress bars on stderr: the travel-time matrix of an instance file, and the
+        methods (:func:`method_table`).
 
     Raises
     ------
@@ -255,7 +268,9 @@ def solve_file(
     _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
-    table, solutions = method_table(problem, methods, seed=seed, time_limit=time_limit)
+    table, solutions = method_table(
+        problem, methods, seed=seed, time_limit=time_limit, progress=progress
+    )
     print(f"{problem!r} from {path}", file=out)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
     note = "" if methods else no_optimum_note(problem)
