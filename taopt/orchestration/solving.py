@@ -151,7 +151,7 @@ def method_table(
     with tqdm(methods, unit="method", disable=not progress, leave=False) as bar:
         for method in bar:
             limited = time_limit is not None and specs[method].category in ("exact", "peer")
-            bar.set_description(f"{method}" + (f" (up to {time_limit:g} s)" if limited else ""))
+            bar.set_description(method + (f" (up to {time_limit:g} s)" if limited else ""))
             solutions[method] = _run_method(problem, method, seed, time_limit)
     ratios = _ratio_columns(problem)
     optima = [s.objective for s in solutions.values() if s.status == OPTIMAL]
