@@ -25,47 +25,6 @@ from __future__ import annotations
 
 from typing import Any
 
-
-def _map_source_tree_packages() -> None:
-    """Make ``taopt.models`` and ``taopt.heuristics`` importable from a checkout.
-
-    pyproject.toml installs the top-level folders ``models/`` and
-    ``heuristics/`` as ``taopt.models`` and ``taopt.heuristics``
-    (``package-dir``). Python started in the checkout root imports the local
-    ``taopt/`` folder instead of the installed package, and that folder has
-    no such subpackages; this finder maps them exactly as ``package-dir``
-    does, so the checkout imports the same package as the installation. It
-    does nothing in an installed package (the subpackages are real folders).
-    """
-    import importlib.util
-    import os.path
-    import sys
-
-    here = os.path.dirname(os.path.realpath(__file__))
-    root = os.path.dirname(here)
-    mapped = {
-        f"taopt.{name}": os.path.join(root, name)
-        for name in ("models", "heuristics")
-        if not os.path.isdir(os.path.join(here, name))
-        and os.path.isfile(os.path.join(root, name, "__init__.py"))
-    }
-    if not mapped or not os.path.isfile(os.path.join(root, "pyproject.toml")):
-        return
-
-    class _SourceTreeFinder:  # a meta path finder (importlib.abc is not imported: it is slow)
-        def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> Any:
-            folder = mapped.get(fullname)
-            if folder is None:
-                return None
-            return importlib.util.spec_from_file_location(
-                fullname, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder]
-            )
-
-    sys.meta_path.append(_SourceTreeFinder())
-
-
-_map_source_tree_packages()
-
 __version__ = "0.1.0"
 
 #: Public name -> (module, attribute): imported on first use, so ``import taopt`` (and
