@@ -411,32 +411,6 @@ def register_method(
     return wrap
 
 
-_RELAXATIONS: dict[type, list[Callable[[Any], float]]] = {}
-
-
-def register_relaxation(
-    problem_type: type,
-) -> Callable[[Callable[..., float]], Callable[..., float]]:
-    """Decorator: ``func(problem) -> float`` is a valid lower bound from a relaxation of an
-    exact model (an LP); :func:`taopt.bounds.lower` with ``strength="strong"`` takes it.
-
-    Exact-model modules register theirs where they are defined, so the core never imports them.
-    """
-
-    def wrap(func: Callable[..., float]) -> Callable[..., float]:
-        found = _RELAXATIONS.setdefault(problem_type, [])
-        if func not in found:
-            found.append(func)
-        return func
-
-    return wrap
-
-
-def relaxations(problem: Any) -> list[Callable[[Any], float]]:
-    """The relaxation bounds registered for the family of ``problem`` (imported modules only)."""
-    return list(_RELAXATIONS.get(family_of(problem).problem_type, []))
-
-
 _IMPROVERS: dict[type, Callable[..., Any]] = {}
 
 
@@ -563,8 +537,6 @@ __all__ = [
     "Method",
     "register_family",
     "register_method",
-    "register_relaxation",
-    "relaxations",
     "register_improver",
     "improver",
     "ensure_families",

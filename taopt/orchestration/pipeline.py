@@ -244,8 +244,7 @@ def no_optimum_note(problem: Any) -> str:
 
 
 def lower(problem: Any, strength: str = "auto") -> float:
-    """:func:`taopt.bounds.lower` with every relaxation of the exact models registered (the
-    LP relaxations that ``strength="strong"`` adds live in ``taopt.models``, imported here).
+    """:func:`taopt.bounds.lower` (the strongest valid lower bound of the problem's family).
 
     Example
     -------
