@@ -18,7 +18,7 @@ from reference import REFERENCES, brute_force_routing
 from test_exact_brute_force import sop_brute_force, sop_instance
 
 import taopt
-from taopt.arborescence import min_arborescence
+from taopt.arborescence import degree_penalised_arborescence, min_arborescence
 from taopt.delivery.bounds import (
     arborescence_bound,
     decomposition_bound,
@@ -29,7 +29,6 @@ from taopt.delivery.costs import drone_cost_matrix
 from taopt.delivery.dags import layered_dag
 from taopt.delivery.evaluate import timeline
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.relaxation import degree_penalised_arborescence, min_arborescence_tree
 from taopt.delivery.schedule import optimal_plan
 from taopt.errors import InstanceError
 
@@ -71,7 +70,7 @@ def test_min_arborescence_tree_matches_edmonds(seed):
     weights = rng.uniform(-5.0, 20.0, size=(size, size)).round(int(rng.integers(0, 3)))
     weights[rng.random((size, size)) < 0.3] = np.inf
     weights[0, 1:] = np.where(np.isfinite(weights[0, 1:]), weights[0, 1:], 50.0)
-    value, parent = min_arborescence_tree(weights, 0)
+    value, parent = min_arborescence(weights, 0, tree=True)
     assert value == pytest.approx(min_arborescence(weights, 0), rel=REL, abs=1e-9)
     assert _is_arborescence(parent, 0)
     tree_weight = sum(weights[parent[v], v] for v in range(1, size))
@@ -81,7 +80,7 @@ def test_min_arborescence_tree_matches_edmonds(seed):
 def test_min_arborescence_tree_unreachable():
     """A vertex without in-edges: no arborescence (inf, None)."""
     weights = np.array([[0.0, 1.0, np.inf], [1.0, 0.0, np.inf], [1.0, 1.0, 0.0]])
-    assert min_arborescence_tree(weights, 0) == (np.inf, None)
+    assert min_arborescence(weights, 0, tree=True) == (np.inf, None)
 
 
 @pytest.mark.parametrize("precedences", [False, True])

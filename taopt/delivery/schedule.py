@@ -29,8 +29,7 @@ from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.limits import Deadline
-from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
-from taopt.status import outcome
+from taopt.result import FEASIBLE, Solution, finish, make_solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9
@@ -316,19 +315,15 @@ def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: 
     from taopt.delivery.bounds import arborescence_bound
 
     plan = getattr(incumbent, "plan", incumbent)
-    solution = make_solution(
+    return finish(
         instance,
         plan,
         method="subset-dp",
-        status=TIME_LIMIT,
+        stop="time_limit",
+        bound=arborescence_bound(instance),
         runtime=time.perf_counter() - start,
-        info={"stopped_by": "time_limit", **info},
+        info=info,
     )
-    bound = min(arborescence_bound(instance), solution.objective)
-    status, _ = outcome(
-        "dp", "stopped", objective=solution.objective, bound=bound, time_limited=True
-    )
-    return solution.replace(status=status, bound=bound)
 
 
 def optimal_plan(
@@ -450,12 +445,12 @@ def optimal_plan(
         mask &= ~(1 << j)
     plan = Plan(tuple(order[::-1]), tuple(launch[::-1]), tuple(landing[::-1]))
     # every subset expanded: the DP's optimum, its own bound
-    status, _ = outcome("dp", "complete", objective=makespan, bound=makespan)
-    solution = make_solution(
+    solution = finish(
         instance,
         plan,
         method="subset-dp",
-        status=status,
+        stop="optimal",
+        bound=makespan,
         runtime=time.perf_counter() - start,
         info={"dp_objective": makespan},
     )

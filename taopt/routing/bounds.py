@@ -247,11 +247,11 @@ def path_bound(problem: AssignmentProblem) -> float:
     (root -> target k costs min_j t(p_j, k), as in the dense arborescence bound) is a
     spanning arborescence in which every target has out-degree <= 1 and the root <= m, of
     weight <= f; the Lagrangian with π >= 0 on these rows is <= f
-    (:mod:`taopt.delivery.relaxation`).
+    (:func:`taopt.arborescence.degree_penalised_arborescence`).
     """
     import numpy as np
 
-    from taopt.delivery.relaxation import degree_penalised_arborescence
+    from taopt.arborescence import degree_penalised_arborescence
 
     n, m = problem.n, problem.m
     if n == 0:
