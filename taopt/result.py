@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from taopt import schemas
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.families import ensure_families
 
@@ -57,23 +58,62 @@ from taopt.status import (
 # -- payloads ------------------------------------------------------------------------------
 
 _PAYLOADS: dict[str, type] = {}
+_PAYLOAD_SCHEMAS: dict[str, dict[str, Any]] = {}
 
 
-def register_payload(name: str) -> Callable[[type], type]:
+def register_payload(name: str, schema: Mapping[str, Any] | None = None) -> Callable[[type], type]:
     """Class decorator: register a payload type under ``name`` for JSON round trips.
 
     The class needs ``to_dict() -> dict`` and ``from_dict(dict)``; its ``payload_kind``
     attribute is set to ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The ``payload_kind`` of solution files.
+    schema : dict
+        The JSON Schema (draft 2020-12) of ``to_dict()``'s output. It becomes
+        ``$defs/<name>`` of the solution schema, with the rule "payload_kind ``name`` ->
+        payload of this schema" (:func:`taopt.schemas.schema` adds both, so the shipped
+        ``solution.schema.json`` lists no payload kind); it may refer to the solution
+        schema's ``#/$defs/index`` (an index) and ``#/$defs/indices`` (a list of them).
+        Every family's payload declares one (the family checklist test).
     """
 
     def wrap(cls: type) -> type:
         if name in _PAYLOADS and _PAYLOADS[name] is not cls:
             raise InstanceError(f"payload kind {name!r} is already registered")
         _PAYLOADS[name] = cls
+        if schema is not None:
+            _PAYLOAD_SCHEMAS[name] = json.loads(json.dumps(schema))
         cls.payload_kind = name  # type: ignore[attr-defined]
         return cls
 
     return wrap
+
+
+def payload_schemas() -> dict[str, dict[str, Any]]:
+    """The JSON Schema each registered payload kind declares (every family imported)."""
+    ensure_families()
+    return {name: json.loads(json.dumps(s)) for name, s in sorted(_PAYLOAD_SCHEMAS.items())}
+
+
+def _add_payload_kinds(contents: dict[str, Any]) -> None:
+    """Complete the solution schema: one ``$defs`` entry and one rule per payload kind."""
+    for name, payload_schema in payload_schemas().items():
+        contents.setdefault("$defs", {})[name] = payload_schema
+        contents.setdefault("allOf", []).append(
+            {
+                "if": {
+                    "properties": {"payload_kind": {"const": name}},
+                    "required": ["payload_kind"],
+                },
+                "then": {"properties": {"payload": {"$ref": f"#/$defs/{name}"}}},
+            }
+        )
+
+
+schemas.extend("solution", _add_payload_kinds)
 
 
 def payload_type(name: str) -> type[Any]:
@@ -97,7 +137,16 @@ def _index_list(values: Any, what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
-@register_payload("routes")
+@register_payload(
+    "routes",
+    schema={
+        "description": "One route per vehicle, each a list of target indices in visiting order.",
+        "type": "object",
+        "required": ["routes"],
+        "additionalProperties": False,
+        "properties": {"routes": {"type": "array", "items": {"$ref": "#/$defs/indices"}}},
+    },
+)
 @dataclass(frozen=True)
 class Routes:
     """One route per vehicle, each a list of target indices in visiting order.
@@ -160,7 +209,16 @@ class Routes:
         return f"Routes({self.as_lists()!r})"
 
 
-@register_payload("order")
+@register_payload(
+    "order",
+    schema={
+        "description": "A visiting order: node indices of a Hamiltonian path (SOP).",
+        "type": "object",
+        "required": ["order"],
+        "additionalProperties": False,
+        "properties": {"order": {"$ref": "#/$defs/indices"}},
+    },
+)
 @dataclass(frozen=True)
 class Order:
     """A visiting order: the sequence of node indices of a Hamiltonian path (SOP)."""
