@@ -148,6 +148,10 @@ class Family:
         this family (exactly one family accepts any instance).
     studies : tuple of Study
         Its ``taopt study`` commands.
+    describe : callable, optional
+        ``describe(problem, payload, instance=None) -> list of str``: the payload spelt with
+        the ids drawn on the plot (``taopt solve --plot`` prints these lines under it; an
+        ``instance`` gives the ids, else ``t0, t1, ...``). None: nothing is printed.
     exports : dict
         Public names reachable as ``taopt.<name>`` (the problem type at least).
     """
@@ -163,6 +167,7 @@ class Family:
     plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     adapter: Callable[..., Any] | None = None
     studies: tuple[Study, ...] = ()
+    describe: Callable[..., list[str]] | None = None
     exports: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
