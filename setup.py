@@ -2,8 +2,8 @@
 
 The packages are found, not listed: every package under ``taopt/``, and the top-level
 ``models/`` and ``heuristics/`` folders installed as ``taopt.models`` and
-``taopt.heuristics`` (DESIGN.md, "Layout"). A new family's package is installed without an
-edit here or in pyproject.toml.
+``taopt.heuristics`` (docs/architecture.md, "Layout"). A new family's package is installed
+without an edit here or in pyproject.toml.
 """
 
 from setuptools import find_namespace_packages, setup

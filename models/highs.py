@@ -2,7 +2,7 @@
 
 Every exact model of :mod:`taopt.models` (routing, delivery, SOP) solves
 through :func:`solve_highs`, so the three agree on what "optimal" means
-(DESIGN invariant 4, "exact means certified"):
+(docs/architecture.md, invariant 4, "exact means certified"):
 
 * **optimal** only when the incumbent is proven within
   :data:`OPTIMALITY_TOLERANCE` (relative gap ``(objective − bound) /

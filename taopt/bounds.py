@@ -1,4 +1,4 @@
-"""Bounds, each saying whether it is valid (DESIGN invariant 3), looked up in the family specs.
+"""Bounds, each saying whether it is valid (docs/architecture.md, invariant 3), from the specs.
 
 Each family declares its bounds in its spec (:class:`taopt.registry.Family`, ``bounds``):
 a name, the function, whether it is valid (proven) or kept "as printed" by the thesis, and

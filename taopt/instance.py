@@ -4,7 +4,7 @@ An :class:`Instance` is immutable problem data, validated on construction
 (every error an :class:`~taopt.errors.InstanceError` naming the offending
 item), with JSON load/save carrying a schema version. It is the input of the
 navigation layer, which turns it into a travel-time matrix; the assignment
-algorithms only ever see that matrix (DESIGN invariant 2).
+algorithms only ever see that matrix (docs/architecture.md, invariant 2).
 
 Point order follows the thesis (§2.2.1): targets ``0..n-1`` first, then the
 vehicles' start positions ``n..n+m-1``.

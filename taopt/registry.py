@@ -52,7 +52,7 @@ SIDES = ("lower", "upper")
 
 @dataclass(frozen=True)
 class Bound:
-    """A bound a family declares, and what it may be used for (DESIGN invariant 3).
+    """A bound a family declares, and what it may be used for (docs/architecture.md, invariant 3).
 
     Attributes
     ----------
@@ -287,7 +287,7 @@ def _installed(package: str) -> bool:
     """Whether top-level ``package`` can be imported, found without importing it.
 
     ``importlib.util.find_spec`` only locates the package: importing ``ortools`` into a
-    process that uses HiGHS would break cvxpy's HiGHS (DESIGN.md, "Known trap").
+    process that uses HiGHS would break cvxpy's HiGHS (docs/architecture.md, "Known traps").
     """
     return importlib.util.find_spec(package) is not None
 

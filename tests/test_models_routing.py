@@ -93,7 +93,7 @@ def test_all_formulations_match_dp(kind, n, m, seed):
         solution = solve_routing(problem, sec=sec)
         assert solution.status == "optimal"
         assert solution.objective == pytest.approx(optimum, rel=1e-6)
-        # the one scorer agrees with the reported objective (DESIGN invariant 1)
+        # the one scorer agrees with the reported objective (docs/architecture.md, invariant 1)
         assert taopt.evaluate(problem, solution.routes) == pytest.approx(
             solution.objective, rel=1e-6
         )

@@ -12,7 +12,7 @@ the dynamic programme over (sortie, landing stop) states below is exact.
 Both dynamic programmes, :func:`schedule` (fixed order) and :func:`optimal_plan`
 (subsets of customers), make their transitions with the one vectorised step
 :func:`_sortie_step`, and both score the plan they return with the one scorer
-:func:`taopt.delivery.evaluate.evaluate_plan` (DESIGN invariant 1), checking that the
+:func:`taopt.delivery.evaluate.evaluate_plan` (docs/architecture.md, invariant 1), checking that the
 DP's own value agrees (relative :data:`MATCH_TOLERANCE`).
 """
 

@@ -105,8 +105,8 @@ def solve(
     seed : int, optional
         Passed to methods that take one (randomised ones); ignored by the others.
     time_limit : float, optional
-        Wall-clock seconds for the whole call (DESIGN.md invariant 4): the clock starts on
-        entry; the warm-start heuristics of an exact method get a share of it
+        Wall-clock seconds for the whole call (docs/architecture.md, invariant 4): the clock
+        starts on entry; the warm-start heuristics of an exact method get a share of it
         (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
         that take no limit (fast heuristics) ignore it. An exact model stopped by it returns
         its best plan with status "time_limit" and a proven bound; with no plan found in

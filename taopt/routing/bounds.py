@@ -1,7 +1,7 @@
 """Chapter 2 bounds: the thesis's Algorithm 1 ("MCGA"), a valid arborescence bound, f_da.
 
 Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
-(DESIGN invariant 3):
+(docs/architecture.md, invariant 3):
 
 * :func:`arborescence_bound` — **valid** for every non-negative matrix. Every
   feasible solution (one open path per vehicle) plus zero-cost edges from a

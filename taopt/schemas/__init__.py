@@ -1,8 +1,8 @@
 """JSON Schemas of taopt's file formats, and the strict reader that applies them.
 
-Every file taopt reads is checked here before any object is built (DESIGN
-invariant 8): the text must be UTF-8 JSON without the ``NaN``/``Infinity``
-literals Python's :mod:`json` accepts, and the data must match the JSON Schema
+Every file taopt reads is checked here before any object is built
+(docs/architecture.md, invariant 8): the text must be UTF-8 JSON without the
+``NaN``/``Infinity`` literals Python's :mod:`json` accepts, and the data must match the JSON Schema
 (draft 2020-12) of its kind, shipped beside this module as
 ``<kind>.schema.json``. A failure is an :class:`~taopt.errors.InstanceError`
 whose message names the file, the JSON path and the value, e.g.
