@@ -1213,11 +1213,6 @@ def solve_joint(
     return solve_capability(problem, "joint", time_limit=time_limit, incumbent=incumbent, sec=sec)
 
 
-def solve_printed(problem: CapabilityProblem, time_limit: float | None = None) -> Solution:
-    """(3.1)–(3.3) as printed: a relaxation; its value is a lower bound, its arcs explained."""
-    return solve_capability(problem, "printed", time_limit=time_limit)
-
-
 def describe(
     problem: CapabilityProblem, formulation: str = "joint", sec: str = "dfj", show: bool = True
 ) -> list[dict[str, Any]]:

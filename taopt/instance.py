@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -370,10 +369,6 @@ def check_square(rows: Any, where: str, source: str) -> None:
                 f"{source}: {where}[{i}]: expected {len(rows)} numbers "
                 f"(the matrix must be square), got {len(row)}"
             )
-
-
-def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") -> tuple[Target, ...]:
-    return tuple(Target(f"{prefix}{k}", tuple(p)) for k, p in enumerate(points))
 
 
 __all__ = [

@@ -180,10 +180,6 @@ class Family:
         exports = {self.problem_type.__name__: self.problem_type, **dict(self.exports)}
         object.__setattr__(self, "exports", exports)
 
-    def valid_bounds(self, side: str = "lower") -> dict[str, Bound]:
-        """Its valid bounds of one side (``"lower"`` included when declared)."""
-        return {k: b for k, b in self.bounds.items() if b.valid and b.side == side}
-
 
 @dataclass(frozen=True)
 class Method:

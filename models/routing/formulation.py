@@ -72,15 +72,6 @@ class RoutingModel:
     cuts: list[tuple[int, ...]] = field(default_factory=list)
     relax: bool = False
 
-    def arc_matrix(self) -> np.ndarray:
-        """σ as a dense ``(n + m) × n`` matrix (zeros on the masked diagonal)."""
-        n = int(self.heads.max()) + 1 if len(self.heads) else 0
-        size = int(self.tails.max()) + 1 if len(self.tails) else 0
-        matrix = np.zeros((size, n))
-        if self.arc_use.value is not None:
-            matrix[self.tails, self.heads] = self.arc_use.value
-        return matrix
-
 
 def _check(problem: Any, sec: str) -> None:
     require(problem, AssignmentProblem, "solve_routing")

@@ -17,7 +17,7 @@ the current and the next layer's values and compact back-pointers, with
 The optimal order found is scheduled again by :func:`taopt.delivery.schedule.schedule`
 (the fixed-order DP, made of :func:`_sortie_step`) and the plan is scored by
 :func:`taopt.delivery.evaluate.evaluate_plan`; the DP's own value must agree
-(:func:`taopt.delivery.schedule._scored`).
+(:func:`taopt.delivery.schedule._matches`).
 """
 
 from __future__ import annotations

@@ -25,7 +25,6 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.limits import Deadline
@@ -137,20 +136,6 @@ def _sortie_step(
     recovery += penalty  # + τ where (5.6) holds, +inf elsewhere
     launch_pos = recovery.argmin(axis=0)
     return prev_pos, served, launch_pos, recovery[launch_pos, columns]
-
-
-def _scored(instance: DeliveryInstance, plan: Plan, dp_value: float, who: str) -> float:
-    """The scorer's makespan of a complete plan, checked against the DP's own value.
-
-    Raises
-    ------
-    SolverError
-        The two differ by more than :data:`MATCH_TOLERANCE` relative (a bug: the DP and
-        :func:`taopt.delivery.evaluate.evaluate_plan` disagree on the timing semantics).
-    """
-    value = evaluate_plan(instance, plan)
-    _matches(value, dp_value, who, plan)
-    return value
 
 
 def _matches(value: float, dp_value: float, who: str, plan: Plan) -> None:
