@@ -12,8 +12,8 @@ def generated_pages() -> dict[str, str]:
     an edit to any page."""
     from taopt import schemas
     from taopt.orchestration.pipeline import available_methods
-    from taopt.result import payload_schemas
     from taopt.registry import families
+    from taopt.result import payload_schemas
 
     rows = []
     for family in sorted(families(), key=lambda f: f.kind):
