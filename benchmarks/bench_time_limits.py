@@ -1,6 +1,6 @@
 """Wall-clock time limits: for each family, T, the elapsed wall time and the overrun.
 
-The contract (DESIGN.md invariant 4, issue 15 item 2): ``taopt.solve(problem, method,
+The contract (docs/architecture.md, invariant 4, issue 15 item 2): ``taopt.solve(problem, method,
 time_limit=T)`` returns within T + 0.5 s of being called, everything included (warm start,
 model building, separation, decoding), with status "time_limit" (or "optimal" if it proved
 the optimum in time), a proven bound and no exception.

@@ -30,6 +30,7 @@ import taopt  # noqa: E402
 
 for _name, _text in generated_pages().items():
     _page = HERE / _name
+    _page.parent.mkdir(parents=True, exist_ok=True)
     if not _page.is_file() or _page.read_text(encoding="utf-8") != _text:
         _page.write_text(_text, encoding="utf-8")
 
@@ -59,6 +60,7 @@ exclude_patterns = [
     "reproduction/data",
     "reproduction/counterexamples",
     "README.md",
+    "_includes",  # generated fragments, included into pages (docs/generated.py)
 ]
 
 # -- HTML ----------------------------------------------------------------------------------

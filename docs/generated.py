@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 
 def generated_pages() -> dict[str, str]:
     """The pages written from the family specs and the schema folder at every build (not kept
@@ -11,6 +13,7 @@ def generated_pages() -> dict[str, str]:
     from taopt import schemas
     from taopt.orchestration.pipeline import available_methods
     from taopt.registry import families
+    from taopt.result import payload_schemas
 
     rows = []
     for family in sorted(families(), key=lambda f: f.kind):
@@ -73,7 +76,45 @@ def generated_pages() -> dict[str, str]:
             "```",
             "",
         ]
-    return {"kinds.md": kinds, "schemas.md": "\n".join(parts), "api/index.md": api_index()}
+    payloads = payload_schemas()
+    parts += [
+        "(schema-payloads)=",
+        "## Payload kinds of `solution`",
+        "",
+        "`solution.schema.json` lists no payload kind: each payload type declares its schema "
+        "where it is registered (`taopt.result.register_payload`), and "
+        "`taopt.schemas.schema('solution')` adds it as `$defs/<payload_kind>` with the rule "
+        "that a solution of that `payload_kind` carries such a payload. Today's:",
+        "",
+    ]
+    for name, payload_schema in payloads.items():
+        parts += [f"### `{name}`", "", "```json", json.dumps(payload_schema, indent=2), "```", ""]
+    return {
+        "kinds.md": kinds,
+        "schemas.md": "\n".join(parts),
+        "api/index.md": api_index(),
+        "_includes/family-kinds.md": family_kinds_table(),
+    }
+
+
+def family_kinds_table() -> str:
+    """docs/file-formats.md's table of the problem kinds, one row per family spec (included
+    there, so a new family's kind is listed without an edit; its links are resolved from
+    the including page)."""
+    from taopt.registry import families
+
+    rows = [
+        "| kind | schema | read by | written by |",
+        "|---|---|---|---|",
+    ]
+    for family in sorted(families(), key=lambda f: f.kind):
+        name = family.problem_type.__name__
+        readers = [f"`{name}.load`", "`taopt solve`"]
+        rows.append(
+            f"| `{family.kind}` | [`{family.kind}.schema.json`](schemas.md#{family.kind}) | "
+            f"{', '.join(readers)} | `{name}.save` |"
+        )
+    return "\n".join(rows) + "\n"
 
 
 def api_index() -> str:

@@ -9,8 +9,8 @@ reachable from everywhere at cost 0.
 
 Each runs in the chapter 2 peers' worker process (``_peer_worker.py``, whose PyVRP and
 OR-Tools models add the load and time dimensions when a request carries ``capacity`` and
-``max_time``), for the reason given in :mod:`taopt.heuristics.peers` (DESIGN.md "Known
-trap"); the worker management (start-up handshake, Ctrl-C, crashes, hangs) is that
+``max_time``), for the reason given in :mod:`taopt.heuristics.peers` (docs/architecture.md "Known
+traps"); the worker management (start-up handshake, Ctrl-C, crashes, hangs) is that
 module's.
 
 Integer units

@@ -84,16 +84,16 @@ from taopt.errors import InstanceError, SolverError, require
 from taopt.registry import register_method
 from taopt.result import (
     FEASIBLE,
-    INFEASIBLE,
     NO_SOLUTION,
     Order,
     Routes,
     Solution,
+    finish,
     make_solution,
 )
 from taopt.routing.problem import AssignmentProblem
 from taopt.sop.problem import SopProblem
-from taopt.status import outcome
+from taopt.status import RAW_OUTCOMES
 
 __all__ = [
     "LARGEST_ENTRY",
@@ -570,7 +570,7 @@ def _cpsat_run(
     """Send one CP-SAT request to the worker and turn its reply into a Solution.
 
     Shared by both families' registrations: scored once by taopt's scorer, status by
-    :func:`taopt.status.outcome`, bound in the problem's units (see :func:`cpsat_sop`).
+    :func:`taopt.result.finish`, bound in the problem's units (see :func:`cpsat_sop`).
     """
     options = request["options"]
     time_limit = options["time_limit"]
@@ -594,27 +594,22 @@ def _cpsat_run(
     if reply["cpsat_status"] == "OPTIMAL" and payload is None:
         raise SolverError("cpsat reported OPTIMAL without a solution")
     seed = options["seed"]
+    infeasible = RAW_OUTCOMES["cpsat"].get(reply["cpsat_status"]) == "infeasible"
     try:  # scored once by taopt's scorer; the status follows from that objective
-        result = make_solution(
-            problem, payload, method="cpsat", status=FEASIBLE, runtime=runtime, seed=seed
+        return finish(
+            problem,
+            payload,
+            method="cpsat",
+            stop=reply["cpsat_status"],
+            solver="cpsat",
+            time_limited=time_limit is not None,
+            bound=np.inf if infeasible else bound,
+            runtime=runtime,
+            seed=seed,
+            info=info,
         )
     except Exception as exc:
         raise SolverError(f"cpsat returned a solution that fails the check: {exc}") from None
-    objective = result.objective
-    status, stopped_by = outcome(
-        "cpsat",
-        reply["cpsat_status"],
-        objective=objective,
-        bound=bound,
-        time_limited=time_limit is not None,
-        has_point=payload is not None,
-    )
-    info["stopped_by"] = stopped_by
-    if status == INFEASIBLE:
-        bound = np.inf
-    elif bound is not None:
-        bound = min(bound, objective)
-    return result.replace(status=status, bound=bound, info=info)
 
 
 @register_method(SopProblem, "cpsat", category="peer", requires="ortools")
@@ -647,7 +642,7 @@ def cpsat_sop(
     Returns
     -------
     Solution
-        Method "cpsat". Status by :func:`taopt.status.outcome` (the one rule): CP-SAT's
+        Method "cpsat". Status by :func:`taopt.status.decide` (the one rule): CP-SAT's
         OPTIMAL -> "optimal" when its bound (in the problem's units) closes the gap,
         else "feasible"; FEASIBLE -> "time_limit"; no solution -> "time_limit" with
         objective ``inf``; INFEASIBLE -> "infeasible".

@@ -37,12 +37,11 @@ from taopt.models.comm import solve_comm  # registers CommProblem "exact"
 from taopt.models.delivery import solve_delivery
 from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
-from taopt.registry import register_method, register_relaxation
+from taopt.registry import register_method
 from taopt.routing.problem import AssignmentProblem
 from taopt.sop.problem import SopProblem
 
 
-@register_relaxation(AssignmentProblem)  # taopt.lower(problem, "strong") takes it
 def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> float:
     """Valid lower bound from the LP relaxation of the exact model (2.2)–(2.5).
 
@@ -50,7 +49,8 @@ def lp_bound(problem: AssignmentProblem, sec: str = "dfj", **options: Any) -> fl
     objective (the relaxation's value). With "dfj" (all of (2.5)) the LP lies inside the
     arborescence polytope (in-degree 1 plus the subtour constraints imply a cut into every
     target set), so it is never below ``taopt.bounds.arborescence``; "mtz" and "flow"
-    give weaker LPs.
+    give weaker LPs. ``taopt.bounds.lower(problem, "strong")`` takes the same DFJ value
+    from the core (:func:`taopt.routing.bounds.lp_bound`).
     """
     result = solve_routing(problem, sec=sec, relax=True, **options)
     return float(result.bound if result.bound is not None else result.objective)

@@ -39,7 +39,7 @@ Measurements (n50m10 drift scenarios, ``benchmarks/bench_budgeted.py``) are in
 Reused from chapter 2 (:mod:`taopt.models.routing`): the arc list, exact separation and
 row writing of (2.5), the Karp patching of a MIP answer's cycles, the first bounds; and
 the live HiGHS model (:class:`taopt.models.highs.HighsModel`) with its status rule
-:func:`~taopt.models.highs.certify`. A problem without any finite limit is chapter 2's:
+:func:`taopt.status.decide` (through :func:`taopt.result.finish`). A problem without any finite limit is chapter 2's:
 it is solved by :func:`~taopt.models.routing.solve_routing` on ``problem.routing``.
 
 References
@@ -67,7 +67,7 @@ from taopt.budgeted.problem import (
 )
 from taopt.errors import InstanceError, SolverError, require
 from taopt.limits import Deadline, milp_bytes, register_footprint
-from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, certify, relative_gap
+from taopt.models.highs import OPTIMALITY_TOLERANCE, HighsModel, relative_gap
 from taopt.models.routing import (
     HIGHS_OVERRUN,
     arc_list,
@@ -81,7 +81,7 @@ from taopt.models.routing import (
 )
 from taopt.models.routing.dfj import IMPROVE_MIN_SECONDS
 from taopt.registry import register_method
-from taopt.result import INFEASIBLE, Routes, Solution
+from taopt.result import Routes, Solution, finish, make_solution
 from taopt.routing.bounds import arborescence_bound
 
 #: HiGHS options of the MIP rounds (as chapter 2's DFJ loop).
@@ -727,27 +727,6 @@ def _as_routes(problem: BudgetedProblem, incumbent: Any) -> tuple[list[list[int]
     return routes, ""
 
 
-def _result(
-    problem: BudgetedProblem,
-    routes: list[list[int]] | None,
-    status: str,
-    bound: float | None,
-    deadline: Deadline,
-    info: dict[str, Any],
-) -> Solution:
-    """The one place this module builds a Solution: the objective by the one scorer."""
-    objective = math.inf if routes is None else evaluate_budgeted(problem, routes)
-    return Solution(
-        objective=objective,
-        status=status,
-        bound=bound,
-        runtime=deadline.elapsed(),
-        method="exact-budgeted",
-        solution=None if routes is None else Routes(routes),
-        info=info,
-    )
-
-
 def total_time_cap(problem: BudgetedProblem) -> float | None:
     """``Σ_k T_k`` (with the scorer's tolerance) when every vehicle has a time limit, else
     None: no feasible answer takes longer in total, so a lower bound above it proves that
@@ -763,8 +742,16 @@ def _infeasible(
 ) -> Solution:
     """The one way this module reports status "infeasible": no answer, the reason in
     ``info["proof"]``, and the bound +inf (no assignment meets the limits)."""
-    info.update(stopped_by="infeasible", proof=proof)
-    return _result(problem, None, INFEASIBLE.value, math.inf, deadline, info)
+    info.update(proof=proof)
+    return finish(
+        problem,
+        None,
+        method="exact-budgeted",
+        stop="infeasible",
+        bound=math.inf,
+        runtime=deadline.elapsed(),
+        info=info,
+    )
 
 
 def _too_long(
@@ -903,7 +890,15 @@ def solve_budgeted(
             max_rounds=max_rounds, incumbent=given,
         )  # fmt: skip
         info.update(plain.info, model="chapter 2 (no finite limit)")
-        return _result(problem, plain.routes, plain.status.value, plain.bound, deadline, info)
+        return make_solution(  # chapter 2's status and bound, re-scored for this problem
+            problem,
+            None if plain.routes is None else Routes(plain.routes),
+            method="exact-budgeted",
+            status=plain.status,
+            bound=plain.bound,
+            runtime=deadline.elapsed(),
+            info=info,
+        )
     if problem.capacity.sum() < n:
         proof = f"the capacities sum to {problem.capacity.sum():g} < n = {n}"
         return _infeasible(problem, proof, deadline, info)
@@ -953,10 +948,16 @@ def solve_budgeted(
         consider_start(repaired_routes(problem, free.routes))
 
     def stop(stopped_by: str, extra: dict[str, Any]) -> Solution:
-        bound = best_bound if best_routes is None else min(best_bound, best_value)
-        status, why = certify(best_value, bound, stopped_by)
-        info.update(extra, stopped_by=why, mip_gap=mip_gap, improved=improved)
-        return _result(problem, best_routes, status, bound, deadline, info)
+        info.update(extra, mip_gap=mip_gap, improved=improved)
+        return finish(
+            problem,
+            None if best_routes is None else Routes(best_routes),
+            method="exact-budgeted",
+            stop=stopped_by,
+            bound=best_bound,
+            runtime=deadline.elapsed(),
+            info=info,
+        )
 
     if deadline.limited and deadline.remaining() < SECONDS_PER_COLUMN * (n + 1) * n * m:
         return stop("time_limit", {"stage": "build"})

@@ -80,8 +80,7 @@ from taopt.errors import InstanceError, SolverError, require
 from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import solve_highs
 from taopt.models.routing import solve_routing
-from taopt.result import OPTIMAL, RELAXATION, TIME_LIMIT, Routes, Solution, make_solution
-from taopt.status import certify
+from taopt.result import OPTIMAL, RELAXATION, Routes, Solution, finish, make_solution
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -701,14 +700,14 @@ def solve_classes(
     for cls in solvable:  # a class killed past its limit: its incumbent (if any), bound 0
         if cls.capability not in results:
             given = starts.get(cls.capability)
-            results[cls.capability] = make_solution(
+            results[cls.capability] = finish(
                 cls.problem,
                 None if given is None else Routes(given),
                 method="exact-dfj",
-                status=TIME_LIMIT,
+                stop="time_limit",
                 bound=0.0,
                 runtime=time.perf_counter() - start,
-                info={"stopped_by": "time_limit", "killed": True},
+                info={"killed": True},
             )
     unfinished = [c for c in solvable if results[c.capability].status != OPTIMAL]
     if unfinished and left() >= 0.05:
@@ -719,10 +718,12 @@ def solve_classes(
                 continue
             best = again if again.objective < first.objective else first
             proven = max(b for b in (first.bound, again.bound, 0.0) if b is not None)
-            status, _ = certify(best.objective, min(proven, best.objective), "time_limit")
-            results[cls.capability] = best.replace(
-                bound=min(proven, best.objective),
-                status=status,
+            results[cls.capability] = finish(
+                cls.problem,
+                best.solution,
+                method=best.method,
+                stop="time_limit",
+                bound=proven,
                 runtime=first.runtime + again.runtime,
                 info={**best.info, "passes": 2},
             )
@@ -781,26 +782,24 @@ def _solve_corrected(
         "classes": split.per_class,
     }
     if not split.complete:  # a class has no plan in time
-        return make_solution(
+        return finish(
             problem,
             None,
             method="exact-corrected",
-            status=TIME_LIMIT,
+            stop="time_limit",
             bound=split.bound,
             runtime=time.perf_counter() - start,
-            info={**info, "stopped_by": "time_limit"},
+            info=info,
         )
-    routes = Routes(problem.join(split.class_routes()))
-    solution = make_solution(  # certified on the scored objective (gap 0 when bound >= it)
+    return finish(  # certified on the scored objective (gap 0 when bound >= it)
         problem,
-        routes,
+        Routes(problem.join(split.class_routes())),
         method="exact-corrected",
-        stopped_by=split.stopped_by,
+        stop=split.stopped_by,
         bound=split.bound,
         runtime=time.perf_counter() - start,
         info=info,
     )
-    return solution.replace(bound=min(split.bound, solution.objective))
 
 
 # ------------------------------------------------------------------------------- joint
@@ -1044,27 +1043,24 @@ def _solve_joint(
         if stopped_by != "time_limit":
             raise SolverError(f"the joint model found no feasible solution ({solver_status})")
         # no plan in time: status time_limit, objective inf, the bound stands
-        bound = max(best_bound, float(arborescence_lower(problem)))
-        info = joint_info("time_limit")
-        return make_solution(
+        return finish(
             problem,
             None,
             method="exact-joint",
-            status=TIME_LIMIT,
-            bound=bound,
+            stop="time_limit",
+            bound=max(best_bound, float(arborescence_lower(problem))),
             runtime=time.perf_counter() - start,
-            info=info,
+            info=joint_info("time_limit"),
         )
     if stopped_by == "time_limit":  # a valid bound of the family keeps the gap honest
         best_bound = max(best_bound, float(arborescence_lower(problem)))
-    bound = min(best_bound, best_value)
-    status, stopped_by = certify(best_value, bound, stopped_by)
+    bound = best_bound
     info = joint_info(stopped_by)
-    return make_solution(
+    return finish(
         problem,
         Routes(best_routes),
         method="exact-joint",
-        status=status,
+        stop=stopped_by,
         bound=bound,
         runtime=time.perf_counter() - start,
         info=info,
@@ -1125,7 +1121,7 @@ def solve_capability(
     -------
     Solution
         Routes (one per vehicle), objective = ``evaluate(routes)``, status by the one rule
-        of :func:`taopt.models.highs.certify`, ``bound`` the sum of the proven class bounds
+        of :func:`taopt.status.decide`, ``bound`` the sum of the proven class bounds
         (corrected) or the MIP bound (joint); ``info["classes"]`` has each class's status,
         objective, bound and time, ``info["workers"]`` the processes used (corrected).
 
@@ -1215,11 +1211,6 @@ def solve_joint(
 ) -> Solution:
     """The corrected model as one MILP over all classes (for teaching)."""
     return solve_capability(problem, "joint", time_limit=time_limit, incumbent=incumbent, sec=sec)
-
-
-def solve_printed(problem: CapabilityProblem, time_limit: float | None = None) -> Solution:
-    """(3.1)–(3.3) as printed: a relaxation; its value is a lower bound, its arcs explained."""
-    return solve_capability(problem, "printed", time_limit=time_limit)
 
 
 def describe(

@@ -9,7 +9,7 @@ chapter 2 problems. The classes are solved by chapter 3's decomposition,
 :func:`taopt.models.capability.solve_classes` (chapter 2's exact model
 :func:`taopt.models.solve_routing` per class, one shared wall-clock limit); the classes'
 routes are joined and driven as straight lines, which is what (4.1) scores. The bound is
-the sum of the classes' proven bounds, and the status is :func:`taopt.status.certify`'s
+the sum of the classes' proven bounds, and the status is :func:`taopt.status.decide`'s
 ("optimal" only when the gap is closed).
 
 Any simulation's trajectories are at least f_o long (its first visits form routes that
@@ -32,7 +32,7 @@ from taopt.errors import InstanceError
 from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability import solve_classes
 from taopt.registry import register_method
-from taopt.result import TIME_LIMIT, Routes, Solution, make_solution
+from taopt.result import Routes, Solution, finish
 
 
 def drive(problem: CommProblem, routes: Sequence[Sequence[int]]) -> Trajectories:
@@ -99,7 +99,7 @@ def solve_comm(
     -------
     Solution
         Payload: the trajectories of driving the optimal routes; status by
-        :func:`taopt.status.certify` of their length against bound = Σ class bounds:
+        :func:`taopt.status.decide` of their length against bound = Σ class bounds:
         "optimal" when the gap is closed, else "time_limit" (or "feasible" when the first
         unfinished class stopped by a gap or round limit); with a class without routes
         in time, "time_limit", objective ``inf`` and no payload. ``info`` holds
@@ -143,29 +143,28 @@ def solve_comm(
         "workers": split.workers,
     }
     if not split.complete:  # a class has no routes in time: no trajectories
-        return make_solution(
+        return finish(
             problem,
             None,
             method="exact",
-            status=TIME_LIMIT,
+            stop="time_limit",
             bound=split.bound,
             runtime=time.perf_counter() - began,
-            info={**info, "routes": None, "stopped_by": "time_limit"},
+            info={**info, "routes": None},
         )
     routes: list[list[int]] = [[] for _ in range(problem.m)]
     for cls in solved:
         for j, route in cls.lift(split.results[cls.capability].routes).items():
             routes[j] = route
-    solution = make_solution(  # certified on the scored length (4.1) of the driven routes
+    return finish(  # certified on the scored length (4.1) of the driven routes
         problem,
         drive(problem, routes),
         method="exact",
-        stopped_by=split.stopped_by,
+        stop=split.stopped_by,
         bound=split.bound,
         runtime=time.perf_counter() - began,
         info={**info, "routes": routes},
     )
-    return solution.replace(bound=min(split.bound, solution.objective))
 
 
 register_method(CommProblem, "exact", category="exact", warm_start=("DAA",))(solve_comm)

@@ -91,7 +91,6 @@ Example
 from __future__ import annotations
 
 import logging
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -107,8 +106,7 @@ from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.models.highs import solve_highs
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, make_solution
-from taopt.status import certify
+from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, finish
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -602,16 +600,14 @@ def _stopped(
     """Status "time_limit" before HiGHS found a plan: the incumbent (or no plan, objective
     inf) and the larger of HiGHS's bound and Proposition 5.3's arborescence bound."""
     tree = arborescence_bound(instance)
-    bound = tree if bound is None else max(bound, tree)
-    objective = math.inf if known is None else known[0]
-    return make_solution(
+    return finish(
         instance,
         None if known is None else known[1],
         method="exact-milp",
-        status=TIME_LIMIT,
-        bound=min(bound, objective),
+        stop="time_limit",
+        bound=tree if bound is None else max(bound, tree),
         runtime=time.perf_counter() - began,
-        info={"stopped_by": "time_limit", **info},
+        info=info,
     )
 
 
@@ -753,14 +749,11 @@ def solve_delivery(
     if run.status != OPTIMAL:  # also Proposition 5.3's valid bound, so a limit keeps a gap
         arborescence = arborescence_bound(instance)
         bound = arborescence if bound is None else max(bound, arborescence)
-    bound = None if bound is None else min(bound, objective)
-    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
-    status, stopped_by = certify(objective, bound, stopped_by)
-    return make_solution(
+    return finish(  # the one status rule: optimal only when proven within 1e-6
         instance,
         plan,
         method="exact-milp",
-        status=status,
+        stop=stopped_by,
         bound=bound,
         runtime=time.perf_counter() - began,
         info={
@@ -771,6 +764,5 @@ def solve_delivery(
             "mip_gap": run.mip_gap,
             "cutoff": cutoff,
             "solver_status": run.solver_status,
-            "stopped_by": stopped_by,
         },
     )

@@ -2,7 +2,7 @@
 
 Every exact model of :mod:`taopt.models` (routing, delivery, SOP) solves
 through :func:`solve_highs`, so the three agree on what "optimal" means
-(DESIGN invariant 4, "exact means certified"):
+(docs/architecture.md, invariant 4, "exact means certified"):
 
 * **optimal** only when the incumbent is proven within
   :data:`OPTIMALITY_TOLERANCE` (relative gap ``(objective − bound) /
@@ -12,10 +12,10 @@ through :func:`solve_highs`, so the three agree on what "optimal" means
 * a run stopped by ``time_limit`` with a point is **time_limit**, with the
   proven bound.
 
-The rule is :func:`taopt.status.outcome` (on HiGHS's raw status) and
-:func:`taopt.status.certify` (re-exported here), which the models apply to their final
-answer, after they combine the solver's bound with their own valid bounds
-and re-score the decoded solution.
+The rule is :func:`taopt.status.decide` (here on HiGHS's raw status); the models end
+through :func:`taopt.result.finish`, which applies the same rule to their final answer
+after they combine the solver's bound with their own valid bounds and re-score the
+decoded solution.
 
 Two ways to solve. :func:`solve_highs` hands a cvxpy problem to cvxpy's HiGHS
 interface (one solve, values written back into the cvxpy variables).
@@ -65,7 +65,7 @@ from highspy._core import _Highs
 
 from taopt.errors import SolverError
 from taopt.result import ERROR
-from taopt.status import OPTIMALITY_TOLERANCE, certify, outcome, relative_gap
+from taopt.status import OPTIMALITY_TOLERANCE, decide, relative_gap
 
 #: A MIP run whose reported objective differs from ``c·x + offset`` of its own point by more
 #: than this (relative, at least 1e-6 absolute) is not trusted (see :meth:`HighsModel.solve`).
@@ -80,7 +80,6 @@ __all__ = [
     "solver_interrupted",
     "HighsModel",
     "HighsRun",
-    "certify",
     "new_highs",
     "relative_gap",
     "solve_highs",
@@ -300,7 +299,7 @@ class HighsRun:
     Attributes
     ----------
     status : str
-        taopt status by :func:`certify`: "optimal", "feasible" (loose
+        taopt status by :func:`taopt.status.decide`: "optimal", "feasible" (loose
         ``mip_rel_gap``), "time_limit", "infeasible" or "error".
     stopped_by : str
         "optimal", "mip_gap", "time_limit", "solver_limit" (a HiGHS limit other
@@ -419,11 +418,11 @@ def solve_highs(
         bound = dual_bound if math.isfinite(dual_bound) else None
     elif solver_status == "optimal" and has_point:
         bound = _number(info, "objective_function_value")  # an LP at its optimum
-    status, stopped_by = outcome(
-        "highs",
+    status, stopped_by = decide(
         solver_status,
-        objective=objective,
-        bound=bound,
+        objective,
+        bound,
+        solver="highs",
         time_limited=time_limit is not None,
         has_point=has_point,
     )
@@ -472,11 +471,11 @@ def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> 
         bound = dual_bound if math.isfinite(dual_bound) else None
     elif solver_status == "optimal" and has_point:
         bound = objective  # an LP at its optimum
-    status, stopped_by = outcome(
-        "highs",
+    status, stopped_by = decide(
         solver_status,
-        objective=objective,
-        bound=bound,
+        objective,
+        bound,
+        solver="highs",
         time_limited=time_limit is not None,
         has_point=has_point,
     )

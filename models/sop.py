@@ -69,9 +69,17 @@ from scipy.optimize import linear_sum_assignment
 from taopt.errors import InstanceError, SolverError
 from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.models.highs import HighsModel, solve_highs
-from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Order, Solution, make_solution
+from taopt.result import (
+    FEASIBLE,
+    INFEASIBLE,
+    OPTIMAL,
+    TIME_LIMIT,
+    Order,
+    Solution,
+    finish,
+)
 from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
-from taopt.status import certify
+from taopt.status import decide
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -506,15 +514,14 @@ def _stopped(
     bound (:func:`sop_arborescence_bound`)."""
     tree = _cheap_bound(problem)
     bound = tree if bound is None or not np.isfinite(bound) else max(bound, tree)
-    objective = np.inf if known is None else known[0]
-    return make_solution(
+    return finish(
         problem,
         None if known is None else Order(known[1]),
         method=f"exact-sop-{formulation}",
-        status=TIME_LIMIT,
-        bound=min(bound, objective),
+        stop="time_limit",
+        bound=bound,
         runtime=time.perf_counter() - began,
-        info={"stopped_by": "time_limit", **info},
+        info=info,
     )
 
 
@@ -537,14 +544,14 @@ def _unreachable(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) ->
 
 def _infeasible(began: float, formulation: str, proof: str) -> Solution:
     """Status "infeasible" (no path exists), with the reason as ``info["proof"]``."""
-    return make_solution(
+    return finish(
         None,  # no payload to score
         None,
         method=f"exact-sop-{formulation}",
-        status=INFEASIBLE,
+        stop="infeasible",
         bound=np.inf,
         runtime=time.perf_counter() - began,
-        info={"stopped_by": "infeasible", "proof": proof},
+        info={"proof": proof},
     )
 
 
@@ -674,23 +681,20 @@ def solve_sop(
         info = {"model": "solved", "solver_status": run.solver_status, "nodes": run.nodes}
         return _stopped(problem, known, run.bound, began, formulation, info)
     order = decode(model, values)
-    objective = _check_path(model, order, precedences, run.objective)
+    _check_path(model, order, precedences, run.objective)  # the path and its value agree
     bound = run.bound
     if run.status == TIME_LIMIT:  # HiGHS may stop before its root bound beats the tree's
         if problem is None:
             problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
         tree = _cheap_bound(problem)
         bound = tree if bound is None else max(bound, tree)
-    bound = None if bound is None else min(bound, objective)
-    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
-    status, stopped_by = certify(objective, bound, run.stopped_by)
     if problem is None:
         problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
-    return make_solution(
+    return finish(  # the one status rule: optimal only when proven within 1e-6
         problem,
         Order(order),
         method=f"exact-sop-{formulation}",
-        status=status,
+        stop=run.stopped_by,
         bound=bound,
         runtime=time.perf_counter() - began,
         info={
@@ -700,7 +704,6 @@ def solve_sop(
             "mip_gap": run.mip_gap,
             "nodes": run.nodes,
             "solver_status": run.solver_status,
-            "stopped_by": stopped_by,
         },
     )
 
@@ -809,7 +812,7 @@ def solve_sop_problem(
             status = result.status
             if np.isfinite(result.objective):
                 stopped_by = result.info.get("stopped_by") or "time_limit"
-                status, _ = certify(result.objective, bound, stopped_by)
+                status, _ = decide(stopped_by, result.objective, bound)
             result = result.replace(bound=bound, status=status)
         return result
 
@@ -850,7 +853,7 @@ def solve_sop_problem(
                 bound = min(max(first.bound or 0.0, second.bound or 0.0), best.objective)
                 status = TIME_LIMIT
                 if np.isfinite(best.objective):
-                    status, _ = certify(best.objective, bound, "time_limit")
+                    status, _ = decide("time_limit", best.objective, bound)
                 second = best.replace(bound=bound, status=status)
             result = second
         if result.status == TIME_LIMIT and not deadline.expired(MARGIN):

@@ -84,11 +84,13 @@ from typing import Any
 
 import numpy as np
 
+from taopt import ideals
 from taopt.errors import InstanceError
+from taopt.ideals import MAX_BITS, predecessor_masks
+from taopt.ideals import bits as node_bits
 from taopt.limits import MARGIN, Deadline
-from taopt.result import Order, Solution, make_solution
+from taopt.result import Order, Solution, finish
 from taopt.sop.problem import SopProblem, path_cost
-from taopt.status import outcome
 
 __all__ = [
     "MAX_NODES",
@@ -100,7 +102,7 @@ __all__ = [
 ]
 
 #: Ideals are uint64 bitmasks: the DP takes at most 64 nodes.
-MAX_NODES = 64
+MAX_NODES = MAX_BITS
 
 #: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
 IDEAL_CAP = 20_000
@@ -131,17 +133,9 @@ _ONE = np.uint64(1)
 _DIRECT = 1 << 18
 
 
-def _bits(n: int) -> np.ndarray:
-    return np.left_shift(_ONE, np.arange(n, dtype=np.uint64))
-
-
 def _predecessor_masks(problem: SopProblem) -> np.ndarray:
     """``pred[w]``: bitmask of every node that must come before ``w`` (closed relation)."""
-    pred = np.zeros(problem.n, dtype=np.uint64)
-    bits = _bits(problem.n)
-    for r, j in problem.closure.edges:
-        pred[j] |= bits[r]
-    return pred
+    return predecessor_masks(problem.n, problem.closure.edges)
 
 
 def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
@@ -156,40 +150,25 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     Returns
     -------
     count : int
-        The exact number of ideals, or the count reached when ``capped``.
+        The exact number of ideals, or ``cap + 1`` when ``capped``.
     capped : bool
-        True when the count passed ``cap`` (the true number is larger).
+        True when there are more than ``cap`` (the true number is larger).
 
     Notes
     -----
-    Breadth-first over ideal sizes, one numpy ``unique`` per layer: ``O(n · count)``.
-    Precedences only: forbidden arcs are ignored (an upper bound on the sets the DP meets).
+    :func:`taopt.ideals.count_ideals` on the precedence closure, from ``{start}``:
+    ``O(n · count)``. Precedences only: forbidden arcs are ignored (an upper bound on the
+    sets the DP meets).
 
     Example
     -------
     >>> count_ideals(SopProblem.load("ESC07"))
     (41, False)
     """
-    n = problem.n
-    if n > MAX_NODES:
+    if problem.n > MAX_NODES:
         return cap + 1, True
-    pred = _predecessor_masks(problem)
-    bits = _bits(n)
-    layer = np.array([bits[problem.start]], dtype=np.uint64)
-    total = 1
-    for _ in range(n - 1):
-        grown = []
-        for w in range(n):
-            ok = ((layer & bits[w]) == 0) & ((layer & pred[w]) == pred[w])
-            if ok.any():
-                grown.append(layer[ok] | bits[w])
-        if not grown:
-            break
-        layer = np.unique(np.concatenate(grown))
-        total += len(layer)
-        if total > cap:
-            return total, True
-    return total, False
+    first = int(_ONE << np.uint64(problem.start))
+    return ideals.count_ideals(_predecessor_masks(problem), problem.n, cap, first=first)
 
 
 class _Bound:
@@ -217,7 +196,7 @@ class _Bound:
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
         self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
-        bits = _bits(n)
+        bits = node_bits(n)
         self.bits = bits
         self.into = [self._sorted(usable[:, w], bits) for w in range(n)]
         self.out = [self._sorted(usable[u, :], bits) for u in range(n)]
@@ -434,7 +413,7 @@ class _Search:
         self.usable = np.full((n, n), np.inf)
         self.usable[tails, heads] = problem.cost[tails, heads]
         self.pred = _predecessor_masks(problem)
-        self.bits = _bits(n)
+        self.bits = node_bits(n)
         self.bound = _completion(self.usable, problem.start, problem.end, self.pred)
         self.more_bounds: list[_Bound] = []  # the same bound on other prices (max taken)
         self.trial: dict[int, list[int]] = {}  # per extra bound: states evaluated, pruned
@@ -816,27 +795,25 @@ def solve_sop_dp(
     if stopped_by is None:
         pruned_min = done.pruned_min
         if known is None and not np.isfinite(pruned_min):  # no state can reach the end
-            status, stopped_by = outcome("dp", "infeasible", objective=None, bound=None)
-            return make_solution(
+            return finish(
                 problem,
                 None,
                 method="exact-sop-dp",
-                status=status,
+                stop="infeasible",
                 bound=np.inf,
                 runtime=runtime,
-                info={**info, "stopped_by": stopped_by, "proof": "every ideal expanded"},
+                info={**info, "proof": "every ideal expanded"},
             )
         # every cheaper path was pruned within tolerance: proven to 1e-9 relative
-        bound = min(objective, pruned_min)
-        status, _ = outcome("dp", "complete", objective=objective, bound=bound)
-        return make_solution(
+        return finish(
             problem,
             Order(known[1]),
             method="exact-sop-dp",
-            status=status,
-            bound=bound,
+            stop="complete",
+            solver="dp",
+            bound=min(objective, pruned_min),
             runtime=runtime,
-            info={**info, "stopped_by": None},
+            info=info,
         )
     # stopped: the open layer and the dropped states hold every cheaper path
     # each direction alone proves min(open layer, dropped states); both hold: the larger
@@ -844,20 +821,12 @@ def solve_sop_dp(
     if cheap_bound is None:
         cheap_bound = _cheap_bound(problem)
     proven = max(proven, cheap_bound) if np.isfinite(proven) else max(cheap_bound, 0.0)
-    bound = min(proven, objective)
-    status, _ = outcome(
-        "dp",
-        "stopped",
-        objective=objective,
-        bound=bound,
-        time_limited=stopped_by == "time_limit",
-    )
-    return make_solution(
+    return finish(
         problem,
         None if known is None else Order(known[1]),
         method="exact-sop-dp",
-        status=status,
-        bound=bound,
+        stop=stopped_by,
+        bound=proven,
         runtime=time.perf_counter() - began,
-        info={**info, "stopped_by": stopped_by},
+        info=info,
     )

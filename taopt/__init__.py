@@ -99,36 +99,10 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
-#: The public names that are not a family's (``taopt.__all__`` adds every family's exports).
-_PUBLIC = [
-    # entry points
-    "solve",
-    "available_methods",
-    "evaluate",
-    "schedule",
-    "lower",
-    # the instance file
-    "Instance",
-    "Vehicle",
-    "Target",
-    "Obstacle",
-    # results and payloads
-    "Solution",
-    "Status",
-    "Routes",
-    "Order",
-    # fields
-    "UniformField",
-    "LinearField",
-    "GriddedField",
-    "thesis_field",
-    # errors
-    "TaoptError",
-    "InstanceError",
-    "FeasibilityError",
-    "SolverError",
-    "ConvergenceError",
-    # subpackages used as namespaces
-    "bounds",
-    "navigation",
-]
+#: Subpackages that are public namespaces (``taopt.bounds.lower``, ``taopt.navigation...``).
+_NAMESPACES = ("bounds", "navigation")
+
+#: The public names that are not a family's (``taopt.__all__`` adds every family's exports):
+#: the entry points, the instance file, results and payloads, fields and errors of
+#: :data:`_LAZY`, in its order, and the namespaces.
+_PUBLIC = [*_LAZY, *_NAMESPACES]

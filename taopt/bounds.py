@@ -1,4 +1,4 @@
-"""Bounds, each saying whether it is valid (DESIGN invariant 3), looked up in the family specs.
+"""Bounds, each saying whether it is valid (docs/architecture.md, invariant 3), from the specs.
 
 Each family declares its bounds in its spec (:class:`taopt.registry.Family`, ``bounds``):
 a name, the function, whether it is valid (proven) or kept "as printed" by the thesis, and
@@ -74,10 +74,11 @@ def lower(problem: Any, strength: str = "auto") -> float:
     problem : a registered problem (AssignmentProblem, DeliveryInstance, ...)
     strength : {"fast", "auto", "strong"}
         "fast": the family's Edmonds/MST bound (milliseconds). "auto" (default): the
-        strongest bound that takes seconds at the thesis's sizes. "strong": "auto" plus
-        every LP relaxation registered for the family by an exact-model module
-        (:func:`taopt.registry.register_relaxation`; :func:`taopt.lower` imports them
-        first) — may take minutes.
+        strongest bound that takes seconds at the thesis's sizes. "strong": also the
+        family's LP relaxations (e.g. chapter 2's DFJ LP,
+        :func:`taopt.routing.bounds.lp_bound`) — may take minutes. Every value comes from
+        the family's spec alone, so a call gives the same answer whatever was imported
+        before it.
 
     Returns
     -------
@@ -106,8 +107,6 @@ def lower(problem: Any, strength: str = "auto") -> float:
     ----------
     Thesis Prop. 5.3 (§5.3.2), §2.4.3, Lemma 4.8; Held and Karp (1970).
     """
-    from taopt.registry import relaxations
-
     if strength not in STRENGTHS:
         raise InstanceError(f"strength must be one of {STRENGTHS}, got {strength!r}")
     declared = _declared(problem)
@@ -120,9 +119,6 @@ def lower(problem: Any, strength: str = "auto") -> float:
         if not values:
             raise InstanceError(f"{type(problem).__name__} declares no valid lower bound")
         value = max(values)
-    if strength == "strong":
-        for relaxation in relaxations(problem):
-            value = max(value, float(relaxation(problem)))
     return value
 
 

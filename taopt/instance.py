@@ -4,7 +4,7 @@ An :class:`Instance` is immutable problem data, validated on construction
 (every error an :class:`~taopt.errors.InstanceError` naming the offending
 item), with JSON load/save carrying a schema version. It is the input of the
 navigation layer, which turns it into a travel-time matrix; the assignment
-algorithms only ever see that matrix (DESIGN invariant 2).
+algorithms only ever see that matrix (docs/architecture.md, invariant 2).
 
 Point order follows the thesis (§2.2.1): targets ``0..n-1`` first, then the
 vehicles' start positions ``n..n+m-1``.
@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -370,10 +369,6 @@ def check_square(rows: Any, where: str, source: str) -> None:
                 f"{source}: {where}[{i}]: expected {len(rows)} numbers "
                 f"(the matrix must be square), got {len(row)}"
             )
-
-
-def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") -> tuple[Target, ...]:
-    return tuple(Target(f"{prefix}{k}", tuple(p)) for k, p in enumerate(points))
 
 
 __all__ = [

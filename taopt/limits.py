@@ -2,11 +2,12 @@
 
 Two promises of :func:`taopt.solve` live here.
 
-**A time limit is wall-clock** (DESIGN.md, invariant 4). A :class:`Deadline` is taken when
-the call starts; the warm-start heuristics get a share of it (:data:`WARM_START_SHARE`) and
-the method the *remaining* seconds, so warm start, model building, separation and decoding
-all count. A method that runs out returns its best plan with a proven bound and status
-"time_limit" (objective ``inf`` and no payload when it found no plan): never an exception.
+**A time limit is wall-clock** (docs/architecture.md, invariant 4). A :class:`Deadline` is
+taken when the call starts; the warm-start heuristics get a share of it
+(:data:`WARM_START_SHARE`) and the method the *remaining* seconds, so warm start, model
+building, separation and decoding all count. A method that runs out returns its best plan
+with a proven bound and status "time_limit" (objective ``inf`` and no payload when it found
+no plan): never an exception.
 
 **A size guard refuses what cannot fit.** Before anything is built, the memory a method would
 need is estimated from the problem's size (:func:`footprint`, one estimator registered per

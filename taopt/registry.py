@@ -52,7 +52,7 @@ SIDES = ("lower", "upper")
 
 @dataclass(frozen=True)
 class Bound:
-    """A bound a family declares, and what it may be used for (DESIGN invariant 3).
+    """A bound a family declares, and what it may be used for (docs/architecture.md, invariant 3).
 
     Attributes
     ----------
@@ -148,6 +148,10 @@ class Family:
         this family (exactly one family accepts any instance).
     studies : tuple of Study
         Its ``taopt study`` commands.
+    describe : callable, optional
+        ``describe(problem, payload, instance=None) -> list of str``: the payload spelt with
+        the ids drawn on the plot (``taopt solve --plot`` prints these lines under it; an
+        ``instance`` gives the ids, else ``t0, t1, ...``). None: nothing is printed.
     exports : dict
         Public names reachable as ``taopt.<name>`` (the problem type at least).
     """
@@ -163,6 +167,7 @@ class Family:
     plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     adapter: Callable[..., Any] | None = None
     studies: tuple[Study, ...] = ()
+    describe: Callable[..., list[str]] | None = None
     exports: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -174,10 +179,6 @@ class Family:
         object.__setattr__(self, "bounds", bounds)
         exports = {self.problem_type.__name__: self.problem_type, **dict(self.exports)}
         object.__setattr__(self, "exports", exports)
-
-    def valid_bounds(self, side: str = "lower") -> dict[str, Bound]:
-        """Its valid bounds of one side (``"lower"`` included when declared)."""
-        return {k: b for k, b in self.bounds.items() if b.valid and b.side == side}
 
 
 @dataclass(frozen=True)
@@ -282,7 +283,7 @@ def _installed(package: str) -> bool:
     """Whether top-level ``package`` can be imported, found without importing it.
 
     ``importlib.util.find_spec`` only locates the package: importing ``ortools`` into a
-    process that uses HiGHS would break cvxpy's HiGHS (DESIGN.md, "Known trap").
+    process that uses HiGHS would break cvxpy's HiGHS (docs/architecture.md, "Known traps").
     """
     return importlib.util.find_spec(package) is not None
 
@@ -411,32 +412,6 @@ def register_method(
     return wrap
 
 
-_RELAXATIONS: dict[type, list[Callable[[Any], float]]] = {}
-
-
-def register_relaxation(
-    problem_type: type,
-) -> Callable[[Callable[..., float]], Callable[..., float]]:
-    """Decorator: ``func(problem) -> float`` is a valid lower bound from a relaxation of an
-    exact model (an LP); :func:`taopt.bounds.lower` with ``strength="strong"`` takes it.
-
-    Exact-model modules register theirs where they are defined, so the core never imports them.
-    """
-
-    def wrap(func: Callable[..., float]) -> Callable[..., float]:
-        found = _RELAXATIONS.setdefault(problem_type, [])
-        if func not in found:
-            found.append(func)
-        return func
-
-    return wrap
-
-
-def relaxations(problem: Any) -> list[Callable[[Any], float]]:
-    """The relaxation bounds registered for the family of ``problem`` (imported modules only)."""
-    return list(_RELAXATIONS.get(family_of(problem).problem_type, []))
-
-
 _IMPROVERS: dict[type, Callable[..., Any]] = {}
 
 
@@ -563,8 +538,6 @@ __all__ = [
     "Method",
     "register_family",
     "register_method",
-    "register_relaxation",
-    "relaxations",
     "register_improver",
     "improver",
     "ensure_families",

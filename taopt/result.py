@@ -28,7 +28,6 @@ True
 from __future__ import annotations
 
 import dataclasses
-import enum
 import json
 import math
 import os
@@ -38,62 +37,83 @@ from typing import Any
 
 import numpy as np
 
+from taopt import schemas
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.families import ensure_families
 
-
-class Status(str, enum.Enum):
-    """Named statuses. Only a proven optimum is called OPTIMAL."""
-
-    OPTIMAL = "optimal"
-    TIME_LIMIT = "time_limit"  # stopped by a limit: objective is the incumbent, bound is proven
-    FEASIBLE = "feasible"  # a feasible solution with no optimality claim (heuristics)
-    RELAXATION = "relaxation"  # the value of a relaxation: a bound, not a solution
-    INFEASIBLE = "infeasible"
-    # a heuristic or peer ended without a feasible answer: its outcome, not a proof that
-    # none exists, and not a failure of the method (the reason is in ``info["error"]``)
-    NO_SOLUTION = "no_solution"
-    ERROR = "error"
-
-    def __str__(self) -> str:
-        return self.value
-
-    def __repr__(self) -> str:  # a str enum: shown as the string it equals
-        return repr(self.value)
-
-    def __format__(self, spec: str) -> str:
-        return format(self.value, spec)
-
-
-OPTIMAL = Status.OPTIMAL
-TIME_LIMIT = Status.TIME_LIMIT
-FEASIBLE = Status.FEASIBLE
-RELAXATION = Status.RELAXATION
-INFEASIBLE = Status.INFEASIBLE
-NO_SOLUTION = Status.NO_SOLUTION
-ERROR = Status.ERROR
-STATUSES = tuple(Status)
+# the statuses are the status rule's (taopt.status, which imports nothing of this module)
+from taopt.status import (
+    ERROR,
+    FEASIBLE,
+    INFEASIBLE,
+    NO_SOLUTION,
+    OPTIMAL,
+    RELAXATION,
+    STATUSES,
+    TIME_LIMIT,
+    Status,
+    decide,
+)
 
 # -- payloads ------------------------------------------------------------------------------
 
 _PAYLOADS: dict[str, type] = {}
+_PAYLOAD_SCHEMAS: dict[str, dict[str, Any]] = {}
 
 
-def register_payload(name: str) -> Callable[[type], type]:
+def register_payload(name: str, schema: Mapping[str, Any] | None = None) -> Callable[[type], type]:
     """Class decorator: register a payload type under ``name`` for JSON round trips.
 
     The class needs ``to_dict() -> dict`` and ``from_dict(dict)``; its ``payload_kind``
     attribute is set to ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The ``payload_kind`` of solution files.
+    schema : dict
+        The JSON Schema (draft 2020-12) of ``to_dict()``'s output. It becomes
+        ``$defs/<name>`` of the solution schema, with the rule "payload_kind ``name`` ->
+        payload of this schema" (:func:`taopt.schemas.schema` adds both, so the shipped
+        ``solution.schema.json`` lists no payload kind); it may refer to the solution
+        schema's ``#/$defs/index`` (an index) and ``#/$defs/indices`` (a list of them).
+        Every family's payload declares one (the family checklist test).
     """
 
     def wrap(cls: type) -> type:
         if name in _PAYLOADS and _PAYLOADS[name] is not cls:
             raise InstanceError(f"payload kind {name!r} is already registered")
         _PAYLOADS[name] = cls
+        if schema is not None:
+            _PAYLOAD_SCHEMAS[name] = json.loads(json.dumps(schema))
         cls.payload_kind = name  # type: ignore[attr-defined]
         return cls
 
     return wrap
+
+
+def payload_schemas() -> dict[str, dict[str, Any]]:
+    """The JSON Schema each registered payload kind declares (every family imported)."""
+    ensure_families()
+    return {name: json.loads(json.dumps(s)) for name, s in sorted(_PAYLOAD_SCHEMAS.items())}
+
+
+def _add_payload_kinds(contents: dict[str, Any]) -> None:
+    """Complete the solution schema: one ``$defs`` entry and one rule per payload kind."""
+    for name, payload_schema in payload_schemas().items():
+        contents.setdefault("$defs", {})[name] = payload_schema
+        contents.setdefault("allOf", []).append(
+            {
+                "if": {
+                    "properties": {"payload_kind": {"const": name}},
+                    "required": ["payload_kind"],
+                },
+                "then": {"properties": {"payload": {"$ref": f"#/$defs/{name}"}}},
+            }
+        )
+
+
+schemas.extend("solution", _add_payload_kinds)
 
 
 def payload_type(name: str) -> type[Any]:
@@ -117,7 +137,16 @@ def _index_list(values: Any, what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
-@register_payload("routes")
+@register_payload(
+    "routes",
+    schema={
+        "description": "One route per vehicle, each a list of target indices in visiting order.",
+        "type": "object",
+        "required": ["routes"],
+        "additionalProperties": False,
+        "properties": {"routes": {"type": "array", "items": {"$ref": "#/$defs/indices"}}},
+    },
+)
 @dataclass(frozen=True)
 class Routes:
     """One route per vehicle, each a list of target indices in visiting order.
@@ -180,7 +209,16 @@ class Routes:
         return f"Routes({self.as_lists()!r})"
 
 
-@register_payload("order")
+@register_payload(
+    "order",
+    schema={
+        "description": "A visiting order: node indices of a Hamiltonian path (SOP).",
+        "type": "object",
+        "required": ["order"],
+        "additionalProperties": False,
+        "properties": {"order": {"$ref": "#/$defs/indices"}},
+    },
+)
 @dataclass(frozen=True)
 class Order:
     """A visiting order: the sequence of node indices of a Hamiltonian path (SOP)."""
@@ -473,15 +511,18 @@ def make_solution(
     payload: Any,
     *,
     method: str,
-    status: Status | str | None = None,
-    stopped_by: str | None = None,
+    status: Status | str,
     bound: float | None = None,
     runtime: float = 0.0,
     seed: int | None = None,
     info: Mapping[str, Any] | None = None,
     objective: float | None = None,
 ) -> Solution:
-    """The one way a method builds its :class:`Solution`: the payload scored once.
+    """A method's :class:`Solution` with a status it knows: the payload scored once.
+
+    Heuristics ("feasible"), relaxations ("relaxation") and the like build their result here;
+    an exact method or a peer ends through :func:`finish`, which decides the status from its
+    stop and calls this.
 
     Parameters
     ----------
@@ -492,12 +533,8 @@ def make_solution(
         The domain solution; None for a relaxation, an error or a limit with no incumbent.
     method : str
         The method's (or variant's) name.
-    status : Status or str, optional
-        The status, when the method knows it (a heuristic's "feasible").
-    stopped_by : str, optional
-        Instead of ``status``: why an exact search ended; the status is then
-        :func:`taopt.status.certify` of the scored objective and ``bound``, and
-        ``info["stopped_by"]`` records its answer.
+    status : Status or str
+        The status.
     bound : float, optional
         A proven lower bound (the gap, :attr:`Solution.gap`, follows from it).
     runtime : float
@@ -511,12 +548,12 @@ def make_solution(
     -------
     Solution
         Marked as scored for ``problem``, so :func:`taopt.solve` does not score it again
-        (DESIGN invariant 1 holds by construction: objective == evaluate(problem, payload)).
+        (one scorer per family holds by construction: objective == evaluate(problem, payload)).
 
     Raises
     ------
     TypeError
-        Both or neither of ``status`` and ``stopped_by``; an ``objective`` with a payload.
+        An ``objective`` with a payload.
     FeasibilityError
         The payload is not feasible for ``problem`` (the scorer's check).
 
@@ -531,12 +568,7 @@ def make_solution(
     >>> s = make_solution(p, Routes([[1, 0]]), method="MC", status="feasible")
     >>> s.objective, s.is_scored_for(p)
     (4.0, True)
-    >>> make_solution(p, Routes([[1, 0]]), method="x", stopped_by="time_limit", bound=4).status
-    'optimal'
     """
-    if (status is None) == (stopped_by is None):
-        raise TypeError("make_solution takes exactly one of status and stopped_by")
-    details = dict(info or {})
     if payload is not None:
         if objective is not None:
             raise TypeError("make_solution scores the payload: pass no objective with it")
@@ -547,12 +579,6 @@ def make_solution(
     else:
         value = math.inf if objective is None else float(objective)
         key = None
-    if stopped_by is not None:
-        from taopt.status import certify
-
-        status, stopped_by = certify(value, bound, stopped_by)
-        details["stopped_by"] = stopped_by
-    assert status is not None  # exactly one of status and stopped_by (checked above)
     return Solution(
         objective=value,
         status=Status(status),
@@ -561,15 +587,100 @@ def make_solution(
         runtime=runtime,
         method=method,
         seed=seed,
-        info=details,
+        info=dict(info or {}),
         scored_for=key,
     )
+
+
+def finish(
+    problem: Any,
+    payload: Any,
+    *,
+    method: str,
+    stop: str,
+    bound: float | None = None,
+    runtime: float = 0.0,
+    seed: int | None = None,
+    info: Mapping[str, Any] | None = None,
+    objective: float | None = None,
+    solver: str | None = None,
+    time_limited: bool = False,
+) -> Solution:
+    """The one path from an engine's stop to a :class:`Solution` (every exact model and peer).
+
+    The payload (the best incumbent, or None) is scored once by the family's scorer; the
+    bound is capped at that value (a valid lower bound never exceeds an incumbent's value);
+    the status is :func:`taopt.status.decide` of the stop, the scored value and the bound,
+    and ``info["stopped_by"]`` records the reason it gives.
+
+    Parameters
+    ----------
+    problem : a registered problem
+    payload : the incumbent's payload, or None (no incumbent: objective ``inf``)
+    method : str
+    stop : str
+        Why the engine stopped: a word of :data:`taopt.status.STOPS` ("optimal",
+        "infeasible", "time_limit", "solver_limit", "interrupted", "mip_gap",
+        "max_rounds", "error"); with ``solver``, that solver's raw status word.
+    bound : float, optional
+        A proven lower bound (``inf`` for a proof of infeasibility).
+    runtime : float
+    seed : int, optional
+    info : mapping, optional
+        Method details; ``stopped_by`` is set here.
+    objective : float, optional
+        Only without a payload (e.g. a relaxation's value).
+    solver : str, optional
+        "highs", "cpsat" or "dp": ``stop`` is that solver's raw status
+        (:data:`taopt.status.RAW_OUTCOMES`).
+    time_limited : bool
+        With ``solver``: whether a time limit was set.
+
+    Returns
+    -------
+    Solution
+
+    Example
+    -------
+    >>> import numpy as np, taopt
+    >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0.0]]), n_targets=2)
+    >>> finish(p, Routes([[1, 0]]), method="x", stop="time_limit", bound=4).status
+    'optimal'
+    >>> s = finish(p, Routes([[0, 1]]), method="x", stop="time_limit", bound=4)
+    >>> s.status, s.info["stopped_by"], s.bound
+    ('time_limit', 'time_limit', 4.0)
+    >>> finish(p, None, method="x", stop="time_limit", bound=3.0).objective
+    inf
+    """
+    result = make_solution(
+        problem,
+        payload,
+        method=method,
+        status=FEASIBLE,
+        runtime=runtime,
+        seed=seed,
+        info=info,
+        objective=objective,
+    )
+    if bound is not None:
+        bound = min(float(bound), result.objective)
+    status, stopped_by = decide(
+        stop,
+        result.objective,
+        bound,
+        solver=solver,
+        time_limited=time_limited,
+        has_point=None if solver is None else payload is not None,
+    )
+    result.info["stopped_by"] = stopped_by
+    return dataclasses.replace(result, status=Status(status), bound=bound)
 
 
 __all__ = [
     "Status",
     "Solution",
     "make_solution",
+    "finish",
     "Routes",
     "Order",
     "register_payload",

@@ -1,4 +1,4 @@
-"""``taopt.evaluate``: the one scorer per problem family (DESIGN invariant 1).
+"""``taopt.evaluate``: the one scorer per problem family (docs/architecture.md, invariant 1).
 
 :func:`evaluate` is a ``functools.singledispatch`` function on the problem's class; each
 family hooks its scorer in with :func:`taopt.registry.register_family`. The scorer checks

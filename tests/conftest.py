@@ -20,7 +20,8 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import reference  # noqa: E402  (tests/ is on sys.path: pytest's rootdir conftest insertion)
 
-DATA = Path(__file__).parent / "data"
+#: The instance files shipped with the package (examples of every kind, TSPLIB, the demo).
+DATA = Path(__file__).resolve().parents[1] / "taopt" / "data"
 
 
 def valid_lower_bounds(family: Any) -> dict[str, Callable[..., float]]:
@@ -38,7 +39,8 @@ def upper_bounds(family: Any) -> dict[str, Callable[[Any], float]]:
 
 @pytest.fixture(scope="session")
 def data_dir() -> Path:
-    """Folder of the test instance files."""
+    """Folder of the instance files the package ships (``taopt/data``: ``examples/<kind>.json``
+    of every file kind, ``tsplib/``, ``demo.json``)."""
     return DATA
 
 

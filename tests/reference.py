@@ -39,6 +39,61 @@ class Reference:
     solution: Any = None
 
 
+#: Every reference problem :func:`check_method` runs every method on: the functions marked
+#: with :func:`reference` here, then each ``tests/reference_<family>.py`` module's
+#: ``REFERENCES`` (a new family adds a file, not a line here).
+REFERENCES: list[Callable[[], Reference]] = []
+
+
+def reference(make: Callable[[], Reference]) -> Callable[[], Reference]:
+    """Decorator: add ``make`` to :data:`REFERENCES`."""
+    REFERENCES.append(make)
+    return make
+
+
+@dataclass(frozen=True)
+class BruteForce:
+    """Random small instances of a family with their optima by an independent brute force,
+    on which an exact method must end "optimal" at that value (an infinite optimum: the
+    method must prove "infeasible").
+
+    Attributes
+    ----------
+    name : str
+        The test id ("routing", "dp", "milp", ...).
+    method : str
+        The registered exact method run on them.
+    cases : callable
+        ``cases(seeds) -> [(problem, optimum), ...]``.
+    fast, slow : int
+        Instances in the default run, and more (seeds after those) in the ``slow`` run.
+    """
+
+    name: str
+    method: str
+    cases: Callable[[range], list[tuple[Any, float]]]
+    fast: int
+    slow: int
+
+
+#: Every brute-force check of ``tests/test_exact_brute_force.py``: those registered with
+#: :func:`brute_force` there, then each ``tests/reference_<family>.py`` module's
+#: ``BRUTE_FORCE``.
+BRUTE_FORCE: list[BruteForce] = []
+
+
+def brute_force(
+    name: str, method: str, fast: int, slow: int
+) -> Callable[[Callable[[range], list[tuple[Any, float]]]], Callable[..., Any]]:
+    """Decorator: register ``cases(seeds)`` as the brute-force check ``name`` of ``method``."""
+
+    def wrap(cases: Callable[[range], list[tuple[Any, float]]]) -> Callable[..., Any]:
+        BRUTE_FORCE.append(BruteForce(name, method, cases, fast, slow))
+        return cases
+
+    return wrap
+
+
 # -- independent brute force ----------------------------------------------------------------
 
 
@@ -83,6 +138,7 @@ def layered_grid_delivery(n: int, seed: int = 0) -> Any:
     )  # fmt: skip
 
 
+@reference
 def routing_line() -> Reference:
     """Targets at 1, 2, 4 and vehicles at 0 and 5 on a line: 0→1→2 and 5→4, total 3."""
     x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
@@ -111,6 +167,7 @@ def routing_idle_vehicle() -> Reference:
     return Reference("routing-idle-vehicle", problem, 3.0, "by hand", solution=[[0, 1, 2], []])
 
 
+@reference
 def routing_asymmetric() -> Reference:
     """A random asymmetric 5-target, 2-vehicle matrix (brute force over all routes)."""
     rng = np.random.default_rng(11)
@@ -121,6 +178,7 @@ def routing_asymmetric() -> Reference:
     )
 
 
+@reference
 def delivery_small() -> Reference:
     """Five customers on a 3×3 street grid with two precedences (brute force over orders)."""
     rng = np.random.default_rng(5)
@@ -136,6 +194,7 @@ def delivery_small() -> Reference:
     )
 
 
+@reference
 def sop_esc07() -> Reference:
     """TSPLIB's ESC07 sequential ordering instance, optimum 2125 (TSPLIB95)."""
     return Reference("sop-ESC07", taopt.SopProblem.load("ESC07"), 2125.0, "TSPLIB95")
@@ -146,6 +205,7 @@ def sop_esc12() -> Reference:
     return Reference("sop-ESC12", taopt.SopProblem.load("ESC12"), 1675.0, "TSPLIB95")
 
 
+@reference
 def capability_small() -> Reference:
     """Two capabilities, 4 targets (one demanding both), 3 vehicles; per-class brute force."""
     rng = np.random.default_rng(3)
@@ -160,6 +220,7 @@ def capability_small() -> Reference:
     return Reference("capability-small", problem, optimum, "brute force per class (§3.6 split)")
 
 
+@reference
 def comm_small() -> Reference:
     """Chapter 4: 5 targets of two attributes, 3 vehicles, r = 30 m; f_o by brute force per
     class of ``full_information()`` (any simulation drives at least f_o)."""
@@ -180,29 +241,19 @@ def comm_small() -> Reference:
     return Reference("comm-small", problem, optimum, "brute force per attribute class")
 
 
-REFERENCES: list[Callable[[], Reference]] = [
-    routing_line,
-    routing_asymmetric,
-    delivery_small,
-    sop_esc07,
-    capability_small,
-    comm_small,
-]
-
-
-def _discovered_references() -> list[Callable[[], Reference]]:
-    """The references of families added later: each ``tests/reference_<family>.py`` holds a
-    ``REFERENCES`` list of its own (so a new family adds a file, not a line here)."""
+def _discover() -> None:
+    """Add each ``tests/reference_<family>.py`` module's ``REFERENCES`` and ``BRUTE_FORCE``
+    (families added later bring their references and brute force in a file of their own)."""
     import importlib
     from pathlib import Path
 
-    found: list[Callable[[], Reference]] = []
     for path in sorted(Path(__file__).parent.glob("reference_*.py")):
-        found += list(importlib.import_module(path.stem).REFERENCES)
-    return found
+        module = importlib.import_module(path.stem)
+        REFERENCES.extend(getattr(module, "REFERENCES", ()))
+        BRUTE_FORCE.extend(getattr(module, "BRUTE_FORCE", ()))
 
 
-REFERENCES += _discovered_references()
+_discover()
 
 
 def cases() -> list[tuple[Callable[[], Reference], str]]:

@@ -124,3 +124,20 @@ def test_lp_bound_is_valid():
         lp = taopt.models.lp_bound(problem)  # DFJ: all of (2.5)
         assert lp <= exact_optimum(problem)[0] + 1e-6
         assert lp >= bounds.arborescence_bound(problem) - 1e-6
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_core_dfj_lp_bound_equals_the_models_lp_and_is_valid(seed):
+    """The core's DFJ LP (taopt.routing.bounds.lp_bound) equals taopt.models.lp_bound and is
+    never above the brute-force optimum (asymmetric costs)."""
+    from reference import brute_force_routing
+
+    import taopt.models
+
+    rng = np.random.default_rng([31, seed])
+    n, m = int(rng.integers(3, 7)), int(rng.integers(1, 3))
+    cost = rng.uniform(1.0, 30.0, size=(n + m, n + m))
+    problem = taopt.AssignmentProblem(cost, n_targets=n)
+    value = bounds.lp_bound(problem)
+    assert value == pytest.approx(taopt.models.lp_bound(problem), rel=1e-6)
+    assert value <= brute_force_routing(problem.cost, n) * (1 + 1e-9)

@@ -385,7 +385,7 @@ def test_top_level_api_is_complete_and_lazy():
 
 def test_the_core_imports_no_method_or_orchestration_module():
     """Importing taopt and every family (problem data, scorers, bounds, plots' modules) loads no
-    module of taopt.models, taopt.heuristics or taopt.orchestration (the layers of DESIGN.md)."""
+    module of taopt.models, taopt.heuristics or taopt.orchestration (architecture.md, "Layers")."""
     import subprocess
     import sys
 

@@ -32,7 +32,7 @@ def test_counterexample_still_violates(path: Path) -> None:
     assert values[claim]["holds"] is False
     assert values[claim]["lhs"] > values[claim]["rhs"]
     # The matrices are metric (Lemma 2.3 holds), so the failures are the claims' own, and the
-    # valid bound of DESIGN invariant 3 stays below the certified optimum even here.
+    # valid bound of docs/architecture.md, invariant 3 stays below the certified optimum even here.
     assert values["Lemma 2.3 (triangle inequality)"]["holds"] is True
     optimum = solve_routing(problem)
     assert optimum.status == "optimal"

@@ -11,14 +11,12 @@ import itertools
 import math
 from pathlib import Path
 
-import networkx as nx
 import numpy as np
 import pytest
 from reference import REFERENCES, brute_force_routing
 from test_exact_brute_force import sop_brute_force, sop_instance
 
 import taopt
-from taopt.arborescence import min_arborescence
 from taopt.delivery.bounds import (
     arborescence_bound,
     decomposition_bound,
@@ -29,7 +27,6 @@ from taopt.delivery.costs import drone_cost_matrix
 from taopt.delivery.dags import layered_dag
 from taopt.delivery.evaluate import timeline
 from taopt.delivery.instance import DeliveryInstance
-from taopt.delivery.relaxation import degree_penalised_arborescence, min_arborescence_tree
 from taopt.delivery.schedule import optimal_plan
 from taopt.errors import InstanceError
 
@@ -55,33 +52,6 @@ def _random_delivery(seed: int, precedences: bool) -> DeliveryInstance:
         precedences=pairs,
         service_time=float(rng.choice([0.0, 5.0])),
     )
-
-
-def _is_arborescence(parent: np.ndarray, root: int) -> bool:
-    graph = nx.DiGraph([(int(p), v) for v, p in enumerate(parent) if v != root])
-    graph.add_nodes_from(range(len(parent)))
-    return parent[root] == -1 and nx.is_arborescence(graph)
-
-
-@pytest.mark.parametrize("seed", range(30))
-def test_min_arborescence_tree_matches_edmonds(seed):
-    """The hand-written Edmonds returns the reference weight and a tree of that weight."""
-    rng = np.random.default_rng(seed)
-    size = int(rng.integers(2, 30))
-    weights = rng.uniform(-5.0, 20.0, size=(size, size)).round(int(rng.integers(0, 3)))
-    weights[rng.random((size, size)) < 0.3] = np.inf
-    weights[0, 1:] = np.where(np.isfinite(weights[0, 1:]), weights[0, 1:], 50.0)
-    value, parent = min_arborescence_tree(weights, 0)
-    assert value == pytest.approx(min_arborescence(weights, 0), rel=REL, abs=1e-9)
-    assert _is_arborescence(parent, 0)
-    tree_weight = sum(weights[parent[v], v] for v in range(1, size))
-    assert tree_weight == pytest.approx(value, rel=REL, abs=1e-9)
-
-
-def test_min_arborescence_tree_unreachable():
-    """A vertex without in-edges: no arborescence (inf, None)."""
-    weights = np.array([[0.0, 1.0, np.inf], [1.0, 0.0, np.inf], [1.0, 1.0, 0.0]])
-    assert min_arborescence_tree(weights, 0) == (np.inf, None)
 
 
 @pytest.mark.parametrize("precedences", [False, True])
@@ -234,21 +204,6 @@ def test_lower_rejects_unknown_inputs(ref_routing_small):
         taopt.bounds.lower(ref_routing_small.problem, "best")
     with pytest.raises(InstanceError, match="not a registered problem type"):
         taopt.bounds.lower(object())
-
-
-def test_degree_penalised_arborescence_finds_a_forced_path():
-    """On a line graph whose arborescence is a star, the Lagrangian reaches the path's cost."""
-    # root 0 and points 1, 2, 3: a star from 0 costs 3, any path 0-1-2-3 costs 1 + 1 + 1 = 3,
-    # but 0 -> 1 (1), 0 -> 2 (1.1), 0 -> 3 (1.2) with 1 -> 2, 2 -> 3 costing 1.5: star 3.3,
-    # best path 0 -> 1 -> 2 -> 3 = 4.0
-    w = np.full((4, 4), np.inf)
-    w[0, 1:] = [1.0, 1.1, 1.2]
-    w[1, 2] = w[2, 3] = 1.5
-    w[1, 3] = w[3, 2] = w[2, 1] = w[3, 1] = 5.0
-    capacity = np.array([1.0, 1.0, 1.0, np.inf])
-    result = degree_penalised_arborescence(w, 0, capacity, np.ones(4, dtype=bool), target=4.0)
-    assert result.arborescence == pytest.approx(3.3)
-    assert result.arborescence < result.value <= 4.0 + 1e-9
 
 
 def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):

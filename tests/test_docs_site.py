@@ -61,6 +61,7 @@ def test_every_page_is_in_a_toctree() -> None:
         p.relative_to(DOCS).with_suffix("").as_posix()
         for p in DOCS.rglob("*.md")
         if "_build" not in p.parts
+        and "_includes" not in p.parts  # generated fragments, included into pages
         and p.parent.name not in ("api", "notebooks")
         and p.name != "index.md"
     ]

@@ -1,11 +1,11 @@
 """Every family's exact methods against brute force on seeded random small instances.
 
-DESIGN invariant 4: without a time limit an exact method ends "optimal" with the brute-force
-value (every instance is feasible but the budgeted family's, whose limits may admit no
-assignment: then "infeasible", proven). The default run checks a few hundred instances; the
-``slow`` run checks more than 2,000 (``pytest -m slow tests/test_exact_brute_force.py``).
-Generators favour the cases that broke the DFJ loop: asymmetric costs, zero and equal costs,
-1–7 vehicles.
+docs/architecture.md, invariant 4: without a time limit an exact method ends "optimal" with
+the brute-force value (every instance is feasible but the budgeted family's, whose limits
+may admit no assignment: then "infeasible", proven). The default run checks a few hundred
+instances; the ``slow`` run checks more than 2,000 (``pytest -m slow
+tests/test_exact_brute_force.py``). Generators favour the cases that broke the DFJ loop:
+asymmetric costs, zero and equal costs, 1–7 vehicles.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import math
 import networkx as nx
 import numpy as np
 import pytest
-from reference import brute_force_delivery, brute_force_routing
+from reference import BRUTE_FORCE, brute_force, brute_force_delivery, brute_force_routing
 from reference_budgeted import brute_force_budgeted
 from test_models_routing import dp_optimum
 
@@ -176,6 +176,10 @@ def _failures(cases, method: str) -> list[str]:
     return failures
 
 
+# the checks (reference.brute_force registers each; a family added later lists its own as
+# BRUTE_FORCE in tests/reference_<family>.py). Default run: 270 instances; slow run: 2,670
+# more (seeds after the default run's).
+@brute_force("routing", "exact", fast=100, slow=1200)
 def _routing_cases(seeds):
     return [(p, dp_optimum(p)) for p in map(routing_instance, seeds)]
 
@@ -188,63 +192,42 @@ def _delivery_cases(seeds, customers):
     return cases
 
 
+@brute_force("dp", "exact", fast=30, slow=250)
+def _dp_cases(seeds):
+    return _delivery_cases(seeds, lambda s: 3 + s % 4)
+
+
+@brute_force("milp", "milp", fast=10, slow=60)
+def _milp_cases(seeds):
+    return _delivery_cases(seeds, lambda s: 2 + s % 2)
+
+
+@brute_force("sop", "exact", fast=40, slow=250)
 def _sop_cases(seeds):
     return [(p, sop_brute_force(p)) for p in map(sop_instance, seeds)]
 
 
+@brute_force("capability", "exact", fast=20, slow=150)
 def _capability_cases(seeds):
     return [(p, capability_brute_force(p)) for p in map(capability_instance, seeds)]
 
 
+@brute_force("joint", "joint", fast=10, slow=60)
+def _joint_cases(seeds):
+    return _capability_cases(seeds)
+
+
+@brute_force("comm", "exact", fast=20, slow=100)
 def _comm_cases(seeds):
     return [(p, comm_brute_force(p)) for p in map(comm_instance, seeds)]
 
 
+@brute_force("budgeted", "exact", fast=40, slow=600)
 def _budgeted_cases(seeds):
     return [(p, brute_force_budgeted(p)) for p in map(budgeted_instance, seeds)]
 
 
-# default run: 100 + 30 + 10 + 40 + 20 + 10 + 20 + 40 = 270 instances
-FAST = {
-    "routing": 100,
-    "dp": 30,
-    "milp": 10,
-    "sop": 40,
-    "capability": 20,
-    "joint": 10,
-    "comm": 20,
-    "budgeted": 40,
-}
-# slow run: 1,200 + 250 + 60 + 250 + 150 + 60 + 100 + 600 = 2,670 instances (seeds disjoint
-# from FAST)
-SLOW = {
-    "routing": 1200,
-    "dp": 250,
-    "milp": 60,
-    "sop": 250,
-    "capability": 150,
-    "joint": 60,
-    "comm": 100,
-    "budgeted": 600,
-}
-
-
-def _run_family(family: str, seeds) -> list[str]:
-    if family == "routing":
-        return _failures(_routing_cases(seeds), "exact")
-    if family == "dp":
-        return _failures(_delivery_cases(seeds, lambda s: 3 + s % 4), "exact")
-    if family == "milp":
-        return _failures(_delivery_cases(seeds, lambda s: 2 + s % 2), "milp")
-    if family == "sop":
-        return _failures(_sop_cases(seeds), "exact")
-    if family == "capability":
-        return _failures(_capability_cases(seeds), "exact")
-    if family == "joint":
-        return _failures(_capability_cases(seeds), "joint")
-    if family == "budgeted":
-        return _failures(_budgeted_cases(seeds), "exact")
-    return _failures(_comm_cases(seeds), "exact")
+CHECKS = {check.name: check for check in BRUTE_FORCE}
 
 
 def test_issue_15_file_is_optimal_three(tmp_path):
@@ -326,31 +309,32 @@ def test_highs_model_solves_again_after_a_solve_error(monkeypatch, tmp_path):
         dfj.model.solve(mip_rel_gap=1e-6)
 
 
-@pytest.mark.parametrize("family", sorted(FAST))
+@pytest.mark.parametrize("family", sorted(CHECKS))
 def test_exact_equals_brute_force(family):
     """Exact method of each family: optimal with the brute-force value on every instance."""
-    failures = _run_family(family, range(FAST[family]))
-    assert not failures, f"{len(failures)} of {FAST[family]}:\n" + "\n".join(failures[:10])
+    check = CHECKS[family]
+    failures = _failures(check.cases(range(check.fast)), check.method)
+    assert not failures, f"{len(failures)} of {check.fast}:\n" + "\n".join(failures[:10])
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("family", sorted(SLOW))
+@pytest.mark.parametrize("family", sorted(CHECKS))
 def test_exact_equals_brute_force_on_two_thousand(family):
     """The same on 2,670 more instances in all (seeds after the default run's)."""
-    seeds = range(FAST[family], FAST[family] + SLOW[family])
-    failures = _run_family(family, seeds)
-    assert not failures, f"{len(failures)} of {SLOW[family]}:\n" + "\n".join(failures[:10])
+    check = CHECKS[family]
+    failures = _failures(check.cases(range(check.fast, check.fast + check.slow)), check.method)
+    assert not failures, f"{len(failures)} of {check.slow}:\n" + "\n".join(failures[:10])
 
 
 def test_generators_cover_the_hard_cases():
     """Routing instances include 1 and 7 vehicles, zero costs and ties; SOP has precedences."""
-    problems = [routing_instance(s) for s in range(FAST["routing"])]
+    problems = [routing_instance(s) for s in range(CHECKS["routing"].fast)]
     assert {1, 7} <= {p.m for p in problems}
     assert any((p.cost == 0).sum() > len(p.cost) for p in problems)
     assert any(len(np.unique(p.cost)) <= 4 for p in problems)
     assert any(sop_instance(s).precedences for s in range(10))
     assert nx.is_directed_acyclic_graph(delivery_instance(0, 5).precedence_graph)
-    budgeted = [budgeted_instance(s) for s in range(FAST["budgeted"])]
+    budgeted = [budgeted_instance(s) for s in range(CHECKS["budgeted"].fast)]
     optima = [brute_force_budgeted(p) for p in budgeted]
     assert any(math.isinf(o) for o in optima)  # no assignment within the limits
     assert any(  # a limit binds: the optimum is above the unlimited one

@@ -93,7 +93,7 @@ def test_all_formulations_match_dp(kind, n, m, seed):
         solution = solve_routing(problem, sec=sec)
         assert solution.status == "optimal"
         assert solution.objective == pytest.approx(optimum, rel=1e-6)
-        # the one scorer agrees with the reported objective (DESIGN invariant 1)
+        # the one scorer agrees with the reported objective (docs/architecture.md, invariant 1)
         assert taopt.evaluate(problem, solution.routes) == pytest.approx(
             solution.objective, rel=1e-6
         )
@@ -288,15 +288,16 @@ def test_drift_field_fifteen_targets_all_formulations_agree() -> None:
 
 
 def test_one_status_rule_for_every_model():
-    """models.highs.certify: optimal only within 1e-6; else the reason decides."""
-    from taopt.models.highs import certify, relative_gap
+    """taopt.status.decide: optimal only within 1e-6; else the reason decides."""
+    from taopt.models.highs import relative_gap
+    from taopt.status import decide
 
-    assert certify(100.0, 100.0 - 1e-5, "mip_gap") == ("optimal", "optimal")
-    assert certify(100.0, 99.0, "mip_gap") == ("feasible", "mip_gap")
-    assert certify(100.0, 99.0, "max_rounds") == ("feasible", "max_rounds")
-    assert certify(100.0, 99.0, "time_limit") == ("time_limit", "time_limit")
-    assert certify(100.0, None, "time_limit") == ("time_limit", "time_limit")
-    assert certify(0.0, 0.0, "mip_gap") == ("optimal", "optimal")
+    assert decide("mip_gap", 100.0, 100.0 - 1e-5) == ("optimal", "optimal")
+    assert decide("mip_gap", 100.0, 99.0) == ("feasible", "mip_gap")
+    assert decide("max_rounds", 100.0, 99.0) == ("feasible", "max_rounds")
+    assert decide("time_limit", 100.0, 99.0) == ("time_limit", "time_limit")
+    assert decide("time_limit", 100.0, None) == ("time_limit", "time_limit")
+    assert decide("mip_gap", 0.0, 0.0) == ("optimal", "optimal")
     assert relative_gap(0.0, -1.0) == float("inf")
     assert relative_gap(10.0, 12.0) == 0.0
 

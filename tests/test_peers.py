@@ -32,7 +32,7 @@ from taopt.models import solve_routing
 from taopt.navigation import uniform_travel_times
 from taopt.registry import get_method
 from taopt.sop.problem import evaluate_order
-from taopt.status import outcome
+from taopt.status import decide
 
 # Deterministic limits (iterations / solutions, not time) for everything but the n50m10 check.
 SOLVERS = {
@@ -461,7 +461,7 @@ def test_cpsat_status_and_bound_mapping():
     """OPTIMAL -> optimal (gap closed), FEASIBLE/UNKNOWN -> time_limit; bound scaled back down."""
 
     def status(raw, objective=10.0, bound=10.0):
-        return outcome("cpsat", raw, objective=objective, bound=bound, time_limited=True)[0]
+        return decide(raw, objective, bound, solver="cpsat", time_limited=True)[0]
 
     assert status("OPTIMAL") == "optimal"
     assert status("OPTIMAL", bound=9.0) == "feasible"  # the one rule: a gap is not optimal

@@ -120,8 +120,11 @@ def test_file_formats_doc_lists_every_kind() -> None:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     pages = module.generated_pages()
+    assert "```{include} _includes/family-kinds.md" in doc  # the problem kinds: generated
     for kind in file_kinds():
         assert f"| `{kind}` |" in pages["kinds.md"], kind
+        assert f"| `{kind}` |" in pages["_includes/family-kinds.md"], kind
+        assert f"`{kind}`" not in TEXT or kind in ("instance", "field", "solution"), kind
     for kind in kinds():
         assert f"## `{kind}`" in pages["schemas.md"], kind
     assert "taopt kinds" in TEXT

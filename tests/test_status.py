@@ -1,5 +1,5 @@
-"""The one status rule (taopt.status), the one Solution builder (make_solution) and the
-per-class decomposition shared by chapter 3's corrected model and chapter 4's f_o."""
+"""The one status rule (taopt.status.decide), the one path from a stop to a Solution
+(taopt.result.finish), the Solution builder (make_solution) and the per-class decomposition shared by chapter 3's corrected model and chapter 4's f_o."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from taopt.comm.problem import random_problem as comm_problem
 from taopt.errors import SolverError
 from taopt.models.capability import solve_capability, solve_classes
 from taopt.orchestration.studies.capability_claims import random_problem as capability_problem
-from taopt.result import FEASIBLE, Routes, Solution, make_solution
-from taopt.status import OPTIMALITY_TOLERANCE, RAW_OUTCOMES, certify, outcome, relative_gap
+from taopt.result import FEASIBLE, Routes, Solution, finish, make_solution
+from taopt.status import OPTIMALITY_TOLERANCE, RAW_OUTCOMES, STOPS, decide, relative_gap
 
 
 def brute_force(problem: taopt.AssignmentProblem) -> float:
@@ -53,9 +53,9 @@ def small_routing(seed: int, n: int = 5, m: int = 2) -> taopt.AssignmentProblem:
         (10.0, 11.0, "mip_gap", "optimal"),  # a bound above the objective closes the gap
     ],
 )
-def test_certify_closes_only_a_proven_gap(objective, bound, stopped_by, expected):
-    """certify: optimal iff the relative gap is within the tolerance, else by stopped_by."""
-    status, why = certify(objective, bound, stopped_by)
+def test_decide_closes_only_a_proven_gap(objective, bound, stopped_by, expected):
+    """decide: optimal iff the relative gap is within the tolerance, else by the stop."""
+    status, why = decide(stopped_by, objective, bound)
     assert status == expected
     assert why == ("optimal" if expected == "optimal" else stopped_by)
 
@@ -69,12 +69,12 @@ def test_relative_gap_edges():
 
 
 @pytest.mark.parametrize("solver", sorted(RAW_OUTCOMES))
-def test_outcome_maps_every_raw_status_of_every_solver(solver):
+def test_decide_maps_every_raw_status_of_every_solver(solver):
     """Each solver's claimed optimum, limit and infeasibility map to the same taopt words."""
     for raw, kind in RAW_OUTCOMES[solver].items():
-        closed = outcome(solver, raw, objective=10.0, bound=10.0, time_limited=True)
-        open_ = outcome(solver, raw, objective=10.0, bound=9.0, time_limited=True)
-        empty = outcome(solver, raw, objective=None, bound=9.0, time_limited=False)
+        closed = decide(raw, 10.0, 10.0, solver=solver, time_limited=True)
+        open_ = decide(raw, 10.0, 9.0, solver=solver, time_limited=True)
+        empty = decide(raw, None, 9.0, solver=solver, time_limited=False)
         if kind == "infeasible":
             assert closed == open_ == empty == ("infeasible", "infeasible")
         elif kind == "optimal":
@@ -87,10 +87,24 @@ def test_outcome_maps_every_raw_status_of_every_solver(solver):
             assert empty == ("time_limit", "solver_limit")
 
 
-def test_outcome_of_an_unknown_status_is_an_error():
+def test_decide_of_an_unknown_status_is_an_error():
     """An unlisted raw status (or solver) is an error, never a silent optimum."""
-    assert outcome("highs", "unbounded", objective=1.0, bound=1.0) == ("error", "error")
-    assert outcome("nosuch", "optimal", objective=1.0, bound=1.0) == ("error", "error")
+    assert decide("unbounded", 1.0, 1.0, solver="highs") == ("error", "error")
+    assert decide("optimal", 1.0, 1.0, solver="nosuch") == ("error", "error")
+
+
+@pytest.mark.parametrize("stop", STOPS)
+def test_decide_reads_every_stop(stop):
+    """Every stop word: a proof or error is itself; a closed gap is optimal; an open gap is
+    time_limit after a limit or an interrupt and feasible after any other stopping rule."""
+    closed, open_ = decide(stop, 10.0, 10.0), decide(stop, 10.0, 9.0)
+    if stop in ("infeasible", "error"):
+        assert closed == open_ == (stop, stop)
+        return
+    assert closed == ("optimal", "optimal")
+    limited = stop in ("time_limit", "solver_limit", "max_states", "size", "interrupted")
+    assert open_ == ("time_limit" if limited else "feasible", stop)
+    assert decide(stop, None, 9.0)[0] == ("time_limit" if limited else "feasible")
 
 
 def test_highs_model_and_cvxpy_runs_use_the_rule():
@@ -123,26 +137,31 @@ def test_make_solution_scores_the_payload_once_and_marks_it():
     assert Solution.from_dict(solution.to_dict()) == solution  # the mark is not data
 
 
-def test_make_solution_certifies_from_stopped_by():
-    """With stopped_by, the status is certify's on the scored objective."""
+def test_finish_decides_the_status_on_the_scored_objective():
+    """finish: the status is decide's on the scored objective, the bound capped at it, and
+    info["stopped_by"] says why; no incumbent is objective inf with the bound kept."""
     problem = small_routing(3)
     routes = Routes([[0, 1, 2, 3, 4], []])
     value = taopt.evaluate(problem, routes)
-    closed = make_solution(problem, routes, method="x", stopped_by="time_limit", bound=value)
-    opened = make_solution(problem, routes, method="x", stopped_by="time_limit", bound=0.5 * value)
-    assert (closed.status, closed.info["stopped_by"]) == ("optimal", "optimal")
+    closed = finish(problem, routes, method="x", stop="time_limit", bound=2 * value)
+    opened = finish(problem, routes, method="x", stop="time_limit", bound=0.5 * value)
+    assert (closed.status, closed.info["stopped_by"], closed.bound) == ("optimal", "optimal", value)
     assert (opened.status, opened.info["stopped_by"]) == ("time_limit", "time_limit")
-    assert opened.gap == pytest.approx(0.5)
+    assert opened.gap == pytest.approx(0.5) and opened.is_scored_for(problem)
+    empty = finish(problem, None, method="x", stop="interrupted", bound=3.0)
+    assert (empty.status, empty.objective, empty.bound) == ("time_limit", math.inf, 3.0)
+    proof = finish(problem, None, method="x", stop="infeasible", bound=math.inf)
+    assert (proof.status, proof.info["stopped_by"]) == ("infeasible", "infeasible")
+    raw = finish(problem, routes, method="x", stop="FEASIBLE", solver="cpsat", bound=value)
+    assert raw.status == "optimal"  # a raw limit whose gap is closed proves the optimum
 
 
 def test_make_solution_refuses_ambiguous_calls():
-    """Exactly one of status/stopped_by; no objective next to a payload; no payload: inf."""
+    """A status is required; no objective next to a payload; no payload: inf."""
     problem = small_routing(4)
     routes = Routes([[0, 1, 2, 3, 4], []])
     with pytest.raises(TypeError):
-        make_solution(problem, routes, method="x")
-    with pytest.raises(TypeError):
-        make_solution(problem, routes, method="x", status=FEASIBLE, stopped_by="mip_gap")
+        make_solution(problem, routes, method="x")  # type: ignore[call-arg]
     with pytest.raises(TypeError):
         make_solution(problem, routes, method="x", status=FEASIBLE, objective=1.0)
     empty = make_solution(problem, None, method="x", status="time_limit", bound=3.0)

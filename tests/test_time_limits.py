@@ -1,4 +1,4 @@
-"""Wall-clock time limits and size guards (issue 15 items 2 and 6; DESIGN.md invariant 4).
+"""Wall-clock time limits and size guards (issue 15 items 2, 6; docs/architecture.md, invariant 4).
 
 Every exact method of every family, called through ``taopt.solve`` with a tiny ``time_limit``
 on an instance large for it, returns (no exception) with status "time_limit" and a proven

@@ -26,9 +26,8 @@ from taopt.models.routing.formulation import (
     entry_bound,
     greedy_routes,
 )
-from taopt.result import Routes, Solution, make_solution
+from taopt.result import Routes, Solution, finish
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
-from taopt.status import certify
 
 #: Seconds per arc to build and compile the MTZ / flow model through cvxpy and for
 #: HiGHS's MIP presolve, which does not stop at its time limit (flow at n = 150, m = 5,
@@ -99,16 +98,14 @@ def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -
     if left is not None and left < COMPACT_SECONDS_PER_ARC * ((n + m) * n - n):
         # cvxpy's build and compilation, and HiGHS's presolve (which does not stop at its
         # time limit), would not fit: the incumbent and the bounds so far
-        bound = min(best_bound, best_value)
-        status, stopped_by = certify(best_value, bound, "time_limit")
-        info = {"rounds": 0, "cuts": 0, "stopped_by": stopped_by, "solver_status": ""}
+        info = {"rounds": 0, "cuts": 0, "stopped_by": "time_limit", "solver_status": ""}
         info.update(stage="build", mip_gap=mip_gap)
-        return make_solution(
+        return finish(
             problem,
             None if best_routes is None else Routes(best_routes),
             method=f"exact-{sec}",
-            status=status,
-            bound=bound,
+            stop="time_limit",
+            bound=best_bound,
             runtime=time.perf_counter() - started,
             info=info,
         )
@@ -129,8 +126,6 @@ def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -
         value = evaluate_routes(problem, routes)
         if value < best_value:
             best_routes, best_value = routes, value
-    bound = min(best_bound, best_value)
-    status, stopped_by = certify(best_value, bound, stopped_by)
     info = {
         "rounds": 1,
         "cuts": 0,
@@ -139,12 +134,12 @@ def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
     }
-    return make_solution(
+    return finish(
         problem,
         None if best_routes is None else Routes(best_routes),
         method=f"exact-{sec}",
-        status=status,
-        bound=bound,
+        stop=stopped_by,
+        bound=best_bound,
         runtime=time.perf_counter() - started,
         info=info,
     )

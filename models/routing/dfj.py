@@ -45,9 +45,9 @@ from taopt.models.routing.separation import (
     separate_lifted_cycles,
     separate_subtours,
 )
-from taopt.result import Routes, Solution, make_solution
+from taopt.result import Routes, Solution, finish
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
-from taopt.status import OPTIMALITY_TOLERANCE, certify, relative_gap
+from taopt.status import OPTIMALITY_TOLERANCE, relative_gap
 
 #: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
 CORE_SIZE = 4
@@ -432,16 +432,14 @@ def _solve_dfj(
     left = remaining()
     if left is not None and left < BUILD_SECONDS_PER_ARC * n_arcs:
         # no time to build the model: the incumbent with the bounds proven so far
-        bound = min(best_bound, best_value)
-        status, stopped_by = certify(best_value, bound, "time_limit")
-        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": stopped_by}
+        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": "time_limit"}
         info.update(solver_status="", stage="build", mip_gap=mip_gap)
-        return make_solution(
+        return finish(
             problem,
             None if best_routes is None else Routes(best_routes),
             method="exact-dfj",
-            status=status,
-            bound=bound,
+            stop="time_limit",
+            bound=best_bound,
             runtime=time.perf_counter() - started,
             info=info,
         )
@@ -567,9 +565,6 @@ def _solve_dfj(
             best_bound = max(best_bound, fallback.bound)
         stopped_by = fallback.info["stopped_by"]
         solver_status = fallback.info["solver_status"]
-    bound = min(best_bound, best_value)
-    # the one rule of taopt.models.highs: optimal only when proven within 1e-6
-    status, stopped_by = certify(best_value, bound, stopped_by)
     info = {
         "rounds": rounds,
         "cuts": len(dfj.cuts),
@@ -586,12 +581,12 @@ def _solve_dfj(
         "fallback": FALLBACK_SEC if stall else None,
         "improved": improved,
     }
-    return make_solution(
+    return finish(  # the one status rule: optimal only when proven within 1e-6
         problem,
         None if best_routes is None else Routes(best_routes),
         method="exact-dfj",
-        status=status,
-        bound=bound,
+        stop=stopped_by,
+        bound=best_bound,
         runtime=time.perf_counter() - started,
         info=info,
     )

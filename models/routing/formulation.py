@@ -27,6 +27,7 @@ from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError, require
 from taopt.routing.problem import AssignmentProblem
+from taopt.routing.subtours import arc_list  # the arc list σ is indexed by (core)
 
 if TYPE_CHECKING:
     from taopt.models.routing.dfj import DfjModel
@@ -36,18 +37,6 @@ logger = logging.getLogger("taopt.models.routing")
 
 #: The ways (2.5) can be written: DFJ rows (added lazily), MTZ order variables, a flow.
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
-
-
-def arc_list(problem: AssignmentProblem) -> tuple[np.ndarray, np.ndarray]:
-    """Tails and heads of every arc ``i -> j``, ``i ∈ T ∪ R``, ``j ∈ T``, ``i ≠ j``.
-
-    Row-major order of the masked ``(n + m) × n`` matrix of σ.
-    """
-    n, size = problem.n, problem.n + problem.m
-    mask = np.ones((size, n), dtype=bool)
-    mask[np.arange(n), np.arange(n)] = False  # σ_ii = 0: no self loops
-    tails, heads = np.nonzero(mask)
-    return tails, heads
 
 
 @dataclass
@@ -82,15 +71,6 @@ class RoutingModel:
     flow: cp.Variable | None = None
     cuts: list[tuple[int, ...]] = field(default_factory=list)
     relax: bool = False
-
-    def arc_matrix(self) -> np.ndarray:
-        """σ as a dense ``(n + m) × n`` matrix (zeros on the masked diagonal)."""
-        n = int(self.heads.max()) + 1 if len(self.heads) else 0
-        size = int(self.tails.max()) + 1 if len(self.tails) else 0
-        matrix = np.zeros((size, n))
-        if self.arc_use.value is not None:
-            matrix[self.tails, self.heads] = self.arc_use.value
-        return matrix
 
 
 def _check(problem: Any, sec: str) -> None:

@@ -104,7 +104,7 @@ def solve_routing(
     -------
     Solution
         ``routes`` (one list per vehicle), ``objective`` = ``evaluate(routes)``,
-        ``status`` by :func:`taopt.models.highs.certify`: "optimal" (gap at
+        ``status`` by :func:`taopt.status.decide` (through :func:`taopt.result.finish`): "optimal" (gap at
         most 1e-6), "time_limit", or "feasible" (loose ``mip_gap`` or
         ``max_rounds``; ``info["stopped_by"]`` says which),
         ``bound`` a proven lower bound, never above ``objective``.

@@ -1,6 +1,7 @@
 """Valid lower bounds of the budgeted family (capacity and travel-time limits, §6.2).
 
-Every bound here is **valid** (never above the optimum; DESIGN invariant 3). Two ideas:
+Every bound here is **valid** (never above the optimum; docs/architecture.md, invariant 3).
+Two ideas:
 
 * *Limits only remove solutions.* Every feasible solution of a
   :class:`~taopt.budgeted.BudgetedProblem` is a feasible solution of chapter 2's problem

@@ -14,6 +14,7 @@ from taopt.budgeted.plot import plot_budgeted_routes
 from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted
 from taopt.registry import Bound, Family, Study, register_family
 from taopt.result import Routes
+from taopt.routing.plot import routes_lines
 
 FAMILY = register_family(
     Family(
@@ -24,6 +25,7 @@ FAMILY = register_family(
         evaluate=evaluate_budgeted,
         bounds={"arborescence": Bound(arborescence_bound), "lower": Bound(lower)},
         plots={"routes": plot_budgeted_routes},
+        describe=routes_lines,
         studies=(Study("budgeted", "taopt.orchestration.studies.budgeted"),),
     )
 )

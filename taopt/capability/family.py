@@ -19,6 +19,7 @@ from taopt.capability.bounds import (
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.registry import Bound, Family, Study, register_family
 from taopt.result import Routes
+from taopt.routing.plot import routes_lines
 
 
 def _plot_routes(
@@ -84,6 +85,7 @@ FAMILY = register_family(
         },
         plots={"routes": _plot_routes},
         adapter=_from_instance,
+        describe=routes_lines,
         studies=(Study("capability", "taopt.orchestration.studies.capability"),),
     )
 )

@@ -23,7 +23,41 @@ from taopt.result import register_payload
 TOLERANCE = 1e-6
 
 
-@register_payload("trajectories")
+_COORDINATE = {"type": "number", "minimum": -1_000_000_000, "maximum": 1_000_000_000}
+
+
+@register_payload(
+    "trajectories",
+    schema={
+        "description": "Chapter 4: waypoints (t, x, y) of each vehicle (|value| <= 1e9) and "
+        "its visits (target, waypoint index).",
+        "type": "object",
+        "required": ["paths", "visits"],
+        "additionalProperties": False,
+        "properties": {
+            "paths": {
+                "type": "array",
+                "items": {
+                    "type": "array",
+                    "minItems": 1,
+                    "items": {"type": "array", "minItems": 3, "maxItems": 3, "items": _COORDINATE},
+                },
+            },
+            "visits": {
+                "type": "array",
+                "items": {
+                    "type": "array",
+                    "items": {
+                        "type": "array",
+                        "minItems": 2,
+                        "maxItems": 2,
+                        "items": {"$ref": "#/$defs/index"},
+                    },
+                },
+            },
+        },
+    },
+)
 @dataclass(frozen=True, eq=False)
 class Trajectories:
     """Driven trajectories of the m vehicles (the payload of a chapter 4 solution).

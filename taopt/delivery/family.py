@@ -33,6 +33,15 @@ def _plot_gantt(
     plot_gantt(problem, plan, method=method).figure.savefig(path, dpi=120, bbox_inches="tight")
 
 
+def _plan_lines(instance: DeliveryInstance, plan: Plan, file: Any = None) -> list[str]:
+    """One ``"  #p: customer j, launch s<i>, landing s<k>"`` line per sortie."""
+    sorties = zip(plan.order, plan.launch, plan.landing, strict=True)
+    return [
+        f"  #{p + 1}: customer {j}, launch s{i}, landing s{k}"
+        for p, (j, i, k) in enumerate(sorties)
+    ]
+
+
 FAMILY = register_family(
     Family(
         problem_type=DeliveryInstance,
@@ -42,6 +51,7 @@ FAMILY = register_family(
         evaluate=evaluate_plan,
         bounds={"arborescence": Bound(arborescence_bound), "lower": Bound(delivery_lower)},
         plots={"plan": _plot_plan, "gantt": _plot_gantt},
+        describe=_plan_lines,
         studies=(Study("delivery", "taopt.orchestration.studies.delivery"),),
         exports={"Plan": Plan},
     )

@@ -17,7 +17,7 @@ the current and the next layer's values and compact back-pointers, with
 The optimal order found is scheduled again by :func:`taopt.delivery.schedule.schedule`
 (the fixed-order DP, made of :func:`_sortie_step`) and the plan is scored by
 :func:`taopt.delivery.evaluate.evaluate_plan`; the DP's own value must agree
-(:func:`taopt.delivery.schedule._scored`).
+(:func:`taopt.delivery.schedule._matches`).
 """
 
 from __future__ import annotations
@@ -30,13 +30,14 @@ from typing import Any
 
 import numpy as np
 
+from taopt import ideals
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.schedule import _matches, _sortie_data, schedule
 from taopt.errors import InstanceError
+from taopt.ideals import distinct, ideal_layers, predecessor_masks
 from taopt.limits import Deadline, max_memory_gb
-from taopt.result import FEASIBLE, Solution, make_solution
-from taopt.status import outcome
+from taopt.result import FEASIBLE, Solution, finish, make_solution
 
 #: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
 MAX_CUSTOMERS = 63
@@ -102,10 +103,9 @@ def _tables(instance: DeliveryInstance) -> _Tables:
     # back_then_launch[j, i] = min_k flight_time[j, k] + truck_time[k, i]
     back_then_launch = np.stack([(ft[j][:, None] + tt).min(axis=0) for j in range(n)])
     edge = (back_then_launch[:, None, :] + ft[None, :, :]).min(axis=2) + 2.0 * tau  # (n, n)
-    need = np.zeros(n, dtype=np.uint64)
+    need = predecessor_masks(n, instance.precedences)
     after = np.zeros((n, n), dtype=bool)  # after[r, j]: r must precede j (transitive)
     for r, j in instance.precedences:
-        need[j] |= np.uint64(1) << np.uint64(r)
         after[r, j] = True
     for k in range(n):  # transitive closure (Warshall)
         after |= after[:, [k]] & after[[k], :]
@@ -126,8 +126,8 @@ _IDEAL_COUNTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def count_ideals(instance: DeliveryInstance, cap: int = 10_000_000) -> int | None:
     """The number of order ideals of G^p (the empty and the full set included), or None
-    when it exceeds ``cap`` or n > :data:`MAX_CUSTOMERS` (the count stops there; cached
-    per instance and cap).
+    when it exceeds ``cap`` or n > :data:`MAX_CUSTOMERS` (:func:`taopt.ideals.count_ideals`;
+    cached per instance and cap).
 
     Example
     -------
@@ -140,52 +140,10 @@ def count_ideals(instance: DeliveryInstance, cap: int = 10_000_000) -> int | Non
     if key not in cached and instance.n > MAX_CUSTOMERS:
         cached[key] = None  # beyond 64-bit masks: the DP refuses it anyway
     if key not in cached:
-        n = instance.n
-        need = np.zeros(n, dtype=np.uint64)
-        for r, j in instance.precedences:
-            need[j] |= np.uint64(1) << np.uint64(r)
-        layers = _ideal_layers(need, n, key, Deadline(None))
-        cached[key] = None if layers is None else sum(int(layer.size) for layer in layers)
+        need = predecessor_masks(instance.n, instance.precedences)
+        count, capped = ideals.count_ideals(need, instance.n, key)
+        cached[key] = None if capped else count
     return cached[key]
-
-
-def _distinct(masks: np.ndarray) -> np.ndarray:
-    """Sorted distinct values (``np.unique`` of numpy 2.4 hashes unsigned arrays, 10-20x
-    slower than sorting them here)."""
-    masks = np.sort(masks)
-    if masks.size:
-        masks = masks[np.concatenate(([True], masks[1:] != masks[:-1]))]
-    return masks
-
-
-def _ideal_layers(
-    need: np.ndarray, n: int, cap: int, deadline: Deadline
-) -> list[np.ndarray] | None:
-    """The order ideals by size (sorted uint64 masks per layer), or None past ``cap``
-    ideals or the deadline."""
-    layers = [np.array([0], dtype=np.uint64)]
-    total = 1
-    for _ in range(n):
-        cur = layers[-1]
-        parts = []
-        size = 0
-        for j in range(n):
-            bit = np.uint64(1) << np.uint64(j)
-            part = cur[((cur & bit) == 0) & ((cur & need[j]) == need[j])] | bit
-            parts.append(part)
-            size += part.size
-            if deadline.limited and deadline.expired():
-                return None
-            if size > 2 * (cap - total) + 1024:  # merge duplicates early, stop past the cap
-                parts = [_distinct(np.concatenate(parts))]
-                size = parts[0].size
-                if size > cap - total:
-                    return None
-        layers.append(_distinct(np.concatenate(parts)))
-        total += layers[-1].size
-        if total > cap or (deadline.limited and deadline.expired()):
-            return None
-    return layers
 
 
 def _byte_tables(values: np.ndarray) -> np.ndarray:
@@ -318,7 +276,7 @@ class _Relaxation:
     def build(
         cls, tab: _Tables, edge: np.ndarray, n: int, max_ideals: int, deadline: Deadline
     ) -> _Relaxation | None:
-        layers = _ideal_layers(tab.need, n, max_ideals, deadline)
+        layers = ideal_layers(tab.need, n, max_ideals, deadline)
         if layers is None:
             return None
         after: list[np.ndarray] = [np.empty((0, n))] * (n + 1)
@@ -397,18 +355,14 @@ def _stopped(
     the DP's proven bound and Proposition 5.3's arborescence bound."""
     from taopt.delivery.bounds import arborescence_bound
 
-    bound = min(max(proven, arborescence_bound(instance)), incumbent_value)
-    status, _ = outcome(
-        "dp", "stopped", objective=incumbent_value, bound=bound, time_limited=why == "time_limit"
-    )
-    return make_solution(
+    return finish(
         instance,
         incumbent_plan,
         method="exact",
-        status=status,
-        bound=bound,
+        stop=why,
+        bound=min(max(proven, arborescence_bound(instance)), incumbent_value),
         runtime=time.perf_counter() - start,
-        info={"stopped_by": why, **info},
+        info=info,
     )
 
 
@@ -590,7 +544,7 @@ def ideal_dp(
             can = ((ideals & bit) == 0) & ((ideals & tab.need[j]) == tab.need[j])
             if can.any():
                 blocks.append((j, np.flatnonzero(can)))
-        new_ideals = _distinct(
+        new_ideals = distinct(
             np.concatenate([ideals[rows] | (np.uint64(1) << np.uint64(j)) for j, rows in blocks])
         )
         m = new_ideals.size
@@ -694,25 +648,32 @@ def ideal_dp(
     if not best_value < inc_value:
         if inc_plan is None:
             raise InstanceError("ideal_dp: no complete plan exists (no customers?)")
-        if _beam is None:  # every state expanded: the incumbent is proven optimal
-            status, _ = outcome("dp", "complete", objective=inc_value, bound=inc_value)
-        return make_solution(
+        details = {**info, "dp_objective": inc_value, "incumbent_optimal": True}
+        if _beam is not None:  # a restricted pass proves nothing
+            return make_solution(
+                instance,
+                inc_plan,
+                method="exact",
+                status=FEASIBLE,
+                runtime=time.perf_counter() - start,
+                info=details,
+            )
+        return finish(  # every state expanded: the incumbent is proven optimal
             instance,
             inc_plan,
             method="exact",
-            status=status if _beam is None else FEASIBLE,
-            bound=inc_value if _beam is None else None,
+            stop="optimal",
+            bound=inc_value,
             runtime=time.perf_counter() - start,
-            info={**info, "dp_objective": inc_value, "incumbent_optimal": True},
+            info=details,
         )
     order = _rebuild(history, s, best_state, best_j)
     if _start is not None:
-        status, _ = outcome("dp", "complete", objective=best_value, bound=best_value)
-        return make_solution(  # a partial start: the value only, no plan to score
+        return finish(  # a partial start: the value only, no plan to score
             instance,
             None,
             method="exact",
-            status=status,
+            stop="optimal",
             objective=best_value,
             bound=best_value,
             runtime=time.perf_counter() - start,
@@ -726,12 +687,12 @@ def ideal_dp(
         return scheduled.replace(
             method="exact-beam", status=FEASIBLE, runtime=time.perf_counter() - start, info=info
         )
-    objective = scheduled.objective
-    status, _ = outcome("dp", "complete", objective=objective, bound=objective)
-    return scheduled.replace(
+    return finish(  # every ideal expanded: the DP's optimum, its own bound
+        instance,
+        scheduled.solution,
         method="exact",
-        status=status,
-        bound=objective,
+        stop="optimal",
+        bound=scheduled.objective,
         runtime=time.perf_counter() - start,
         info={**info, "dp_objective": best_value},
     )

@@ -446,7 +446,21 @@ class DeliveryInstance:
         return cls.from_dict(load_json(path, "delivery_instance"), source=str(path))
 
 
-@register_payload("plan")
+@register_payload(
+    "plan",
+    schema={
+        "description": "A chapter 5 plan: the customer served by each sortie, its launch and "
+        "landing stops.",
+        "type": "object",
+        "required": ["order", "launch", "landing"],
+        "additionalProperties": False,
+        "properties": {
+            "order": {"$ref": "#/$defs/indices"},
+            "launch": {"$ref": "#/$defs/indices"},
+            "landing": {"$ref": "#/$defs/indices"},
+        },
+    },
+)
 @dataclass(frozen=True)
 class Plan:
     """A chapter 5 solution: one drone sortie per customer, in serving order.

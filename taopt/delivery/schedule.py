@@ -12,7 +12,7 @@ the dynamic programme over (sortie, landing stop) states below is exact.
 Both dynamic programmes, :func:`schedule` (fixed order) and :func:`optimal_plan`
 (subsets of customers), make their transitions with the one vectorised step
 :func:`_sortie_step`, and both score the plan they return with the one scorer
-:func:`taopt.delivery.evaluate.evaluate_plan` (DESIGN invariant 1), checking that the
+:func:`taopt.delivery.evaluate.evaluate_plan` (docs/architecture.md, invariant 1), checking that the
 DP's own value agrees (relative :data:`MATCH_TOLERANCE`).
 """
 
@@ -25,12 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
 from taopt.limits import Deadline
-from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
-from taopt.status import outcome
+from taopt.result import FEASIBLE, Solution, finish, make_solution
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9
@@ -138,20 +136,6 @@ def _sortie_step(
     recovery += penalty  # + τ where (5.6) holds, +inf elsewhere
     launch_pos = recovery.argmin(axis=0)
     return prev_pos, served, launch_pos, recovery[launch_pos, columns]
-
-
-def _scored(instance: DeliveryInstance, plan: Plan, dp_value: float, who: str) -> float:
-    """The scorer's makespan of a complete plan, checked against the DP's own value.
-
-    Raises
-    ------
-    SolverError
-        The two differ by more than :data:`MATCH_TOLERANCE` relative (a bug: the DP and
-        :func:`taopt.delivery.evaluate.evaluate_plan` disagree on the timing semantics).
-    """
-    value = evaluate_plan(instance, plan)
-    _matches(value, dp_value, who, plan)
-    return value
 
 
 def _matches(value: float, dp_value: float, who: str, plan: Plan) -> None:
@@ -316,19 +300,15 @@ def _dp_stopped(instance: DeliveryInstance, incumbent: Any, start: float, info: 
     from taopt.delivery.bounds import arborescence_bound
 
     plan = getattr(incumbent, "plan", incumbent)
-    solution = make_solution(
+    return finish(
         instance,
         plan,
         method="subset-dp",
-        status=TIME_LIMIT,
+        stop="time_limit",
+        bound=arborescence_bound(instance),
         runtime=time.perf_counter() - start,
-        info={"stopped_by": "time_limit", **info},
+        info=info,
     )
-    bound = min(arborescence_bound(instance), solution.objective)
-    status, _ = outcome(
-        "dp", "stopped", objective=solution.objective, bound=bound, time_limited=True
-    )
-    return solution.replace(status=status, bound=bound)
 
 
 def optimal_plan(
@@ -450,12 +430,12 @@ def optimal_plan(
         mask &= ~(1 << j)
     plan = Plan(tuple(order[::-1]), tuple(launch[::-1]), tuple(landing[::-1]))
     # every subset expanded: the DP's optimum, its own bound
-    status, _ = outcome("dp", "complete", objective=makespan, bound=makespan)
-    solution = make_solution(
+    solution = finish(
         instance,
         plan,
         method="subset-dp",
-        status=status,
+        stop="optimal",
+        bound=makespan,
         runtime=time.perf_counter() - start,
         info={"dp_objective": makespan},
     )

@@ -96,8 +96,6 @@ NEIGHBOURHOODS = {8: MOVES_8, 16: MOVES_16}
 #: Worst relative excess of a lattice path over the straight line in a uniform current.
 LATTICE_ERROR = {8: 1.0 / np.cos(np.pi / 8) - 1.0, 16: 1.0 / np.cos(np.arctan(0.5) / 2) - 1.0}
 
-MOVES = np.array(MOVES_8)  # kept for older code
-
 
 def crossed_cells(move: tuple[int, int]) -> tuple[tuple[tuple[int, int], float], ...]:
     """Cells crossed by the segment between two cell centres ``move`` apart, with fractions.

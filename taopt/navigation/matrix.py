@@ -1,6 +1,6 @@
 """Travel-time matrices ``t(i, j)`` for all ordered pairs of points (thesis §2.2.1).
 
-The matrix is the only thing the assignment layer sees (DESIGN invariant 2).
+The matrix is the only thing the assignment layer sees (docs/architecture.md, invariant 2).
 Methods:
 
 * ``"pmp"``: all pairs at once by vectorised Pontryagin shooting on (2.6)/(2.10)

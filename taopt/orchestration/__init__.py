@@ -1,4 +1,4 @@
-"""The orchestration layer (DESIGN.md, "Layers"): everything that wires the core and the methods.
+"""The orchestration layer (docs/architecture.md, "Layers"): it wires the core and the methods.
 
 * :mod:`~taopt.orchestration.pipeline` — :func:`taopt.solve`, the one entry point, and
   :func:`taopt.available_methods`;

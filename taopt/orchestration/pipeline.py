@@ -105,8 +105,8 @@ def solve(
     seed : int, optional
         Passed to methods that take one (randomised ones); ignored by the others.
     time_limit : float, optional
-        Wall-clock seconds for the whole call (DESIGN.md invariant 4): the clock starts on
-        entry; the warm-start heuristics of an exact method get a share of it
+        Wall-clock seconds for the whole call (docs/architecture.md, invariant 4): the clock
+        starts on entry; the warm-start heuristics of an exact method get a share of it
         (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
         that take no limit (fast heuristics) ignore it. An exact model stopped by it returns
         its best plan with status "time_limit" and a proven bound; with no plan found in
@@ -244,8 +244,7 @@ def no_optimum_note(problem: Any) -> str:
 
 
 def lower(problem: Any, strength: str = "auto") -> float:
-    """:func:`taopt.bounds.lower` with every relaxation of the exact models registered (the
-    LP relaxations that ``strength="strong"`` adds live in ``taopt.models``, imported here).
+    """:func:`taopt.bounds.lower` (the strongest valid lower bound of the problem's family).
 
     Example
     -------

@@ -468,34 +468,10 @@ def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -
 
 
 def _route_lines(best: Solution, instance: Instance | None, problem: Any) -> list[str]:
-    """The plotted solution spelt with the ids written on the picture.
-
-    Routes as ``v0: v0 -> t2 -> t1``; a delivery plan as one ``#p: customer j, launch s<i>,
-    landing s<k>`` line per sortie; an SOP order as its node sequence. Other payloads
-    (trajectories) print nothing here.
-    """
-    payload = best.solution
-    if hasattr(payload, "launch") and hasattr(payload, "landing"):  # a delivery Plan
-        sorties = zip(payload.order, payload.launch, payload.landing, strict=True)
-        return [
-            f"  #{p + 1}: customer {j}, launch s{i}, landing s{k}"
-            for p, (j, i, k) in enumerate(sorties)
-        ]
-    if hasattr(payload, "sequence"):  # an SOP Order
-        return ["  order: " + " -> ".join(str(v) for v in payload.sequence)]
-    routes = getattr(payload, "routes", None)
-    if routes is None:
-        return []
-    from taopt.routing.plot import route_text
-
-    routes = [list(r) for r in routes]
-    if instance is not None:
-        targets = [t.id for t in instance.targets]
-        vehicles = [v.id for v in instance.vehicles]
-    else:
-        targets = [f"t{k}" for k in range(problem.n_targets)]
-        vehicles = [f"v{k}" for k in range(len(routes))]
-    return [f"  {route_text(vehicles[k], r, targets)}" for k, r in enumerate(routes)]
+    """The plotted solution spelt with the ids written on the picture: the family's
+    ``describe`` hook (:class:`taopt.registry.Family`), nothing when it has none."""
+    describe = family_of(problem).describe
+    return [] if describe is None else list(describe(problem, best.solution, instance))
 
 
 def verify_file(

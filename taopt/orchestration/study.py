@@ -662,7 +662,7 @@ def _flag_uncertified(
     spec: StudySpec, rows: Sequence[Mapping[str, Any]], exact: set[str], time_limit: Any
 ) -> None:
     """Warn (logger ``taopt``) about an exact row that is neither optimal nor infeasible
-    although no time limit stopped it: DESIGN invariant 4 says that is a bug."""
+    although no time limit stopped it: docs/architecture.md, invariant 4 says that is a bug."""
     if time_limit is not None:
         return
     for row in rows:

@@ -1,7 +1,7 @@
 """Chapter 2 bounds: the thesis's Algorithm 1 ("MCGA"), a valid arborescence bound, f_da.
 
 Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
-(DESIGN invariant 3):
+(docs/architecture.md, invariant 3):
 
 * :func:`arborescence_bound` — **valid** for every non-negative matrix. Every
   feasible solution (one open path per vehicle) plus zero-cost edges from a
@@ -15,8 +15,8 @@ Which of these is a valid lower bound on the optimum f_o of (2.2)–(2.5)
   instances). Kept because the thesis's quality ratio q = f / f_a (2.26) uses it.
 * :func:`f_da` — Lemma 2.5's upper bound: the MCGA with every edge duplicated
   in the opposite direction.
-* ``taopt.models.lp_bound`` — the LP relaxation of the exact model (valid; in the
-  models layer, since it solves a model).
+* :func:`lp_bound` — the LP relaxation of (2.2)–(2.5) with every DFJ row (valid; the
+  ``"strong"`` bound of :func:`taopt.bounds.lower`).
 """
 
 from __future__ import annotations
@@ -247,11 +247,11 @@ def path_bound(problem: AssignmentProblem) -> float:
     (root -> target k costs min_j t(p_j, k), as in the dense arborescence bound) is a
     spanning arborescence in which every target has out-degree <= 1 and the root <= m, of
     weight <= f; the Lagrangian with π >= 0 on these rows is <= f
-    (:mod:`taopt.delivery.relaxation`).
+    (:func:`taopt.arborescence.degree_penalised_arborescence`).
     """
     import numpy as np
 
-    from taopt.delivery.relaxation import degree_penalised_arborescence
+    from taopt.arborescence import degree_penalised_arborescence
 
     n, m = problem.n, problem.m
     if n == 0:
@@ -264,11 +264,93 @@ def path_bound(problem: AssignmentProblem) -> float:
     return max(result.value, arborescence_bound(problem))
 
 
+def lp_bound(problem: AssignmentProblem) -> float:
+    """Valid lower bound: the LP relaxation of (2.2)–(2.5) with every DFJ row (2.5).
+
+    The LP of (2.2)–(2.4) over ``0 <= σ <= 1`` is solved with scipy's HiGHS; the (2.5) rows a
+    fractional σ violates are found by exact separation
+    (:func:`taopt.routing.subtours.separate_subtours`) and added until none is left, so the
+    last LP is the full DFJ relaxation (the value ``taopt.models.lp_bound`` computes with the
+    exact model's own HiGHS loop). Every LP of the loop is a relaxation; the value returned is
+    the largest Lagrangian value of their row duals, valid whatever the solver's tolerances.
+
+    Returns
+    -------
+    float
+        The DFJ LP bound (never above the optimum f_o); at least :func:`arborescence_bound`
+        up to solver tolerances (the DFJ LP lies in the arborescence polytope).
+
+    Notes
+    -----
+    For row duals y of (2.3) (free) and z <= 0 of the other rows (written ``A_ub σ <= b_ub``),
+    ``L = 1·y + b_ub·z + Σ_a min(0, c_a − (A_eq^T y + A_ub^T z)_a) <= c·σ`` for every
+    ``0 <= σ <= 1`` meeting the rows, hence <= f_o. One LP of ``(n + m) n`` columns per
+    round; a few rounds at the thesis's sizes.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> cost = np.array([[0, 1, 9], [1, 0, 9], [5, 6, 0.0]])
+    >>> round(lp_bound(AssignmentProblem(cost, 2)), 6)
+    6.0
+
+    References
+    ----------
+    Thesis (2.2)–(2.5); Dantzig, Fulkerson and Johnson (1954).
+    """
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    from taopt.routing.subtours import arc_list, cut_rows, separate_subtours
+
+    n, m = problem.n, problem.m
+    if n == 0:
+        return 0.0
+    size = n + m
+    tails, heads = arc_list(problem)
+    arcs = np.arange(len(tails))
+    cost = problem.cost[tails, heads]
+    into = sp.csr_matrix((np.ones(len(arcs)), (heads, arcs)), shape=(n, len(arcs)))  # (2.3)
+    out_of = sp.csr_matrix((np.ones(len(arcs)), (tails, arcs)), shape=(size, len(arcs)))  # (2.4)
+    cuts: list[tuple[int, ...]] = []
+    best = -np.inf
+    while True:
+        rows, lower, upper = cut_rows(problem, cuts, tails, heads)
+        # a cut row reads lower <= row·σ <= upper with one side open: as A_ub σ <= b_ub
+        sign = np.where(np.isfinite(upper), 1.0, -1.0)
+        a_ub = sp.vstack([out_of, sp.diags(sign) @ rows]).tocsr()
+        b_ub = np.concatenate([np.ones(size), np.where(sign > 0, upper, -lower)])
+        result = linprog(
+            cost,
+            A_ub=a_ub,
+            b_ub=b_ub,
+            A_eq=into,
+            b_eq=np.ones(n),
+            bounds=(0.0, 1.0),
+            method="highs",
+        )
+        if result.status != 0:
+            raise InstanceError(
+                f"the DFJ LP relaxation of {problem.name or 'the problem'} "
+                f"ended with status {result.status}: {result.message}"
+            )
+        y = np.asarray(result.eqlin.marginals, dtype=float)
+        z = np.minimum(np.asarray(result.ineqlin.marginals, dtype=float), 0.0)
+        reduced = cost - into.T @ y - a_ub.T @ z
+        best = max(best, float(y.sum() + b_ub @ z + np.minimum(reduced, 0.0).sum()))
+        found = [s for s in separate_subtours(problem, tails, heads, result.x) if s not in cuts]
+        if not found:
+            return best
+        cuts += found
+
+
 def routing_lower(problem: AssignmentProblem, strength: str) -> float:
-    """:func:`taopt.bounds.lower` for chapter 2: the arborescence ("fast"), else
-    :func:`path_bound` (the LP relaxation that "strong" adds is registered by ``taopt.models``)."""
+    """:func:`taopt.bounds.lower` for chapter 2: the arborescence ("fast"), :func:`path_bound`
+    ("auto"), and the larger of that and the DFJ LP :func:`lp_bound` ("strong")."""
     if strength == "fast":
         return float(arborescence_bound(problem))
+    if strength == "strong":
+        return max(float(path_bound(problem)), lp_bound(problem))
     return float(path_bound(problem))
 
 
@@ -280,5 +362,6 @@ __all__ = [
     "arborescence_graph",
     "f_da",
     "path_bound",
+    "lp_bound",
     "routing_lower",
 ]

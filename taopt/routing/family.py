@@ -14,6 +14,7 @@ from typing import Any
 from taopt.registry import Bound, Family, Study, register_family
 from taopt.result import Routes
 from taopt.routing.bounds import arborescence_bound, routing_lower, thesis_mcga
+from taopt.routing.plot import routes_lines
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
 
 
@@ -83,5 +84,6 @@ FAMILY = register_family(
         plots={"routes": _plot_routes},
         adapter=_from_instance,
         studies=(Study("drift", "taopt.orchestration.studies.drift"),),
+        describe=routes_lines,
     )
 )

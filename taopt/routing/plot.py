@@ -15,13 +15,26 @@ import numpy as np
 
 from taopt.plot import LINESTYLES, _axes, label_points, legend_outside, plot_field
 
-__all__ = ["plot_routes", "plot_instance_routes", "route_text"]
+__all__ = ["plot_routes", "plot_instance_routes", "route_text", "routes_lines"]
 
 
 def route_text(vehicle: str, route: Sequence[int], target_ids: Sequence[str]) -> str:
     """``"v0: v0 -> t3 -> t1"``: a route as ``taopt demo`` prints it (``"v0: v0 (no target)"``)."""
     text = f"{vehicle}: " + " -> ".join([vehicle, *(target_ids[t] for t in route)])
     return text if len(route) else f"{text} (no target)"
+
+
+def routes_lines(problem: Any, routes: Any, instance: Any = None) -> list[str]:
+    """One ``"  v0: v0 -> t2 -> t1"`` line per route, with the instance's ids (else ``t<k>``
+    and ``v<j>``): the ``describe`` hook of every family whose payload is Routes."""
+    routes = [list(r) for r in routes]
+    if instance is not None:
+        targets = [t.id for t in instance.targets]
+        vehicles = [v.id for v in instance.vehicles]
+    else:
+        targets = [f"t{k}" for k in range(problem.n_targets)]
+        vehicles = [f"v{k}" for k in range(len(routes))]
+    return [f"  {route_text(vehicles[k], r, targets)}" for k, r in enumerate(routes)]
 
 
 def plot_routes(

@@ -1,8 +1,8 @@
 """JSON Schemas of taopt's file formats, and the strict reader that applies them.
 
-Every file taopt reads is checked here before any object is built (DESIGN
-invariant 8): the text must be UTF-8 JSON without the ``NaN``/``Infinity``
-literals Python's :mod:`json` accepts, and the data must match the JSON Schema
+Every file taopt reads is checked here before any object is built
+(docs/architecture.md, invariant 8): the text must be UTF-8 JSON without the
+``NaN``/``Infinity`` literals Python's :mod:`json` accepts, and the data must match the JSON Schema
 (draft 2020-12) of its kind, shipped beside this module as
 ``<kind>.schema.json``. A failure is an :class:`~taopt.errors.InstanceError`
 whose message names the file, the JSON path and the value, e.g.
@@ -86,20 +86,46 @@ def kinds() -> tuple[str, ...]:
     return tuple(sorted(_schema_files()))
 
 
+#: kind -> functions completing its schema in place (see :func:`extend`)
+_EXTENSIONS: dict[str, list[Callable[[dict[str, Any]], None]]] = {}
+
+
+def extend(kind: str, complete: Callable[[dict[str, Any]], None]) -> None:
+    """Register ``complete(schema)``, which adds to the schema of ``kind`` in place each time
+    :func:`schema` reads it.
+
+    A schema part that the code declares elsewhere is added here instead of being listed by
+    hand in the shipped file: :mod:`taopt.result` adds one rule and one ``$defs`` entry per
+    registered payload kind to the solution schema, each declared with its payload type
+    (:func:`taopt.result.register_payload`).
+    """
+    found = _EXTENSIONS.setdefault(kind, [])
+    if complete not in found:
+        found.append(complete)
+
+
 def schema(kind: str) -> dict[str, Any]:
-    """The JSON Schema of ``kind`` (a fresh copy of the shipped ``<kind>.schema.json``).
+    """The JSON Schema of ``kind``: a fresh copy of the shipped ``<kind>.schema.json``,
+    completed by the functions registered with :func:`extend` (every family imported
+    first, so the answer does not depend on what was imported before).
 
     Raises
     ------
     KeyError
         ``kind`` has no schema (this is a programming error, not bad input).
     """
+    from taopt.families import ensure_families
+
     uri = kind + _SUFFIX
     try:
         contents = _registry().contents(uri)
     except LookupError:
         raise KeyError(f"no schema for kind {kind!r}; known kinds: {', '.join(kinds())}") from None
-    return json.loads(json.dumps(contents))
+    contents = json.loads(json.dumps(contents))
+    ensure_families()  # every payload type (and other extension) registered
+    for complete in _EXTENSIONS.get(kind, ()):
+        complete(contents)
+    return contents
 
 
 # -- strict types --------------------------------------------------------------------------------

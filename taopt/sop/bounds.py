@@ -16,7 +16,7 @@ def path_bound(problem: SopProblem) -> float:
     """
     import numpy as np
 
-    from taopt.delivery.relaxation import degree_penalised_arborescence, greedy_path_weight
+    from taopt.arborescence import degree_penalised_arborescence, greedy_path_weight
 
     weights = np.array(problem.cost, dtype=float)
     closure = problem.closure

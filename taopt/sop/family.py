@@ -30,5 +30,8 @@ FAMILY = register_family(
         evaluate=evaluate_order,
         bounds={"arborescence": Bound(sop_arborescence_bound), "lower": Bound(sop_lower)},
         plots={"order": _plot_order},
+        describe=lambda problem, order, instance=None: [
+            "  order: " + " -> ".join(str(v) for v in order.sequence)
+        ],
     )
 )

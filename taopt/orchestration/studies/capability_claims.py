@@ -1,4 +1,4 @@
-"""Executable checks of chapter 3's claims (DESIGN invariant 5).
+"""Executable checks of chapter 3's claims (docs/architecture.md, invariant 5).
 
 Each checkable statement is evaluated on random instances of several classes; the result
 says how often it held and keeps the smallest counterexample (fewest targets, then vehicles,

@@ -1,4 +1,4 @@
-"""Executable checks of chapter 4's claims (DESIGN invariant 5), and Remark 4.6's search.
+"""Chapter 4's claims checked (docs/architecture.md, invariant 5), and Remark 4.6's search.
 
 Each claim is evaluated on random scenarios (:func:`claim_values` on one problem,
 :func:`check_claims` over many); the table says how often it held and keeps the smallest

@@ -1,4 +1,4 @@
-"""Executable checks of chapter 2's claims (DESIGN invariant 5).
+"""Executable checks of chapter 2's claims (docs/architecture.md, invariant 5).
 
 Each claim with a checkable inequality is tested over random instances of
 several classes; the result says how often it held and keeps the smallest
