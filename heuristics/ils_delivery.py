@@ -623,7 +623,8 @@ def _start_orders(
     for name in ("SMMA", "MMA"):
         path, info = ordered_or_repaired(name, cost, pairs, start, end)
         if path is None:
-            failure = {**info, "error": f"ILS found no start order: {info['error']}"}
+            reason = info["error"].split(": ", 1)[-1]  # "no feasible order exists (...)"
+            failure = {**info, "error": f"ILS found no start order: {reason}"}
         else:
             starts.append([c for c in path if c not in fixed])
     return starts, failure
