@@ -7,15 +7,21 @@ exact method (SOP). The larger sweeps are ``@pytest.mark.slow``.
 
 from __future__ import annotations
 
+import itertools
+import json
 import math
+import re
 
 import numpy as np
+import pytest
 from reference_budgeted import brute_force_budgeted
 
 import taopt
 from taopt.budgeted import BudgetedProblem
-from taopt.heuristics import budgeted
+from taopt.errors import FeasibilityError, InstanceError
+from taopt.heuristics import budgeted, peers
 from taopt.heuristics.budgeted import genetic_algorithm
+from taopt.sop.problem import SopProblem, evaluate_order
 
 # -- defect 2: the budgeted GA -------------------------------------------------------------------
 
@@ -45,3 +51,113 @@ def test_capacity_unit_is_positive():
     cost = np.zeros((4, 4))
     cost[2, 0] = 6.0
     assert budgeted.capacity_unit(BudgetedProblem(cost, 2, capacity=[1, 1])) == 6.0
+
+
+# -- defect 1: negative SOP costs, CP-SAT's forbidden arcs ---------------------------------------
+
+#: The one message for a negative cost on arc (1, 2) of value -3.
+NEGATIVE = r"arc \(1, 2\) has cost -3 < 0: SOP costs must be >= 0"
+
+
+def _four_nodes(value: float) -> list[list[float]]:
+    """A 4-node matrix, all arcs 5 except ``cost[1][2] = value``."""
+    cost = [[0.0 if i == j else 5.0 for j in range(4)] for i in range(4)]
+    cost[1][2] = value
+    return cost
+
+
+def test_negative_cost_refused_in_python():
+    """SopProblem refuses a negative cost (-1 included) naming the arc and the value."""
+    with pytest.raises(InstanceError, match=NEGATIVE):
+        SopProblem(np.array(_four_nodes(-3.0)), (), 0, 3)
+    with pytest.raises(InstanceError, match=r"arc \(1, 2\) has cost -1 < 0"):
+        SopProblem(np.array(_four_nodes(-1.0)), (), 0, 3)
+    assert SopProblem(np.array(_four_nodes(np.inf)), (), 0, 3).n == 4  # inf forbids
+
+
+@pytest.mark.parametrize("value", [-3, -0.5])
+def test_negative_cost_refused_in_json_files(tmp_path, value):
+    """A JSON file with a negative cost other than -1: the same message, after the path."""
+    path = tmp_path / "negative.json"
+    data = {"schema_version": 1, "kind": "sop_problem", "start": 0, "end": 3}
+    path.write_text(json.dumps({**data, "cost": _four_nodes(value)}))
+    text = f"arc (1, 2) has cost {value:g} < 0: SOP costs must be >= 0"
+    with pytest.raises(InstanceError) as caught:
+        SopProblem.load(path)
+    assert str(caught.value).startswith(f"{path}: {text}")
+    path.write_text(json.dumps({**data, "cost": _four_nodes(-1)}))  # TSPLIB's marker
+    assert not np.isfinite(SopProblem.load(path).cost[1, 2])
+
+
+def test_negative_cost_refused_by_the_schema():
+    """The schema alone refuses -3 and -0.5 and accepts -1 (for other tools reading it)."""
+    import jsonschema
+
+    from taopt import schemas
+
+    data = {"schema_version": 1, "kind": "sop_problem", "start": 0, "end": 3}
+    validator = jsonschema.Draft202012Validator(schemas.schema("sop_problem"))
+    assert validator.is_valid({**data, "cost": _four_nodes(-1)})
+    for value in (-3, -0.5):
+        assert not validator.is_valid({**data, "cost": _four_nodes(value)})
+
+
+def test_negative_cost_refused_in_tsplib_files(tmp_path):
+    """A TSPLIB .sop file with a weight below 0 other than -1: the same message."""
+    rows = [[0, 0, 0, 1000000], [-1, 0, -3, 0], [-1, 7, 0, 0], [-1, -1, -1, 0]]
+    body = "\n".join(" ".join(str(v) for v in row) for row in rows)
+    path = tmp_path / "negative.sop"
+    path.write_text(
+        "NAME: negative\nTYPE: SOP\nDIMENSION: 4\nEDGE_WEIGHT_TYPE: EXPLICIT\n"
+        f"EDGE_WEIGHT_FORMAT: FULL_MATRIX\nEDGE_WEIGHT_SECTION\n4\n{body}\nEOF\n"
+    )
+    with pytest.raises(InstanceError, match=f"^{re.escape(str(path))}: {NEGATIVE}"):
+        SopProblem.load(path)
+    path.write_text(path.read_text().replace("-1 0 -3 0", "-1 0 3 0"))
+    problem = SopProblem.load(path)  # the -1 markers still read as TSPLIB means them
+    assert np.isinf(problem.cost[[1, 2, 3, 3], [0, 0, 1, 2]]).all()
+    assert brute_force_sop(problem) == 0 + 3 + 0
+
+
+def brute_force_sop(problem: SopProblem) -> float:
+    """The cheapest feasible order over every permutation of the inner nodes (inf if none)."""
+    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
+    best = math.inf
+    for perm in itertools.permutations(inner):
+        try:
+            best = min(best, evaluate_order(problem, [problem.start, *perm, problem.end]))
+        except FeasibilityError:
+            continue
+    return best
+
+
+def test_cpsat_worker_takes_forbidden_arcs_explicitly():
+    """The CP-SAT worker reads forbidden arcs from their own array, never from a cost's sign:
+    negative costs are used (the brute-force optimum -6), marked arcs are not."""
+    cost = np.array([[0, 4, 9, 9], [9, 0, -8, 9], [9, 9, 0, -2], [0, 0, 0, 0]])
+    options = {"time_limit": 20, "seed": 0, "num_workers": 1, "kind": "sop"}
+    options.update(start=0, end=3, precedences=[])
+    request = {"cost": cost, "n": 4, "m": 0, "options": options}
+    request["options"]["forbidden"] = np.zeros((4, 4), dtype=bool).tolist()
+    reply = peers._call("cpsat", request, 20)[0]
+    assert reply["cpsat_status"] == "OPTIMAL" and reply["order"] == [0, 1, 2, 3]
+    assert reply["objective"] == 4 - 8 - 2 == -6
+    forbidden = np.zeros((4, 4), dtype=bool)
+    forbidden[1, 2] = True
+    request["options"]["forbidden"] = forbidden.tolist()
+    reply = peers._call("cpsat", request, 20)[0]
+    assert reply["order"] == [0, 2, 1, 3] and reply["objective"] == 9 + 9 + 9
+
+
+def random_sop(rng: np.random.Generator, largest: int = 7) -> SopProblem:
+    """A tiny SOP (3..largest nodes): costs 0..19, a random share of forbidden arcs, random
+    precedences between inner nodes; feasible or not."""
+    n = int(rng.integers(3, largest + 1))
+    cost = rng.integers(0, 20, size=(n, n)).astype(float)
+    cost[rng.random((n, n)) < rng.uniform(0, 0.6)] = np.inf
+    pairs = set()
+    if n > 3:
+        for _ in range(int(rng.integers(0, n))):
+            r, j = sorted(int(v) for v in rng.choice(np.arange(1, n - 1), 2, replace=False))
+            pairs.add((r, j))
+    return SopProblem(cost, tuple(sorted(pairs)), 0, n - 1)
