@@ -161,3 +161,152 @@ def random_sop(rng: np.random.Generator, largest: int = 7) -> SopProblem:
             r, j = sorted(int(v) for v in rng.choice(np.arange(1, n - 1), 2, replace=False))
             pairs.add((r, j))
     return SopProblem(cost, tuple(sorted(pairs)), 0, n - 1)
+
+
+# -- defect 3 and the adversarial round: SOP ----------------------------------------------------
+
+#: The SOP heuristics with iteration-bounded options (no wall-clock stop in tests).
+SOP_HEURISTICS = {
+    "NIA": {},
+    "MMA": {},
+    "SMMA": {},
+    "GA": {"population": 10, "generations": 10},
+    "ILS": {"iterations": 3},
+}
+
+
+def check_sop_answer(problem: SopProblem, method: str, result: taopt.Solution, optimum: float):
+    """A heuristic's answer: feasible and re-scored when an order exists (never below the
+    optimum), status no_solution with the reason when none does; never "optimal"."""
+    assert str(result.status) in ("feasible", "no_solution"), (method, result.status)
+    if math.isfinite(optimum):
+        assert result.solution is not None, (method, result.info)
+        assert evaluate_order(problem, result.order) == result.objective >= optimum
+    else:
+        assert result.solution is None and "no feasible order exists" in result.info["error"]
+
+
+def test_sop_heuristics_answer_on_random_tiny_sops():
+    """25 random tiny SOPs with forbidden arcs and precedences (some infeasible): every
+    heuristic answers (repaired at a dead end), re-scored, never below brute force."""
+    rng = np.random.default_rng(30)
+    repaired = 0
+    for k in range(25):
+        problem = random_sop(rng)
+        optimum = brute_force_sop(problem)
+        for method, options in SOP_HEURISTICS.items():
+            result = taopt.solve(problem, method, seed=k, **options)
+            check_sop_answer(problem, method, result, optimum)
+            repaired += bool(result.info.get("repaired"))
+    assert repaired > 0  # the sample does reach greedy dead ends
+
+
+def test_backtracking_repair_proves_or_gives_up():
+    """backtrack_order finds the only order, proves there is none, or says its budget ran out."""
+    from taopt.heuristics.sequencing import backtrack_order
+
+    inf = np.inf
+    only = [[0, 2, inf, inf], [1, 0, 8, inf], [0, 4, 0, 5], [5, 3, 2, 0]]
+    assert backtrack_order(only, [], 0, 3) == ([0, 1, 2, 3], False)
+    none = [[0, 1, 1, 1], [1, 0, 1, inf], [1, 1, 0, inf], [1, 1, 1, 0]]
+    assert backtrack_order(none, [], 0, 3) == (None, True)
+    assert backtrack_order(np.ones((6, 6)), [], 0, 5, budget=2) == (None, False)
+
+
+def test_cpsat_never_optimal_for_a_wrong_value():
+    """cpsat on random tiny SOPs with forbidden arcs and precedences: "optimal" only at the
+    brute-force optimum, "infeasible" only when no order exists; its order re-scored."""
+    rng = np.random.default_rng(31)
+    for k in range(6):
+        problem = random_sop(rng)
+        optimum = brute_force_sop(problem)
+        result = taopt.solve(problem, "cpsat", time_limit=20, seed=k, num_workers=1)
+        if math.isfinite(optimum):
+            assert str(result.status) == "optimal" and result.objective == optimum
+            assert evaluate_order(problem, result.order) == optimum
+        else:
+            assert str(result.status) == "infeasible" and result.solution is None
+
+
+@pytest.mark.slow
+def test_sop_sweep_every_method_against_brute_force():
+    """300 random tiny SOPs: exact and cpsat prove the brute-force optimum (or infeasible);
+    every heuristic answers as :func:`check_sop_answer` requires."""
+    rng = np.random.default_rng(32)
+    for k in range(300):
+        problem = random_sop(rng)
+        optimum = brute_force_sop(problem)
+        for method in ("exact", "cpsat"):
+            result = taopt.solve(problem, method, seed=k)
+            if math.isfinite(optimum):
+                assert str(result.status) == "optimal" and result.objective == optimum
+                assert evaluate_order(problem, result.order) == optimum
+            else:
+                assert str(result.status) == "infeasible", (k, method)
+        for method, options in SOP_HEURISTICS.items():
+            check_sop_answer(
+                problem, method, taopt.solve(problem, method, seed=k, **options), optimum
+            )
+
+
+# -- the adversarial round: budgeted -------------------------------------------------------------
+
+
+def random_budgeted(rng: np.random.Generator) -> BudgetedProblem:
+    """A tiny budgeted problem: 1-5 targets, 1-3 vehicles, whole travel times with many
+    zeros (largest 1, 3 or 10), random capacities and maximum travel times; feasible or not."""
+    n, m = int(rng.integers(1, 6)), int(rng.integers(1, 4))
+    high = int(rng.choice([1, 3, 10]))
+    cost = rng.integers(0, high, size=(n + m, n + m)).astype(float)
+    capacity = [None if rng.random() < 0.4 else int(rng.integers(0, 3)) for _ in range(m)]
+    max_time = [
+        None if rng.random() < 0.5 else float(rng.integers(0, 3 * high + 1)) for _ in range(m)
+    ]
+    return BudgetedProblem(cost, n, capacity=capacity, max_time=max_time)
+
+
+#: The budgeted heuristics with iteration-bounded options.
+BUDGETED_HEURISTICS = {"MC": {}, "EVM": {}, "GA": {"population": 10, "generations": 15}}
+
+
+def check_budgeted_answer(problem, method, result, optimum):
+    """A heuristic's answer: feasible (re-scored, never below the optimum) or no_solution
+    with the reason (always when no solution exists); never "optimal"."""
+    assert str(result.status) in ("feasible", "no_solution"), (method, result.status)
+    if result.solution is None:
+        assert "error" in result.info and math.isinf(result.objective)
+        return
+    assert math.isfinite(optimum), f"{method} answered on an infeasible instance"
+    assert taopt.evaluate(problem, result.solution) == pytest.approx(result.objective)
+    assert result.objective >= optimum - 1e-9
+
+
+def test_budgeted_heuristics_answer_on_random_tiny_problems():
+    """25 random tiny budgeted problems (zero travel times, tight limits, some infeasible):
+    MC, EVM and GA never raise; answers feasible and never below brute force."""
+    rng = np.random.default_rng(33)
+    for k in range(25):
+        problem = random_budgeted(rng)
+        optimum = brute_force_budgeted(problem)
+        for method, options in BUDGETED_HEURISTICS.items():
+            result = taopt.solve(problem, method, seed=k, **options)
+            check_budgeted_answer(problem, method, result, optimum)
+
+
+@pytest.mark.slow
+def test_budgeted_sweep_every_method_against_brute_force():
+    """300 random tiny budgeted problems: exact proves the brute-force optimum (or
+    infeasible); MC, EVM and GA answer as :func:`check_budgeted_answer` requires."""
+    rng = np.random.default_rng(34)
+    for k in range(300):
+        problem = random_budgeted(rng)
+        optimum = brute_force_budgeted(problem)
+        exact = taopt.solve(problem, "exact")
+        if math.isfinite(optimum):
+            assert str(exact.status) == "optimal"
+            assert exact.objective == pytest.approx(optimum, rel=1e-6, abs=1e-9)
+        else:
+            assert str(exact.status) == "infeasible"
+        for method, options in BUDGETED_HEURISTICS.items():
+            result = taopt.solve(problem, method, seed=k, **options)
+            check_budgeted_answer(problem, method, result, optimum)
