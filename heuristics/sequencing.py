@@ -226,8 +226,10 @@ def _no_slot(rule: str, node: int) -> SolverError:
 # The backtracking repair of a greedy dead end
 # ---------------------------------------------------------------------------------------------
 
-#: Partial paths the backtracking repair may extend before it gives up (deterministic).
-REPAIR_BUDGET = 100_000
+#: Partial paths the backtracking repair may extend before it gives up (deterministic). At
+#: about 0.1 ms an extension, a search that gives up takes a few seconds; on random SOPs
+#: with 50-80 % forbidden arcs and n <= 100 it finds an order in under 0.05 s.
+REPAIR_BUDGET = 50_000
 
 
 class NoOrderError(SolverError):
@@ -285,7 +287,8 @@ def backtrack_order(
     -----
     Exponential in the worst case (the SOP's feasibility question is NP-complete with
     forbidden arcs); the memo bounds the work by the number of (set, last) states,
-    O(2^n n), and ``budget`` caps it. Each extension costs O(n^2) numpy work (the check).
+    O(2^n n), and ``budget`` caps it. Each extension costs O(n) numpy work (the check keeps
+    counts of the usable arcs into and out of the nodes left).
     """
     matrix, _, pairs = _validate(cost, precedences, start, end)
     size = matrix.shape[0]
@@ -294,52 +297,66 @@ def backtrack_order(
     if end is not None:
         usable[end, :] = False  # nothing leaves the end of the path
         usable[:, start] = False
-    required = [0] * size  # bitmask of the nodes that must come before each node
-    for before, after in pairs:
-        required[after] |= 1 << before
-    everyone = (1 << size) - 1
-    failed: set[tuple[int, int]] = set()
+    successors: list[list[int]] = [[] for _ in range(size)]
+    waiting = np.zeros(size, dtype=np.int64)  # predecessors not yet on the path
+    for before, after in set(pairs):
+        successors[before].append(after)
+        waiting[after] += 1
+    left = np.ones(size, dtype=bool)  # nodes not yet on the path
+    arcs = usable.astype(np.int64)
+    entries = arcs.sum(axis=0)  # usable arcs into each node from the nodes left
+    exits = arcs.sum(axis=1)  # usable arcs out of each node to the nodes left
+    inner = np.ones(size, dtype=bool)  # nodes that must leave on an arc (not the end)
+    if end is not None:
+        inner[end] = False
+    failed: set[tuple[int, int]] = set()  # (visited bitmask, last node) that led nowhere
     spent = 0
 
-    def hopeless(mask: int, last: int) -> bool:
-        """Some node left can no longer be entered or left on usable arcs."""
-        left = np.array([not (mask >> v) & 1 for v in range(size)])
-        if not left.any():
-            return False
-        sources = left.copy()
-        sources[last] = True
-        entered = usable[sources][:, left].sum(axis=0)
-        if (entered < 1).any():
-            return True
-        out = usable[left][:, left].sum(axis=1)
-        exits = left.copy()
-        if end is not None:
-            exits[end] = False
-            return bool((out[exits[left]] < 1).any())
-        return int((out < 1).sum()) > 1  # an open path: only its last node leaves nothing
+    def place(node: int) -> None:
+        left[node] = False
+        entries[:] -= arcs[node]
+        exits[:] -= arcs[:, node]
+        for successor in successors[node]:
+            waiting[successor] -= 1
 
-    def choices(mask: int, last: int) -> list[int]:
-        left = [v for v in range(size) if not (mask >> v) & 1]
-        ready = [
-            v
-            for v in left
-            if usable[last, v]
-            and required[v] & mask == required[v]
-            and (v != end or len(left) == 1)
-        ]
-        return sorted(ready, key=lambda v: (matrix[last, v], v))
+    def unplace(node: int) -> None:
+        left[node] = True
+        entries[:] += arcs[node]
+        exits[:] += arcs[:, node]
+        for successor in successors[node]:
+            waiting[successor] += 1
+
+    def hopeless(last: int) -> bool:
+        """Some node left can no longer be entered or left on usable arcs."""
+        if ((entries + arcs[last] < 1) & left).any():
+            return True
+        stuck = (exits < 1) & left
+        if end is not None:
+            return bool((stuck & inner).any())
+        return int(stuck.sum()) > 1  # an open path: only its last node leaves nothing
+
+    def choices(last: int) -> list[int]:
+        """The nodes that may follow ``last``, the one to try first at the end."""
+        ready = left & usable[last] & (waiting == 0)
+        if end is not None and left.sum() > 1:
+            ready[end] = False
+        nodes = np.flatnonzero(ready)
+        return nodes[np.lexsort((nodes, matrix[last, nodes]))][::-1].tolist()
 
     path = [int(start)]
     mask = 1 << int(start)
-    stack = [choices(mask, int(start))[::-1]]
+    place(int(start))
+    stack = [choices(int(start))]
     while stack:
-        if mask == everyone:
+        if not left.any():
             return path, False
         options = stack[-1]
         if not options:  # every extension of this partial path failed
             stack.pop()
             failed.add((mask, path[-1]))
-            mask &= ~(1 << path.pop())
+            node = path.pop()
+            mask &= ~(1 << node)
+            unplace(node)
             continue
         node = options.pop()
         grown = mask | (1 << node)
@@ -348,12 +365,14 @@ def backtrack_order(
         spent += 1
         if spent > budget:
             return None, False
-        if hopeless(grown, node):
+        place(node)
+        if hopeless(node):
             failed.add((grown, node))
+            unplace(node)
             continue
         path.append(node)
         mask = grown
-        stack.append(choices(mask, node)[::-1])
+        stack.append(choices(node))
     return None, True
 
 
