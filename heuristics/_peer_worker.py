@@ -253,8 +253,9 @@ def _cpsat_reply(solver: Any, status: int, started: float) -> dict[str, Any]:
 
 
 def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
-    """Sequential ordering as one circuit: the arcs of ``cost`` (-1: forbidden) plus a dummy
-    ``end -> start`` arc, and position variables for the precedences.
+    """Sequential ordering as one circuit: the arcs of ``cost`` not marked in
+    ``options["forbidden"]`` (an n x n list of booleans; a cost's sign means nothing) plus a
+    dummy ``end -> start`` arc, and position variables for the precedences.
 
     ``AddCircuit`` over every node makes the chosen arcs one Hamiltonian cycle; with the
     dummy arc as the only way into ``start`` and out of ``end`` it is a path start -> end.
@@ -265,6 +266,7 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     from ortools.sat.python import cp_model
 
     n = cost.shape[0]
+    forbidden = options["forbidden"]
     start, end = int(options["start"]), int(options["end"])
     model = cp_model.CpModel()
     position = [model.NewIntVar(0, n - 1, f"position {v}") for v in range(n)]
@@ -273,7 +275,7 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     arcs, terms, used = [], [], {}
     for i in range(n):
         for j in range(n):
-            if i == j or cost[i, j] < 0 or j == start or i == end:
+            if i == j or forbidden[i][j] or j == start or i == end:
                 continue
             literal = model.NewBoolVar(f"{i}->{j}")
             arcs.append((i, j, literal))

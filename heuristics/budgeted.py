@@ -76,6 +76,7 @@ __all__ = [
     "mc",
     "evm",
     "genetic_algorithm",
+    "capacity_unit",
 ]
 
 
@@ -635,6 +636,23 @@ def penalised_cost(
     return total + weight * violation, total, violation
 
 
+def capacity_unit(problem: BudgetedProblem) -> float:
+    """Time units of violation per target over a capacity: the median travel time between
+    targets (from the starts when n = 1), or, when that is 0, the median positive entry, or 1.
+
+    It must be positive: with a unit of 0 a chromosome over a capacity would count as
+    violating nothing, and the GA would return it as feasible (a 3-target instance with all
+    travel times 0 and capacity ``[None, 1]`` did, on 7 of 10 seeds).
+    """
+    n = problem.n
+    between = problem.cost[:n, :n][~np.eye(n, dtype=bool)]
+    unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
+    if unit > 0:
+        return unit
+    positive = problem.cost[(problem.cost > 0) & np.isfinite(problem.cost)]
+    return float(np.median(positive)) if positive.size else 1.0
+
+
 @register_method(BudgetedProblem, "GA", category="heuristic")
 def genetic_algorithm(
     problem: BudgetedProblem,
@@ -696,7 +714,8 @@ def genetic_algorithm(
         As chapter 2's GA (thesis: 120, 350, 0.9, 0.1).
     penalty : float
         λ, time units of penalty per time unit of excess; a target over a capacity counts
-        as the median travel time between targets (``info["unit"]``) of excess.
+        as :func:`capacity_unit` (``info["unit"]``, the median travel time between targets,
+        always positive) of excess.
     time_limit : float, optional
         Wall-clock seconds; the run stops after the generation during which it expires
         (``info["stopped_by"] = "time_limit"``).
@@ -761,8 +780,7 @@ def genetic_algorithm(
     rng = np.random.default_rng(seed)
     n, m = problem.n, problem.m
     length = n + m - 1
-    between = problem.cost[:n, :n][~np.eye(n, dtype=bool)]
-    unit = float(np.median(between)) if between.size else float(np.median(problem.cost[n:, :n]))
+    unit = capacity_unit(problem)
     matrix = path_matrix(problem.routing)
     descent = LimitedDescent(problem)
     penalised = PenalisedSearch(problem, penalty, unit) if memetic == "penalised" else None

@@ -15,8 +15,9 @@ Operators
   gives a precedence-feasible order, and every feasible order is reachable. When some arcs
   are forbidden (infinite cost, as in TSPLIB SOP files), a viable node reached from the
   last placed one by a usable arc is preferred; an order that still needs a forbidden arc
-  costs inf, and if the best order found does, the GA raises ``SolverError`` rather than
-  return it.
+  costs inf, and if the best order found does, :func:`ga_search` raises ``SolverError``
+  rather than return it; the registered methods then take the backtracking repair's order
+  (:func:`~taopt.heuristics.sequencing.backtrack_order`) or answer status "no_solution".
 * **Normalisation** (Lamarckian): after decoding, each node's key is reset to its rank in
   the decoded order divided by the number of nodes, so keys carry positions.
 * **Selection**: binary tournament (lower path cost wins, the first drawn on ties);
@@ -36,6 +37,7 @@ scores the best order with the exact scheduler :func:`taopt.schedule`.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -45,8 +47,12 @@ import numpy as np
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.sequencing import (
+    REPAIR_BUDGET,
     _validate,
+    backtrack_order,
     delivery_cost_matrix,
+    no_order_solution,
+    path_cost,
     schedule_order,
 )
 from taopt.limits import Deadline
@@ -253,6 +259,35 @@ def ga_order(
     return path
 
 
+def _searched_or_repaired(
+    cost: Any, pairs: Any, start: int, end: int | None, seed: Any, **options: Any
+) -> tuple[list[int] | None, float, np.ndarray | None, dict[str, Any]]:
+    """:func:`ga_search`'s best path; when every order it decoded needs a forbidden arc, the
+    backtracking repair's (:func:`~taopt.heuristics.sequencing.backtrack_order`); else None.
+
+    Returns the path, its cost, the history (None when repaired) and the ``info`` to
+    record (``repaired``/``dead_end``, or ``error``/``proved_infeasible`` with no path).
+    """
+    try:
+        path, value, history = ga_search(cost, pairs, start, end, seed, **options)
+        return path, value, history, {}
+    except InstanceError:
+        raise
+    except SolverError as exc:
+        dead_end = str(exc)
+    path, proved = backtrack_order(cost, pairs, start, end)
+    if path is not None:
+        matrix = np.asarray(cost, dtype=float)
+        return path, path_cost(matrix, path), None, {"repaired": True, "dead_end": dead_end}
+    why = (
+        "no feasible order exists (the backtracking repair searched every partial path)"
+        if proved
+        else f"the backtracking repair found none within {REPAIR_BUDGET} extensions"
+    )
+    info = {"error": f"GA found no order: {why}", "dead_end": dead_end}
+    return None, math.inf, None, {**info, "proved_infeasible": proved}
+
+
 @register_method(DeliveryInstance, "GA")
 def ga_delivery(
     instance: Any, seed: int = 0, time_limit: float | None = None, **options: Any
@@ -266,15 +301,19 @@ def ga_delivery(
     """
     began = time.perf_counter()
     cost, start, pairs, customers = delivery_cost_matrix(instance)
-    path, value, history = ga_search(
+    path, value, history, info = _searched_or_repaired(
         cost, pairs, start, None, seed, time_limit=time_limit, **options
     )
+    if path is None:
+        return no_order_solution(instance, "GA", seed, began, info)
     solution = schedule_order(instance, path, customers)
+    if history is not None:
+        info["history"] = history.tolist()
     return solution.replace(
         method="GA",
         seed=seed,
         runtime=time.perf_counter() - began,
-        info={**solution.info, "tstar_cost": value, "history": history.tolist()},
+        info={**solution.info, "tstar_cost": value, **info},
     )
 
 
@@ -283,9 +322,11 @@ def ga_sop(
     problem: SopProblem, seed: int = 0, time_limit: float | None = None, **options: Any
 ) -> Solution:
     """The topological-sort GA of :func:`ga_order` on the SOP's own cost matrix
-    (``time_limit``: wall-clock seconds, see :func:`ga_search`)."""
+    (``time_limit``: wall-clock seconds, see :func:`ga_search`). When every order it decoded
+    needs a forbidden arc, the backtracking repair's order (``info["repaired"]``), or status
+    "no_solution" with the reason in ``info["error"]``."""
     began = time.perf_counter()
-    path, _, history = ga_search(
+    path, _, history, info = _searched_or_repaired(
         problem.cost,
         problem.precedences,
         problem.start,
@@ -294,6 +335,10 @@ def ga_sop(
         time_limit=time_limit,
         **options,
     )
+    if path is None:
+        return no_order_solution(problem, "GA", seed, began, info)
+    if history is not None:
+        info["history"] = history.tolist()
     return make_solution(
         problem,
         Order(path),
@@ -301,5 +346,5 @@ def ga_sop(
         status=FEASIBLE,
         runtime=time.perf_counter() - began,
         seed=seed,
-        info={"history": history.tolist()},
+        info=info,
     )

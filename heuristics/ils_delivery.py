@@ -64,10 +64,9 @@ from taopt.delivery.schedule import _sortie_data, _sortie_step, schedule
 from taopt.errors import InstanceError, SolverError
 from taopt.heuristics.sequencing import (
     delivery_cost_matrix,
-    mma_order,
-    nia_order,
+    no_order_solution,
+    ordered_or_repaired,
     path_cost,
-    smma_order,
 )
 from taopt.limits import Deadline
 from taopt.registry import register_method
@@ -611,8 +610,24 @@ def ils_search(
 # ---------------------------------------------------------------------------------------------
 
 
-def _tstar_order(rule: Any, cost: np.ndarray, pairs: list, start: int) -> list[int]:
-    return [c for c in rule(cost, pairs, start) if c != start]
+def _start_orders(
+    cost: np.ndarray, pairs: Any, start: int, end: int | None
+) -> tuple[list[list[int]], dict[str, Any]]:
+    """SMMA's and MMA's paths (repaired at a greedy dead end), without the fixed nodes.
+
+    Returns the orders (none when both rules and the repair found nothing) and the
+    ``info`` of the last rule that failed (:func:`ordered_or_repaired`; ``{}`` if none did).
+    """
+    fixed = {start} if end is None else {start, end}
+    starts, failure = [], {}
+    for name in ("SMMA", "MMA"):
+        path, info = ordered_or_repaired(name, cost, pairs, start, end)
+        if path is None:
+            reason = info["error"].split(": ", 1)[-1]  # "no feasible order exists (...)"
+            failure = {**info, "error": f"ILS found no start order: {reason}"}
+        else:
+            starts.append([c for c in path if c not in fixed])
+    return starts, failure
 
 
 @register_method(
@@ -650,7 +665,9 @@ def ils_delivery(
     """
     began = time.perf_counter()
     cost, start, pairs, _ = delivery_cost_matrix(instance)
-    starts = [_tstar_order(rule, cost, pairs, start) for rule in (smma_order, mma_order)]
+    starts, failure = _start_orders(cost, pairs, start, None)
+    if not starts:
+        return no_order_solution(instance, "ILS", seed, began, failure)
     screen = None
     if tstar_screen is not None:
         if not tstar_screen >= 0:
@@ -703,24 +720,16 @@ def ils_sop(
 ) -> Solution:
     """The same iterated local search on the SOP's path cost (start/end nodes fixed).
 
-    Starts from SMMA's and MMA's paths (NIA's if neither finds one).
+    Starts from SMMA's and MMA's paths, each repaired by backtracking at a greedy dead end
+    (:func:`~taopt.heuristics.sequencing.ordered_or_repaired`); when neither gives one,
+    status "no_solution" with the reason in ``info["error"]``.
     """
     began = time.perf_counter()
     start, end = problem.start, problem.end
     fixed = {start} if end is None else {start, end}
-    starts = []
-    for rule in (smma_order, mma_order, nia_order):
-        if len(starts) == 2:
-            break
-        try:
-            path = rule(problem.cost, problem.precedences, start, end)
-        except SolverError:
-            continue
-        starts.append([c for c in path if c not in fixed])
+    starts, failure = _start_orders(problem.cost, problem.precedences, start, end)
     if not starts:
-        raise SolverError(
-            "ILS found no feasible order: NIA, MMA and SMMA found no path to start from"
-        )
+        return no_order_solution(problem, "ILS", seed, began, failure)
     items = [c for c in range(len(problem.cost)) if c not in fixed]
     order, _, info = ils_search(
         lambda o: PathStates(problem.cost, start, end, o),

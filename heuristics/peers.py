@@ -497,12 +497,16 @@ def ortools_solve(
 
 
 # ----------------------------------------------------------------------------- CP-SAT
-def _sop_integer_costs(problem: SopProblem, scale: float | None) -> tuple[np.ndarray, float, bool]:
-    """The SOP's usable arcs as int64 (-1: forbidden), the scale, and whether it is exact.
+def _sop_integer_costs(
+    problem: SopProblem, scale: float | None
+) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """The SOP's arc costs as int64, the forbidden arcs, the scale, and whether it is exact.
 
     Whole-number costs keep ``scale = 1`` (exact); otherwise the largest finite entry
-    becomes :data:`LARGEST_ENTRY`. An arc ``i -> j`` with ``j`` required before ``i`` is
-    forbidden too (no feasible path uses it).
+    becomes :data:`LARGEST_ENTRY`. ``forbidden[i, j]`` is True for an infinite cost and
+    for an arc ``i -> j`` with ``j`` required before ``i`` (no feasible path uses it); it
+    goes to the worker as its own array, never coded in the sign of a cost (a negative
+    cost read as "forbidden" once made CP-SAT prove a wrong optimum).
     """
     cost = problem.cost
     finite = np.isfinite(cost)
@@ -520,10 +524,11 @@ def _sop_integer_costs(problem: SopProblem, scale: float | None) -> tuple[np.nda
         )
     scaled = np.where(finite, cost * scale, 0.0)
     exact = bool(np.all(scaled == np.rint(scaled)))
-    matrix = np.where(finite, np.rint(scaled), -1).astype(np.int64)
+    matrix = np.where(finite, np.rint(scaled), 0).astype(np.int64)
+    forbidden = ~finite
     for r, j in problem.closure.edges:
-        matrix[j, r] = -1
-    return matrix, scale, exact
+        forbidden[j, r] = True
+    return matrix, forbidden, scale, exact
 
 
 def _scaled_bound(reply: dict[str, Any], scale: float, slack_units: float) -> float | None:
@@ -623,8 +628,9 @@ def cpsat_sop(
 ) -> Solution:
     """OR-Tools CP-SAT on a sequential ordering problem, in its worker process.
 
-    One ``AddCircuit`` over the usable arcs plus a dummy ``end -> start`` arc, with position
-    variables for the precedences (``_peer_worker.solve_cpsat_sop``).
+    One ``AddCircuit`` over the usable arcs (the forbidden ones passed as their own array)
+    plus a dummy ``end -> start`` arc, with position variables for the precedences
+    (``_peer_worker.solve_cpsat_sop``).
 
     Parameters
     ----------
@@ -672,9 +678,10 @@ def cpsat_sop(
     Thesis §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
     """
     options = _cpsat_options(problem, SopProblem, time_limit, seed, num_workers)
-    cost, scale, exact = _sop_integer_costs(problem, scale)
+    cost, forbidden, scale, exact = _sop_integer_costs(problem, scale)
     options.update(
         kind="sop",
+        forbidden=forbidden.tolist(),
         start=problem.start,
         end=problem.end,
         precedences=[(int(r), int(j)) for r, j in problem.precedences],

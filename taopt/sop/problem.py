@@ -55,6 +55,7 @@ __all__ = [
     "SopProblem",
     "check_sop",
     "evaluate_order",
+    "negative_cost",
     "load_sop",
     "shipped_sop",
     "sop_path",
@@ -83,6 +84,33 @@ KNOWN_OPTIMA: dict[str, int] = {
 #: The largest |weight| a file may hold (docs/file-formats.md, "Magnitudes"); TSPLIB's
 #: structural 1000000 is well inside it.
 MAX_MAGNITUDE = 1e9
+
+
+def negative_cost(i: int, j: int, value: float) -> str:
+    """The one message refusing a negative SOP cost (Python, JSON files and TSPLIB files).
+
+    Example
+    -------
+    >>> negative_cost(2, 5, -3.0)
+    'arc (2, 5) has cost -3 < 0: SOP costs must be >= 0 (inf forbids an arc in Python, -1 in a file; adding one constant to every cost changes no order)'
+    """
+    return (
+        f"arc ({int(i)}, {int(j)}) has cost {float(value):g} < 0: SOP costs must be >= 0 "
+        "(inf forbids an arc in Python, -1 in a file; adding one constant to every cost "
+        "changes no order)"
+    )
+
+
+def _first_negative(cost: np.ndarray, marker: float | None = None) -> tuple[int, int] | None:
+    """The first off-diagonal ``(i, j)`` with ``cost[i, j] < 0`` (other than ``marker``)."""
+    negative = cost < 0
+    if marker is not None:
+        negative &= cost != marker
+    np.fill_diagonal(negative, False)
+    if not negative.any():
+        return None
+    i, j = np.argwhere(negative)[0]
+    return int(i), int(j)
 
 
 def shipped_sop() -> list[str]:
@@ -167,8 +195,9 @@ def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]
     precedences = [
         (int(r), int(j)) for j, r in zip(*np.nonzero(minus), strict=True) if r != start and j != end
     ]
-    if (raw[~minus] < 0).any():
-        raise InstanceError(f"{path}: negative weight other than -1")
+    negative = _first_negative(raw, marker=-1.0)
+    if negative is not None:
+        raise InstanceError(f"{path}: {negative_cost(*negative, raw[negative])}")
     cost = np.where(minus, np.inf, raw)
     np.fill_diagonal(cost, 0.0)
     cost[start, end] = np.inf
@@ -186,7 +215,8 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
     Raises
     ------
     InstanceError
-        Non-square or NaN cost, bad indices, start == end (n > 1), a self or
+        Non-square or NaN cost, a negative cost off the diagonal (:func:`negative_cost`
+        names the arc and the value), bad indices, start == end (n > 1), a self or
         cyclic precedence, a precedence putting something before start or
         after end.
     """
@@ -204,6 +234,9 @@ def check_sop(cost: Any, precedences: Any, start: Any, end: Any) -> tuple[np.nda
     if np.isneginf(cost).any():
         i, j = np.argwhere(np.isneginf(cost))[0]
         raise InstanceError(f"cost[{i}, {j}] is -inf")
+    negative = _first_negative(cost)
+    if negative is not None:
+        raise InstanceError(negative_cost(*negative, cost[negative]))
     n = cost.shape[0]
     for label, node in (("start", start), ("end", end)):
         if isinstance(node, bool) or not (isinstance(node, (int, np.integer)) and 0 <= node < n):
@@ -244,7 +277,8 @@ class SopProblem:
     Parameters
     ----------
     cost : (n, n) array_like
-        Arc costs (asymmetric allowed; ``inf`` forbids an arc; diagonal ignored).
+        Arc costs >= 0 (asymmetric allowed; ``inf`` forbids an arc; diagonal ignored).
+        A negative cost is refused (see Notes).
     precedences : iterable of (r, j)
         r must be visited before j (as (5.7)).
     start, end : int
@@ -255,6 +289,14 @@ class SopProblem:
     ------
     InstanceError
         Bad data (see :func:`check_sop`), naming the item.
+
+    Notes
+    -----
+    Costs are lengths or travel times (TSPLIB, the t* matrix (5.11)), so every one is
+    >= 0. A negative cost is refused rather than supported: in a file -1 is TSPLIB's
+    forbidden-arc marker, so any other negative number would be ambiguous; and nothing is
+    lost, since every order uses exactly n - 1 arcs: adding one constant to every finite
+    cost shifts every order's cost by (n - 1) times it and changes no optimum.
 
     Example
     -------
@@ -340,13 +382,16 @@ class SopProblem:
         Raises
         ------
         InstanceError
-            A schema violation (a cost above 1e9 included), a row of another length than
+            A negative cost other than -1 (:func:`negative_cost`, before the schema so the
+            message is the one Python gives), a schema violation (a cost above 1e9
+            included), a row of another length than
             the matrix (named), or :func:`check_sop`'s complaint; the message starts with
             ``source``.
         """
         from taopt.instance import check_schema, check_square
 
         label = source or "sop_problem"
+        _refuse_negative_costs(data, label)
         check_schema(data, "sop_problem", label)
         check_square(data["cost"], "cost", label)
         cost = np.array(data["cost"], dtype=float)
@@ -368,6 +413,27 @@ class SopProblem:
     def __repr__(self) -> str:
         label = f" {self.name!r}" if self.name else ""
         return f"SopProblem{label}(n={self.n}, precedences={len(self.precedences)})"
+
+
+def _refuse_negative_costs(data: Any, label: str) -> None:
+    """Raise :func:`negative_cost`'s message for the first off-diagonal cost below 0 other
+    than -1 in JSON data (a well-formed numeric matrix only; anything else is left to the
+    schema, which refuses the same values in other words)."""
+    rows = data.get("cost") if isinstance(data, Mapping) else None
+    if not isinstance(rows, list) or not all(isinstance(row, list) for row in rows):
+        return
+    if any(isinstance(v, bool) for row in rows for v in row):
+        return
+    try:
+        cost = np.array(rows, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return
+    if cost.ndim != 2 or cost.shape[0] != cost.shape[1]:
+        return
+    with np.errstate(invalid="ignore"):
+        negative = _first_negative(cost, marker=-1.0)
+    if negative is not None:
+        raise InstanceError(f"{label}: {negative_cost(*negative, cost[negative])}")
 
 
 def evaluate_order(problem: SopProblem, order: Iterable[int]) -> float:
