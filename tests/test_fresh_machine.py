@@ -91,9 +91,17 @@ def test_checkout_root_imports_the_whole_package():
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120, env=env
     )
     assert done.returncode == 0, done.stderr
-    files = [Path(line) for line in done.stdout.split()]
+    files = [Path(line).resolve() for line in done.stdout.split()]
     assert files == [
-        ROOT / "taopt" / "__init__.py",
-        ROOT / "models" / "__init__.py",
-        ROOT / "heuristics" / "__init__.py",
+        (ROOT / "taopt" / "__init__.py").resolve(),
+        (ROOT / "models" / "__init__.py").resolve(),
+        (ROOT / "heuristics" / "__init__.py").resolve(),
     ]
+
+
+def test_models_and_heuristics_are_links_to_the_top_level_folders():
+    """taopt/models and taopt/heuristics are symbolic links to the design card's top-level folders."""
+    for name in ("models", "heuristics"):
+        link = ROOT / "taopt" / name
+        assert link.is_symlink(), f"taopt/{name} must be a symbolic link to ../{name}"
+        assert link.resolve() == (ROOT / name).resolve()
