@@ -373,7 +373,7 @@ def check_square(rows: Any, where: str, source: str) -> None:
 
 
 def targets_from_points(points: Iterable[Sequence[float]], prefix: str = "t") -> tuple[Target, ...]:
-    return tuple(Target(f"{prefix}{k}", tuple(p)) for k, p in enumerate(points))
+    return tuple(Target(f"{prefix}{k}", (p[0], p[1])) for k, p in enumerate(points))
 
 
 __all__ = [

@@ -156,7 +156,7 @@ def outcome(
     limit = "time_limit" if time_limited else "solver_limit"
     if kind == "infeasible":
         return INFEASIBLE, "infeasible"
-    if kind in ("optimal", "limit") and has_point:
+    if kind in ("optimal", "limit") and has_point and objective is not None:
         return certify(float(objective), bound, "mip_gap" if kind == "optimal" else limit)
     if kind == "limit":  # a limit before any incumbent
         return TIME_LIMIT, limit
