@@ -80,6 +80,7 @@ Operations Research 37(2), 1989 (bounds on reduced costs).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -213,7 +214,8 @@ class _Bound:
         self.n, self.start, self.end = n, start, end
         if potentials is None:
             potentials = (np.zeros(n), np.zeros(n))
-        self.alpha, self.beta = potentials
+        self.alpha: np.ndarray = potentials[0]
+        self.beta: np.ndarray = potentials[1]
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
         self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
@@ -449,7 +451,14 @@ class _Search:
             np.array([-1], dtype=np.int64),
         )
 
-    def grow(self, mask, last, value, deadline: Deadline, limit: float = np.inf):
+    def grow(
+        self,
+        mask: np.ndarray,
+        last: np.ndarray,
+        value: np.ndarray,
+        deadline: Deadline,
+        limit: float = np.inf,
+    ) -> tuple[np.ndarray, ...] | None:
         """Every one-node extension of the layer, the cheapest per (ideal, last); None when
         the deadline passed first, or the extensions before merging passed ``limit``."""
         bits, pred, usable = self.bits, self.pred, self.usable
@@ -491,8 +500,14 @@ class _Search:
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
     def totals(
-        self, mask, last, value, deadline: Deadline, cutoff: float = np.inf, chunk: int = 200_000
-    ):
+        self,
+        mask: np.ndarray,
+        last: np.ndarray,
+        value: np.ndarray,
+        deadline: Deadline,
+        cutoff: float = np.inf,
+        chunk: int = 200_000,
+    ) -> np.ndarray | None:
         """``f + g`` per state, in chunks between deadline checks; None when it passed.
 
         A state whose ``f + P`` already reaches ``cutoff`` gets that (smaller, valid) value:
@@ -524,7 +539,7 @@ class _Search:
         if seen[0] >= SECOND_PRICES_TRIAL and seen[1] < SECOND_PRICES_MIN_SHARE * seen[0]:
             self.more_bounds = [b for b in self.more_bounds if b is not bound]
 
-    def path(self, layers, k: int, top: int = -1) -> list[int]:
+    def path(self, layers: Sequence[tuple[np.ndarray, ...]], k: int, top: int = -1) -> list[int]:
         """The path ending at state ``k`` of layer ``top`` (the last), by the parents."""
         top = top % len(layers)
         path = [int(layers[top][1][k])]
@@ -559,8 +574,12 @@ class _Run:
         self.n = problem.n
         self.search = _Search(problem)
         mask, last, value, parent = self.search.first()
-        self.layers = [(mask, last, value, parent)]  # layer k: (mask, last, value, parent)
-        self.layer_total = self.search.totals(mask, last, value, Deadline(None))
+        self.layers: list[tuple[np.ndarray, ...]] = [
+            (mask, last, value, parent)
+        ]  # layer k: (mask, last, value, parent)
+        total = self.search.totals(mask, last, value, Deadline(None))
+        assert total is not None  # no deadline: never stopped
+        self.layer_total = total
         self.pruned_min = np.inf
         self.pruned = 0
         self.kept = 1
@@ -569,7 +588,9 @@ class _Run:
         self.best_cost = np.inf
         self.best_path: list[int] | None = None
 
-    def step(self, upper, tolerance, deadline, limit, room) -> str | None:
+    def step(
+        self, upper: float, tolerance: float, deadline: Deadline, limit: float, room: int | None
+    ) -> str | None:
         """Expand one layer; the reason to stop ("time_limit", "max_states") or None."""
         mask, last, value, _ = self.layers[-1]
         grown = self.search.grow(mask, last, value, deadline, limit)
@@ -577,7 +598,7 @@ class _Run:
             return "time_limit" if deadline.expired(MARGIN) else "max_states"
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
-        total = self.search.totals(*grown[:3], deadline, cutoff=upper - tolerance)
+        total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)
         if total is None:
             return "time_limit"
         keep = total < upper - tolerance
@@ -609,7 +630,7 @@ class _Run:
         return min(open_min, self.pruned_min)
 
 
-def _join(forward: _Run, backward: _Run, cost: np.ndarray):
+def _join(forward: _Run, backward: _Run, cost: np.ndarray) -> tuple[float, list[int]] | None:
     """Meet in the middle: the cheapest path through a forward state ``(I, v)`` of the
     forward's last layer, an arc ``v -> w`` and a backward state ``(V \\ I, w)``.
 
@@ -665,7 +686,7 @@ def beam_order(
         if len(grown[0]) > 4 * width:  # bound only the cheapest prefixes of the layer
             cheapest = np.argsort(grown[2], kind="stable")[: 4 * width]
             grown = tuple(a[cheapest] for a in grown)
-        total = search.totals(*grown[:3], deadline)
+        total = search.totals(grown[0], grown[1], grown[2], deadline)
         if total is None:
             return None
         alive = np.flatnonzero(np.isfinite(total))
@@ -813,7 +834,7 @@ def solve_sop_dp(
     info.update(states=kept, pruned=pruned, peak_layer=peak)
     objective = np.inf if known is None else known[0]
     runtime = time.perf_counter() - began
-    if stopped_by is None:
+    if stopped_by is None and done is not None:  # done is set when nothing stopped the loop
         pruned_min = done.pruned_min
         if known is None and not np.isfinite(pruned_min):  # no state can reach the end
             status, stopped_by = outcome("dp", "infeasible", objective=None, bound=None)
@@ -827,6 +848,7 @@ def solve_sop_dp(
                 info={**info, "stopped_by": stopped_by, "proof": "every ideal expanded"},
             )
         # every cheaper path was pruned within tolerance: proven to 1e-9 relative
+        assert known is not None  # without an incumbent nothing is pruned at a finite value
         bound = min(objective, pruned_min)
         status, _ = outcome("dp", "complete", objective=objective, bound=bound)
         return make_solution(

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import cvxpy as cp
 import numpy as np
@@ -27,9 +27,6 @@ from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError, require
 from taopt.routing.problem import AssignmentProblem
-
-if TYPE_CHECKING:
-    from taopt.models.routing.dfj import DfjModel
 
 # the logger of the package (a child of the "taopt" logger), as before the split
 logger = logging.getLogger("taopt.models.routing")
@@ -48,6 +45,14 @@ def arc_list(problem: AssignmentProblem) -> tuple[np.ndarray, np.ndarray]:
     mask[np.arange(n), np.arange(n)] = False  # σ_ii = 0: no self loops
     tails, heads = np.nonzero(mask)
     return tails, heads
+
+
+class ArcModel(Protocol):
+    """What :func:`decode` reads of a model: its arc list, σ's columns in order
+    (:class:`RoutingModel`, the DFJ model, the budgeted resource model)."""
+
+    tails: np.ndarray
+    heads: np.ndarray
 
 
 @dataclass
@@ -99,7 +104,9 @@ def _check(problem: Any, sec: str) -> None:
         raise InstanceError(f"sec must be one of {SUBTOUR_ELIMINATIONS}, got {sec!r}")
 
 
-def _cut_matrix(cuts: list[tuple[int, ...]], tails, heads, n: int) -> sp.csr_matrix:
+def _cut_matrix(
+    cuts: list[tuple[int, ...]], tails: np.ndarray, heads: np.ndarray, n: int
+) -> sp.csr_matrix:
     """Rows of (2.5): row r has a 1 on every arc with both ends in cut r's subset S."""
     rows, cols = [], []
     for r, subset in enumerate(cuts):
@@ -156,7 +163,7 @@ def build(
     if relax:
         # 0 <= sigma_ij <= 1: the LP relaxation of binary sigma (column bounds)
         arc_use = cp.Variable(n_arcs, name="sigma", bounds=[0, 1])
-        bounds = []
+        bounds: list[Any] = []
     else:
         arc_use = cp.Variable(n_arcs, name="sigma", boolean=True)
         bounds = []
@@ -299,7 +306,7 @@ def _successors(model: Any, values: np.ndarray | None = None) -> dict[int, int]:
 
 
 def decode(
-    problem: AssignmentProblem, model: RoutingModel | DfjModel, values: np.ndarray | None = None
+    problem: AssignmentProblem, model: ArcModel, values: np.ndarray | None = None
 ) -> tuple[list[list[int]], list[list[int]]]:
     """Turn an integral σ into routes (one per vehicle) and the subtours left over.
 
@@ -317,7 +324,8 @@ def decode(
     n = problem.n
     routes, reached = [], set()
     for vehicle in range(problem.m):
-        route, point = [], n + vehicle
+        route: list[int] = []
+        point = n + vehicle
         while point in successor:
             point = successor[point]
             if point in reached or len(route) > n:
@@ -361,11 +369,13 @@ def repair(
     cost = problem.cost
     n = problem.n
     routes = [list(r) for r in routes]
-    for cycle in subtours:
-        cycle = np.asarray(list(cycle), dtype=np.int64)
+    for subtour in subtours:
+        cycle = np.asarray(list(subtour), dtype=np.int64)
         before = np.roll(cycle, 1)  # opening at p drops before[p] -> cycle[p]
         # every place: after point a = points[k][q], before b (-1 at a route's end)
-        places_a, places_b, where = [], [], []
+        places_a: list[int] = []
+        places_b: list[int] = []
+        where: list[tuple[int, int]] = []
         for k, route in enumerate(routes):
             points = [n + k, *route]
             places_a.extend(points)
