@@ -187,6 +187,7 @@ def build(
     if relax:
         constraints.append((arc_use <= 1).set_label("0 <= x <= 1 (LP relaxation)"))
         constraints.append((arc_use >= 0).set_label("0 <= x <= 1 (LP relaxation)"))
+    # ignore: the problem (None for now) is set below, once the row builders added their rows
     model = SopModel(None, arc_use, tails, heads, cost, start, end, formulation)  # type: ignore[arg-type]
     if formulation == "flow":
         constraints += _flow_rows(model, closure)

@@ -90,7 +90,7 @@ def register_payload(name: str) -> Callable[[type], type]:
         if name in _PAYLOADS and _PAYLOADS[name] is not cls:
             raise InstanceError(f"payload kind {name!r} is already registered")
         _PAYLOADS[name] = cls
-        cls.payload_kind = name  # type: ignore[attr-defined]
+        cls.payload_kind = name  # type: ignore[attr-defined]  # any class may be registered
         return cls
 
     return wrap

@@ -290,6 +290,7 @@ class SopProblem:
     @property
     def closure(self) -> nx.DiGraph:
         """Transitively closed precedence DAG (start before and end after every node)."""
+        # ignore: set by __post_init__ (object.__setattr__), not a dataclass field
         return self._closure  # type: ignore[attr-defined]
 
     def replace(self, **changes: Any) -> SopProblem:
