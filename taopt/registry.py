@@ -322,7 +322,7 @@ def register_family(family: Family | type[Any], **spec: Any) -> Family:
             raise InstanceError(f"file kind {family.kind!r} is already registered")
     _FAMILIES[family.problem_type] = family
     _METHODS.setdefault(family.problem_type, {})
-    generic_evaluate.register(family.problem_type)(_scorer(family.evaluate, family.payload))
+    generic_evaluate.register(family.problem_type, _scorer(family.evaluate, family.payload))
     return family
 
 
