@@ -83,7 +83,7 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
     is None when the solution is incomplete) instead of raising.
     """
     import pyvrp
-    from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria
+    from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria, StoppingCriterion
 
     matrix = open_routes_matrix(cost)
     limited = _limited(options)
@@ -113,7 +113,7 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
             for k in range(m)
         ]
     data = pyvrp.ProblemData(locations, clients, depots, vehicle_types, [matrix], [matrix])
-    criteria = []
+    criteria: list[StoppingCriterion] = []
     if options.get("time_limit") is not None:
         criteria.append(MaxRuntime(float(options["time_limit"])))
     if options.get("max_iterations") is not None:
@@ -257,7 +257,7 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     ``options["forbidden"]`` (an n x n list of booleans; a cost's sign means nothing) plus a
     dummy ``end -> start`` arc, and position variables for the precedences.
 
-    ``AddCircuit`` over every node makes the chosen arcs one Hamiltonian cycle; with the
+    ``add_circuit`` over every node makes the chosen arcs one Hamiltonian cycle; with the
     dummy arc as the only way into ``start`` and out of ``end`` it is a path start -> end.
     ``position[start] = 0``, an arc ``i -> j`` (not the dummy) forces
     ``position[j] = position[i] + 1``, and each precedence ``(r, j)`` adds
@@ -269,31 +269,31 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     forbidden = options["forbidden"]
     start, end = int(options["start"]), int(options["end"])
     model = cp_model.CpModel()
-    position = [model.NewIntVar(0, n - 1, f"position {v}") for v in range(n)]
-    model.Add(position[start] == 0)
-    model.Add(position[end] == n - 1)
+    position = [model.new_int_var(0, n - 1, f"position {v}") for v in range(n)]
+    model.add(position[start] == 0)
+    model.add(position[end] == n - 1)
     arcs, terms, used = [], [], {}
     for i in range(n):
         for j in range(n):
             if i == j or forbidden[i][j] or j == start or i == end:
                 continue
-            literal = model.NewBoolVar(f"{i}->{j}")
+            literal = model.new_bool_var(f"{i}->{j}")
             arcs.append((i, j, literal))
             terms.append(int(cost[i, j]) * literal)
             used[(i, j)] = literal
-            model.Add(position[j] == position[i] + 1).OnlyEnforceIf(literal)
-    arcs.append((end, start, model.NewConstant(1)))
-    model.AddCircuit(arcs)
+            model.add(position[j] == position[i] + 1).only_enforce_if(literal)
+    arcs.append((end, start, model.new_constant(1)))
+    model.add_circuit(arcs)
     for r, j in options["precedences"]:
-        model.Add(position[int(r)] < position[int(j)])
-    model.Minimize(sum(terms))
+        model.add(position[int(r)] < position[int(j)])
+    model.minimize(sum(terms))
     solver = _cpsat_solver(options)
     started = time.perf_counter()
-    status = solver.Solve(model)
+    status = solver.solve(model)
     reply = _cpsat_reply(solver, status, started)
     order = None
     if reply["objective"] is not None:
-        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
+        successor = {i: j for (i, j), literal in used.items() if solver.boolean_value(literal)}
         order = [start]
         while order[-1] != end and len(order) <= n:
             order.append(successor[order[-1]])
@@ -316,12 +316,12 @@ def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> d
 
     model = cp_model.CpModel()
     dummy = n + m
-    vehicle = [model.NewIntVar(0, m - 1, f"vehicle {v}") for v in range(n)]
-    vehicle += [model.NewConstant(k) for k in range(m)]
+    vehicle = [model.new_int_var(0, m - 1, f"vehicle {v}") for v in range(n)]
+    vehicle += [model.new_constant(k) for k in range(m)]
     arcs, terms, used = [], [], {}
 
     def arc(i: int, j: int, charge: int) -> Any:
-        literal = model.NewBoolVar(f"{i}->{j}")
+        literal = model.new_bool_var(f"{i}->{j}")
         arcs.append((i, j, literal))
         used[(i, j)] = literal
         if charge:
@@ -333,22 +333,22 @@ def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> d
         for j in range(n):  # into a target: same vehicle, cost charged
             if i != j:
                 literal = arc(i, j, int(cost[i, j]))
-                model.Add(vehicle[j] == vehicle[i]).OnlyEnforceIf(literal)
+                model.add(vehicle[j] == vehicle[i]).only_enforce_if(literal)
         for k in range(1, m):  # into start k: the route of vehicle k-1 ends here
             if i < n or i == n + k - 1:
                 literal = arc(i, n + k, 0)
-                model.Add(vehicle[i] == k - 1).OnlyEnforceIf(literal)
+                model.add(vehicle[i] == k - 1).only_enforce_if(literal)
         literal = arc(i, dummy, 0)  # back to D: the last vehicle's route ends
-        model.Add(vehicle[i] == m - 1).OnlyEnforceIf(literal)
-    model.AddCircuit(arcs)
-    model.Minimize(sum(terms))
+        model.add(vehicle[i] == m - 1).only_enforce_if(literal)
+    model.add_circuit(arcs)
+    model.minimize(sum(terms))
     solver = _cpsat_solver(options)
     started = time.perf_counter()
-    status = solver.Solve(model)
+    status = solver.solve(model)
     reply = _cpsat_reply(solver, status, started)
-    routes = None
+    routes: list[list[int]] | None = None
     if reply["objective"] is not None:
-        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
+        successor = {i: j for (i, j), literal in used.items() if solver.boolean_value(literal)}
         routes = [[] for _ in range(m)]
         at, current = successor[dummy], -1
         while at != dummy:
@@ -433,6 +433,7 @@ def serve(peer: str, parent_pid: int, use_pdeathsig: bool) -> None:
             request = pickle.load(channel_in)
         except EOFError:
             return
+        reply: tuple[str, Any]
         try:
             reply = ("ok", solver(request["cost"], request["n"], request["m"], request["options"]))
         except Exception:

@@ -105,8 +105,9 @@ def ga_per_class(
     deadline = Deadline(time_limit)
     classes = [(q, cls) for q, cls in enumerate(problem.classes) if cls.problem is not None]
     for index, (q, cls) in enumerate(classes):
-        if deadline.limited:
-            extra["time_limit"] = max(deadline.remaining() / (len(classes) - index), 1e-3)
+        left = deadline.remaining()  # None without a limit
+        if left is not None:
+            extra["time_limit"] = max(left / (len(classes) - index), 1e-3)
         population = max(2, population_factor * (len(cls.targets) + len(cls.vehicles)))
         result = genetic_algorithm(
             cls.problem,

@@ -69,7 +69,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.comm.engine import Group, Simulation, SimulationStopped
+from taopt.comm.engine import Group, Policy, Simulation, SimulationStopped
 from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
@@ -100,7 +100,10 @@ def _check_deadline() -> None:
 
 
 def central_auction(
-    problem: CommProblem, starts: np.ndarray, abilities: np.ndarray, targets: Sequence[int]
+    problem: CommProblem,
+    starts: np.ndarray,
+    abilities: np.ndarray,
+    targets: Sequence[int] | np.ndarray,
 ) -> list[list[int]]:
     """CAA's assignment (4.9)–(4.13) of ``targets`` to vehicles at ``starts``, from empty routes.
 
@@ -250,7 +253,7 @@ def adopt_per_class(
         if new_lengths[members].sum() > old_lengths[members].sum():
             continue  # keep the previous routes
         for i in members:
-            group.set_route(int(i), new_routes[i])
+            group.set_route(int(i), new_routes[int(i)])
         group.record_joint(members.tolist())
         adopted.extend(int(i) for i in members)
     group.notes["reassigned"] = bool(adopted)
@@ -312,7 +315,7 @@ class DAA(_Auction):
         adopt_per_class(group, new_routes, lengths)
 
     @staticmethod
-    def distributed_auction(group: Group, targets: Sequence[int]) -> list[list[int]]:
+    def distributed_auction(group: Group, targets: Sequence[int] | np.ndarray) -> list[list[int]]:
         """Algorithm 5: each member keeps its own bids c_j, β_j and builds its own o'_j.
 
         Raises
@@ -375,7 +378,9 @@ class HDA(_Auction):
         adopt_per_class(group, new_routes, lengths)
 
     @staticmethod
-    def release_loop(group: Group, targets: Sequence[int]) -> tuple[list[list[int]], int]:
+    def release_loop(
+        group: Group, targets: Sequence[int] | np.ndarray
+    ) -> tuple[list[list[int]], int]:
         """Release targets by significance until no release saves distance.
 
         Each iteration every member computes, for each cooperative target of its ability,
@@ -473,7 +478,7 @@ class HDA(_Auction):
 
 def _run(
     problem: CommProblem,
-    policy: _Auction,
+    policy: Policy,
     seed: int,
     strict: bool,
     time_limit: float | None = None,

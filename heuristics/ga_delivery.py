@@ -269,8 +269,8 @@ def _searched_or_repaired(
     record (``repaired``/``dead_end``, or ``error``/``proved_infeasible`` with no path).
     """
     try:
-        path, value, history = ga_search(cost, pairs, start, end, seed, **options)
-        return path, value, history, {}
+        found, value, history = ga_search(cost, pairs, start, end, seed, **options)
+        return found, value, history, {}
     except InstanceError:
         raise
     except SolverError as exc:

@@ -236,7 +236,7 @@ class PenalisedSearch:
                 whole = add + removal[:, None]
                 source = route[first]
                 same = source[:, None] == to[None, :]
-                penalty = 0.0
+                penalty: float | np.ndarray = 0.0
                 if self.timed:  # the receiving route's time: the only route, inside one
                     received = np.where(same, whole, add + inside[:, None])
                     penalty = time_change(to[None, :], received)

@@ -394,7 +394,7 @@ def _operator_set(operators: str | OperatorSet) -> OperatorSet:
 def _mutate(
     children: np.ndarray, ops: OperatorSet, rate: float, rng: np.random.Generator
 ) -> np.ndarray:
-    mutate = rng.random(children.shape[0]) < rate
+    mutate = rng.random(len(children)) < rate
     if not mutate.any():
         return children
     if len(ops.mutations) == 1:  # no draw for the choice: keeps "ox-inversion" as it was
@@ -564,7 +564,7 @@ def genetic_algorithm(
             _separate_clones(children, weights, ops, rng)
         genes = children
         fitness = population_cost(problem, genes, ops.markers)
-        if ops.polish:
+        if ops.polish and matrix is not None:
             _polish(problem, matrix, genes, fitness, ops, best_cost, counters)
         best = int(np.argmin(fitness))
         if fitness[best] < best_cost:

@@ -54,7 +54,7 @@ positions).
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -90,7 +90,7 @@ _CHECK_EVERY = 64
 
 def forward_states(
     instance: DeliveryInstance,
-    order: Sequence[int],
+    order: Sequence[int] | np.ndarray,
     start: int = 0,
     states: list[np.ndarray] | None = None,
 ) -> tuple[list[np.ndarray], float]:
@@ -314,7 +314,9 @@ class _Precedence:
         return lo, hi
 
 
-def _moves(order: np.ndarray, i: int, prec: _Precedence, window: int, max_block: int):
+def _moves(
+    order: np.ndarray, i: int, prec: _Precedence, window: int, max_block: int
+) -> Iterator[tuple[int, list[int]]]:
     """Precedence-feasible segment moves for the item at position i, nearest first.
 
     Yields (a, segment) pairs: block relocations (or-opt) of length 1..max_block starting
@@ -426,7 +428,7 @@ def _local_search(
         position[states.order] = np.arange(states.order.size)
         i = int(position[item])
         improved = False
-        moves = _moves(states.order, i, prec, window, max_block)
+        moves: Iterable[tuple[int, list[int]]] = _moves(states.order, i, prec, window, max_block)
         if screen is not None:
             moves = screen.rank(states.order, moves)
         for a, segment in moves:

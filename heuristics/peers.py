@@ -76,7 +76,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import IO, Any, cast
 
 import numpy as np
 
@@ -136,6 +136,9 @@ class _Worker:
             stdout=subprocess.PIPE,
             start_new_session=os.name == "posix",  # the terminal's Ctrl-C is ours, not its
         )
+        # the two pipes asked for above (Popen types them Optional)
+        self.stdin = cast(IO[bytes], self.process.stdin)
+        self.stdout = cast(IO[bytes], self.process.stdout)
         self.replies: queue.Queue = queue.Queue()
         threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
         try:
@@ -154,7 +157,7 @@ class _Worker:
 
     def _read(self) -> None:
         """Reader thread: every frame from the worker goes to the queue; None at end of file."""
-        stream = self.process.stdout
+        stream = self.stdout
         while True:
             try:
                 self.replies.put(pickle.load(stream))
@@ -194,8 +197,8 @@ class _Worker:
             if not self.alive():
                 raise _Stopped(self.peer)
             try:
-                pickle.dump(request, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
-                self.process.stdin.flush()
+                pickle.dump(request, self.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                self.stdin.flush()
                 kind, payload = self._wait(timeout, "a solve")
             except (BrokenPipeError, OSError) as exc:
                 self.stop()
@@ -212,7 +215,7 @@ class _Worker:
         if self.owner != os.getpid():  # inherited through fork: not ours to stop
             return
         try:
-            self.process.stdin.close()
+            self.stdin.close()
         except OSError:
             pass
         try:

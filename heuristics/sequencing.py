@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import networkx as nx
@@ -821,7 +821,11 @@ def schedule_order(instance: Any, path: Sequence[int], customer_of: np.ndarray) 
     return schedule(instance, order)
 
 
-_RULES = {"NIA": nia_order, "MMA": mma_order, "SMMA": smma_order}
+_RULES: dict[str, Callable[..., list[int]]] = {
+    "NIA": nia_order,
+    "MMA": mma_order,
+    "SMMA": smma_order,
+}
 
 
 def ordered_or_repaired(

@@ -52,6 +52,7 @@ from __future__ import annotations
 import bisect
 import math
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -192,7 +193,7 @@ class BudgetedModel:
         self._known_capacity: set[tuple[tuple[int, ...], int]] = set()
         self.capacity_cuts: list[tuple[tuple[int, ...], int]] = []
 
-    def sigma(self, solution: np.ndarray) -> np.ndarray:
+    def sigma(self, solution: Sequence[float] | np.ndarray) -> np.ndarray:
         """Chapter 2's σ (one value per two-index arc) of a column vector."""
         return self.aggregate @ np.asarray(solution, dtype=float)
 
@@ -308,7 +309,7 @@ class ResourceModel:
         allowed = np.where(
             is_start,
             usable[np.clip(self.tails - n, 0, m - 1), self.tails, self.heads],
-            usable.any(axis=0)[self.tails, self.heads],
+            np.asarray(usable.any(axis=0))[self.tails, self.heads],
         )
         size = n + m
         index = self.arcs
@@ -368,13 +369,15 @@ class ResourceModel:
             )
             # inner rows: resource_j − resource_i + coef σ_ij (+ lift σ_ji) <= rhs
             count = len(inner)
-            data = [np.ones(count), -np.ones(count), inner_coef]
-            cols = [offset + self.heads[inner], offset + self.tails[inner], inner]
+            inner_data = [np.ones(count), -np.ones(count), inner_coef]
+            inner_cols = [offset + self.heads[inner], offset + self.tails[inner], inner]
             if lift > 0:
-                data.append(np.full(count, lift))
-                cols.append(reverse[inner])
-            rows = np.tile(np.arange(count), len(data))
-            extra.append(((np.concatenate(data), rows, np.concatenate(cols)), count, inner_rhs))
+                inner_data.append(np.full(count, lift))
+                inner_cols.append(reverse[inner])
+            rows = np.tile(np.arange(count), len(inner_data))
+            extra.append(
+                ((np.concatenate(inner_data), rows, np.concatenate(inner_cols)), count, inner_rhs)
+            )
         self.n_columns = columns
         pad = columns - n_arcs
         matrix = [sp.hstack([b, sp.csr_matrix((b.shape[0], pad))]) for b in blocks]
@@ -398,7 +401,7 @@ class ResourceModel:
         self._known_capacity: set[tuple[tuple[int, ...], int]] = set()
         self.capacity_cuts: list[tuple[tuple[int, ...], int]] = []
 
-    def sigma(self, solution: np.ndarray) -> np.ndarray:
+    def sigma(self, solution: Sequence[float] | np.ndarray) -> np.ndarray:
         """σ (one value per arc) of a column vector."""
         return np.asarray(solution, dtype=float)[: len(self.tails)]
 
@@ -568,7 +571,7 @@ def separate_capacity(
         if k >= 2 and k - (size - weight[np.ix_(members, members)].sum()) > tolerance:
             found[tuple(int(v) for v in members)] = k
     for seed in range(n):
-        members = [seed]
+        group = [seed]
         inside = np.zeros(n, dtype=bool)
         inside[seed] = True
         link = joined[seed].copy()
@@ -582,13 +585,13 @@ def separate_capacity(
             inside_sum += link[j]
             time_sum += float(entry[j])
             inside[j] = True
-            members.append(j)
+            group.append(j)
             link += joined[j]
-            size = len(members)
+            size = len(group)
             k = need(size, time_sum)
             violation = k - (size - inside_sum)
             if k >= 2 and violation > best:
-                best, best_members, best_need = violation, list(members), k
+                best, best_members, best_need = violation, list(group), k
         if best_members is not None:
             found[tuple(sorted(best_members))] = best_need
     return sorted(found.items())
@@ -673,7 +676,7 @@ def repaired_routes(
         ):
             loose.append(route.pop())
 
-    def best_place(target: int, exclude: tuple[int, int] | None = None):
+    def best_place(target: int, exclude: tuple[int, int] | None = None) -> tuple[float, int, int]:
         best = (math.inf, -1, -1)
         for k, route in enumerate(routes):
             if len(route) + 1 > problem.capacity[k]:
@@ -909,7 +912,8 @@ def solve_budgeted(
     # bound, a proof that no assignment meets the limits
     cutoff = total_time_cap(problem)
     best_bound = max(entry_bound(problem.routing), arborescence_bound(problem.routing))
-    if not deadline.limited or deadline.remaining() > 3e-10 * n**2 * (n + m):
+    spare = deadline.remaining()  # None without a limit
+    if spare is None or spare > 3e-10 * n**2 * (n + m):
         best_bound = max(best_bound, assignment_bound(problem.routing))
     # chapter 2's optimum without the limits: a valid bound (limits only remove solutions)
     # and, cut back to the limits and repaired, a start
@@ -959,7 +963,8 @@ def solve_budgeted(
             info=info,
         )
 
-    if deadline.limited and deadline.remaining() < SECONDS_PER_COLUMN * (n + 1) * n * m:
+    spare = deadline.remaining()
+    if spare is not None and spare < SECONDS_PER_COLUMN * (n + 1) * n * m:
         return stop("time_limit", {"stage": "build"})
     model = (ResourceModel if form == "resource" else BudgetedModel)(problem, verbose=verbose)
     info.update(columns=model.n_columns, rows=model.model.n_rows)
@@ -1019,7 +1024,7 @@ def solve_budgeted(
         # reduced-cost fixing: a solution using arc a costs at least L + d_a
         # (HighsModel.lagrangian_bound), so an arc with L + d_a > UB is in no solution
         # better than the incumbent; the incumbent's own arcs stay
-        if root_reduced is not None:
+        if root_reduced is not None and isinstance(model, ResourceModel):  # form "resource"
             arcs = root_reduced[: len(model.tails)]
             slack = 1e-9 * max(1.0, abs(best_value))
             off = arcs > best_value - root_bound + slack
@@ -1088,13 +1093,13 @@ def solve_budgeted(
             break
         rounds += 1
         if best_routes is not None:
-            start = model.start_vector(best_routes)
-            if start is not None:
-                model.model.set_start(start)
+            mip_start = model.start_vector(best_routes)
+            if mip_start is not None:
+                model.model.set_start(mip_start)
         harvested.clear()
         candidates.clear()
         offered.update(value=min(offered["value"], best_value), routes=None)
-        options = dict(MIP_OPTIONS)
+        options: dict[str, Any] = dict(MIP_OPTIONS)
         if cutoff is not None:
             options["objective_bound"] = cutoff
         run = model.model.solve(

@@ -341,6 +341,7 @@ def _solve_printed(
     if not run.has_point:
         raise SolverError(f"HiGHS found no point of the printed model ({run.solver_status})")
     decoded = decode_printed(problem, model)
+    assert run.objective is not None  # has_point
     value = float(run.objective)
     bound = value if run.status == OPTIMAL else run.bound
     info = {
@@ -496,7 +497,9 @@ def _main_not_rerun() -> Any:
     if main is None:
         yield
         return
-    saved = {key: main.__dict__[key] for key in ("__file__", "__spec__") if key in main.__dict__}
+    saved: dict[str, Any] = {
+        key: main.__dict__[key] for key in ("__file__", "__spec__") if key in main.__dict__
+    }
     main.__dict__.pop("__file__", None)
     main.__spec__ = None
     try:
@@ -622,8 +625,9 @@ class ClassSolve:
         return all(r.routes is not None for r in self.results.values())
 
     def class_routes(self) -> dict[Hashable, list[list[int]]]:
-        """Capability -> the class's routes (class indexing), for ``CapabilityProblem.join``."""
-        return {cap: r.routes for cap, r in self.results.items()}
+        """Capability -> the class's routes (class indexing), for ``CapabilityProblem.join``;
+        a class without routes is left out (none is when :attr:`complete`)."""
+        return {cap: r.routes for cap, r in self.results.items() if r.routes is not None}
 
 
 def solve_classes(
@@ -877,7 +881,8 @@ def build_joint(
     order = None
     cuts = list(cuts or [])
     if sec == "dfj" and cuts:
-        rows, cols = [], []
+        rows: list[int] = []
+        cols: list[int] = []
         for r, (q, subset) in enumerate(cuts):
             inside = np.isin(tails, subset) & np.isin(heads, subset) & (classes == q)
             cols.extend(np.flatnonzero(inside))
@@ -998,7 +1003,7 @@ def _solve_joint(
             break
         building = time.perf_counter()
         model = build_joint(problem, sec, cuts)
-        if left is not None:  # cvxpy compiles outside HiGHS's clock: about 4-8x the build
+        if time_limit is not None:  # cvxpy compiles outside HiGHS's clock: about 4-8x the build
             left = time_limit - (time.perf_counter() - start)
             left -= COMPILE_PER_BUILD * (time.perf_counter() - building) + MARGIN
             if left <= 0:
@@ -1013,7 +1018,9 @@ def _solve_joint(
         if not run.has_point:
             stopped_by = run.stopped_by
             break
-        routes, cycles = _joint_decode(problem, model, model.arc_use.value)
+        arc_values = model.arc_use.value
+        assert arc_values is not None  # has_point
+        routes, cycles = _joint_decode(problem, model, arc_values)
         candidate = _repair(problem, routes, cycles) if cycles else routes
         value = evaluate_capability(problem, candidate)
         if value < best_value:

@@ -92,6 +92,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -144,13 +145,17 @@ class Triples:
     feasible: int
 
 
-def _recovery_duration(instance: DeliveryInstance, i, j, k) -> np.ndarray:
+def _recovery_duration(
+    instance: DeliveryInstance, i: np.ndarray, j: np.ndarray | int, k: np.ndarray
+) -> np.ndarray:
     """``R_p − S_p`` of triple (i, j, k): ``max(ft[j,i] + τ + ft[j,k], tt[i,k]) + τ``."""
     ft, tt, tau = instance.flight_time, instance.truck_time, instance.service_time
     return np.maximum(ft[j, i] + tau + ft[j, k], tt[i, k]) + tau
 
 
-def _undominated(score: np.ndarray, d_launch: np.ndarray, d_land: np.ndarray, eps: float):
+def _undominated(
+    score: np.ndarray, d_launch: np.ndarray, d_land: np.ndarray, eps: float
+) -> np.ndarray:
     """Mask of candidates no other candidate strictly dominates.
 
     Candidate b dominates a when ``d_launch[b, a] + score[b] − score[a] + d_land[b, a] < −eps``:
@@ -292,7 +297,14 @@ def customer_gaps(instance: DeliveryInstance) -> np.ndarray:
     return gaps + 2 * instance.service_time
 
 
-def _add_customer_legs(instance, position, customer, sortie, service_time, add) -> None:
+def _add_customer_legs(
+    instance: DeliveryInstance,
+    position: np.ndarray,
+    customer: np.ndarray,
+    sortie: cp.Variable,
+    service_time: cp.Variable,
+    add: Callable[[Any, str, str], None],
+) -> None:
     """Valid inequalities ``t_p ≥ t_{p−1} + Σ g[j,j'] x[p,j,j']`` (see :func:`build`)."""
     n, n_y = instance.n, len(position)
     gaps = customer_gaps(instance)
@@ -393,7 +405,7 @@ def build(
     families: list[dict[str, Any]] = []
     constraints: list = []
 
-    def add(constraint, label: str, printed: str) -> None:
+    def add(constraint: Any, label: str, printed: str) -> None:
         constraint.set_label(label)
         constraints.append(constraint)
         families.append({"label": label, "rows": int(constraint.size), "implements": printed})
@@ -494,13 +506,13 @@ def build(
     if edges:
         served_by = _indicator(customer * n + position, n * n, n_y)  # z[j, p] as rows j*n+p
         cum = sp.csr_matrix(np.tril(np.ones((n, n))))  # cum[q, p] = [p <= q]
-        rows = []
+        blocks = []
         for r, j in edges:
             z_j = served_by[j * n : (j + 1) * n]
             z_r = served_by[r * n : (r + 1) * n]
             shifted = sp.csr_matrix(np.tril(np.ones((n, n)), k=-1))  # [p < q]
-            rows.append(cum @ z_j - shifted @ z_r)
-        prec = sp.vstack(rows).tocsr()
+            blocks.append(cum @ z_j - shifted @ z_r)
+        prec = sp.vstack(blocks).tocsr()
         nonempty = np.flatnonzero(np.diff(prec.indptr) > 0)
         add(
             prec[nonempty] @ sortie <= 0,
@@ -556,7 +568,7 @@ def describe(instance: DeliveryInstance, show: bool = True) -> list[dict[str, An
     return table
 
 
-def decode(model: DeliveryModel, instance: DeliveryInstance, values=None) -> Plan:
+def decode(model: DeliveryModel, instance: DeliveryInstance, values: Any = None) -> Plan:
     """The :class:`Plan` chosen by y (the largest entry per position).
 
     Raises
@@ -696,9 +708,10 @@ def solve_delivery(
     cutoff = None if known is None else known[0]
     model = build(instance, customer_legs=customer_legs)
     highs_limit = None
-    if deadline.limited:  # HiGHS gets what is left after building and compiling
+    left = deadline.remaining()  # None without a limit
+    if left is not None:  # HiGHS gets what is left after building and compiling
         columns = sum(v.size for v in model.problem.variables())
-        highs_limit = deadline.remaining() - COMPILE_SECONDS_PER_COLUMN * columns - MARGIN
+        highs_limit = left - COMPILE_SECONDS_PER_COLUMN * columns - MARGIN
         if highs_limit <= 0:
             return _stopped(instance, known, None, began, {"model": "built, not solved"})
     options: dict[str, Any] = {
@@ -733,6 +746,7 @@ def solve_delivery(
     else:
         plan = decode(model, instance)
         objective = evaluate_plan(instance, plan)
+        assert run.objective is not None  # has_point
         model_objective = float(run.objective)
         if abs(objective - model_objective) > 1e-6 * max(1.0, abs(objective)):
             # the model's times equal the scorer's at every integral point HiGHS

@@ -54,6 +54,7 @@ import sys
 import threading
 import time
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -95,7 +96,7 @@ def _flush_c_stdout() -> None:
 
 
 @contextlib.contextmanager
-def _stdout_discarded():
+def _stdout_discarded() -> Iterator[None]:
     """Send file descriptor 1 to the null device for the duration of the block.
 
     HiGHS writes its banner from C++ straight to the process's standard output,
@@ -285,11 +286,12 @@ def _cvxpy_interruptible() -> Any:
     ):
         yield
         return
-    original, highspy.Highs = highspy.Highs, _InterruptibleHighs
+    original = highspy.Highs
+    highspy.Highs = _InterruptibleHighs  # type: ignore[misc]  # a deliberate monkeypatch
     try:
         yield
     finally:
-        highspy.Highs = original
+        highspy.Highs = original  # type: ignore[misc]  # undone
 
 
 @dataclass(frozen=True)
@@ -603,7 +605,16 @@ class HighsModel:
         return model
 
     def _load(
-        self, cost, matrix, lower, upper, column_lower, column_upper, booleans, integers, offset
+        self,
+        cost: np.ndarray,
+        matrix: sp.spmatrix,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        column_lower: np.ndarray | None,
+        column_upper: np.ndarray | None,
+        booleans: np.ndarray,
+        integers: np.ndarray,
+        offset: float,
     ) -> None:
         """Pass the model to HiGHS: one ``passModel`` of numpy arrays, integrality included."""
         n_columns = len(cost)

@@ -59,6 +59,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import cvxpy as cp
 import networkx as nx
@@ -149,7 +150,12 @@ class SopModel:
 
 
 def build(
-    cost, precedences, start: int, end: int, formulation: str = "flow", relax: bool = False
+    cost: Any,
+    precedences: Any,
+    start: int,
+    end: int,
+    formulation: str = "flow",
+    relax: bool = False,
 ) -> SopModel:
     """Build the SOP model (see the module docstring for the formulation).
 
@@ -189,6 +195,7 @@ def build(
     if relax:
         constraints.append((arc_use <= 1).set_label("0 <= x <= 1 (LP relaxation)"))
         constraints.append((arc_use >= 0).set_label("0 <= x <= 1 (LP relaxation)"))
+    # ignore: the problem (None for now) is set below, once the row builders added their rows
     model = SopModel(None, arc_use, tails, heads, cost, start, end, formulation)  # type: ignore[arg-type]
     if formulation == "flow":
         constraints += _flow_rows(model, closure)
@@ -223,7 +230,7 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
         ),
         shape=(n_com * n, n_pairs),
     )
-    supply = np.zeros((n_com, n))
+    supply: np.ndarray = np.zeros((n_com, n))
     supply[:, start] = 1.0
     supply[np.arange(n_com), commodities] = -1.0
     supply = supply.ravel()
@@ -252,7 +259,10 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
             prec_r.append(r)
             prec_k.append(int(np.searchsorted(commodities, k)))
     if prec_r:
-        row_of = {(k, r): i for i, (k, r) in enumerate(zip(prec_k, prec_r, strict=True))}
+        # keys (commodity, node): numpy integers find them as Python ints do
+        row_of: dict[tuple[Any, Any], int] = {
+            (k, r): i for i, (k, r) in enumerate(zip(prec_k, prec_r, strict=True))
+        }
         entries = [
             (row_of[(k, heads[a])], p)
             for p, (k, a) in enumerate(zip(pair_k, pair_a, strict=True))
@@ -337,7 +347,12 @@ def _mtz_rows(model: SopModel, closure: nx.DiGraph) -> list:
 
 
 def describe(
-    cost, precedences, start: int, end: int, formulation: str = "flow", show: bool = True
+    cost: Any,
+    precedences: Any,
+    start: int,
+    end: int,
+    formulation: str = "flow",
+    show: bool = True,
 ) -> list[dict]:
     """Constraint families of the built model, with their row counts.
 
@@ -379,7 +394,7 @@ def decode(model: SopModel, values: np.ndarray | None = None) -> list[int]:
 
 
 # ----------------------------------------------------------------------------- solve
-def _check_path(model: SopModel, order: list[int], precedences, model_value: float) -> float:
+def _check_path(model: SopModel, order: list[int], precedences: Any, model_value: float) -> float:
     """Re-cost the decoded path from the data and check it without trusting the solver.
 
     Checks every precedence ``(r, j)`` (r before j) on the decoded order, and
@@ -485,11 +500,14 @@ def _cheap_bound(problem: SopProblem) -> float:
     )
 
 
-def _known_order(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, incumbent):
+def _known_order(
+    cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, incumbent: Any
+) -> tuple[float, list[int]] | None:
     """``(cost, order)`` of a feasible incumbent order, or None (an infeasible one is ignored)."""
-    if incumbent is None:
+    given = incumbent.order if isinstance(incumbent, Solution) else incumbent
+    if given is None:  # no incumbent, or a Solution without an order
         return None
-    order = [int(v) for v in (incumbent.order if isinstance(incumbent, Solution) else incumbent)]
+    order = [int(v) for v in given]
     n = cost.shape[0]
     if sorted(order) != list(range(n)) or order[0] != start or order[-1] != end:
         return None
@@ -503,7 +521,7 @@ def _known_order(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, in
 
 def _stopped(
     problem: SopProblem,
-    known,
+    known: tuple[float, list[int]] | None,
     bound: float | None,
     began: float,
     formulation: str,
@@ -556,15 +574,15 @@ def _infeasible(began: float, formulation: str, proof: str) -> Solution:
 
 
 def solve_sop(
-    cost,
-    precedences,
+    cost: Any,
+    precedences: Any,
     start: int,
     end: int,
     time_limit: float | None = None,
     formulation: str = "flow",
     mip_gap: float = 1e-9,
     verbose: bool = False,
-    incumbent=None,
+    incumbent: Any = None,
     problem: SopProblem | None = None,
 ) -> Solution:
     """Exact sequential ordering: cheapest precedence-respecting Hamiltonian path.
@@ -637,30 +655,36 @@ def solve_sop(
     known = _known_order(checked, closure, start, end, incumbent)
     if deadline.limited and problem is None:
         problem = SopProblem(checked, tuple(map(tuple, precedences)), start, end)
-    if deadline.limited:
+    left = deadline.remaining()  # None without a limit
+    if left is not None:
+        assert problem is not None  # built above under a limit
         columns = column_count(checked, closure, start, formulation)
         estimate = columns * SECONDS_PER_COLUMN
-        if estimate > deadline.remaining() - MARGIN:  # cannot build and compile in time
+        if estimate > left - MARGIN:  # cannot build and compile in time
             info = {"model": "not built", "columns": columns, "build_estimate": estimate}
             return _stopped(problem, known, None, began, formulation, info)
     building = time.perf_counter()
     model = build(cost, precedences, start, end, formulation)
     built_in = time.perf_counter() - building
     values = None
-    if deadline.limited:
+    left = deadline.remaining()
+    if left is not None:
+        assert problem is not None  # built above under a limit
         # compile apart from solving (HighsModel), so HiGHS gets exactly what is left
         columns = sum(v.size for v in model.problem.variables())
         compile_estimate = max(
             COMPILE_SHARE * columns * SECONDS_PER_COLUMN, COMPILE_PER_BUILD * built_in
         )
-        if deadline.remaining() - compile_estimate - MARGIN <= 0:
+        if left - compile_estimate - MARGIN <= 0:
             info = {"model": "built, not compiled", "columns": columns}
             return _stopped(problem, known, None, began, formulation, info)
         compiled = HighsModel(model.problem, verbose=verbose)
         if deadline.expired(MARGIN):
             info = {"model": "compiled, not solved", "columns": columns}
             return _stopped(problem, known, None, began, formulation, info)
-        run = compiled.solve(time_limit=deadline.remaining() - MARGIN, mip_rel_gap=float(mip_gap))
+        left = deadline.remaining()
+        assert left is not None  # limited
+        run = compiled.solve(time_limit=left - MARGIN, mip_rel_gap=float(mip_gap))
         if run.has_point:
             values = compiled.values(model.arc_use)
     else:
@@ -672,7 +696,10 @@ def solve_sop(
     if run.status not in (OPTIMAL, FEASIBLE, TIME_LIMIT):
         raise SolverError(f"HiGHS returned status {run.solver_status!r} on the SOP model")
     if not run.has_point or (
-        run.status == TIME_LIMIT and known is not None and known[0] < run.objective
+        run.status == TIME_LIMIT
+        and known is not None
+        and run.objective is not None
+        and known[0] < run.objective
     ):
         if run.status != TIME_LIMIT:
             raise SolverError(f"HiGHS returned status {run.solver_status!r} without a path")
@@ -681,6 +708,7 @@ def solve_sop(
         info = {"model": "solved", "solver_status": run.solver_status, "nodes": run.nodes}
         return _stopped(problem, known, run.bound, began, formulation, info)
     order = decode(model, values)
+    assert run.objective is not None  # a point was found (has_point)
     _check_path(model, order, precedences, run.objective)  # the path and its value agree
     bound = run.bound
     if run.status == TIME_LIMIT:  # HiGHS may stop before its root bound beats the tree's
@@ -733,7 +761,7 @@ def solve_sop_problem(
     formulation: str = "flow",
     mip_gap: float = 1e-9,
     verbose: bool = False,
-    incumbent=None,
+    incumbent: Any = None,
     engine: str = "auto",
     ideal_cap: int | None = None,
     max_states: int = PORTFOLIO_MAX_STATES,
@@ -793,7 +821,7 @@ def solve_sop_problem(
     ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
     info = {"ideals": ideals, "ideals_capped": capped}
 
-    def milp(known, time_left, dp_result=None) -> Solution:
+    def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         result = solve_sop(
             problem.cost,
             problem.precedences,

@@ -80,6 +80,7 @@ Operations Research 37(2), 1989 (bounds on reduced costs).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -192,7 +193,8 @@ class _Bound:
         self.n, self.start, self.end = n, start, end
         if potentials is None:
             potentials = (np.zeros(n), np.zeros(n))
-        self.alpha, self.beta = potentials
+        self.alpha: np.ndarray = potentials[0]
+        self.beta: np.ndarray = potentials[1]
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
         self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
@@ -428,7 +430,14 @@ class _Search:
             np.array([-1], dtype=np.int64),
         )
 
-    def grow(self, mask, last, value, deadline: Deadline, limit: float = np.inf):
+    def grow(
+        self,
+        mask: np.ndarray,
+        last: np.ndarray,
+        value: np.ndarray,
+        deadline: Deadline,
+        limit: float = np.inf,
+    ) -> tuple[np.ndarray, ...] | None:
         """Every one-node extension of the layer, the cheapest per (ideal, last); None when
         the deadline passed first, or the extensions before merging passed ``limit``."""
         bits, pred, usable = self.bits, self.pred, self.usable
@@ -470,8 +479,14 @@ class _Search:
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
     def totals(
-        self, mask, last, value, deadline: Deadline, cutoff: float = np.inf, chunk: int = 200_000
-    ):
+        self,
+        mask: np.ndarray,
+        last: np.ndarray,
+        value: np.ndarray,
+        deadline: Deadline,
+        cutoff: float = np.inf,
+        chunk: int = 200_000,
+    ) -> np.ndarray | None:
         """``f + g`` per state, in chunks between deadline checks; None when it passed.
 
         A state whose ``f + P`` already reaches ``cutoff`` gets that (smaller, valid) value:
@@ -503,7 +518,7 @@ class _Search:
         if seen[0] >= SECOND_PRICES_TRIAL and seen[1] < SECOND_PRICES_MIN_SHARE * seen[0]:
             self.more_bounds = [b for b in self.more_bounds if b is not bound]
 
-    def path(self, layers, k: int, top: int = -1) -> list[int]:
+    def path(self, layers: Sequence[tuple[np.ndarray, ...]], k: int, top: int = -1) -> list[int]:
         """The path ending at state ``k`` of layer ``top`` (the last), by the parents."""
         top = top % len(layers)
         path = [int(layers[top][1][k])]
@@ -538,8 +553,12 @@ class _Run:
         self.n = problem.n
         self.search = _Search(problem)
         mask, last, value, parent = self.search.first()
-        self.layers = [(mask, last, value, parent)]  # layer k: (mask, last, value, parent)
-        self.layer_total = self.search.totals(mask, last, value, Deadline(None))
+        self.layers: list[tuple[np.ndarray, ...]] = [
+            (mask, last, value, parent)
+        ]  # layer k: (mask, last, value, parent)
+        total = self.search.totals(mask, last, value, Deadline(None))
+        assert total is not None  # no deadline: never stopped
+        self.layer_total = total
         self.pruned_min = np.inf
         self.pruned = 0
         self.kept = 1
@@ -548,7 +567,9 @@ class _Run:
         self.best_cost = np.inf
         self.best_path: list[int] | None = None
 
-    def step(self, upper, tolerance, deadline, limit, room) -> str | None:
+    def step(
+        self, upper: float, tolerance: float, deadline: Deadline, limit: float, room: int | None
+    ) -> str | None:
         """Expand one layer; the reason to stop ("time_limit", "max_states") or None."""
         mask, last, value, _ = self.layers[-1]
         grown = self.search.grow(mask, last, value, deadline, limit)
@@ -556,7 +577,7 @@ class _Run:
             return "time_limit" if deadline.expired(MARGIN) else "max_states"
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
-        total = self.search.totals(*grown[:3], deadline, cutoff=upper - tolerance)
+        total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)
         if total is None:
             return "time_limit"
         keep = total < upper - tolerance
@@ -588,7 +609,7 @@ class _Run:
         return min(open_min, self.pruned_min)
 
 
-def _join(forward: _Run, backward: _Run, cost: np.ndarray):
+def _join(forward: _Run, backward: _Run, cost: np.ndarray) -> tuple[float, list[int]] | None:
     """Meet in the middle: the cheapest path through a forward state ``(I, v)`` of the
     forward's last layer, an arc ``v -> w`` and a backward state ``(V \\ I, w)``.
 
@@ -644,7 +665,7 @@ def beam_order(
         if len(grown[0]) > 4 * width:  # bound only the cheapest prefixes of the layer
             cheapest = np.argsort(grown[2], kind="stable")[: 4 * width]
             grown = tuple(a[cheapest] for a in grown)
-        total = search.totals(*grown[:3], deadline)
+        total = search.totals(grown[0], grown[1], grown[2], deadline)
         if total is None:
             return None
         alive = np.flatnonzero(np.isfinite(total))
@@ -792,7 +813,7 @@ def solve_sop_dp(
     info.update(states=kept, pruned=pruned, peak_layer=peak)
     objective = np.inf if known is None else known[0]
     runtime = time.perf_counter() - began
-    if stopped_by is None:
+    if stopped_by is None and done is not None:  # done is set when nothing stopped the loop
         pruned_min = done.pruned_min
         if known is None and not np.isfinite(pruned_min):  # no state can reach the end
             return finish(
@@ -805,6 +826,7 @@ def solve_sop_dp(
                 info={**info, "proof": "every ideal expanded"},
             )
         # every cheaper path was pruned within tolerance: proven to 1e-9 relative
+        assert known is not None  # a pruned state needs an incumbent (upper < inf)
         return finish(
             problem,
             Order(known[1]),
@@ -825,7 +847,7 @@ def solve_sop_dp(
         problem,
         None if known is None else Order(known[1]),
         method="exact-sop-dp",
-        stop=stopped_by,
+        stop=stopped_by or "error",
         bound=proven,
         runtime=time.perf_counter() - began,
         info=info,

@@ -161,8 +161,9 @@ class Family:
     payload: type
     title: str
     evaluate: Callable[[Any, Any], float]
-    load: Callable[[Mapping[str, Any]], Any] | None = None
-    to_dict: Callable[[Any], dict[str, Any]] | None = None
+    # None: the defaults below, set by __post_init__ (so never None once built)
+    load: Callable[[Mapping[str, Any]], Any] = None  # type: ignore[assignment]
+    to_dict: Callable[[Any], dict[str, Any]] = None  # type: ignore[assignment]
     bounds: Mapping[str, Bound] = field(default_factory=dict)
     plots: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
     adapter: Callable[..., Any] | None = None
@@ -322,7 +323,7 @@ def register_family(family: Family | type[Any], **spec: Any) -> Family:
             raise InstanceError(f"file kind {family.kind!r} is already registered")
     _FAMILIES[family.problem_type] = family
     _METHODS.setdefault(family.problem_type, {})
-    generic_evaluate.register(family.problem_type)(_scorer(family.evaluate, family.payload))
+    generic_evaluate.register(family.problem_type, _scorer(family.evaluate, family.payload))
     return family
 
 

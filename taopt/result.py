@@ -514,7 +514,7 @@ def make_solution(
     status: Status | str,
     bound: float | None = None,
     runtime: float = 0.0,
-    seed: int | None = None,
+    seed: int | np.random.Generator | None = None,
     info: Mapping[str, Any] | None = None,
     objective: float | None = None,
 ) -> Solution:
@@ -539,7 +539,8 @@ def make_solution(
         A proven lower bound (the gap, :attr:`Solution.gap`, follows from it).
     runtime : float
         Wall-clock seconds.
-    seed : int, optional
+    seed : int or numpy.random.Generator, optional
+        The method's seed; a Generator is not recorded (``Solution.seed`` None).
     info : mapping, optional
     objective : float, optional
         Only without a payload: a relaxation's value (default ``inf``: no incumbent).
@@ -586,7 +587,7 @@ def make_solution(
         bound=bound,
         runtime=runtime,
         method=method,
-        seed=seed,
+        seed=None if isinstance(seed, np.random.Generator) else seed,  # a Generator is not recorded
         info=dict(info or {}),
         scored_for=key,
     )

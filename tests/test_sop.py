@@ -119,6 +119,19 @@ def test_held_karp_reproduces_esc07():
     assert held_karp_sop(cost, precedences, start, end) == KNOWN_OPTIMA["ESC07"]
 
 
+def test_incumbent_solution_without_an_order_is_ignored():
+    """A Solution incumbent that holds no order is ignored like an infeasible one, not a crash."""
+    from taopt.result import TIME_LIMIT, make_solution
+    from taopt.sop.problem import SopProblem
+
+    cost = np.array([[0, 1, 5, 9], [9, 0, 1, 5], [1, 9, 0, 1], [9, 9, 9, 0.0]])
+    problem = SopProblem(cost, ((2, 1),), 0, 3)
+    empty = make_solution(problem, None, method="none", status=TIME_LIMIT)
+    solution = solve_sop(cost, [(2, 1)], 0, 3, incumbent=empty)
+    assert solution.order == [0, 2, 1, 3]
+    assert solution.objective == held_karp_sop(cost, [(2, 1)], 0, 3)
+
+
 def test_mtz_formulation_agrees_on_esc07():
     """The MTZ model certifies the same ESC07 optimum as the flow model."""
     cost, precedences, start, end, _ = load_sop("ESC07")

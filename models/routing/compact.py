@@ -13,6 +13,7 @@ Thesis §2.2.1, (2.2)–(2.5).
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -59,7 +60,12 @@ def _first_incumbent(
     return best_routes, best_value
 
 
-def _start_vector(problem, model: HighsModel, formulation: RoutingModel, routes) -> np.ndarray:
+def _start_vector(
+    problem: AssignmentProblem,
+    model: HighsModel,
+    formulation: RoutingModel,
+    routes: Sequence[Sequence[int]],
+) -> np.ndarray:
     """σ, and MTZ positions u or single-commodity flows f, of ``routes`` as a MIP start."""
     n = problem.n
     vector = np.zeros(model.n_columns)
@@ -82,7 +88,15 @@ def _highs_limit(left: float | None) -> float | None:
     return None if left is None else max(left - HIGHS_OVERRUN, 1e-3)
 
 
-def _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started) -> Solution:
+def _solve_compact(
+    problem: AssignmentProblem,
+    sec: str,
+    time_limit: float | None,
+    mip_gap: float,
+    verbose: bool,
+    given: list[list[int]] | None,
+    started: float,
+) -> Solution:
     """MTZ or flow: one solve of the compiled model, the incumbent as MIP start."""
 
     def remaining() -> float | None:

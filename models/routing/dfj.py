@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -266,7 +267,7 @@ class DfjModel:
     def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
         """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
         if solution is None:
-            solution = self.model.highs.getSolution().col_value
+            return np.asarray(self.model.highs.getSolution().col_value, dtype=float)[self.arcs]
         return np.asarray(solution, dtype=float)[self.arcs]
 
     def start_vector(self, routes: list[list[int]]) -> np.ndarray:
@@ -278,7 +279,7 @@ class DfjModel:
     def route_arcs(self, routes: list[list[int]]) -> np.ndarray:
         """Arc indices used by ``routes``."""
         n = self.problem.n
-        arcs = []
+        arcs: list[int] = []
         for k, route in enumerate(routes):
             points = [n + k, *route]
             arcs.extend(self.arc_index[points[:-1], points[1:]])
@@ -309,7 +310,9 @@ class DfjModel:
         self.model.relax(True)
         rounds, value, complete = 0, -np.inf, False
         lifted_rounds = LIFTED_ROUNDS if lifted is None else lifted
-        snapshot = None  # the model and LP when no (2.5) row was violated the first time
+        snapshot: tuple[Any, ...] | None = (
+            None  # the model and LP when no (2.5) row was violated the first time
+        )
         last_bound = -np.inf  # the bound when no (2.5) row was violated the last time
         bound, reduced, values = -np.inf, np.zeros(len(self.arcs)), None
         try:
@@ -396,8 +399,18 @@ def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> Roo
 
 
 def _solve_dfj(
-    problem, time_limit, mip_gap, verbose, max_rounds, given, started, improve=None
+    problem: AssignmentProblem,
+    time_limit: float | None,
+    mip_gap: float,
+    verbose: bool,
+    max_rounds: int,
+    given: list[list[int]] | None,
+    started: float,
+    improve: Any = None,
 ) -> Solution:
+    best_routes: list[list[int]]
+    best_value: float
+
     def remaining() -> float | None:
         return None if time_limit is None else time_limit - (time.perf_counter() - started)
 
@@ -559,7 +572,7 @@ def _solve_dfj(
         fallback = _solve_compact(
             problem, FALLBACK_SEC, time_limit, mip_gap, verbose, best_routes, started
         )
-        if fallback.objective < best_value:
+        if fallback.routes is not None and fallback.objective < best_value:
             best_routes, best_value = fallback.routes, fallback.objective
         if fallback.bound is not None:
             best_bound = max(best_bound, fallback.bound)

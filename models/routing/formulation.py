@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import cvxpy as cp
 import numpy as np
@@ -29,14 +29,19 @@ from taopt.errors import InstanceError, SolverError, require
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.subtours import arc_list  # the arc list σ is indexed by (core)
 
-if TYPE_CHECKING:
-    from taopt.models.routing.dfj import DfjModel
-
 # the logger of the package (a child of the "taopt" logger), as before the split
 logger = logging.getLogger("taopt.models.routing")
 
 #: The ways (2.5) can be written: DFJ rows (added lazily), MTZ order variables, a flow.
 SUBTOUR_ELIMINATIONS = ("dfj", "mtz", "flow")
+
+
+class ArcModel(Protocol):
+    """What :func:`decode` reads of a model: its arc list, σ's columns in order
+    (:class:`RoutingModel`, the DFJ model, the budgeted resource model)."""
+
+    tails: np.ndarray
+    heads: np.ndarray
 
 
 @dataclass
@@ -79,7 +84,9 @@ def _check(problem: Any, sec: str) -> None:
         raise InstanceError(f"sec must be one of {SUBTOUR_ELIMINATIONS}, got {sec!r}")
 
 
-def _cut_matrix(cuts: list[tuple[int, ...]], tails, heads, n: int) -> sp.csr_matrix:
+def _cut_matrix(
+    cuts: list[tuple[int, ...]], tails: np.ndarray, heads: np.ndarray, n: int
+) -> sp.csr_matrix:
     """Rows of (2.5): row r has a 1 on every arc with both ends in cut r's subset S."""
     rows, cols = [], []
     for r, subset in enumerate(cuts):
@@ -136,7 +143,7 @@ def build(
     if relax:
         # 0 <= sigma_ij <= 1: the LP relaxation of binary sigma (column bounds)
         arc_use = cp.Variable(n_arcs, name="sigma", bounds=[0, 1])
-        bounds = []
+        bounds: list[Any] = []
     else:
         arc_use = cp.Variable(n_arcs, name="sigma", boolean=True)
         bounds = []
@@ -279,7 +286,7 @@ def _successors(model: Any, values: np.ndarray | None = None) -> dict[int, int]:
 
 
 def decode(
-    problem: AssignmentProblem, model: RoutingModel | DfjModel, values: np.ndarray | None = None
+    problem: AssignmentProblem, model: ArcModel, values: np.ndarray | None = None
 ) -> tuple[list[list[int]], list[list[int]]]:
     """Turn an integral σ into routes (one per vehicle) and the subtours left over.
 
@@ -297,7 +304,8 @@ def decode(
     n = problem.n
     routes, reached = [], set()
     for vehicle in range(problem.m):
-        route, point = [], n + vehicle
+        route: list[int] = []
+        point = n + vehicle
         while point in successor:
             point = successor[point]
             if point in reached or len(route) > n:
@@ -341,11 +349,13 @@ def repair(
     cost = problem.cost
     n = problem.n
     routes = [list(r) for r in routes]
-    for cycle in subtours:
-        cycle = np.asarray(list(cycle), dtype=np.int64)
+    for subtour in subtours:
+        cycle = np.asarray(list(subtour), dtype=np.int64)
         before = np.roll(cycle, 1)  # opening at p drops before[p] -> cycle[p]
         # every place: after point a = points[k][q], before b (-1 at a route's end)
-        places_a, places_b, where = [], [], []
+        places_a: list[int] = []
+        places_b: list[int] = []
+        where: list[tuple[int, int]] = []
         for k, route in enumerate(routes):
             points = [n + k, *route]
             places_a.extend(points)

@@ -178,7 +178,9 @@ def solve_routing(
     return _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started)
 
 
-def _solve_relaxation(problem, sec, started, verbose) -> Solution:
+def _solve_relaxation(
+    problem: AssignmentProblem, sec: str, started: float, verbose: bool
+) -> Solution:
     """LP value of (2.2)–(2.5): DFJ with all of (2.5) (exact separation), or MTZ / flow."""
     if sec == "dfj":
         root = DfjModel(problem, verbose=verbose).root(lifted=0)

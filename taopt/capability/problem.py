@@ -243,6 +243,7 @@ class CapabilityProblem:
     @property
     def classes(self) -> tuple[CapabilityClass, ...]:
         """One :class:`CapabilityClass` per capability (the exact split of §3.6)."""
+        # ignore (here and below): set by __post_init__ (object.__setattr__), not a field
         return self._classes  # type: ignore[attr-defined]
 
     def cost_for(self, capability: Hashable) -> np.ndarray:

@@ -150,6 +150,7 @@ class CommProblem:
     @property
     def attributes(self) -> tuple[Hashable, ...]:
         """The set A of abilities/attributes, in order of first appearance (vehicles first)."""
+        # ignore (here and below): set by __post_init__ (object.__setattr__), not a field
         return self._labels  # type: ignore[attr-defined]
 
     @property

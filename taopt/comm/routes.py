@@ -30,7 +30,9 @@ def distances_from(point: np.ndarray, targets: np.ndarray) -> np.ndarray:
     return np.hypot(diff[:, 0], diff[:, 1])
 
 
-def leg_lengths(start: np.ndarray, route: Sequence[int], dist: np.ndarray) -> np.ndarray:
+def leg_lengths(
+    start: np.ndarray, route: Sequence[int] | np.ndarray, dist: np.ndarray
+) -> np.ndarray:
     """Lengths of the legs ``p -> o^1 -> ... -> o^{|o|}`` ((|o|,) array)."""
     if len(route) == 0:
         return np.zeros(0)

@@ -496,7 +496,7 @@ def ideal_dp(
     history: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = [
         (ideals, st_idx * s + st_stop, np.full(1, -1, np.int8), np.full(1, -1, np.int16))
     ]
-    counts = {
+    counts: dict[str, Any] = {
         "ideals_expanded": 1,
         "states_kept": 1,
         "states_pruned": 0,

@@ -288,6 +288,8 @@ class DeliveryInstance:
     @property
     def truck_distance(self) -> np.ndarray:
         """(s, s) street shortest-path lengths between stops."""
+        # ignore (here and below): the caches are set by __post_init__ (object.__setattr__)
+        # and are not dataclass fields, so mypy cannot see them
         return self._truck_distance  # type: ignore[attr-defined]
 
     @property

@@ -164,10 +164,10 @@ def _check_order(instance: DeliveryInstance, order: np.ndarray, complete: bool) 
         position = np.full(n, -1, dtype=np.int64)
         position[order] = np.arange(order.size)
         pr, pj = position[pairs[:, 0]], position[pairs[:, 1]]
-        bad = np.flatnonzero((pj >= 0) & ((pr < 0) | (pr > pj)))
-        if bad.size:
-            r, j = (int(x) for x in pairs[bad[0]])
-            if pr[bad[0]] < 0:
+        late = np.flatnonzero((pj >= 0) & ((pr < 0) | (pr > pj)))
+        if late.size:
+            r, j = (int(x) for x in pairs[late[0]])
+            if pr[late[0]] < 0:
                 raise FeasibilityError(
                     f"(5.7) precedence ({r}, {j}) violated: customer {j} is in the order but "
                     f"its predecessor {r} is not"

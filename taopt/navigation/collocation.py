@@ -158,8 +158,9 @@ class CollocationSolver:
         tau, C, D = _collocation_matrices(d, self.scheme)
         self._tau = tau
         h = 1.0 / K
-        # GriddedField interpolants need MX; analytic fields are faster in SX.
-        sym = ca.MX if self.field.kind == "gridded" else ca.SX
+        # GriddedField interpolants need MX; analytic fields are faster in SX. (Any: casadi's
+        # stubs type each class alone, not code written for either.)
+        sym: Any = ca.MX if self.field.kind == "gridded" else ca.SX
 
         # --- parameters: p = (start_x, start_y, goal_x, goal_y, v)
         p = sym.sym("p", 5)
@@ -207,7 +208,7 @@ class CollocationSolver:
         self.ubx = np.full(self._n_w, np.inf)
         self.lbx[0], self.ubx[0] = _S_MIN, _S_MAX
 
-        options = {
+        options: dict[str, Any] = {
             "print_time": False,
             "ipopt.print_level": 0,
             "ipopt.sb": "yes",
@@ -283,10 +284,11 @@ class CollocationSolver:
         """
         if size not in self._batches:
             pair = self.nlp.oracle()  # (w, p) -> (f, g) of one pair
-            sym = ca.MX if self.field.kind == "gridded" else ca.SX
+            sym: Any = ca.MX if self.field.kind == "gridded" else ca.SX
             w = sym.sym("w", self._n_w, size)
             p = sym.sym("p", 5, size)
-            objective, constraints = 0, []
+            objective: Any = 0
+            constraints = []
             for b in range(size):
                 f_b, g_b = pair(w[:, b], p[:, b])
                 objective += f_b
@@ -373,7 +375,7 @@ class CollocationSolver:
         xi.append(nodes[K:])
         u_samples.append(self._u_values[-1:] @ thrust[K - 1])
         du_samples.append(self._u_derivs[-1:] @ thrust[K - 1])
-        xi = np.vstack(xi)
+        xi_all = np.vstack(xi)
         u = np.vstack(u_samples)
         du = np.vstack(du_samples) / travel_time  # d u / d t
         heading = np.arctan2(u[:, 1], u[:, 0])
@@ -384,7 +386,7 @@ class CollocationSolver:
             speed=speed,
             time=travel_time,
             t=self._taus * travel_time,
-            xy=start + dist * xi,
+            xy=start + dist * xi_all,
             heading=heading,
             heading_rate=heading_rate,
             method="collocation",

@@ -28,7 +28,7 @@ import os
 import warnings
 from collections.abc import Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -88,6 +88,38 @@ def _worker_solve(pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def default_jobs() -> int:
     """Worker processes to use: the machine's CPU count (at least 1)."""
     return max(1, os.cpu_count() or 1)
+
+
+@overload
+def travel_time_matrix(
+    field: Field | None,
+    points: Any,
+    speed: float = 1.0,
+    *,
+    method: str = "auto",
+    jobs: int | None = None,
+    progress: bool = False,
+    intervals: int = DEFAULT_INTERVALS,
+    degree: int = DEFAULT_DEGREE,
+    return_info: Literal[False] = False,
+    pmp_options: Mapping[str, Any] | None = None,
+) -> np.ndarray: ...
+
+
+@overload
+def travel_time_matrix(
+    field: Field | None,
+    points: Any,
+    speed: float = 1.0,
+    *,
+    method: str = "auto",
+    jobs: int | None = None,
+    progress: bool = False,
+    intervals: int = DEFAULT_INTERVALS,
+    degree: int = DEFAULT_DEGREE,
+    return_info: Literal[True],
+    pmp_options: Mapping[str, Any] | None = None,
+) -> tuple[np.ndarray, dict[str, Any]]: ...
 
 
 def travel_time_matrix(

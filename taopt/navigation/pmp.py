@@ -431,7 +431,7 @@ def _integrate(
             np.maximum(worst, state[3] * k[0, 1] - state[4] * k[0, 0], out=worst)
         _combine(stage, state, scale, _RK_B, k, scratch)
         state, stage = stage, state
-        if record:
+        if samples is not None:
             samples.append(state.copy())
     end_rate = np.empty((rows, size))
     _rates(model, speed, start, state, end_rate, stiffness)
@@ -984,6 +984,7 @@ def pmp_path(
         False,
         record=True,
     )
+    assert flow.samples is not None  # record=True
     states = flow.samples[:, :, 0]
     pick = np.round(np.linspace(0, steps, int(samples))).astype(int)
     xy = states[pick, :2] + start

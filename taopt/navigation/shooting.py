@@ -23,6 +23,7 @@ Thesis §2.3.2, Lemma 2.2, (2.6)-(2.10).
 
 from __future__ import annotations
 
+import math
 import threading
 import time as _time
 from typing import Any
@@ -63,7 +64,8 @@ class ShootingSolver:
         self.tol = float(tol)
         self.samples = int(samples)
         self._lock = threading.Lock()
-        sym = ca.MX if self.field.kind == "gridded" else ca.SX
+        # Any: casadi's stubs type MX and SX each alone, not code written for either
+        sym: Any = ca.MX if self.field.kind == "gridded" else ca.SX
         x, y, psi = sym.sym("x"), sym.sym("y"), sym.sym("psi")
         duration, v = sym.sym("T"), sym.sym("v")
         state = ca.vertcat(x, y, psi)
@@ -128,7 +130,7 @@ class ShootingSolver:
         dist = float(np.linalg.norm(goal - start))
         target = self.tol * max(dist, 1e-300)
         total = 0
-        best = None
+        best: tuple[np.ndarray, float] | None = None
         with self._lock:
             for guess in self.guesses(start, goal, speed):
                 z, miss, iterations = self._newton(np.array(guess), data, target, max_iter)
@@ -141,7 +143,8 @@ class ShootingSolver:
                     )
         raise ConvergenceError(
             f"shooting did not converge from {tuple(start)} to {tuple(goal)}: "
-            f"best miss distance {best[1]:.3g} m after {total} Newton steps"
+            f"best miss distance {math.nan if best is None else best[1]:.3g} m after {total} "
+            "Newton steps"
         )
 
     def _newton(

@@ -307,7 +307,7 @@ class _Deprecated(argparse.Action):
         super().__init__(option_strings, dest, **kwargs)
         self.replacement = replacement
 
-    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None):
+    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
         print(
             f"taopt: DeprecationWarning: {option_string} is deprecated and will be removed in "
             f"the next release; use {self.replacement}",
@@ -316,7 +316,9 @@ class _Deprecated(argparse.Action):
         setattr(namespace, self.dest, True if self.nargs == 0 else values)
 
 
-def deprecated(parser: argparse.ArgumentParser, old: str, dest: str, replacement: str, **kw: Any):
+def deprecated(
+    parser: argparse.ArgumentParser, old: str, dest: str, replacement: str, **kw: Any
+) -> None:
     """Keep ``old`` working as ``replacement`` (stored in ``dest``) with a warning, hidden."""
     parser.add_argument(old, dest=dest, action=_Deprecated, replacement=replacement, **kw)
 

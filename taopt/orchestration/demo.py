@@ -112,7 +112,7 @@ def run_demo(
         best = exact if exact is not None else min(solutions.values(), key=lambda s: s.objective)
         plot_instance_routes(
             instance,
-            best.routes,
+            best.routes or [],
             title=f"{instance.name}: {best.method} routes, total travel time {best.objective:.1f} s",
             path=plot,
         )

@@ -64,7 +64,7 @@ def _warm_start(
     """
     budget = deadline.share(WARM_START_SHARE)
     end = None if budget is None else deadline.elapsed() + budget
-    warm = []
+    warm: list[Solution] = []
     for k, name in enumerate(names):
         limit = None
         if end is not None:
@@ -157,9 +157,10 @@ def solve(
         warm_info = _warm_start(problem, spec.warm_start, seed, deadline, kwargs)
     if spec.category == "exact" and spec.accepts("improve") and "improve" not in kwargs:
         kwargs["improve"] = improver(problem)  # the family's, registered by a heuristic
-    if "time_limit" in kwargs:
+    left = deadline.remaining()  # None only without a time_limit
+    if "time_limit" in kwargs and left is not None:
         # the method gets what is left: warm start and checks above were on the clock
-        kwargs["time_limit"] = max(deadline.remaining() - MARGIN, MIN_SECONDS)
+        kwargs["time_limit"] = max(left - MARGIN, MIN_SECONDS)
     result = spec.func(problem, **kwargs)
     if not isinstance(result, Solution):
         raise SolverError(f"method {method!r} returned {type(result).__name__}, not a Solution")

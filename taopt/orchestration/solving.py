@@ -289,13 +289,13 @@ def solve_file(
         print(f"solutions written to {folder}/<method>.json", file=out)
     if best is None:
         plot = gantt = None  # nothing to draw
-    if plot:
+    if plot and best is not None:
         name, draw = next(iter(family.plots.items()))
         draw(problem, best.solution, plot, instance=instance, method=best.method)
         print(f"{name} plot of {best.method} written to {plot}", file=out)
         for line in _route_lines(best, instance, problem):
             print(line, file=out)
-    if gantt:
+    if gantt and best is not None:
         family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
     if unanswered:
@@ -589,7 +589,7 @@ def verify_file(
         for claim in claims:
             if claim == "optimality" and _not_above(value, lower):
                 report(True, f"optimality: the objective reaches the valid bound {lower:.10g}")
-            elif claim == "bound" and _not_above(bound, lower):
+            elif claim == "bound" and bound is not None and _not_above(bound, lower):
                 report(True, f"bound {bound:.10g} is below the valid bound {lower:.10g}")
             else:
                 report(None, f"{_CLAIM_TEXT[claim]}: needs --exact")

@@ -49,10 +49,10 @@ import sys
 import threading
 import time
 import zlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 import pandas as pd
@@ -257,6 +257,14 @@ def check_integer(label: str, value: Any, low: int = 0) -> int:
     return int(value)
 
 
+@overload
+def check_positive(label: str, value: Any, allow_none: Literal[False] = False) -> float: ...
+
+
+@overload
+def check_positive(label: str, value: Any, allow_none: bool) -> float | None: ...
+
+
 def check_positive(label: str, value: Any, allow_none: bool = False) -> float | None:
     """``value`` as a float, or :class:`InstanceError` naming ``label`` unless it is a finite
     number > 0 (``None`` passes when ``allow_none``)."""
@@ -448,7 +456,7 @@ def _executor(
         pids = {*client.run(os.getpid).values(), *client.run(os.getpid, nanny=True).values()}
         local = sorted(pids - {os.getpid()})  # a LocalCluster's nannies live in this process
 
-    def kill() -> None:
+    def kill_cluster() -> None:
         if cluster is not None:
             for nanny in list(getattr(cluster, "workers", {}).values()):
                 with contextlib.suppress(Exception):
@@ -462,11 +470,11 @@ def _executor(
         with contextlib.suppress(Exception):
             client.close(timeout=1)
 
-    return client.get_executor(), close, kill
+    return client.get_executor(), close, kill_cluster
 
 
 @contextlib.contextmanager
-def _thread_environment() -> Iterable[None]:
+def _thread_environment() -> Iterator[None]:
     """Set :data:`THREAD_ENV` while workers are started (they inherit it), then restore."""
     saved = {k: os.environ.get(k) for k in THREAD_ENV}
     os.environ.update(THREAD_ENV)
@@ -555,7 +563,7 @@ def run_study(
         "method_options": options,
     }
 
-    def open_store(write: bool) -> tuple[ResultsStore, list[tuple[dict, list[str]]]]:
+    def open_store(write: bool) -> tuple[ResultsStore, list[tuple[Mapping[str, Any], list[str]]]]:
         store = ResultsStore(
             out_dir,
             f"{spec.name}.csv",
@@ -600,7 +608,7 @@ def _run_tasks(
     spec: StudySpec,
     store: ResultsStore,
     keys: Sequence[Mapping[str, Any]],
-    tasks: Sequence[tuple[dict, list[str]]],
+    tasks: Sequence[tuple[Mapping[str, Any], list[str]]],
     saved: Mapping[str, Any],
     jobs: int,
     dask: str | None,

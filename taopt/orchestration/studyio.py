@@ -137,7 +137,7 @@ def normalize_key(values: Iterable[Any]) -> tuple[Any, ...]:
     So a key read back from the CSV (``0.15``, ``3``, ``"MC"``) equals the one the
     study builds (``np.float64(0.15)``, ``np.int64(3)``, ``"MC"``).
     """
-    out = []
+    out: list[Any] = []
     for value in values:
         if isinstance(value, str):
             out.append(value)
@@ -295,6 +295,7 @@ class ResultsStore:
 
     def _line_key(self, line: str) -> tuple[Any, ...]:
         fields = _fields(line.rstrip("\n"))
+        assert fields is not None  # the lines kept by _clean_lines parse
         return _parse_key([fields[self.columns.index(c)] for c in self.key_columns])
 
     def _rewrite(self, lines: list[str]) -> None:
@@ -344,7 +345,7 @@ class ResultsStore:
         """
         if not self.writable:
             raise InstanceError(f"{self.path}: opened read-only (write=False); cannot append")
-        fresh = []
+        fresh: list[tuple[tuple[Any, ...], Mapping[str, Any]]] = []
         for row in rows:
             missing = [c for c in self.data_columns if c not in row]
             if missing:

@@ -109,6 +109,8 @@ def drift_scenario(
         field = thesis_field()
     if isinstance(field, dict):
         field = field_from_dict(field)
+    if isinstance(field, str):  # Instance would refuse it too
+        raise InstanceError(f"field must be a taopt.fields.Field, None or 'thesis', got {field!r}")
     instance = Instance.random(n, m, side=side, field=field, speed=speed, seed=int(seed))
     points = instance.points
     description = {

@@ -197,13 +197,16 @@ def _compile(validator: Any, subschema: Any, depth: int = 0) -> Callable[[Any], 
 
         return number
     if kind == "array" and set(subschema) <= _ARRAY_KEYS and not nullable:
-        items = None
+        items: Callable[[Any], bool] | None = None
         if "items" in subschema:
             items = _compile(validator, subschema["items"], depth + 1)
             if items is None:
                 return None
-        prefix = [_compile(validator, part, depth + 1) for part in subschema.get("prefixItems", [])]
-        if any(part is None for part in prefix):
+        compiled = [
+            _compile(validator, part, depth + 1) for part in subschema.get("prefixItems", [])
+        ]
+        prefix = [part for part in compiled if part is not None]
+        if len(prefix) < len(compiled):
             return None
         shortest = subschema.get("minItems", 0)
         longest = subschema.get("maxItems", math.inf)

@@ -37,7 +37,7 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import networkx as nx
 import numpy as np
@@ -127,7 +127,9 @@ def sop_path(name: str) -> Path:
     return path
 
 
-def load_sop(path_or_name: str | Path) -> tuple[np.ndarray, list[tuple[int, int]], int, int, str]:
+def load_sop(
+    path_or_name: str | os.PathLike[str],
+) -> tuple[np.ndarray, list[tuple[int, int]], int, int, str]:
     """Read a TSPLIB .sop file.
 
     Parameters
@@ -330,6 +332,7 @@ class SopProblem:
     @property
     def closure(self) -> nx.DiGraph:
         """Transitively closed precedence DAG (start before and end after every node)."""
+        # ignore: set by __post_init__ (object.__setattr__), not a dataclass field
         return self._closure  # type: ignore[attr-defined]
 
     def replace(self, **changes: Any) -> SopProblem:
@@ -399,7 +402,11 @@ class SopProblem:
         with naming(label):
             return cls(
                 cost,
-                tuple(tuple(int(v) for v in p) for p in data.get("precedences", [])),
+                # pairs: __post_init__ (check_sop) refuses anything else, naming it
+                cast(
+                    "tuple[tuple[int, int], ...]",
+                    tuple(tuple(int(v) for v in p) for p in data.get("precedences", [])),
+                ),
                 int(data["start"]),
                 int(data["end"]),
                 data.get("name", ""),

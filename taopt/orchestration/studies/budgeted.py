@@ -56,7 +56,7 @@ import numpy as np
 import pandas as pd
 
 from taopt.budgeted.problem import BudgetedProblem
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, SolverError
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
@@ -145,6 +145,8 @@ def unlimited_reference(problem: Any, seed: int, cache_dir: str | None) -> dict[
     from taopt.orchestration.pipeline import solve
 
     solution = solve(problem, "exact", time_limit=REFERENCE_TIME_LIMIT)
+    if solution.routes is None:  # the unlimited problem always has routes; none in time
+        raise SolverError(f"{problem!r}: no unlimited reference routes ({solution.status})")
     times = [problem.route_cost(j, route) for j, route in enumerate(solution.routes)]
     reference = {
         "objective": solution.objective,

@@ -425,7 +425,7 @@ def thesis_comparison(df: pd.DataFrame, table: str = "3.1") -> pd.DataFrame:
         ours, printed = thesis_table(df, "runtime", "mean"), THESIS_TABLE_3_2
     else:
         raise InstanceError(f"table must be '3.1' or '3.2', got {table!r}")
-    rows = []
+    rows: list[dict[Any, Any]] = []  # keys: column names and the capability counts |A|
     for (instance, method), values in printed.items():
         thesis_row = dict(zip(CAPABILITIES, values, strict=True))
         rows.append({"instance": instance, "method": method, "source": "thesis", **thesis_row})

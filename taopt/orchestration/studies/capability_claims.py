@@ -134,8 +134,8 @@ def random_problem(
     return CapabilityProblem(
         cost,
         n,
-        capability,
-        [frozenset(d) for d in demands],
+        tuple(capability),
+        tuple(frozenset(d) for d in demands),
         name=f"{kind}-n{n}m{m}A{n_capabilities}",
     )
 
@@ -186,9 +186,9 @@ def _leq(lhs: float, rhs: float, rtol: float) -> bool:
     return lhs <= rhs + rtol * max(1.0, abs(rhs))
 
 
-def _algorithm1_clusters(problem: CapabilityProblem) -> dict[Any, list[frozenset[int]]]:
+def _algorithm1_clusters(problem: CapabilityProblem) -> dict[Any, dict[int, frozenset[int]]]:
     """Algorithm 1's clusters per class, in whole-problem indices, one set per vehicle."""
-    out = {}
+    out: dict[Any, dict[int, frozenset[int]]] = {}
     for cls in problem.classes:
         if cls.problem is None:
             continue

@@ -608,7 +608,10 @@ def plot_scalability(table: pd.DataFrame, path: str | Path | None = None) -> Any
     rows = table[table["method"] == "DAA"]
     for k, (attributes, part) in enumerate(rows.groupby("A")):
         part = part.sort_values("n")
-        style = {"ls": LINESTYLES[k % len(LINESTYLES)], "marker": MARKERS[k % len(MARKERS)]}
+        style: dict[str, Any] = {
+            "ls": LINESTYLES[k % len(LINESTYLES)],
+            "marker": MARKERS[k % len(MARKERS)],
+        }
         q_ax.plot(part["n"], part["q"], label=f"|A| = {attributes}", **style)
         time_ax.plot(part["n"], part["runtime"], label=f"|A| = {attributes}", **style)
     q_ax.set_ylabel("mean q = f / f_MST (4.21), ratio (1)")
