@@ -7,6 +7,7 @@ every plot of taopt live here:
 * :func:`check_output` — refuse an output file of the wrong kind before any work;
 * :func:`legend_outside` — the legend right of (or below) the axes, never over the data;
 * :func:`label_points` — ids (``t0``, ``v0``, ...) written next to points;
+* :func:`place_labels` — the same, each label on the side where it covers the fewest others;
 * :func:`schematic_layout` — 2-D positions for a problem given only by a cost matrix;
 * :func:`save` — PNG with the outside legend kept in the picture.
 """
@@ -118,6 +119,109 @@ def label_points(
         )
         for name, (x, y) in zip(names, np.asarray(points, dtype=float), strict=True)
     ]
+
+
+def place_labels(
+    ax: Any,
+    groups: Sequence[tuple[Any, Sequence[str], dict[str, Any]]],
+    avoid: Any = None,
+    distance: float = 5.0,
+) -> list[Any]:
+    """Write ids next to points, each on the side where it covers the fewest others.
+
+    Greedy placement in display space: for each point in turn, eight candidate spots
+    around it (``distance`` points away: upper right, lower right, ...) and eight three
+    times as far (joined to the point by a thin leader line) are scored by the area the
+    label's box would share with the boxes already placed plus a penalty for every marker
+    (of ``groups`` and of ``avoid``) under it and a small one for the far ring; the least
+    covered spot wins (ties: the first, upper right). Call it after everything is drawn and the limits are
+    set; the axes' aspect is applied first.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    groups : sequence of (points, names, style)
+        ``(N, 2)`` positions in data units, their N labels and the ``annotate`` keywords
+        (``fontsize``, ``color``, ...) for that group.
+    avoid : (K, 2) array, optional
+        Further markers that labels should not cover (e.g. unlabelled stops).
+    distance : float
+        Gap between a point and its label, in points.
+
+    Returns
+    -------
+    list of matplotlib Text
+        One per name, in the order given.
+    """
+    ax.apply_aspect()
+    to_display = ax.transData.transform
+    scale = ax.figure.dpi / 72.0  # display pixels per point
+    anchors = [np.asarray(points, dtype=float).reshape(-1, 2) for points, _, _ in groups]
+    markers = [to_display(a) for a in anchors if len(a)]
+    if avoid is not None and len(avoid):
+        markers.append(to_display(np.asarray(avoid, dtype=float).reshape(-1, 2)))
+    marker_xy = np.vstack(markers) if markers else np.zeros((0, 2))
+    # (dx, dy) unit directions and the matching text alignment, upper right first
+    sides = [
+        (1, 1, "left", "bottom"),
+        (1, -1, "left", "top"),
+        (-1, 1, "right", "bottom"),
+        (-1, -1, "right", "top"),
+        (1, 0, "left", "center"),
+        (-1, 0, "right", "center"),
+        (0, 1, "center", "bottom"),
+        (0, -1, "center", "top"),
+    ]
+    placed: list[tuple[float, float, float, float]] = []
+    texts = []
+    for points, (_, names, style) in zip(anchors, groups, strict=True):
+        style = {"fontsize": 8, "zorder": 7, **style}
+        size = float(style["fontsize"]) * scale
+        for (x, y), name in zip(points, names, strict=True):
+            px, py = to_display([[x, y]])[0]
+            width, height = 0.6 * size * len(str(name)), 1.0 * size
+            best, best_score, best_box = (1, 1, "left", "bottom", 1.0), np.inf, None
+            # the near ring first; a ring three times as far (with a leader line) costs a
+            # little more, so a label leaves its point only to get out of a cluster
+            for ring, cost in ((1.0, 0.0), (3.0, 0.15 * width * height)):
+                for dx, dy, ha, va in sides:
+                    gap = ring * distance * scale / (np.sqrt(2.0) if dx and dy else 1.0)
+                    left = px + dx * gap - {"left": 0.0, "right": width, "center": width / 2}[ha]
+                    bottom = (
+                        py + dy * gap - {"bottom": 0.0, "top": height, "center": height / 2}[va]
+                    )
+                    box = (left, bottom, left + width, bottom + height)
+                    score = cost + sum(
+                        max(0.0, min(box[2], b[2]) - max(box[0], b[0]))
+                        * max(0.0, min(box[3], b[3]) - max(box[1], b[1]))
+                        for b in placed
+                    )
+                    inside = (
+                        (marker_xy[:, 0] > box[0] - 2 * scale)
+                        & (marker_xy[:, 0] < box[2] + 2 * scale)
+                        & (marker_xy[:, 1] > box[1] - 2 * scale)
+                        & (marker_xy[:, 1] < box[3] + 2 * scale)
+                    )
+                    score += float(inside.sum()) * width * height / 4
+                    if score < best_score - 1e-9:
+                        best, best_score, best_box = (dx, dy, ha, va, ring), score, box
+            dx, dy, ha, va, ring = best
+            gap = ring * distance / (np.sqrt(2.0) if dx and dy else 1.0)
+            placed.append(best_box)
+            leader = {"arrowstyle": "-", "lw": 0.5, "color": style.get("color", "0.3")}
+            texts.append(
+                ax.annotate(
+                    str(name),
+                    (float(x), float(y)),
+                    textcoords="offset points",
+                    xytext=(dx * gap, dy * gap),
+                    ha=ha,
+                    va=va,
+                    arrowprops=leader if ring > 1 else None,
+                    **style,
+                )
+            )
+    return texts
 
 
 def schematic_layout(cost: Any, seed: int = 0) -> np.ndarray:
