@@ -315,6 +315,9 @@ def plot_paths(
 ) -> Any:
     """Paths over the field's quiver; optional heading arrows (the thrust direction psi).
 
+    Each path's start is a small filled dot drawn over its goal, a large open square (the
+    two coincide in a round trip i -> j, j -> i). Axes in metres.
+
     ``region`` defaults to the paths' bounding box grown by 10 %.
     """
     if isinstance(paths, Path):
@@ -331,8 +334,10 @@ def plot_paths(
         color = colors[k % len(colors)]
         label = labels[k] if labels is not None else f"t = {path.time:.2f} s ({path.method})"
         ax.plot(path.xy[:, 0], path.xy[:, 1], "-", color=color, lw=2, label=label)
-        ax.plot(*path.start, "o", color=color)
-        ax.plot(*path.goal, "s", color=color)
+        # a round trip starts where the other path ends: the goal is a large open square
+        # under, the start a small filled dot over it, so both stay visible
+        ax.plot(*path.goal, "s", color=color, ms=12, mfc="none", mew=1.8, zorder=4, gid="goal")
+        ax.plot(*path.start, "o", color=color, ms=6, mec="white", zorder=5, gid="start")
         if headings and len(path.xy) > 2:
             step = max(1, len(path.xy) // 8)
             sel = slice(0, None, step)
@@ -345,8 +350,8 @@ def plot_paths(
                 width=0.004,
                 alpha=0.6,
             )
-    ax.plot([], [], "o", color="0.3", label="start")
-    ax.plot([], [], "s", color="0.3", label="goal")
+    ax.plot([], [], "o", color="0.3", ms=6, mec="white", label="start")
+    ax.plot([], [], "s", color="0.3", ms=12, mfc="none", mew=1.8, label="goal")
     legend_outside(ax, "below", ncol=2)
     return ax
 
