@@ -352,6 +352,9 @@ def plot_paths(
             )
     ax.plot([], [], "o", color="0.3", ms=6, mec="white", label="start")
     ax.plot([], [], "s", color="0.3", ms=12, mfc="none", mew=1.8, label="goal")
+    if not ax.get_title():
+        speeds = ", ".join(sorted({f"{p.speed:g}" for p in paths}))
+        ax.set_title(f"minimum-time paths in the drift field, speed {speeds} m/s", fontsize=10)
     legend_outside(ax, "below", ncol=2)
     return ax
 
