@@ -147,8 +147,8 @@ def place_labels(
     times as far (joined to the point by a thin leader line) are scored by the area the
     label's box would share with the boxes already placed plus a penalty for every marker
     (of ``groups`` and of ``avoid``) under it and a small one for the far ring; the least
-    covered spot wins (ties: the first, upper right). Call it after everything is drawn and the limits are
-    set; the axes' aspect is applied first.
+    covered spot wins (ties: the first, upper right). Call it after everything is drawn and
+    the limits are set; the axes' aspect is applied first. Cost: O(labels² x 16), numpy.
 
     Parameters
     ----------
@@ -204,11 +204,12 @@ def place_labels(
                         py + dy * gap - {"bottom": 0.0, "top": height, "center": height / 2}[va]
                     )
                     box = (left, bottom, left + width, bottom + height)
-                    score = cost + sum(
-                        max(0.0, min(box[2], b[2]) - max(box[0], b[0]))
-                        * max(0.0, min(box[3], b[3]) - max(box[1], b[1]))
-                        for b in placed
-                    )
+                    score = cost
+                    if placed:
+                        boxes = np.asarray(placed)
+                        wide = np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
+                        high = np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
+                        score += float(np.sum(np.clip(wide, 0, None) * np.clip(high, 0, None)))
                     inside = (
                         (marker_xy[:, 0] > box[0] - 2 * scale)
                         & (marker_xy[:, 0] < box[2] + 2 * scale)
@@ -315,8 +316,8 @@ def plot_paths(
 ) -> Any:
     """Paths over the field's quiver; optional heading arrows (the thrust direction psi).
 
-    Each path's start is a small filled dot drawn over its goal, a large open square (the
-    two coincide in a round trip i -> j, j -> i). Axes in metres.
+    Starts are small filled dots drawn over the goals, large open squares, so in a round
+    trip (i -> j, j -> i: each start is the other path's goal) both show. Axes in metres.
 
     ``region`` defaults to the paths' bounding box grown by 10 %.
     """
