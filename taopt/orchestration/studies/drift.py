@@ -374,7 +374,11 @@ def plot_gaps(df: Any, column: str = "gap_pct", ax: Any = None, path: str | None
     }
     ax.set_xlabel("method (box: quartiles, whiskers: 1.5 IQR, circles: outliers)")
     ax.set_ylabel(labels.get(column, column))
-    size_text = ", ".join(f"n = {n} targets, m = {m} vehicles" for n, m in sizes)
+    size_text = (
+        f"n = {sizes[0][0]} targets, m = {sizes[0][1]} vehicles"
+        if len(sizes) == 1
+        else "sizes " + ", ".join(f"n{n}m{m}" for n, m in sizes)
+    )
     scenarios = int(df["scenario"].nunique()) if len(df) else 0
     what = {
         "gap_pct": f"true gap to the optimum, certified in {certified} of {scenarios} scenarios",
