@@ -5,10 +5,22 @@ from __future__ import annotations
 import json
 
 
+def thesis_order(family: object) -> tuple[int, bool, str]:
+    """Sort key: the family's chapter as its title names it ("(chapter 3)", "(§6.2)"), a
+    chapter's certification family (the SOP) after its main one, then the kind: chapters
+    2, 3, 4, 5, SOP, 6. A title naming no chapter sorts last."""
+    import re
+
+    title = str(getattr(family, "title", ""))
+    found = re.search(r"chapter (\d+)|§(\d+)", title)
+    chapter = int(found.group(1) or found.group(2)) if found else 99
+    return chapter, "certification" in title, str(getattr(family, "kind", ""))
+
+
 def generated_pages() -> dict[str, str]:
     """The pages written from the family specs and the schema folder at every build (not kept
-    in git): ``kinds.md`` (one row per family: kind, problem type, payload, bounds, methods,
-    studies) and ``schemas.md`` (every shipped schema). A new family appears in both without
+    in git): ``kinds.md`` (one row per family in the thesis's order: kind, problem type,
+    payload, bounds, methods, studies) and ``schemas.md`` (every shipped schema). A new family appears in both without
     an edit to any page."""
     from taopt import schemas
     from taopt.orchestration.pipeline import available_methods
@@ -16,7 +28,7 @@ def generated_pages() -> dict[str, str]:
     from taopt.result import payload_schemas
 
     rows = []
-    for family in sorted(families(), key=lambda f: f.kind):
+    for family in sorted(families(), key=thesis_order):
         bounds = ", ".join(
             f"`{name}` ({'valid' if b.valid else 'as printed'}, {b.side})"
             for name, b in family.bounds.items()
@@ -41,7 +53,7 @@ def generated_pages() -> dict[str, str]:
             "",
             *[
                 line
-                for family in sorted(families(), key=lambda f: f.kind)
+                for family in sorted(families(), key=thesis_order)
                 for line in (
                     f"## `{family.kind}`",
                     "",

@@ -7,6 +7,8 @@ every plot of taopt live here:
 * :func:`check_output` — refuse an output file of the wrong kind before any work;
 * :func:`legend_outside` — the legend right of (or below) the axes, never over the data;
 * :func:`label_points` — ids (``t0``, ``v0``, ...) written next to points;
+* :func:`place_labels` — the same, each label on the side where it covers the fewest others;
+* :func:`dodge` — a small sideways shift per series, so equal values do not hide markers;
 * :func:`schematic_layout` — 2-D positions for a problem given only by a cost matrix;
 * :func:`save` — PNG with the outside legend kept in the picture.
 """
@@ -45,6 +47,18 @@ def method_style(method: str, k: int = 0) -> dict[str, Any]:
     fixed = registered_style(str(method)) or _VARIANT_STYLES.get(str(method))
     linestyle, marker = fixed or (LINESTYLES[k % len(LINESTYLES)], MARKERS[k % len(MARKERS)])
     return {"linestyle": linestyle, "marker": marker}
+
+
+def dodge(k: int, count: int, span: float, share: float = 0.02) -> float:
+    """Sideways shift of the ``k``-th of ``count`` overlaid series: ``share`` of ``span`` apart.
+
+    Series that take equal values (two heuristics both at the optimum) would hide one
+    another's markers; shifted by a few per cent of the axis (``span``, in data units),
+    centred on the true x, each stays visible. Say so in the axis label or caption.
+    """
+    if count <= 1:
+        return 0.0
+    return (k - (count - 1) / 2.0) * share * span
 
 
 def check_output(path: str | os.PathLike[str] | None, suffix: str, option: str) -> None:
@@ -118,6 +132,110 @@ def label_points(
         )
         for name, (x, y) in zip(names, np.asarray(points, dtype=float), strict=True)
     ]
+
+
+def place_labels(
+    ax: Any,
+    groups: Sequence[tuple[Any, Sequence[str], dict[str, Any]]],
+    avoid: Any = None,
+    distance: float = 5.0,
+) -> list[Any]:
+    """Write ids next to points, each on the side where it covers the fewest others.
+
+    Greedy placement in display space: for each point in turn, eight candidate spots
+    around it (``distance`` points away: upper right, lower right, ...) and eight three
+    times as far (joined to the point by a thin leader line) are scored by the area the
+    label's box would share with the boxes already placed plus a penalty for every marker
+    (of ``groups`` and of ``avoid``) under it and a small one for the far ring; the least
+    covered spot wins (ties: the first, upper right). Call it after everything is drawn and
+    the limits are set; the axes' aspect is applied first. Cost: O(labels² x 16), numpy.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    groups : sequence of (points, names, style)
+        ``(N, 2)`` positions in data units, their N labels and the ``annotate`` keywords
+        (``fontsize``, ``color``, ...) for that group.
+    avoid : (K, 2) array, optional
+        Further markers that labels should not cover (e.g. unlabelled stops).
+    distance : float
+        Gap between a point and its label, in points.
+
+    Returns
+    -------
+    list of matplotlib Text
+        One per name, in the order given.
+    """
+    ax.apply_aspect()
+    to_display = ax.transData.transform
+    scale = ax.figure.dpi / 72.0  # display pixels per point
+    anchors = [np.asarray(points, dtype=float).reshape(-1, 2) for points, _, _ in groups]
+    markers = [to_display(a) for a in anchors if len(a)]
+    if avoid is not None and len(avoid):
+        markers.append(to_display(np.asarray(avoid, dtype=float).reshape(-1, 2)))
+    marker_xy = np.vstack(markers) if markers else np.zeros((0, 2))
+    # (dx, dy) unit directions and the matching text alignment, upper right first
+    sides = [
+        (1, 1, "left", "bottom"),
+        (1, -1, "left", "top"),
+        (-1, 1, "right", "bottom"),
+        (-1, -1, "right", "top"),
+        (1, 0, "left", "center"),
+        (-1, 0, "right", "center"),
+        (0, 1, "center", "bottom"),
+        (0, -1, "center", "top"),
+    ]
+    placed: list[tuple[float, float, float, float]] = []
+    texts = []
+    for points, (_, names, style) in zip(anchors, groups, strict=True):
+        style = {"fontsize": 8, "zorder": 7, **style}
+        size = float(style["fontsize"]) * scale
+        for (x, y), name in zip(points, names, strict=True):
+            px, py = to_display([[x, y]])[0]
+            width, height = 0.6 * size * len(str(name)), 1.0 * size
+            best, best_score, best_box = (1, 1, "left", "bottom", 1.0), np.inf, None
+            # the near ring first; a ring three times as far (with a leader line) costs a
+            # little more, so a label leaves its point only to get out of a cluster
+            for ring, cost in ((1.0, 0.0), (3.0, 0.15 * width * height)):
+                for dx, dy, ha, va in sides:
+                    gap = ring * distance * scale / (np.sqrt(2.0) if dx and dy else 1.0)
+                    left = px + dx * gap - {"left": 0.0, "right": width, "center": width / 2}[ha]
+                    bottom = (
+                        py + dy * gap - {"bottom": 0.0, "top": height, "center": height / 2}[va]
+                    )
+                    box = (left, bottom, left + width, bottom + height)
+                    score = cost
+                    if placed:
+                        boxes = np.asarray(placed)
+                        wide = np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
+                        high = np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
+                        score += float(np.sum(np.clip(wide, 0, None) * np.clip(high, 0, None)))
+                    inside = (
+                        (marker_xy[:, 0] > box[0] - 2 * scale)
+                        & (marker_xy[:, 0] < box[2] + 2 * scale)
+                        & (marker_xy[:, 1] > box[1] - 2 * scale)
+                        & (marker_xy[:, 1] < box[3] + 2 * scale)
+                    )
+                    score += float(inside.sum()) * width * height / 4
+                    if score < best_score - 1e-9:
+                        best, best_score, best_box = (dx, dy, ha, va, ring), score, box
+            dx, dy, ha, va, ring = best
+            gap = ring * distance / (np.sqrt(2.0) if dx and dy else 1.0)
+            placed.append(best_box)
+            leader = {"arrowstyle": "-", "lw": 0.5, "color": style.get("color", "0.3")}
+            texts.append(
+                ax.annotate(
+                    str(name),
+                    (float(x), float(y)),
+                    textcoords="offset points",
+                    xytext=(dx * gap, dy * gap),
+                    ha=ha,
+                    va=va,
+                    arrowprops=leader if ring > 1 else None,
+                    **style,
+                )
+            )
+    return texts
 
 
 def schematic_layout(cost: Any, seed: int = 0) -> np.ndarray:
@@ -198,6 +316,9 @@ def plot_paths(
 ) -> Any:
     """Paths over the field's quiver; optional heading arrows (the thrust direction psi).
 
+    Starts are small filled dots drawn over the goals, large open squares, so in a round
+    trip (i -> j, j -> i: each start is the other path's goal) both show. Axes in metres.
+
     ``region`` defaults to the paths' bounding box grown by 10 %.
     """
     if isinstance(paths, Path):
@@ -214,8 +335,10 @@ def plot_paths(
         color = colors[k % len(colors)]
         label = labels[k] if labels is not None else f"t = {path.time:.2f} s ({path.method})"
         ax.plot(path.xy[:, 0], path.xy[:, 1], "-", color=color, lw=2, label=label)
-        ax.plot(*path.start, "o", color=color)
-        ax.plot(*path.goal, "s", color=color)
+        # a round trip starts where the other path ends: the goal is a large open square
+        # under, the start a small filled dot over it, so both stay visible
+        ax.plot(*path.goal, "s", color=color, ms=12, mfc="none", mew=1.8, zorder=4, gid="goal")
+        ax.plot(*path.start, "o", color=color, ms=6, mec="white", zorder=5, gid="start")
         if headings and len(path.xy) > 2:
             step = max(1, len(path.xy) // 8)
             sel = slice(0, None, step)
@@ -228,8 +351,11 @@ def plot_paths(
                 width=0.004,
                 alpha=0.6,
             )
-    ax.plot([], [], "o", color="0.3", label="start")
-    ax.plot([], [], "s", color="0.3", label="goal")
+    ax.plot([], [], "o", color="0.3", ms=6, mec="white", label="start")
+    ax.plot([], [], "s", color="0.3", ms=12, mfc="none", mew=1.8, label="goal")
+    if not ax.get_title():
+        speeds = ", ".join(sorted({f"{p.speed:g}" for p in paths}))
+        ax.set_title(f"minimum-time paths in the drift field, speed {speeds} m/s", fontsize=10)
     legend_outside(ax, "below", ncol=2)
     return ax
 

@@ -76,6 +76,51 @@ def test_every_page_is_in_a_toctree() -> None:
     assert not missing, f"pages in no toctree of docs/index.md: {missing}"
 
 
+def _chapter(text: str) -> tuple[int, bool]:
+    """(chapter, is a certification family) named in a title: "(chapter 3)", "(§6.2 ...)"."""
+    found = re.search(r"chapter (\d+)|§(\d+)", text)
+    assert found, f"no chapter named in {text!r}"
+    return int(found.group(1) or found.group(2)), "certification" in text or "SOP" in text
+
+
+def test_families_are_listed_in_the_thesis_order() -> None:
+    """The index's family pages and the generated kinds.md run chapter 2, 3, 4, 5, SOP, 6."""
+    import importlib.util
+
+    block = re.search(r":caption: Problem families\n(.*?)```", _toctree_entries(), re.DOTALL)
+    entries = [e for e in re.findall(r"^(families/[\w-]+)$", block.group(1), re.MULTILINE)]
+    pages = sorted(p.stem for p in (DOCS / "families").glob("*.md"))
+    assert sorted(e.split("/")[1] for e in entries) == pages  # every page listed by name
+    titles = [
+        next(
+            line
+            for line in (DOCS / f"{e}.md").read_text(encoding="utf-8").splitlines()
+            if line.startswith("# ")
+        )
+        for e in entries
+    ]
+    chapters = [_chapter(t)[0] for t in titles]
+    assert chapters == sorted(chapters), titles
+    spec = importlib.util.spec_from_file_location("generated", DOCS / "generated.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    kinds = re.findall(r"^\| `(\w+)` \| ([^|]+) \|", module.generated_pages()["kinds.md"], re.M)
+    order = [_chapter(title) for _, title in kinds]
+    assert order == sorted(order), kinds
+    assert [k for k, _ in kinds][-1] == "budgeted_problem"  # chapter 6, after the SOP
+
+
+def test_notebook_titles_share_one_style() -> None:
+    """Every notebook opens with "# Chapter N — ..." (one style, the chapter it teaches)."""
+    import json
+
+    for path in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        first = "".join(next(c for c in cells if c["cell_type"] == "markdown")["source"])
+        title = first.splitlines()[0]
+        assert re.fullmatch(r"# Chapter \d(, §\d\.\d)? — [a-z].+", title), f"{path.name}: {title}"
+
+
 # ------------------------------------------------------------------ the built site, in Chromium
 def _browser():
     """Headless Chromium driven by Debian's chromedriver (never a downloaded driver)."""

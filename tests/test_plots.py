@@ -274,6 +274,225 @@ def test_study_plots_are_labelled():
             readable(ax)
 
 
+# -- issue 30, item 13: plots a user would look at --------------------------------------------
+def marker_x(ax, label):
+    """The x data of the line labelled ``label``."""
+    (line,) = [x for x in ax.lines if x.get_label() == label]
+    return np.asarray(line.get_xdata(), dtype=float)
+
+
+def test_gantt_draws_one_drone_bar_per_sortie_and_landings_as_ticks():
+    """The drone row is one bar per sortie (S_p to R_p) and two ticks per sortie at t_j, R_p."""
+    from taopt.delivery import DeliveryInstance
+    from taopt.delivery.evaluate import timeline
+    from taopt.delivery.plot import plot_gantt
+
+    instance = DeliveryInstance.load(taopt.__path__[0] + "/data/delivery_example_20.json")
+    solution = taopt.solve(instance, "NIA")
+    line = timeline(instance, solution.plan)
+    ax = plot_gantt(instance, solution, method="NIA")
+    by_gid = {c.get_gid(): c for c in ax.collections if c.get_gid()}
+    bars = by_gid["drone sorties"].get_paths()
+    assert len(bars) == len(solution.plan.order) == 20
+    starts = sorted(float(b.vertices[:, 0].min()) for b in bars)
+    ends = sorted(float(b.vertices[:, 0].max()) for b in bars)
+    np.testing.assert_allclose(starts, np.sort(line.launch_time))
+    np.testing.assert_allclose(ends, np.sort(line.recovery_time))
+    for gid, times in (
+        ("customer landings", line.service_time),
+        ("truck landings", line.recovery_time),
+    ):
+        ticks = [float(seg[0, 0]) for seg in by_gid[gid].get_segments()]
+        np.testing.assert_allclose(sorted(ticks), np.sort(times))
+    # nothing else is drawn in the drone row (no stripe per flight, landing and wait)
+    drone_row = [c for c in ax.collections if c.get_gid() is None and len(c.get_paths())]
+    assert all(float(p.vertices[:, 1].min()) > 0.3 for c in drone_row for p in c.get_paths())
+    readable(ax, ids=[str(j) for j in solution.plan.order], categorical="y")
+
+
+def test_plan_map_labels_of_20_customers_do_not_collide():
+    """On the 20-customer map no two customer or stop labels overlap (their drawn boxes)."""
+    from taopt.delivery import DeliveryInstance
+    from taopt.delivery.plot import plot_plan
+
+    instance = DeliveryInstance.load(taopt.__path__[0] + "/data/delivery_example_20.json")
+    ax = plot_plan(instance, taopt.solve(instance, "NIA"), method="NIA")
+    ax.figure.draw_without_rendering()
+    labels = [t for t in ax.texts if re.fullmatch(r"\d+ \(#\d+\)|\d+|s\d+", t.get_text())]
+    assert len(labels) >= 20
+    boxes = [t.get_window_extent() for t in labels]
+    clashes = [
+        (labels[a].get_text(), labels[b].get_text())
+        for a in range(len(boxes))
+        for b in range(a + 1, len(boxes))
+        if boxes[a].overlaps(boxes[b])
+    ]
+    assert not clashes, f"labels drawn over each other: {clashes}"
+
+
+def delivery_rows(instances=1, ratios=(0.3, 0.6, 0.9)):
+    """A delivery study frame: NIA, MMA and GA equal (all optimal) at every ratio."""
+    return pd.DataFrame(
+        [
+            {"instance": i, "ratio": r, "method": m, "q": 1.4, "makespan": 100.0}
+            for i in range(instances)
+            for r in ratios
+            for m in ("GA", "MMA", "NIA")
+        ]
+    )
+
+
+@pytest.mark.parametrize(("instances", "words"), [(1, "1 instance x 3"), (4, "4 instances x 3")])
+def test_delivery_study_title_counts_the_plotted_instances(instances, words):
+    """The title names the instances plotted (one instance at 3 L/L0 values: "1 instance")."""
+    from taopt.orchestration.studies.delivery import plot_study
+
+    ax = plot_study(delivery_rows(instances), "q")
+    assert f"({words} L/L0 values)" in ax.get_title()
+    readable(ax)
+
+
+def test_delivery_study_markers_of_equal_methods_do_not_overlap():
+    """GA, MMA and NIA at the same mean are drawn at distinct x (dodged), each near its L/L0."""
+    from taopt.orchestration.studies.delivery import plot_study
+
+    ax = plot_study(delivery_rows(), "q")
+    xs = [marker_x(ax, m) for m in ("GA", "MMA", "NIA")]
+    for a in range(3):
+        np.testing.assert_allclose(xs[a], [0.3, 0.6, 0.9], atol=0.05)
+        for b in range(a + 1, 3):
+            assert np.all(np.abs(xs[a] - xs[b]) > 1e-3)
+    assert "shifted" in ax.get_xlabel()
+
+
+def test_comm_run_draws_the_range_r_around_each_start():
+    """plot_run draws a circle of radius r around every vehicle start, labelled with r."""
+    from matplotlib.patches import Circle
+
+    from taopt.comm.plot import plot_run
+
+    problem = taopt.CommProblem.load(EXAMPLES / "comm_problem.json")
+    ax = plot_run(problem, taopt.solve(problem, "DAA"))
+    circles = [p for p in ax.patches if isinstance(p, Circle)]
+    assert len(circles) == problem.m
+    for circle, start in zip(circles, problem.vehicles, strict=True):
+        assert circle.get_radius() == pytest.approx(problem.comm_range)
+        np.testing.assert_allclose(circle.center, start)
+    texts = [t.get_text() for t in ax.texts] + [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(f"r = {problem.comm_range:g} m" in t for t in texts)
+
+
+def test_comm_study_bytes_axis_is_in_the_tables_unit():
+    """The bytes panel plots 10^5 bytes (as Table 4.2 and bytes_table), with no 1e7 offset."""
+    from taopt.orchestration.studies.comm import bytes_table, plot_study
+
+    table = pd.DataFrame(
+        [
+            {"n": 30, "m": 6, "A": 2, "r": r, "method": m, "q": 1.2, "bytes": 3.0e7 + r * 1e5}
+            for r in (1.0, 100.0)
+            for m in ("DAA", "HDA", "CAA")
+        ]
+    )
+    figure = plot_study(table)
+    bytes_ax = figure.axes[1]
+    assert "(10^5 bytes)" in bytes_ax.get_ylabel()
+    plotted = np.concatenate([line.get_ydata() for line in bytes_ax.lines])
+    printed = bytes_table(table).to_numpy().ravel()
+    np.testing.assert_allclose(np.sort(plotted), np.sort(printed))
+    figure.draw_without_rendering()
+    assert bytes_ax.yaxis.get_offset_text().get_text() == ""
+    for ax in figure.axes:
+        readable(ax)
+
+
+def test_budgeted_panels_are_titled_by_measure_and_methods_distinguishable():
+    """Each panel's title says its measure; MC and EVM, equal here, differ in style and x."""
+    from taopt.orchestration.studies.budgeted import plot_study
+
+    table = pd.DataFrame(
+        [
+            {
+                "size": "n6m2",
+                "level": level,
+                "method": method,
+                "scenarios": 3,
+                "gap_pct": 1.5,
+                "vs_best_pct": 1.5,
+                "no_answer_pct": 0.0,
+            }
+            for level in ("none", "Q1", "T1.2")
+            for method in ("MC", "EVM", "GA", "exact")
+        ]
+    )
+    figure = plot_study(table, exclude=("exact",))
+    titles = [ax.get_title() for ax in figure.axes]
+    assert len(set(titles)) == 3 and not any(t == "n6m2" for t in titles)
+    assert "true gap" in titles[0] and "no feasible answer" in titles[2]
+    assert "3 scenarios" in figure.get_suptitle()
+    for ax in figure.axes:
+        looks = {
+            m: (ax.lines[k].get_linestyle(), ax.lines[k].get_marker())
+            for k, m in enumerate(("MC", "EVM", "GA"))
+        }
+        assert len(set(looks.values())) == 3
+        assert np.all(np.abs(marker_x(ax, "MC") - marker_x(ax, "EVM")) > 1e-3)
+        readable(ax, legend=ax is figure.axes[-1], categorical="x")
+
+
+def test_drift_plot_shows_the_true_gap_to_the_certified_optimum():
+    """plot_gaps draws 100 (f / f_o - 1) per heuristic (not f / f_a), and says so."""
+    from taopt.orchestration.studies.drift import plot_gaps
+
+    rows = [
+        {
+            "scenario": s,
+            "n": 5,
+            "m": 2,
+            "method": m,
+            "objective": f,
+            "status": st,
+            "bound": np.nan,
+            "f_a": 80.0,
+            "valid_bound": 70.0,
+        }
+        for s in range(3)
+        for m, f, st in (("MC", 110.0 + s, "feasible"), ("exact", 100.0, "optimal"))
+    ]
+    ax = plot_gaps(pd.DataFrame(rows))
+    assert "f_o" in ax.get_ylabel() and "(%)" in ax.get_ylabel()
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["MC"]
+    medians = [
+        line
+        for line in ax.lines
+        if len(line.get_ydata()) == 2 and line.get_ydata()[0] == line.get_ydata()[1]
+    ]
+    assert any(line.get_ydata()[0] == pytest.approx(11.0) for line in medians)
+    assert "certified in 3 of 3 scenarios" in ax.get_title()
+
+
+def test_navigate_start_is_drawn_over_the_goal():
+    """In a round trip each start (a dot) lies over the other path's goal (an open square)."""
+    from taopt.fields import UniformField
+    from taopt.navigation import min_time_path
+    from taopt.plot import plot_paths
+
+    field = UniformField(0.2, 0.0)
+    there = min_time_path(field, (10.0, 20.0), (80.0, 70.0), method="closed_form")
+    back = min_time_path(field, (80.0, 70.0), (10.0, 20.0), method="closed_form")
+    ax = plot_paths(field, [there, back], labels=["i -> j", "j -> i"])
+    starts = [x for x in ax.lines if x.get_gid() == "start"]
+    goals = [x for x in ax.lines if x.get_gid() == "goal"]
+    assert len(starts) == len(goals) == 2
+    for start in starts:
+        under = [g for g in goals if np.allclose(g.get_xydata(), start.get_xydata())]
+        assert under, "each start of a round trip sits on the other path's goal"
+        assert start.get_zorder() > under[0].get_zorder()
+        assert start.get_marker() != under[0].get_marker()
+        assert start.get_markersize() < under[0].get_markersize()
+        assert under[0].get_markerfacecolor() == "none" or under[0].get_markerfacecolor()[3] == 0
+    readable(ax)
+
+
 # -- taopt solve --plot on every file kind ------------------------------------------------------
 FAST = {
     "assignment_problem": "exact",

@@ -22,7 +22,15 @@ from typing import Any
 
 import numpy as np
 
-from taopt.plot import LINESTYLES, _axes, label_points, legend_outside, method_style, plot_field
+from taopt.plot import (
+    LINESTYLES,
+    _axes,
+    dodge,
+    label_points,
+    legend_outside,
+    method_style,
+    plot_field,
+)
 
 __all__ = [
     "capability_colours",
@@ -125,6 +133,19 @@ def plot_scene(
         label_points(targets, [t.id for t in instance.targets], ax)
         starts = np.array([v.start for v in instance.vehicles])
         label_points(starts, [v.id for v in instance.vehicles], ax, fontweight="bold")
+    if not ax.get_title():
+        ax.set_title(
+            f"{getattr(instance, 'name', '') or 'instance'}: "
+            + ", ".join(
+                f"{len(items)} {word}{'' if len(items) == 1 else 's'}"
+                for items, word in (
+                    (instance.targets, "target"),
+                    (instance.vehicles, "vehicle"),
+                    (instance.obstacles, "obstacle"),
+                )
+            ),
+            fontsize=10,
+        )
     legend_outside(ax)
     _save(ax, path)
     return ax
@@ -162,10 +183,15 @@ def plot_grid_paths(
         colour = colours[k % len(colours)]
         label = labels[k] if labels is not None else f"t = {time:.2f} s"
         ax.plot(line[:, 0], line[:, 1], "-", color=colour, lw=2, label=label)
-        ax.plot(*line[0], "o", color=colour)
-        ax.plot(*line[-1], "s", color=colour)
-    ax.plot([], [], "o", color="0.3", label="start")
-    ax.plot([], [], "s", color="0.3", label="goal")
+        # as taopt.plot.plot_paths: the goal an open square under, the start a dot over it
+        ax.plot(*line[-1], "s", color=colour, ms=12, mfc="none", mew=1.8, zorder=4, gid="goal")
+        ax.plot(*line[0], "o", color=colour, ms=6, mec="white", zorder=5, gid="start")
+    ax.plot([], [], "o", color="0.3", ms=6, mec="white", label="start")
+    ax.plot([], [], "s", color="0.3", ms=12, mfc="none", mew=1.8, label="goal")
+    if not ax.get_title():
+        ax.set_title(
+            f"shortest grid paths round the obstacles (cell {graph.cell:g} m)", fontsize=10
+        )
     legend_outside(ax)
     _save(ax, path)
     return ax
@@ -411,16 +437,21 @@ def plot_quality(
     data = table if instance is None else table[table["instance"] == instance]
     ax = _axes(ax, (5.0, 4.0))
     methods = sorted(set(data["method"]))
+    counts = data["A"].astype(float) if len(data) else np.zeros(1)
+    span = float(counts.max() - counts.min()) or 1.0
     for (name, method), rows in data.groupby(["instance", "method"], sort=True):
         rows = rows.sort_values("A")
         label = method if instance is not None else f"{name} {method}"
-        style = method_style(method, methods.index(method))
+        k = methods.index(method)
+        style = method_style(method, k)
         colour = "black" if method == "exact" else None
-        ax.plot(rows["A"], rows[column], color=colour, label=label, **style)
+        # a heuristic at the optimum would hide the exact line's markers: shift sideways
+        shift = dodge(k, len(methods), span, share=0.015)
+        ax.plot(rows["A"] + shift, rows[column], color=colour, label=label, **style)
     from matplotlib.ticker import MaxNLocator
 
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # |A| is a count
-    ax.set_xlabel("|A|, number of capabilities (count)")
+    ax.set_xlabel("|A|, capabilities (count); methods shifted a little")
     ax.set_ylabel(
         {
             "q_thesis": "mean q = f / f^a (3.15), ratio (1)",

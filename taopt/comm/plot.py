@@ -15,7 +15,7 @@ import numpy as np
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories
 from taopt.errors import InstanceError
-from taopt.plot import LINESTYLES, legend_outside, method_style
+from taopt.plot import LINESTYLES, dodge, legend_outside, method_style
 
 _MARKERS = "so^DvP*Xhp<>"
 
@@ -82,6 +82,55 @@ def plot_points(problem: CommProblem, ax: Any, labels: bool = True) -> Any:
     return ax
 
 
+def draw_range(problem: CommProblem, ax: Any, centres: Any = None) -> list[Any]:
+    """Circles of radius r (the communication range of (4.3)) around each vehicle's start.
+
+    Two vehicles can talk while each is inside the other's circle. The circles are dashed,
+    in the vehicle's colour, with ``gid="communication range"``; one is labelled
+    ``r = ... m`` and the legend says what they are. The axes keep the limits of the data
+    (a range wider than the field is clipped, not zoomed out to).
+
+    Returns
+    -------
+    list of matplotlib.patches.Circle
+    """
+    from matplotlib.patches import Circle
+
+    r = float(problem.comm_range)
+    centres = problem.vehicles if centres is None else centres
+    ax.autoscale_view()
+    xlim, ylim = ax.get_xlim(), ax.get_ylim()
+    circles = []
+    for j, (x, y) in enumerate(np.asarray(centres, dtype=float)):
+        circle = Circle(
+            (x, y),
+            r,
+            fill=False,
+            ls="--",
+            lw=0.9,
+            edgecolor=_colour(j),
+            alpha=0.7,
+            gid="communication range",
+            label=f"communication range r = {r:g} m\n(around the starts)" if j == 0 else None,
+        )
+        ax.add_patch(circle)
+        circles.append(circle)
+    if circles:
+        x, y = np.asarray(centres, dtype=float)[0]
+        ax.annotate(
+            f"r = {r:g} m",
+            (x + r * np.cos(np.pi / 4), y + r * np.sin(np.pi / 4)),
+            fontsize=7,
+            color=_colour(0),
+            xytext=(2, 2),
+            textcoords="offset points",
+            annotation_clip=True,
+        )
+    ax.set_xlim(xlim)
+    ax.set_ylim(ylim)
+    return circles
+
+
 def plot_run(
     problem: CommProblem,
     solution: Any,
@@ -92,10 +141,11 @@ def plot_run(
     path: str | os.PathLike[str] | None = None,
     method: str = "",
 ) -> Any:
-    """A run: targets, start points, the driven paths by vehicle, and the links.
+    """A run: targets, start points, the driven paths by vehicle, the links and the range r.
 
     Each vehicle has its own colour and line style; the legend (outside the axes) gives
-    each vehicle's ability and driven length, positions are in metres.
+    each vehicle's ability and driven length, positions are in metres. A dashed circle of
+    radius r around each start shows the communication range (:func:`draw_range`).
 
     Parameters
     ----------
@@ -144,13 +194,14 @@ def plot_run(
     if groups:
         ax.plot([], [], ":", color="0.4", label="links when a group connects")
     plot_points(problem, ax, labels=labels)
+    draw_range(problem, ax)
     if title is None:
         name = method or getattr(solution, "method", "") or "run"
         total = float(tr.lengths().sum())
         title = f"{name}: f = {total:.1f} m, r = {problem.comm_range:g} m"
         info = getattr(solution, "info", {})
         if "bytes" in info:
-            title += f", {info['bytes']:.3g} bytes"
+            title += f", {info['bytes']:,.0f} bytes relayed"
     ax.set_title(title, fontsize=10)
     legend_outside(ax, fontsize=7)
     _save(ax, path)
@@ -287,13 +338,16 @@ def plot_range_curves(
     :func:`taopt.orchestration.studies.comm.summary`).
     """
     ax = _axes(ax, (7.0, 4.5))
+    ranges = summary["r"].astype(float) if len(summary) else np.zeros(1)
+    span = float(ranges.max() - ranges.min()) or 1.0
     for a_index, (attributes, part) in enumerate(summary.groupby("A")):
         for k, method in enumerate(algorithms):
             rows = part[part["method"] == method].sort_values("r")
             if rows.empty:
                 continue
+            # DAA and HDA often agree: shift each algorithm sideways so neither hides
             ax.plot(
-                rows["r"],
+                rows["r"] + dodge(k, len(algorithms), span, share=0.01),
                 rows[value],
                 ms=5,
                 mfc="white" if method == "HDA" else None,
@@ -301,8 +355,10 @@ def plot_range_curves(
                 label=f"{method}, |A| = {attributes}",
                 **method_style(method, k),
             )
-    ax.set_xlabel("communication range r (m)")
+    ax.set_xlabel("communication range r (m); algorithms shifted sideways a little")
     ax.set_ylabel(ylabel or value)
+    if not ax.get_title():
+        ax.set_title(f"mean {value} against the communication range r", fontsize=10)
     ax.grid(alpha=0.3)
     legend_outside(ax, "below", fontsize=7, ncol=len(algorithms))
     _save(ax, path)
@@ -312,6 +368,7 @@ def plot_range_curves(
 __all__ = [
     "plot_points",
     "plot_run",
+    "draw_range",
     "plot_pair",
     "animate_run",
     "check_frames",

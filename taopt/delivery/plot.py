@@ -13,7 +13,7 @@ import numpy as np
 
 from taopt.delivery.evaluate import timeline
 from taopt.delivery.instance import DeliveryInstance, Plan
-from taopt.plot import _axes, label_points, legend_outside
+from taopt.plot import _axes, label_points, legend_outside, place_labels
 
 
 def _plan_of(plan: Any) -> Plan:
@@ -74,20 +74,36 @@ def plot_plan(
             *pts.T, ls="--", color="tab:orange", lw=1.2, zorder=4, label="drone" if p == 0 else None
         )
     ax.scatter(*customers.T, s=30, color="tab:red", zorder=5, label="customer")
+    ax.scatter(*stops[instance.depot], marker="s", s=80, color="black", zorder=6, label="depot")
+    ax.plot([], [], " ", label="labels: customer j (#sortie),\nstop s<i>")
+    ax.set_aspect("equal")
     if label_customers:
         position = {j: p for p, j in enumerate(plan.order)}
         tags = [
             f"{j}" if j not in position else f"{j} (#{position[j] + 1})"
             for j in range(len(customers))
         ]
-        label_points(customers, tags, ax, offset=(3, 3), fontsize=7, color="darkred")
         used = sorted(set(plan.launch) | set(plan.landing) | {instance.depot})
-        label_points(
-            stops[used], [f"s{i}" for i in used], ax, offset=(3, -9), fontsize=6, color="navy"
+        crowded = len(customers) > 12  # smaller type on a crowded map
+        # labels over the lines, on a light patch that keeps them legible
+        patch = {"boxstyle": "square,pad=0.05", "facecolor": "white", "alpha": 0.6, "lw": 0}
+        place_labels(
+            ax,
+            [
+                (
+                    customers,
+                    tags,
+                    {"fontsize": 6.5 if crowded else 7, "color": "darkred", "bbox": patch},
+                ),
+                (
+                    stops[used],
+                    [f"s{i}" for i in used],
+                    {"fontsize": 5.5 if crowded else 6, "color": "navy", "bbox": patch},
+                ),
+            ],
+            avoid=stops,
+            distance=4.5,
         )
-    ax.scatter(*stops[instance.depot], marker="s", s=80, color="black", zorder=6, label="depot")
-    ax.plot([], [], " ", label="labels: customer j (#sortie),\nstop s<i>")
-    ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     who = f"{method} plan" if method else "plan"
@@ -104,9 +120,11 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
     """Truck and drone timelines of a plan.
 
     Truck row: repositioning with the drone aboard (blue), carrying legs while the
-    drone is out (light blue), waiting for the drone (grey). Drone row: flights (orange),
-    landing time τ at the customer and on the truck (red), waiting at the landing stop
-    (grey); customer indices are written at their service times t_j.
+    drone is out (light blue), waiting for the drone (grey). Drone row: one bar per
+    sortie p, from its launch S_p to its recovery R_p (the drone back aboard), with two
+    ticks: the landing at the customer, ending at its service time t_j (red), and the
+    landing on the truck, ending at R_p (black); each landing takes τ. Customer indices
+    are written above their ticks t_j.
 
     The dotted line is the makespan (5.1), ``f = max_j t_j``: the time the last customer
     is served (chapter 5 minimises "the time when the last customer is served"). The
@@ -116,10 +134,12 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
     Returns
     -------
     matplotlib Axes
+        The drone row's bars are one collection with
+        ``gid="drone sorties"`` (one rectangle per sortie); the landing ticks are the
+        collections with ``gid="customer landings"`` and ``gid="truck landings"``.
     """
     plan = _plan_of(plan)
     line = timeline(instance, plan)
-    tau = instance.service_time
     ax = _new_ax(ax, (10, 2.8))
     truck_y, drone_y, h = 1.0, 0.0, 0.6
 
@@ -129,16 +149,37 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
 
     for _from, _to, depart, arrive, kind in line.truck_legs:
         bar(truck_y, depart, arrive, "tab:blue" if kind == "reposition" else "lightsteelblue")
+    for p in range(len(plan.order)):
+        # the truck waits at the landing stop for the drone, then while it lands (τ)
+        bar(truck_y, line.truck_arrival[p], line.recovery_time[p], "0.75")
+    sorties = [
+        (float(S), float(R - S)) for S, R in zip(line.launch_time, line.recovery_time, strict=True)
+    ]
+    if sorties:
+        # one rectangle per sortie, white edges so back-to-back sorties stay apart
+        ax.broken_barh(
+            sorties,
+            (drone_y - h / 2, h),
+            facecolors="tab:orange",
+            edgecolors="white",
+            linewidth=1.5,
+            gid="drone sorties",
+        )
+        ticks = (drone_y - h / 2, drone_y + h / 2)
+        ax.vlines(
+            line.service_time, *ticks, colors="tab:red", linewidth=2.0, gid="customer landings"
+        )
+        ax.vlines(line.recovery_time, *ticks, colors="black", linewidth=1.2, gid="truck landings")
     for p, j in enumerate(plan.order):
-        S, t, back = line.launch_time[p], line.service_time[p], line.drone_return[p]
-        truck, R = line.truck_arrival[p], line.recovery_time[p]
-        bar(truck_y, truck, R, "0.75")  # waits for the drone, then while it lands (τ)
-        bar(drone_y, S, t - tau, "tab:orange")
-        bar(drone_y, t - tau, t, "tab:red")
-        bar(drone_y, t, back, "tab:orange")
-        bar(drone_y, back, R - tau, "0.75")
-        bar(drone_y, R - tau, R, "tab:red")
-        ax.annotate(str(j), (t, drone_y + h / 2), ha="center", va="bottom", fontsize=7)
+        ax.annotate(
+            str(j),
+            (line.service_time[p], drone_y + h / 2),
+            ha="center",
+            va="bottom",
+            fontsize=7,
+            zorder=5,  # over the makespan line, on a white patch: a "1" is no dotted line
+            bbox={"boxstyle": "square,pad=0.1", "facecolor": "white", "edgecolor": "none"},
+        )
     end = max([line.makespan, *line.recovery_time]) if len(plan.order) else line.makespan
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -146,9 +187,10 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
     legend = [
         Patch(color="tab:blue", label="truck drives, drone aboard"),
         Patch(color="lightsteelblue", label="truck drives, drone out"),
-        Patch(color="0.75", label="waiting"),
-        Patch(color="tab:orange", label="drone flies"),
-        Patch(color="tab:red", label="landing time τ"),
+        Patch(color="0.75", label="truck waits for the drone"),
+        Patch(color="tab:orange", label="drone sortie: launch S_p to recovery R_p"),
+        Line2D([], [], color="tab:red", lw=2.0, label="landing at customer j ends: t_j"),
+        Line2D([], [], color="black", lw=1.2, label="landing on the truck ends: R_p"),
         Line2D([], [], color="k", ls=":", label="makespan (5.1): last customer served"),
     ]
     ax.axvline(line.makespan, color="k", ls=":", lw=1.2)
@@ -165,7 +207,7 @@ def plot_gantt(instance: DeliveryInstance, plan: Any, ax: Any = None, method: st
         ax.axvspan(
             line.makespan, end, facecolor="none", edgecolor="0.6", hatch="//", lw=0, zorder=0
         )
-        if end - line.makespan > 0.15 * end:  # room for the words inside the hatched part
+        if end - line.makespan > 0.3 * end:  # room for the words inside the hatched part
             ax.annotate(
                 "drone returns and lands:\nnot counted in f",
                 (line.makespan, 1.62),

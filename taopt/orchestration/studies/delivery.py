@@ -329,6 +329,19 @@ def thesis_table(df: pd.DataFrame, value: str = "makespan") -> pd.DataFrame:
     return df.pivot_table(index="method", columns="ratio", values=value, aggfunc="mean")
 
 
+def _counted(df: pd.DataFrame) -> str:
+    """What a study plot averages over: "3 instances x 6 L/L0 values" (as plotted)."""
+
+    def plural(count: int, word: str) -> str:
+        return f"{count} {word}{'' if count == 1 else 's'}"
+
+    column = "instance" if "instance" in df else "scenario" if "scenario" in df else None
+    count = int(df[column].nunique()) if column else len(df)
+    ratios = int(df["ratio"].nunique()) if "ratio" in df else 0
+    text = plural(count, "instance" if column == "instance" else "scenario")
+    return f"{text} x {plural(ratios, 'L/L0 value')}" if ratios else text
+
+
 def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | None = None) -> Any:
     """Mean ``value`` ("q", "makespan", "gap_to_optimum", ...) per method against L/L0.
 
@@ -340,19 +353,25 @@ def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | N
     """
     from matplotlib.figure import Figure
 
-    from taopt.plot import legend_outside, method_style
+    from taopt.plot import dodge, legend_outside, method_style
 
     if ax is None:
         ax = Figure(figsize=(7, 4)).add_subplot()
     table = thesis_table(df, value)
+    ratios = table.columns.astype(float)
+    span = float(ratios.max() - ratios.min()) if len(ratios) > 1 else 1.0
     for k, (method, row) in enumerate(table.iterrows()):
+        # methods with equal means (two at the optimum) would hide each other's markers
+        shift = dodge(k, len(table), span, share=0.012)
         ax.plot(
-            row.index.astype(float),
+            row.index.astype(float) + shift,
             row.to_numpy(dtype=float),
             label=str(method),
+            ms=6,
+            mfc="white" if k % 2 else None,
             **method_style(str(method), k),
         )
-    ax.set_xlabel("flight range L / L0, ratio (1)")
+    ax.set_xlabel("flight range L / L0, ratio (1); methods shifted sideways a little")
     ax.set_ylabel(
         {
             "q": "mean q = f / f_a (5.19), ratio (1)",
@@ -362,8 +381,10 @@ def plot_study(df: pd.DataFrame, value: str = "q", ax: Any = None, path: str | N
             "gap_to_optimum": "mean f / f_o - 1, ratio (1)",
         }.get(value, value)
     )
-    n_scenarios = df["scenario"].nunique() if "scenario" in df else len(df)
-    ax.set_title(f"mean {value} per method against L / L0 ({n_scenarios} scenarios)", fontsize=10)
+    ax.set_title(
+        f"mean {value} per method against L / L0 ({_counted(df)})",
+        fontsize=10,
+    )
     legend_outside(ax)
     ax.grid(alpha=0.3)
     if path is not None:
