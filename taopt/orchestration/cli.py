@@ -26,7 +26,6 @@ bytecodes.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -88,21 +87,24 @@ def parse_field(spec: str) -> Any:
         return LinearField(np.reshape(a, (2, 2)))
     from pathlib import Path
 
-    path = Path(key)
+    from taopt.examples import resolve
+
+    path = Path(resolve(key))
     if path.suffix.lower() == ".json" or path.exists():
         if not path.exists():
             raise InstanceError(f"field file {key!r} does not exist")
-        try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError as exc:
-            raise InstanceError(f"{key}: not valid JSON ({exc})") from None
-        if isinstance(data, dict) and data.get("kind") == "instance":
-            from taopt.instance import Instance
+        from taopt.io import load_json
+        from taopt.schemas import naming
 
-            return Instance.from_dict(data).field
-        if isinstance(data, dict) and "field" in data and "kind" not in data:
-            return None if data["field"] is None else field_from_dict(data["field"])
-        return field_from_dict(data)
+        data = load_json(path)  # the one reader: size and depth guards, errors name the file
+        with naming(str(path)):
+            if isinstance(data, dict) and data.get("kind") == "instance":
+                from taopt.instance import Instance
+
+                return Instance.from_dict(data, source=str(path)).field
+            if isinstance(data, dict) and "field" in data and "kind" not in data:
+                return None if data["field"] is None else field_from_dict(data["field"])
+            return field_from_dict(data)
     raise InstanceError(f"unknown field {spec!r}; {FIELD_HELP}")
 
 

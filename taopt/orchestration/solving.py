@@ -34,13 +34,22 @@ import pandas as pd
 
 from taopt.bounds import lower
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError
+from taopt.examples import resolve as resolve_example
+from taopt.fields import FIELD_KINDS
 from taopt.instance import Instance
-from taopt.io import load_json
+from taopt.io import atomic_path, check_writable, check_writable_file, load_json
 from taopt.limits import check_memory, navigation_bytes
 from taopt.orchestration.pipeline import default_methods, no_optimum_note, solve
-from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
+from taopt.registry import (
+    certifying_method,
+    families,
+    family_for_kind,
+    family_of,
+    file_kinds,
+    get_method,
+)
 from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
-from taopt.schemas import naming
+from taopt.schemas import naming, show
 from taopt.scoring import evaluate
 
 logger = logging.getLogger("taopt")
@@ -80,7 +89,9 @@ def problem_from_instance(instance: Instance, progress: bool = True) -> Any:
 
 
 def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Instance | None]:
-    """(problem, instance) from a JSON file; ``instance`` is None unless it is an instance."""
+    """(problem, instance) from a JSON file (or ``example:NAME``, :mod:`taopt.examples`);
+    ``instance`` is None unless it is an instance."""
+    path = resolve_example(path)
     data = load_json(path)
     if not isinstance(data, dict):
         raise InstanceError(f"{path}: a problem file holds a JSON object")
@@ -94,14 +105,28 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
                 f"{len(vehicles)} vehicles ({points:,} points)",
             )
         instance = Instance.from_dict(data, source=str(path))
-        return problem_from_instance(instance, progress=progress), instance
-    if data.get("kind") == "solution":  # e.g. `taopt verify PROBLEM SOLUTION`, swapped
+        with naming(str(path)):  # e.g. a target inside an obstacle: name the file
+            return problem_from_instance(instance, progress=progress), instance
+    kind = data.get("kind")
+    if kind == "solution":  # e.g. `taopt verify PROBLEM SOLUTION`, swapped
         raise InstanceError(
             f"{path} is a solution file (kind 'solution'), not a problem; `taopt verify` takes "
             "the solution first, then the problem it solves"
         )
-    family = family_for_kind(data.get("kind"))
+    if kind in FIELD_KINDS:
+        raise InstanceError(
+            f"{path} is a drift field file (kind {kind!r}), not a problem; use it as "
+            f"`taopt navigate --field {path} --from X,Y --to X,Y`, or as the field of an "
+            "instance file"
+        )
+    if kind not in file_kinds():
+        known = ", ".join(["instance", *sorted(file_kinds())])
+        raise InstanceError(
+            f"{path}: unknown file kind {show(kind)}; a problem file's kind is one of: {known} "
+            "('taopt kinds' describes them)"
+        )
     with naming(str(path)):  # the schema's and the constructor's errors name the file
+        family = family_for_kind(kind)
         return family.load(data), None
 
 
@@ -265,7 +290,13 @@ def solve_file(
     """
     out = out or sys.stdout
     tic = time.perf_counter()
+    path = resolve_example(path)
     _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
+    # output folders writable before the solve, not after it (a full disk, a read-only folder)
+    if save:
+        check_writable(save, "--out folder")
+    check_writable_file(plot, "--plot")
+    check_writable_file(gantt, "--gantt")
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
     table, solutions = method_table(
@@ -281,8 +312,7 @@ def solve_file(
     failed = [m for m, s in solutions.items() if s.status == ERROR]
     unanswered = [m for m, s in solutions.items() if s.status == NO_SOLUTION]
     if save:
-        folder = Path(save)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = check_writable(save, "--out folder")
         for method, sol in solutions.items():
             if sol.status != ERROR:
                 sol.save(folder / f"{method}.json")
@@ -291,12 +321,16 @@ def solve_file(
         plot = gantt = None  # nothing to draw
     if plot:
         name, draw = next(iter(family.plots.items()))
-        draw(problem, best.solution, plot, instance=instance, method=best.method)
+        with atomic_path(plot) as tmp:  # no half-written PNG; an error names the path
+            draw(problem, best.solution, str(tmp), instance=instance, method=best.method)
         print(f"{name} plot of {best.method} written to {plot}", file=out)
         for line in _route_lines(best, instance, problem):
             print(line, file=out)
     if gantt:
-        family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
+        with atomic_path(gantt) as tmp:
+            family.plots["gantt"](
+                problem, best.solution, str(tmp), instance=instance, method=best.method
+            )
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
     if unanswered:
         print(
@@ -539,6 +573,8 @@ def verify_file(
         its ``payload_kind``.
     """
     out = out or sys.stdout
+    solution_path = resolve_example(solution_path)
+    problem_path = resolve_example(problem_path)
     problem, _ = load_problem_file(problem_path, progress=progress)
     solution = load_certificate(solution_path)
     family = family_of(problem)
