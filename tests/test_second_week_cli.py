@@ -9,8 +9,11 @@ from __future__ import annotations
 import errno
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from taopt import examples
@@ -203,3 +206,195 @@ def test_example_prefix_in_solve_from_another_folder(tmp_path, capsys, monkeypat
     monkeypatch.chdir(tmp_path)
     assert main(["solve", "example:budgeted_problem", "--methods", "MC", "--quiet"]) == 0
     assert "budgeted_problem.json" in capsys.readouterr().out
+
+
+def test_example_prefix_in_verify_and_navigate(capsys):
+    """verify and navigate read example:NAME too (the solution example checks against its problem)."""
+    code = main(["verify", "example:solution", "example:assignment_problem"])
+    assert code in (0, 3)
+    assert "VALID" in capsys.readouterr().out
+    code = main(["navigate", "--field", "example:field", "--from", "10,10", "--to", "20,20"])
+    assert code == 0 and "t(i, j)" in capsys.readouterr().out
+
+
+# -- friction 8: a study's defaults are the methods installed here ----------------------------------
+
+
+def test_budgeted_defaults_leave_out_missing_peers(monkeypatch, tmp_path):
+    """Without pyvrp/ortools the budgeted study's defaults omit them; naming one writes nothing."""
+    import taopt.registry as registry
+    from taopt.orchestration.studies import budgeted
+
+    monkeypatch.setattr(registry, "_installed", lambda package: package not in ("pyvrp", "ortools"))
+    assert budgeted.default_methods() == ["MC", "EVM", "GA", "exact"]
+    out = tmp_path / "study"
+    with pytest.raises(InstanceError, match="'pyvrp' needs pyvrp, not installed"):
+        budgeted.budgeted_study("n6m2", "none", 1, methods="MC,pyvrp", out_dir=out)
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_budgeted_study_runs_without_peers(tmp_path):
+    """`taopt study budgeted --sizes n6m2 --levels none,Q1 --scenarios 1` runs with pyvrp and
+    ortools unimportable (a sitecustomize shim), from a folder other than the clone."""
+    shim = tmp_path / "shim"
+    shim.mkdir()
+    (shim / "sitecustomize.py").write_text(
+        "import sys\nfor name in ('pyvrp', 'ortools'):\n    sys.modules[name] = None\n"
+    )
+    out = tmp_path / "budgeted"
+    argv = ["--sizes", "n6m2", "--levels", "none,Q1", "--scenarios", "1", "--out", str(out)]
+    done = subprocess.run(
+        [sys.executable, "-m", "taopt", "study", "budgeted", *argv, "--quiet"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=dict(os.environ, PYTHONPATH=f"{shim}{os.pathsep}{ROOT}", MPLBACKEND="Agg"),
+    )
+    assert done.returncode == 0, done.stderr
+    assert " MC " in done.stdout and " exact " in done.stdout and "pyvrp" not in done.stdout
+
+
+# -- friction 10: which methods run ---------------------------------------------------------------
+
+
+def test_method_names_are_case_insensitive(capsys):
+    """--methods mc,evm runs MC and EVM; taopt.solve takes 'mc' and reports 'MC'."""
+    import taopt
+    from taopt.routing.problem import AssignmentProblem
+
+    assert main(["solve", "example:assignment_problem", "--methods", "mc,evm", "--quiet"]) == 0
+    rows = [line.split()[0] for line in capsys.readouterr().out.splitlines()[2:4]]
+    assert rows == ["MC", "EVM"]
+    problem = AssignmentProblem.load(examples.path("assignment_problem"))
+    assert taopt.solve(problem, "mc").method == "MC"
+
+
+def test_methods_all_is_every_available_method():
+    """--methods all is taopt.available_methods (what taopt kinds lists), in its order."""
+    import taopt
+    from taopt.orchestration.solving import load_problem_file, resolve_methods
+
+    problem, _ = load_problem_file("example:delivery_instance", progress=False)
+    assert resolve_methods(problem, ("all",)) == taopt.available_methods(problem)
+    assert {"subset-dp", "milp", "ILS"} <= set(resolve_methods(problem, "ALL"))
+
+
+def test_default_set_is_named_under_the_table(capsys, monkeypatch):
+    """With no --methods the notes name the default set, what is left out and why."""
+    monkeypatch.setenv("COLUMNS", "100")
+    assert main(["solve", "example:delivery_instance", "--quiet"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "default methods: exact, NIA, MMA, SMMA, GA" in out
+    assert "subset-dp, milp (other exact models" in out and "--methods all" in out
+
+
+# -- friction 11: one grammar -----------------------------------------------------------------------
+
+
+def test_python_defaults_equal_the_cli_defaults():
+    """taopt.solve, solve_file and the solve command share seed and time limit (taopt.defaults)."""
+    import inspect
+
+    import taopt
+    from taopt import defaults
+    from taopt.orchestration.cli import build_parser
+    from taopt.orchestration.solving import solve_file
+
+    args = build_parser(with_studies=False).parse_args(["solve", "x.json"])
+    for function in (taopt.solve, solve_file):
+        parameters = inspect.signature(function).parameters
+        assert parameters["seed"].default == args.seed == defaults.SEED
+        assert parameters["time_limit"].default == args.time_limit == defaults.TIME_LIMIT
+
+
+def test_simulate_takes_methods_and_warns_on_algorithm(capsys):
+    """simulate --methods hda runs HDA; the old --algorithm still works with a deprecation line."""
+    assert main(["simulate", "example:comm_problem", "--methods", "hda"]) == 0
+    assert capsys.readouterr().out.startswith("HDA")
+    assert main(["simulate", "example:comm_problem", "--algorithm", "CAA"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.startswith("CAA")
+    assert "--algorithm is deprecated" in captured.err and "--methods" in captured.err
+
+
+def test_study_counts_and_sizes_have_one_name(capsys):
+    """study drift takes --sizes (old --n/--m warn); study delivery's count is --scenarios."""
+    from taopt.orchestration.cli import build_parser
+    from taopt.orchestration.studies.drift import _cli_sizes
+
+    parser = build_parser()
+    args = parser.parse_args(["study", "drift", "--sizes", "n5m2,n6m2", "--out", "x"])
+    assert _cli_sizes(args) == ["n5m2", "n6m2"]
+    assert capsys.readouterr().err == ""
+    args = parser.parse_args(["study", "drift", "--n", "5", "--m", "2", "--out", "x"])
+    assert _cli_sizes(args) == ["n5m2"]
+    assert "--n is deprecated" in capsys.readouterr().err
+    args = parser.parse_args(["study", "delivery", "--scenarios", "3", "--out", "x"])
+    assert args.scenarios == 3
+    args = parser.parse_args(["study", "delivery", "--instances", "4", "--out", "x"])
+    assert args.scenarios == 4 and "--instances is deprecated" in capsys.readouterr().err
+    for study in ("drift", "delivery", "capability", "comm", "budgeted"):
+        assert parser.parse_args(["study", study, "--out", "x"]).scenarios >= 1
+
+
+# -- friction 12: readable output -------------------------------------------------------------------
+
+
+def test_table_fits_the_terminal_and_messages_become_notes():
+    """Every printed line of a table is within the terminal width; messages move to notes."""
+    import pandas as pd
+
+    from taopt.orchestration.solving import format_table, wrap_notes
+
+    table = pd.DataFrame(
+        {
+            "method": ["exact", "GA"],
+            "status": ["optimal", "error"],
+            "objective": [1.0, np.nan],
+            "gap_to_optimum": [0.0, np.nan],
+            "q_valid": [1.0, np.nan],
+            "q_thesis": [0.9, np.nan],
+            "seconds": [0.1, 0.2],
+            "message": ["", "SolverError: " + "a long reason " * 12],
+        }
+    )
+    text, notes = format_table(table, width=50)
+    assert max(len(line) for line in text.splitlines()) <= 50
+    assert "[1]" in text and "long reason" not in text
+    assert notes[0].startswith("[1] GA: SolverError: a long reason")
+    assert all(len(line) <= 50 for line in wrap_notes(notes, width=50))
+
+
+def test_ratio_columns_explained_in_help_and_footer(capsys):
+    """q_valid and q_thesis are explained in solve --help and under the table."""
+    assert main(["solve", "--help"]) == 0
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "q_valid = objective / the family's fast valid lower bound" in help_text
+    assert "q_thesis = objective / the thesis's Algorithm 1 value" in help_text
+    assert "example:NAME" in help_text and "budgeted_problem" in help_text
+    assert main(["solve", "example:assignment_problem", "--methods", "MC", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "q_valid = objective /" in out and "q_thesis = objective / thesis_mcga" in out
+
+
+def test_verify_exact_prints_the_gap_to_the_optimum(tmp_path, capsys):
+    """verify --exact prints the checked solution's gap to the optimum it re-solved."""
+    out = tmp_path / "sols"
+    assert main(["solve", "example:delivery_instance", "--methods", "NIA", "--out", str(out)]) == 0
+    capsys.readouterr()
+    code = main(["verify", str(out / "NIA.json"), "example:delivery_instance", "--exact"])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert "gap of the checked solution to the re-solved optimum 178.54" in text
+    assert "0.04514 %" in text
+
+
+def test_claims_shows_a_progress_bar_unless_quiet(capsys):
+    """taopt claims draws a progress bar on stderr; --quiet hides it."""
+    argv = ["claims", "--samples", "3", "--classes", "metric"]
+    assert main(argv) == 0
+    assert "instance" in capsys.readouterr().err
+    assert main([*argv, "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

@@ -540,7 +540,7 @@ def read_capped(where: Path, limit: int | None = None) -> bytes:
     file when it is longer, missing, a folder or unreadable."""
     limit = max_file_bytes() if limit is None else limit
     try:
-        with open(where, "rb") as handle:
+        with where.open("rb") as handle:
             chunks, size = [], 0
             while size <= limit:
                 chunk = handle.read(min(_CHUNK, limit + 1 - size))

@@ -56,6 +56,7 @@ import numpy as np
 import pandas as pd
 
 from taopt.budgeted.problem import BudgetedProblem
+from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
@@ -69,6 +70,7 @@ REFERENCE_TIME_LIMIT = 600.0
 __all__ = [
     "METHODS",
     "LEVELS",
+    "default_methods",
     "SPEC",
     "parse_level",
     "parse_size",
@@ -109,6 +111,14 @@ def parse_level(text: str) -> tuple[float, float]:
     if tau <= 0:
         raise InstanceError(f"level {text!r}: tau must be > 0")
     return s, tau
+
+
+def default_methods() -> list[str]:
+    """The study's default methods: :data:`METHODS` that are installed here (pyvrp and
+    ortools only with ``taopt[peers]``; :func:`taopt.available_methods`)."""
+    from taopt.orchestration.study import available_defaults
+
+    return available_defaults(BudgetedProblem, METHODS)
 
 
 def level_order(level: str) -> tuple[int, float, float]:
@@ -203,11 +213,11 @@ def budgeted_study(
     sizes: str | Sequence[str] = SIZES,
     levels: str | Sequence[str] = LEVELS,
     scenarios: int = 10,
-    methods: str | Sequence[str] = METHODS,
-    seed: int = 1,
+    methods: str | Sequence[str] | None = None,
+    seed: int = SEED,
     out_dir: str | os.PathLike = "budgeted-study",
     jobs: int = 1,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = TIME_LIMIT,
     peer_iterations: int = 2000,
     method_options: dict[str, dict] | None = None,
     progress: bool = True,
@@ -223,9 +233,10 @@ def budgeted_study(
         Level names (module docstring), in the order they should be plotted.
     scenarios : int
         Scenarios per (size, level); scenario k is the same drift scenario at every level.
-    methods : str or list of str
+    methods : str or list of str, optional
         Registered methods of BudgetedProblem ("MC", "EVM", "GA", "pyvrp", "ortools",
-        "exact").
+        "exact"; case-insensitive). Default: those of :data:`METHODS` installed here
+        (:func:`default_methods`: the peers only with ``taopt[peers]``).
     seed : int
         Study seed (scenario k has seed ``scenario_seed(seed, k)``).
     out_dir : path
@@ -264,7 +275,10 @@ def budgeted_study(
         parse_size(size)
     for level in levels:
         parse_level(level)
-    methods = _items(methods, "methods")
+    methods = default_methods() if methods is None else _items(methods, "methods")
+    from taopt.registry import get_method
+
+    methods = list(dict.fromkeys(get_method(BudgetedProblem, m).name for m in methods))
     scenarios = check_integer("scenarios", scenarios, 1)
     seed = check_integer("seed", seed, 0)
     peer_iterations = check_integer("peer_iterations", peer_iterations, 10)
@@ -452,9 +466,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--methods",
-        default=",".join(METHODS),
+        default=None,
         metavar="LIST",
-        help="comma-separated: MC,EVM,GA,pyvrp,ortools,exact",
+        help="comma-separated, case-insensitive: MC,EVM,GA,pyvrp,ortools,exact (default: "
+        "those installed here: MC,EVM,GA,exact, plus pyvrp,ortools with taopt[peers])",
     )
     parser.add_argument(
         "--peer-iterations",
@@ -482,10 +497,10 @@ def run(args: argparse.Namespace) -> int:
         args.levels,
         args.scenarios,
         methods=args.methods,
-        seed=getattr(args, "seed", 1),
+        seed=args.seed,
         out_dir=args.out,
         jobs=getattr(args, "jobs", 1),
-        time_limit=getattr(args, "time_limit", 60.0),
+        time_limit=args.time_limit,
         peer_iterations=args.peer_iterations,
         method_options=options,
         progress=not getattr(args, "quiet", False),

@@ -56,6 +56,7 @@ from taopt.capability.instances import (
     thesis_scenario,
 )
 from taopt.capability.problem import CapabilityProblem
+from taopt.defaults import SEED
 from taopt.errors import InstanceError
 from taopt.navigation.grid import NEIGHBOURHOODS
 from taopt.orchestration.cli import deprecated, folder
@@ -257,7 +258,7 @@ def capability_study(
     capabilities: Sequence[int] = CAPABILITIES,
     scenarios: int = 50,
     methods: str | Sequence[str] = METHODS,
-    seed: int = 1,
+    seed: int = SEED,
     out_dir: str | os.PathLike = "capability-study",
     jobs: int = 1,
     dask: str | None = None,

@@ -52,6 +52,7 @@ import pandas as pd
 from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
+from taopt.defaults import TIME_LIMIT
 from taopt.errors import InstanceError
 from taopt.orchestration.cli import deprecated, folder, method_list
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
@@ -342,7 +343,7 @@ def comm_study(
     seed: int = 0,
     jobs: int = 1,
     dask: str | None = None,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = TIME_LIMIT,
     progress: bool = True,
 ) -> pd.DataFrame:
     """Run a preset of §4.4 (resumable; one CSV ``<out>/comm.csv`` for every preset).

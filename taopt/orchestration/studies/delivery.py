@@ -56,12 +56,13 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import lower
+from taopt.defaults import SEED
 from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import folder, method_list, parse_numbers
+from taopt.orchestration.cli import deprecated, folder, method_list, parse_numbers
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 L0 = 1000.0
@@ -157,7 +158,7 @@ def delivery_study(
     instances: int = 10,
     ratios: Sequence[float] = DEFAULT_RATIOS,
     methods: Sequence[str] = DEFAULT_METHODS,
-    seed: int = 1,
+    seed: int = SEED,
     out_dir: str | Path = "delivery-study",
     jobs: int = 1,
     progress: bool = True,
@@ -387,8 +388,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
     )
     parser.add_argument(
-        "--instances", type=int, default=10, help="random instances per setup (a count)"
+        "--scenarios", type=int, default=10, help="random instances per setup (a count)"
     )
+    deprecated(parser, "--instances", "scenarios", "--scenarios N (a count)", type=int)
     parser.add_argument(
         "--methods",
         default="NIA,MMA,SMMA,GA",
@@ -430,7 +432,7 @@ def run(args: argparse.Namespace) -> int:
     )
     df = delivery_study(
         setup=args.setup,
-        instances=args.instances,
+        instances=args.scenarios,
         ratios=ratios,
         methods=method_list(args.methods) or (),
         seed=args.seed,
