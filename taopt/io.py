@@ -19,6 +19,7 @@ Example
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 from collections.abc import Iterator
@@ -93,19 +94,37 @@ def save_json(data: dict[str, Any], path: str | os.PathLike[str]) -> None:
         out.write(text)
 
 
-def check_writable(folder: str | os.PathLike[str], what: str = "output folder") -> Path:
-    """Create ``folder`` if needed and check a file can be created in it, before any work.
+def check_writable(
+    folder: str | os.PathLike[str], what: str = "output folder", create: bool = True
+) -> Path:
+    """Check that files can be created in ``folder``, before any work.
+
+    ``create=True`` makes the folder (parents too) and creates and removes a probe file in
+    it; ``create=False`` writes nothing: an existing folder is probed the same way (a file
+    created and removed at once), a missing one must sit under a writable existing folder.
 
     Returns the folder as a Path. Raises :class:`OutputError` naming it otherwise (a path
     under a file, a read-only folder, no space left for even an empty file).
     """
     where = Path(folder)
     try:
-        where.mkdir(parents=True, exist_ok=True)
-        probe = unique_temp(where / "probe")
-        with open(probe, "x", encoding="utf-8"):
-            pass
-        probe.unlink()
+        if create:
+            where.mkdir(parents=True, exist_ok=True)
+        if where.is_dir():
+            probe = unique_temp(where / "probe")
+            with open(probe, "x", encoding="utf-8"):
+                pass
+            probe.unlink()
+            return where
+        if where.exists():
+            raise NotADirectoryError(errno.ENOTDIR, "not a folder")
+        ancestor = where.absolute().parent
+        while not ancestor.exists():
+            ancestor = ancestor.parent
+        if not ancestor.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, f"{ancestor} is a file")
+        if not os.access(ancestor, os.W_OK | os.X_OK):
+            raise PermissionError(errno.EACCES, f"{ancestor} is not writable")
     except OSError as exc:
         detail = exc.strerror or str(exc) or type(exc).__name__
         raise OutputError(f"{what} {where}: cannot be written ({detail})") from None
@@ -113,11 +132,12 @@ def check_writable(folder: str | os.PathLike[str], what: str = "output folder") 
 
 
 def check_writable_file(path: str | os.PathLike[str] | None, what: str) -> None:
-    """:func:`check_writable` on the folder of an output file (nothing for None)."""
+    """:func:`check_writable` (``create=False``: nothing written) on the folder of an output
+    file; nothing for None."""
     if path is None:
         return
     parent = Path(path).parent
-    check_writable(parent if str(parent) else ".", f"{what}: folder")
+    check_writable(parent if str(parent) else ".", f"{what}: folder", create=False)
 
 
 def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:

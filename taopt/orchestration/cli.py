@@ -116,6 +116,14 @@ def parse_field(spec: str) -> Any:
     raise InstanceError(f"unknown field {spec!r}; {FIELD_HELP}")
 
 
+def terminal_width() -> int:
+    """Columns of the terminal (``COLUMNS``, else 100 when not a terminal): printed tables are
+    wrapped to it (pandas' ``line_width``)."""
+    import shutil
+
+    return shutil.get_terminal_size((100, 24)).columns
+
+
 def folder(path: str) -> Any:
     """``pathlib.Path(path)``, imported when a command writes files (not for ``--version``)."""
     from pathlib import Path
@@ -249,7 +257,7 @@ def cmd_claims(args: argparse.Namespace) -> int:
             progress=lambda _: bar.update(),
         )
     shown = [c for c in table.columns if c not in ("instance",)]
-    print(table[shown].to_string(index=False))
+    print(table[shown].to_string(index=False, line_width=terminal_width()))
     return 0
 
 
@@ -671,12 +679,15 @@ def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse an image or animation file of the wrong kind before any work starts."""
+    """Refuse an image or animation file of the wrong kind, or in a folder that cannot be
+    written, before any work starts (nothing is written by the check)."""
     for option, suffix in (("plot", ".png"), ("gantt", ".png"), ("animate", ".gif")):
         if getattr(args, option, None) is not None:
+            from taopt.io import check_writable_file
             from taopt.plot import check_output
 
             check_output(getattr(args, option), suffix, f"--{option}")
+            check_writable_file(getattr(args, option), f"--{option}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

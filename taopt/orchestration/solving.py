@@ -418,7 +418,7 @@ def solve_file(
     _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
     # output folders writable before the solve, not after it (a full disk, a read-only folder)
     if save:
-        check_writable(save, "--out folder")
+        check_writable(save, "--out folder", create=False)
     check_writable_file(plot, "--plot")
     check_writable_file(gantt, "--gantt")
     problem, instance = load_problem_file(path, progress=progress)

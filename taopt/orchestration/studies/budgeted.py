@@ -58,6 +58,7 @@ import pandas as pd
 from taopt.budgeted.problem import BudgetedProblem
 from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError
+from taopt.orchestration.cli import terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
@@ -508,7 +509,7 @@ def run(args: argparse.Namespace) -> int:
     )
     table = summarize(df)
     with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table.round(3).to_string(index=False))
+        print(table.round(3).to_string(index=False, line_width=terminal_width()))
     Path(args.out).mkdir(parents=True, exist_ok=True)
     table.to_csv(Path(args.out) / "summary.csv", index=False)
     if getattr(args, "plot", None):

@@ -59,7 +59,7 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.defaults import SEED
 from taopt.errors import InstanceError
 from taopt.navigation.grid import NEIGHBOURHOODS
-from taopt.orchestration.cli import deprecated, folder
+from taopt.orchestration.cli import deprecated, folder, terminal_width
 from taopt.orchestration.study import (
     Scenario,
     StudySpec,
@@ -175,10 +175,10 @@ def run(args: argparse.Namespace) -> int:
     table = summarize(df)
     shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
     with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table[shown].round(4).to_string())
+        print(table[shown].round(4).to_string(line_width=terminal_width()))
         for name in ("3.1", "3.2"):
             print(f"\nTable {name}, thesis beside taopt:")
-            print(thesis_comparison(df, name).round(4).to_string())
+            print(thesis_comparison(df, name).round(4).to_string(line_width=terminal_width()))
     table.to_csv(folder(args.out) / "summary.csv")
     if args.plot:
         plot_figures(df, path=args.plot)

@@ -54,7 +54,7 @@ from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
 from taopt.defaults import TIME_LIMIT
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import deprecated, folder, method_list
+from taopt.orchestration.cli import deprecated, folder, method_list, terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 ALGORITHMS = ("DAA", "HDA", "CAA")
@@ -144,12 +144,16 @@ def run(args: argparse.Namespace) -> int:
         print(preset.title)
         for n, m in preset.sizes:
             print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
-            print(q_table(table, n, m).round(4).to_string())
+            print(q_table(table, n, m).round(4).to_string(line_width=terminal_width()))
             if table["certified"].sum():
                 print("\nmean true gap f / f_o (certified scenarios)")
-                print(q_table(table, n, m, value="gap").round(4).to_string())
+                print(
+                    q_table(table, n, m, value="gap")
+                    .round(4)
+                    .to_string(line_width=terminal_width())
+                )
             print("\nmean bytes relayed (10^5 bytes)")
-            print(bytes_table(table, n, m).round(4).to_string())
+            print(bytes_table(table, n, m).round(4).to_string(line_width=terminal_width()))
     if args.plot:
         n, m = preset.sizes[0]
         plot_study(table, n, m, path=args.plot)

@@ -62,7 +62,7 @@ from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import deprecated, folder, method_list, parse_numbers
+from taopt.orchestration.cli import deprecated, folder, method_list, parse_numbers, terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 L0 = 1000.0
@@ -447,14 +447,16 @@ def run(args: argparse.Namespace) -> int:
     )
     with pd.option_context("display.width", 160, "display.max_columns", 20):
         print("average makespan f (5.1):")
-        print(thesis_table(df, "makespan").round(1).to_string())
+        print(thesis_table(df, "makespan").round(1).to_string(line_width=terminal_width()))
         print("\naverage q = f / f_a (5.19):")
-        print(thesis_table(df, "q").round(4).to_string())
+        print(thesis_table(df, "q").round(4).to_string(line_width=terminal_width()))
         print("\naverage run time (s):")
-        print(thesis_table(df, "runtime").round(3).to_string())
+        print(thesis_table(df, "runtime").round(3).to_string(line_width=terminal_width()))
         if df["optimum"].notna().any():
             print("\naverage gap to the optimum f / f_o - 1:")
-            print(thesis_table(df, "gap_to_optimum").round(4).to_string())
+            print(
+                thesis_table(df, "gap_to_optimum").round(4).to_string(line_width=terminal_width())
+            )
     print(f"\nrows: {folder(args.out) / f'delivery_{args.setup}.csv'}")
     if args.plot:
         plot_study(df, "q", path=args.plot)

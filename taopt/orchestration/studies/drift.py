@@ -44,7 +44,7 @@ import pandas as pd
 from taopt.bounds import arborescence, thesis_mcga
 from taopt.defaults import SEED
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import FIELD_HELP, deprecated, folder, parse_field
+from taopt.orchestration.cli import FIELD_HELP, deprecated, folder, parse_field, terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
@@ -126,9 +126,9 @@ def run(args: argparse.Namespace) -> int:
         )
         table = summarize(df)
         with pd.option_context("display.width", 160, "display.max_columns", 20):
-            print(table.round(4).to_string())
+            print(table.round(4).to_string(line_width=terminal_width()))
             print()
-            print(wilcoxon_pairs(df).round(4).to_string(index=False))
+            print(wilcoxon_pairs(df).round(4).to_string(index=False, line_width=terminal_width()))
         table.to_csv(out / "summary.csv")
         if plot:
             plot_gaps(df, path=plot)
