@@ -50,7 +50,7 @@ from typing import Any
 
 import pandas as pd
 
-from taopt.errors import InstanceError, TaoptError
+from taopt.errors import InstanceError, OutputError, TaoptError
 from taopt.io import load_json, save_json, unique_temp
 
 COMPLETE = "complete"
@@ -122,7 +122,7 @@ def folder_lock(folder: str | os.PathLike[str]) -> Iterator[Path]:
             "host": socket.gethostname(),
             "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
-        with contextlib.suppress(OSError):
+        with contextlib.suppress(OSError, OutputError):  # the note is a courtesy
             save_json(note, folder / OWNER)
         yield folder
     finally:

@@ -58,6 +58,7 @@ import pandas as pd
 from taopt.budgeted.problem import BudgetedProblem
 from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError
+from taopt.io import save_json
 from taopt.orchestration.cli import terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
@@ -164,9 +165,7 @@ def unlimited_reference(problem: Any, seed: int, cache_dir: str | None) -> dict[
     }
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = path.with_suffix(f".{os.getpid()}.tmp")
-        temporary.write_text(json.dumps(reference))
-        os.replace(temporary, path)
+        save_json(reference, path)  # atomic; a failed write leaves no temporary file
     return reference
 
 
