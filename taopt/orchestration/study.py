@@ -392,6 +392,15 @@ def _canonical(problem_type: Any, name: str) -> str:
         return name
 
 
+def canonical_methods(problem_type: Any, methods: str | Sequence[str]) -> list[str]:
+    """Method names (a comma string or a list) in their registered spelling, deduplicated:
+    ``"mc,ga"`` -> ``["MC", "GA"]``; an unknown name is an InstanceError listing the
+    family's methods (raised before anything is written)."""
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    return list(dict.fromkeys(get_method(problem_type, m).name for m in methods))
+
+
 def available_defaults(problem_type: Any, names: Sequence[str]) -> list[str]:
     """The methods of ``names`` installed here (a study's default methods: a peer whose
     package is missing is left out, not run to fail)."""

@@ -63,6 +63,7 @@ from taopt.orchestration.cli import deprecated, folder, terminal_width
 from taopt.orchestration.study import (
     Scenario,
     StudySpec,
+    canonical_methods,
     check_integer,
     check_positive,
     parse_integers,
@@ -300,9 +301,7 @@ def capability_study(
     pandas.DataFrame
         The runner's rows plus ``instance``, ``optimum`` and ``exact_bound``.
     """
-    if isinstance(methods, str):
-        methods = [m.strip() for m in methods.split(",") if m.strip()]
-    methods = list(dict.fromkeys(methods))
+    methods = canonical_methods(CapabilityProblem, methods)  # "dtaa" -> "DTAA"
     # every argument checked before anything is written (issue 15, item 7)
     scenarios = check_integer("scenarios", scenarios, 1)
     first_scenario = check_integer("first_scenario", first_scenario, 0)

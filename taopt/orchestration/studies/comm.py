@@ -119,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
     from taopt.orchestration.studies.comm import summary as summarize
 
     preset = PRESETS[args.preset]
-    named = list(method_list(args.methods) or preset.methods)
+    from taopt.registry import get_method
+
+    named = [get_method(CommProblem, m).name for m in method_list(args.methods) or preset.methods]
     exact = "exact" in named or args.exact_alias
     if not [m for m in named if m != "exact"]:
         raise InstanceError(
@@ -386,6 +388,9 @@ def comm_study(
     settings = {"seed": int(seed), "side": THESIS_SIDE}
     keys = preset_keys(spec, scenarios)
     chosen = list(methods) if methods is not None else list(spec.methods)
+    from taopt.registry import get_method
+
+    chosen = list(dict.fromkeys(get_method(CommProblem, m).name for m in chosen))  # "daa"->"DAA"
     frames = [
         run_study(
             SPEC,

@@ -63,7 +63,14 @@ from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
 from taopt.orchestration.cli import deprecated, folder, method_list, parse_numbers, terminal_width
-from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
+from taopt.orchestration.study import (
+    Scenario,
+    StudySpec,
+    canonical_methods,
+    check_integer,
+    check_positive,
+    run_study,
+)
 
 L0 = 1000.0
 GRID_K = 11
@@ -230,6 +237,7 @@ def delivery_study(
     if not ratios or not all(0 < r < math.inf for r in ratios):
         shown = ", ".join(f"{r:g}" for r in ratios)
         raise InstanceError(f"ratios must be positive and finite, got [{shown}]")
+    methods = canonical_methods(DeliveryInstance, methods)  # "smma" -> "SMMA"
     if time_limit is None and {"exact", "milp"} & set(methods):
         time_limit = EXACT_TIME_LIMIT
     settings = {

@@ -45,7 +45,14 @@ from taopt.bounds import arborescence, thesis_mcga
 from taopt.defaults import SEED
 from taopt.errors import InstanceError
 from taopt.orchestration.cli import FIELD_HELP, deprecated, folder, parse_field, terminal_width
-from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
+from taopt.orchestration.study import (
+    Scenario,
+    StudySpec,
+    canonical_methods,
+    check_integer,
+    run_study,
+    with_optimum,
+)
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
@@ -277,7 +284,7 @@ def parse_methods(methods: str | Sequence[str]) -> list[str]:
     methods = list(dict.fromkeys(methods))
     if not methods:
         raise InstanceError("no methods given")
-    return methods
+    return canonical_methods(AssignmentProblem, methods)  # "mc" -> "MC"
 
 
 def _with_ratios(df: pd.DataFrame) -> pd.DataFrame:
