@@ -398,3 +398,26 @@ def test_claims_shows_a_progress_bar_unless_quiet(capsys):
     assert "instance" in capsys.readouterr().err
     assert main([*argv, "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_full_disk_while_appending_rows_names_the_csv(tmp_path, monkeypatch):
+    """ENOSPC while a study appends rows: an OutputError naming the CSV; earlier rows kept."""
+    import builtins
+
+    from taopt.orchestration.studyio import ResultsStore
+
+    store = ResultsStore(tmp_path, "rows.csv", ["k", "v"], ["k"], {"seed": 0})
+    store.append([{"k": 0, "v": 1.0}])
+    real_open = builtins.open
+
+    def full(path, mode="r", *args, **kwargs):
+        if "a" in mode:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_open(path, mode, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", full)
+    with pytest.raises(OutputError, match=r"rows\.csv: cannot be written \(No space left"):
+        store.append([{"k": 1, "v": 2.0}])
+    monkeypatch.setattr(builtins, "open", real_open)
+    again = ResultsStore(tmp_path, "rows.csv", ["k", "v"], ["k"], {"seed": 0})
+    assert len(again.read()) == 1
