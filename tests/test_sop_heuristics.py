@@ -181,5 +181,6 @@ def test_failing_method_keeps_table(tmp_path, capsys):
     assert lines["exact"].split()[1:3] == ["optimal", "22"]
     for method in ("NIA", "MMA"):
         assert lines[method].split()[1] == "error"
-        assert f"SolverError: {method} found no feasible order" in lines[method]
+        note = lines[method].split()[-1]  # the message is a numbered note under the table
+        assert f"{note} {method}: SolverError: {method} found no feasible order" in out
     assert "failed: NIA, MMA" in out
