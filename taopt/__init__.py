@@ -172,4 +172,6 @@ _PUBLIC = [
     # subpackages used as namespaces
     "bounds",
     "navigation",
+    "examples",  # taopt.examples.path("budgeted_problem"): the packaged example files
+    "defaults",  # taopt.defaults.SEED, TIME_LIMIT: shared by taopt.solve and the CLI
 ]
