@@ -750,6 +750,8 @@ def _main(argv: Sequence[str] | None) -> int:
         raise
     except (TaoptError, ValueError, OSError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if isinstance(exc, OSError) and exc.filename and exc.strerror:  # name the file
+            message = f"{exc.filename}: {exc.strerror}"
         print(f"taopt {args.command}: error: {message}", file=sys.stderr)
         return 2
 
