@@ -421,3 +421,14 @@ def test_full_disk_while_appending_rows_names_the_csv(tmp_path, monkeypatch):
     monkeypatch.setattr(builtins, "open", real_open)
     again = ResultsStore(tmp_path, "rows.csv", ["k", "v"], ["k"], {"seed": 0})
     assert len(again.read()) == 1
+
+
+def test_file_of_another_kind_is_named_by_its_kind(capsys):
+    """A field file given where a solution or comm problem is expected says which kind it is."""
+    field = str(examples.path("field"))
+    assert main(["verify", field, "example:assignment_problem"]) == 2
+    assert _error_line(capsys).endswith(
+        f"{field}: expected a 'solution' file, got kind \"gridded\""
+    )
+    assert main(["simulate", field]) == 2
+    assert "expected a 'comm_problem' file, got kind \"gridded\"" in _error_line(capsys)

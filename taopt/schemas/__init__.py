@@ -386,17 +386,18 @@ def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
 def _check_header(data: dict[str, Any], kind: str, contents: dict[str, Any], source: str) -> None:
     """The schema version and the kind first, with messages that say what to do."""
     properties = contents.get("properties", {})
+    # the kind first: a file of another kind is named as such, whatever its version
+    if properties.get("kind", {}).get("const") == kind and "kind" in data:
+        if data["kind"] != kind:
+            raise InstanceError(
+                f"{source}: expected a {kind!r} file, got kind {show(data['kind'])}"
+            )
     if "schema_version" in properties:
         version = data.get("schema_version")
         if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
             raise InstanceError(
                 f"{source}: unknown schema_version {show(version)} for {kind} "
                 f"(this taopt reads {list(SUPPORTED_VERSIONS)})"
-            )
-    if properties.get("kind", {}).get("const") == kind and "kind" in data:
-        if data["kind"] != kind:
-            raise InstanceError(
-                f"{source}: expected a {kind!r} file, got kind {show(data['kind'])}"
             )
 
 
