@@ -432,3 +432,27 @@ def test_file_of_another_kind_is_named_by_its_kind(capsys):
     )
     assert main(["simulate", field]) == 2
     assert "expected a 'comm_problem' file, got kind \"gridded\"" in _error_line(capsys)
+
+
+def test_readme_snippets_with_files_run_from_another_folder(tmp_path, monkeypatch, capsys):
+    """The README's snippets that read a file run outside the clone (packaged examples)."""
+    import re
+    import shlex
+
+    text = (ROOT / "README.md").read_text()
+    monkeypatch.chdir(tmp_path)
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "examples.path" in b]
+    assert blocks, "the README lost its packaged-example snippet"
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {})
+    commands = [
+        shlex.split(line, comments=True)[1:]
+        for block in re.findall(r"```bash\n(.*?)```", text, re.S)
+        for line in block.splitlines()
+        if line.startswith("taopt ") and "example:" in line
+    ]
+    assert not [c for c in commands for w in c if w.startswith("taopt/data")]
+    quick = [c for c in commands if c[:2] in (["solve", "example:sop_problem"],)]
+    for argv in quick:
+        assert main([*argv, "--quiet"]) == 0
+    assert "infeasible" in capsys.readouterr().out
