@@ -57,10 +57,8 @@ def one(mode: list[str]) -> tuple[float, int, int]:
             "taopt.orchestration.cli",
             "study",
             "drift",
-            "--n",
-            "30",
-            "--m",
-            "4",
+            "--sizes",
+            "n30m4",
         ]
         argv += ["--scenarios", "400", "--methods", "GA", "--out", str(out), "--quiet", *mode]
         process = subprocess.Popen(

@@ -99,8 +99,10 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
-#: Subpackages that are public namespaces (``taopt.bounds.lower``, ``taopt.navigation...``).
-_NAMESPACES = ("bounds", "navigation")
+#: Subpackages that are public namespaces (``taopt.bounds.lower``, ``taopt.navigation...``,
+#: ``taopt.examples.path(NAME)``: the packaged example files, ``taopt.defaults``: SEED and
+#: TIME_LIMIT shared by taopt.solve and the CLI).
+_NAMESPACES = ("bounds", "navigation", "examples", "defaults")
 
 #: The public names that are not a family's (``taopt.__all__`` adds every family's exports):
 #: the entry points, the instance file, results and payloads, fields and errors of

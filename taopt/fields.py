@@ -291,6 +291,10 @@ def thesis_field(scale: float = 1e-3) -> LinearField:
     return LinearField(scale * np.array([[0.3, 0.2], [-0.2, 0.3]]))
 
 
+#: The ``kind`` of a drift-field file (``field.schema.json``).
+FIELD_KINDS = ("uniform", "linear", "gridded")
+
+
 def field_from_dict(data: dict[str, Any]) -> Field:
     """Inverse of ``Field.to_dict``, checked against ``field.schema.json`` first.
 
@@ -309,7 +313,7 @@ def field_from_dict(data: dict[str, Any]) -> Field:
     if not isinstance(data, dict) or "kind" not in data:
         raise InstanceError("field must be an object with a 'kind'")
     kind = data["kind"]
-    if kind not in ("uniform", "linear", "gridded"):
+    if kind not in FIELD_KINDS:
         raise InstanceError(f"unknown field kind {kind!r} (expected uniform, linear or gridded)")
     validate(data, "field")
     if kind == "gridded":

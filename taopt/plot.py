@@ -221,7 +221,8 @@ def place_labels(
                         best, best_score, best_box = (dx, dy, ha, va, ring), score, box
             dx, dy, ha, va, ring = best
             gap = ring * distance / (np.sqrt(2.0) if dx and dy else 1.0)
-            placed.append(best_box)
+            if best_box is not None:  # every candidate scores below inf: always set
+                placed.append(best_box)
             leader = {"arrowstyle": "-", "lw": 0.5, "color": style.get("color", "0.3")}
             texts.append(
                 ax.annotate(
@@ -389,11 +390,15 @@ def plot_points(
 
 
 def save(ax_or_fig: Any, path_out: str | os.PathLike[str], dpi: int = 120) -> None:
-    """Save the figure of an Axes (or a Figure) as PNG."""
+    """Save the figure of an Axes (or a Figure) as PNG, atomically (:func:`taopt.io.atomic_path`:
+    a failed write leaves no partial file and raises an OutputError naming ``path_out``)."""
+    from taopt.io import atomic_path
+
     fig = getattr(ax_or_fig, "figure", ax_or_fig)
     fig.tight_layout()
     # "tight" keeps a legend placed outside the axes inside the picture
-    fig.savefig(os.fspath(path_out), dpi=dpi, bbox_inches="tight")
+    with atomic_path(path_out) as tmp:
+        fig.savefig(os.fspath(tmp), dpi=dpi, bbox_inches="tight")
 
 
 def figure_2_1(

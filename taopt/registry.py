@@ -520,14 +520,21 @@ def method_names(problem: Any, category: str | None = None) -> list[str]:
 
 
 def get_method(problem: Any, name: str) -> Method:
-    """The method ``name`` for ``problem``, or InstanceError listing what exists."""
+    """The method ``name`` for ``problem``, or InstanceError listing what exists.
+
+    Names are matched case-insensitively (``"mc"`` is ``"MC"``, ``"Exact"`` is ``"exact"``);
+    the returned spec's ``name`` is the registered spelling.
+    """
     found = methods(problem)
-    if name not in found:
-        family = family_of(problem)
-        raise InstanceError(
-            f"no method {name!r} for {family.problem_type.__name__}; choose from {sorted(found)}"
-        )
-    return found[name]
+    if name in found:
+        return found[name]
+    folded = {key.casefold(): spec for key, spec in found.items()}
+    if isinstance(name, str) and name.strip().casefold() in folded:
+        return folded[name.strip().casefold()]
+    family = family_of(problem)
+    raise InstanceError(
+        f"no method {name!r} for {family.problem_type.__name__}; choose from {sorted(found)}"
+    )
 
 
 __all__ = [

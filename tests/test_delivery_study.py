@@ -50,7 +50,7 @@ def test_small_study_resumes_and_checks(tmp_path):
 
 def test_cli_prints_tables(tmp_path, capsys):
     """`taopt study delivery` prints the thesis's tables and the gap to the optimum."""
-    argv = ["study", "delivery", "--setup", "small", "--instances", "1", "--ratios", "0.3"]
+    argv = ["study", "delivery", "--setup", "small", "--scenarios", "1", "--ratios", "0.3"]
     argv += ["--methods", "NIA,subset-dp", "--out", str(tmp_path), "--quiet"]
     assert main(argv) == 0
     out = capsys.readouterr().out
@@ -61,7 +61,7 @@ def test_cli_prints_tables(tmp_path, capsys):
 def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
     """Through the real ``taopt`` entry point: the study prints its tables and draws q vs L/L0."""
     png = tmp_path / "q.png"
-    argv = ["study", "delivery", "--setup", "small", "--instances", "1", "--ratios", "0.3,0.9"]
+    argv = ["study", "delivery", "--setup", "small", "--scenarios", "1", "--ratios", "0.3,0.9"]
     argv += ["--methods", "MMA,subset-dp", "--out", str(tmp_path), "--quiet", "--plot", str(png)]
     assert main(argv) == 0
     assert png.stat().st_size > 0

@@ -610,10 +610,10 @@ def test_unreadable_files_name_the_path(tmp_path, monkeypatch):
     refused = tmp_path / "refused.json"
     refused.write_text("{}")
 
-    def deny(self):
+    def deny(self, *args, **kwargs):
         raise PermissionError(13, "Permission denied", str(self))
 
-    monkeypatch.setattr(Path, "read_bytes", deny)
+    monkeypatch.setattr(Path, "open", deny)  # the reader opens the file and reads with a cap
     with pytest.raises(InstanceError, match=r"refused\.json: cannot be read \(Permission denied\)"):
         Instance.load(refused)
 

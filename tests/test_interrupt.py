@@ -105,7 +105,7 @@ def test_verify_exact(tmp_path):
 
 def test_claims(tmp_path):
     """`taopt claims` over many samples (pure Python loops): Ctrl-C."""
-    args = ["claims", "--samples", "100000"]
+    args = ["claims", "--samples", "100000", "--quiet"]  # no progress bar on stderr
     assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "claims")
 
 

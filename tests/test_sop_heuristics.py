@@ -218,4 +218,6 @@ def test_no_order_is_a_no_solution_row(tmp_path, capsys):
     assert lines["exact"].split()[1] == "infeasible"
     for method in ("NIA", "MMA", "SMMA", "GA", "ILS"):
         assert lines[method].split()[1] == "no_solution"
-        assert "no feasible order exists" in lines[method]
+        note = lines[method].split()[-1]  # the reason is a numbered note under the table
+        assert f"{note} {method}:" in out
+        assert "no feasible order exists" in out.split(f"{note} {method}:")[1].splitlines()[0]

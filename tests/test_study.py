@@ -214,10 +214,8 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
         "taopt.orchestration.cli",
         "study",
         "drift",
-        "--n",
-        "8",
-        "--m",
-        "2",
+        "--sizes",
+        "n8m2",
     ]
     argv += ["--scenarios", "400", "--methods", "GA", "--ga-generations", "30"]
     argv += ["--field", "uniform:0.3,0.1", "--out", str(out), "--quiet", *mode]

@@ -119,7 +119,7 @@ def test_other_settings_in_same_folder_refused(full):
 def test_cli_and_plots(tmp_path, capsys):
     """`taopt study drift` prints the summary and the tests and writes the plot."""
     png = tmp_path / "gaps.png"
-    argv = ["study", "drift", "--n", "5", "--m", "2", "--scenarios", "2"]
+    argv = ["study", "drift", "--sizes", "n5m2", "--scenarios", "2"]
     argv += ["--methods", "MC,EVM,exact", "--seed", "3", "--out", str(tmp_path / "cli")]
     argv += ["--plot", str(png), "--quiet"]
     assert main(argv) == 0

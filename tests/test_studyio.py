@@ -12,7 +12,7 @@ import time
 import pandas as pd
 import pytest
 
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, OutputError
 from taopt.io import save_json, unique_temp
 from taopt.orchestration.studyio import LOCK, ResultsStore, StudyLocked, folder_lock, normalize_key
 
@@ -206,7 +206,7 @@ def test_failed_rewrite_leaves_no_temporary_file(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "replace", refuse)
     with pytest.raises(InstanceError, match=r"rows\.csv: cannot be rewritten"):
         open_store(tmp_path)
-    with pytest.raises(PermissionError):
+    with pytest.raises(OutputError, match=r"x\.json: cannot be written \(Operation not permitted"):
         save_json({"a": 1}, tmp_path / "x.json")
     assert not [p.name for p in tmp_path.iterdir() if "tmp" in p.name]
 

@@ -80,6 +80,11 @@ def _grid(instance: Instance, cell: float, neighbours: int, speed: float) -> Any
     )
 
 
+def _point_text(point: Any) -> str:
+    """``(50.0, 20.0)``: plain floats, not numpy's ``np.float64(50.0)``."""
+    return f"({', '.join(repr(float(x)) for x in point)})"
+
+
 def _check_points(instance: Instance, graph: Any = None) -> None:
     """Name a target or vehicle start inside an obstacle (or an obstacle's cell)."""
     names = [f"target {t.id!r}" for t in instance.targets]
@@ -90,7 +95,7 @@ def _check_points(instance: Instance, graph: Any = None) -> None:
         if inside.size:
             p = int(inside[0])
             raise InstanceError(
-                f"{names[p]} at {tuple(points[p])} lies inside obstacle {obstacle.id or k!r}"
+                f"{names[p]} at {_point_text(points[p])} lies inside obstacle {obstacle.id or k!r}"
             )
     if graph is not None:
         cells = graph.cell_index(points)
@@ -98,7 +103,7 @@ def _check_points(instance: Instance, graph: Any = None) -> None:
         if bad.size:
             p = int(bad[0])
             raise InstanceError(
-                f"{names[p]} at {tuple(points[p])} lies in a grid cell of side {graph.cell:g} "
+                f"{names[p]} at {_point_text(points[p])} lies in a grid cell of side {graph.cell:g} "
                 "that an obstacle overlaps; use a smaller cell"
             )
 

@@ -334,7 +334,7 @@ class GridGraph:
         dist, pred = dijkstra(self.graph, directed=True, indices=source, return_predecessors=True)
         if not np.isfinite(dist[target]):
             raise InstanceError(
-                f"{tuple(pts[1])} cannot be reached from {tuple(pts[0])} on the grid"
+                f"{tuple(pts[1].tolist())} cannot be reached from {tuple(pts[0].tolist())} on the grid"
             )
         order = [int(target)]
         while order[-1] != source:

@@ -4,13 +4,16 @@ Subcommands: ``navigate``, ``demo``, ``solve``, ``verify``, ``claims``, ``simula
 ``study NAME`` (one per study a family declares). One grammar: the same flag means the same
 thing, with the same default, in every command that has it:
 
-``--seed`` (default 0), ``--methods`` (a comma list; ``exact`` is a method),
-``--time-limit`` (seconds per exact or peer run, default :data:`TIME_LIMIT`), ``--out`` (the
-output folder), ``--jobs`` and ``--dask`` (parallel work), ``--plot`` (a PNG), ``--quiet``
-and ``-v`` (log level), ``--instances`` (a count; study sizes are ``--sizes``). Every
-option's help shows its default. Old spellings (``solve --save``, ``study comm --exact``,
-``study capability --instances SIZES``, ``simulate --save``) still work for one release and
-print a deprecation line on stderr.
+``--seed`` (default 0), ``--methods`` (a comma list, case-insensitive, ``all`` for every
+available method; ``exact`` is a method), ``--time-limit`` (seconds per exact or peer run,
+default :data:`TIME_LIMIT`), ``--out`` (the output folder), ``--jobs`` and ``--dask``
+(parallel work), ``--plot`` (a PNG), ``--quiet`` and ``-v`` (log level), ``--scenarios`` (a
+count of scenarios in every study), ``--sizes`` (study sizes ``nNmM``). The defaults of
+``--seed`` and ``--time-limit`` are the Python API's (:mod:`taopt.defaults`). Every option's
+help shows its default. A file argument may be ``example:NAME`` (:mod:`taopt.examples`). Old
+spellings (``solve --save``, ``study comm --exact``, ``study capability --instances SIZES``,
+``study delivery --instances N``, ``study drift --n N --m M``, ``simulate --save``,
+``simulate --algorithm``) still work for one release and print a deprecation line on stderr.
 
 This module imports only the standard library and :mod:`taopt.errors` at the top, so
 ``taopt --version`` and ``taopt --help`` load no numpy, cvxpy or matplotlib; every handler
@@ -26,7 +29,6 @@ bytecodes.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -36,17 +38,22 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import logging
 
+#: Seconds per exact model (or peer) run in ``solve``, ``verify`` and every study, and seed of
+#: randomised methods in every command: :mod:`taopt.defaults`, shared with the Python API.
+from taopt.defaults import SEED, TIME_LIMIT  # noqa: E402
 from taopt.errors import InstanceError, TaoptError
 
-#: Seconds per exact model (or peer) run in ``solve``, ``verify`` and every study.
-TIME_LIMIT = 60.0
-#: Seed of randomised methods, in every command.
-SEED = 0
+#: The packaged examples (:mod:`taopt.examples`), named in the help texts.
+EXAMPLES_TEXT = (
+    "assignment_problem, budgeted_problem, capability_problem, comm_problem, "
+    "delivery_instance, sop_problem, instance, field, solution, demo (an instance, 10 "
+    "targets), delivery_example_20 (20 customers)"
+)
 
 FIELD_HELP = (
     "drift field: 'thesis' (1e-3 [0.3x+0.2y, -0.2x+0.3y]), 'fig21' (the same at 1e-2), "
     "'still', 'uniform:VX,VY', 'linear:A11,A12,A21,A22', or a JSON file holding a field "
-    "or an instance (its field is used)"
+    "or an instance (its field is used), e.g. example:field"
 )
 
 
@@ -88,22 +95,33 @@ def parse_field(spec: str) -> Any:
         return LinearField(np.reshape(a, (2, 2)))
     from pathlib import Path
 
-    path = Path(key)
+    from taopt.examples import resolve
+
+    path = Path(resolve(key))
     if path.suffix.lower() == ".json" or path.exists():
         if not path.exists():
             raise InstanceError(f"field file {key!r} does not exist")
-        try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError as exc:
-            raise InstanceError(f"{key}: not valid JSON ({exc})") from None
-        if isinstance(data, dict) and data.get("kind") == "instance":
-            from taopt.instance import Instance
+        from taopt.io import load_json
+        from taopt.schemas import naming
 
-            return Instance.from_dict(data).field
-        if isinstance(data, dict) and "field" in data and "kind" not in data:
-            return None if data["field"] is None else field_from_dict(data["field"])
-        return field_from_dict(data)
+        data = load_json(path)  # the one reader: size and depth guards, errors name the file
+        with naming(str(path)):
+            if isinstance(data, dict) and data.get("kind") == "instance":
+                from taopt.instance import Instance
+
+                return Instance.from_dict(data, source=str(path)).field
+            if isinstance(data, dict) and "field" in data and "kind" not in data:
+                return None if data["field"] is None else field_from_dict(data["field"])
+            return field_from_dict(data)
     raise InstanceError(f"unknown field {spec!r}; {FIELD_HELP}")
+
+
+def terminal_width() -> int:
+    """Columns of the terminal (``COLUMNS``, else 100 when not a terminal): printed tables are
+    wrapped to it (pandas' ``line_width``)."""
+    import shutil
+
+    return shutil.get_terminal_size((100, 24)).columns
 
 
 def folder(path: str) -> Any:
@@ -209,8 +227,8 @@ def cmd_kinds(args: argparse.Namespace) -> int:
         print(f"{family.kind}: {family.title}")
         print(f"  problem {family.problem_type.__name__}, payload {family.payload.__name__}")
         print(
-            f"  schema taopt/schemas/{family.kind}.schema.json, example "
-            f"taopt/data/examples/{family.kind}.json"
+            f"  schema taopt/schemas/{family.kind}.schema.json, example example:{family.kind} "
+            f"(taopt solve example:{family.kind})"
         )
         print(f"  bounds: {bounds or 'none'}")
         print(f"  methods: {', '.join(available_methods(family.problem_type))}")
@@ -225,52 +243,79 @@ def cmd_claims(args: argparse.Namespace) -> int:
 
     if args.samples < 1:
         raise InstanceError(f"--samples must be >= 1, got {args.samples}")
-    table = check_claims(
-        samples=args.samples,
-        seed=args.seed,
-        out_dir=args.out,
-        classes=tuple(c.strip() for c in args.classes.split(",") if c.strip()),
-    )
+    from tqdm.auto import tqdm
+
+    classes = tuple(c.strip() for c in args.classes.split(",") if c.strip())
+    with tqdm(
+        total=args.samples * len(classes), unit="instance", disable=args.quiet, leave=False
+    ) as bar:
+        table = check_claims(
+            samples=args.samples,
+            seed=args.seed,
+            out_dir=args.out,
+            classes=classes,
+            progress=lambda _: bar.update(),
+        )
     shown = [c for c in table.columns if c not in ("instance",)]
-    print(table[shown].to_string(index=False))
+    print(table[shown].to_string(index=False, line_width=terminal_width()))
     return 0
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    """Body of ``taopt simulate FILE``: one chapter 4 run, its bytes, routes and pictures."""
+    """Body of ``taopt simulate FILE``: chapter 4 runs, their bytes, routes and pictures."""
     from taopt.comm import CommProblem
     from taopt.comm.plot import animate_run, check_frames, plot_run
+    from taopt.examples import resolve
     from taopt.orchestration.pipeline import solve
+    from taopt.registry import get_method
 
     if args.animate:
         check_frames(args.frames)  # before the run: nothing printed or written on bad input
-    problem = CommProblem.load(args.file)
+    problem = CommProblem.load(resolve(args.file))
     if args.range is not None:
         problem = problem.replace(comm_range=args.range)
-    result = solve(problem, args.algorithm, seed=args.seed)
-    info = result.info
-    print(result.summary())
-    print(
-        f"r = {problem.comm_range:g} m, bytes relayed {info['bytes']:.6g} "
-        f"({info['numbers']} numbers, {info['messages']} messages, {info['rounds']} rounds), "
-        f"{info['group_events']} newly connected groups, {info['replans']} reassignments"
+    names = list(
+        dict.fromkeys(get_method(problem, m).name for m in method_list(args.methods) or ("DAA",))
     )
-    for j, d in enumerate(result.solution.lengths()):
-        print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
+    bad = [m for m in names if get_method(problem, m).category != "simulation"]
+    if bad:
+        raise InstanceError(
+            f"--methods: {', '.join(bad)} is not a simulation; simulate runs DAA, CAA or HDA "
+            "(taopt solve runs the exact model)"
+        )
+    single = [o for o in ("plot", "animate", "save_file") if getattr(args, o, None)]
+    if len(names) > 1 and single:
+        raise InstanceError(
+            f"--{single[0].replace('_file', '')} draws or saves one run: name one method"
+        )
+    where = None
     if args.out:
-        where = folder(args.out)
-        where.mkdir(parents=True, exist_ok=True)
-        result.save(where / f"{args.algorithm}.json")
-        print(f"solution written to {where / f'{args.algorithm}.json'}")
-    if args.save_file:
-        result.save(args.save_file)
-        print(f"solution written to {args.save_file}")
-    if args.plot:
-        plot_run(problem, result, path=args.plot)
-        print(f"plot written to {args.plot}")
-    if args.animate:
-        animate_run(problem, result, args.animate, frames=args.frames)
-        print(f"animation written to {args.animate}")
+        from taopt.io import check_writable
+
+        where = check_writable(args.out, "--out folder")
+    for name in names:
+        result = solve(problem, name, seed=args.seed)
+        info = result.info
+        print(result.summary())
+        print(
+            f"r = {problem.comm_range:g} m, bytes relayed {info['bytes']:.6g} "
+            f"({info['numbers']} numbers, {info['messages']} messages, {info['rounds']} rounds), "
+            f"{info['group_events']} newly connected groups, {info['replans']} reassignments"
+        )
+        for j, d in enumerate(result.solution.lengths()):
+            print(f"  vehicle {j}: {d:.2f} m, visits {result.solution.visited_targets(j)}")
+        if where is not None:
+            result.save(where / f"{name}.json")
+            print(f"solution written to {where / f'{name}.json'}")
+        if args.save_file:
+            result.save(args.save_file)
+            print(f"solution written to {args.save_file}")
+        if args.plot:
+            plot_run(problem, result, path=args.plot)
+            print(f"plot written to {args.plot}")
+        if args.animate:
+            animate_run(problem, result, args.animate, frames=args.frames)
+            print(f"animation written to {args.animate}")
     return 0
 
 
@@ -375,8 +420,10 @@ def _common(parser: argparse.ArgumentParser, *names: str) -> None:
             "--methods",
             default=None,
             metavar="LIST",
-            help="comma-separated method names, 'exact' among them (default: none named: every "
-            "method that applies, the certified optimum first where affordable; peers only "
+            help="comma-separated method names, case-insensitive, 'exact' among them; 'all' "
+            "for every method available here ('taopt kinds' lists them) (default: none named: "
+            "the family's default set, printed under the table: the certified optimum where "
+            "affordable, then the heuristics; other exact models, variants and peers only "
             "when named)",
         )
     if "time-limit" in names:
@@ -427,16 +474,22 @@ def setup_logging(quiet: bool = False, verbose: bool = False) -> logging.Logger:
 # -- the parser ---------------------------------------------------------------------------------
 
 SOLVE_DESCRIPTION = (
-    "Solve a JSON problem file with every registered method that applies (or --methods)\n"
-    "and print one table: status, objective, proven bound and gap, true gap to a certified\n"
-    "optimum, ratio to a valid bound. The certified optimum is computed by default where it\n"
-    "is affordable; one line says why when it is not.\n\n"
+    "Solve a JSON problem file with the default methods of its family (or --methods) and\n"
+    "print one table: status, objective, proven bound and gap, true gap to a certified\n"
+    "optimum, ratios to bounds. The certified optimum is computed by default where it is\n"
+    "affordable; one line says why when it is not. Under the table: the messages of failed\n"
+    "methods (numbered), what each ratio column divides by, and the default method set.\n\n"
+    "Columns: gap = what the method proves (objective / its bound - 1); gap_to_optimum =\n"
+    "objective / the certified optimum of this run - 1; q_valid = objective / the family's\n"
+    "fast valid lower bound (>= 1; 1 proves optimality); q_thesis = objective / the thesis's\n"
+    "Algorithm 1 value as printed (not a valid bound on asymmetric costs: it may be < 1).\n\n"
+    "Default methods: the family's exact method (where affordable) and its heuristics; other\n"
+    "exact models (the same optimum, slower), variants, budgeted searches (ILS) and peers\n"
+    "(pyvrp, ortools, cpsat) run only when named; '--methods all' runs every one.\n\n"
     "File kinds (docs/file-formats.md; schemas in taopt/schemas/): 'instance' (positions,\n"
     "field, obstacles: travel times by navigation) and the kind of every problem family\n"
-    "('taopt kinds' lists them). Examples ship with the\n"
-    "package: taopt/data/demo.json (an instance, 10 targets, 3 vehicles),\n"
-    "taopt/data/delivery_example_20.json (20 customers) and taopt/data/examples/*.json (one\n"
-    "small file of each kind)."
+    "('taopt kinds' lists them). Examples ship with the package, from any folder:\n"
+    "example:NAME (taopt.examples.path(NAME)), NAME one of " + EXAMPLES_TEXT + "."
 )
 
 
@@ -488,10 +541,10 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
     solve.description = SOLVE_DESCRIPTION
     solve.epilog = (
         "A method that fails does not stop the others: its row has status 'error' and a\n"
-        "message column says why. Exit codes: 0 every method ran, 1 some method failed,\n"
+        "numbered note under the table says why. Exit codes: 0 every method ran, 1 some method failed,\n"
         "2 bad input, 130 interrupted (Ctrl-C)."
     )
-    solve.add_argument("file", help="a JSON problem file")
+    solve.add_argument("file", help="a JSON problem file, or example:NAME (a packaged example)")
     _common(solve, "methods", "seed", "time-limit", "plot")
     solve.add_argument(
         "--gantt",
@@ -524,8 +577,10 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         "1 a check failed, 2 bad input (a malformed file), 3 valid but some claims not\n"
         "checked, 130 interrupted (Ctrl-C)."
     )
-    verify.add_argument("solution", help="a solution JSON (taopt solve --out, Solution.save)")
-    verify.add_argument("problem", help="the problem file it solves")
+    verify.add_argument(
+        "solution", help="a solution JSON (taopt solve --out, Solution.save), or example:solution"
+    )
+    verify.add_argument("problem", help="the problem file it solves, or example:NAME")
     verify.add_argument(
         "--exact",
         action="store_true",
@@ -561,8 +616,14 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         cmd_simulate,
         "chapter 4: simulate CAA, DAA or HDA on a comm_problem file (limited range)",
     )
-    simulate.add_argument("file", help="a comm_problem JSON file")
-    simulate.add_argument("--algorithm", choices=["DAA", "CAA", "HDA"], default="DAA")
+    simulate.add_argument("file", help="a comm_problem JSON file, or example:comm_problem")
+    simulate.add_argument(
+        "--methods",
+        default="DAA",
+        metavar="LIST",
+        help="comma-separated algorithms: DAA, CAA, HDA (case-insensitive)",
+    )
+    deprecated(simulate, "--algorithm", "methods", "--methods NAME", metavar="NAME")
     simulate.add_argument(
         "--range",
         type=float,
@@ -574,9 +635,9 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         "--out",
         default=None,
         metavar="DIR",
-        help="write the solution as DIR/<algorithm>.json, for taopt verify (default: none)",
+        help="write each solution as DIR/<method>.json, for taopt verify (default: none)",
     )
-    deprecated(simulate, "--save", "save_file", "--out DIR (writes DIR/<algorithm>.json)")
+    deprecated(simulate, "--save", "save_file", "--out DIR (writes DIR/<method>.json)")
     simulate.set_defaults(save_file=None)
     simulate.add_argument(
         "--animate", default=None, metavar="GIF", help="write an animation (default: none)"
@@ -622,12 +683,15 @@ def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse an image or animation file of the wrong kind before any work starts."""
+    """Refuse an image or animation file of the wrong kind, or in a folder that cannot be
+    written, before any work starts (nothing is written by the check)."""
     for option, suffix in (("plot", ".png"), ("gantt", ".png"), ("animate", ".gif")):
         if getattr(args, option, None) is not None:
+            from taopt.io import check_writable_file
             from taopt.plot import check_output
 
             check_output(getattr(args, option), suffix, f"--{option}")
+            check_writable_file(getattr(args, option), f"--{option}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -690,6 +754,8 @@ def _main(argv: Sequence[str] | None) -> int:
         raise
     except (TaoptError, ValueError, OSError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if isinstance(exc, OSError) and exc.filename and exc.strerror:  # name the file
+            message = f"{exc.filename}: {exc.strerror}"
         print(f"taopt {args.command}: error: {message}", file=sys.stderr)
         return 2
 

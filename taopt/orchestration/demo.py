@@ -15,7 +15,7 @@ from typing import IO, Any
 import numpy as np
 
 from taopt.instance import Instance
-from taopt.orchestration.solving import method_table
+from taopt.orchestration.solving import method_table, wrap_notes
 from taopt.routing.problem import AssignmentProblem
 
 
@@ -31,15 +31,25 @@ def load_demo_instance() -> Instance:
     return Instance.from_dict(json.loads(text))
 
 
-def format_matrix(matrix: np.ndarray, names: list[str], digits: int = 1) -> str:
-    """A plain-text table of ``matrix`` with row/column names."""
+def format_matrix(
+    matrix: np.ndarray, names: list[str], digits: int = 1, line_width: int | None = None
+) -> str:
+    """A plain-text table of ``matrix`` with row/column names; with ``line_width``, its
+    columns are split into blocks (separated by a blank line) so no line is wider."""
     width = max(max(len(n) for n in names), len(f"{matrix.max():.{digits}f}")) + 1
-    head = " " * width + "".join(f"{n:>{width}}" for n in names)
-    rows = [
-        f"{names[i]:>{width}}" + "".join(f"{v:>{width}.{digits}f}" for v in matrix[i])
-        for i in range(len(names))
-    ]
-    return "\n".join([head, *rows])
+    per_block = len(names)
+    if line_width is not None:
+        per_block = max(1, (line_width - width) // width)
+    blocks = []
+    for start in range(0, len(names), per_block):
+        columns = range(start, min(start + per_block, len(names)))
+        head = " " * width + "".join(f"{names[j]:>{width}}" for j in columns)
+        rows = [
+            f"{names[i]:>{width}}" + "".join(f"{matrix[i, j]:>{width}.{digits}f}" for j in columns)
+            for i in range(len(names))
+        ]
+        blocks.append("\n".join([head, *rows]))
+    return "\n\n".join(blocks)
 
 
 def run_demo(
@@ -75,8 +85,8 @@ def run_demo(
     speed = float(instance.speeds.min())
     print(
         f"instance {instance.name!r}: {instance.n_targets} targets, "
-        f"{instance.n_vehicles} vehicles, "
-        f"region {instance.region}, field {instance.field!r}, speed {speed:g}",
+        f"{instance.n_vehicles} vehicles, region {instance.region},\n"
+        f"field {instance.field!r}, speed {speed:g}",
         file=out,
     )
     tic = time.perf_counter()
@@ -86,18 +96,23 @@ def run_demo(
     print(
         f"\ntravel-time matrix t(i, j) in seconds (row i -> column j), {seconds:.2f} s:", file=out
     )
-    print(format_matrix(matrix, names), file=out)
+    from taopt.orchestration.cli import terminal_width
+
+    print(format_matrix(matrix, names, line_width=terminal_width()), file=out)
     report = matrix_report(matrix)
-    print("\n" + report.summary(), file=out)
+    print("\n" + "\n".join(wrap_notes([report.summary()])), file=out)
     print(f"Lemma 2.3 triangle inequality within 1e-6: {report.triangle_holds(1e-6)}", file=out)
 
     problem = AssignmentProblem(matrix, n_targets=instance.n_targets, name=instance.name)
     table, solutions = method_table(problem, methods=methods, seed=seed)
     print(
-        "\nexact optimum against the thesis's heuristics (objective = total travel time, s):",
+        "\nexact optimum against the thesis's heuristics (objective: total travel time, s):",
         file=out,
     )
-    print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"), file=out)
+    text = table.to_string(
+        index=False, float_format=lambda v: f"{v:.4g}", line_width=terminal_width()
+    )
+    print(text, file=out)
     exact = solutions.get("exact")
     if exact is not None:
         print(f"\n{exact.summary()}", file=out)

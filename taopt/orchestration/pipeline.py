@@ -26,6 +26,7 @@ from typing import Any
 
 import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
+from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError, SolverError, TaoptError
 from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.registry import (
@@ -89,8 +90,8 @@ def solve(
     problem: Any,
     method: str = "exact",
     *,
-    seed: int | None = None,
-    time_limit: float | None = None,
+    seed: int | None = SEED,
+    time_limit: float | None = TIME_LIMIT,
     max_memory_gb: float | None = None,
     **options: Any,
 ) -> Solution:
@@ -103,8 +104,11 @@ def solve(
         A registered name: "exact", "MC", "GA", "SMMA", "pyvrp", ... (see
         :func:`available_methods`).
     seed : int, optional
-        Passed to methods that take one (randomised ones); ignored by the others.
+        Passed to methods that take one (randomised ones); ignored by the others. Default
+        :data:`taopt.defaults.SEED` (0), as ``taopt solve --seed``.
     time_limit : float, optional
+        Default :data:`taopt.defaults.TIME_LIMIT` (60 s), as ``taopt solve --time-limit``;
+        None for no limit.
         Wall-clock seconds for the whole call (docs/architecture.md, invariant 4): the clock
         starts on entry; the warm-start heuristics of an exact method get a share of it
         (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
@@ -144,6 +148,7 @@ def solve(
             raise InstanceError(f"time_limit must be positive, got {time_limit}")
         deadline = Deadline(time_limit)  # the clock starts now: everything below counts
     spec = get_method(problem, method)
+    method = spec.name  # the registered spelling ("mc" -> "MC")
     kwargs = dict(options)
     if seed is not None and spec.accepts("seed"):
         kwargs["seed"] = seed

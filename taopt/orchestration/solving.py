@@ -33,12 +33,27 @@ from typing import IO, Any
 import pandas as pd
 
 from taopt.bounds import lower
+from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError
+from taopt.examples import resolve as resolve_example
+from taopt.fields import FIELD_KINDS
 from taopt.instance import Instance
-from taopt.io import load_json
+from taopt.io import atomic_path, check_writable, check_writable_file, load_json
 from taopt.limits import check_memory, navigation_bytes
-from taopt.orchestration.pipeline import default_methods, no_optimum_note, solve
-from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
+from taopt.orchestration.pipeline import (
+    available_methods,
+    default_methods,
+    no_optimum_note,
+    solve,
+)
+from taopt.registry import (
+    certifying_method,
+    families,
+    family_for_kind,
+    family_of,
+    file_kinds,
+    get_method,
+)
 from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
 from taopt.schemas import naming
 from taopt.scoring import evaluate
@@ -80,7 +95,9 @@ def problem_from_instance(instance: Instance, progress: bool = True) -> Any:
 
 
 def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Instance | None]:
-    """(problem, instance) from a JSON file; ``instance`` is None unless it is an instance."""
+    """(problem, instance) from a JSON file (or ``example:NAME``, :mod:`taopt.examples`);
+    ``instance`` is None unless it is an instance."""
+    path = resolve_example(path)
     data = load_json(path)
     if not isinstance(data, dict):
         raise InstanceError(f"{path}: a problem file holds a JSON object")
@@ -94,14 +111,28 @@ def load_problem_file(path: str | Path, progress: bool = True) -> tuple[Any, Ins
                 f"{len(vehicles)} vehicles ({points:,} points)",
             )
         instance = Instance.from_dict(data, source=str(path))
-        return problem_from_instance(instance, progress=progress), instance
-    if data.get("kind") == "solution":  # e.g. `taopt verify PROBLEM SOLUTION`, swapped
+        with naming(str(path)):  # e.g. a target inside an obstacle: name the file
+            return problem_from_instance(instance, progress=progress), instance
+    kind = data.get("kind")
+    if kind == "solution":  # e.g. `taopt verify PROBLEM SOLUTION`, swapped
         raise InstanceError(
             f"{path} is a solution file (kind 'solution'), not a problem; `taopt verify` takes "
             "the solution first, then the problem it solves"
         )
-    family = family_for_kind(data.get("kind"))
+    if kind in FIELD_KINDS:
+        raise InstanceError(
+            f"{path} is a drift field file (kind {kind!r}), not a problem; use it as "
+            f"`taopt navigate --field {path} --from X,Y --to X,Y`, or as the field of an "
+            "instance file"
+        )
+    if kind not in file_kinds():
+        known = ", ".join(["instance", *sorted(file_kinds())])
+        raise InstanceError(
+            f"{path}: unknown file kind {kind!r}; a problem file's kind is one of: {known} "
+            "('taopt kinds' describes them)"
+        )
     with naming(str(path)):  # the schema's and the constructor's errors name the file
+        family = family_for_kind(kind)
         return family.load(data), None
 
 
@@ -122,8 +153,8 @@ def _ratio_columns(problem: Any) -> dict[str, float]:
 def method_table(
     problem: Any,
     methods: tuple[str, ...] | list[str] | None = None,
-    seed: int = 0,
-    time_limit: float | None = None,
+    seed: int = SEED,
+    time_limit: float | None = TIME_LIMIT,
     progress: bool = False,
 ) -> tuple[pd.DataFrame, dict[str, Solution]]:
     """Solve ``problem`` with each method; a table of objectives, bounds and gaps.
@@ -143,8 +174,8 @@ def method_table(
     ``progress``: a bar on stderr over the methods, naming the one running and, for an exact
     method or a peer, the time limit it may take (a peer proves nothing, so it runs to it).
     """
-    methods = list(methods) if methods else default_methods(problem)
-    specs = {m: get_method(problem, m) for m in methods}  # an unknown name: refused first
+    methods = resolve_methods(problem, methods)  # an unknown name: refused first
+    specs = {m: get_method(problem, m) for m in methods}
     from tqdm.auto import tqdm
 
     solutions = {}
@@ -182,6 +213,124 @@ def method_table(
     return table, solutions
 
 
+def resolve_methods(problem: Any, methods: Any = None) -> list[str]:
+    """The registered names of ``methods`` for ``problem``, in order, duplicates dropped.
+
+    None or empty: :func:`~taopt.orchestration.pipeline.default_methods`; ``"all"`` (alone
+    or in the list): every method available here (:func:`taopt.available_methods`, what
+    ``taopt kinds`` lists). Names are case-insensitive (``"mc"`` is ``"MC"``).
+
+    Raises
+    ------
+    InstanceError
+        An unknown name (the message lists the family's methods), or a method whose package
+        is not installed here.
+    """
+    if not methods:
+        return default_methods(problem)
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    names: list[str] = []
+    for name in methods:
+        if str(name).strip().lower() == "all":
+            names.extend(available_methods(problem))
+            continue
+        spec = get_method(problem, name)
+        if not spec.available:
+            raise InstanceError(
+                f"method {spec.name!r} needs {', '.join(spec.requires)}, not installed here "
+                f"(pip install 'taopt[peers]'); available: "
+                f"{', '.join(available_methods(problem))}"
+            )
+        names.append(spec.name)
+    return list(dict.fromkeys(names))
+
+
+def default_set_note(problem: Any) -> str:
+    """What ``taopt solve`` runs when no methods are named, and what it leaves out and why.
+
+    E.g. "default methods: exact, NIA, MMA, SMMA, GA (...); run only when named (--methods
+    NAME, or --methods all): ILS (a search with a budget), subset-dp, milp (other exact
+    models: the same optimum, slower)".
+    """
+    chosen = default_methods(problem)
+    left = [m for m in available_methods(problem) if m not in chosen]
+    text = (
+        f"default methods: {', '.join(chosen)} (the certified optimum where affordable, then "
+        "the heuristics)"
+    )
+    if not left:
+        return text
+    groups: dict[str, list[str]] = {}
+    for name in left:
+        category = get_method(problem, name).category
+        why = {
+            "exact": "other exact models: the same optimum, slower",
+            "peer": "peers: external solvers, no proof",
+            "relaxation": "relaxations: bounds, not solutions",
+        }.get(category, "variants and budgeted searches")
+        groups.setdefault(why, []).append(name)
+    parts = [f"{', '.join(names)} ({why})" for why, names in groups.items()]
+    return f"{text}; run only when named (--methods NAME, or --methods all): {'; '.join(parts)}"
+
+
+#: What the ratio and gap columns of ``taopt solve``'s table mean (printed under it).
+COLUMN_NOTES = {
+    "gap": "gap = the gap the method proves (objective / its bound - 1)",
+    "gap_to_optimum": "gap_to_optimum = objective / the certified optimum of this run - 1",
+    "q_valid": "q_valid = objective / the family's fast valid lower bound (>= 1; 1 proves the "
+    "objective optimal)",
+}
+
+
+def column_notes(table: pd.DataFrame, problem: Any) -> list[str]:
+    """One line per gap or ratio column present in ``table``: what it divides by."""
+    notes = [text for column, text in COLUMN_NOTES.items() if column in table.columns]
+    for name, bound in family_of(problem).bounds.items():
+        if bound.column and bound.column in table.columns:
+            kind = f"a valid {bound.side} bound" if bound.valid else "as printed, not a valid bound"
+            notes.append(f"{bound.column} = objective / {name}: {bound.description} ({kind})")
+    return notes
+
+
+def format_table(table: pd.DataFrame, width: int | None = None) -> tuple[str, list[str]]:
+    """The table as text no wider than ``width`` (the terminal's by default), and its notes.
+
+    Messages (the ``message`` column) leave the table: the cell says ``[k]`` and note k
+    holds the message. A table still wider than ``width`` is wrapped into blocks of columns
+    (pandas' ``line_width``).
+    """
+    import shutil
+
+    width = width or shutil.get_terminal_size((100, 24)).columns
+    notes: list[str] = []
+    shown = table.copy()
+    if "message" in shown.columns:
+        refs = []
+        for method, message in zip(shown["method"], shown["message"], strict=True):
+            if message:
+                notes.append(f"[{len(notes) + 1}] {method}: {message}")
+                refs.append(f"[{len(notes)}]")
+            else:
+                refs.append("")
+        shown["message"] = refs
+        shown = shown.rename(columns={"message": "note"})
+    text = shown.to_string(index=False, float_format=lambda v: f"{v:.6g}", line_width=width)
+    return text, notes
+
+
+def wrap_notes(lines: list[str], width: int | None = None) -> list[str]:
+    """Each line wrapped to ``width`` (the terminal's by default), continuations indented."""
+    import shutil
+    import textwrap
+
+    width = width or shutil.get_terminal_size((100, 24)).columns
+    out: list[str] = []
+    for line in lines:
+        out.extend(textwrap.wrap(line, width=max(width, 20), subsequent_indent="    ") or [line])
+    return out
+
+
 def _short(text: str, width: int = 120) -> str:
     """``text`` cut to ``width`` characters for a table cell (the full text is in ``info``)."""
     return text if len(text) <= width else text[: width - 3] + "..."
@@ -213,8 +362,8 @@ def _run_method(problem: Any, method: str, seed: int, time_limit: float | None) 
 def solve_file(
     path: str | Path,
     methods: tuple[str, ...] | None = None,
-    seed: int = 0,
-    time_limit: float | None = 60.0,
+    seed: int = SEED,
+    time_limit: float | None = TIME_LIMIT,
     plot: str | None = None,
     gantt: str | None = None,
     save: str | Path | None = None,
@@ -265,24 +414,34 @@ def solve_file(
     """
     out = out or sys.stdout
     tic = time.perf_counter()
+    path = resolve_example(path)
     _check_plot_request(path, plot, gantt)  # before any matrix is computed or model solved
+    # output folders writable before the solve, not after it (a full disk, a read-only folder)
+    if save:
+        check_writable(save, "--out folder", create=False)
+    check_writable_file(plot, "--plot")
+    check_writable_file(gantt, "--gantt")
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
     table, solutions = method_table(
         problem, methods, seed=seed, time_limit=time_limit, progress=progress
     )
     print(f"{problem!r} from {path}", file=out)
-    print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"), file=out)
-    note = "" if methods else no_optimum_note(problem)
-    if note:
-        print(note, file=out)
+    text, message_notes = format_table(table)
+    print(text, file=out)
+    notes = [*message_notes, *column_notes(table, problem)]
+    if not methods:
+        notes.append(default_set_note(problem))
+        if no_optimum_note(problem):
+            notes.append(no_optimum_note(problem))
+    for line in wrap_notes(notes):
+        print(line, file=out)
     found = [s for s in solutions.values() if s.solution is not None and s.status != ERROR]
     best = min(found, key=lambda s: s.objective) if found else None
     failed = [m for m, s in solutions.items() if s.status == ERROR]
     unanswered = [m for m, s in solutions.items() if s.status == NO_SOLUTION]
     if save:
-        folder = Path(save)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = check_writable(save, "--out folder")
         for method, sol in solutions.items():
             if sol.status != ERROR:
                 sol.save(folder / f"{method}.json")
@@ -291,21 +450,25 @@ def solve_file(
         plot = gantt = None  # nothing to draw
     if plot and best is not None:
         name, draw = next(iter(family.plots.items()))
-        draw(problem, best.solution, plot, instance=instance, method=best.method)
+        with atomic_path(plot) as tmp:  # no half-written PNG; an error names the path
+            draw(problem, best.solution, str(tmp), instance=instance, method=best.method)
         print(f"{name} plot of {best.method} written to {plot}", file=out)
         for line in _route_lines(best, instance, problem):
             print(line, file=out)
     if gantt and best is not None:
-        family.plots["gantt"](problem, best.solution, gantt, instance=instance, method=best.method)
+        with atomic_path(gantt) as tmp:
+            family.plots["gantt"](
+                problem, best.solution, str(tmp), instance=instance, method=best.method
+            )
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
     if unanswered:
         print(
             f"no feasible answer: {', '.join(unanswered)} (their outcome, not a proof that "
-            "none exists; see the message column)",
+            "none exists; see the notes under the table)",
             file=out,
         )
     if failed:
-        print(f"failed: {', '.join(failed)} (see the message column)", file=out)
+        print(f"failed: {', '.join(failed)} (see the notes under the table)", file=out)
     print(f"({time.perf_counter() - tic:.2f} s)", file=out)
     return {
         "problem": problem,
@@ -478,7 +641,7 @@ def verify_file(
     solution_path: str | Path,
     problem_path: str | Path,
     exact: bool = False,
-    time_limit: float | None = None,
+    time_limit: float | None = TIME_LIMIT,
     out: IO[str] | None = None,
     progress: bool = False,
 ) -> Verdict:
@@ -515,6 +678,8 @@ def verify_file(
         its ``payload_kind``.
     """
     out = out or sys.stdout
+    solution_path = resolve_example(solution_path)
+    problem_path = resolve_example(problem_path)
     problem, _ = load_problem_file(problem_path, progress=progress)
     solution = load_certificate(solution_path)
     family = family_of(problem)
@@ -582,8 +747,8 @@ def verify_file(
         claims.append("bound")
     if status == Status.INFEASIBLE and payload is None:
         claims.append("infeasibility")
-    if not claims:
-        return finish()
+    if not claims and not (exact and payload is not None):
+        return finish()  # with --exact a payload still gets its gap to the re-solved optimum
     if not exact:
         lower = _valid_lower_bound(problem)
         for claim in claims:
@@ -611,8 +776,37 @@ def verify_file(
         return finish()
     seconds = time.perf_counter() - began
     print(f"  re-solved with {method!r} in {seconds:.2f} s: {certified.summary()}", file=out)
+    line = _gap_line(certified, value)
+    if line:
+        print(f"  {line}", file=out)
     _judge(report, claims, certified, value, bound)
     return finish()
+
+
+def _gap_line(certified: Solution, value: float) -> str:
+    """The checked solution's gap to the optimum the re-solve found ("" with nothing to say).
+
+    Against a proven optimum f_o: ``f / f_o - 1``; against a stopped re-solve, the range
+    between its proven bound and its incumbent.
+    """
+    if not math.isfinite(value):
+        return ""
+    if certified.status == Status.OPTIMAL and math.isfinite(certified.objective):
+        optimum = certified.objective
+        if optimum > 0:
+            return (
+                f"gap of the checked solution to the re-solved optimum {optimum:.10g}: "
+                f"{100 * (value / optimum - 1):.4g} %"
+            )
+        return f"the checked solution's value {value:.10g}, the re-solved optimum {optimum:.10g}"
+    parts = []
+    if certified.bound is not None and certified.bound > 0:
+        parts.append(f"at most {100 * (value / certified.bound - 1):.4g} % (to its bound)")
+    if certified.solution is not None and math.isfinite(certified.objective):
+        parts.append(f"at least {100 * (value / certified.objective - 1):.4g} % (to its incumbent)")
+    if not parts:
+        return ""
+    return "gap of the checked solution to the optimum: " + ", ".join(parts)
 
 
 _CLAIM_TEXT = {

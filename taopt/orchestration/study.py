@@ -382,8 +382,37 @@ def _check_arguments(
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
     for name in dict.fromkeys([*methods, *method_options]):
         method = get_method(spec.problem_type, name)
+        if not method.available:
+            raise InstanceError(
+                f"method {method.name!r} needs {', '.join(method.requires)}, not installed here "
+                "(pip install 'taopt[peers]'); leave it out of --methods; nothing written"
+            )
         method.check_options(dict(method_options.get(name, {})))
         _check_option_values(name, dict(method_options.get(name, {})))
+
+
+def _canonical(problem_type: Any, name: str) -> str:
+    """The registered spelling of method ``name`` (case-insensitive), or ``name`` unchanged
+    when it is unknown (the argument check names it)."""
+    try:
+        return get_method(problem_type, name).name
+    except TaoptError:
+        return name
+
+
+def canonical_methods(problem_type: Any, methods: str | Sequence[str]) -> list[str]:
+    """Method names (a comma string or a list) in their registered spelling, deduplicated:
+    ``"mc,ga"`` -> ``["MC", "GA"]``; an unknown name is an InstanceError listing the
+    family's methods (raised before anything is written)."""
+    if isinstance(methods, str):
+        methods = [m.strip() for m in methods.split(",") if m.strip()]
+    return list(dict.fromkeys(get_method(problem_type, m).name for m in methods))
+
+
+def available_defaults(problem_type: Any, names: Sequence[str]) -> list[str]:
+    """The methods of ``names`` installed here (a study's default methods: a peer whose
+    package is missing is left out, not run to fail)."""
+    return [name for name in names if get_method(problem_type, name).available]
 
 
 _POOLS: dict[int, ProcessPoolExecutor] = {}
@@ -550,7 +579,11 @@ def run_study(
         Ctrl-C; the finished rows are on disk and a re-run resumes.
     """
     keys = [dict(k) for k in keys]
-    methods = list(dict.fromkeys(methods))
+    # registered spellings ("mc" -> "MC"); an unknown name is refused below, before writing
+    methods = list(dict.fromkeys(_canonical(spec.problem_type, m) for m in methods))
+    method_options = {
+        _canonical(spec.problem_type, k): v for k, v in (method_options or {}).items()
+    }
     options = {k: dict(v) for k, v in (method_options or {}).items()}
     _check_arguments(spec, keys, methods, jobs, time_limit, options)
     if dask is not None and executor is not None:

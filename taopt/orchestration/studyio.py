@@ -50,7 +50,7 @@ from typing import Any
 
 import pandas as pd
 
-from taopt.errors import InstanceError, TaoptError
+from taopt.errors import InstanceError, OutputError, TaoptError
 from taopt.io import load_json, save_json, unique_temp
 
 COMPLETE = "complete"
@@ -122,7 +122,7 @@ def folder_lock(folder: str | os.PathLike[str]) -> Iterator[Path]:
             "host": socket.gethostname(),
             "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
-        with contextlib.suppress(OSError):
+        with contextlib.suppress(OSError, OutputError):  # the note is a courtesy
             save_json(note, folder / OWNER)
         yield folder
     finally:
@@ -359,10 +359,16 @@ class ResultsStore:
         frame = pd.DataFrame([row for _, row in fresh], columns=self.data_columns)
         frame[COMPLETE] = 1
         text = frame.to_csv(header=False, index=False, lineterminator="\n")
-        with open(self.path, "a", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
+        try:
+            with open(self.path, "a", encoding="utf-8", newline="") as handle:
+                handle.write(text)
+                handle.flush()
+                os.fsync(handle.fileno())
+        except OSError as exc:  # e.g. a full disk: name the file (a torn line is dropped later)
+            detail = exc.strerror or str(exc) or type(exc).__name__
+            raise OutputError(
+                f"{self.path}: cannot be written ({detail}); the rows written before are kept"
+            ) from None
         self._done.update(key for key, _ in fresh)
         return len(fresh)
 

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from taopt.errors import InstanceError
+from taopt.errors import InstanceError, OutputError
 from taopt.fields import Field, field_from_dict, thesis_field
 from taopt.instance import Instance
 from taopt.io import save_json, unique_temp
@@ -143,8 +143,14 @@ def drift_scenario(
             try:
                 np.save(tmp, matrix, allow_pickle=False)
                 os.replace(tmp, npy)
+                save_json(description, meta)  # atomic, written after the .npy it describes
+            except BaseException as exc:
+                npy.unlink(missing_ok=True)  # no .npy without the description that keys it
+                if isinstance(exc, OSError):
+                    detail = exc.strerror or str(exc)
+                    raise OutputError(f"{npy}: cannot be written ({detail})") from None
+                raise
             finally:
                 tmp.unlink(missing_ok=True)
-            save_json(description, meta)  # atomic, written after the .npy it describes
     problem = AssignmentProblem(matrix, n_targets=n, name=f"n{n}m{m}-seed{seed}")
     return Scenario(instance=instance, problem=problem, seed=int(seed))

@@ -415,17 +415,18 @@ def _non_finite(data: Any) -> Iterator[tuple[list[Any], Any]]:
 def _check_header(data: dict[str, Any], kind: str, contents: dict[str, Any], source: str) -> None:
     """The schema version and the kind first, with messages that say what to do."""
     properties = contents.get("properties", {})
+    # the kind first: a file of another kind is named as such, whatever its version
+    if properties.get("kind", {}).get("const") == kind and "kind" in data:
+        if data["kind"] != kind:
+            raise InstanceError(
+                f"{source}: expected a {kind!r} file, got kind {show(data['kind'])}"
+            )
     if "schema_version" in properties:
         version = data.get("schema_version")
         if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
             raise InstanceError(
                 f"{source}: unknown schema_version {show(version)} for {kind} "
                 f"(this taopt reads {list(SUPPORTED_VERSIONS)})"
-            )
-    if properties.get("kind", {}).get("const") == kind and "kind" in data:
-        if data["kind"] != kind:
-            raise InstanceError(
-                f"{source}: expected a {kind!r} file, got kind {show(data['kind'])}"
             )
 
 
@@ -477,10 +478,13 @@ def validate(data: Any, kind: str, source: str | None = None) -> None:
 @contextlib.contextmanager
 def naming(source: str) -> Iterator[None]:
     """Prefix ``source`` (a file path, or the kind) to any :class:`InstanceError` raised inside,
-    so a constructor's complaint about loaded data names the file it came from."""
+    so a constructor's complaint about loaded data names the file it came from. A message
+    that already starts with ``source`` is left as it is (no ``file: file: ...``)."""
     try:
         yield
     except InstanceError as exc:
+        if str(exc).startswith(str(source)):
+            raise
         raise InstanceError(f"{source}: {exc}") from None
 
 
@@ -534,22 +538,46 @@ def parse_json(text: str, source: str = "JSON") -> Any:
         raise InstanceError(f"{source}: the JSON is nested too deeply") from None
 
 
-def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
-    """Read a JSON file strictly and, given ``kind``, validate it (:func:`validate`).
+#: Largest JSON file taopt reads, in bytes (``TAOPT_MAX_FILE_MB`` overrides it): a longer file,
+#: or an endless stream such as ``/dev/zero`` or a FIFO, is refused after reading this much.
+MAX_FILE_BYTES = 256 * 2**20
+#: Environment variable overriding :data:`MAX_FILE_BYTES` (megabytes).
+FILE_SIZE_ENV = "TAOPT_MAX_FILE_MB"
+#: Deepest nesting of lists and objects in a file taopt reads (its formats nest at most 5).
+MAX_DEPTH = 64
 
-    Raises
-    ------
-    InstanceError
-        The file does not exist or cannot be read, is not UTF-8, is not valid JSON,
-        holds ``NaN``/``Infinity`` or an overflowing number, or breaks the schema; the
-        message starts with the path.
-    """
+_CHUNK = 2**20
+
+
+def max_file_bytes() -> int:
+    """The size guard of :func:`load_json`: ``TAOPT_MAX_FILE_MB`` if set, else
+    :data:`MAX_FILE_BYTES`."""
+    text = os.environ.get(FILE_SIZE_ENV, "").strip()
+    if text:
+        try:
+            value = float(text)
+        except ValueError:
+            raise InstanceError(f"{FILE_SIZE_ENV}={text!r}: expected megabytes") from None
+        if not (math.isfinite(value) and value > 0):
+            raise InstanceError(f"{FILE_SIZE_ENV}={text!r}: expected positive megabytes")
+        return int(value * 2**20)
+    return MAX_FILE_BYTES
+
+
+def read_capped(where: Path, limit: int | None = None) -> bytes:
+    """At most ``limit`` bytes of ``where`` (default :func:`max_file_bytes`), read in chunks
+    so that a device or a FIFO that never ends is refused too; InstanceError naming the
+    file when it is longer, missing, a folder or unreadable."""
+    limit = max_file_bytes() if limit is None else limit
     try:
-        where = Path(path)
-    except TypeError:
-        raise InstanceError(f"not a file path: {path!r}") from None
-    try:
-        raw = where.read_bytes()
+        with where.open("rb") as handle:
+            chunks, size = [], 0
+            while size <= limit:
+                chunk = handle.read(min(_CHUNK, limit + 1 - size))
+                if not chunk:
+                    break
+                chunks.append(chunk)
+                size += len(chunk)
     except FileNotFoundError:
         raise InstanceError(f"{where}: no such file") from None
     except IsADirectoryError:
@@ -557,6 +585,55 @@ def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
     except (OSError, ValueError) as exc:
         detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
         raise InstanceError(f"{where}: cannot be read ({detail})") from None
+    if size > limit:
+        raise InstanceError(
+            f"{where}: longer than {limit / 2**20:g} MB, the size guard of taopt's files "
+            f"(set {FILE_SIZE_ENV} to read it)"
+        )
+    return b"".join(chunks)
+
+
+def check_depth(data: Any, source: str, limit: int = MAX_DEPTH) -> None:
+    """InstanceError naming ``source`` when lists and objects nest deeper than ``limit``
+    (walked iteratively: no recursion, whatever the depth)."""
+    stack: list[tuple[int, Any]] = [(1, data)]
+    while stack:
+        depth, value = stack.pop()
+        if depth > limit:
+            raise InstanceError(
+                f"{source}: the JSON is nested more than {limit} levels deep "
+                "(taopt's files nest a few levels)"
+            )
+        if isinstance(value, dict):
+            stack.extend(
+                (depth + 1, item) for item in value.values() if isinstance(item, (dict, list))
+            )
+        elif isinstance(value, list):
+            if all(map(_plain_leaf, value)):
+                continue
+            stack.extend((depth + 1, item) for item in value if isinstance(item, (dict, list)))
+
+
+def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
+    """Read a JSON file strictly and, given ``kind``, validate it (:func:`validate`).
+
+    The one reader of every JSON file taopt takes (problems, solutions, fields, study
+    configurations): at most :func:`max_file_bytes` bytes are read (a device such as
+    ``/dev/zero`` is refused, not read for ever), lists and objects nest at most
+    :data:`MAX_DEPTH` levels.
+
+    Raises
+    ------
+    InstanceError
+        The file does not exist or cannot be read, is longer than the size guard, is not
+        UTF-8, is not valid JSON, nests too deeply, holds ``NaN``/``Infinity`` or an
+        overflowing number, or breaks the schema; the message starts with the path.
+    """
+    try:
+        where = Path(path)
+    except TypeError:
+        raise InstanceError(f"not a file path: {path!r}") from None
+    raw = read_capped(where)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -564,6 +641,7 @@ def load_json(path: str | os.PathLike[str], kind: str | None = None) -> Any:
             f"{where}: not UTF-8 text (byte {exc.start} is {raw[exc.start : exc.start + 1]!r})"
         ) from None
     data = parse_json(text, str(where))
+    check_depth(data, str(where))
     if kind is not None:
         validate(data, kind, str(where))
     return data
@@ -574,8 +652,13 @@ __all__ = [
     "strict_validator_class",
     "json_path",
     "kinds",
+    "MAX_DEPTH",
+    "MAX_FILE_BYTES",
+    "check_depth",
     "load_json",
+    "max_file_bytes",
     "naming",
+    "read_capped",
     "parse_json",
     "reason",
     "schema",

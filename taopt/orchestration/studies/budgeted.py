@@ -56,7 +56,10 @@ import numpy as np
 import pandas as pd
 
 from taopt.budgeted.problem import BudgetedProblem
+from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError, SolverError
+from taopt.io import save_json
+from taopt.orchestration.cli import terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
@@ -69,6 +72,7 @@ REFERENCE_TIME_LIMIT = 600.0
 __all__ = [
     "METHODS",
     "LEVELS",
+    "default_methods",
     "SPEC",
     "parse_level",
     "parse_size",
@@ -109,6 +113,14 @@ def parse_level(text: str) -> tuple[float, float]:
     if tau <= 0:
         raise InstanceError(f"level {text!r}: tau must be > 0")
     return s, tau
+
+
+def default_methods() -> list[str]:
+    """The study's default methods: :data:`METHODS` that are installed here (pyvrp and
+    ortools only with ``taopt[peers]``; :func:`taopt.available_methods`)."""
+    from taopt.orchestration.study import available_defaults
+
+    return available_defaults(BudgetedProblem, METHODS)
 
 
 def level_order(level: str) -> tuple[int, float, float]:
@@ -155,9 +167,7 @@ def unlimited_reference(problem: Any, seed: int, cache_dir: str | None) -> dict[
     }
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = path.with_suffix(f".{os.getpid()}.tmp")
-        temporary.write_text(json.dumps(reference))
-        os.replace(temporary, path)
+        save_json(reference, path)  # atomic; a failed write leaves no temporary file
     return reference
 
 
@@ -205,11 +215,11 @@ def budgeted_study(
     sizes: str | Sequence[str] = SIZES,
     levels: str | Sequence[str] = LEVELS,
     scenarios: int = 10,
-    methods: str | Sequence[str] = METHODS,
-    seed: int = 1,
+    methods: str | Sequence[str] | None = None,
+    seed: int = SEED,
     out_dir: str | os.PathLike = "budgeted-study",
     jobs: int = 1,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = TIME_LIMIT,
     peer_iterations: int = 2000,
     method_options: dict[str, dict] | None = None,
     progress: bool = True,
@@ -225,9 +235,10 @@ def budgeted_study(
         Level names (module docstring), in the order they should be plotted.
     scenarios : int
         Scenarios per (size, level); scenario k is the same drift scenario at every level.
-    methods : str or list of str
+    methods : str or list of str, optional
         Registered methods of BudgetedProblem ("MC", "EVM", "GA", "pyvrp", "ortools",
-        "exact").
+        "exact"; case-insensitive). Default: those of :data:`METHODS` installed here
+        (:func:`default_methods`: the peers only with ``taopt[peers]``).
     seed : int
         Study seed (scenario k has seed ``scenario_seed(seed, k)``).
     out_dir : path
@@ -266,7 +277,10 @@ def budgeted_study(
         parse_size(size)
     for level in levels:
         parse_level(level)
-    methods = _items(methods, "methods")
+    methods = default_methods() if methods is None else _items(methods, "methods")
+    from taopt.registry import get_method
+
+    methods = list(dict.fromkeys(get_method(BudgetedProblem, m).name for m in methods))
     scenarios = check_integer("scenarios", scenarios, 1)
     seed = check_integer("seed", seed, 0)
     peer_iterations = check_integer("peer_iterations", peer_iterations, 10)
@@ -486,9 +500,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--methods",
-        default=",".join(METHODS),
+        default=None,
         metavar="LIST",
-        help="comma-separated: MC,EVM,GA,pyvrp,ortools,exact",
+        help="comma-separated, case-insensitive: MC,EVM,GA,pyvrp,ortools,exact (default: "
+        "those installed here: MC,EVM,GA,exact, plus pyvrp,ortools with taopt[peers])",
     )
     parser.add_argument(
         "--peer-iterations",
@@ -516,10 +531,10 @@ def run(args: argparse.Namespace) -> int:
         args.levels,
         args.scenarios,
         methods=args.methods,
-        seed=getattr(args, "seed", 1),
+        seed=getattr(args, "seed", SEED),
         out_dir=args.out,
         jobs=getattr(args, "jobs", 1),
-        time_limit=getattr(args, "time_limit", 60.0),
+        time_limit=getattr(args, "time_limit", TIME_LIMIT),
         peer_iterations=args.peer_iterations,
         method_options=options,
         progress=not getattr(args, "quiet", False),
@@ -527,7 +542,7 @@ def run(args: argparse.Namespace) -> int:
     )
     table = summarize(df)
     with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table.round(3).to_string(index=False))
+        print(table.round(3).to_string(index=False, line_width=terminal_width()))
     Path(args.out).mkdir(parents=True, exist_ok=True)
     table.to_csv(Path(args.out) / "summary.csv", index=False)
     if getattr(args, "plot", None):

@@ -56,12 +56,14 @@ from taopt.capability.instances import (
     thesis_scenario,
 )
 from taopt.capability.problem import CapabilityProblem
+from taopt.defaults import SEED
 from taopt.errors import InstanceError
 from taopt.navigation.grid import NEIGHBOURHOODS
-from taopt.orchestration.cli import deprecated, folder
+from taopt.orchestration.cli import deprecated, folder, terminal_width
 from taopt.orchestration.study import (
     Scenario,
     StudySpec,
+    canonical_methods,
     check_integer,
     check_positive,
     parse_integers,
@@ -174,10 +176,10 @@ def run(args: argparse.Namespace) -> int:
     table = summarize(df)
     shown = ["scenarios", "q_thesis", "var_q_thesis", "q_valid", "q_exact", "time_s"]
     with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table[shown].round(4).to_string())
+        print(table[shown].round(4).to_string(line_width=terminal_width()))
         for name in ("3.1", "3.2"):
             print(f"\nTable {name}, thesis beside taopt:")
-            print(thesis_comparison(df, name).round(4).to_string())
+            print(thesis_comparison(df, name).round(4).to_string(line_width=terminal_width()))
     table.to_csv(folder(args.out) / "summary.csv")
     if args.plot:
         plot_figures(df, path=args.plot)
@@ -257,7 +259,7 @@ def capability_study(
     capabilities: Sequence[int] = CAPABILITIES,
     scenarios: int = 50,
     methods: str | Sequence[str] = METHODS,
-    seed: int = 1,
+    seed: int = SEED,
     out_dir: str | os.PathLike = "capability-study",
     jobs: int = 1,
     dask: str | None = None,
@@ -299,9 +301,7 @@ def capability_study(
     pandas.DataFrame
         The runner's rows plus ``instance``, ``optimum`` and ``exact_bound``.
     """
-    if isinstance(methods, str):
-        methods = [m.strip() for m in methods.split(",") if m.strip()]
-    methods = list(dict.fromkeys(methods))
+    methods = canonical_methods(CapabilityProblem, methods)  # "dtaa" -> "DTAA"
     # every argument checked before anything is written (issue 15, item 7)
     scenarios = check_integer("scenarios", scenarios, 1)
     first_scenario = check_integer("first_scenario", first_scenario, 0)

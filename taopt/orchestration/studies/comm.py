@@ -52,8 +52,9 @@ import pandas as pd
 from taopt.comm.bounds import mst_bound
 from taopt.comm.engine import initially_connected
 from taopt.comm.problem import THESIS_SIDE, CommProblem, random_problem
+from taopt.defaults import TIME_LIMIT
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import deprecated, folder, method_list
+from taopt.orchestration.cli import deprecated, folder, method_list, terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
 
 ALGORITHMS = ("DAA", "HDA", "CAA")
@@ -118,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
     from taopt.orchestration.studies.comm import summary as summarize
 
     preset = PRESETS[args.preset]
-    named = list(method_list(args.methods) or preset.methods)
+    from taopt.registry import get_method
+
+    named = [get_method(CommProblem, m).name for m in method_list(args.methods) or preset.methods]
     exact = "exact" in named or args.exact_alias
     if not [m for m in named if m != "exact"]:
         raise InstanceError(
@@ -143,12 +146,16 @@ def run(args: argparse.Namespace) -> int:
         print(preset.title)
         for n, m in preset.sizes:
             print(f"\nn = {n}, m = {m}: mean q = f / f_MST (4.21)")
-            print(q_table(table, n, m).round(4).to_string())
+            print(q_table(table, n, m).round(4).to_string(line_width=terminal_width()))
             if table["certified"].sum():
                 print("\nmean true gap f / f_o (certified scenarios)")
-                print(q_table(table, n, m, value="gap").round(4).to_string())
+                print(
+                    q_table(table, n, m, value="gap")
+                    .round(4)
+                    .to_string(line_width=terminal_width())
+                )
             print("\nmean bytes relayed (10^5 bytes)")
-            print(bytes_table(table, n, m).round(4).to_string())
+            print(bytes_table(table, n, m).round(4).to_string(line_width=terminal_width()))
     if args.plot:
         n, m = preset.sizes[0]
         plot_study(table, n, m, path=args.plot)
@@ -342,7 +349,7 @@ def comm_study(
     seed: int = 0,
     jobs: int = 1,
     dask: str | None = None,
-    time_limit: float | None = 60.0,
+    time_limit: float | None = TIME_LIMIT,
     progress: bool = True,
 ) -> pd.DataFrame:
     """Run a preset of §4.4 (resumable; one CSV ``<out>/comm.csv`` for every preset).
@@ -381,6 +388,9 @@ def comm_study(
     settings = {"seed": int(seed), "side": THESIS_SIDE}
     keys = preset_keys(spec, scenarios)
     chosen = list(methods) if methods is not None else list(spec.methods)
+    from taopt.registry import get_method
+
+    chosen = list(dict.fromkeys(get_method(CommProblem, m).name for m in chosen))  # "daa"->"DAA"
     frames = [
         run_study(
             SPEC,

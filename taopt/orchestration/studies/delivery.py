@@ -56,13 +56,21 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import lower
+from taopt.defaults import SEED
 from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.dags import layered_dag, paired_precedences
 from taopt.delivery.ideal_dp import ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import folder, method_list, parse_numbers
-from taopt.orchestration.study import Scenario, StudySpec, check_integer, check_positive, run_study
+from taopt.orchestration.cli import deprecated, folder, method_list, parse_numbers, terminal_width
+from taopt.orchestration.study import (
+    Scenario,
+    StudySpec,
+    canonical_methods,
+    check_integer,
+    check_positive,
+    run_study,
+)
 
 L0 = 1000.0
 GRID_K = 11
@@ -157,7 +165,7 @@ def delivery_study(
     instances: int = 10,
     ratios: Sequence[float] = DEFAULT_RATIOS,
     methods: Sequence[str] = DEFAULT_METHODS,
-    seed: int = 1,
+    seed: int = SEED,
     out_dir: str | Path = "delivery-study",
     jobs: int = 1,
     progress: bool = True,
@@ -229,6 +237,7 @@ def delivery_study(
     if not ratios or not all(0 < r < math.inf for r in ratios):
         shown = ", ".join(f"{r:g}" for r in ratios)
         raise InstanceError(f"ratios must be positive and finite, got [{shown}]")
+    methods = canonical_methods(DeliveryInstance, methods)  # "smma" -> "SMMA"
     if time_limit is None and {"exact", "milp"} & set(methods):
         time_limit = EXACT_TIME_LIMIT
     settings = {
@@ -408,8 +417,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--setup", choices=["dag40", "pairs120", "small"], default="dag40", help="§5.5 setup"
     )
     parser.add_argument(
-        "--instances", type=int, default=10, help="random instances per setup (a count)"
+        "--scenarios", type=int, default=10, help="random instances per setup (a count)"
     )
+    deprecated(parser, "--instances", "scenarios", "--scenarios N (a count)", type=int)
     parser.add_argument(
         "--methods",
         default="NIA,MMA,SMMA,GA",
@@ -451,7 +461,7 @@ def run(args: argparse.Namespace) -> int:
     )
     df = delivery_study(
         setup=args.setup,
-        instances=args.instances,
+        instances=args.scenarios,
         ratios=ratios,
         methods=method_list(args.methods) or (),
         seed=args.seed,
@@ -466,14 +476,16 @@ def run(args: argparse.Namespace) -> int:
     )
     with pd.option_context("display.width", 160, "display.max_columns", 20):
         print("average makespan f (5.1):")
-        print(thesis_table(df, "makespan").round(1).to_string())
+        print(thesis_table(df, "makespan").round(1).to_string(line_width=terminal_width()))
         print("\naverage q = f / f_a (5.19):")
-        print(thesis_table(df, "q").round(4).to_string())
+        print(thesis_table(df, "q").round(4).to_string(line_width=terminal_width()))
         print("\naverage run time (s):")
-        print(thesis_table(df, "runtime").round(3).to_string())
+        print(thesis_table(df, "runtime").round(3).to_string(line_width=terminal_width()))
         if df["optimum"].notna().any():
             print("\naverage gap to the optimum f / f_o - 1:")
-            print(thesis_table(df, "gap_to_optimum").round(4).to_string())
+            print(
+                thesis_table(df, "gap_to_optimum").round(4).to_string(line_width=terminal_width())
+            )
     print(f"\nrows: {folder(args.out) / f'delivery_{args.setup}.csv'}")
     if args.plot:
         plot_study(df, "q", path=args.plot)

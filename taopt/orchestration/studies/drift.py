@@ -42,9 +42,17 @@ import numpy as np
 import pandas as pd
 
 from taopt.bounds import arborescence, thesis_mcga
+from taopt.defaults import SEED
 from taopt.errors import InstanceError
-from taopt.orchestration.cli import FIELD_HELP, folder, parse_field
-from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
+from taopt.orchestration.cli import FIELD_HELP, deprecated, folder, parse_field, terminal_width
+from taopt.orchestration.study import (
+    Scenario,
+    StudySpec,
+    canonical_methods,
+    check_integer,
+    run_study,
+    with_optimum,
+)
 from taopt.routing.problem import AssignmentProblem
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
@@ -62,14 +70,23 @@ CSV = "drift.csv"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``taopt study drift`` (the CLI adds ``--out``, ``--seed``,
     ``--time-limit``, ``--jobs``, ``--dask`` and ``--plot``)."""
-    parser.add_argument("--n", type=int, required=True, help="number of targets")
-    parser.add_argument("--m", type=int, required=True, help="number of vehicles")
+    parser.add_argument(
+        "--sizes",
+        default=None,
+        metavar="LIST",
+        help="comma-separated nNmM sizes (n targets, m vehicles), e.g. n10m3 or n50m10,n120m10; "
+        "several sizes go to OUT/<size>/ (default: none: required)",
+    )
+    deprecated(parser, "--n", "n_alias", "--sizes nNmM", type=int)
+    deprecated(parser, "--m", "m_alias", "--sizes nNmM", type=int)
+    parser.set_defaults(n_alias=None, m_alias=None)
     parser.add_argument("--scenarios", type=int, default=400, help="random scenarios (a count)")
     parser.add_argument(
         "--methods",
         default="VN,VM,EVN,EVM,MC,GA,exact",
         metavar="LIST",
-        help="comma-separated registered methods (also pyvrp, ortools with taopt[peers])",
+        help="comma-separated registered methods, case-insensitive (also pyvrp, ortools with "
+        "taopt[peers])",
     )
     parser.add_argument("--field", default="thesis", metavar="SPEC", help=FIELD_HELP)
     parser.add_argument(
@@ -84,35 +101,61 @@ def run(args: argparse.Namespace) -> int:
     """Body of ``taopt study drift``: run, print the summary and the tests, plot."""
     import pandas as pd
 
+    from taopt.orchestration.studies.budgeted import parse_size
     from taopt.orchestration.studies.drift import drift_study, plot_gaps, summarize, wilcoxon_pairs
 
+    sizes = _cli_sizes(args)
+    pairs = [parse_size(size) for size in sizes]  # every size checked before anything runs
     options = (
         {"GA": {"generations": args.ga_generations}} if args.ga_generations is not None else None
     )
-    df = drift_study(
-        args.n,
-        args.m,
-        args.scenarios,
-        methods=args.methods,
-        seed=args.seed,
-        out_dir=args.out,
-        jobs=args.jobs,
-        dask=args.dask,
-        progress=not args.quiet,
-        time_limit=args.time_limit,
-        method_options=options,
-        field="thesis" if args.field == "thesis" else parse_field(args.field),
-    )
-    table = summarize(df)
-    with pd.option_context("display.width", 160, "display.max_columns", 20):
-        print(table.round(4).to_string())
-        print()
-        print(wilcoxon_pairs(df).round(4).to_string(index=False))
-    table.to_csv(folder(args.out) / "summary.csv")
-    if args.plot:
-        plot_gaps(df, path=args.plot)
-        print(f"plot written to {args.plot}")
+    field = "thesis" if args.field == "thesis" else parse_field(args.field)
+    for size, (n, m) in zip(sizes, pairs, strict=True):
+        out = folder(args.out) if len(sizes) == 1 else folder(args.out) / size
+        plot = args.plot
+        if plot and len(sizes) > 1:
+            plot = str(folder(plot).with_name(f"{folder(plot).stem}_{size}.png"))
+        if len(sizes) > 1:
+            print(f"== {size} ({out})")
+        df = drift_study(
+            n,
+            m,
+            args.scenarios,
+            methods=args.methods,
+            seed=args.seed,
+            out_dir=out,
+            jobs=args.jobs,
+            dask=args.dask,
+            progress=not args.quiet,
+            time_limit=args.time_limit,
+            method_options=options,
+            field=field,
+        )
+        table = summarize(df)
+        with pd.option_context("display.width", 160, "display.max_columns", 20):
+            print(table.round(4).to_string(line_width=terminal_width()))
+            print()
+            print(wilcoxon_pairs(df).round(4).to_string(index=False, line_width=terminal_width()))
+        table.to_csv(out / "summary.csv")
+        if plot:
+            plot_gaps(df, path=plot)
+            print(f"plot written to {plot}")
     return 0
+
+
+def _cli_sizes(args: argparse.Namespace) -> list[str]:
+    """``--sizes`` as a list, or the deprecated ``--n N --m M`` as one size."""
+    n, m = getattr(args, "n_alias", None), getattr(args, "m_alias", None)
+    if n is not None or m is not None:
+        if n is None or m is None or args.sizes:
+            raise InstanceError("give --sizes nNmM (the deprecated --n and --m go together)")
+        return [f"n{n}m{m}"]
+    if not args.sizes:
+        raise InstanceError("--sizes is required: comma-separated nNmM sizes, e.g. n10m3")
+    sizes = list(dict.fromkeys(s.strip() for s in args.sizes.split(",") if s.strip()))
+    if not sizes:
+        raise InstanceError(f"--sizes: no sizes in {args.sizes!r}")
+    return sizes
 
 
 __all__ = [
@@ -162,7 +205,7 @@ def drift_study(
     m: int,
     scenarios: int,
     methods: str | Sequence[str] = METHODS,
-    seed: int = 1,
+    seed: int = SEED,
     out_dir: str | os.PathLike = "drift-study",
     jobs: int = 1,
     progress: bool = True,
@@ -241,7 +284,7 @@ def parse_methods(methods: str | Sequence[str]) -> list[str]:
     methods = list(dict.fromkeys(methods))
     if not methods:
         raise InstanceError("no methods given")
-    return methods
+    return canonical_methods(AssignmentProblem, methods)  # "mc" -> "MC"
 
 
 def _with_ratios(df: pd.DataFrame) -> pd.DataFrame:
