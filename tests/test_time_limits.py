@@ -347,3 +347,66 @@ def test_sop_under_a_generous_limit_still_certifies():
     for name in ("ESC07", "ESC11", "ESC12"):
         result = taopt.solve(SopProblem.load(name), "exact", time_limit=60)
         assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
+
+
+# -- issue 30 item 4: the clock is looked at inside the memetic steps too -----------------------
+
+
+class ExpiresAfter:
+    """A stand-in Deadline that is limited and expires after ``checks`` queries (no clock):
+    it tells which steps look at the deadline, whatever the machine's speed."""
+
+    def __init__(self, checks: int) -> None:
+        self.checks, self.asked = checks, 0
+        self.limited, self.seconds = True, 1.0
+
+    def expired(self, margin: float = 0.0) -> bool:
+        self.asked += 1
+        return self.asked > self.checks
+
+    def remaining(self) -> float:
+        return 0.0 if self.asked >= self.checks else 1.0
+
+    def elapsed(self) -> float:
+        return 0.0
+
+
+def test_local_searches_stop_at_an_expired_deadline():
+    """Each memetic descent makes no move once its deadline has expired (and some without)."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics.budgeted import LimitedDescent
+    from taopt.heuristics.ga_local_search import local_search
+    from taopt.heuristics.ga_penalised_search import PenalisedSearch
+    from taopt.heuristics.ga_routing import decode, path_matrix, path_nodes
+
+    problem = euclidean(40, 3, seed=4)
+    genes = np.random.default_rng(1).permutation(problem.n + problem.m - 1)
+    matrix, path = path_matrix(problem), path_nodes(problem, genes)[0]
+    spent = Deadline(1e-9)
+    assert local_search(matrix, path, deadline=spent)[1] == 0 < local_search(matrix, path)[1]
+    budgeted = BudgetedProblem(problem.cost, problem.n, capacity=[20, 20, 20])
+    search = PenalisedSearch(budgeted, 1.0, 0.1)
+    assert search.run(matrix, path, deadline=spent)[1] == 0 < search.run(matrix, path)[1]
+    routes = decode(problem, genes, "vehicle")
+    descent = LimitedDescent(budgeted)
+    assert descent.run(routes, deadline=spent)[1] == 0 < descent.run(routes)[1]
+
+
+@pytest.mark.parametrize("family", ["assignment", "budgeted"])
+def test_memetic_step_looks_at_the_deadline(family, monkeypatch):
+    """A deadline that expires once the first generation has begun stops the GA inside that
+    generation's local search (no move made, one generation, the best so far, scored): a
+    generation's polish on n = 200 took 15 s past a 1 s limit under load before."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics import budgeted, ga_routing
+
+    problem = euclidean(60, 3, seed=2)
+    module, ga = ga_routing, ga_routing.genetic_algorithm
+    if family == "budgeted":
+        problem = BudgetedProblem(problem.cost, problem.n, capacity=[25, 25, 25])
+        module, ga = budgeted, budgeted.genetic_algorithm
+    monkeypatch.setattr(module, "Deadline", lambda seconds: ExpiresAfter(1))
+    result = ga(problem, seed=0, time_limit=1.0)
+    assert result.info["generations_done"] == 1 and result.info["stopped_by"] == "time_limit"
+    assert result.info["moves"] == 0
+    assert taopt.evaluate(problem, result.solution) == pytest.approx(result.objective)
