@@ -410,3 +410,32 @@ def test_memetic_step_looks_at_the_deadline(family, monkeypatch):
     assert result.info["generations_done"] == 1 and result.info["stopped_by"] == "time_limit"
     assert result.info["moves"] == 0
     assert taopt.evaluate(problem, result.solution) == pytest.approx(result.objective)
+
+
+def test_delivery_milp_with_a_spent_limit_builds_nothing():
+    """Given a limit already spent, the delivery MILP returns the incumbent with status
+    time_limit and a valid bound without building its model (it built it before)."""
+    from taopt.heuristics.sequencing import smma_delivery
+    from taopt.models.delivery import solve_delivery
+
+    instance = delivery(12)
+    incumbent = smma_delivery(instance)
+    result = solve_delivery(instance, time_limit=1e-9, incumbent=incumbent.solution)
+    assert result.info["model"] == "not built"
+    assert result.status == TIME_LIMIT and result.objective == pytest.approx(incumbent.objective)
+    assert result.bound is not None and result.bound <= result.objective
+
+
+def test_delivery_milp_skips_a_compile_that_cannot_fit(monkeypatch):
+    """The compile-and-presolve estimate follows the build's measured time (so it grows with
+    the machine's load): when it exceeds what is left, HiGHS is not started and the answer is
+    the incumbent with a bound (a 1 s limit took 2.4 s under load before)."""
+    from taopt.models import delivery as model
+
+    monkeypatch.setattr(model, "COMPILE_PER_BUILD_PER_CUSTOMER", 1e9)
+    instance = delivery(10)
+    result = taopt.solve(instance, "milp", time_limit=60.0)
+    assert result.info["model"] == "built, not compiled" and result.info["estimate"] > 60
+    assert result.status == TIME_LIMIT and result.solution is not None
+    assert taopt.evaluate(instance, result) == pytest.approx(result.objective)
+    assert result.bound is not None and result.bound <= result.objective
