@@ -42,19 +42,38 @@ imports ``taopt.models`` (hence highspy) at the top would break OR-Tools in
 its own worker. The worker dies with its parent (Linux ``PR_SET_PDEATHSIG``,
 a ``getppid`` watch, end of file on its stdin); on Ctrl-C during a call the
 caller stops it and re-raises; a worker that crashes or cannot import its
-package becomes a :class:`taopt.SolverError` naming the peer, and so does a
-call that overruns its ``time_limit`` by :data:`GRACE` seconds (the worker is
-then stopped; a call without a time limit waits as long as it takes).
+package becomes a :class:`taopt.SolverError` naming the peer.
 :func:`shutdown` stops the workers (also done at exit).
+
+Time limits
+-----------
+A ``time_limit`` is wall-clock from the call (DESIGN.md invariant 4), the
+worker's start-up included: the caller waits for a starting worker only as
+long as the limit allows (a worker still importing its package at the limit
+keeps starting, for the next call, and the call answers "no_solution"); the
+request carries the seconds left, which the worker counts from when it reads
+it (model building included; CP-SAT's is checked as it is built). Each
+improving solution the worker finds is sent to the caller at once; a worker
+that has not answered :func:`grace` seconds after the limit is stopped and
+the call answers with the last of them (or "no_solution"), never an
+exception. A call without a time limit waits as long as it takes.
+
+Default stop
+------------
+A heuristic peer stops by default after :func:`default_no_improvement`
+iterations (PyVRP) or solutions (OR-Tools) without a better solution, a count
+that grows with ``n + m``; the time limit is the ceiling. An explicit
+``max_iterations`` / ``solution_limit`` switches it off.
 
 Determinism
 -----------
-PyVRP is deterministic for a given ``seed`` when it stops on
-``max_iterations`` (pass ``time_limit=None``); stopped by time it is not (the
-number of iterations done in the time varies). OR-Tools' routing search has
-no random seed: ``seed`` is recorded but changes nothing; it is deterministic
-when it stops on ``solution_limit`` (pass ``time_limit=None``), not when it
-stops on time.
+PyVRP is deterministic for a given ``seed`` when it stops on a count
+(``max_iterations`` or the default no-improvement stop; pass
+``time_limit=None``); stopped by time it is not (the number of iterations done
+in the time varies). OR-Tools' routing search has no random seed: ``seed`` is
+recorded but changes nothing; it is deterministic when it stops on a count
+(``solution_limit`` or the no-improvement stop; pass ``time_limit=None``), not
+when it stops on time.
 
 References
 ----------
