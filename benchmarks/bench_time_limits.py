@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 import taopt
+from taopt.limits import overrun_allowance
 
 # the public TSPLIB files beside the checkout (../shared/benchmarks/tsplib)
 BENCHMARKS = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "tsplib"
@@ -50,11 +51,6 @@ BENCHMARKS = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "ts
 BUSY_LOOP = (
     "import sys, time\nend = time.time() + float(sys.argv[1])\nwhile time.time() < end: pass\n"
 )
-
-
-def allowance(limit: float) -> float:
-    """The overrun the contract allows at a limit of ``limit`` seconds: max(1 s, 5 %)."""
-    return max(1.0, 0.05 * limit)
 
 
 def euclidean(n: int, m: int, seed: int = 0) -> np.ndarray:
@@ -147,7 +143,7 @@ def run(problem: object, family: str, method: str, limit: float) -> tuple[float,
         elapsed = time.perf_counter() - began
         status, objective, startup = type(exc).__name__, str(exc).splitlines()[0][:40], None
     overrun = elapsed - limit
-    ok = overrun <= allowance(limit)
+    ok = overrun <= overrun_allowance(limit)
     extra = "" if not startup else f"  start-up {startup:.2f} s"
     print(
         f"{family:<11}{method:<16}{name_of(problem):<19}{limit:>5g}{elapsed:>8.2f}"
