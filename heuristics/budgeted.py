@@ -413,6 +413,7 @@ def improve_budgeted(problem: BudgetedProblem, routes: list[list[int]]) -> list[
 
 def limited_extended_voronoi_routes(
     problem: BudgetedProblem,
+    deadline: Deadline | None = None,
 ) -> tuple[list[list[int]], np.ndarray, int]:
     """Extended Voronoi clustering whose growth refuses a vehicle at its limit, then (2.18).
 
@@ -423,12 +424,15 @@ def limited_extended_voronoi_routes(
     good and the next cheapest pair is proposed. Each vehicle's route is the (2.18) sequence
     of its final cluster, the one checked at its last acceptance, so it is within limits.
 
+    Once ``deadline`` (optional) has expired no further pair is proposed: the targets not
+    yet clustered are returned in ``left``.
+
     Returns
     -------
     routes : list of m lists
         One route per vehicle (partial when targets were left).
     left : (r,) int array
-        Targets every vehicle refused.
+        Targets every vehicle refused (or not reached before the deadline).
     refusals : int
         Pairs refused.
 
@@ -451,6 +455,8 @@ def limited_extended_voronoi_routes(
     routes: list[list[int]] = [[] for _ in range(m)]
     refusals = 0
     while not done.all():
+        if deadline is not None and deadline.expired():
+            break
         masked = np.where(done[None, :] | refused, np.inf, reach)
         flat = int(np.argmin(masked.T))  # lowest target, then lowest vehicle
         k, j = divmod(flat, m)
@@ -534,10 +540,18 @@ def mc(
 
 
 @register_method(BudgetedProblem, "EVM", category="heuristic")
-def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) -> Solution:
+def evm(
+    problem: BudgetedProblem,
+    seed: int | np.random.Generator | None = 0,
+    time_limit: float | None = None,
+) -> Solution:
     """EVM made limit-aware: extended Voronoi growth that refuses a vehicle at its limit.
 
     See :func:`limited_extended_voronoi_routes`. Deterministic (``seed`` is recorded only).
+    ``time_limit`` (wall-clock seconds): when it expires the growth stops and the targets not
+    yet placed are reported unassigned (status "no_solution", ``info["stopped_by"] =
+    "time_limit"``), as :func:`mc` does; it is the exact model's warm start, which must keep
+    to its share of the limit.
 
     Returns
     -------
@@ -560,8 +574,13 @@ def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) ->
     Thesis (2.12)–(2.14), (2.18)–(2.19), Theorem 2.6; §6.2.
     """
     start = time.perf_counter()
-    routes, left, refusals = limited_extended_voronoi_routes(problem)
+    deadline = Deadline(time_limit)
+    routes, left, refusals = limited_extended_voronoi_routes(
+        problem, deadline if deadline.limited else None
+    )
     info: dict[str, Any] = {"refusals": refusals}
+    if deadline.limited and deadline.expired() and left.size:
+        info["stopped_by"] = "time_limit"
     if left.size:
         return _answer(
             problem, None, "EVM", seed, start, {**info, **_no_solution("EVM", left.size)}

@@ -439,3 +439,26 @@ def test_delivery_milp_skips_a_compile_that_cannot_fit(monkeypatch):
     assert result.status == TIME_LIMIT and result.solution is not None
     assert taopt.evaluate(instance, result) == pytest.approx(result.objective)
     assert result.bound is not None and result.bound <= result.objective
+
+
+def test_budgeted_warm_start_and_starts_keep_to_a_spent_limit(monkeypatch):
+    """Budgeted EVM (the exact model's warm start) stops at its limit with the targets not yet
+    placed reported (no_solution), and the exact model builds no further start once its limit
+    is spent (n = 100 at T = 0.5 took 1.5 s under load: EVM and the repair ignored the clock)."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics.budgeted import evm
+    from taopt.models import budgeted as model
+
+    problem = BudgetedProblem(euclidean(30, 3).cost, 30, capacity=[12, 12, 12])
+    stopped = evm(problem, time_limit=1e-9)
+    assert stopped.status == "no_solution" and stopped.info["stopped_by"] == "time_limit"
+    assert stopped.info["unassigned"] == 30 and math.isinf(stopped.objective)
+    assert evm(problem).status == "feasible"  # without a limit it places them all
+
+    def never(*args, **kwargs):
+        raise AssertionError("a start was built after the limit")
+
+    monkeypatch.setattr(model, "greedy_budgeted", never)
+    monkeypatch.setattr(model, "repaired_routes", never)
+    result = model.solve_budgeted(problem, time_limit=1e-9)
+    assert result.status == TIME_LIMIT and result.bound is not None
