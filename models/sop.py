@@ -832,7 +832,14 @@ def solve_sop_problem(
         share = deadline.share(DP_SHARE)
         result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
         used = "dp"
-        if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+        # a second stage sets up as the first did (its bounds, its first layers; seconds under
+        # load, outside the DP's clock): started only when its share covers twice that
+        setup = result.info.get("setup_seconds", 0.0)
+        second_share = deadline.share(SECOND_STAGE_SHARE)
+        short = second_share is not None and second_share < 2 * setup + MARGIN
+        if result.status == TIME_LIMIT and short:
+            info["second_stage"] = f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
+        elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
             # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
             # state, so not the first choice) with more states, from the best order so far
             first = result
