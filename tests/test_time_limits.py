@@ -484,3 +484,25 @@ def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch):
     assert len(calls) == 1 and result.info["second_stage"].startswith("skipped")
     assert result.status == TIME_LIMIT and result.bound <= result.objective
     assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
+def test_delivery_milp_limited_runs_leave_out_the_clockless_highs_phases(monkeypatch):
+    """A time-limited delivery MILP asks HiGHS for no probing and no restart (both ignore
+    its clock: 6 s took up to 13 s); the answer is still certified on a small instance."""
+    from taopt.models import delivery as model
+
+    seen = []
+    real = model.HighsModel.solve
+
+    def recording(self, time_limit=None, mip_rel_gap=None, on_solution=None, options=None, **kw):
+        seen.append(dict(options or {}))
+        return real(self, time_limit, mip_rel_gap, on_solution, options, **kw)
+
+    monkeypatch.setattr(model.HighsModel, "solve", recording)
+    instance = delivery(6)
+    result = taopt.solve(instance, "milp", time_limit=60.0)
+    assert seen and all(
+        o["presolve_rule_off"] == 2**15 and o["mip_allow_restart"] is False for o in seen
+    )
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(taopt.solve(instance, "exact").objective)
