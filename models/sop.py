@@ -787,7 +787,9 @@ def solve_sop_problem(
     if unreachable is not None:
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
+    counting = time.perf_counter()
     ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
+    counted_in = time.perf_counter() - counting
     info = {"ideals": ideals, "ideals_capped": capped}
 
     def milp(known, time_left, dp_result=None) -> Solution:
@@ -813,9 +815,19 @@ def solve_sop_problem(
             result = result.replace(bound=bound, status=status)
         return result
 
-    if deadline.expired(MARGIN):  # no time left after the warm start and the count
+    dp_next = engine != "milp" and problem.n <= MAX_NODES
+    # a DP stage first sets up its bounds and first layers outside its clock, about as long
+    # as the count just measured (both follow the machine's load): not started without that
+    dp_cannot_fit = (
+        dp_next
+        and deadline.limited
+        and deadline.remaining() * (1.0 if engine == "dp" or not capped else DP_SHARE)
+        < counted_in + MARGIN
+    )
+    if deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
-        result = _stopped(problem, known, None, began, "portfolio", {"model": "not run"})
+        stop_info = {"model": "not run", "count_seconds": counted_in}
+        result = _stopped(problem, known, None, began, "portfolio", stop_info)
         used = "none"
     elif engine == "milp" or problem.n > MAX_NODES:
         result = milp(incumbent, deadline.remaining())

@@ -506,3 +506,38 @@ def test_delivery_milp_limited_runs_leave_out_the_clockless_highs_phases(monkeyp
     )
     assert result.status == OPTIMAL
     assert result.objective == pytest.approx(taopt.solve(instance, "exact").objective)
+
+
+def test_sop_portfolio_starts_no_dp_stage_it_cannot_set_up(monkeypatch):
+    """The portfolio starts a DP stage only when its share covers the ideal count just
+    measured (a stage sets up about as long, outside its clock: under load ESC47 at T = 1
+    took 2.8 s); otherwise it answers at once with the warm start's order and a bound."""
+    from taopt.models import sop as model
+    from taopt.sop.problem import SopProblem
+
+    monkeypatch.setattr(model, "DP_SHARE", 1e-9)  # a first stage's share below any count
+    problem = SopProblem.load("ESC47")
+    result = taopt.solve(problem, "exact", time_limit=2.0)
+    assert result.info["model"] == "not run" and result.info["engine"] == "none"
+    assert result.status == TIME_LIMIT and result.bound <= result.objective
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
+def test_limited_mip_runs_leave_out_highs_clockless_phases():
+    """Every time-limited MIP run of a HighsModel (all exact models) turns off HiGHS's probing
+    and restarts, which ignore its clock (the budgeted model's 5 s took 6.3 s, routing's
+    5.7 s); a run without a limit turns them back on."""
+    import cvxpy as cp
+
+    from taopt.models.highs import CLOCKLESS_MIP_PHASES, HighsModel
+
+    x = cp.Variable(3, integer=True)
+    model = HighsModel(cp.Problem(cp.Minimize(cp.sum(x)), [x >= 0.5, x[0] + x[1] >= 3]))
+
+    def phases():
+        return {name: model.highs.getOptionValue(name)[1] for name in CLOCKLESS_MIP_PHASES}
+
+    assert model.solve(time_limit=10.0).objective == 4.0
+    assert phases() == {"presolve_rule_off": 2**15, "mip_allow_restart": False}
+    assert model.solve().objective == 4.0
+    assert phases() == {"presolve_rule_off": 0, "mip_allow_restart": True}
