@@ -179,6 +179,11 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
     class Reporter(IteratedLocalSearchCallbacks):
         """Sends each new feasible best to the parent (kept if the worker is stopped)."""
 
+        def on_start(self, ils: Any) -> None:
+            start = getattr(ils, "_init", None)  # its first local optimum, if it shows it
+            if start is not None:
+                self.on_best(start)
+
         def on_best(self, best: Any) -> None:
             if best.is_feasible() and best.is_complete():
                 report(options, answer(best))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -624,15 +625,46 @@ def test_a_limit_that_ends_during_start_up_leaves_the_worker_starting(ref_routin
 
 
 def test_cpsat_worker_stops_building_at_its_deadline():
-    """The worker checks its deadline while it builds the CP-SAT model: past it, it replies at
-    once with status UNKNOWN, no routes and where it stopped."""
-    sys.path.insert(0, str(peers.WORKER_SCRIPT.parent))
-    try:
-        import _peer_worker as worker
-    finally:
-        sys.path.pop(0)
+    """The worker checks its deadline while it builds the CP-SAT model: sent a request whose
+    time is spent, it replies at once with status UNKNOWN, no routes and where it stopped
+    (the request goes straight to the worker process; OR-Tools never loads in this one)."""
     cost = np.rint(uniform_current_problem(40, 4, 3).cost).astype(np.int64)
-    options = {"seed": 0, "num_workers": 1, "deadline": time.monotonic() - 1.0}
-    reply = worker.solve_cpsat_routing(cost, 40, 4, options)
-    assert reply["cpsat_status"] == "UNKNOWN" and reply["routes"] is None
+    options = {"time_limit": 1e-6, "seed": 0, "num_workers": 1, "kind": "routing"}
+    worker = peers._worker("cpsat")
+    with worker.lock:
+        assert worker.wait_ready(None)
+        reply, answered = worker.call({"cost": cost, "n": 40, "m": 4, "options": options}, None)
+    assert answered and reply["cpsat_status"] == "UNKNOWN" and reply["routes"] is None
     assert reply["stopped_during"] == "model building"
+
+
+def test_reported_solutions_are_complete_route_sets():
+    """Every improving solution a worker streams (kept if it is stopped at the deadline) is a
+    complete route set whose integer cost is the one reported, for each routing peer."""
+    problem = uniform_current_problem(12, 3, 8)
+    cost, _ = peers.integer_costs(problem, None)
+    for peer, options in (
+        ("pyvrp", {"max_iterations": 300, "seed": 0}),
+        ("ortools", {"solution_limit": 50, "first_solution": "PATH_CHEAPEST_ARC",
+                     "metaheuristic": "GUIDED_LOCAL_SEARCH", "seed": 0}),
+        ("cpsat", {"seed": 0, "num_workers": 1, "kind": "routing", "time_limit": 20.0}),
+    ):  # fmt: skip
+        worker = peers._worker(peer)
+        request = {"cost": cost, "n": 12, "m": 3, "options": options}
+        with worker.lock:
+            assert worker.wait_ready(None)
+            worker.process.stdin.write(pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL))
+            worker.process.stdin.flush()
+            frames = []
+            while not frames or frames[-1][0] == "best":
+                frames.append(worker._next(None, "a solve"))
+        assert frames[-1][0] == "ok" and len(frames) >= 2, peer
+        for _, payload in frames[:-1]:
+            routes = payload["routes"]
+            assert sorted(t for route in routes for t in route) == list(range(12)), peer
+            walked = sum(
+                cost[a, b]
+                for k, route in enumerate(routes)
+                for a, b in zip([12 + k, *route], route, strict=False)
+            )
+            assert walked == payload["objective"], peer
