@@ -139,7 +139,9 @@ def _predecessor_masks(problem: SopProblem) -> np.ndarray:
     return predecessor_masks(problem.n, problem.closure.edges)
 
 
-def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
+def count_ideals(
+    problem: SopProblem, cap: int = IDEAL_CAP, deadline: Deadline | None = None
+) -> tuple[int, bool]:
     """Number of order ideals containing ``start`` (the DP's sets), counted up to ``cap``.
 
     Parameters
@@ -147,13 +149,18 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     problem : SopProblem
     cap : int
         Stop once more than ``cap`` ideals are counted.
+    deadline : Deadline, optional
+        Stop, as if capped, once it has expired (looked at for every node of every layer);
+        given one, a layer whose candidates prove the cap passed (each ideal has at most
+        as many parents as removable nodes) returns that lower bound without counting it.
 
     Returns
     -------
     count : int
         The exact number of ideals, or ``cap + 1`` when ``capped``.
     capped : bool
-        True when there are more than ``cap`` (the true number is larger).
+        True when the count passed ``cap`` or the deadline came first (the true number
+        is larger or unknown).
 
     Notes
     -----
@@ -169,7 +176,9 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     if problem.n > MAX_NODES:
         return cap + 1, True
     first = int(_ONE << np.uint64(problem.start))
-    return ideals.count_ideals(_predecessor_masks(problem), problem.n, cap, first=first)
+    return ideals.count_ideals(
+        _predecessor_masks(problem), problem.n, cap, first=first, deadline=deadline
+    )
 
 
 class _Bound:
@@ -772,7 +781,9 @@ def solve_sop_dp(
                 info["beam"] = beam[0]
     upper = np.inf if known is None else known[0]
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
+    setting_up = time.perf_counter()
     runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
     if both and both_prices:
         # the assignment LP is degenerate: the reversed problem's optimal prices (read
         # transposed) are other optimal prices, and often prune other states

@@ -127,16 +127,20 @@ def ideal_layers(
 
 
 def count_ideals(
-    need: np.ndarray, n: int, cap: int = 10_000_000, first: int = 0
+    need: np.ndarray, n: int, cap: int = 10_000_000, first: int = 0, deadline: Any = None
 ) -> tuple[int, bool]:
     """The number of order ideals containing ``first`` (the empty and full sets included).
+
+    With a ``deadline`` (:class:`taopt.limits.Deadline`) the count gives up when it expires
+    (``capped`` True: the true number is unknown).
 
     Returns
     -------
     count : int
         The exact number, or ``cap + 1`` when ``capped``.
     capped : bool
-        True when there are more than ``cap`` ideals, or more than :data:`MAX_BITS` nodes.
+        True when there are more than ``cap`` ideals, more than :data:`MAX_BITS` nodes, or
+        the deadline came first.
 
     Example
     -------
@@ -145,7 +149,7 @@ def count_ideals(
     """
     if n > MAX_BITS:
         return cap + 1, True
-    layers = ideal_layers(need, n, cap, first=first)
+    layers = ideal_layers(need, n, cap, deadline=deadline, first=first)
     if layers is None:
         return cap + 1, True
     return sum(int(layer.size) for layer in layers), False
