@@ -261,19 +261,33 @@ def _solve_joint(
         stopped_by = run.stopped_by
         break
 
-    def joint_info(stopped: str) -> dict:
-        return {
-            "formulation": "joint",
-            "sec": sec,
-            "rounds": rounds,
-            "cuts": len(cuts),
-            "solver_status": solver_status,
-            "stopped_by": stopped,
-        }
+    info = {
+        "formulation": "joint",
+        "sec": sec,
+        "rounds": rounds,
+        "cuts": len(cuts),
+        "solver_status": solver_status,
+        "stopped_by": stopped_by,
+    }
+    return _joint_answer(problem, best_routes, best_bound, stopped_by, info, start)
 
+
+def _joint_answer(
+    problem: CapabilityProblem,
+    best_routes: list[list[int]] | None,
+    best_bound: float,
+    stopped_by: str,
+    info: dict[str, Any],
+    start: float,
+) -> Solution:
+    """The joint model's answer by :func:`taopt.result.finish`; on a time limit the
+    family's arborescence bound (:func:`taopt.bounds.arborescence`) keeps the gap honest.
+    Without routes only a time limit is an answer (status "time_limit", objective inf)."""
     if best_routes is None:
         if stopped_by != "time_limit":
-            raise SolverError(f"the joint model found no feasible solution ({solver_status})")
+            raise SolverError(
+                f"the joint model found no feasible solution ({info['solver_status']})"
+            )
         # no plan in time: status time_limit, objective inf, the bound stands
         return finish(
             problem,
@@ -282,18 +296,16 @@ def _solve_joint(
             stop="time_limit",
             bound=max(best_bound, float(arborescence_lower(problem))),
             runtime=time.perf_counter() - start,
-            info=joint_info("time_limit"),
+            info=info,
         )
     if stopped_by == "time_limit":  # a valid bound of the family keeps the gap honest
         best_bound = max(best_bound, float(arborescence_lower(problem)))
-    bound = best_bound
-    info = joint_info(stopped_by)
     return finish(
         problem,
         Routes(best_routes),
         method="exact-joint",
         stop=stopped_by,
-        bound=bound,
+        bound=best_bound,
         runtime=time.perf_counter() - start,
         info=info,
     )
