@@ -7,6 +7,7 @@ Thesis §2.2.1 (2.2)–(2.5), §6.2.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -97,42 +98,15 @@ class ResourceModel:
         ):
             if not active:
                 continue
-            offset, top = columns, float(limits.max())
-            self.offsets[name] = offset
+            self.offsets[name] = columns
+            values_upper, rows = _resource_rows(
+                problem, name, limits, columns, (self.tails, self.heads, cost, reverse),
+                starts, inner, vehicle,
+            )  # fmt: skip
             columns += n
-            if name == "capacity":
-                column_upper.append(np.full(n, max(top - 1.0, 0.0)))
-                start_coef, start_rhs = top - limits[vehicle], top - 1.0
-                inner_coef, inner_rhs, lift = np.full(len(inner), top), top - 1.0, top - 2.0
-            else:
-                # time left on arrival at j: at most U_j = max_k (T_k − d_k(j)), d_k the
-                # shortest time from p_k; the big-M of each row is U of its head
-                reach = shortest_times(problem)[:, :n]
-                most = np.clip((limits[:, None] - reach).max(axis=0), 0.0, top)
-                column_upper.append(most)
-                start_rhs = most[self.heads[starts]]
-                start_coef = np.maximum(start_rhs - limits[vehicle] + cost[starts], 0.0)
-                inner_rhs = most[self.heads[inner]]
-                inner_coef, lift = inner_rhs + cost[inner], 0.0
+            column_upper.append(values_upper)
             costs.append(np.zeros(n))
-            # start rows: resource_j + coef σ[p_k, j] <= rhs
-            count = len(starts)
-            rows = np.tile(np.arange(count), 2)
-            cols = np.concatenate([offset + self.heads[starts], starts])
-            extra.append(
-                ((np.concatenate([np.ones(count), start_coef]), rows, cols), count, start_rhs)
-            )
-            # inner rows: resource_j − resource_i + coef σ_ij (+ lift σ_ji) <= rhs
-            count = len(inner)
-            inner_data = [np.ones(count), -np.ones(count), inner_coef]
-            inner_cols = [offset + self.heads[inner], offset + self.tails[inner], inner]
-            if lift > 0:
-                inner_data.append(np.full(count, lift))
-                inner_cols.append(reverse[inner])
-            rows = np.tile(np.arange(count), len(inner_data))
-            extra.append(
-                ((np.concatenate(inner_data), rows, np.concatenate(inner_cols)), count, inner_rhs)
-            )
+            extra.extend(rows)
         self.n_columns = columns
         pad = columns - n_arcs
         matrix = [sp.hstack([b, sp.csr_matrix((b.shape[0], pad))]) for b in blocks]
@@ -218,3 +192,53 @@ class ResourceModel:
             return decode(self.problem.routing, self, self.sigma(solution))
         except SolverError:
             return None
+
+
+def _resource_rows(
+    problem: BudgetedProblem,
+    name: str,
+    limits: np.ndarray,
+    offset: int,
+    arcs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    starts: np.ndarray,
+    inner: np.ndarray,
+    vehicle: np.ndarray,
+) -> tuple[np.ndarray, list[Any]]:
+    """The upper bounds of resource ``name``'s n columns (the first at ``offset``) and its
+    rows (:class:`ResourceModel`), each block as ((data, row, column) triplets, row count,
+    right-hand side). ``arcs``: tails, heads, travel times and the reverse arc of each arc;
+    ``starts``, ``inner``: the arcs out of a start point and between targets; ``vehicle``:
+    the vehicle of each start arc."""
+    n = problem.n
+    tails, heads, cost, reverse = arcs
+    top = float(limits.max())
+    if name == "capacity":
+        column_upper = np.full(n, max(top - 1.0, 0.0))
+        start_coef, start_rhs = top - limits[vehicle], top - 1.0
+        inner_coef, inner_rhs, lift = np.full(len(inner), top), top - 1.0, top - 2.0
+    else:
+        # time left on arrival at j: at most U_j = max_k (T_k − d_k(j)), d_k the
+        # shortest time from p_k; the big-M of each row is U of its head
+        reach = shortest_times(problem)[:, :n]
+        most = np.clip((limits[:, None] - reach).max(axis=0), 0.0, top)
+        column_upper = most
+        start_rhs = most[heads[starts]]
+        start_coef = np.maximum(start_rhs - limits[vehicle] + cost[starts], 0.0)
+        inner_rhs = most[heads[inner]]
+        inner_coef, lift = inner_rhs + cost[inner], 0.0
+    extra: list[Any] = []
+    # start rows: resource_j + coef σ[p_k, j] <= rhs
+    count = len(starts)
+    rows = np.tile(np.arange(count), 2)
+    cols = np.concatenate([offset + heads[starts], starts])
+    extra.append(((np.concatenate([np.ones(count), start_coef]), rows, cols), count, start_rhs))
+    # inner rows: resource_j − resource_i + coef σ_ij (+ lift σ_ji) <= rhs
+    count = len(inner)
+    inner_data = [np.ones(count), -np.ones(count), inner_coef]
+    inner_cols = [offset + heads[inner], offset + tails[inner], inner]
+    if lift > 0:
+        inner_data.append(np.full(count, lift))
+        inner_cols.append(reverse[inner])
+    rows = np.tile(np.arange(count), len(inner_data))
+    extra.append(((np.concatenate(inner_data), rows, np.concatenate(inner_cols)), count, inner_rhs))
+    return column_upper, extra
