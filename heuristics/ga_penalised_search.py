@@ -168,129 +168,162 @@ class PenalisedSearch:
     def _improving_moves(self, matrix: np.ndarray, nodes: np.ndarray) -> list[tuple[float, Move]]:
         """One pass: the :data:`CANDIDATES` best moves of each table that improve the
         penalised fitness by more than the tolerance, with their changes, best first."""
-        n, inner = self.n, nodes.size - 2
-        reverse_block, relocate_block, exchange_block, later = _move_masks(inner)
-        position = np.arange(nodes.size)
-        cost = matrix[nodes][:, nodes]
-        forward = np.diagonal(cost, 1)  # a[q]: arc q -> q + 1, q = 0..L
-        prefix = np.concatenate(([0.0], np.cumsum(forward)))  # F[q] = a[0] + .. + a[q-1]
-        is_start = nodes >= n  # route starts and the end point
-        starts_upto = np.cumsum(is_start)  # starts at positions 0..q
-        route = starts_upto - 1  # route (in path order) of each position
+        tables = _MoveTables(self, matrix, nodes)
+        if "reverse" in self.neighbourhood:
+            tables.reverse()
+        if "relocate" in self.neighbourhood:
+            tables.relocate()
+        if "exchange" in self.neighbourhood:
+            tables.exchange()
+        if "tails" in self.neighbourhood:
+            tables.tails()
+        tables.found.sort(key=lambda item: item[0])  # stable: ties keep the order of the tables
+        return tables.found
+
+
+class _MoveTables:
+    """One pass of :class:`PenalisedSearch` on path ``nodes``: the path's routes, times,
+    counts and penalties, and one table per move kind of the change of the penalised
+    fitness; :meth:`keep` collects the improving cells in :attr:`found`."""
+
+    def __init__(self, search: PenalisedSearch, matrix: np.ndarray, nodes: np.ndarray) -> None:
+        self.search = search
+        n, inner = search.n, nodes.size - 2
+        self.nodes, self.inner = nodes, inner
+        self.reverse_block, self.relocate_block, self.exchange_block, self.later = _move_masks(
+            inner
+        )
+        self.position = np.arange(nodes.size)
+        self.cost = cost = matrix[nodes][:, nodes]
+        self.forward = forward = np.diagonal(cost, 1)  # a[q]: arc q -> q + 1, q = 0..L
+        self.prefix = np.concatenate(([0.0], np.cumsum(forward)))  # F[q] = a[0] + .. + a[q-1]
+        self.is_start = is_start = nodes >= n  # route starts and the end point
+        self.starts_upto = starts_upto = np.cumsum(is_start)  # starts at positions 0..q
+        self.route = route = starts_upto - 1  # route (in path order) of each position
         vehicle = nodes[is_start] - n  # vehicle of each route; m for the end point
         times = np.bincount(route[:-1], weights=forward, minlength=vehicle.size)
         counts = np.bincount(route, weights=(~is_start).astype(float), minlength=vehicle.size)
         # per route: how far its time is over its limit (and over the limit with slack),
         # how many targets over its capacity, and its penalty now (-inf: no limit)
-        over_time = times - self.max_time[vehicle]
-        over_limit = times - self.time_limit[vehicle]
-        room = counts - self.capacity[vehicle]
-        weight, per_target = self.weight, self.weight * self.unit
+        over_time = times - search.max_time[vehicle]
+        over_limit = times - search.time_limit[vehicle]
+        self.room = counts - search.capacity[vehicle]
+        self.weight = weight = search.weight
+        self.per_target = search.weight * search.unit
         base_time = weight * np.where(over_limit > 0, over_time, 0.0)
-        base_count = per_target * np.maximum(room, 0.0)
+        self.base_count = self.per_target * np.maximum(self.room, 0.0)
         # the time penalty change is weight * (change + over_time) - base_time above the
         # limit and -base_time below it: per route, the threshold and the constant part
-        threshold = -over_limit
-        above = weight * np.where(np.isfinite(over_time), over_time, 0.0) - base_time
-        below = -base_time
+        self.threshold = -over_limit
+        self.above = weight * np.where(np.isfinite(over_time), over_time, 0.0) - base_time
+        self.below = -base_time
+        self.tolerance = 1e-10 * max(float(forward.sum()), 1.0)
+        self.found: list[tuple[float, Move]] = []
+        self.genes = slice(1, inner + 1)
+        self.rows, self.columns = route[self.genes][:, None], route[self.genes][None, :]
 
-        def time_change(r: np.ndarray, change: np.ndarray) -> np.ndarray:
-            """Change of route r's time penalty when its time changes by ``change``."""
-            if not self.timed:  # no finite travel-time limit: never a change (and cheap)
-                return np.zeros(r.shape)
-            return np.where(change > threshold[r], weight * change + above[r], below[r])
+    def time_change(self, r: np.ndarray, change: np.ndarray) -> np.ndarray:
+        """Change of route r's time penalty when its time changes by ``change``."""
+        if not self.search.timed:  # no finite travel-time limit: never a change (and cheap)
+            return np.zeros(r.shape)
+        return np.where(
+            change > self.threshold[r], self.weight * change + self.above[r], self.below[r]
+        )
 
-        def count_change(r: np.ndarray, change: Any) -> np.ndarray:
-            """Change of route r's capacity penalty when its count changes by ``change``."""
-            if not self.counted:
-                return np.zeros(r.shape)
-            return per_target * np.maximum(room[r] + change, 0.0) - base_count[r]
+    def count_change(self, r: np.ndarray, change: Any) -> np.ndarray:
+        """Change of route r's capacity penalty when its count changes by ``change``."""
+        if not self.search.counted:
+            return np.zeros(r.shape)
+        return self.per_target * np.maximum(self.room[r] + change, 0.0) - self.base_count[r]
 
-        tolerance = 1e-10 * max(float(forward.sum()), 1.0)
-        found: list[tuple[float, Move]] = []
+    def keep(self, kind: str, length: int, table: np.ndarray) -> None:
+        """Collect the :data:`CANDIDATES` best cells of ``table`` below -tolerance."""
+        flat = table.ravel()
+        better = np.flatnonzero(flat < -self.tolerance)
+        if better.size > CANDIDATES:
+            better = better[np.argpartition(flat[better], CANDIDATES)[:CANDIDATES]]
+        for index in better.tolist():
+            row, column = divmod(index, table.shape[1])
+            self.found.append((float(flat[index]), (kind, row, column, length)))
 
-        def keep(kind: str, length: int, table: np.ndarray) -> None:
-            flat = table.ravel()
-            better = np.flatnonzero(flat < -tolerance)
-            if better.size > CANDIDATES:
-                better = better[np.argpartition(flat[better], CANDIDATES)[:CANDIDATES]]
-            for index in better.tolist():
-                row, column = divmod(index, table.shape[1])
-                found.append((float(flat[index]), (kind, row, column, length)))
+    def reverse(self) -> None:
+        """Reversal of i..j (rows i, columns j, 1..L): a run of targets of one route."""
+        cost, forward, inner, genes = self.cost, self.forward, self.inner, self.genes
+        delta = cost[0:inner, 1 : inner + 1] + cost[1 : inner + 1, 2 : inner + 2]
+        backward = np.concatenate(([0.0], np.cumsum(np.diagonal(cost, -1))))[1 : inner + 1]
+        fsum = self.prefix[1 : inner + 1]
+        delta += (backward - fsum - forward[1 : inner + 1])[None, :]
+        delta += (fsum - backward - forward[0:inner])[:, None]
+        delta += self.time_change(self.rows, delta) + self.reverse_block
+        no_start = self.starts_upto[genes][None, :] == self.starts_upto[0:inner][:, None]
+        self.keep("reverse", 0, np.where(no_start, delta, np.inf))
 
-        genes = slice(1, inner + 1)
-        rows, columns = route[genes][:, None], route[genes][None, :]
-        if "reverse" in self.neighbourhood:
-            # reversal of i..j (rows i, columns j, 1..L): a run of targets of one route
-            delta = cost[0:inner, 1 : inner + 1] + cost[1 : inner + 1, 2 : inner + 2]
-            backward = np.concatenate(([0.0], np.cumsum(np.diagonal(cost, -1))))[1 : inner + 1]
-            fsum = prefix[1 : inner + 1]
-            delta += (backward - fsum - forward[1 : inner + 1])[None, :]
-            delta += (fsum - backward - forward[0:inner])[:, None]
-            delta += time_change(rows, delta) + reverse_block
-            no_start = starts_upto[genes][None, :] == starts_upto[0:inner][:, None]
-            keep("reverse", 0, np.where(no_start, delta, np.inf))
-        if "relocate" in self.neighbourhood:
-            # relocation of i..i+length-1 between p and p + 1 (rows i, columns p = 0..L)
-            to = route[0 : inner + 1]
-            insertion = cost.T[1 : inner + 1, 0 : inner + 1] - forward[None, 0 : inner + 1]
-            for length, block in relocate_block.items():
-                count = block.shape[0]
-                first = position[1 : count + 1]
-                last = first + length - 1
-                inside = prefix[last] - prefix[first]  # the segment's own arcs
-                removal = cost[first - 1, last + 1] - forward[first - 1] - forward[last]
-                add = insertion[:count] + cost[length : inner + 1, 1 : inner + 2]
-                whole = add + removal[:, None]
-                source = route[first]
-                same = source[:, None] == to[None, :]
-                penalty: float | np.ndarray = 0.0
-                if self.timed:  # the receiving route's time: the only route, inside one
-                    received = np.where(same, whole, add + inside[:, None])
-                    penalty = time_change(to[None, :], received)
-                # the segment's route loses it and the receiving route's count grows
-                leaving = count_change(source, -length)
-                if self.timed:
-                    leaving = leaving + time_change(source, removal - inside)
-                whole += np.where(same, 0.0, leaving[:, None] + count_change(to, length)[None, :])
-                whole += penalty + block
-                whole[starts_upto[last] != starts_upto[first - 1]] = np.inf  # a start in it
-                keep("relocate", length, whole)
-        if "exchange" in self.neighbourhood:
-            # exchange of the genes at i < j - 1 (rows i, columns j, 1..L), both targets:
-            # route of i gets j in i's place (``gets``), route of j gets i (its transpose)
-            first_arc = cost[0:inner, 1 : inner + 1]  # [i-1, j-1]: M[i-1, j]
-            second_arc = cost[1 : inner + 1, 2 : inner + 2]  # [i-1, j-1]: M[i, j+1]
-            around = forward[0:inner] + forward[1 : inner + 1]  # a[i-1] + a[i]
-            gets = first_arc + second_arc.T - around[:, None]
-            delta = gets + gets.T
-            if self.timed:  # counts never change; ``delta`` is symmetric
-                same = rows == columns
-                one_side = time_change(rows, np.where(same, delta, gets))
-                delta += one_side + np.where(same, 0.0, one_side.T)
-            delta += exchange_block
-            starts = is_start[genes]
-            delta[starts] = np.inf
-            delta[:, starts] = np.inf
-            keep("exchange", 0, delta)
-        if "tails" in self.neighbourhood:
-            # 2-opt*: cuts before c < d (rows c - 1, columns d - 1, 0..L) in different routes.
-            # Route a of c - 1 takes the tail after d - 1 and route b the tail after c - 1:
-            # the table is ``one_side`` (route a's change) plus its transpose (route b's).
-            following = np.minimum.accumulate(np.where(is_start, position, nodes.size)[::-1])[
-                ::-1
-            ]  # next start at or after each position: a tail cut before q runs to it
-            tail_time = (prefix[following] - prefix[position])[1 : inner + 2]
-            tail_count = (following - position)[1 : inner + 2]
-            half = cost[0 : inner + 1, 1 : inner + 2] - forward[0 : inner + 1, None]
-            a = route[0 : inner + 1][:, None]
-            one_side = half + count_change(a, tail_count[None, :] - tail_count[:, None])
-            if self.timed:
-                one_side += time_change(a, half + (tail_time[None, :] - tail_time[:, None]))
-            delta = one_side + one_side.T
-            keep("tails", 0, np.where(later | (a == a.T), np.inf, delta))
-        found.sort(key=lambda item: item[0])  # stable: ties keep the order of the tables
-        return found
+    def relocate(self) -> None:
+        """Relocation of i..i+length-1 between p and p + 1 (rows i, columns p = 0..L)."""
+        cost, forward, inner, prefix = self.cost, self.forward, self.inner, self.prefix
+        route, starts_upto, timed = self.route, self.starts_upto, self.search.timed
+        to = route[0 : inner + 1]
+        insertion = cost.T[1 : inner + 1, 0 : inner + 1] - forward[None, 0 : inner + 1]
+        for length, block in self.relocate_block.items():
+            count = block.shape[0]
+            first = self.position[1 : count + 1]
+            last = first + length - 1
+            inside = prefix[last] - prefix[first]  # the segment's own arcs
+            removal = cost[first - 1, last + 1] - forward[first - 1] - forward[last]
+            add = insertion[:count] + cost[length : inner + 1, 1 : inner + 2]
+            whole = add + removal[:, None]
+            source = route[first]
+            same = source[:, None] == to[None, :]
+            penalty: float | np.ndarray = 0.0
+            if timed:  # the receiving route's time: the only route, inside one
+                received = np.where(same, whole, add + inside[:, None])
+                penalty = self.time_change(to[None, :], received)
+            # the segment's route loses it and the receiving route's count grows
+            leaving = self.count_change(source, -length)
+            if timed:
+                leaving = leaving + self.time_change(source, removal - inside)
+            whole += np.where(same, 0.0, leaving[:, None] + self.count_change(to, length)[None, :])
+            whole += penalty + block
+            whole[starts_upto[last] != starts_upto[first - 1]] = np.inf  # a start in it
+            self.keep("relocate", length, whole)
+
+    def exchange(self) -> None:
+        """Exchange of the genes at i < j - 1 (rows i, columns j, 1..L), both targets:
+        route of i gets j in i's place (``gets``), route of j gets i (its transpose)."""
+        cost, forward, inner = self.cost, self.forward, self.inner
+        first_arc = cost[0:inner, 1 : inner + 1]  # [i-1, j-1]: M[i-1, j]
+        second_arc = cost[1 : inner + 1, 2 : inner + 2]  # [i-1, j-1]: M[i, j+1]
+        around = forward[0:inner] + forward[1 : inner + 1]  # a[i-1] + a[i]
+        gets = first_arc + second_arc.T - around[:, None]
+        delta = gets + gets.T
+        if self.search.timed:  # counts never change; ``delta`` is symmetric
+            same = self.rows == self.columns
+            one_side = self.time_change(self.rows, np.where(same, delta, gets))
+            delta += one_side + np.where(same, 0.0, one_side.T)
+        delta += self.exchange_block
+        starts = self.is_start[self.genes]
+        delta[starts] = np.inf
+        delta[:, starts] = np.inf
+        self.keep("exchange", 0, delta)
+
+    def tails(self) -> None:
+        """2-opt*: cuts before c < d (rows c - 1, columns d - 1, 0..L) in different routes.
+        Route a of c - 1 takes the tail after d - 1 and route b the tail after c - 1: the
+        table is ``one_side`` (route a's change) plus its transpose (route b's)."""
+        cost, forward, inner, prefix = self.cost, self.forward, self.inner, self.prefix
+        position, size = self.position, self.nodes.size
+        following = np.minimum.accumulate(np.where(self.is_start, position, size)[::-1])[
+            ::-1
+        ]  # next start at or after each position: a tail cut before q runs to it
+        tail_time = (prefix[following] - prefix[position])[1 : inner + 2]
+        tail_count = (following - position)[1 : inner + 2]
+        half = cost[0 : inner + 1, 1 : inner + 2] - forward[0 : inner + 1, None]
+        a = self.route[0 : inner + 1][:, None]
+        one_side = half + self.count_change(a, tail_count[None, :] - tail_count[:, None])
+        if self.search.timed:
+            one_side += self.time_change(a, half + (tail_time[None, :] - tail_time[:, None]))
+        delta = one_side + one_side.T
+        self.keep("tails", 0, np.where(self.later | (a == a.T), np.inf, delta))
 
 
 def _touched(move: Move, route: np.ndarray) -> set[int]:

@@ -368,164 +368,21 @@ def build(
         raise InstanceError(
             f"solve_delivery needs a DeliveryInstance, got {type(instance).__name__}"
         )
-    n, s = instance.n, instance.s
+    n = instance.n
     if n == 0:
         raise InstanceError("the instance has no customers")
-    tt, ft, tau = instance.truck_time, instance.flight_time, instance.service_time
     triples = feasible_triples(instance, reduce=reduce)
     lo, hi, closure = _position_ranges(instance)
-
-    # ---- sortie variables y[p, (i, j, k)]: one row per usable (position, triple)
-    blocks = []
-    for p in range(n):
-        rows = triples.last if p == n - 1 else (triples.first if p == 0 else triples.middle)
-        allowed = (lo[rows[:, 1]] <= p) & (p <= hi[rows[:, 1]])  # (5.7) position window
-        rows = rows[allowed]
-        blocks.append(np.column_stack([np.full(len(rows), p), rows]))
-    index = np.vstack(blocks)
-    position, launch, customer, landing = index.T
-    n_y = len(position)
-    sortie = cp.Variable(n_y, boolean=not relax, name="y")
-
-    # ---- truck legs w[p, k, i], k a possible landing of p−1, i a possible launch of p
-    leg_rows = []
-    for p in range(1, n):
-        lands = np.unique(landing[position == p - 1])
-        launches = np.unique(launch[position == p])
-        kk, ii = np.meshgrid(lands, launches, indexing="ij")
-        leg_rows.append(np.column_stack([np.full(kk.size, p), kk.ravel(), ii.ravel()]))
-    legs = np.vstack(leg_rows) if leg_rows else np.zeros((0, 3), dtype=np.int64)
-    leg_position, leg_from, leg_to = legs.T
+    position, launch, customer, landing = _sortie_index(triples, lo, hi, n).T
+    sortie = cp.Variable(len(position), boolean=not relax, name="y")
+    leg_position, leg_from, leg_to = _truck_legs(position, launch, landing, n).T
     n_w = len(leg_position)
     truck_leg = cp.Variable(n_w, nonneg=True, name="w") if n_w else None
-
     launch_time = cp.Variable(n, nonneg=True, name="S")
     service_time = cp.Variable(n, nonneg=True, name="t")
     recovery_time = cp.Variable(n, nonneg=True, name="R")
-
-    families: list[dict[str, Any]] = []
-    constraints: list = []
-
-    def add(constraint: Any, label: str, printed: str) -> None:
-        constraint.set_label(label)
-        constraints.append(constraint)
-        families.append({"label": label, "rows": int(constraint.size), "implements": printed})
-
-    families.append(
-        {
-            "label": "(5.6) flight range: only triples with d(i,j) + d(j,k) <= L get a y "
-            f"({triples.feasible} feasible of {n * s * s}; by construction, no rows)",
-            "rows": 0,
-            "implements": "(5.6) (d(i,j) + d(j,k)) sigma_ijk <= L",
-        }
-    )
-    families.append(
-        {
-            "label": "(5.4) y_ii = 0: no counterpart (a zero-length leg w[p,k,k] = the truck "
-            "stays; landing where launched is allowed)",
-            "rows": 0,
-            "implements": "(5.4) y_ii = 0",
-        }
-    )
-    # (5.2) each customer served by exactly one sortie
-    add(
-        _indicator(customer, n, n_y) @ sortie == 1,
-        "(5.2) every customer served once: sum_{p,i,k} y[p,i,j,k] = 1",
-        "(5.2) sum_{i,k} sigma_ijk = 1",
-    )
-    add(
-        _indicator(position, n, n_y) @ sortie == 1,
-        "one sortie per position: sum_{i,j,k} y[p,i,j,k] = 1",
-        "(one package per flight, §5.2.1; implicit in the thesis)",
-    )
-    if relax:
-        add(sortie <= 1, "0 <= y <= 1 (LP relaxation)", "(relaxation of binary sigma)")
-        add(sortie >= 0, "0 <= y <= 1 (LP relaxation)", "(relaxation of binary sigma)")
-    # launch indicator a[p, i] and landing indicator b[p, k] as sparse rows of y
-    launch_ind = _indicator(position * s + launch, n * s, n_y)
-    landing_ind = _indicator(position * s + landing, n * s, n_y)
-    if n_w:
-        # Σ_i w[p,k,i] = b[p−1,k] ; Σ_k w[p,k,i] = a[p,i]
-        out_rows = (leg_position - 1) * s + leg_from
-        in_rows = leg_position * s + leg_to
-        used_out = np.unique(out_rows)
-        used_in = np.unique(in_rows)
-        leg_out = _indicator(out_rows, n * s, n_w)[used_out]
-        leg_in = _indicator(in_rows, n * s, n_w)[used_in]
-        add(
-            leg_out @ truck_leg == landing_ind[used_out] @ sortie,
-            "(5.3) truck continuity: sum_i w[p,k,i] = landing of sortie p-1 at k",
-            "(5.3) sigma_ijk = y_ik (drone recovered by the truck at k)",
-        )
-        add(
-            leg_in @ truck_leg == launch_ind[used_in] @ sortie,
-            "(5.5) truck continuity: sum_k w[p,k,i] = launch of sortie p at i",
-            "(5.5) P(t_j - d(i,j)/v_d) = i (truck at the launch stop)",
-        )
-    # timing
-    first = position == 0
-    depot_drive = sp.csr_matrix(
-        (
-            tt[instance.depot, launch[first]],
-            (np.zeros(first.sum(), dtype=int), np.flatnonzero(first)),
-        ),
-        shape=(1, n_y),
-    )
-    add(
-        launch_time[0] >= depot_drive @ sortie,
-        "(5.5) timing: S_0 >= truck_time[w0, launch of sortie 0]",
-        "(5.5) truck position P(t) at the launch (linear via the leg times)",
-    )
-    if n_w:
-        drive = sp.csr_matrix(
-            (tt[leg_from, leg_to], (leg_position - 1, np.arange(n_w))), shape=(n - 1, n_w)
-        )
-        add(
-            launch_time[1:] >= recovery_time[:-1] + drive @ truck_leg,
-            "(5.5) timing: S_p >= R_{p-1} + sum_{k,i} truck_time[k,i] w[p,k,i]",
-            "(5.5) truck position P(t) at the launch (linear via the leg times)",
-        )
-    outbound = sp.csr_matrix(
-        (ft[customer, launch] + tau, (position, np.arange(n_y))), shape=(n, n_y)
-    )
-    add(
-        service_time == launch_time + outbound @ sortie,
-        "(5.1) service time: t_p = S_p + sum y (flight_time[j,i] + tau)",
-        "(5.1) t_j, the time customer j is served",
-    )
-    if n > 1:
-        mid = position < n - 1
-        duration = _recovery_duration(instance, launch[mid], customer[mid], landing[mid])
-        cycle = sp.csr_matrix((duration, (position[mid], np.flatnonzero(mid))), shape=(n - 1, n_y))
-        add(
-            recovery_time[:-1] >= launch_time[:-1] + cycle @ sortie,
-            "(5.3) recovery: R_p >= S_p + sum y (max(ft[j,i]+tau+ft[j,k], tt[i,k]) + tau)",
-            "(5.3) drone recovered by the truck at k (both there, then tau)",
-        )
-    # (5.7) cumulative precedence
-    edges = [(r, j) for r, j in closure.edges()]
-    if edges:
-        served_by = _indicator(customer * n + position, n * n, n_y)  # z[j, p] as rows j*n+p
-        cum = sp.csr_matrix(np.tril(np.ones((n, n))))  # cum[q, p] = [p <= q]
-        blocks = []
-        for r, j in edges:
-            z_j = served_by[j * n : (j + 1) * n]
-            z_r = served_by[r * n : (r + 1) * n]
-            shifted = sp.csr_matrix(np.tril(np.ones((n, n)), k=-1))  # [p < q]
-            blocks.append(cum @ z_j - shifted @ z_r)
-        prec = sp.vstack(blocks).tocsr()
-        nonempty = np.flatnonzero(np.diff(prec.indptr) > 0)
-        add(
-            prec[nonempty] @ sortie <= 0,
-            "(5.7) precedence r before j: sum_{p<=q} z[p,j] <= sum_{p<q} z[p,r]",
-            "(5.7) (t_r - t_j) p_j^r <= 0",
-        )
-    if customer_legs and n > 1:
-        _add_customer_legs(instance, position, customer, sortie, service_time, add)
-    objective = cp.Minimize(service_time[n - 1])
-    problem = cp.Problem(objective, constraints)
-    return DeliveryModel(
-        problem,
+    model = DeliveryModel(
+        cp.Problem(cp.Minimize(0)),  # replaced below, once every row is in
         sortie,
         position,
         launch,
@@ -538,7 +395,201 @@ def build(
         launch_time,
         service_time,
         recovery_time,
-        families,
+        [],
+    )
+    rows = _Rows(model.families)
+    rows.note_implicit(triples.feasible, n * instance.s * instance.s)
+    _assignment_rows(model, rows, n, relax)
+    _continuity_rows(model, rows, instance.s, n)
+    _timing_rows(instance, model, rows)
+    _precedence_rows(model, rows, closure, n)
+    if customer_legs and n > 1:
+        _add_customer_legs(instance, position, customer, sortie, service_time, rows.add)
+    model.problem = cp.Problem(cp.Minimize(service_time[n - 1]), rows.constraints)
+    return model
+
+
+def _sortie_index(triples: Any, lo: np.ndarray, hi: np.ndarray, n: int) -> np.ndarray:
+    """The sortie variables y[p, (i, j, k)]: one row (p, i, j, k) per usable (position,
+    triple), the triples of the first, middle or last position within customer j's
+    (5.7) position window ``lo[j] <= p <= hi[j]``."""
+    blocks = []
+    for p in range(n):
+        rows = triples.last if p == n - 1 else (triples.first if p == 0 else triples.middle)
+        allowed = (lo[rows[:, 1]] <= p) & (p <= hi[rows[:, 1]])  # (5.7) position window
+        rows = rows[allowed]
+        blocks.append(np.column_stack([np.full(len(rows), p), rows]))
+    return np.vstack(blocks)
+
+
+def _truck_legs(
+    position: np.ndarray, launch: np.ndarray, landing: np.ndarray, n: int
+) -> np.ndarray:
+    """The truck legs w[p, k, i]: rows (p, k, i), k a possible landing of sortie p − 1 and i
+    a possible launch of sortie p."""
+    leg_rows = []
+    for p in range(1, n):
+        lands = np.unique(landing[position == p - 1])
+        launches = np.unique(launch[position == p])
+        kk, ii = np.meshgrid(lands, launches, indexing="ij")
+        leg_rows.append(np.column_stack([np.full(kk.size, p), kk.ravel(), ii.ravel()]))
+    return np.vstack(leg_rows) if leg_rows else np.zeros((0, 3), dtype=np.int64)
+
+
+class _Rows:
+    """The model's constraints and, for :func:`describe`, one family entry per row block."""
+
+    def __init__(self, families: list[dict[str, Any]]) -> None:
+        self.constraints: list = []
+        self.families = families
+
+    def add(self, constraint: Any, label: str, printed: str) -> None:
+        """Add a labelled row block implementing the printed equation ``printed``."""
+        constraint.set_label(label)
+        self.constraints.append(constraint)
+        self.families.append({"label": label, "rows": int(constraint.size), "implements": printed})
+
+    def note_implicit(self, feasible: int, triples: int) -> None:
+        """The printed rows that hold by construction: (5.6) and (5.4)."""
+        self.families.append(
+            {
+                "label": "(5.6) flight range: only triples with d(i,j) + d(j,k) <= L get a y "
+                f"({feasible} feasible of {triples}; by construction, no rows)",
+                "rows": 0,
+                "implements": "(5.6) (d(i,j) + d(j,k)) sigma_ijk <= L",
+            }
+        )
+        self.families.append(
+            {
+                "label": "(5.4) y_ii = 0: no counterpart (a zero-length leg w[p,k,k] = the truck "
+                "stays; landing where launched is allowed)",
+                "rows": 0,
+                "implements": "(5.4) y_ii = 0",
+            }
+        )
+
+
+def _assignment_rows(model: DeliveryModel, rows: _Rows, n: int, relax: bool) -> None:
+    """(5.2) every customer served once, one sortie per position (and 0 <= y <= 1)."""
+    sortie, n_y = model.sortie, len(model.position)
+    # (5.2) each customer served by exactly one sortie
+    rows.add(
+        _indicator(model.customer, n, n_y) @ sortie == 1,
+        "(5.2) every customer served once: sum_{p,i,k} y[p,i,j,k] = 1",
+        "(5.2) sum_{i,k} sigma_ijk = 1",
+    )
+    rows.add(
+        _indicator(model.position, n, n_y) @ sortie == 1,
+        "one sortie per position: sum_{i,j,k} y[p,i,j,k] = 1",
+        "(one package per flight, §5.2.1; implicit in the thesis)",
+    )
+    if relax:
+        rows.add(sortie <= 1, "0 <= y <= 1 (LP relaxation)", "(relaxation of binary sigma)")
+        rows.add(sortie >= 0, "0 <= y <= 1 (LP relaxation)", "(relaxation of binary sigma)")
+
+
+def _continuity_rows(model: DeliveryModel, rows: _Rows, s: int, n: int) -> None:
+    """(5.3), (5.5) truck continuity: the legs into launch stops and out of landing stops."""
+    n_w = len(model.leg_position)
+    if not n_w:
+        return
+    sortie, truck_leg, n_y = model.sortie, model.truck_leg, len(model.position)
+    assert truck_leg is not None  # n_w > 0
+    # launch indicator a[p, i] and landing indicator b[p, k] as sparse rows of y
+    launch_ind = _indicator(model.position * s + model.launch, n * s, n_y)
+    landing_ind = _indicator(model.position * s + model.landing, n * s, n_y)
+    # Σ_i w[p,k,i] = b[p−1,k] ; Σ_k w[p,k,i] = a[p,i]
+    out_rows = (model.leg_position - 1) * s + model.leg_from
+    in_rows = model.leg_position * s + model.leg_to
+    used_out = np.unique(out_rows)
+    used_in = np.unique(in_rows)
+    leg_out = _indicator(out_rows, n * s, n_w)[used_out]
+    leg_in = _indicator(in_rows, n * s, n_w)[used_in]
+    rows.add(
+        leg_out @ truck_leg == landing_ind[used_out] @ sortie,
+        "(5.3) truck continuity: sum_i w[p,k,i] = landing of sortie p-1 at k",
+        "(5.3) sigma_ijk = y_ik (drone recovered by the truck at k)",
+    )
+    rows.add(
+        leg_in @ truck_leg == launch_ind[used_in] @ sortie,
+        "(5.5) truck continuity: sum_k w[p,k,i] = launch of sortie p at i",
+        "(5.5) P(t_j - d(i,j)/v_d) = i (truck at the launch stop)",
+    )
+
+
+def _timing_rows(instance: DeliveryInstance, model: DeliveryModel, rows: _Rows) -> None:
+    """(5.5) launch times after the truck's drive, (5.1) service times, (5.3) recoveries."""
+    n = instance.n
+    tt, ft, tau = instance.truck_time, instance.flight_time, instance.service_time
+    position, launch, customer, landing = (
+        model.position, model.launch, model.customer, model.landing,
+    )  # fmt: skip
+    sortie, n_y, n_w = model.sortie, len(position), len(model.leg_position)
+    launch_time, service_time = model.launch_time, model.service_time
+    recovery_time = model.recovery_time
+    first = position == 0
+    depot_drive = sp.csr_matrix(
+        (
+            tt[instance.depot, launch[first]],
+            (np.zeros(first.sum(), dtype=int), np.flatnonzero(first)),
+        ),
+        shape=(1, n_y),
+    )
+    rows.add(
+        launch_time[0] >= depot_drive @ sortie,
+        "(5.5) timing: S_0 >= truck_time[w0, launch of sortie 0]",
+        "(5.5) truck position P(t) at the launch (linear via the leg times)",
+    )
+    if n_w:
+        assert model.truck_leg is not None  # n_w > 0
+        drive = sp.csr_matrix(
+            (tt[model.leg_from, model.leg_to], (model.leg_position - 1, np.arange(n_w))),
+            shape=(n - 1, n_w),
+        )
+        rows.add(
+            launch_time[1:] >= recovery_time[:-1] + drive @ model.truck_leg,
+            "(5.5) timing: S_p >= R_{p-1} + sum_{k,i} truck_time[k,i] w[p,k,i]",
+            "(5.5) truck position P(t) at the launch (linear via the leg times)",
+        )
+    outbound = sp.csr_matrix(
+        (ft[customer, launch] + tau, (position, np.arange(n_y))), shape=(n, n_y)
+    )
+    rows.add(
+        service_time == launch_time + outbound @ sortie,
+        "(5.1) service time: t_p = S_p + sum y (flight_time[j,i] + tau)",
+        "(5.1) t_j, the time customer j is served",
+    )
+    if n > 1:
+        mid = position < n - 1
+        duration = _recovery_duration(instance, launch[mid], customer[mid], landing[mid])
+        cycle = sp.csr_matrix((duration, (position[mid], np.flatnonzero(mid))), shape=(n - 1, n_y))
+        rows.add(
+            recovery_time[:-1] >= launch_time[:-1] + cycle @ sortie,
+            "(5.3) recovery: R_p >= S_p + sum y (max(ft[j,i]+tau+ft[j,k], tt[i,k]) + tau)",
+            "(5.3) drone recovered by the truck at k (both there, then tau)",
+        )
+
+
+def _precedence_rows(model: DeliveryModel, rows: _Rows, closure: nx.DiGraph, n: int) -> None:
+    """(5.7) cumulative precedence: by any position, r is served no later than j."""
+    edges = [(r, j) for r, j in closure.edges()]
+    if not edges:
+        return
+    n_y = len(model.position)
+    served_by = _indicator(model.customer * n + model.position, n * n, n_y)  # z[j, p]: j*n+p
+    cum = sp.csr_matrix(np.tril(np.ones((n, n))))  # cum[q, p] = [p <= q]
+    blocks = []
+    for r, j in edges:
+        z_j = served_by[j * n : (j + 1) * n]
+        z_r = served_by[r * n : (r + 1) * n]
+        shifted = sp.csr_matrix(np.tril(np.ones((n, n)), k=-1))  # [p < q]
+        blocks.append(cum @ z_j - shifted @ z_r)
+    prec = sp.vstack(blocks).tocsr()
+    nonempty = np.flatnonzero(np.diff(prec.indptr) > 0)
+    rows.add(
+        prec[nonempty] @ model.sortie <= 0,
+        "(5.7) precedence r before j: sum_{p<=q} z[p,j] <= sum_{p<q} z[p,r]",
+        "(5.7) (t_r - t_j) p_j^r <= 0",
     )
 
 

@@ -666,29 +666,13 @@ def solve_sop(
     building = time.perf_counter()
     model = build(cost, precedences, start, end, formulation)
     built_in = time.perf_counter() - building
-    values = None
-    left = deadline.remaining()
-    if left is not None:
+    if deadline.limited:
         assert problem is not None  # built above under a limit
-        # compile apart from solving (HighsModel), so HiGHS gets exactly what is left
-        columns = sum(v.size for v in model.problem.variables())
-        compile_estimate = max(
-            COMPILE_SHARE * columns * SECONDS_PER_COLUMN, COMPILE_PER_BUILD * built_in
-        )
-        if left - compile_estimate - MARGIN <= 0:
-            info = {"model": "built, not compiled", "columns": columns}
-            return _stopped(problem, known, None, began, formulation, info)
-        compiled = HighsModel(model.problem, verbose=verbose)
-        if deadline.expired(MARGIN):
-            info = {"model": "compiled, not solved", "columns": columns}
-            return _stopped(problem, known, None, began, formulation, info)
-        left = deadline.remaining()
-        assert left is not None  # limited
-        run = compiled.solve(time_limit=left - MARGIN, mip_rel_gap=float(mip_gap))
-        if run.has_point:
-            values = compiled.values(model.arc_use)
+        run, values, not_run = _solve_limited(model, deadline, built_in, mip_gap, verbose)
+        if not_run is not None:
+            return _stopped(problem, known, None, began, formulation, not_run)
     else:
-        run = solve_highs(model.problem, mip_rel_gap=float(mip_gap), verbose=verbose)
+        run, values = solve_highs(model.problem, mip_rel_gap=float(mip_gap), verbose=verbose), None
     if run.solver_status == "solver_error":
         raise SolverError(f"HiGHS failed on the SOP model: {run.message}")
     if run.status == INFEASIBLE:
@@ -734,6 +718,30 @@ def solve_sop(
             "solver_status": run.solver_status,
         },
     )
+
+
+def _solve_limited(
+    model: Any, deadline: Deadline, built_in: float, mip_gap: float, verbose: bool
+) -> tuple[Any, Any, dict[str, Any] | None]:
+    """Compile ``model`` apart from solving (:class:`HighsModel`), so that HiGHS gets exactly
+    the time left, and solve it. Returns (HiGHS's run, the arc values or None, None), or
+    (None, None, info) when the time left cannot pay for the compile or the solve."""
+    left = deadline.remaining()
+    assert left is not None  # limited
+    columns = sum(v.size for v in model.problem.variables())
+    compile_estimate = max(
+        COMPILE_SHARE * columns * SECONDS_PER_COLUMN, COMPILE_PER_BUILD * built_in
+    )
+    if left - compile_estimate - MARGIN <= 0:
+        return None, None, {"model": "built, not compiled", "columns": columns}
+    compiled = HighsModel(model.problem, verbose=verbose)
+    if deadline.expired(MARGIN):
+        return None, None, {"model": "compiled, not solved", "columns": columns}
+    left = deadline.remaining()
+    assert left is not None  # limited
+    run = compiled.solve(time_limit=left - MARGIN, mip_rel_gap=float(mip_gap))
+    values = compiled.values(model.arc_use) if run.has_point else None
+    return run, values, None
 
 
 #: States the DP may keep in all before the portfolio hands over to the MILP (rbg048a: 1.8

@@ -768,49 +768,14 @@ def solve_sop_dp(
     if n > MAX_NODES:
         raise InstanceError(f"the ideal DP takes at most {MAX_NODES} nodes, got n = {n}")
     deadline = Deadline(time_limit)
-    known = _incumbent(problem, incumbent)
     info: dict[str, Any] = {"beam": None}
-    if beam_width:  # a narrow beam first (a good path in a fraction of a second), then wide
-        budget = Deadline(deadline.share(BEAM_SHARE))
-        for width in sorted({min(NARROW_BEAM, beam_width), beam_width}):
-            if budget.expired(MARGIN):
-                break
-            beam = beam_order(problem, width, budget.remaining())
-            if beam is not None and (known is None or beam[0] < known[0]):
-                known = beam
-                info["beam"] = beam[0]
+    known = _beam_start(problem, _incumbent(problem, incumbent), beam_width, deadline, info)
     upper = np.inf if known is None else known[0]
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
     setting_up = time.perf_counter()
-    runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    runs = _directions(problem, both, both_prices)
     info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
-    if both and both_prices:
-        # the assignment LP is degenerate: the reversed problem's optimal prices (read
-        # transposed) are other optimal prices, and often prune other states
-        for run, other in ((runs[0], runs[1]), (runs[1], runs[0])):
-            s, o = run.search, other.search.bound
-            s.more_bounds.append(
-                _Bound(s.usable, s.problem.start, s.problem.end, (o.beta, o.alpha), s.pred)
-            )
-    stopped_by = None
-    done = None
-    while done is None:
-        # advance the direction with the smaller last layer (forward on ties): each grows
-        # into its widest layers only as far as the other is wider
-        run = min(runs, key=lambda r: len(r.layers[-1][0]))
-        limit = np.inf if max_states is None else 4 * max_states
-        room = None if max_states is None else max_states - sum(r.kept for r in runs)
-        stopped_by = run.step(upper, tolerance, deadline, limit, room)
-        if stopped_by is not None:
-            break
-        if run.finished:
-            done = run
-        elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:
-            done = runs[0]  # the two directions meet: join them
-            joined = _join(runs[0], runs[1], problem.cost)
-            done.best_path = None if joined is None else joined[1]
-            done.pruned_min = min(r.pruned_min for r in runs)
-            info["met"] = True
+    done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info)
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
         if cost < upper:
@@ -863,3 +828,74 @@ def solve_sop_dp(
         runtime=time.perf_counter() - began,
         info=info,
     )
+
+
+def _beam_start(
+    problem: SopProblem,
+    known: tuple[float, list[int]] | None,
+    beam_width: int,
+    deadline: Deadline,
+    info: dict[str, Any],
+) -> tuple[float, list[int]] | None:
+    """The incumbent improved by beam passes (:func:`beam_order`): a narrow beam first (a
+    good path in a fraction of a second), then ``beam_width``, within :data:`BEAM_SHARE` of
+    the time; ``info["beam"]`` the beam's cost when it improved the incumbent."""
+    if beam_width:
+        budget = Deadline(deadline.share(BEAM_SHARE))
+        for width in sorted({min(NARROW_BEAM, beam_width), beam_width}):
+            if budget.expired(MARGIN):
+                break
+            beam = beam_order(problem, width, budget.remaining())
+            if beam is not None and (known is None or beam[0] < known[0]):
+                known = beam
+                info["beam"] = beam[0]
+    return known
+
+
+def _directions(problem: SopProblem, both: bool, both_prices: bool) -> list[_Run]:
+    """The forward search and (``both``) the backward one on :func:`reversed_problem`,
+    each (``both_prices``) also bounded on the other's assignment prices."""
+    runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    if both and both_prices:
+        # the assignment LP is degenerate: the reversed problem's optimal prices (read
+        # transposed) are other optimal prices, and often prune other states
+        for run, other in ((runs[0], runs[1]), (runs[1], runs[0])):
+            s, o = run.search, other.search.bound
+            s.more_bounds.append(
+                _Bound(s.usable, s.problem.start, s.problem.end, (o.beta, o.alpha), s.pred)
+            )
+    return runs
+
+
+def _expand(
+    problem: SopProblem,
+    runs: list[_Run],
+    upper: float,
+    tolerance: float,
+    deadline: Deadline,
+    max_states: int | None,
+    info: dict[str, Any],
+) -> tuple[_Run | None, str | None]:
+    """Layer after layer, the direction with the smaller last layer first (forward on
+    ties: each grows into its widest layers only as far as the other is wider), until one
+    finishes, the two meet (joined; ``info["met"]``) or a limit stops them. Returns the
+    finished run (None if stopped) and why it stopped (None if it finished)."""
+    both = len(runs) > 1
+    stopped_by = None
+    done = None
+    while done is None:
+        run = min(runs, key=lambda r: len(r.layers[-1][0]))
+        limit = np.inf if max_states is None else 4 * max_states
+        room = None if max_states is None else max_states - sum(r.kept for r in runs)
+        stopped_by = run.step(upper, tolerance, deadline, limit, room)
+        if stopped_by is not None:
+            break
+        if run.finished:
+            done = run
+        elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:
+            done = runs[0]  # the two directions meet: join them
+            joined = _join(runs[0], runs[1], problem.cost)
+            done.best_path = None if joined is None else joined[1]
+            done.pruned_min = min(r.pruned_min for r in runs)
+            info["met"] = True
+    return done, stopped_by

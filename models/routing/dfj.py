@@ -398,6 +398,200 @@ def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> Roo
     return DfjModel(problem).root(budget=time_limit, lifted=0)
 
 
+class _Search:
+    """The state of one :func:`_solve_dfj` call: the incumbent (best routes and value), the
+    proven lower bound, the clock and the improver."""
+
+    def __init__(
+        self,
+        problem: AssignmentProblem,
+        time_limit: float | None,
+        started: float,
+        improve: Any,
+        given: list[list[int]] | None,
+    ) -> None:
+        self.problem = problem
+        self.time_limit = time_limit
+        self.started = started
+        self.improve = improve
+        self.best_routes, self.best_value = _first_incumbent(problem, given)
+        self.best_bound = -np.inf
+        self.improved = 0
+
+    def remaining(self) -> float | None:
+        """Seconds left (None without a limit)."""
+        if self.time_limit is None:
+            return None
+        return self.time_limit - (time.perf_counter() - self.started)
+
+    def improved_routes(
+        self, routes: Routes | list[list[int]] | None
+    ) -> tuple[list[list[int]], float] | None:
+        """``improve(problem, routes)`` and its value, if time allows and it is feasible."""
+        left = self.remaining()
+        if (
+            self.improve is None
+            or routes is None
+            or (left is not None and left < IMPROVE_MIN_SECONDS)
+        ):
+            return None
+        better = [[int(t) for t in route] for route in self.improve(self.problem, routes)]
+        try:
+            return better, evaluate_routes(self.problem, better)
+        except FeasibilityError as exc:
+            raise SolverError(f"improve returned routes that are not feasible: {exc}") from exc
+
+    def offer(self, routes: Routes | list[list[int]] | None) -> None:
+        """Improve ``routes``; keep the answer if it beats the incumbent."""
+        found = self.improved_routes(routes)
+        if found is not None and found[1] < self.best_value:
+            (self.best_routes, self.best_value), self.improved = found, self.improved + 1
+
+    def keep(self, routes: list[list[int]], value: float) -> None:
+        """Keep ``routes`` (of total ``value``) if they beat the incumbent."""
+        if value < self.best_value:
+            self.best_routes, self.best_value = routes, value
+
+    def finish(self, stopped_by: str, info: dict[str, Any]) -> Solution:
+        """The answer by the one status rule: optimal only when proven within 1e-6."""
+        return finish(
+            self.problem,
+            None if self.best_routes is None else Routes(self.best_routes),
+            method="exact-dfj",
+            stop=stopped_by,
+            bound=self.best_bound,
+            runtime=time.perf_counter() - self.started,
+            info=info,
+        )
+
+
+class _Core:
+    """The arcs the MIP rounds run on: those of small reduced cost at the root, at most
+    :data:`CORE_SIZE` per point at first (all arcs if the root LP did not finish)."""
+
+    def __init__(self, dfj: DfjModel, root: RootRelaxation, n: int, m: int) -> None:
+        self.dfj = dfj
+        self.root = root
+        if np.isfinite(root.bound):
+            size = min(CORE_SIZE * (n + m), len(dfj.arcs))
+            self.cap = float(np.partition(root.reduced_costs, size - 1)[size - 1])
+        else:
+            self.cap = np.inf
+        self.mask = np.ones(len(dfj.arcs), dtype=bool)
+
+    def resize(self, best_value: float, best_routes: list[list[int]]) -> bool:
+        """Core := arcs with ``d_a <= min(UB − L, cap)``, plus the incumbent's. Changed?
+
+        Arcs with ``d_a > UB − L`` cannot be in a solution better than the incumbent
+        (``UB``); ``cap`` keeps the first rounds small while UB is still poor.
+        """
+        root, dfj, core = self.root, self.dfj, self.mask
+        if not np.isfinite(root.bound):
+            return False
+        slack = 1e-9 * max(1.0, abs(best_value))
+        wanted = root.reduced_costs <= min(best_value - root.bound + slack, self.cap)
+        wanted[dfj.route_arcs(best_routes)] = True
+        on, off = wanted & ~core, core & ~wanted
+        dfj.model.set_upper(dfj.arcs[on], 1.0)
+        dfj.model.set_upper(dfj.arcs[off], 0.0)
+        core[:] = wanted
+        return bool(on.any() or off.any())
+
+    def outside_bound(self) -> float:
+        """Proven bound on every solution using an arc outside the core."""
+        if self.mask.all():
+            return np.inf
+        return self.root.bound + float(self.root.reduced_costs[~self.mask].min())
+
+
+class _Rounds:
+    """MIP rounds on the core, (2.5) rows from every solution HiGHS reports; each answer
+    (its subtours patched) a candidate incumbent, the round's best one improved."""
+
+    def __init__(self, search: _Search, dfj: DfjModel, core: _Core) -> None:
+        self.search = search
+        self.dfj = dfj
+        self.core = core
+        self.harvested: list[tuple[int, ...]] = []
+        self.candidates: list[tuple[float, list[list[int]]]] = []
+
+    def harvest(self, solution: np.ndarray) -> None:
+        """HiGHS's callback on each solution it finds: its subtours, its patched routes."""
+        problem, dfj = self.search.problem, self.dfj
+        values = dfj.arc_values(solution)
+        try:
+            routes, subtours = decode(problem, dfj, values)
+        except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
+            return
+        if subtours:
+            self.harvested.extend(tuple(sorted(c)) for c in subtours)
+            routes = repair(problem, routes, subtours)
+        self.candidates.append((evaluate_routes(problem, routes), routes))
+
+    def run(self, mip_gap: float, max_rounds: int) -> tuple[int, str, str, bool]:
+        """The rounds until the gap closes or a limit; returns (rounds, HiGHS's last status,
+        why they stopped, whether they stalled with an open gap)."""
+        search, dfj, core = self.search, self.dfj, self.core
+        problem = search.problem
+        target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
+        rounds = 0
+        solver_status, stopped_by = "", "time_limit"
+        while True:
+            left = search.remaining()
+            if left is not None and left < LP_SECONDS_PER_ARC * int(core.mask.sum()):
+                stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
+                break
+            rounds += 1
+            dfj.model.set_start(dfj.start_vector(search.best_routes))
+            self.harvested.clear()
+            self.candidates.clear()
+            run = dfj.model.solve(
+                time_limit=_highs_limit(left),
+                mip_rel_gap=mip_gap,
+                on_solution=self.harvest,
+                options=MIP_OPTIONS,
+            )
+            solver_status = run.solver_status
+            if solver_status not in ("optimal", "user_limit"):
+                raise SolverError(f"HiGHS returned status {solver_status!r} on the DFJ model")
+            # every solution stays in the core (cost >= HiGHS's bound) or leaves it
+            core_bound = run.bound if run.bound is not None else -np.inf
+            search.best_bound = max(search.best_bound, min(core_bound, core.outside_bound()))
+            for value, routes in self.candidates:
+                search.keep(routes, value)
+            subtours: list[list[int]] = []
+            if run.has_point:
+                routes, subtours = decode(problem, dfj, dfj.arc_values())
+                candidate = repair(problem, routes, subtours) if subtours else routes
+                value = evaluate_routes(problem, candidate)
+                self.candidates.append((value, candidate))
+                search.keep(candidate, value)
+            if self.candidates:  # the round's best answer, improved (often the next optimum)
+                search.offer(min(self.candidates, key=lambda pair: pair[0])[1])
+            dfj.add_cuts([*map(tuple, subtours), *self.harvested])
+            stopped_by = run.stopped_by
+            best_value = search.best_value
+            if relative_gap(best_value, min(search.best_bound, best_value)) <= target_gap:
+                break  # proven: "optimal", or "mip_gap" for a loose gap
+            if run.stopped_by in ("time_limit", "solver_limit"):
+                break  # a limit: the incumbent stands with the bound proven so far
+            if rounds >= max_rounds:
+                stopped_by = "max_rounds"
+                break
+            # only arcs that can still improve on the incumbent stay in the model; once
+            # the core's own optimum has no cycle, every such arc comes in
+            if not subtours:
+                core.cap = np.inf
+            if not run.has_point or (
+                not core.resize(search.best_value, search.best_routes) and not subtours
+            ):
+                # Nothing left to learn, yet the gap is open: the round's answer contradicts
+                # the proof (a solver fault, as HiGHS 1.16's MIP starts in a presolved space
+                # were before HighsModel checked them). A compact model closes it.
+                return rounds, solver_status, stopped_by, True
+        return rounds, solver_status, stopped_by, False
+
+
 def _solve_dfj(
     problem: AssignmentProblem,
     time_limit: float | None,
@@ -408,174 +602,41 @@ def _solve_dfj(
     started: float,
     improve: Any = None,
 ) -> Solution:
-    best_routes: list[list[int]]
-    best_value: float
-
-    def remaining() -> float | None:
-        return None if time_limit is None else time_limit - (time.perf_counter() - started)
-
-    improved = 0
-
-    def improved_routes(routes: Routes | list[list[int]] | None) -> tuple[list, float] | None:
-        """``improve(problem, routes)`` and its value, if time allows and it is feasible."""
-        left = remaining()
-        if improve is None or routes is None or (left is not None and left < IMPROVE_MIN_SECONDS):
-            return None
-        better = [[int(t) for t in route] for route in improve(problem, routes)]
-        try:
-            return better, evaluate_routes(problem, better)
-        except FeasibilityError as exc:
-            raise SolverError(f"improve returned routes that are not feasible: {exc}") from exc
-
-    def offer(routes: Routes | list[list[int]] | None) -> None:
-        """Improve ``routes``; keep the answer if it beats the incumbent."""
-        nonlocal best_routes, best_value, improved
-        found = improved_routes(routes)
-        if found is not None and found[1] < best_value:
-            (best_routes, best_value), improved = found, improved + 1
-
+    """The DFJ loop (module docstring): first bounds, the root LP with exact separation (at
+    most half of a time limit), the reduced-cost core, MIP rounds on it (:class:`_Rounds`)
+    and, if they stall with an open gap, the compact :data:`FALLBACK_SEC` model."""
+    search = _Search(problem, time_limit, started, improve, given)
+    search.offer(search.best_routes)
     n, m = problem.n, problem.m
-    best_routes, best_value = _first_incumbent(problem, given)
-    offer(best_routes)
-    best_bound = entry_bound(problem)
-    left = remaining()
+    search.best_bound = entry_bound(problem)
+    left = search.remaining()
     if left is None or left > ASSIGNMENT_SECONDS_PER_CUBE * n**2 * (n + m):
-        best_bound = max(best_bound, assignment_bound(problem))
+        search.best_bound = max(search.best_bound, assignment_bound(problem))
     n_arcs = (n + m) * n - n
-    left = remaining()
+    left = search.remaining()
     if left is not None and left < BUILD_SECONDS_PER_ARC * n_arcs:
         # no time to build the model: the incumbent with the bounds proven so far
-        info = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": "time_limit"}
+        info: dict[str, Any] = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": "time_limit"}
         info.update(solver_status="", stage="build", mip_gap=mip_gap)
-        return finish(
-            problem,
-            None if best_routes is None else Routes(best_routes),
-            method="exact-dfj",
-            stop="time_limit",
-            bound=best_bound,
-            runtime=time.perf_counter() - started,
-            info=info,
-        )
+        return search.finish("time_limit", info)
     dfj = DfjModel(problem, verbose=verbose)
     # 1. root LP with exact separation; at most half of a time limit
-    budget = remaining()
+    budget = search.remaining()
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
     root_cuts = len(dfj.cuts)
-    best_bound = max(best_bound, root.bound)
-    # 2. the core: arcs of small reduced cost, at most CORE_SIZE per point at first
-    # (all arcs if the root LP did not finish)
-    if np.isfinite(root.bound):
-        size = min(CORE_SIZE * (n + m), len(dfj.arcs))
-        cap = float(np.partition(root.reduced_costs, size - 1)[size - 1])
-    else:
-        cap = np.inf
-    core = np.ones(len(dfj.arcs), dtype=bool)
-
-    def resize_core() -> bool:
-        """Core := arcs with ``d_a <= min(UB − L, cap)``, plus the incumbent's. Changed?
-
-        Arcs with ``d_a > UB − L`` cannot be in a solution better than the incumbent
-        (``UB``); ``cap`` keeps the first rounds small while UB is still poor.
-        """
-        if not np.isfinite(root.bound):
-            return False
-        slack = 1e-9 * max(1.0, abs(best_value))
-        wanted = root.reduced_costs <= min(best_value - root.bound + slack, cap)
-        wanted[dfj.route_arcs(best_routes)] = True
-        on, off = wanted & ~core, core & ~wanted
-        dfj.model.set_upper(dfj.arcs[on], 1.0)
-        dfj.model.set_upper(dfj.arcs[off], 0.0)
-        core[:] = wanted
-        return bool(on.any() or off.any())
-
-    resize_core()
-
-    def outside_bound() -> float:
-        """Proven bound on every solution using an arc outside the core."""
-        if core.all():
-            return np.inf
-        return root.bound + float(root.reduced_costs[~core].min())
-
-    # 3. MIP rounds on the core, (2.5) rows from every solution HiGHS reports
-    harvested: list[tuple[int, ...]] = []
-    candidates: list[tuple[float, list[list[int]]]] = []
-
-    def harvest(solution: np.ndarray) -> None:
-        values = dfj.arc_values(solution)
-        try:
-            routes, subtours = decode(problem, dfj, values)
-        except SolverError:  # not an integral point of (2.3)-(2.4): nothing to learn
-            return
-        if subtours:
-            harvested.extend(tuple(sorted(c)) for c in subtours)
-            routes = repair(problem, routes, subtours)
-        candidates.append((evaluate_routes(problem, routes), routes))
-
-    target_gap = max(float(mip_gap), OPTIMALITY_TOLERANCE)
-    rounds = 0
-    solver_status, stopped_by = "", "time_limit"
-    stall = False
-    while True:
-        left = remaining()
-        if left is not None and left < LP_SECONDS_PER_ARC * int(core.sum()):
-            stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
-            break
-        rounds += 1
-        dfj.model.set_start(dfj.start_vector(best_routes))
-        harvested.clear()
-        candidates.clear()
-        run = dfj.model.solve(
-            time_limit=_highs_limit(left),
-            mip_rel_gap=mip_gap,
-            on_solution=harvest,
-            options=MIP_OPTIONS,
-        )
-        solver_status = run.solver_status
-        if solver_status not in ("optimal", "user_limit"):
-            raise SolverError(f"HiGHS returned status {solver_status!r} on the DFJ model")
-        # every solution stays in the core (cost >= HiGHS's bound) or leaves it
-        core_bound = run.bound if run.bound is not None else -np.inf
-        best_bound = max(best_bound, min(core_bound, outside_bound()))
-        for value, routes in candidates:
-            if value < best_value:
-                best_routes, best_value = routes, value
-        subtours: list[list[int]] = []
-        if run.has_point:
-            routes, subtours = decode(problem, dfj, dfj.arc_values())
-            candidate = repair(problem, routes, subtours) if subtours else routes
-            value = evaluate_routes(problem, candidate)
-            candidates.append((value, candidate))
-            if value < best_value:
-                best_routes, best_value = candidate, value
-        if candidates:  # the round's best answer, improved (often to the next round's optimum)
-            offer(min(candidates, key=lambda pair: pair[0])[1])
-        dfj.add_cuts([*map(tuple, subtours), *harvested])
-        stopped_by = run.stopped_by
-        if relative_gap(best_value, min(best_bound, best_value)) <= target_gap:
-            break  # proven: "optimal", or "mip_gap" for a loose gap
-        if run.stopped_by in ("time_limit", "solver_limit"):
-            break  # a limit: the incumbent stands with the bound proven so far
-        if rounds >= max_rounds:
-            stopped_by = "max_rounds"
-            break
-        # only arcs that can still improve on the incumbent stay in the model; once
-        # the core's own optimum has no cycle, every such arc comes in
-        if not subtours:
-            cap = np.inf
-        if not run.has_point or (not resize_core() and not subtours):
-            # Nothing left to learn, yet the gap is open: the round's answer contradicts
-            # the proof (a solver fault, as HiGHS 1.16's MIP starts in a presolved space
-            # were before HighsModel checked them). A compact model closes it.
-            stall = True
-            break
+    search.best_bound = max(search.best_bound, root.bound)
+    # 2. the core; 3. MIP rounds on it
+    core = _Core(dfj, root, n, m)
+    core.resize(search.best_value, search.best_routes)
+    rounds, solver_status, stopped_by, stall = _Rounds(search, dfj, core).run(mip_gap, max_rounds)
     if stall:
         fallback = _solve_compact(
-            problem, FALLBACK_SEC, time_limit, mip_gap, verbose, best_routes, started
+            problem, FALLBACK_SEC, time_limit, mip_gap, verbose, search.best_routes, started
         )
-        if fallback.routes is not None and fallback.objective < best_value:
-            best_routes, best_value = fallback.routes, fallback.objective
+        if fallback.routes is not None:
+            search.keep(fallback.routes, fallback.objective)
         if fallback.bound is not None:
-            best_bound = max(best_bound, fallback.bound)
+            search.best_bound = max(search.best_bound, fallback.bound)
         stopped_by = fallback.info["stopped_by"]
         solver_status = fallback.info["solver_status"]
     info = {
@@ -585,24 +646,16 @@ def _solve_dfj(
         "lifted_cuts": len(dfj.lifted),
         "root_rounds": root.rounds,
         "lp_bound": root.bound,
-        "core_arcs": int(core.sum()),
+        "core_arcs": int(core.mask.sum()),
         "arcs": len(dfj.arcs),
         "solver_status": solver_status,
         "mip_gap": mip_gap,
         "stopped_by": stopped_by,
         "reruns": dfj.model.reruns,
         "fallback": FALLBACK_SEC if stall else None,
-        "improved": improved,
+        "improved": search.improved,
     }
-    return finish(  # the one status rule: optimal only when proven within 1e-6
-        problem,
-        None if best_routes is None else Routes(best_routes),
-        method="exact-dfj",
-        stop=stopped_by,
-        bound=best_bound,
-        runtime=time.perf_counter() - started,
-        info=info,
-    )
+    return search.finish(stopped_by, info)
 
 
 __all__ = [
