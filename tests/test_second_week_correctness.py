@@ -21,6 +21,7 @@ from taopt.budgeted import BudgetedProblem
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.heuristics import budgeted, peers
 from taopt.heuristics.budgeted import genetic_algorithm
+from taopt.limits import Deadline
 from taopt.sop.problem import SopProblem, evaluate_order
 
 # -- defect 2: the budgeted GA -------------------------------------------------------------------
@@ -139,13 +140,15 @@ def test_cpsat_worker_takes_forbidden_arcs_explicitly():
     options.update(start=0, end=3, precedences=[])
     request = {"cost": cost, "n": 4, "m": 0, "options": options}
     request["options"]["forbidden"] = np.zeros((4, 4), dtype=bool).tolist()
-    reply = peers._call("cpsat", request, 20)[0]
+    reply = peers._call("cpsat", request, Deadline(20)).reply
+    assert reply is not None
     assert reply["cpsat_status"] == "OPTIMAL" and reply["order"] == [0, 1, 2, 3]
     assert reply["objective"] == 4 - 8 - 2 == -6
     forbidden = np.zeros((4, 4), dtype=bool)
     forbidden[1, 2] = True
     request["options"]["forbidden"] = forbidden.tolist()
-    reply = peers._call("cpsat", request, 20)[0]
+    reply = peers._call("cpsat", request, Deadline(20)).reply
+    assert reply is not None
     assert reply["order"] == [0, 2, 1, 3] and reply["objective"] == 9 + 9 + 9
 
 

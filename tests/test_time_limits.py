@@ -398,7 +398,8 @@ def test_memetic_step_looks_at_the_deadline(family, monkeypatch):
     generation's local search (no move made, one generation, the best so far, scored): a
     generation's polish on n = 200 took 15 s past a 1 s limit under load before."""
     from taopt.budgeted import BudgetedProblem
-    from taopt.heuristics import budgeted, ga_routing
+    from taopt.heuristics import ga_routing
+    from taopt.heuristics.budgeted import ga as budgeted
 
     problem = euclidean(60, 3, seed=2)
     module, ga = ga_routing, ga_routing.genetic_algorithm
@@ -447,7 +448,7 @@ def test_budgeted_warm_start_and_starts_keep_to_a_spent_limit(monkeypatch):
     is spent (n = 100 at T = 0.5 took 1.5 s under load: EVM and the repair ignored the clock)."""
     from taopt.budgeted import BudgetedProblem
     from taopt.heuristics.budgeted import evm
-    from taopt.models import budgeted as model
+    from taopt.models.budgeted import solve as model
 
     problem = BudgetedProblem(euclidean(30, 3).cost, 30, capacity=[12, 12, 12])
     stopped = evm(problem, time_limit=1e-9)
