@@ -148,7 +148,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
                 continue
             e = INF
             tok, dok = tab.truck_ok[j], tab.drone_ok[j]
-            for k, (w, A, _T, _ev, fin, _F, drones) in enumerate(trucks):
+            for w, A, _T, _ev, fin, _F, drones in trucks:
                 if fin:
                     continue
                 if tok:
