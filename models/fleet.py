@@ -173,11 +173,20 @@ def solve_fleet(
             runtime=time.perf_counter() - start,
             info=info,
         )
+    # stopped by the clock or the size guard: certified by the gap only
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.status import certify
+
+    value = evaluate_fleet(problem, result["plan"])
+    status, _ = certify(
+        value, result["bound"], "time_limit" if stopped == "time_limit" else "solver_limit"
+    )
+    info["stopped_by"] = "optimal" if status == "optimal" else stopped
     return make_solution(
         problem,
         result["plan"],
         method="exact",
-        stopped_by="time_limit",
+        status=status,
         bound=result["bound"],
         runtime=time.perf_counter() - start,
         info=info,
