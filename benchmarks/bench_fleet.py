@@ -35,6 +35,7 @@ def _solve(problem: FleetProblem, limit: float) -> tuple[float, taopt.Solution]:
 def tspd(limit: float) -> None:
     by_size: dict[int, list[float]] = {}
     wrong = 0
+    _solve(FleetProblem.from_tspd(tspd_instances()[0]), limit)  # warm-up: imports
     for path in tspd_instances():
         problem = FleetProblem.from_tspd(path)
         seconds, solution = _solve(problem, limit)

@@ -112,6 +112,16 @@ class _Tables:
                 )
         self.back = back
         self.ret = p.objective == "return"
+        # work[j]: drone time serving a drone-only customer costs at least (landing τ and the
+        # shortest leg into it, from a stop or another customer); 0 for truck-servable ones
+        into = np.minimum(
+            p.flight_stop.min(axis=1),
+            np.where(np.eye(n, dtype=bool), INF, p.flight_customer).min(axis=1),
+        )
+        self.work = [
+            0.0 if self.truck_ok[j] else float(into[j] / p.v_drone + p.service_time)
+            for j in range(n)
+        ]
         self.full = (1 << n) - 1
         # launch_ok[w]: customers a sortie launched at w can serve first (and still land)
         self.launch_ok = [
@@ -127,6 +137,40 @@ class _Tables:
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
 # drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open) with origin = ℓ >= 0, or
 # -(w_L + 1) before its first customer
+
+
+def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
+    """The drones' shared work: every unserved drone-only customer j costs its drone at least
+    ``work[j]`` after the drone is available (a_d: launch no sooner than its truck's arrival
+    A or its recovery ρ; an airborne drone from its last time t). A drone that serves a load
+    finishes its last service no sooner than ``a_d + load``, so the last service time F
+    satisfies ``Σ_d max(0, F - a_d) >= W`` (the total work): F is at least the water level
+    that fills W over the availabilities. 0 when no drone-only customer is left."""
+    W = 0.0
+    for j in range(tab.n):
+        if not S >> j & 1:
+            W += tab.work[j]
+    if W <= 0.0:
+        return 0.0
+    avail = []
+    for _w, A, _T, _ev, fin, _F, drones in trucks:
+        if fin:
+            continue
+        for dr in drones:
+            if dr[0] == 0:
+                avail.append(dr[1] if dr[1] > A else A)
+            else:
+                avail.append(dr[3])
+    if not avail:
+        return INF
+    avail.sort()
+    total = 0.0
+    for i, a in enumerate(avail):
+        total += a
+        level = (total + W) / (i + 1)
+        if i + 1 == len(avail) or level <= avail[i + 1]:
+            return level
+    return INF  # not reached
 
 
 def _bound(tab: _Tables, label: tuple) -> float:
@@ -179,13 +223,14 @@ def _bound(tab: _Tables, label: tuple) -> float:
                 if est[r] > e:
                     e = est[r]
             est[j] = e
+    fill = _water_fill(tab, S, trucks)
     if not tab.ret:
-        b = M
+        b = M if M > fill else fill
         for j in range(n):
             if not S >> j & 1 and est[j] > b:
                 b = est[j]
         return b
-    b = 0.0
+    b = fill
     depot = tab.depot
     for w, _A, T, _ev, fin, F, drones in trucks:
         if fin:
