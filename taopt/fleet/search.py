@@ -528,37 +528,33 @@ def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tup
 
 
 def _simple_plan(problem: FleetProblem) -> FleetPlan | None:
-    """A feasible plan when one exists: truck 0 (or the first truck with a drone) serves the
-    customers one by one in a topological order, by itself at the customer's stop when it may,
-    else by a single-customer sortie launched and recovered at the customer's nearest stop."""
+    """A feasible plan when one exists: the customers, in a topological order, dealt to the
+    trucks in turn (a drone-only one to a truck carrying a drone); each truck serves its own
+    one by one, by itself at the customer's stop when it may, else by a single-customer sortie
+    of its first drone launched and recovered at the customer's nearest stop. Every wait
+    points to a customer earlier in the order, so no deadlock."""
     if problem.unservable():
         return None
     import networkx as nx
 
-    carrier = next((k for k in range(problem.K) if problem.drones[k] > 0), 0)
-    route = [problem.depot]
-    served: list[tuple[int, int]] = []
-    flights: list[Sortie] = []
-    for j in nx.topological_sort(problem.precedence_graph):
-        if problem.truck_servable(j):
-            stop = problem.customer_stop[j]
+    K = problem.K
+    carriers = [k for k in range(K) if problem.drones[k] > 0]
+    routes = [[problem.depot] for _ in range(K)]
+    served: list[list[tuple[int, int]]] = [[] for _ in range(K)]
+    flights: list[list[Sortie]] = [[] for _ in range(K)]
+    for i, j in enumerate(nx.topological_sort(problem.precedence_graph)):
+        by_truck = problem.truck_servable(j)
+        k = i % K if by_truck or problem.drones[i % K] > 0 else carriers[i % len(carriers)]
+        stop = problem.customer_stop[j] if by_truck else int(np.argmin(problem.flight_stop[j]))
+        if routes[k][-1] != stop:
+            routes[k].append(stop)
+        p = len(routes[k]) - 1
+        if by_truck:
+            served[k].append((p, j))
         else:
-            stop = int(np.argmin(problem.flight_stop[j]))
-        if route[-1] != stop:
-            route.append(stop)
-        p = len(route) - 1
-        if problem.truck_servable(j):
-            served.append((p, j))
-        else:
-            flights.append(Sortie(p, (j,), p))
-    routes = [[problem.depot] for _ in range(problem.K)]
-    routes[carrier] = route
-    truck_service: list[list[tuple[int, int]]] = [[] for _ in range(problem.K)]
-    truck_service[carrier] = served
-    sorties = [[[] for _ in range(problem.drones[k])] for k in range(problem.K)]
-    if flights:
-        sorties[carrier][0] = flights
-    return FleetPlan(routes, truck_service, sorties)
+            flights[k].append(Sortie(p, (j,), p))
+    sorties = [[flights[k] if d == 0 else [] for d in range(problem.drones[k])] for k in range(K)]
+    return FleetPlan(routes, served, sorties)
 
 
 def _beam(
@@ -579,6 +575,8 @@ def _beam(
         nxt: list[tuple[float, tuple, tuple]] = []
         seen: set[tuple] = set()
         for _lb, label, acts in layer:
+            if deadline.expired():
+                break
             for child, act in _children(tab, label):
                 b = _bound(tab, child)
                 if b >= best or b == INF:
@@ -675,7 +673,7 @@ def label_search(
         if lb >= best * (1 - slack):
             heap.clear()
             break
-        if expanded & 255 == 0 and deadline.expired():
+        if deadline.expired():
             heapq.heappush(heap, (lb, 0, i))
             stopped_by = "time_limit"
             break
