@@ -193,7 +193,18 @@ def solve_fleet(
     )
 
 
-register_method(FleetProblem, "exact", category="exact", certifies=True, style=("-", "*"))(
+def _affordable(problem: FleetProblem) -> bool:
+    """Where the exact method typically certifies within a minute (measured, see
+    docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers, the
+    label search up to 5 customers."""
+    if _chapter5_shape(problem):
+        return True
+    if _operations_shape(problem):
+        return problem.n <= 12
+    return problem.n <= 5
+
+
+register_method(FleetProblem, "exact", category="exact", certifies=_affordable, style=("-", "*"))(
     solve_fleet
 )
 
