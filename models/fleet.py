@@ -121,6 +121,11 @@ def solve_fleet(
             else None
         )
         info = {"algorithm": "ideal_dp", **inner.info}
+        bound = inner.bound
+        if plan is None:  # stopped before any plan: the sequential one, with the DP's bound
+            from taopt.fleet.search import _simple_plan
+
+            plan = _simple_plan(problem)
         if inner.status == "optimal":
             return make_solution(
                 problem,
@@ -136,7 +141,7 @@ def solve_fleet(
             plan,
             method="exact",
             stopped_by="time_limit",
-            bound=inner.bound,
+            bound=bound,
             runtime=time.perf_counter() - start,
             info=info,
         )

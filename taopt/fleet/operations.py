@@ -89,6 +89,8 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
     P = np.empty((N, s, s))
     P[0] = tt
     for start in range(1, N, 4096):
+        if deadline.expired():
+            return _stopped(problem, "time_limit")
         stop = min(N, start + 4096)
         P[start:stop] = np.min(H[start:stop, :, :, None] + to_stop[None, None, :, :], axis=2)
     fly = ft[:, :, None] + tau + ft[:, None, :]  # (n, v, w)
@@ -100,6 +102,8 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
     for d in range(n):
         if not drone_ok[d]:
             continue
+        if deadline.expired():
+            return _stopped(problem, "time_limit")
         sel = everything[(everything >> d) & 1 == 1]
         op = np.maximum(P[sel ^ (1 << d)], fly[d][None, :, :]) + tau
         better = op < C[sel]
