@@ -1,0 +1,28 @@
+"""Registration of the fleet family (thesis §6.2, recommendations 2 and 3).
+
+The family's spec (:class:`taopt.registry.Family`), found on disk by
+:func:`taopt.families.ensure_families`: problem :class:`FleetProblem`, file kind
+``fleet_problem``, payload :class:`FleetPlan`, the one scorer :func:`evaluate_fleet` and the
+valid bound ``reach``.
+"""
+
+from __future__ import annotations
+
+from taopt.fleet.bounds import reach_bound
+from taopt.fleet.evaluate import evaluate_fleet
+from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.registry import Bound, Family, register_family
+
+FAMILY = register_family(
+    Family(
+        problem_type=FleetProblem,
+        kind="fleet_problem",
+        payload=FleetPlan,
+        title="trucks carrying multi-parcel drones, precedence across the fleet (§6.2)",
+        evaluate=evaluate_fleet,
+        bounds={"reach": Bound(reach_bound)},
+        exports={"FleetPlan": FleetPlan, "Sortie": Sortie},
+    )
+)
+
+__all__ = ["FAMILY"]

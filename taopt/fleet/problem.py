@@ -1,0 +1,722 @@
+"""The fleet family's data: several trucks, each carrying several multi-parcel drones (§6.2).
+
+Thesis §6.2 (recommendations 2 and 3) asks for "one or several trucks, each of which carries
+several drones", a drone that "can deliver packages to several customers after each package
+recharging from the truck", and precedence across the fleet. :class:`FleetProblem` is chapter
+5's data (:class:`~taopt.delivery.instance.DeliveryInstance`: a street network of stops, the
+depot, customers, speeds, a flight range, a precedence DAG G^p, a landing/loading time τ)
+extended with
+
+* K trucks, truck k carrying D_k drones (``drones``), each drone serving at most c customers
+  per sortie (``capacity``), its range the total flight distance of one sortie (all legs);
+* per customer who may serve it (``service``): ``"drone"`` (chapter 5), ``"both"`` (a
+  customer at a stop, as in TSP-D) or ``"truck"``; a truck serves customer j when it is at
+  ``customer_stop[j]``;
+* the objective: ``"last_service"`` (the thesis's f (5.1), the time the last customer is
+  served; default) or ``"return"`` (every truck, drones aboard, back at the depot; TSP-D's).
+
+A solution is a :class:`FleetPlan` (payload ``fleet_plan``); :func:`taopt.fleet.evaluate.evaluate_fleet`
+is the family's one scorer. Customers are indices ``0..n-1``, stops ``0..s-1``, trucks
+``0..K-1``, drone d of truck k is ``(k, d)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components, shortest_path
+
+from taopt.delivery.dags import cycle_path
+from taopt.delivery.instance import STREET_TOLERANCE, _index, _points, _positive
+from taopt.errors import FeasibilityError, InstanceError
+from taopt.instance import check_schema, plain
+from taopt.io import load_json, save_json
+from taopt.result import register_payload
+from taopt.schemas import naming
+
+#: Relative tolerance of the flight-range check, as chapter 5's (5.6).
+FLIGHT_TOLERANCE = 1e-9
+
+#: Who may serve a customer.
+SERVICE_MODES = ("drone", "both", "truck")
+
+#: The objectives.
+OBJECTIVES = ("last_service", "return")
+
+
+def _count(value: Any, what: str, minimum: int) -> int:
+    try:
+        k = int(value)
+        ok = float(value) == k and not isinstance(value, bool)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InstanceError(f"{what} must be an integer, got {plain(value)!r}")
+    if k < minimum:
+        raise InstanceError(f"{what} = {k} must be >= {minimum}")
+    return k
+
+
+def _street_network(graph: Any, stops: np.ndarray, depot: int) -> tuple[nx.Graph, np.ndarray]:
+    """The frozen street network and its (s, s) shortest-path lengths (chapter 5's rules)."""
+    s = len(stops)
+    if not isinstance(graph, nx.Graph) or graph.is_directed():
+        raise InstanceError("graph must be an undirected networkx.Graph on the stop indices")
+    out = nx.Graph()
+    out.add_nodes_from(range(s))
+    for node in graph.nodes:
+        _index(node, f"graph node {node!r}", s, "stop")
+    rows, cols, vals = [], [], []
+    for u, v, data in graph.edges(data=True):
+        a = _index(u, f"graph edge ({u!r}, {v!r})", s, "stop")
+        b = _index(v, f"graph edge ({u!r}, {v!r})", s, "stop")
+        if a == b:
+            raise InstanceError(f"graph edge ({a}, {b}) joins stop {a} to itself")
+        if "length" not in data:
+            raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
+        length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
+        straight = float(np.hypot(*(stops[a] - stops[b])))
+        if length < straight * (1.0 - STREET_TOLERANCE):
+            raise InstanceError(
+                f"street edge ({a}, {b}) has length {length:.9g}, shorter than the straight "
+                f"line {straight:.9g} between stops {a} and {b}"
+            )
+        out.add_edge(a, b, length=length)
+        rows += [a, b]
+        cols += [b, a]
+        vals += [length if length > 0 else np.finfo(float).tiny] * 2
+    adjacency = csr_matrix((vals, (rows, cols)), shape=(s, s))
+    n_parts, labels = connected_components(adjacency, directed=False)
+    if n_parts > 1:
+        lonely = int(np.flatnonzero(labels != labels[depot])[0])
+        raise InstanceError(
+            f"street network is disconnected ({n_parts} components): stop {lonely} "
+            f"cannot be reached from the depot {depot}"
+        )
+    distance = shortest_path(adjacency, method="D", directed=False)
+    distance[distance < 1e-300] = 0.0
+    np.fill_diagonal(distance, 0.0)
+    return nx.freeze(out), distance
+
+
+@dataclass(frozen=True, eq=False)
+class FleetProblem:
+    """K trucks with D_k drones each, multi-customer sorties, precedence across the fleet.
+
+    Parameters
+    ----------
+    customers : (n, 2) array_like
+        Customer positions (metres), indices 0..n-1.
+    stops : (s, 2) array_like
+        Stop positions (the street network's vertices), indices 0..s-1.
+    graph : networkx.Graph
+        Street network on the stops, each edge with a ``"length"`` at least the straight
+        line between its stops (chapter 5's rule); connected. Copied and frozen.
+    depot : int
+        The stop w_0 where every truck starts, its drones aboard.
+    drones : int or sequence of int
+        D_k, the drones truck k carries (>= 0 each); an int gives every truck that many.
+    trucks : int
+        K >= 1 (only read when ``drones`` is an int; otherwise ``len(drones)``).
+    capacity : int
+        c >= 1, the most customers one sortie serves.
+    flight_range : float or None
+        The longest total flight distance of one sortie (launch stop -> customers -> recovery
+        stop), (5.6) generalised; None or ``inf`` = unlimited.
+    v_truck, v_drone : float
+        Speeds (> 0); truck times are street shortest paths over ``v_truck``, drone times
+        straight lines over ``v_drone``.
+    service : sequence of str or str
+        Per customer ``"drone"`` (default, chapter 5), ``"both"`` or ``"truck"``.
+    customer_stop : sequence of (int or None)
+        Per customer the stop where a truck serves it; required (an int) for customers a truck
+        may serve, ignored (None) for drone-only ones. Default: None for all.
+    precedences : iterable of (r, j)
+        r is served no later than j, whichever vehicles serve them ((5.7) across the fleet).
+    service_time : float
+        τ >= 0, chapter 5's landing/loading time: paid by a drone at each customer it serves
+        and once at its recovery (a truck serves its customers in no time).
+    objective : {"last_service", "return"}
+        ``"last_service"`` (default): f = the time the last customer is served (5.1);
+        ``"return"``: the time every truck is back at the depot with its drones aboard.
+    name : str
+        Optional label.
+
+    Attributes (derived, read-only)
+    -------------------------------
+    n, s, K, D (total drones), truck_time (s, s), flight_stop (n, s) customer-stop distances,
+    flight_customer (n, n) customer-customer distances, precedence_graph (networkx.DiGraph).
+
+    Raises
+    ------
+    InstanceError
+        Naming the item: a non-finite or negative value, a bad index, a truck-servable customer
+        without a stop, an unknown service mode or objective, a self-precedence, a precedence
+        cycle (e.g. ``precedence cycle 3 -> 5 -> 3``), a disconnected street network, a street
+        shorter than the straight line.
+
+    Notes
+    -----
+    An instance may have no feasible plan (a drone-only customer out of every drone's range,
+    or no drones at all): that is not an error here; :meth:`unservable` names such customers
+    and the exact method reports ``infeasible``.
+
+    Example
+    -------
+    >>> import networkx as nx
+    >>> g = nx.Graph(); g.add_edge(0, 1, length=100.0)
+    >>> p = FleetProblem([[50, 30]], [[0, 0], [100, 0]], g, depot=0, drones=[1, 2],
+    ...                  capacity=2, flight_range=500, v_truck=10, v_drone=20)
+    >>> p.K, p.D, p.drones, p.n
+    (2, 3, (1, 2), 1)
+
+    References
+    ----------
+    Thesis §5.2 ((5.1)–(5.7)), §6.2 (recommendations 2 and 3).
+    """
+
+    customers: np.ndarray
+    stops: np.ndarray
+    graph: nx.Graph
+    depot: int
+    drones: Any = 1
+    trucks: int = 1
+    capacity: int = 1
+    flight_range: float | None = None
+    v_truck: float = 1.0
+    v_drone: float = 1.0
+    service: Any = "drone"
+    customer_stop: Any = None
+    precedences: tuple[tuple[int, int], ...] = ()
+    service_time: float = 0.0
+    objective: str = "last_service"
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        customers = _points(self.customers, "customers")
+        stops = _points(self.stops, "stops")
+        n, s = len(customers), len(stops)
+        if n < 1:
+            raise InstanceError("customers: need at least one customer")
+        if s < 1:
+            raise InstanceError("stops: need at least one stop")
+        set_(self, "customers", customers)
+        set_(self, "stops", stops)
+        set_(self, "depot", _index(self.depot, "depot", s, "stop"))
+        # -- fleet ---------------------------------------------------------------------
+        if isinstance(self.drones, (str, bytes)):
+            raise InstanceError(f"drones must be an int or a list of ints, got {self.drones!r}")
+        if isinstance(self.drones, (Sequence, np.ndarray)):
+            drones = tuple(_count(d, f"drones[{k}]", 0) for k, d in enumerate(list(self.drones)))
+            if not drones:
+                raise InstanceError("drones: need at least one truck (one entry per truck)")
+        else:
+            trucks = _count(self.trucks, "trucks", 1)
+            drones = (_count(self.drones, "drones", 0),) * trucks
+        set_(self, "drones", drones)
+        set_(self, "trucks", len(drones))
+        set_(self, "capacity", _count(self.capacity, "capacity", 1))
+        if self.flight_range is None:
+            set_(self, "flight_range", math.inf)
+        else:
+            try:
+                rng = float(self.flight_range)
+            except (TypeError, ValueError):
+                raise InstanceError(
+                    f"flight_range must be a number or None, got {plain(self.flight_range)!r}"
+                ) from None
+            if math.isnan(rng) or rng <= 0:
+                raise InstanceError(f"flight_range = {rng} must be > 0 (None for unlimited)")
+            set_(self, "flight_range", rng)
+        set_(self, "v_truck", _positive(self.v_truck, "v_truck"))
+        set_(self, "v_drone", _positive(self.v_drone, "v_drone"))
+        set_(self, "service_time", _positive(self.service_time, "service_time", allow_zero=True))
+        if self.objective not in OBJECTIVES:
+            raise InstanceError(f"objective {self.objective!r} is not one of {OBJECTIVES}")
+        set_(self, "name", str(self.name))
+        # -- who serves whom -------------------------------------------------------------
+        modes = [self.service] * n if isinstance(self.service, str) else list(self.service)
+        if len(modes) != n:
+            raise InstanceError(f"service has {len(modes)} entries but there are {n} customers")
+        for j, mode in enumerate(modes):
+            if mode not in SERVICE_MODES:
+                raise InstanceError(f"service[{j}] = {mode!r} is not one of {SERVICE_MODES}")
+        set_(self, "service", tuple(modes))
+        raw_stop = [None] * n if self.customer_stop is None else list(self.customer_stop)
+        if len(raw_stop) != n:
+            raise InstanceError(
+                f"customer_stop has {len(raw_stop)} entries but there are {n} customers"
+            )
+        at: list[int | None] = []
+        for j, (mode, w) in enumerate(zip(modes, raw_stop, strict=True)):
+            if mode == "drone":
+                at.append(None if w is None else _index(w, f"customer_stop[{j}]", s, "stop"))
+            elif w is None:
+                raise InstanceError(
+                    f"customer {j} may be served by a truck (service {mode!r}) but "
+                    f"customer_stop[{j}] is None: name the stop where a truck serves it"
+                )
+            else:
+                at.append(_index(w, f"customer_stop[{j}]", s, "stop"))
+        set_(self, "customer_stop", tuple(at))
+        # -- street network ------------------------------------------------------------------
+        graph, truck_distance = _street_network(self.graph, stops, self.depot)
+        set_(self, "graph", graph)
+        truck_time = truck_distance / self.v_truck
+        diff = customers[:, None, :] - stops[None, :, :]
+        flight_stop = np.sqrt((diff**2).sum(axis=2))
+        diff = customers[:, None, :] - customers[None, :, :]
+        flight_customer = np.sqrt((diff**2).sum(axis=2))
+        # -- precedences ---------------------------------------------------------------------
+        pairs: list[tuple[int, int]] = []
+        seen: set[tuple[int, int]] = set()
+        try:
+            items = list(self.precedences)
+        except TypeError:
+            raise InstanceError("precedences must be an iterable of (r, j) pairs") from None
+        for item in items:
+            try:
+                r_raw, j_raw = item
+            except (TypeError, ValueError):
+                raise InstanceError(f"precedence {plain(item)!r} is not an (r, j) pair") from None
+            r = _index(r_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
+            j = _index(j_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
+            if r == j:
+                raise InstanceError(f"precedence ({r}, {j}): customer {r} cannot precede itself")
+            if (r, j) not in seen:
+                seen.add((r, j))
+                pairs.append((r, j))
+        dag = nx.DiGraph()
+        dag.add_nodes_from(range(n))
+        dag.add_edges_from(pairs)
+        path = cycle_path(dag)
+        if path:
+            raise InstanceError(f"precedence cycle {path}: no plan can serve these customers")
+        set_(self, "precedences", tuple(pairs))
+        for arr in (truck_distance, truck_time, flight_stop, flight_customer):
+            arr.setflags(write=False)
+        set_(self, "_truck_distance", truck_distance)
+        set_(self, "_truck_time", truck_time)
+        set_(self, "_flight_stop", flight_stop)
+        set_(self, "_flight_customer", flight_customer)
+        set_(self, "_precedence_graph", nx.freeze(dag))
+
+    # -- derived data ----------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of customers."""
+        return len(self.customers)
+
+    @property
+    def s(self) -> int:
+        """Number of stops (the depot included)."""
+        return len(self.stops)
+
+    @property
+    def K(self) -> int:  # noqa: N802  (the thesis's symbol)
+        """Number of trucks."""
+        return len(self.drones)
+
+    @property
+    def D(self) -> int:  # noqa: N802
+        """Total number of drones, Σ_k D_k."""
+        return int(sum(self.drones))
+
+    @property
+    def flight_limit(self) -> float:
+        """The flight range with the relative tolerance used by every range check."""
+        return self.flight_range * (1.0 + FLIGHT_TOLERANCE)
+
+    @property
+    def truck_distance(self) -> np.ndarray:
+        """(s, s) street shortest-path lengths."""
+        return self._truck_distance  # type: ignore[attr-defined]
+
+    @property
+    def truck_time(self) -> np.ndarray:
+        """(s, s) truck driving times ``truck_distance / v_truck``."""
+        return self._truck_time  # type: ignore[attr-defined]
+
+    @property
+    def flight_stop(self) -> np.ndarray:
+        """(n, s) straight-line distances customer j – stop w."""
+        return self._flight_stop  # type: ignore[attr-defined]
+
+    @property
+    def flight_customer(self) -> np.ndarray:
+        """(n, n) straight-line distances between customers."""
+        return self._flight_customer  # type: ignore[attr-defined]
+
+    @property
+    def precedence_graph(self) -> nx.DiGraph:
+        """G^p: a frozen DiGraph on customers 0..n-1, an edge r -> j per precedence."""
+        return self._precedence_graph  # type: ignore[attr-defined]
+
+    def drone_ids(self) -> list[tuple[int, int]]:
+        """Every drone as ``(truck, d)``."""
+        return [(k, d) for k, count in enumerate(self.drones) for d in range(count)]
+
+    def truck_servable(self, j: int) -> bool:
+        """Whether a truck may serve customer j (service ``"truck"`` or ``"both"``)."""
+        return self.service[j] != "drone"
+
+    def drone_servable(self, j: int) -> bool:
+        """Whether a drone may serve customer j (service ``"drone"`` or ``"both"``)."""
+        return self.service[j] != "truck"
+
+    def unservable(self) -> list[int]:
+        """Customers no plan can serve: drone-only and out of range of every stop (the
+        shortest sortie, nearest stop and back, is longer than the range), or drone-only when
+        no truck carries a drone. Empty when a feasible plan exists (serve every drone
+        customer by its own sortie from its nearest stop, in a topological order)."""
+        out = []
+        for j in range(self.n):
+            if self.service[j] != "drone":
+                continue
+            if self.D == 0 or 2.0 * float(self.flight_stop[j].min()) > self.flight_limit:
+                out.append(j)
+        return out
+
+    def replace(self, **changes: Any) -> FleetProblem:
+        """A validated copy with some fields changed (e.g. ``capacity=2``)."""
+        if "drones" in changes and "trucks" not in changes and isinstance(changes["drones"], int):
+            changes["trucks"] = self.K
+        return dataclasses.replace(self, **changes)
+
+    def __repr__(self) -> str:
+        label = f" {self.name!r}" if self.name else ""
+        return (
+            f"FleetProblem{label}(n={self.n}, s={self.s}, K={self.K}, drones={list(self.drones)}, "
+            f"c={self.capacity}, range={self.flight_range:g}, precedences={len(self.precedences)}, "
+            f"objective={self.objective!r})"
+        )
+
+    # -- readers ------------------------------------------------------------------------------
+    @classmethod
+    def from_delivery(cls, instance: Any, **changes: Any) -> FleetProblem:
+        """Chapter 5's instance as a fleet problem: K = D = c = 1, drone-only customers,
+        ``last_service`` (f of (5.1)); same network, speeds, range, τ and precedences.
+        ``changes`` override fields (e.g. ``drones=2``)."""
+        fields = dict(
+            customers=instance.customers,
+            stops=instance.stops,
+            graph=instance.graph,
+            depot=instance.depot,
+            drones=(1,),
+            capacity=1,
+            flight_range=instance.flight_range,
+            v_truck=instance.v_truck,
+            v_drone=instance.v_drone,
+            service="drone",
+            precedences=instance.precedences,
+            service_time=instance.service_time,
+            objective="last_service",
+            name=instance.name,
+        )
+        fields.update(changes)
+        return cls(**fields)
+
+    @classmethod
+    def from_tspd(cls, path: str | os.PathLike[str], **changes: Any) -> FleetProblem:
+        """Read an Agatz–Bouman–Schmidt TSP-D instance (``uniform-*-n*.txt``).
+
+        The format: comments ``/* ... */``; the truck's and the drone's cost per unit of
+        distance (speeds are their inverses), the number of nodes N, then N lines ``x y
+        name``, the depot first; optional ``#MAXFLY r`` (flight range, in distance; unlimited
+        otherwise) and ``#NOVISIT i j ...`` (nodes the drone may not serve: truck-only).
+        Built as: stops = the N nodes on the complete Euclidean graph, customer j = node
+        j + 1 at its stop, served by truck or drone, one truck with one drone, c = 1, τ = 0,
+        objective ``"return"``. ``changes`` override fields.
+
+        Raises
+        ------
+        InstanceError
+            The file cannot be read or does not follow the grammar (naming the path).
+        """
+        where = Path(path)
+        try:
+            text = where.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise InstanceError(f"{where}: cannot be read ({exc.strerror or exc})") from None
+        maxfly: float | None = None
+        novisit: set[int] = set()
+        for match in re.finditer(r"#MAXFLY\s+([-0-9.eE+]+)", text):
+            maxfly = float(match.group(1))
+        for match in re.finditer(r"#NOVISIT((?:\s+\d+)+)", text):
+            novisit.update(int(x) for x in match.group(1).split())
+        body = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)
+        body = re.sub(r"#(MAXFLY|NOVISIT)[^\n]*", " ", body)
+        lines = [line.split() for line in body.splitlines() if line.strip()]
+        try:
+            truck_cost = float(lines[0][0])
+            drone_cost = float(lines[1][0])
+            count = int(lines[2][0])
+            nodes = np.array([[float(r[0]), float(r[1])] for r in lines[3 : 3 + count]])
+        except (IndexError, ValueError):
+            raise InstanceError(f"{where}: not a TSP-D instance (speeds, N, N nodes)") from None
+        if len(nodes) != count or count < 2:
+            raise InstanceError(f"{where}: {count} nodes announced, {len(nodes)} read")
+        graph = nx.Graph()
+        for a in range(count):
+            for b in range(a + 1, count):
+                graph.add_edge(a, b, length=float(np.hypot(*(nodes[a] - nodes[b]))))
+        fields: dict[str, Any] = dict(
+            customers=nodes[1:],
+            stops=nodes,
+            graph=graph,
+            depot=0,
+            drones=(1,),
+            capacity=1,
+            flight_range=maxfly,
+            v_truck=1.0 / truck_cost,
+            v_drone=1.0 / drone_cost,
+            service=["truck" if j + 1 in novisit else "both" for j in range(count - 1)],
+            customer_stop=list(range(1, count)),
+            objective="return",
+            name=where.stem,
+        )
+        fields.update(changes)
+        with naming(str(where)):
+            return cls(**fields)
+
+    # -- JSON --------------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data of kind ``fleet_problem`` (``flight_range`` null = unlimited)."""
+        return {
+            "schema_version": 1,
+            "kind": "fleet_problem",
+            "name": self.name,
+            "customers": self.customers.tolist(),
+            "stops": self.stops.tolist(),
+            "edges": [
+                [int(u), int(v), float(d["length"])]
+                for u, v, d in sorted(self.graph.edges(data=True), key=lambda e: (e[0], e[1]))
+            ],
+            "depot": self.depot,
+            "drones": list(self.drones),
+            "capacity": self.capacity,
+            "flight_range": None if math.isinf(self.flight_range) else self.flight_range,
+            "v_truck": self.v_truck,
+            "v_drone": self.v_drone,
+            "service": list(self.service),
+            "customer_stop": list(self.customer_stop),
+            "precedences": [list(p) for p in self.precedences],
+            "service_time": self.service_time,
+            "objective": self.objective,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], source: str | None = None) -> FleetProblem:
+        """Inverse of :meth:`to_dict`: checked against ``fleet_problem.schema.json`` first
+        (``source`` names the data in messages), then by the constructor.
+
+        Raises
+        ------
+        InstanceError
+            A schema violation (naming the JSON path and the value), a street listed twice,
+            or the constructor's own complaint.
+        """
+        where = source or "fleet_problem"
+        check_schema(data, "fleet_problem", source)
+        graph = nx.Graph()
+        graph.add_nodes_from(range(len(data["stops"])))
+        first: dict[frozenset[int], int] = {}
+        for k, (u, v, length) in enumerate(data["edges"]):
+            key = frozenset((int(u), int(v)))
+            if key in first:
+                raise InstanceError(
+                    f"{where}: edges[{k}]: the street ({int(u)}, {int(v)}) is already "
+                    f"edges[{first[key]}]"
+                )
+            if int(u) == int(v):
+                raise InstanceError(
+                    f"{where}: edges[{k}]: the street ({int(u)}, {int(v)}) joins stop "
+                    f"{int(u)} to itself"
+                )
+            first[key] = k
+            graph.add_edge(int(u), int(v), length=length)
+        with naming(where):
+            return cls(
+                customers=data["customers"],
+                stops=data["stops"],
+                graph=graph,
+                depot=data["depot"],
+                drones=list(data["drones"]),
+                capacity=data.get("capacity", 1),
+                flight_range=data.get("flight_range"),
+                v_truck=data["v_truck"],
+                v_drone=data["v_drone"],
+                service=data.get("service", "drone"),
+                customer_stop=data.get("customer_stop"),
+                precedences=tuple(tuple(p) for p in data.get("precedences", [])),
+                service_time=data.get("service_time", 0.0),
+                objective=data.get("objective", "last_service"),
+                name=data.get("name", ""),
+            )
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write JSON atomically."""
+        save_json(self.to_dict(), path)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> FleetProblem:
+        """Read a JSON file written by :meth:`save` (strict JSON, validated; every failure an
+        InstanceError naming the path)."""
+        return cls.from_dict(load_json(path, "fleet_problem"), source=str(path))
+
+
+# -- the payload -----------------------------------------------------------------------------------
+def _ints(value: Any, what: str) -> tuple[int, ...]:
+    if isinstance(value, (str, bytes)):
+        raise FeasibilityError(f"{what} must be a list of integers, got {value!r}")
+    try:
+        items = list(value)
+        out = tuple(int(x) for x in items)
+        ok = all(float(x) == int(x) and not isinstance(x, bool) for x in items)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise FeasibilityError(f"{what} must be a list of integers, got {value!r}")
+    return out
+
+
+@dataclass(frozen=True)
+class Sortie:
+    """One drone flight: launched at position ``launch`` of its truck's stop sequence, serving
+    ``customers`` in order, recovered by the same truck at position ``recovery >= launch``."""
+
+    launch: int
+    customers: tuple[int, ...]
+    recovery: int
+
+    def __post_init__(self) -> None:
+        (launch,) = _ints([self.launch], "sortie launch")
+        (recovery,) = _ints([self.recovery], "sortie recovery")
+        object.__setattr__(self, "launch", launch)
+        object.__setattr__(self, "recovery", recovery)
+        object.__setattr__(self, "customers", _ints(self.customers, "sortie customers"))
+
+    def to_list(self) -> list[Any]:
+        """``[launch, [customers...], recovery]``."""
+        return [self.launch, list(self.customers), self.recovery]
+
+
+def _sortie(item: Any, what: str) -> Sortie:
+    if isinstance(item, Sortie):
+        return item
+    try:
+        launch, customers, recovery = item
+    except (TypeError, ValueError):
+        raise FeasibilityError(
+            f"{what} must be [launch, [customers...], recovery], got {item!r}"
+        ) from None
+    return Sortie(launch, customers, recovery)
+
+
+@register_payload("fleet_plan")
+@dataclass(frozen=True)
+class FleetPlan:
+    """A fleet solution (payload ``fleet_plan``).
+
+    Parameters
+    ----------
+    routes : sequence of K sequences of int
+        ``routes[k]`` is truck k's stop sequence, ``routes[k][0]`` the depot; a stop may
+        repeat (a truck may revisit a stop). Consecutive stops are joined by street shortest
+        paths. Under ``"return"`` the drive from the last stop back to the depot is implied.
+    truck_service : sequence of K sequences of (position, customer)
+        ``(p, j)`` in ``truck_service[k]``: truck k serves customer j when at position p of
+        its sequence (the stop ``routes[k][p]`` must be ``customer_stop[j]``).
+    sorties : sequence of K sequences of D_k sequences of Sortie
+        ``sorties[k][d]`` are drone (k, d)'s sorties in flying order, each a :class:`Sortie`
+        or ``[launch, [customers...], recovery]`` with positions in ``routes[k]``.
+
+    Raises
+    ------
+    FeasibilityError
+        Something that is not a list of integers where one is needed (the scorer checks the
+        rest against the problem).
+
+    Example
+    -------
+    >>> plan = FleetPlan([[0, 1]], [[]], [[[[0, [0], 1]]]])
+    >>> plan.sorties[0][0][0]
+    Sortie(launch=0, customers=(0,), recovery=1)
+    """
+
+    routes: tuple[tuple[int, ...], ...]
+    truck_service: tuple[tuple[tuple[int, int], ...], ...] = ()
+    sorties: tuple[tuple[tuple[Sortie, ...], ...], ...] = ()
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        if isinstance(self.routes, (str, bytes)):
+            raise FeasibilityError(f"routes must be a list of stop lists, got {self.routes!r}")
+        routes = tuple(_ints(r, f"routes[{k}]") for k, r in enumerate(self.routes))
+        set_(self, "routes", routes)
+        served = list(self.truck_service) if self.truck_service else [[] for _ in routes]
+        truck_service = []
+        for k, items in enumerate(served):
+            pairs = []
+            for i, item in enumerate(items):
+                pair = _ints(item, f"truck_service[{k}][{i}]")
+                if len(pair) != 2:
+                    raise FeasibilityError(
+                        f"truck_service[{k}][{i}] must be [position, customer], got {item!r}"
+                    )
+                pairs.append((pair[0], pair[1]))
+            truck_service.append(tuple(pairs))
+        set_(self, "truck_service", tuple(truck_service))
+        raw = list(self.sorties) if self.sorties else [[] for _ in routes]
+        sorties = []
+        for k, per_truck in enumerate(raw):
+            drones = []
+            for d, flights in enumerate(per_truck):
+                drones.append(
+                    tuple(_sortie(f, f"sorties[{k}][{d}][{i}]") for i, f in enumerate(flights))
+                )
+            sorties.append(tuple(drones))
+        set_(self, "sorties", tuple(sorties))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "routes": [list(r) for r in self.routes],
+            "truck_service": [[list(p) for p in items] for items in self.truck_service],
+            "sorties": [[[f.to_list() for f in fl] for fl in drones] for drones in self.sorties],
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> FleetPlan:
+        return cls(data["routes"], data.get("truck_service", ()), data.get("sorties", ()))
+
+    @classmethod
+    def from_delivery_plan(cls, plan: Any, depot: int) -> FleetPlan:
+        """Chapter 5's :class:`~taopt.delivery.instance.Plan` as a fleet plan (K = D = 1): the
+        truck visits ``depot, launch[0], landing[0], launch[1], ...``; sortie p is launched at
+        position 2p + 1 and recovered at 2p + 2, so the times are chapter 5's."""
+        route = [depot]
+        flights = []
+        for j, i, k in zip(plan.order, plan.launch, plan.landing, strict=True):
+            route += [int(i), int(k)]
+            flights.append(Sortie(len(route) - 2, (int(j),), len(route) - 1))
+        return cls([route], [[]], [[flights]])
+
+    def customers(self) -> list[int]:
+        """Every customer the plan serves (truck ones first), with repeats if any."""
+        out = [j for items in self.truck_service for _, j in items]
+        out += [j for drones in self.sorties for fl in drones for f in fl for j in f.customers]
+        return out
+
+
+__all__ = ["FleetProblem", "FleetPlan", "Sortie", "SERVICE_MODES", "OBJECTIVES"]
