@@ -8,7 +8,7 @@ valid bound ``reach``.
 
 from __future__ import annotations
 
-from taopt.fleet.bounds import reach_bound
+from taopt.fleet.bounds import fleet_lower, reach_bound, work_bound
 from taopt.fleet.evaluate import evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.registry import Bound, Family, register_family
@@ -20,7 +20,11 @@ FAMILY = register_family(
         payload=FleetPlan,
         title="trucks carrying multi-parcel drones, precedence across the fleet (§6.2)",
         evaluate=evaluate_fleet,
-        bounds={"reach": Bound(reach_bound)},
+        bounds={
+            "reach": Bound(reach_bound),
+            "work": Bound(work_bound),
+            "lower": Bound(fleet_lower),
+        },
         exports={"FleetPlan": FleetPlan, "Sortie": Sortie},
     )
 )
