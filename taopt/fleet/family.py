@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from taopt.fleet.bounds import fleet_lower, reach_bound, work_bound
 from taopt.fleet.evaluate import evaluate_fleet
+from taopt.fleet.plot import save_fleet_gantt, save_fleet_plot
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.registry import Bound, Family, register_family
+from taopt.registry import Bound, Family, Study, register_family
 
 FAMILY = register_family(
     Family(
@@ -25,6 +26,8 @@ FAMILY = register_family(
             "work": Bound(work_bound),
             "lower": Bound(fleet_lower),
         },
+        plots={"plan": save_fleet_plot, "gantt": save_fleet_gantt},
+        studies=(Study("fleet", "taopt.orchestration.studies.fleet"),),
         exports={"FleetPlan": FleetPlan, "Sortie": Sortie},
     )
 )
