@@ -214,11 +214,11 @@ def schedule(problem: FleetProblem, plan: Any, check: bool = True) -> FleetSched
     fs = problem.flight_stop / problem.v_drone
     fc = problem.flight_customer / problem.v_drone
     tau = problem.service_time
-    names: list[str] = []
+    names: list[tuple[str, tuple[Any, ...]]] = []  # formatted only for a deadlock message
     succ: list[list[tuple[int, float]]] = []
 
-    def node(name: str) -> int:
-        names.append(name)
+    def node(template: str, *args: Any) -> int:
+        names.append((template, args))
         succ.append([])
         return len(names) - 1
 
@@ -228,8 +228,8 @@ def schedule(problem: FleetProblem, plan: Any, check: bool = True) -> FleetSched
     arr: list[list[int]] = []
     dep: list[list[int]] = []
     for k, route in enumerate(plan.routes):
-        arr.append([node(f"truck {k} arrives at position {p}") for p in range(len(route))])
-        dep.append([node(f"truck {k} leaves position {p}") for p in range(len(route))])
+        arr.append([node("truck {} arrives at position {}", k, p) for p in range(len(route))])
+        dep.append([node("truck {} leaves position {}", k, p) for p in range(len(route))])
         for p in range(len(route)):
             edge(arr[k][p], dep[k][p], 0.0)
             if p + 1 < len(route):
@@ -237,7 +237,7 @@ def schedule(problem: FleetProblem, plan: Any, check: bool = True) -> FleetSched
     cust = [-1] * problem.n
     for k, items in enumerate(plan.truck_service):
         for p, j in items:
-            cust[j] = node(f"customer {j} served by truck {k}")
+            cust[j] = node("customer {} served by truck {}", j, k)
             edge(arr[k][p], cust[j], 0.0)
             edge(cust[j], dep[k][p], 0.0)
     rows: list[tuple[int, int, int, int, int, int]] = []
@@ -246,23 +246,22 @@ def schedule(problem: FleetProblem, plan: Any, check: bool = True) -> FleetSched
         for d, flights in enumerate(drones):
             prev_rec = -1
             for i, f in enumerate(flights):
-                who = f"sortie {i} of drone ({k}, {d})"
-                launch = node(f"{who} launched")
+                launch = node("sortie {} of drone ({}, {}) launched", i, k, d)
                 edge(arr[k][f.launch], launch, 0.0)
                 edge(launch, dep[k][f.launch], 0.0)
                 if prev_rec >= 0:
                     edge(prev_rec, launch, 0.0)
                 here, last = launch, -1
                 for j in f.customers:
-                    cust[j] = node(f"customer {j} served by drone ({k}, {d})")
+                    cust[j] = node("customer {} served by drone ({}, {})", j, k, d)
                     if last < 0:
                         edge(here, cust[j], float(fs[j, route[f.launch]]) + tau)
                     else:
                         edge(here, cust[j], float(fc[last, j]) + tau)
                     here, last = cust[j], j
-                back = node(f"{who} back at position {f.recovery}")
+                back = node("sortie {} of drone ({}, {}) back at position {}", i, k, d, f.recovery)
                 edge(here, back, float(fs[last, route[f.recovery]]))
-                rec = node(f"{who} recovered")
+                rec = node("sortie {} of drone ({}, {}) recovered", i, k, d)
                 edge(back, rec, tau)
                 edge(arr[k][f.recovery], rec, tau)
                 edge(rec, dep[k][f.recovery], 0.0)
@@ -315,13 +314,18 @@ def schedule(problem: FleetProblem, plan: Any, check: bool = True) -> FleetSched
 
 
 def _deadlock(
-    names: list[str],
+    templates: list[tuple[str, tuple[Any, ...]]],
     succ: list[list[tuple[int, float]]],
     indeg: list[int],
     prec_edges: dict[tuple[int, int], tuple[int, int]],
 ) -> str:
     """A message naming one cycle of waits among the events Kahn's algorithm left."""
-    left = {v for v in range(len(names)) if indeg[v] > 0}
+
+    def names(v: int) -> str:
+        template, args = templates[v]
+        return template.format(*args)
+
+    left = {v for v in range(len(templates)) if indeg[v] > 0}
     start = min(left)
     # walk inside the remaining subgraph until a node repeats (every node left has a
     # predecessor left, so walk backwards along predecessors)
@@ -343,7 +347,7 @@ def _deadlock(
         for a, b in zip(cycle, cycle[1:] + cycle[:1], strict=True)
         if (a, b) in prec_edges
     ]
-    where = " -> ".join(names[x] for x in cycle[:6]) + (" -> ..." if len(cycle) > 6 else "")
+    where = " -> ".join(names(x) for x in cycle[:6]) + (" -> ..." if len(cycle) > 6 else "")
     which = ", ".join(f"({r}, {j})" for r, j in pairs) or "none"
     return (
         f"the plan deadlocks: precedence pair(s) {which} can only be met by waiting in a "

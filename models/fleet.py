@@ -1,0 +1,191 @@
+"""The fleet family's certified exact method, registered as ``"exact"`` for FleetProblem.
+
+:func:`solve_fleet` picks the fastest exact algorithm that applies (each certified on its own):
+
+1. no plan exists (a drone-only customer out of every drone's range, or no drone at all):
+   status ``infeasible``, proven by :meth:`taopt.fleet.problem.FleetProblem.unservable`;
+2. chapter 5's shape (K = D = c = 1, every customer drone-only, ``last_service``): chapter 5's
+   DP over the order ideals of G^p (:func:`taopt.delivery.ideal_dp.ideal_dp`), its plan carried
+   over by :meth:`taopt.fleet.problem.FleetPlan.from_delivery_plan`;
+3. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
+   operations DP over customer subsets (:func:`taopt.fleet.operations.operations_dp`);
+4. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from taopt.errors import require
+from taopt.fleet.problem import FleetPlan, FleetProblem
+from taopt.fleet.search import label_search
+from taopt.registry import register_method
+from taopt.result import INFEASIBLE, Solution, make_solution
+
+
+def _chapter5_shape(problem: FleetProblem) -> bool:
+    return (
+        problem.drones == (1,)
+        and problem.capacity == 1
+        and problem.objective == "last_service"
+        and all(mode == "drone" for mode in problem.service)
+    )
+
+
+def _to_delivery(problem: FleetProblem) -> Any:
+    from taopt.delivery.instance import DeliveryInstance
+
+    return DeliveryInstance(
+        customers=problem.customers,
+        stops=problem.stops,
+        graph=problem.graph,
+        depot=problem.depot,
+        v_drone=problem.v_drone,
+        v_truck=problem.v_truck,
+        flight_range=problem.flight_range,
+        precedences=problem.precedences,
+        service_time=problem.service_time,
+        name=problem.name,
+    )
+
+
+def _operations_shape(problem: FleetProblem) -> bool:
+    return all(d == 1 for d in problem.drones) and problem.capacity == 1 and not problem.precedences
+
+
+def solve_fleet(
+    problem: FleetProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    max_labels: int | None = None,
+    algorithm: str = "auto",
+) -> Solution:
+    """Certified optimum of a fleet problem (module docstring for the algorithm used).
+
+    Parameters
+    ----------
+    problem : FleetProblem
+    time_limit : float, optional
+        Wall-clock seconds, everything included; when reached the result has status
+        ``time_limit``, the best plan found (or none, objective inf) and a proven bound.
+    incumbent : FleetPlan or Solution, optional
+        A feasible plan used to prune (``taopt.solve`` passes the warm-start heuristics').
+    max_labels : int, optional
+        Memory guard of the label search (:data:`taopt.fleet.search.DEFAULT_MAX_LABELS`): the
+        run stops like a time limit (``info["stopped_by"] == "size"``).
+    algorithm : {"auto", "search", "operations", "ideal_dp"}
+        Force one algorithm (``"auto"``: the fastest that applies; for measurements).
+
+    Returns
+    -------
+    Solution
+        ``status`` "optimal" (objective == bound), "infeasible" (no plan exists) or
+        "time_limit"; ``info["algorithm"]`` names the algorithm, plus its counters.
+    """
+    require(problem, FleetProblem, "solve_fleet")
+    start = time.perf_counter()
+    unservable = problem.unservable()
+    if unservable:
+        j = unservable[0]
+        why = (
+            "no truck carries a drone"
+            if problem.D == 0
+            else f"its nearest stop is {float(problem.flight_stop[j].min()):.6g} away, so the "
+            f"shortest sortie is longer than the range {problem.flight_range:.6g}"
+        )
+        return Solution(
+            objective=float("inf"),
+            status=INFEASIBLE,
+            solution=None,
+            bound=float("inf"),
+            runtime=time.perf_counter() - start,
+            method="exact",
+            info={"reason": f"customer {j} is drone-only and cannot be served: {why}"},
+        )
+    choice = algorithm
+    if choice == "auto":
+        if _chapter5_shape(problem):
+            choice = "ideal_dp"
+        elif _operations_shape(problem):
+            choice = "operations"
+        else:
+            choice = "search"
+    if choice == "ideal_dp":
+        from taopt.delivery.ideal_dp import ideal_dp
+
+        inner = ideal_dp(_to_delivery(problem), time_limit=time_limit)
+        plan = (
+            FleetPlan.from_delivery_plan(inner.solution, problem.depot)
+            if inner.solution is not None
+            else None
+        )
+        info = {"algorithm": "ideal_dp", **inner.info}
+        if inner.status == "optimal":
+            return make_solution(
+                problem,
+                plan,
+                method="exact",
+                status="optimal",
+                bound=inner.bound,
+                runtime=time.perf_counter() - start,
+                info=info,
+            )
+        return make_solution(
+            problem,
+            plan,
+            method="exact",
+            stopped_by="time_limit",
+            bound=inner.bound,
+            runtime=time.perf_counter() - start,
+            info=info,
+        )
+    if choice == "operations":
+        from taopt.fleet.operations import operations_dp
+
+        result = operations_dp(problem, time_limit=time_limit)
+    else:
+        result = label_search(
+            problem, time_limit=time_limit, incumbent=incumbent, max_labels=max_labels
+        )
+    info = {
+        "algorithm": choice,
+        **{k: v for k, v in result.items() if k not in ("plan", "value", "bound")},
+    }
+    stopped = result["stopped_by"]
+    if result["plan"] is None:
+        return Solution(
+            objective=float("inf"),
+            status="time_limit",
+            solution=None,
+            bound=result["bound"],
+            runtime=time.perf_counter() - start,
+            method="exact",
+            info=info,
+        )
+    if stopped == "optimal":
+        return make_solution(
+            problem,
+            result["plan"],
+            method="exact",
+            status="optimal",
+            bound=result["value"],
+            runtime=time.perf_counter() - start,
+            info=info,
+        )
+    return make_solution(
+        problem,
+        result["plan"],
+        method="exact",
+        stopped_by="time_limit",
+        bound=result["bound"],
+        runtime=time.perf_counter() - start,
+        info=info,
+    )
+
+
+register_method(FleetProblem, "exact", category="exact", certifies=True, style=("-", "*"))(
+    solve_fleet
+)
+
+__all__ = ["solve_fleet"]

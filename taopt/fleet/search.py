@@ -1,0 +1,576 @@
+"""The fleet family's certified exact method: best-first label search with dominance.
+
+A *label* is a partial plan seen from its end: the served set S (every customer whose
+service is fixed), its service times, and per truck its current stop w, its arrival time A
+there, the earliest time T it may leave (every event at this position done), whether it
+has finished, and per drone either *aboard* (with its last recovery time ρ) or *airborne*
+(the last customer ℓ it served, or its launch stop while it has served none, the number m of
+customers of the sortie so far, the time t it left ℓ or was launched, the distance δ flown).
+
+Actions (each adds constraints of :mod:`taopt.fleet.evaluate` to the plan, never changes
+earlier ones, so every time is final once computed and later times are monotone in earlier
+ones):
+
+* *serve* a truck-servable customer j at the truck's stop: ``t_j = max(A, t_r for r -> j)``;
+* *launch* an aboard drone: ``L = max(A, ρ)``;
+* *append* customer j to an airborne drone's sortie (m < c, within range):
+  ``t_j = max(t + ft(ℓ, j) + τ, t_r for r -> j)``;
+* *recover* an airborne drone (m >= 1) at the truck's stop:
+  ``R = max(t + ft(ℓ, w), A) + τ``;
+* *move* the truck to another stop (only after an event at this position: a position
+  without an event, or two consecutive at the same stop, never helps; see
+  :mod:`taopt.fleet.brute`);
+* *finish* the truck (drones aboard; under ``"return"`` it drives home).
+
+A customer is served only once its predecessors are (their times are then known). Without
+precedences a sortie's customers are all chosen right after its launch (a drone *fills*
+until another action is taken); with precedences a customer may be appended to an airborne
+sortie at any later action, so a predecessor served meanwhile by any vehicle is waited for:
+every feasible plan is reached this way (a plan's events can be committed in an order where
+each customer follows its predecessors — the order of the acyclic constraint graph).
+
+*Search.* Labels are expanded best-first by a valid lower bound on the final objective (the
+least time each unserved customer can be served from the label, over the fleet, raised along
+precedences; under ``"return"`` plus the least way home), so the first complete label popped
+is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
+flags, each drone's ℓ or launch stop and m, identical drones and identical trucks taken as
+interchangeable) where one's times and distances are all <= the other's: the other is
+dropped. An incumbent (the caller's, or a simple sequential plan) prunes labels whose bound
+reaches it. A wall-clock limit and a label cap stop the search with the incumbent and the
+least open bound, proven.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+from typing import Any
+
+import numpy as np
+
+from taopt.errors import FeasibilityError, SolverError
+from taopt.fleet.evaluate import as_plan, evaluate_fleet
+from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.limits import Deadline
+
+#: Default cap on the labels kept (about 1 KB each with their bookkeeping).
+DEFAULT_MAX_LABELS = 3_000_000
+
+#: Relative agreement required between the search's value and the scorer's.
+MATCH_TOLERANCE = 1e-9
+
+INF = math.inf
+
+
+class _Tables:
+    """Per-instance arrays (plain Python lists, read in the inner loops)."""
+
+    def __init__(self, p: FleetProblem) -> None:
+        n, s = p.n, p.s
+        self.n, self.s, self.K = n, s, p.K
+        self.depot = p.depot
+        self.c = p.capacity
+        self.tau = p.service_time
+        self.limit = p.flight_limit
+        self.tt = p.truck_time.tolist()
+        self.fsd = p.flight_stop.tolist()  # distances
+        self.fcd = p.flight_customer.tolist()
+        self.fst = (p.flight_stop / p.v_drone).tolist()  # times
+        self.fct = (p.flight_customer / p.v_drone).tolist()
+        self.near = p.flight_stop.min(axis=1).tolist()
+        self.truck_ok = [p.truck_servable(j) for j in range(n)]
+        self.drone_ok = [p.drone_servable(j) and p.D > 0 for j in range(n)]
+        self.cstop = list(p.customer_stop)
+        self.preds = [[] for _ in range(n)]
+        self.pred_mask = [0] * n
+        self.succ_mask = [0] * n
+        for r, j in p.precedences:
+            self.preds[j].append(r)
+            self.pred_mask[j] |= 1 << r
+            self.succ_mask[r] |= 1 << j
+        import networkx as nx
+
+        self.topo = list(nx.topological_sort(p.precedence_graph))
+        self.lazy = bool(p.precedences)
+        # a drone launched later from a truck now at w serves j no sooner than A + G[w][j] + τ
+        tt = p.truck_time
+        ft = p.flight_stop / p.v_drone
+        ok = (p.flight_stop + p.flight_stop.min(axis=1)[:, None]) <= self.limit  # (n, s)
+        G = np.full((s, n), INF)
+        for j in range(n):
+            if ok[j].any():
+                G[:, j] = np.min(tt[:, ok[j]] + ft[j, ok[j]][None, :], axis=1)
+        self.G = G.tolist()
+        home = ft + p.service_time + tt[:, p.depot][None, :]  # (n, s)
+        self.home = home.min(axis=1).tolist()  # drone at customer j: recovery and drive home
+        back = self.home[:]
+        for j in range(n):
+            if self.truck_ok[j]:
+                back[j] = min(
+                    back[j] if self.drone_ok[j] else INF, float(tt[p.customer_stop[j], p.depot])
+                )
+        self.back = back
+        self.ret = p.objective == "return"
+        self.drones = list(p.drones)
+        groups: dict[int, list[int]] = {}
+        for k, d in enumerate(p.drones):
+            groups.setdefault(d, []).append(k)
+        self.groups = list(groups.values())
+
+
+# label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
+# drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open) with origin = ℓ >= 0, or
+# -(w_L + 1) before its first customer
+
+
+def _bound(tab: _Tables, label: tuple) -> float:
+    """A lower bound on the objective of every completion of ``label`` (module docstring)."""
+    S, M, svc, trucks = label
+    n = tab.n
+    tau = tab.tau
+    est = [0.0] * n
+    full = (1 << n) - 1
+    if S != full:
+        G, tt, fct, fst, fcd, fsd, near = (
+            tab.G,
+            tab.tt,
+            tab.fct,
+            tab.fst,
+            tab.fcd,
+            tab.fsd,
+            tab.near,
+        )
+        limit, c = tab.limit, tab.c
+        for j in tab.topo:
+            if S >> j & 1:
+                est[j] = svc[j]
+                continue
+            e = INF
+            tok, dok = tab.truck_ok[j], tab.drone_ok[j]
+            for k, (w, A, _T, _ev, fin, _F, drones) in enumerate(trucks):
+                if fin:
+                    continue
+                if tok:
+                    v = A + tt[w][tab.cstop[j]]
+                    if v < e:
+                        e = v
+                if dok and drones:
+                    v = A + G[w][j] + tau
+                    if v < e:
+                        e = v
+                    for dr in drones:
+                        if dr[0] == 1 and dr[5] and dr[2] < c:
+                            o = dr[1]
+                            if o >= 0:
+                                dist, fly = fcd[o][j], fct[o][j]
+                            else:
+                                dist, fly = fsd[j][-o - 1], fst[j][-o - 1]
+                            if dr[4] + dist + near[j] <= limit:
+                                v = dr[3] + fly + tau
+                                if v < e:
+                                    e = v
+            for r in tab.preds[j]:
+                if est[r] > e:
+                    e = est[r]
+            est[j] = e
+    if not tab.ret:
+        b = M
+        for j in range(n):
+            if not S >> j & 1 and est[j] > b:
+                b = est[j]
+        return b
+    b = 0.0
+    depot = tab.depot
+    for w, _A, T, _ev, fin, F, drones in trucks:
+        if fin:
+            v = F
+        else:
+            v = T + tab.tt[w][depot]
+            for dr in drones:
+                if dr[0] == 1 and dr[1] >= 0:
+                    u = dr[3] + tab.home[dr[1]]
+                    if u > v:
+                        v = u
+        if v > b:
+            b = v
+    for j in range(n):
+        if not S >> j & 1:
+            v = est[j] + tab.back[j]
+            if v > b:
+                b = v
+    return b
+
+
+def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
+    """(key, vector): labels with equal keys compare by their vectors (all smaller = better)."""
+    S, M, svc, trucks = label
+    vec: list[float] = [M] if not tab.ret else []
+    succ = tab.succ_mask
+    for r in range(tab.n):
+        if S >> r & 1 and succ[r] & ~S:
+            vec.append(svc[r])
+    per_truck = []
+    for w, A, T, ev, fin, F, drones in trucks:
+        parts = []
+        for dr in drones:
+            if dr[0] == 0:
+                parts.append(((0,), (dr[1] if dr[1] > A else A,)))
+            else:
+                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4])))
+        parts.sort()
+        disc = (w, ev, fin, tuple(p[0] for p in parts))
+        cont = (A, T, F, *itertools.chain.from_iterable(p[1] for p in parts))
+        per_truck.append((disc, cont))
+    ordered = []
+    for group in tab.groups:
+        ordered += sorted(per_truck[k] for k in group)
+    key = (S, tuple(d for d, _ in ordered))
+    for _, cont in ordered:
+        vec.extend(cont)
+    return key, tuple(vec)
+
+
+def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
+    """Every (child label, action) of ``label``."""
+    S, M, svc, trucks = label
+    n, c, tau = tab.n, tab.c, tab.tau
+    out: list[tuple[tuple, Any]] = []
+    lazy = tab.lazy
+    # without precedences, a drone being filled (open) takes appends or is closed by any
+    # other action; one with no customer yet must be filled first
+    filling = None
+    if not lazy:
+        for k, tr in enumerate(trucks):
+            for d, dr in enumerate(tr[6]):
+                if dr[0] == 1 and dr[5]:
+                    filling = (k, d)
+
+    def closed(trs: list) -> tuple:
+        if filling is None:
+            return tuple(trs)
+        k, d = filling
+        tr = trs[k]
+        dr = tr[6][d]
+        if dr[0] == 1 and dr[5]:
+            drones = list(tr[6])
+            drones[d] = dr[:5] + (False,)
+            trs[k] = tr[:6] + (tuple(drones),)
+        return tuple(trs)
+
+    def ready(j: int) -> float | None:
+        """max t_r over j's predecessors, or None when one is unserved."""
+        if tab.pred_mask[j] & ~S:
+            return None
+        t = 0.0
+        for r in tab.preds[j]:
+            if svc[r] > t:
+                t = svc[r]
+        return t
+
+    # appends
+    for k, tr in enumerate(trucks):
+        w, A, T, ev, fin, F, drones = tr
+        for d, dr in enumerate(drones):
+            if dr[0] != 1 or not dr[5] or dr[2] >= c:
+                continue
+            o = dr[1]
+            for j in range(n):
+                if S >> j & 1 or not tab.drone_ok[j]:
+                    continue
+                wait = ready(j)
+                if wait is None:
+                    continue
+                if o >= 0:
+                    dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                else:
+                    dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                delta = dr[4] + dist
+                if delta + tab.near[j] > tab.limit:
+                    continue
+                t = dr[3] + fly + tau
+                if wait > t:
+                    t = wait
+                nd = list(drones)
+                nd[d] = (1, j, dr[2] + 1, t, delta, True)
+                trs = list(trucks)
+                trs[k] = (w, A, T, ev, fin, F, tuple(nd))
+                nsvc = svc[:j] + (t,) + svc[j + 1 :]
+                out.append(((S | 1 << j, max(M, t), nsvc, tuple(trs)), ("append", k, d, j)))
+    if filling is not None:
+        k, d = filling
+        if trucks[k][6][d][2] == 0:
+            return out  # an empty sortie must be filled first
+    for k, tr in enumerate(trucks):
+        w, A, T, ev, fin, F, drones = tr
+        if fin:
+            continue
+        # serve at this stop
+        for j in range(n):
+            if S >> j & 1 or not tab.truck_ok[j] or tab.cstop[j] != w:
+                continue
+            wait = ready(j)
+            if wait is None:
+                continue
+            t = A if A > wait else wait
+            trs = list(trucks)
+            trs[k] = (w, A, T if T > t else t, True, fin, F, drones)
+            nsvc = svc[:j] + (t,) + svc[j + 1 :]
+            out.append(((S | 1 << j, max(M, t), nsvc, closed(trs)), ("serve", k, j)))
+        # recover / launch
+        launched_rho: set[float] = set()
+        airborne = False
+        for d, dr in enumerate(drones):
+            if dr[0] == 1:
+                airborne = True
+                if dr[2] >= 1 and dr[1] >= 0:
+                    o = dr[1]
+                    if dr[4] + tab.fsd[o][w] > tab.limit:
+                        continue
+                    back = dr[3] + tab.fst[o][w]
+                    R = (back if back > A else A) + tau
+                    nd = list(drones)
+                    nd[d] = (0, R)
+                    trs = list(trucks)
+                    trs[k] = (w, A, T if T > R else R, True, fin, F, tuple(nd))
+                    out.append(((S, M, svc, closed(trs)), ("recover", k, d)))
+            else:
+                rho = dr[1] if dr[1] > A else A
+                if rho in launched_rho:
+                    continue  # interchangeable with a drone already launched here
+                launched_rho.add(rho)
+                nd = list(drones)
+                nd[d] = (1, -(w + 1), 0, rho, 0.0, True)
+                trs = list(trucks)
+                trs[k] = (w, A, T if T > rho else rho, True, fin, F, tuple(nd))
+                out.append(((S, M, svc, closed(trs)), ("launch", k, d)))
+        if ev:
+            # move to another stop
+            tt_w = tab.tt[w]
+            for w2 in range(tab.s):
+                if w2 == w:
+                    continue
+                A2 = T + tt_w[w2]
+                nd = tuple((0, 0.0) if dr[0] == 0 else dr for dr in drones)
+                trs = list(trucks)
+                trs[k] = (w2, A2, A2, False, fin, F, nd)
+                out.append(((S, M, svc, closed(trs)), ("move", k, w2)))
+            # finish (only "return" needs it: under last_service a truck may just stop)
+            if tab.ret and not airborne:
+                home = T + tab.tt[w][tab.depot] if tab.ret else 0.0
+                trs = list(trucks)
+                trs[k] = (w, A, T, ev, True, home, drones)
+                out.append(((S, M, svc, closed(trs)), ("finish", k)))
+    return out
+
+
+def _complete(tab: _Tables, label: tuple) -> bool:
+    S, M, svc, trucks = label
+    if S != (1 << tab.n) - 1:
+        return False
+    for tr in trucks:
+        for dr in tr[6]:
+            if dr[0] == 1 and dr[2] == 0:
+                return False  # a launched drone with no customer
+    if tab.ret:
+        return all(tr[4] for tr in trucks)
+    return True  # under last_service the recoveries left cost nothing (added on rebuild)
+
+
+def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tuple) -> FleetPlan:
+    """Replay the actions from the root into a plan (adding free recoveries at the end)."""
+    K = problem.K
+    routes = [[problem.depot] for _ in range(K)]
+    served: list[list[tuple[int, int]]] = [[] for _ in range(K)]
+    flights: list[list[list[Sortie]]] = [[[] for _ in range(problem.drones[k])] for k in range(K)]
+    open_: dict[tuple[int, int], tuple[int, list[int]]] = {}
+    for act in actions:
+        kind, k = act[0], act[1]
+        here = len(routes[k]) - 1
+        if kind == "serve":
+            served[k].append((here, act[2]))
+        elif kind == "launch":
+            open_[(k, act[2])] = (here, [])
+        elif kind == "append":
+            open_[(k, act[2])][1].append(act[3])
+        elif kind == "recover":
+            launch, cs = open_.pop((k, act[2]))
+            flights[k][act[2]].append(Sortie(launch, tuple(cs), here))
+        elif kind == "move":
+            routes[k].append(act[2])
+    for (k, d), (launch, cs) in sorted(open_.items()):
+        # last_service only: recover at the stop nearest the last customer (no later service)
+        stop = int(np.argmin(problem.flight_stop[cs[-1]]))
+        if routes[k][-1] != stop:
+            routes[k].append(stop)
+        flights[k][d].append(Sortie(launch, tuple(cs), len(routes[k]) - 1))
+    return FleetPlan(routes, served, flights)
+
+
+def _simple_plan(problem: FleetProblem) -> FleetPlan | None:
+    """A feasible plan when one exists: truck 0 (or the first truck with a drone) serves the
+    customers one by one in a topological order, by itself at the customer's stop when it may,
+    else by a single-customer sortie launched and recovered at the customer's nearest stop."""
+    if problem.unservable():
+        return None
+    import networkx as nx
+
+    carrier = next((k for k in range(problem.K) if problem.drones[k] > 0), 0)
+    route = [problem.depot]
+    served: list[tuple[int, int]] = []
+    flights: list[Sortie] = []
+    for j in nx.topological_sort(problem.precedence_graph):
+        if problem.truck_servable(j):
+            stop = problem.customer_stop[j]
+        else:
+            stop = int(np.argmin(problem.flight_stop[j]))
+        if route[-1] != stop:
+            route.append(stop)
+        p = len(route) - 1
+        if problem.truck_servable(j):
+            served.append((p, j))
+        else:
+            flights.append(Sortie(p, (j,), p))
+    routes = [[problem.depot] for _ in range(problem.K)]
+    routes[carrier] = route
+    truck_service: list[list[tuple[int, int]]] = [[] for _ in range(problem.K)]
+    truck_service[carrier] = served
+    sorties = [[[] for _ in range(problem.drones[k])] for k in range(problem.K)]
+    if flights:
+        sorties[carrier][0] = flights
+    return FleetPlan(routes, truck_service, sorties)
+
+
+def label_search(
+    problem: FleetProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    max_labels: int | None = None,
+) -> dict[str, Any]:
+    """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
+    ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters."""
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
+    if problem.unservable():
+        return {
+            "plan": None,
+            "value": INF,
+            "bound": INF,
+            "stopped_by": "infeasible",
+            "labels": 0,
+            "expanded": 0,
+        }
+    tab = _Tables(problem)
+    best_plan: FleetPlan | None = None
+    best = INF
+    for candidate in (incumbent, _simple_plan(problem)):
+        if candidate is None:
+            continue
+        try:
+            plan = as_plan(candidate)
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            continue
+        if value < best:
+            best, best_plan = value, plan
+    n = problem.n
+    root_trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    root = (0, 0.0, (-1.0,) * n, root_trucks)
+    labels: list[tuple] = [root]
+    parent: list[int] = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {}
+    key, vec = _signature(tab, root)
+    store[key] = [(vec, 0)]
+    heap: list[tuple[float, int, int]] = [(_bound(tab, root), 0, 0)]
+    expanded = dominated = pruned = 0
+    stopped_by = "optimal"
+    found = -1
+    slack = 1e-12
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= best * (1 - slack):
+            heap.clear()
+            break
+        if expanded & 255 == 0 and deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        label = labels[i]
+        if _complete(tab, label):
+            found = i
+            best = lb
+            break
+        expanded += 1
+        for child, act in _children(tab, label):
+            b = _bound(tab, child)
+            if b >= best * (1 - slack):
+                pruned += 1
+                continue
+            key, vec = _signature(tab, child)
+            bucket = store.get(key)
+            if bucket is not None:
+                skip = False
+                for other, _ in bucket:
+                    if all(x <= y for x, y in zip(other, vec, strict=True)):
+                        skip = True
+                        break
+                if skip:
+                    dominated += 1
+                    continue
+                keep = []
+                for other, oid in bucket:
+                    if all(x <= y for x, y in zip(vec, other, strict=True)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
+            cid = len(labels)
+            labels.append(child)
+            parent.append(i)
+            action.append(act)
+            dead.append(0)
+            bucket.append((vec, cid))
+            heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
+        if len(labels) > cap:
+            stopped_by = "size"
+            break
+    bound = best
+    if stopped_by != "optimal":
+        live = [b for b, _, j in heap if not dead[j]]
+        bound = min(min(live, default=best), best)
+    result = {
+        "labels": len(labels),
+        "expanded": expanded,
+        "dominated": dominated,
+        "pruned": pruned,
+        "stopped_by": stopped_by,
+    }
+    if found >= 0:
+        acts = []
+        j = found
+        while j > 0:
+            acts.append(action[j])
+            j = parent[j]
+        acts.reverse()
+        plan = _rebuild(problem, tab, acts, labels[found])
+        value = evaluate_fleet(problem, plan)
+        if abs(value - best) > MATCH_TOLERANCE * max(1.0, abs(value)):
+            raise SolverError(
+                f"fleet label search: the plan found scores {value!r} but the search says {best!r}"
+            )
+        best_plan, best = plan, value
+        bound = min(bound, value)
+    result.update(plan=best_plan, value=best, bound=bound)
+    return result
+
+
+__all__ = ["label_search", "DEFAULT_MAX_LABELS"]
