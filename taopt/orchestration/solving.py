@@ -483,6 +483,24 @@ def _route_lines(best: Solution, instance: Instance | None, problem: Any) -> lis
         ]
     if hasattr(payload, "sequence"):  # an SOP Order
         return ["  order: " + " -> ".join(str(v) for v in payload.sequence)]
+    if hasattr(payload, "sorties") and hasattr(payload, "truck_service"):  # a FleetPlan
+        lines = []
+        for k, route in enumerate(payload.routes):
+            served = ", ".join(f"c{j}@{p}" for p, j in payload.truck_service[k])
+            lines.append(
+                f"  truck {k}: "
+                + " -> ".join(f"s{w}" for w in route)
+                + (f"; serves {served}" if served else "")
+            )
+            for d, flights in enumerate(payload.sorties[k]):
+                text = "; ".join(
+                    f"{f.launch} -> "
+                    + " -> ".join(f"c{j}" for j in f.customers)
+                    + f" -> {f.recovery}"
+                    for f in flights
+                )
+                lines.append(f"    drone ({k}, {d}) [positions]: {text or 'idle'}")
+        return lines
     routes = getattr(payload, "routes", None)
     if routes is None:
         return []
