@@ -11,7 +11,8 @@ that vehicle's plan so far (:class:`FleetBuilder`):
 * ``drone``: drone (k, d) is launched from one of the last positions of truck k where it is
   aboard (or from a new stop near the customer the truck drives to first), serves the customer
   and is recovered either where the truck is, the truck waiting, or at a new stop near the
-  customer the truck drives to meanwhile (TSP-D's truck-and-drone-in-parallel leg);
+  customer the truck drives to meanwhile (TSP-D's truck-and-drone-in-parallel leg), also
+  after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
   fewer than c customers and the longer flight stays within the range.
@@ -229,6 +230,11 @@ class FleetBuilder:
                 tj = max(arrive + leg, rj)
                 rec = tj + flight + tau
                 out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
+                for b in near:  # ... and drives on to another stop near j to recover it
+                    if b == a or float(fsj[a]) + float(fsj[b]) > limit:
+                        continue
+                    rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
+                    out.append(("drone", k, d, -1, a, b, tj, rec, b, leg))
             # sortie merging (c > 1): j appended to the drone's last sortie
             if drone.sorties and self.c > 1:
                 sortie = drone.sorties[-1]
@@ -268,9 +274,10 @@ class FleetBuilder:
                 t.arrival.append(t.ready + float(self.tt[t.route[-2], a]))
                 p = len(t.route) - 1
             launch_stop = t.route[p]
-            if b >= 0:
+            if b >= 0:  # the truck leaves its last stop (the new launch stop: at once)
+                depart = t.arrival[-1] if a >= 0 else t.ready
                 t.route.append(b)
-                t.arrival.append(t.ready + float(self.tt[t.route[-2], b]))
+                t.arrival.append(depart + float(self.tt[t.route[-2], b]))
             last = len(t.route) - 1
             drone.sorties.append([p, [j], last])
             drone.flown = float(self.fs[j, launch_stop])
