@@ -295,6 +295,47 @@ class FleetBuilder:
         here = t.route[-1]
         return max(tj + float(self.fs[j, here]) / self.vd, t.arrival[-1]) + self.tau
 
+    # -- snapshots (the searches re-decode from a prefix) -------------------------------------
+    def snapshot(self) -> tuple[Any, ...]:
+        """A deep copy of the state after the customers placed so far."""
+        return (
+            [t.copy() for t in self.trucks],
+            self.service.copy(),
+            self.last_service,
+            list(self.order),
+            self.truck_of.copy(),
+        )
+
+    def restore(self, state: tuple[Any, ...]) -> None:
+        """Back to a :meth:`snapshot` (copied again: the snapshot stays reusable)."""
+        trucks, service, last_service, order, truck_of = state
+        self.trucks = [t.copy() for t in trucks]
+        self.service = service.copy()
+        self.last_service = last_service
+        self.order = list(order)
+        self.truck_of = truck_of.copy()
+
+    def place(self, j: int, k_fixed: int = -1) -> None:
+        """Place customer j by its least-marginal option among truck ``k_fixed``'s (-1: any
+        truck able to serve it).
+
+        Raises
+        ------
+        InstanceError
+            No option (truck ``k_fixed`` cannot serve j).
+        """
+        ks = servers(self.problem, j) if k_fixed < 0 else [k_fixed]
+        best: Option | None = None
+        best_key: tuple[float, float] | None = None
+        for k in ks:
+            for o in self.options(j, k):
+                key = self.marginal(o)
+                if best_key is None or key < best_key:
+                    best, best_key = o, key
+        if best is None:
+            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}")
+        self.apply(j, best)
+
     # -- keys --------------------------------------------------------------------------------
     def marginal(self, option: Option, truck: _Truck | None = None) -> tuple[float, float]:
         """MMA's key: (the objective after the option minus before, service time plus the
@@ -571,18 +612,7 @@ def decode(
         for r in builder.preds[j]:
             if not placed[r]:
                 raise InstanceError(f"order places customer {j} before its predecessor {r}")
-        k_fixed = -1 if truck_of is None else int(truck_of[j])
-        ks = servers(problem, j) if k_fixed < 0 else [k_fixed]
-        best: Option | None = None
-        best_key: tuple[float, float] | None = None
-        for k in ks:
-            for o in builder.options(j, k):
-                key = builder.marginal(o)
-                if best_key is None or key < best_key:
-                    best, best_key = o, key
-        if best is None:
-            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}")
-        builder.apply(j, best)
+        builder.place(j, -1 if truck_of is None else int(truck_of[j]))
         placed[j] = True
     if not placed.all():
         raise InstanceError(f"order misses customer {int(np.flatnonzero(~placed)[0])}")

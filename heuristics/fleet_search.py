@@ -55,6 +55,9 @@ from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Solution, make_solution
 
+#: Customers between two snapshots of the current decode (:class:`_Search`).
+SNAPSHOT_EVERY = 8
+
 
 class _Search:
     """The encoding (order, trucks), its decoded value, and the descent's neighbourhoods."""
@@ -70,10 +73,46 @@ class _Search:
             self.preds[j].append(int(r))
             self.succs[r].append(int(j))
         self.decodes = 0
+        self.builder = FleetBuilder(problem)
+        self.blank = self.builder.snapshot()
+        # the current encoding and snapshots of its decode every SNAPSHOT_EVERY customers
+        self.current: tuple[list[int], np.ndarray] | None = None
+        self.snapshots: list[tuple[Any, ...]] = []
+
+    def set_current(self, order: list[int], trucks: np.ndarray) -> float:
+        """Decode ``order`` from scratch, keeping snapshots: later values re-decode only from
+        the first customer where a candidate differs."""
+        self.decodes += 1
+        builder = self.builder
+        builder.restore(self.blank)
+        self.snapshots = []
+        for i, j in enumerate(order):
+            if i % SNAPSHOT_EVERY == 0:
+                self.snapshots.append(builder.snapshot())
+            builder.place(j, int(trucks[j]))
+        self.current = (list(order), trucks.copy())
+        return builder.objective()
 
     def value(self, order: list[int], trucks: np.ndarray) -> float:
+        """The decoded objective of an encoding (= ``decode(...).objective()``), re-decoding
+        from the snapshot before the first customer where it differs from the current one."""
+        if self.current is None:
+            return self.set_current(order, trucks)
         self.decodes += 1
-        return decode(self.problem, order, trucks).objective()
+        old_order, old_trucks = self.current
+        first = 0
+        while (
+            first < len(order)
+            and order[first] == old_order[first]
+            and trucks[order[first]] == old_trucks[order[first]]
+        ):
+            first += 1
+        block = min(first // SNAPSHOT_EVERY, len(self.snapshots) - 1)
+        builder = self.builder
+        builder.restore(self.snapshots[block])
+        for j in order[block * SNAPSHOT_EVERY :]:
+            builder.place(j, int(trucks[j]))
+        return builder.objective()
 
     def out_of_time(self) -> bool:
         return self.deadline.expired()
@@ -124,6 +163,7 @@ class _Search:
         self, order: list[int], trucks: np.ndarray, value: float, sample: int
     ) -> tuple[list[int], np.ndarray, float]:
         """Variable neighbourhood descent (N1, N2, N3; first improvement; back to N1)."""
+        self.set_current(order, trucks)
         level = 0
         while level < 3 and not self.out_of_time():
             improved = False
@@ -149,6 +189,7 @@ class _Search:
                 candidate = self.value(new_order, new_trucks)
                 if candidate < value - 1e-9 * max(1.0, abs(value)):
                     order, trucks, value = new_order, new_trucks, candidate
+                    self.set_current(order, trucks)
                     improved = True
                     break
             level = 0 if improved else level + 1

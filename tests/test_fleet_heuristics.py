@@ -237,3 +237,20 @@ def test_plot_writes_map_and_gantt(tmp_path):
     plots["plan"](p, s.solution, str(path), method="MMA")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "gantt" in plots
+
+
+def test_search_value_from_snapshots_equals_a_full_decode():
+    """The searches' prefix re-decode gives decode()'s objective for random moves."""
+    from taopt.heuristics.fleet_search import _Search
+    from taopt.limits import Deadline
+
+    p = residential_fleet(30, trucks=2, drones=2, capacity=2, seed=7)
+    search = _Search(p, np.random.default_rng(0), Deadline(None))
+    order, trucks = truck_routes(p)
+    search.set_current(order, trucks)
+    for _ in range(40):
+        new_order = search.shift(order) or order
+        new_trucks = search.reassign(trucks)
+        new_trucks = trucks if new_trucks is None else new_trucks
+        full = decode(p, new_order, new_trucks).objective()
+        assert search.value(new_order, new_trucks) == pytest.approx(full, rel=1e-12)
