@@ -228,6 +228,7 @@ class FleetBuilder:
                 flight = float(fsj[a]) / vd
                 leg = flight + tau
                 tj = max(arrive + leg, rj)
+                leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
                 rec = tj + flight + tau
                 out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
                 for b in near:  # ... and drives on to another stop near j to recover it
