@@ -121,6 +121,11 @@ def solve_fleet(
             else None
         )
         info = {"algorithm": "ideal_dp", **inner.info}
+        bound = inner.bound
+        if plan is None:  # stopped before any plan: the sequential one, with the DP's bound
+            from taopt.fleet.search import _simple_plan
+
+            plan = _simple_plan(problem)
         if inner.status == "optimal":
             return make_solution(
                 problem,
@@ -136,7 +141,7 @@ def solve_fleet(
             plan,
             method="exact",
             stopped_by="time_limit",
-            bound=inner.bound,
+            bound=bound,
             runtime=time.perf_counter() - start,
             info=info,
         )
@@ -173,18 +178,38 @@ def solve_fleet(
             runtime=time.perf_counter() - start,
             info=info,
         )
+    # stopped by the clock or the size guard: certified by the gap only
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.status import certify
+
+    value = evaluate_fleet(problem, result["plan"])
+    status, _ = certify(
+        value, result["bound"], "time_limit" if stopped == "time_limit" else "solver_limit"
+    )
+    info["stopped_by"] = "optimal" if status == "optimal" else stopped
     return make_solution(
         problem,
         result["plan"],
         method="exact",
-        stopped_by="time_limit",
+        status=status,
         bound=result["bound"],
         runtime=time.perf_counter() - start,
         info=info,
     )
 
 
-register_method(FleetProblem, "exact", category="exact", certifies=True, style=("-", "*"))(
+def _affordable(problem: FleetProblem) -> bool:
+    """Where the exact method typically certifies within a minute (measured, see
+    docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers, the
+    label search up to 5 customers."""
+    if _chapter5_shape(problem):
+        return True
+    if _operations_shape(problem):
+        return problem.n <= 12
+    return problem.n <= 5
+
+
+register_method(FleetProblem, "exact", category="exact", certifies=_affordable, style=("-", "*"))(
     solve_fleet
 )
 

@@ -167,3 +167,175 @@ def test_tspd_reader_scores_the_published_solution():
     value = taopt.evaluate(p, FleetPlan([route], [truck], [[flights]]))
     assert value == pytest.approx(221.18876576478925, rel=1e-12)
     assert np.isinf(p.flight_range)
+
+
+# -- exact methods against the brute force -------------------------------------------------------
+FAST_TINY = [
+    # (seed, n, K, D, c, precedence, objective, stops)
+    (1, 3, 1, 1, 1, False, "return", 2),
+    (1, 3, 1, 1, 2, True, "last_service", 2),
+    (2, 3, 2, 1, 1, False, "last_service", 2),
+    (2, 3, 2, 1, 2, True, "return", 2),
+    (3, 3, 1, 1, 1, True, "return", 3),
+    (4, 2, 1, 2, 2, True, "last_service", 3),
+    (5, 2, 2, 2, 1, False, "return", 3),
+]
+
+
+@pytest.mark.parametrize("case", FAST_TINY)
+def test_exact_equals_brute_force_on_tiny_instances(case):
+    """taopt.solve(..., "exact") is optimal and equals the brute-force optimum."""
+    from taopt.fleet.brute import brute_force, tiny_instance
+
+    problem = tiny_instance(*case[:7], stops=case[7])
+    value, plan, count = brute_force(problem)
+    assert count > 0 and plan is not None
+    solution = taopt.solve(problem, "exact")
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(value, rel=1e-9, abs=1e-9)
+    assert taopt.evaluate(problem, solution.solution) == pytest.approx(solution.objective)
+
+
+@pytest.mark.parametrize("objective", ["return", "last_service"])
+@pytest.mark.parametrize("trucks", [1, 2])
+def test_operations_dp_equals_label_search(objective, trucks):
+    """One drone per truck, c = 1, no precedence: the subset DP and the label search agree."""
+    from models.fleet import solve_fleet
+    from taopt.fleet.brute import tiny_instance
+
+    problem = tiny_instance(11, 4, trucks, 1, 1, False, objective, stops=3)
+    ops = solve_fleet(problem, algorithm="operations")
+    search = solve_fleet(problem, algorithm="search")
+    assert ops.info["algorithm"] == "operations" and search.info["algorithm"] == "search"
+    assert ops.status == search.status == "optimal"
+    assert ops.objective == pytest.approx(search.objective, rel=1e-9)
+
+
+def test_chapter5_reduction_small_dag_instance():
+    """The K = D = c = 1 reduction of a 4-customer dag instance: chapter 5's exact optimum, by
+    the dispatched ideal DP and by the fleet label search."""
+    from models.fleet import solve_fleet
+    from taopt.delivery import build_example_instance
+
+    inst = build_example_instance(seed=3, n=4)
+    chapter5 = taopt.solve(inst, "exact")
+    fleet = FleetProblem.from_delivery(inst)
+    dispatched = taopt.solve(fleet, "exact")
+    assert dispatched.info["algorithm"] == "ideal_dp" and dispatched.status == "optimal"
+    assert dispatched.objective == pytest.approx(chapter5.objective, rel=1e-9)
+    search = solve_fleet(fleet, algorithm="search")
+    assert search.status == "optimal"
+    assert search.objective == pytest.approx(chapter5.objective, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_chapter5_reduction_of_the_fig_5_6_stand_in():
+    """example_instance(250) as a fleet problem: chapter 5's optimum 1793.7145."""
+    from taopt.delivery import example_instance
+
+    solution = taopt.solve(FleetProblem.from_delivery(example_instance(250.0)), "exact")
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(1793.7145315257808, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", ["uniform-1-n5", "uniform-11-n6", "uniform-31-n8"])
+def test_tspd_published_optimum(name):
+    """The exact method equals the published TSP-D optimum (relative 1e-6)."""
+    from taopt.fleet.tspd import TSPD_FOLDER, published_optimum
+
+    path = TSPD_FOLDER / f"{name}.txt"
+    solution = taopt.solve(FleetProblem.from_tspd(path), "exact")
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(published_optimum(path), rel=1e-6)
+
+
+def test_infeasible_instance_is_proven_and_names_the_customer():
+    """A drone-only customer out of range: status infeasible, the reason names it."""
+    p = two_stops(customers=[[50, 10], [50, 400]], flight_range=300)
+    solution = taopt.solve(p, "exact")
+    assert solution.status == "infeasible"
+    assert "customer 1" in solution.info["reason"]
+
+
+def test_time_limit_returns_a_feasible_plan_and_a_proven_bound():
+    """A tight wall-clock limit: status time_limit, a feasible incumbent, bound <= objective."""
+    from models.fleet import solve_fleet
+    from taopt.fleet.instances import residential_fleet
+
+    problem = residential_fleet(6, 2, 2, 2, seed=1)
+    solution = solve_fleet(problem, time_limit=0.3)
+    assert solution.status in ("time_limit", "optimal")
+    assert solution.bound <= solution.objective + 1e-9
+    assert taopt.evaluate(problem, solution.solution) == pytest.approx(solution.objective)
+
+
+def test_size_guard_stops_like_a_time_limit():
+    """max_labels reached: stopped_by "size", a feasible plan and a proven bound."""
+    from models.fleet import solve_fleet
+    from taopt.fleet.instances import residential_fleet
+
+    problem = residential_fleet(5, 2, 2, 2, seed=2)
+    solution = solve_fleet(problem, max_labels=200)
+    assert solution.info["stopped_by"] == "size"
+    assert solution.bound <= solution.objective
+
+
+# -- slow: the whole sets --------------------------------------------------------------------------
+def _tiny_grid() -> list[tuple]:
+    import itertools
+
+    cases = []
+    for seed in range(10):
+        for K, D, c in itertools.product((1, 2), (1, 2), (1, 2)):
+            for prec in (False, True):
+                for objective in ("last_service", "return"):
+                    cases.append((100 + seed, 3, K, D, c, prec, objective, 3 if D == 1 else 2))
+    return cases
+
+
+@pytest.mark.slow
+def test_exact_equals_brute_force_on_320_tiny_instances():
+    """Every combination of K, D, c in {1, 2}, with and without precedence, both objectives,
+    ten seeds: the exact method equals the brute force on all 320."""
+    from taopt.fleet.brute import brute_force, tiny_instance
+
+    checked = 0
+    for case in _tiny_grid():
+        problem = tiny_instance(*case[:7], stops=case[7])
+        value, _, _ = brute_force(problem)
+        solution = taopt.solve(problem, "exact")
+        assert solution.status == "optimal", case
+        assert solution.objective == pytest.approx(value, rel=1e-9, abs=1e-9), case
+        checked += 1
+    assert checked >= 300
+
+
+@pytest.mark.slow
+def test_all_80_tspd_instances_reach_the_published_optimum():
+    """All 80 shipped TSP-D instances: exact equals the published optimum (relative 1e-6)."""
+    from taopt.fleet.tspd import published_optimum, tspd_instances
+
+    paths = tspd_instances()
+    assert len(paths) == 80
+    for path in paths:
+        solution = taopt.solve(FleetProblem.from_tspd(path), "exact")
+        assert solution.status == "optimal", path.name
+        assert solution.objective == pytest.approx(published_optimum(path), rel=1e-6), path.name
+
+
+@pytest.mark.parametrize("which", ["operations", "search", "ideal_dp"])
+def test_every_exact_algorithm_stops_on_a_tiny_limit_with_a_plan_and_a_bound(which):
+    """time_limit = 0.01 s: status time_limit (never a raise), a feasible plan, bound <= f."""
+    from taopt.delivery import example_instance
+    from taopt.fleet.instances import residential_fleet
+    from taopt.fleet.tspd import TSPD_FOLDER
+
+    problem = {
+        "operations": lambda: FleetProblem.from_tspd(TSPD_FOLDER / "uniform-1-n13.txt"),
+        "search": lambda: residential_fleet(8, 2, 2, 2),
+        "ideal_dp": lambda: FleetProblem.from_delivery(example_instance(250.0)),
+    }[which]()
+    solution = taopt.solve(problem, "exact", time_limit=0.01)
+    assert solution.info["algorithm"] == which
+    assert solution.status == "time_limit" and solution.bound <= solution.objective
+    assert taopt.evaluate(problem, solution.solution) == pytest.approx(solution.objective)

@@ -89,6 +89,8 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
     P = np.empty((N, s, s))
     P[0] = tt
     for start in range(1, N, 4096):
+        if deadline.expired():
+            return _stopped(problem, "time_limit")
         stop = min(N, start + 4096)
         P[start:stop] = np.min(H[start:stop, :, :, None] + to_stop[None, None, :, :], axis=2)
     fly = ft[:, :, None] + tau + ft[:, None, :]  # (n, v, w)
@@ -100,6 +102,8 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
     for d in range(n):
         if not drone_ok[d]:
             continue
+        if deadline.expired():
+            return _stopped(problem, "time_limit")
         sel = everything[(everything >> d) & 1 == 1]
         op = np.maximum(P[sel ^ (1 << d)], fly[d][None, :, :]) + tau
         better = op < C[sel]
@@ -110,27 +114,14 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
     # -- F(T, w) -----------------------------------------------------------------------------
     F = np.full((N, s), INF)
     F[0] = tt[problem.depot]
-    back_u = np.zeros((N, s), dtype=np.int64)  # the last operation's U (0: a plain drive)
-    back_v = np.zeros((N, s), dtype=np.int64)
-    back_v[0] = problem.depot
+    masks_all = np.arange(N)
     for T in range(1, N):
-        if T & 1023 == 0 and deadline.expired():
+        if T & 255 == 0 and deadline.expired():
             return _stopped(problem, "time_limit")
-        subs = _submasks(T)
-        vals = F[T ^ subs][:, :, None] + C[subs]  # (m, v, w)
-        flat = vals.reshape(len(subs) * s, s)
-        arg = np.argmin(flat, axis=0)
-        best = flat[arg, np.arange(s)]
-        # a plain drive after the last operation (tt is a metric: one step suffices)
-        drive = best[:, None] + tt
-        src = np.argmin(drive, axis=0)
-        F[T] = drive[src, np.arange(s)]
-        driven = src != np.arange(s)
-        u_of = subs[arg // s]
-        v_of = arg % s
-        back_u[T] = np.where(driven, 0, u_of)
-        back_v[T] = np.where(driven, src, v_of)
-        # a driven cell keeps its source's operation: record it as (U = 0, v = source)
+        subs = masks_all[1 : T + 1][(masks_all[1 : T + 1] & ~T) == 0]
+        best = np.min(F[T ^ subs][:, :, None] + C[subs], axis=(0, 1))
+        # then a plain drive (tt is a metric: one step suffices)
+        F[T] = np.min(best[:, None] + tt, axis=0)
     # -- one truck's optimum per served set ----------------------------------------------------
     if problem.objective == "return":
         f = F[:, problem.depot].copy()
@@ -197,15 +188,13 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
             problem,
             T,
             F,
-            back_u,
-            back_v,
+            C,
             choice,
             H,
             f_last,
             e_choice if f_last is not None else None,
             tt,
             cs,
-            ft,
         )
         routes.append(r)
         served.append(sv)
@@ -247,7 +236,25 @@ def _walk(
     return order[::-1]
 
 
-def _rebuild_truck(problem, T, F, back_u, back_v, choice, H, f_last, e_choice, tt, cs, ft):
+def _last_operation(
+    F: np.ndarray, C: np.ndarray, tt: np.ndarray, T: int, w: int
+) -> tuple[int, int]:
+    """(U, v) of the last step into F[T, w]: an operation U from v (U = 0: a plain drive
+    from v), recomputed as the DP chose it."""
+    s = tt.shape[0]
+    masks = np.arange(1, T + 1)
+    subs = masks[(masks & ~T) == 0]
+    vals = F[T ^ subs][:, :, None] + C[subs]  # (m, v, w)
+    best = vals.min(axis=(0, 1))  # arriving at each w' by an operation
+    target = F[T, w]
+    if best[w] <= target:
+        a = int(np.argmin(vals[:, :, w]))
+        return int(subs[a // s]), a % s
+    v = int(np.argmin(best + tt[:, w]))
+    return 0, v
+
+
+def _rebuild_truck(problem, T, F, C, choice, H, f_last, e_choice, tt, cs):
     """One truck's route, truck service and sorties for its set T."""
     ops: list[tuple[int, int, int]] = []  # (U, v, w) from the start; U = 0 a plain drive
     final: tuple[int, int] | None = None
@@ -257,15 +264,24 @@ def _rebuild_truck(problem, T, F, back_u, back_v, choice, H, f_last, e_choice, t
         T_rest, w = T ^ U, v
     else:
         T_rest, w = T, problem.depot
-    while True:
-        if T_rest == 0 and w == problem.depot:
+    for _ in range(4 * problem.n + 8):
+        if T_rest == 0:
+            if w != problem.depot:
+                ops.append((0, problem.depot, w))
             break
-        U, v = int(back_u[T_rest, w]), int(back_v[T_rest, w])
+        U, v = _last_operation(F, C, tt, T_rest, w)
+        if U == 0:
+            # a plain drive into w: the operation that reached v (never another drive)
+            U2, v2 = _last_operation(F, C, tt, T_rest, v)
+            if U2 == 0:
+                raise SolverError("operations_dp: the rebuild found two drives in a row")
+            ops.append((0, v, w))
+            U, v, w = U2, v2, v
         ops.append((U, v, w))
         T_rest ^= U
         w = v
-        if T_rest == 0 and w == problem.depot and U == 0:
-            break
+    else:
+        raise SolverError("operations_dp: the rebuild did not reach the start")
     ops.reverse()
     route = [problem.depot]
     served: list[tuple[int, int]] = []

@@ -112,6 +112,21 @@ class _Tables:
                 )
         self.back = back
         self.ret = p.objective == "return"
+        # work[j]: drone time serving a drone-only customer costs at least (landing τ and the
+        # shortest leg into it, from a stop or another customer); 0 for truck-servable ones
+        into = np.minimum(
+            p.flight_stop.min(axis=1),
+            np.where(np.eye(n, dtype=bool), INF, p.flight_customer).min(axis=1),
+        )
+        self.work = [
+            0.0 if self.truck_ok[j] else float(into[j] / p.v_drone + p.service_time)
+            for j in range(n)
+        ]
+        self.full = (1 << n) - 1
+        # launch_ok[w]: customers a sortie launched at w can serve first (and still land)
+        self.launch_ok = [
+            sum(1 << j for j in range(n) if self.drone_ok[j] and ok[j, w]) for w in range(s)
+        ]
         self.drones = list(p.drones)
         groups: dict[int, list[int]] = {}
         for k, d in enumerate(p.drones):
@@ -122,6 +137,40 @@ class _Tables:
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
 # drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open) with origin = ℓ >= 0, or
 # -(w_L + 1) before its first customer
+
+
+def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
+    """The drones' shared work: every unserved drone-only customer j costs its drone at least
+    ``work[j]`` after the drone is available (a_d: launch no sooner than its truck's arrival
+    A or its recovery ρ; an airborne drone from its last time t). A drone that serves a load
+    finishes its last service no sooner than ``a_d + load``, so the last service time F
+    satisfies ``Σ_d max(0, F - a_d) >= W`` (the total work): F is at least the water level
+    that fills W over the availabilities. 0 when no drone-only customer is left."""
+    W = 0.0
+    for j in range(tab.n):
+        if not S >> j & 1:
+            W += tab.work[j]
+    if W <= 0.0:
+        return 0.0
+    avail = []
+    for _w, A, _T, _ev, fin, _F, drones in trucks:
+        if fin:
+            continue
+        for dr in drones:
+            if dr[0] == 0:
+                avail.append(dr[1] if dr[1] > A else A)
+            else:
+                avail.append(dr[3])
+    if not avail:
+        return INF
+    avail.sort()
+    total = 0.0
+    for i, a in enumerate(avail):
+        total += a
+        level = (total + W) / (i + 1)
+        if i + 1 == len(avail) or level <= avail[i + 1]:
+            return level
+    return INF  # not reached
 
 
 def _bound(tab: _Tables, label: tuple) -> float:
@@ -148,7 +197,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
                 continue
             e = INF
             tok, dok = tab.truck_ok[j], tab.drone_ok[j]
-            for k, (w, A, _T, _ev, fin, _F, drones) in enumerate(trucks):
+            for w, A, _T, _ev, fin, _F, drones in trucks:
                 if fin:
                     continue
                 if tok:
@@ -174,13 +223,14 @@ def _bound(tab: _Tables, label: tuple) -> float:
                 if est[r] > e:
                     e = est[r]
             est[j] = e
+    fill = _water_fill(tab, S, trucks)
     if not tab.ret:
-        b = M
+        b = M if M > fill else fill
         for j in range(n):
             if not S >> j & 1 and est[j] > b:
                 b = est[j]
         return b
-    b = 0.0
+    b = fill
     depot = tab.depot
     for w, _A, T, _ev, fin, F, drones in trucks:
         if fin:
@@ -229,6 +279,49 @@ def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
     for _, cont in ordered:
         vec.extend(cont)
     return key, tuple(vec)
+
+
+def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float, float, tuple]]:
+    """Per unfinished truck k: (key without truck k's stop, its stop, A, T, vector).
+
+    Label X dominates label Y of the same such key when X's truck k, driving from its stop to
+    Y's, arrives no later than Y's did (``T_X + tt[w_X, w_Y] <= A_Y``) and X's other times
+    are all <= Y's: X can drive there and do all Y can, no later (tt is a metric), and its
+    aboard drones are ready on arrival."""
+    S, M, svc, trucks = label
+    head: list[float] = [M] if not tab.ret else []
+    succ = tab.succ_mask
+    for r in range(tab.n):
+        if S >> r & 1 and succ[r] & ~S:
+            head.append(svc[r])
+    discs, conts = [], []
+    for w, A, T, _ev, fin, F, drones in trucks:
+        parts = []
+        for dr in drones:
+            if dr[0] == 0:
+                parts.append(((0,), (dr[1] if dr[1] > A else A,), ()))
+            else:
+                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4]), (dr[3], dr[4])))
+        parts.sort()
+        discs.append((w, fin, tuple(p[0] for p in parts)))
+        conts.append(
+            (
+                (A, T, F, *itertools.chain.from_iterable(p[1] for p in parts)),
+                tuple(itertools.chain.from_iterable(p[2] for p in parts)),
+            )
+        )
+    out = []
+    for k, (w, A, T, _ev, fin, _F, _drones) in enumerate(trucks):
+        if fin:
+            continue
+        key = (S, k, discs[k][1:], tuple(discs[i] for i in range(len(trucks)) if i != k))
+        vec = list(head)
+        for i in range(len(trucks)):
+            if i != k:
+                vec.extend(conts[i][0])
+        vec.extend(conts[k][1])
+        out.append((key, w, A, T, tuple(vec)))
+    return out
 
 
 def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
@@ -301,66 +394,93 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
         k, d = filling
         if trucks[k][6][d][2] == 0:
             return out  # an empty sortie must be filled first
+    tt = tab.tt
     for k, tr in enumerate(trucks):
         w, A, T, ev, fin, F, drones = tr
         if fin:
             continue
-        # serve at this stop
+        tt_w = tt[w]
+        # the truck's state at stop w2: here (same position) or after driving there
+        moved = tuple((0, 0.0) if dr[0] == 0 else dr for dr in drones)
+
+        def at(
+            w2: int,
+            w: int = w,
+            A: float = A,
+            T: float = T,
+            drones: tuple = drones,
+            tt_w: list = tt_w,
+            moved: tuple = moved,
+        ) -> tuple[float, float, tuple]:
+            if w2 == w:
+                return A, T, drones
+            a2 = T + tt_w[w2]
+            return a2, a2, moved
+
+        # serve j at its stop
         for j in range(n):
-            if S >> j & 1 or not tab.truck_ok[j] or tab.cstop[j] != w:
+            if S >> j & 1 or not tab.truck_ok[j]:
                 continue
             wait = ready(j)
             if wait is None:
                 continue
-            t = A if A > wait else wait
+            w2 = tab.cstop[j]
+            A2, T2, dr2 = at(w2)
+            t = A2 if A2 > wait else wait
             trs = list(trucks)
-            trs[k] = (w, A, T if T > t else t, True, fin, F, drones)
+            trs[k] = (w2, A2, T2 if T2 > t else t, True, fin, F, dr2)
             nsvc = svc[:j] + (t,) + svc[j + 1 :]
-            out.append(((S | 1 << j, max(M, t), nsvc, closed(trs)), ("serve", k, j)))
-        # recover / launch
-        launched_rho: set[float] = set()
+            out.append(((S | 1 << j, max(M, t), nsvc, closed(trs)), ("serve", k, j, w2)))
+        # recover an airborne drone at a stop within its range
         airborne = False
         for d, dr in enumerate(drones):
-            if dr[0] == 1:
-                airborne = True
-                if dr[2] >= 1 and dr[1] >= 0:
-                    o = dr[1]
-                    if dr[4] + tab.fsd[o][w] > tab.limit:
-                        continue
-                    back = dr[3] + tab.fst[o][w]
-                    R = (back if back > A else A) + tau
-                    nd = list(drones)
-                    nd[d] = (0, R)
-                    trs = list(trucks)
-                    trs[k] = (w, A, T if T > R else R, True, fin, F, tuple(nd))
-                    out.append(((S, M, svc, closed(trs)), ("recover", k, d)))
-            else:
-                rho = dr[1] if dr[1] > A else A
-                if rho in launched_rho:
-                    continue  # interchangeable with a drone already launched here
-                launched_rho.add(rho)
-                nd = list(drones)
-                nd[d] = (1, -(w + 1), 0, rho, 0.0, True)
-                trs = list(trucks)
-                trs[k] = (w, A, T if T > rho else rho, True, fin, F, tuple(nd))
-                out.append(((S, M, svc, closed(trs)), ("launch", k, d)))
-        if ev:
-            # move to another stop
-            tt_w = tab.tt[w]
+            if dr[0] != 1:
+                continue
+            airborne = True
+            if dr[2] < 1:
+                continue
+            o = dr[1]
+            fsd_o, fst_o = tab.fsd[o], tab.fst[o]
             for w2 in range(tab.s):
-                if w2 == w:
+                if dr[4] + fsd_o[w2] > tab.limit:
                     continue
-                A2 = T + tt_w[w2]
-                nd = tuple((0, 0.0) if dr[0] == 0 else dr for dr in drones)
+                A2, T2, dr2 = at(w2)
+                back = dr[3] + fst_o[w2]
+                R = (back if back > A2 else A2) + tau
+                nd = list(dr2)
+                nd[d] = (0, R)
                 trs = list(trucks)
-                trs[k] = (w2, A2, A2, False, fin, F, nd)
-                out.append(((S, M, svc, closed(trs)), ("move", k, w2)))
-            # finish (only "return" needs it: under last_service a truck may just stop)
-            if tab.ret and not airborne:
-                home = T + tab.tt[w][tab.depot] if tab.ret else 0.0
-                trs = list(trucks)
-                trs[k] = (w, A, T, ev, True, home, drones)
-                out.append(((S, M, svc, closed(trs)), ("finish", k)))
+                trs[k] = (w2, A2, T2 if T2 > R else R, True, fin, F, tuple(nd))
+                out.append(((S, M, svc, closed(trs)), ("recover", k, d, w2)))
+        # launch an aboard drone at a stop some unserved customer can be reached from
+        classes: dict[float, int] = {}
+        for d, dr in enumerate(drones):
+            if dr[0] == 0:
+                rho = dr[1] if dr[1] > A else A
+                classes.setdefault(rho, d)
+        if classes:
+            useful = tab.launch_ok
+            unserved = ~S & tab.full
+            for w2 in range(tab.s):
+                if not useful[w2] & unserved:
+                    continue
+                A2, T2, dr2 = at(w2)
+                seen_here: set[float] = set()
+                for rho0, d in classes.items():
+                    rho = A2 if w2 != w else rho0
+                    if rho in seen_here:
+                        continue
+                    seen_here.add(rho)
+                    nd = list(dr2)
+                    nd[d] = (1, -(w2 + 1), 0, rho, 0.0, True)
+                    trs = list(trucks)
+                    trs[k] = (w2, A2, T2 if T2 > rho else rho, True, fin, F, tuple(nd))
+                    out.append(((S, M, svc, closed(trs)), ("launch", k, d, w2)))
+        # finish (only "return" needs it: under last_service a truck may just stop)
+        if tab.ret and not airborne:
+            trs = list(trucks)
+            trs[k] = (w, A, T, ev, True, T + tt_w[tab.depot], drones)
+            out.append(((S, M, svc, closed(trs)), ("finish", k)))
     return out
 
 
@@ -386,6 +506,8 @@ def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tup
     open_: dict[tuple[int, int], tuple[int, list[int]]] = {}
     for act in actions:
         kind, k = act[0], act[1]
+        if kind in ("serve", "launch", "recover") and routes[k][-1] != act[3]:
+            routes[k].append(act[3])
         here = len(routes[k]) - 1
         if kind == "serve":
             served[k].append((here, act[2]))
@@ -396,8 +518,6 @@ def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tup
         elif kind == "recover":
             launch, cs = open_.pop((k, act[2]))
             flights[k][act[2]].append(Sortie(launch, tuple(cs), here))
-        elif kind == "move":
-            routes[k].append(act[2])
     for (k, d), (launch, cs) in sorted(open_.items()):
         # last_service only: recover at the stop nearest the last customer (no later service)
         stop = int(np.argmin(problem.flight_stop[cs[-1]]))
@@ -408,37 +528,80 @@ def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tup
 
 
 def _simple_plan(problem: FleetProblem) -> FleetPlan | None:
-    """A feasible plan when one exists: truck 0 (or the first truck with a drone) serves the
-    customers one by one in a topological order, by itself at the customer's stop when it may,
-    else by a single-customer sortie launched and recovered at the customer's nearest stop."""
+    """A feasible plan when one exists: the customers, in a topological order, dealt to the
+    trucks in turn (a drone-only one to a truck carrying a drone); each truck serves its own
+    one by one, by itself at the customer's stop when it may, else by a single-customer sortie
+    of its first drone launched and recovered at the customer's nearest stop. Every wait
+    points to a customer earlier in the order, so no deadlock."""
     if problem.unservable():
         return None
     import networkx as nx
 
-    carrier = next((k for k in range(problem.K) if problem.drones[k] > 0), 0)
-    route = [problem.depot]
-    served: list[tuple[int, int]] = []
-    flights: list[Sortie] = []
-    for j in nx.topological_sort(problem.precedence_graph):
-        if problem.truck_servable(j):
-            stop = problem.customer_stop[j]
+    K = problem.K
+    carriers = [k for k in range(K) if problem.drones[k] > 0]
+    routes = [[problem.depot] for _ in range(K)]
+    served: list[list[tuple[int, int]]] = [[] for _ in range(K)]
+    flights: list[list[Sortie]] = [[] for _ in range(K)]
+    for i, j in enumerate(nx.topological_sort(problem.precedence_graph)):
+        by_truck = problem.truck_servable(j)
+        k = i % K if by_truck or problem.drones[i % K] > 0 else carriers[i % len(carriers)]
+        stop = problem.customer_stop[j] if by_truck else int(np.argmin(problem.flight_stop[j]))
+        if routes[k][-1] != stop:
+            routes[k].append(stop)
+        p = len(routes[k]) - 1
+        if by_truck:
+            served[k].append((p, j))
         else:
-            stop = int(np.argmin(problem.flight_stop[j]))
-        if route[-1] != stop:
-            route.append(stop)
-        p = len(route) - 1
-        if problem.truck_servable(j):
-            served.append((p, j))
-        else:
-            flights.append(Sortie(p, (j,), p))
-    routes = [[problem.depot] for _ in range(problem.K)]
-    routes[carrier] = route
-    truck_service: list[list[tuple[int, int]]] = [[] for _ in range(problem.K)]
-    truck_service[carrier] = served
-    sorties = [[[] for _ in range(problem.drones[k])] for k in range(problem.K)]
-    if flights:
-        sorties[carrier][0] = flights
-    return FleetPlan(routes, truck_service, sorties)
+            flights[k].append(Sortie(p, (j,), p))
+    sorties = [[flights[k] if d == 0 else [] for d in range(problem.drones[k])] for k in range(K)]
+    return FleetPlan(routes, served, sorties)
+
+
+def _beam(
+    problem: FleetProblem, tab: _Tables, width: int, deadline: Deadline, best: float
+) -> tuple[float, FleetPlan | None]:
+    """A restricted pass of the same search for an incumbent: per number of actions keep the
+    ``width`` labels of least bound (no dominance), until complete labels appear."""
+    n = problem.n
+    root_trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    layer: list[tuple[float, tuple, tuple]] = [(0.0, (0, 0.0, (-1.0,) * n, root_trucks), ())]
+    found: tuple[float, tuple, tuple] | None = None
+    for _ in range(8 * n + 8 * problem.K + 8):
+        if deadline.expired() or not layer:
+            break
+        nxt: list[tuple[float, tuple, tuple]] = []
+        seen: set[tuple] = set()
+        for _lb, label, acts in layer:
+            if deadline.expired():
+                break
+            for child, act in _children(tab, label):
+                b = _bound(tab, child)
+                if b >= best or b == INF:
+                    continue
+                key, vec = _signature(tab, child)
+                if (key, vec) in seen:
+                    continue
+                seen.add((key, vec))
+                item = (b, child, acts + (act,))
+                if _complete(tab, child):
+                    if found is None or b < found[0]:
+                        found = item
+                    continue
+                nxt.append(item)
+        if found is not None and (not nxt or min(x[0] for x in nxt) >= found[0]):
+            break
+        nxt.sort(key=lambda x: (x[0], -bin(x[1][0]).count("1")))
+        layer = nxt[:width]
+    if found is None:
+        return INF, None
+    plan = _rebuild(problem, tab, list(found[2]), found[1])
+    try:
+        return evaluate_fleet(problem, plan), plan
+    except FeasibilityError:
+        return INF, None
 
 
 def label_search(
@@ -446,6 +609,8 @@ def label_search(
     time_limit: float | None = None,
     incumbent: Any = None,
     max_labels: int | None = None,
+    metric: bool = True,
+    beam: int = 64,
 ) -> dict[str, Any]:
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
     ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters."""
@@ -473,6 +638,14 @@ def label_search(
             continue
         if value < best:
             best, best_plan = value, plan
+    if beam and time_limit is not None:
+        sub = Deadline(0.2 * time_limit)
+    else:
+        sub = deadline
+    if beam:
+        value, plan = _beam(problem, tab, beam, sub, best)
+        if plan is not None and value < best:
+            best, best_plan = value, plan
     n = problem.n
     root_trucks = tuple(
         (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
@@ -484,6 +657,8 @@ def label_search(
     action: list[Any] = [None]
     dead = bytearray(1)
     store: dict[tuple, list[tuple[tuple, int]]] = {}
+    mindex: dict[tuple, list[tuple[int, float, float, tuple, int]]] = {}
+    tt = tab.tt
     key, vec = _signature(tab, root)
     store[key] = [(vec, 0)]
     heap: list[tuple[float, int, int]] = [(_bound(tab, root), 0, 0)]
@@ -498,7 +673,7 @@ def label_search(
         if lb >= best * (1 - slack):
             heap.clear()
             break
-        if expanded & 255 == 0 and deadline.expired():
+        if deadline.expired():
             heapq.heappush(heap, (lb, 0, i))
             stopped_by = "time_limit"
             break
@@ -533,7 +708,32 @@ def label_search(
                 bucket[:] = keep
             else:
                 bucket = store[key] = []
+            entries = _metric_entries(tab, child) if metric else []
+            hit = False
+            for mkey, w, A, _T, mvec in entries:
+                for ow, _oA, oT, ovec, oid in mindex.get(mkey, ()):
+                    if dead[oid] or ow == w:
+                        continue
+                    if oT + tt[ow][w] <= A and all(x <= y for x, y in zip(ovec, mvec, strict=True)):
+                        hit = True
+                        break
+                if hit:
+                    break
+            if hit:
+                dominated += 1
+                continue
             cid = len(labels)
+            for mkey, w, A, T, mvec in entries:
+                bucket2 = mindex.setdefault(mkey, [])
+                for ow, oA, _oT, ovec, oid in bucket2:
+                    if (
+                        not dead[oid]
+                        and ow != w
+                        and T + tt[w][ow] <= oA
+                        and all(x <= y for x, y in zip(mvec, ovec, strict=True))
+                    ):
+                        dead[oid] = 1
+                bucket2.append((w, A, T, mvec, cid))
             labels.append(child)
             parent.append(i)
             action.append(act)
