@@ -21,7 +21,7 @@ from taopt.errors import require
 from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
 from taopt.registry import register_method
-from taopt.result import INFEASIBLE, Solution, make_solution
+from taopt.result import Solution, finish
 
 
 def _chapter5_shape(problem: FleetProblem) -> bool:
@@ -94,13 +94,13 @@ def solve_fleet(
             else f"its nearest stop is {float(problem.flight_stop[j].min()):.6g} away, so the "
             f"shortest sortie is longer than the range {problem.flight_range:.6g}"
         )
-        return Solution(
-            objective=float("inf"),
-            status=INFEASIBLE,
-            solution=None,
+        return finish(
+            problem,
+            None,
+            method="exact",
+            stop="infeasible",
             bound=float("inf"),
             runtime=time.perf_counter() - start,
-            method="exact",
             info={"reason": f"customer {j} is drone-only and cannot be served: {why}"},
         )
     choice = algorithm
@@ -126,21 +126,11 @@ def solve_fleet(
             from taopt.fleet.search import _simple_plan
 
             plan = _simple_plan(problem)
-        if inner.status == "optimal":
-            return make_solution(
-                problem,
-                plan,
-                method="exact",
-                status="optimal",
-                bound=inner.bound,
-                runtime=time.perf_counter() - start,
-                info=info,
-            )
-        return make_solution(
+        return finish(
             problem,
             plan,
             method="exact",
-            stopped_by="time_limit",
+            stop="optimal" if inner.status == "optimal" else "time_limit",
             bound=bound,
             runtime=time.perf_counter() - start,
             info=info,
@@ -158,41 +148,14 @@ def solve_fleet(
         **{k: v for k, v in result.items() if k not in ("plan", "value", "bound")},
     }
     stopped = result["stopped_by"]
-    if result["plan"] is None:
-        return Solution(
-            objective=float("inf"),
-            status="time_limit",
-            solution=None,
-            bound=result["bound"],
-            runtime=time.perf_counter() - start,
-            method="exact",
-            info=info,
-        )
-    if stopped == "optimal":
-        return make_solution(
-            problem,
-            result["plan"],
-            method="exact",
-            status="optimal",
-            bound=result["value"],
-            runtime=time.perf_counter() - start,
-            info=info,
-        )
-    # stopped by the clock or the size guard: certified by the gap only
-    from taopt.fleet.evaluate import evaluate_fleet
-    from taopt.status import certify
-
-    value = evaluate_fleet(problem, result["plan"])
-    status, _ = certify(
-        value, result["bound"], "time_limit" if stopped == "time_limit" else "solver_limit"
-    )
-    info["stopped_by"] = "optimal" if status == "optimal" else stopped
-    return make_solution(
+    # the label search / operations DP stop: "optimal" (proven), "time_limit" or "size"
+    stop = stopped if stopped in ("optimal", "time_limit", "size") else "solver_limit"
+    return finish(
         problem,
         result["plan"],
         method="exact",
-        status=status,
-        bound=result["bound"],
+        stop=stop,
+        bound=result["value"] if stop == "optimal" else result["bound"],
         runtime=time.perf_counter() - start,
         info=info,
     )

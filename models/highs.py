@@ -359,6 +359,7 @@ def solve_highs(
     mip_rel_gap: float | None = None,
     objective_bound: float | None = None,
     verbose: bool = False,
+    extra: dict[str, Any] | None = None,
 ) -> HighsRun:
     """Solve a cvxpy problem with HiGHS; never raises for a solver outcome.
 
@@ -377,6 +378,9 @@ def solve_highs(
         are pruned (HiGHS reports "infeasible" if no point lies below it).
     verbose : bool
         HiGHS log.
+    extra : dict, optional
+        Further HiGHS options by name (e.g. ``mip_feasibility_tolerance`` for a big-M
+        model, whose integrality slack is the tolerance times M).
 
     Returns
     -------
@@ -392,6 +396,7 @@ def solve_highs(
         options["mip_rel_gap"] = float(mip_rel_gap)
     if objective_bound is not None:
         options["objective_bound"] = float(objective_bound)
+    options.update(extra or {})
     try:
         with warnings.catch_warnings(), _cvxpy_interruptible():
             # cvxpy warns "Solution may be inaccurate" on every limit; the status says it

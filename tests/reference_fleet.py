@@ -1,0 +1,60 @@
+"""Reference problems of the fleet family (:class:`taopt.FleetProblem`), optima by hand.
+
+Found by ``tests/reference.py`` (every ``tests/reference_<family>.py`` adds its ``REFERENCES``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import networkx as nx
+from reference import Reference
+
+import taopt
+
+
+def _two_houses(objective: str) -> taopt.FleetProblem:
+    g = nx.Graph()
+    g.add_edge(0, 1, length=100.0)
+    return taopt.FleetProblem(
+        [[100, 50], [0, 50]],
+        [[0, 0], [100, 0]],
+        g,
+        depot=0,
+        drones=[2],
+        capacity=1,
+        flight_range=500,
+        v_truck=10,
+        v_drone=10,
+        precedences=[(0, 1)],
+        objective=objective,
+        name=f"two houses, two drones ({objective})",
+    )
+
+
+def fleet_two_houses() -> Reference:
+    """Both drones leave the depot at once: house 0 is served after sqrt(100² + 50²) / 10 s,
+    house 1 after 5 s (waiting for house 0 by the precedence); no launch elsewhere is faster
+    (the truck needs 10 s to reach stop 1, then 5 s of flight)."""
+    return Reference(
+        "fleet_two_houses",
+        _two_houses("last_service"),
+        math.hypot(100, 50) / 10,
+        "by hand (docstring)",
+    )
+
+
+def fleet_two_houses_return() -> Reference:
+    """Objective "return": drone 0 out to house 0 and back to the depot, 2 sqrt(100² + 50²) /
+    10 s; recovering it at stop 1 instead costs 10 + 5 + 5 + 10 s or more; drone 1's round
+    trip is 10 s and the truck never moves."""
+    return Reference(
+        "fleet_two_houses_return",
+        _two_houses("return"),
+        2 * math.hypot(100, 50) / 10,
+        "by hand (docstring)",
+    )
+
+
+REFERENCES: list[Callable[[], Reference]] = [fleet_two_houses, fleet_two_houses_return]
