@@ -254,3 +254,19 @@ def test_search_value_from_snapshots_equals_a_full_decode():
         new_trucks = trucks if new_trucks is None else new_trucks
         full = decode(p, new_order, new_trucks).objective()
         assert search.value(new_order, new_trucks) == pytest.approx(full, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_solve_command_plots_and_prints_a_fleet_plan(tmp_path, capsys):
+    """`taopt solve FILE --methods MMA --plot` on the fleet example writes the PNG and prints
+    each truck's walk and each drone's sorties (it raised AttributeError n_targets before)."""
+    from pathlib import Path
+
+    from taopt.orchestration.cli import main
+
+    example = Path(taopt.__file__).parent / "data" / "examples" / "fleet_problem.json"
+    png = tmp_path / "fleet.png"
+    assert main(["solve", str(example), "--methods", "MMA", "--quiet", "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "truck 0: s0" in out and "drone (1, 1) [positions]" in out
+    assert png.read_bytes()[:4] == b"\x89PNG"
