@@ -9,7 +9,7 @@ import math
 from collections.abc import Callable
 
 import networkx as nx
-from reference import Reference
+from reference import BruteForce, Reference
 
 import taopt
 
@@ -58,3 +58,28 @@ def fleet_two_houses_return() -> Reference:
 
 
 REFERENCES: list[Callable[[], Reference]] = [fleet_two_houses, fleet_two_houses_return]
+
+
+def _fleet_cases(seeds: range) -> list[tuple[taopt.FleetProblem, float]]:
+    """Tiny fleets (n = 2-3, K, D, c in {1, 2}, with and without precedence, both objectives)
+    with their optima by :func:`taopt.fleet.brute.brute_force` (every plan of a complete set)."""
+    from taopt.fleet.brute import brute_force, tiny_instance
+
+    cases = []
+    for seed in seeds:
+        trucks, drones, capacity = 1 + seed % 2, 1 + (seed // 2) % 2, 1 + (seed // 4) % 2
+        problem = tiny_instance(
+            seed,
+            n=2 + seed % 2,
+            trucks=trucks,
+            drones=drones,
+            capacity=capacity,
+            precedence=bool(seed % 3),
+            objective=("last_service", "return")[(seed // 3) % 2],
+            stops=2 + seed % 2,
+        )
+        cases.append((problem, brute_force(problem)[0]))
+    return cases
+
+
+BRUTE_FORCE = [BruteForce("fleet", "exact", _fleet_cases, fast=6, slow=60)]

@@ -624,7 +624,53 @@ def _sortie(item: Any, what: str) -> Sortie:
     return Sortie(launch, customers, recovery)
 
 
-@register_payload("fleet_plan")
+@register_payload(
+    "fleet_plan",
+    schema={
+        "description": (
+            "Per truck its stop sequence (from the depot), the customers it serves as "
+            "[position, customer] pairs, and per drone its sorties as "
+            "[launch position, [customers...], recovery position]."
+        ),
+        "type": "object",
+        "required": ["routes"],
+        "additionalProperties": False,
+        "properties": {
+            "routes": {"type": "array", "items": {"$ref": "#/$defs/indices"}},
+            "truck_service": {
+                "type": "array",
+                "items": {
+                    "type": "array",
+                    "items": {
+                        "type": "array",
+                        "prefixItems": [{"$ref": "#/$defs/index"}, {"$ref": "#/$defs/index"}],
+                        "minItems": 2,
+                        "maxItems": 2,
+                    },
+                },
+            },
+            "sorties": {
+                "type": "array",
+                "items": {
+                    "type": "array",
+                    "items": {
+                        "type": "array",
+                        "items": {
+                            "type": "array",
+                            "prefixItems": [
+                                {"$ref": "#/$defs/index"},
+                                {"$ref": "#/$defs/indices"},
+                                {"$ref": "#/$defs/index"},
+                            ],
+                            "minItems": 3,
+                            "maxItems": 3,
+                        },
+                    },
+                },
+            },
+        },
+    },
+)
 @dataclass(frozen=True)
 class FleetPlan:
     """A fleet solution (payload ``fleet_plan``).
