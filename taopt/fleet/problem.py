@@ -187,22 +187,23 @@ class FleetProblem:
     """
 
     # the fields as stored (normalised by __post_init__); __init__ below says what is accepted
+    # and holds the defaults
     customers: np.ndarray
     stops: np.ndarray
     graph: nx.Graph
     depot: int
-    drones: tuple[int, ...] = (1,)
-    trucks: int = 1
-    capacity: int = 1
-    flight_range: float = math.inf
-    v_truck: float = 1.0
-    v_drone: float = 1.0
-    service: tuple[str, ...] = ()
-    customer_stop: tuple[int | None, ...] = ()
-    precedences: tuple[tuple[int, int], ...] = ()
-    service_time: float = 0.0
-    objective: str = "last_service"
-    name: str = ""
+    drones: tuple[int, ...]
+    trucks: int
+    capacity: int
+    flight_range: float
+    v_truck: float
+    v_drone: float
+    service: tuple[str, ...]
+    customer_stop: tuple[int | None, ...]
+    precedences: tuple[tuple[int, int], ...]
+    service_time: float
+    objective: str
+    name: str
 
     def __init__(
         self,
@@ -421,6 +422,14 @@ class FleetProblem:
     def drone_servable(self, j: int) -> bool:
         """Whether a drone may serve customer j (service ``"drone"`` or ``"both"``)."""
         return self.service[j] != "truck"
+
+    def truck_stop(self, j: int) -> int:
+        """``customer_stop[j]``, the stop where a truck serves customer j, for a customer a
+        truck may serve (the constructor requires it then; raises InstanceError when unset)."""
+        w = self.customer_stop[j]
+        if w is None:
+            raise InstanceError(f"customer {j} has no customer_stop: no truck serves it")
+        return w
 
     def unservable(self) -> list[int]:
         """Customers no plan can serve: drone-only and out of range of every stop (the
@@ -749,9 +758,10 @@ class FleetPlan:
     """
 
     # the fields as stored (normalised by __post_init__); __init__ below says what is accepted
+    # and holds the defaults
     routes: tuple[tuple[int, ...], ...]
-    truck_service: tuple[tuple[tuple[int, int], ...], ...] = ()
-    sorties: tuple[tuple[tuple[Sortie, ...], ...], ...] = ()
+    truck_service: tuple[tuple[tuple[int, int], ...], ...]
+    sorties: tuple[tuple[tuple[Sortie, ...], ...], ...]
 
     def __init__(
         self,
@@ -772,7 +782,9 @@ class FleetPlan:
             raise FeasibilityError(f"routes must be a list of stop lists, got {self.routes!r}")
         routes = tuple(_ints(r, f"routes[{k}]") for k, r in enumerate(self.routes))
         set_(self, "routes", routes)
-        served = list(self.truck_service) if self.truck_service else [[] for _ in routes]
+        served: list[Sequence[Any]] = (
+            list(self.truck_service) if self.truck_service else [[] for _ in routes]
+        )
         truck_service = []
         for k, items in enumerate(served):
             pairs = []
@@ -785,7 +797,7 @@ class FleetPlan:
                 pairs.append((pair[0], pair[1]))
             truck_service.append(tuple(pairs))
         set_(self, "truck_service", tuple(truck_service))
-        raw = list(self.sorties) if self.sorties else [[] for _ in routes]
+        raw: list[Sequence[Any]] = list(self.sorties) if self.sorties else [[] for _ in routes]
         sorties = []
         for k, per_truck in enumerate(raw):
             drones = []
