@@ -188,7 +188,7 @@ class FleetBuilder:
         here = t.route[last]
         tt, fs, vd, tau, limit = self.tt, self.fs, self.vd, self.tau, self.limit
         if problem.truck_servable(j):
-            w = int(problem.customer_stop[j])
+            w = problem.truck_stop(j)
             if w == here:
                 tj = max(t.arrival[last], rj)
                 out.append(("truck", k, -1, last, -1, -1, tj, max(t.ready, tj), here, 0.0))
@@ -594,7 +594,7 @@ def smma_fleet(
 def decode(
     problem: FleetProblem,
     order: Sequence[int],
-    truck_of: Sequence[int] | None = None,
+    truck_of: Sequence[int] | np.ndarray | None = None,
     window: int = WINDOW,
     near: int = NEAR_STOPS,
 ) -> FleetBuilder:

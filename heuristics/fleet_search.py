@@ -227,7 +227,7 @@ def truck_routes(problem: FleetProblem) -> tuple[list[int], np.ndarray]:
     anchor = np.empty(n, dtype=np.int64)
     for j in range(n):
         if problem.truck_servable(j):
-            anchor[j] = problem.customer_stop[j]
+            anchor[j] = problem.truck_stop(j)
         else:
             reach = np.where(
                 2.0 * problem.flight_stop[j] <= problem.flight_limit, problem.flight_stop[j], np.inf

@@ -219,7 +219,7 @@ def build(problem: FleetProblem, upper: float) -> FleetMilp:
     for k in range(K):
         for p in range(P):
             for j in truck_js:
-                w = problem.customer_stop[j]
+                w = problem.truck_stop(j)
                 rows.row([term("y", (k, p, w), 1.0), term("x", (k, p, j), -1.0)], 0.0)
                 rows.row(
                     [term("t", (j,), 1.0), term("A", (k, p), -1.0), term("x", (k, p, j), -H)], -H
@@ -457,12 +457,15 @@ def build(problem: FleetProblem, upper: float) -> FleetMilp:
             rows.row([term("f", (), 1.0), term("t", (j,), -1.0)], 0.0)
     xb = cp.Variable(counts["b"], boolean=True, name="binary")
     xc = cp.Variable(counts["c"], nonneg=True, name="time")
-    constraints = []
+    constraints: list[cp.Constraint] = []
     families = []
     for fam in rows.families:
         if not fam["rows"]:
             continue
-        data = {"b": ([], [], []), "c": ([], [], [])}
+        data: dict[str, tuple[list[int], list[int], list[float]]] = {
+            "b": ([], [], []),
+            "c": ([], [], []),
+        }
         rhs = []
         for r, (terms, value) in enumerate(fam["rows"]):
             for kind, col, coef in terms:
@@ -471,7 +474,7 @@ def build(problem: FleetProblem, upper: float) -> FleetMilp:
                 data[kind][2].append(coef)
             rhs.append(value)
         m = len(rhs)
-        lhs = 0
+        lhs: cp.Expression = cp.Constant(0)  # what `0 + expression` builds
         for kind, x in (("b", xb), ("c", xc)):
             rr, cc, vv = data[kind]
             if rr:
@@ -569,8 +572,9 @@ def solve_fleet_milp(
     upper = known[0]
     model = build(problem, upper)
     limit = None
-    if deadline.limited:
-        limit = max(deadline.remaining() - MARGIN, 1e-3)
+    remaining = deadline.remaining()
+    if remaining is not None:  # deadline.limited
+        limit = max(remaining - MARGIN, 1e-3)
     run = solve_highs(
         model.problem,
         time_limit=limit,
@@ -592,6 +596,7 @@ def solve_fleet_milp(
     if run.has_point and run.status in (OPTIMAL, TIME_LIMIT, "feasible"):
         decoded = decode(model, problem)
         value = evaluate_fleet(problem, decoded)
+        assert run.objective is not None  # has_point
         model_objective = float(run.objective)
         if value > model_objective + 1e-6 * max(1.0, abs(value)) and run.status == OPTIMAL:
             raise SolverError(

@@ -200,8 +200,8 @@ def test_exact_equals_brute_force_on_tiny_instances(case):
 @pytest.mark.parametrize("trucks", [1, 2])
 def test_operations_dp_equals_label_search(objective, trucks):
     """One drone per truck, c = 1, no precedence: the subset DP and the label search agree."""
-    from taopt.models.fleet import solve_fleet
     from taopt.fleet.brute import tiny_instance
+    from taopt.models.fleet import solve_fleet
 
     problem = tiny_instance(11, 4, trucks, 1, 1, False, objective, stops=3)
     ops = solve_fleet(problem, algorithm="operations")
@@ -214,8 +214,8 @@ def test_operations_dp_equals_label_search(objective, trucks):
 def test_chapter5_reduction_small_dag_instance():
     """The K = D = c = 1 reduction of a 4-customer dag instance: chapter 5's exact optimum, by
     the dispatched ideal DP and by the fleet label search."""
-    from taopt.models.fleet import solve_fleet
     from taopt.delivery import build_example_instance
+    from taopt.models.fleet import solve_fleet
 
     inst = build_example_instance(seed=3, n=4)
     chapter5 = taopt.solve(inst, "exact")
@@ -259,8 +259,8 @@ def test_infeasible_instance_is_proven_and_names_the_customer():
 
 def test_time_limit_returns_a_feasible_plan_and_a_proven_bound():
     """A tight wall-clock limit: status time_limit, a feasible incumbent, bound <= objective."""
-    from taopt.models.fleet import solve_fleet
     from taopt.fleet.instances import residential_fleet
+    from taopt.models.fleet import solve_fleet
 
     problem = residential_fleet(6, 2, 2, 2, seed=1)
     solution = solve_fleet(problem, time_limit=0.3)
@@ -271,8 +271,8 @@ def test_time_limit_returns_a_feasible_plan_and_a_proven_bound():
 
 def test_size_guard_stops_like_a_time_limit():
     """max_labels reached: stopped_by "size", a feasible plan and a proven bound."""
-    from taopt.models.fleet import solve_fleet
     from taopt.fleet.instances import residential_fleet
+    from taopt.models.fleet import solve_fleet
 
     problem = residential_fleet(5, 2, 2, 2, seed=2)
     solution = solve_fleet(problem, max_labels=200)

@@ -145,11 +145,12 @@ def work_bound(problem: FleetProblem, grid: int = 101) -> float:
     sharing: dict[int, int] = {}
     for j in range(n):
         if problem.truck_servable(j):
-            sharing[problem.customer_stop[j]] = sharing.get(problem.customer_stop[j], 0) + 1
+            w = problem.truck_stop(j)
+            sharing[w] = sharing.get(w, 0) + 1
     for j in range(n):
         if not problem.truck_servable(j):
             continue
-        w = problem.customer_stop[j]
+        w = problem.truck_stop(j)
         if w == problem.depot or s == 1:
             cost = 0.0
         else:
@@ -173,7 +174,7 @@ def work_bound(problem: FleetProblem, grid: int = 101) -> float:
                 np.min(
                     truck_e[ok]
                     - b[ok]
-                    * np.array([sharing[problem.customer_stop[j]] for j in np.flatnonzero(ok)])
+                    * np.array([sharing[problem.truck_stop(int(j))] for j in np.flatnonzero(ok)])
                 )
             ),
         )
@@ -186,7 +187,7 @@ def work_bound(problem: FleetProblem, grid: int = 101) -> float:
             value += (1 - lam) * (
                 float(b[only_truck].sum()) / K + (delta_t if only_truck.any() else 0)
             )
-        for j in np.flatnonzero(~only_drone & ~only_truck):
+        for j in np.flatnonzero(~only_drone & ~only_truck).tolist():
             value += min(lam * a[j] / max(D, 1), (1 - lam) * b[j] / K)
         best = max(best, value)
     return float(best)

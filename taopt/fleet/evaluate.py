@@ -336,7 +336,7 @@ def _deadlock(
                 pred[b] = a
     seen: dict[int, int] = {}
     v = start
-    path = []
+    path: list[int] = []
     while v not in seen:
         seen[v] = len(path)
         path.append(v)

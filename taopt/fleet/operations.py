@@ -254,7 +254,18 @@ def _last_operation(
     return 0, v
 
 
-def _rebuild_truck(problem, T, F, C, choice, H, f_last, e_choice, tt, cs):
+def _rebuild_truck(
+    problem: FleetProblem,
+    T: int,
+    F: np.ndarray,
+    C: np.ndarray,
+    choice: np.ndarray,
+    H: np.ndarray,
+    f_last: np.ndarray | None,
+    e_choice: np.ndarray | None,
+    tt: np.ndarray,
+    cs: np.ndarray,
+) -> tuple[list[int], list[tuple[int, int]], list[Sortie]]:
     """One truck's route, truck service and sorties for its set T."""
     ops: list[tuple[int, int, int]] = []  # (U, v, w) from the start; U = 0 a plain drive
     final: tuple[int, int] | None = None
@@ -324,6 +335,7 @@ def _rebuild_truck(problem, T, F, C, choice, H, f_last, e_choice, tt, cs):
         route.append(w)  # a new position, even at the same stop: the recovery
         flights.append(Sortie(launch, (d,), len(route) - 1))
     if final is not None:
+        assert e_choice is not None  # the caller passes it whenever f_last is given
         U, v = final
         go(v)
         if U:

@@ -26,13 +26,14 @@ import dataclasses
 import math
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import networkx as nx
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, shortest_path
 
@@ -185,25 +186,72 @@ class FleetProblem:
     Thesis §5.2 ((5.1)–(5.7)), §6.2 (recommendations 2 and 3).
     """
 
+    # the fields as stored (normalised by __post_init__); __init__ below says what is accepted
+    # and holds the defaults
     customers: np.ndarray
     stops: np.ndarray
     graph: nx.Graph
     depot: int
-    drones: Any = 1
-    trucks: int = 1
-    capacity: int = 1
-    flight_range: float | None = None
-    v_truck: float = 1.0
-    v_drone: float = 1.0
-    service: Any = "drone"
-    customer_stop: Any = None
-    precedences: tuple[tuple[int, int], ...] = ()
-    service_time: float = 0.0
-    objective: str = "last_service"
-    name: str = ""
+    drones: tuple[int, ...]
+    trucks: int
+    capacity: int
+    flight_range: float
+    v_truck: float
+    v_drone: float
+    service: tuple[str, ...]
+    customer_stop: tuple[int | None, ...]
+    precedences: tuple[tuple[int, int], ...]
+    service_time: float
+    objective: str
+    name: str
+
+    def __init__(
+        self,
+        customers: ArrayLike,
+        stops: ArrayLike,
+        graph: nx.Graph,
+        depot: int | np.integer[Any],
+        drones: int | np.integer[Any] | Sequence[int | np.integer[Any]] | np.ndarray = 1,
+        trucks: int | np.integer[Any] = 1,
+        capacity: int | np.integer[Any] = 1,
+        flight_range: float | None = None,
+        v_truck: float = 1.0,
+        v_drone: float = 1.0,
+        service: str | Sequence[str] = "drone",
+        customer_stop: Sequence[int | np.integer[Any] | None] | np.ndarray | None = None,
+        precedences: Iterable[Sequence[int | np.integer[Any]]] = (),
+        service_time: float = 0.0,
+        objective: str = "last_service",
+        name: str = "",
+    ) -> None:
+        # the dataclass __init__, typed by what it accepts: store the raw values, then
+        # __post_init__ checks and normalises them (as the generated __init__ would)
+        raw: dict[str, Any] = dict(
+            customers=customers,
+            stops=stops,
+            graph=graph,
+            depot=depot,
+            drones=drones,
+            trucks=trucks,
+            capacity=capacity,
+            flight_range=flight_range,
+            v_truck=v_truck,
+            v_drone=v_drone,
+            service=service,
+            customer_stop=customer_stop,
+            precedences=precedences,
+            service_time=service_time,
+            objective=objective,
+            name=name,
+        )
+        for key, value in raw.items():
+            object.__setattr__(self, key, value)
+        self.__post_init__()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        # the raw constructor arguments (any type __init__ accepts), read before normalising
+        raw: Any = self
         customers = _points(self.customers, "customers")
         stops = _points(self.stops, "stops")
         n, s = len(customers), len(stops)
@@ -213,47 +261,47 @@ class FleetProblem:
             raise InstanceError("stops: need at least one stop")
         set_(self, "customers", customers)
         set_(self, "stops", stops)
-        set_(self, "depot", _index(self.depot, "depot", s, "stop"))
+        set_(self, "depot", _index(raw.depot, "depot", s, "stop"))
         # -- fleet ---------------------------------------------------------------------
-        if isinstance(self.drones, (str, bytes)):
-            raise InstanceError(f"drones must be an int or a list of ints, got {self.drones!r}")
-        if isinstance(self.drones, (Sequence, np.ndarray)):
-            drones = tuple(_count(d, f"drones[{k}]", 0) for k, d in enumerate(list(self.drones)))
+        if isinstance(raw.drones, (str, bytes)):
+            raise InstanceError(f"drones must be an int or a list of ints, got {raw.drones!r}")
+        if isinstance(raw.drones, (Sequence, np.ndarray)):
+            drones = tuple(_count(d, f"drones[{k}]", 0) for k, d in enumerate(list(raw.drones)))
             if not drones:
                 raise InstanceError("drones: need at least one truck (one entry per truck)")
         else:
-            trucks = _count(self.trucks, "trucks", 1)
-            drones = (_count(self.drones, "drones", 0),) * trucks
+            trucks = _count(raw.trucks, "trucks", 1)
+            drones = (_count(raw.drones, "drones", 0),) * trucks
         set_(self, "drones", drones)
         set_(self, "trucks", len(drones))
-        set_(self, "capacity", _count(self.capacity, "capacity", 1))
-        if self.flight_range is None:
+        set_(self, "capacity", _count(raw.capacity, "capacity", 1))
+        if raw.flight_range is None:
             set_(self, "flight_range", math.inf)
         else:
             try:
-                rng = float(self.flight_range)
+                rng = float(raw.flight_range)
             except (TypeError, ValueError):
                 raise InstanceError(
-                    f"flight_range must be a number or None, got {plain(self.flight_range)!r}"
+                    f"flight_range must be a number or None, got {plain(raw.flight_range)!r}"
                 ) from None
             if math.isnan(rng) or rng <= 0:
                 raise InstanceError(f"flight_range = {rng} must be > 0 (None for unlimited)")
             set_(self, "flight_range", rng)
-        set_(self, "v_truck", _positive(self.v_truck, "v_truck"))
-        set_(self, "v_drone", _positive(self.v_drone, "v_drone"))
-        set_(self, "service_time", _positive(self.service_time, "service_time", allow_zero=True))
-        if self.objective not in OBJECTIVES:
-            raise InstanceError(f"objective {self.objective!r} is not one of {OBJECTIVES}")
-        set_(self, "name", str(self.name))
+        set_(self, "v_truck", _positive(raw.v_truck, "v_truck"))
+        set_(self, "v_drone", _positive(raw.v_drone, "v_drone"))
+        set_(self, "service_time", _positive(raw.service_time, "service_time", allow_zero=True))
+        if raw.objective not in OBJECTIVES:
+            raise InstanceError(f"objective {raw.objective!r} is not one of {OBJECTIVES}")
+        set_(self, "name", str(raw.name))
         # -- who serves whom -------------------------------------------------------------
-        modes = [self.service] * n if isinstance(self.service, str) else list(self.service)
+        modes = [raw.service] * n if isinstance(raw.service, str) else list(raw.service)
         if len(modes) != n:
             raise InstanceError(f"service has {len(modes)} entries but there are {n} customers")
         for j, mode in enumerate(modes):
             if mode not in SERVICE_MODES:
                 raise InstanceError(f"service[{j}] = {mode!r} is not one of {SERVICE_MODES}")
         set_(self, "service", tuple(modes))
-        raw_stop = [None] * n if self.customer_stop is None else list(self.customer_stop)
+        raw_stop = [None] * n if raw.customer_stop is None else list(raw.customer_stop)
         if len(raw_stop) != n:
             raise InstanceError(
                 f"customer_stop has {len(raw_stop)} entries but there are {n} customers"
@@ -282,7 +330,7 @@ class FleetProblem:
         pairs: list[tuple[int, int]] = []
         seen: set[tuple[int, int]] = set()
         try:
-            items = list(self.precedences)
+            items = list(raw.precedences)
         except TypeError:
             raise InstanceError("precedences must be an iterable of (r, j) pairs") from None
         for item in items:
@@ -374,6 +422,14 @@ class FleetProblem:
     def drone_servable(self, j: int) -> bool:
         """Whether a drone may serve customer j (service ``"drone"`` or ``"both"``)."""
         return self.service[j] != "truck"
+
+    def truck_stop(self, j: int) -> int:
+        """``customer_stop[j]``, the stop where a truck serves customer j, for a customer a
+        truck may serve (the constructor requires it then; raises InstanceError when unset)."""
+        w = self.customer_stop[j]
+        if w is None:
+            raise InstanceError(f"customer {j} has no customer_stop: no truck serves it")
+        return w
 
     def unservable(self) -> list[int]:
         """Customers no plan can serve: drone-only and out of range of every stop (the
@@ -701,9 +757,24 @@ class FleetPlan:
     Sortie(launch=0, customers=(0,), recovery=1)
     """
 
+    # the fields as stored (normalised by __post_init__); __init__ below says what is accepted
+    # and holds the defaults
     routes: tuple[tuple[int, ...], ...]
-    truck_service: tuple[tuple[tuple[int, int], ...], ...] = ()
-    sorties: tuple[tuple[tuple[Sortie, ...], ...], ...] = ()
+    truck_service: tuple[tuple[tuple[int, int], ...], ...]
+    sorties: tuple[tuple[tuple[Sortie, ...], ...], ...]
+
+    def __init__(
+        self,
+        routes: Sequence[Sequence[int]],
+        truck_service: Sequence[Sequence[Sequence[int]]] = (),
+        sorties: Sequence[Sequence[Sequence[Sortie | Sequence[Any]]]] = (),
+    ) -> None:
+        # the dataclass __init__, typed by what it accepts (lists or tuples): store the raw
+        # values, then __post_init__ checks and normalises them to tuples
+        object.__setattr__(self, "routes", routes)
+        object.__setattr__(self, "truck_service", truck_service)
+        object.__setattr__(self, "sorties", sorties)
+        self.__post_init__()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -711,7 +782,9 @@ class FleetPlan:
             raise FeasibilityError(f"routes must be a list of stop lists, got {self.routes!r}")
         routes = tuple(_ints(r, f"routes[{k}]") for k, r in enumerate(self.routes))
         set_(self, "routes", routes)
-        served = list(self.truck_service) if self.truck_service else [[] for _ in routes]
+        served: list[Sequence[Any]] = (
+            list(self.truck_service) if self.truck_service else [[] for _ in routes]
+        )
         truck_service = []
         for k, items in enumerate(served):
             pairs = []
@@ -724,7 +797,7 @@ class FleetPlan:
                 pairs.append((pair[0], pair[1]))
             truck_service.append(tuple(pairs))
         set_(self, "truck_service", tuple(truck_service))
-        raw = list(self.sorties) if self.sorties else [[] for _ in routes]
+        raw: list[Sequence[Any]] = list(self.sorties) if self.sorties else [[] for _ in routes]
         sorties = []
         for k, per_truck in enumerate(raw):
             drones = []

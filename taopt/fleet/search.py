@@ -81,8 +81,8 @@ class _Tables:
         self.near = p.flight_stop.min(axis=1).tolist()
         self.truck_ok = [p.truck_servable(j) for j in range(n)]
         self.drone_ok = [p.drone_servable(j) and p.D > 0 for j in range(n)]
-        self.cstop = list(p.customer_stop)
-        self.preds = [[] for _ in range(n)]
+        self.cstop: list[int | None] = list(p.customer_stop)
+        self.preds: list[list[int]] = [[] for _ in range(n)]
         self.pred_mask = [0] * n
         self.succ_mask = [0] * n
         for r, j in p.precedences:
@@ -262,7 +262,7 @@ def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
             vec.append(svc[r])
     per_truck = []
     for w, A, T, ev, fin, F, drones in trucks:
-        parts = []
+        parts: list[tuple[tuple[Any, ...], tuple[float, ...]]] = []
         for dr in drones:
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,)))
@@ -294,9 +294,10 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
     for r in range(tab.n):
         if S >> r & 1 and succ[r] & ~S:
             head.append(svc[r])
-    discs, conts = [], []
+    discs: list[tuple[Any, ...]] = []
+    conts: list[tuple[tuple[float, ...], tuple[float, ...]]] = []
     for w, A, T, _ev, fin, F, drones in trucks:
-        parts = []
+        parts: list[tuple[tuple[Any, ...], tuple[float, ...], tuple[float, ...]]] = []
         for dr in drones:
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,), ()))
@@ -425,6 +426,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
             if wait is None:
                 continue
             w2 = tab.cstop[j]
+            assert w2 is not None  # truck_ok[j]: the constructor required its stop
             A2, T2, dr2 = at(w2)
             t = A2 if A2 > wait else wait
             trs = list(trucks)
@@ -643,9 +645,9 @@ def label_search(
     else:
         sub = deadline
     if beam:
-        value, plan = _beam(problem, tab, beam, sub, best)
-        if plan is not None and value < best:
-            best, best_plan = value, plan
+        value, beamed = _beam(problem, tab, beam, sub, best)
+        if beamed is not None and value < best:
+            best, best_plan = value, beamed
     n = problem.n
     root_trucks = tuple(
         (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
