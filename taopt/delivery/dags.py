@@ -14,6 +14,7 @@ import networkx as nx
 import numpy as np
 
 from taopt.errors import InstanceError
+from taopt.streets import cycle_path  # re-exported: the one precedence-cycle check
 
 
 def layered_dag(
@@ -129,19 +130,6 @@ def residential_network(
         offset = rng.uniform(15.0, 45.0) * rng.choice([-1.0, 1.0])
         customers.append(a + along * (b - a) + offset * normal)
     return np.array(customers), stops, graph
-
-
-def cycle_path(graph: nx.DiGraph) -> str | None:
-    """A directed cycle of ``graph`` written "a -> b -> a", or None if it is acyclic.
-
-    The one precedence-cycle check (5.7 has no feasible order on a cycle), shared by
-    :class:`taopt.delivery.instance.DeliveryInstance` and the sequencing heuristics.
-    """
-    try:
-        cycle = nx.find_cycle(graph)
-    except nx.NetworkXNoCycle:
-        return None
-    return " -> ".join(str(u) for u, _ in cycle) + f" -> {cycle[0][0]}"
 
 
 __all__ = ["cycle_path", "layered_dag", "paired_precedences", "residential_network"]

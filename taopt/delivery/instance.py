@@ -17,72 +17,33 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import networkx as nx
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, shortest_path
 
-from taopt.delivery.dags import cycle_path
 from taopt.errors import FeasibilityError, InstanceError
-from taopt.instance import check_schema, plain
+from taopt.instance import check_schema
 from taopt.io import load_json, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
+from taopt.streets import (
+    STREET_TOLERANCE,
+    as_index,
+    as_points,
+    positive,
+    precedence_dag,
+    street_network,
+)
 
 #: Relative tolerance on the flight-range constraint (5.6): a sortie with
 #: ``d(i, c) + d(c, k) <= L * (1 + FLIGHT_TOLERANCE)`` is within range.
 FLIGHT_TOLERANCE = 1e-9
 
-#: Relative tolerance on street lengths: an edge may not be shorter than the straight
-#: line between its stops, ``length >= dist * (1 - STREET_TOLERANCE)``.
-STREET_TOLERANCE = 1e-9
-
-
-def _points(value: Any, what: str) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InstanceError(f"{what} must be an (N, 2) array of numbers") from None
-    if arr.size == 0:
-        arr = arr.reshape(0, 2)
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise InstanceError(f"{what} must be an (N, 2) array, got shape {arr.shape}")
-    bad = np.argwhere(~np.isfinite(arr))
-    if bad.size:
-        k = int(bad[0][0])
-        raise InstanceError(f"{what}[{k}] = {arr[k].tolist()} is not finite")
-    arr.setflags(write=False)
-    return arr
-
-
-def _positive(value: Any, what: str, allow_zero: bool = False) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InstanceError(f"{what} must be a number, got {plain(value)!r}") from None
-    if not np.isfinite(x):
-        raise InstanceError(f"{what} = {x} is not finite")
-    if x < 0 or (x == 0 and not allow_zero):
-        raise InstanceError(f"{what} = {x} must be {'>= 0' if allow_zero else '> 0'}")
-    return x
-
-
-def _index(value: Any, what: str, size: int, kind: str) -> int:
-    try:
-        k = int(value)
-        ok = float(value) == k
-    except (TypeError, ValueError):
-        ok = False
-    if not ok or isinstance(value, bool):
-        raise InstanceError(f"{what} must be an integer {kind} index, got {plain(value)!r}")
-    if not 0 <= k < size:
-        raise InstanceError(f"{what} = {k} is not a {kind} (valid: 0..{size - 1})")
-    return k
+# the shared checks (core): kept under their old names, which tests and other modules import
+_points, _positive, _index = as_points, positive, as_index
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,45 +137,8 @@ class DeliveryInstance:
         set_(self, "name", str(self.name))
 
         # -- street network ------------------------------------------------------------
-        if not isinstance(self.graph, nx.Graph) or self.graph.is_directed():
-            raise InstanceError("graph must be an undirected networkx.Graph on the stop indices")
-        graph = nx.Graph()
-        graph.add_nodes_from(range(s))
-        for node in self.graph.nodes:
-            _index(node, f"graph node {node!r}", s, "stop")
-        rows, cols, vals = [], [], []
-        for u, v, data in self.graph.edges(data=True):
-            a = _index(u, f"graph edge ({u!r}, {v!r})", s, "stop")
-            b = _index(v, f"graph edge ({u!r}, {v!r})", s, "stop")
-            if "length" not in data:
-                raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
-            length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
-            if a == b:  # documented normalisation: a loop never shortens a truck path
-                warnings.warn(f"graph edge ({a}, {b}) is a self-loop; it is dropped", stacklevel=3)
-                continue
-            straight = float(np.hypot(*(stops[a] - stops[b])))
-            if length < straight * (1.0 - STREET_TOLERANCE):
-                raise InstanceError(
-                    f"street edge ({a}, {b}) has length {length:.9g}, shorter than the straight "
-                    f"line {straight:.9g} between stops {a} and {b}"
-                )
-            graph.add_edge(a, b, length=length)
-            rows += [a, b]
-            cols += [b, a]
-            # csgraph treats explicit zeros as missing edges: use a tiny stand-in, fixed below
-            vals += [length if length > 0 else np.finfo(float).tiny] * 2
-        set_(self, "graph", nx.freeze(graph))
-        adjacency = csr_matrix((vals, (rows, cols)), shape=(s, s))
-        n_parts, labels = connected_components(adjacency, directed=False)
-        if n_parts > 1:
-            lonely = int(np.flatnonzero(labels != labels[self.depot])[0])
-            raise InstanceError(
-                f"street network is disconnected ({n_parts} components): stop {lonely} "
-                f"cannot be reached from the depot {self.depot}"
-            )
-        truck_distance = shortest_path(adjacency, method="D", directed=False)
-        truck_distance[truck_distance < 1e-300] = 0.0
-        np.fill_diagonal(truck_distance, 0.0)
+        graph, truck_distance = street_network(self.graph, stops, self.depot)
+        set_(self, "graph", graph)
         truck_time = truck_distance / self.v_truck
 
         # -- drone flights (Euclidean) -----------------------------------------------------
@@ -233,33 +157,10 @@ class DeliveryInstance:
             )
 
         # -- precedences (5.7) -----------------------------------------------------------
-        pairs: list[tuple[int, int]] = []
-        seen: set[tuple[int, int]] = set()
-        try:
-            items = list(self.precedences)
-        except TypeError:
-            raise InstanceError("precedences must be an iterable of (r, j) pairs") from None
-        for item in items:
-            try:
-                r_raw, j_raw = item
-            except (TypeError, ValueError):
-                raise InstanceError(f"precedence {plain(item)!r} is not an (r, j) pair") from None
-            r = _index(r_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
-            j = _index(j_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
-            if r == j:
-                raise InstanceError(f"precedence ({r}, {j}): customer {r} cannot precede itself")
-            if (r, j) not in seen:
-                seen.add((r, j))
-                pairs.append((r, j))
-        precedence_graph = nx.DiGraph()
-        precedence_graph.add_nodes_from(range(n))
-        precedence_graph.add_edges_from(pairs)
-        path = cycle_path(precedence_graph)
-        if path:
-            raise InstanceError(
-                f"precedence cycle {path}: no order can serve these customers (5.7)"
-            )
-        set_(self, "precedences", tuple(pairs))
+        pairs, precedence_graph = precedence_dag(
+            self.precedences, n, "no order can serve these customers (5.7)"
+        )
+        set_(self, "precedences", pairs)
 
         for arr in (truck_distance, truck_time, flight_distance, flight_time):
             arr.setflags(write=False)

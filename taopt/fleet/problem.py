@@ -34,16 +34,16 @@ from typing import Any
 import networkx as nx
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, shortest_path
 
-from taopt.delivery.dags import cycle_path
-from taopt.delivery.instance import STREET_TOLERANCE, _index, _points, _positive
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.instance import check_schema, plain
 from taopt.io import load_json, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
+from taopt.streets import as_index as _index
+from taopt.streets import as_points as _points
+from taopt.streets import positive as _positive
+from taopt.streets import precedence_dag, street_network
 
 #: Relative tolerance of the flight-range check, as chapter 5's (5.6).
 FLIGHT_TOLERANCE = 1e-9
@@ -66,48 +66,6 @@ def _count(value: Any, what: str, minimum: int) -> int:
     if k < minimum:
         raise InstanceError(f"{what} = {k} must be >= {minimum}")
     return k
-
-
-def _street_network(graph: Any, stops: np.ndarray, depot: int) -> tuple[nx.Graph, np.ndarray]:
-    """The frozen street network and its (s, s) shortest-path lengths (chapter 5's rules)."""
-    s = len(stops)
-    if not isinstance(graph, nx.Graph) or graph.is_directed():
-        raise InstanceError("graph must be an undirected networkx.Graph on the stop indices")
-    out = nx.Graph()
-    out.add_nodes_from(range(s))
-    for node in graph.nodes:
-        _index(node, f"graph node {node!r}", s, "stop")
-    rows, cols, vals = [], [], []
-    for u, v, data in graph.edges(data=True):
-        a = _index(u, f"graph edge ({u!r}, {v!r})", s, "stop")
-        b = _index(v, f"graph edge ({u!r}, {v!r})", s, "stop")
-        if a == b:
-            raise InstanceError(f"graph edge ({a}, {b}) joins stop {a} to itself")
-        if "length" not in data:
-            raise InstanceError(f"graph edge ({a}, {b}) has no 'length' attribute")
-        length = _positive(data["length"], f"graph edge ({a}, {b}) length", allow_zero=True)
-        straight = float(np.hypot(*(stops[a] - stops[b])))
-        if length < straight * (1.0 - STREET_TOLERANCE):
-            raise InstanceError(
-                f"street edge ({a}, {b}) has length {length:.9g}, shorter than the straight "
-                f"line {straight:.9g} between stops {a} and {b}"
-            )
-        out.add_edge(a, b, length=length)
-        rows += [a, b]
-        cols += [b, a]
-        vals += [length if length > 0 else np.finfo(float).tiny] * 2
-    adjacency = csr_matrix((vals, (rows, cols)), shape=(s, s))
-    n_parts, labels = connected_components(adjacency, directed=False)
-    if n_parts > 1:
-        lonely = int(np.flatnonzero(labels != labels[depot])[0])
-        raise InstanceError(
-            f"street network is disconnected ({n_parts} components): stop {lonely} "
-            f"cannot be reached from the depot {depot}"
-        )
-    distance = shortest_path(adjacency, method="D", directed=False)
-    distance[distance < 1e-300] = 0.0
-    np.fill_diagonal(distance, 0.0)
-    return nx.freeze(out), distance
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,7 +277,7 @@ class FleetProblem:
                 at.append(_index(w, f"customer_stop[{j}]", s, "stop"))
         set_(self, "customer_stop", tuple(at))
         # -- street network ------------------------------------------------------------------
-        graph, truck_distance = _street_network(self.graph, stops, self.depot)
+        graph, truck_distance = street_network(self.graph, stops, self.depot)
         set_(self, "graph", graph)
         truck_time = truck_distance / self.v_truck
         diff = customers[:, None, :] - stops[None, :, :]
@@ -327,31 +285,8 @@ class FleetProblem:
         diff = customers[:, None, :] - customers[None, :, :]
         flight_customer = np.sqrt((diff**2).sum(axis=2))
         # -- precedences ---------------------------------------------------------------------
-        pairs: list[tuple[int, int]] = []
-        seen: set[tuple[int, int]] = set()
-        try:
-            items = list(raw.precedences)
-        except TypeError:
-            raise InstanceError("precedences must be an iterable of (r, j) pairs") from None
-        for item in items:
-            try:
-                r_raw, j_raw = item
-            except (TypeError, ValueError):
-                raise InstanceError(f"precedence {plain(item)!r} is not an (r, j) pair") from None
-            r = _index(r_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
-            j = _index(j_raw, f"precedence {plain(tuple(item))!r}", n, "customer")
-            if r == j:
-                raise InstanceError(f"precedence ({r}, {j}): customer {r} cannot precede itself")
-            if (r, j) not in seen:
-                seen.add((r, j))
-                pairs.append((r, j))
-        dag = nx.DiGraph()
-        dag.add_nodes_from(range(n))
-        dag.add_edges_from(pairs)
-        path = cycle_path(dag)
-        if path:
-            raise InstanceError(f"precedence cycle {path}: no plan can serve these customers")
-        set_(self, "precedences", tuple(pairs))
+        pairs, dag = precedence_dag(raw.precedences, n, "no plan can serve these customers")
+        set_(self, "precedences", pairs)
         for arr in (truck_distance, truck_time, flight_stop, flight_customer):
             arr.setflags(write=False)
         set_(self, "_truck_distance", truck_distance)
