@@ -77,10 +77,10 @@ import scipy.sparse as sp
 from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError, require
-from taopt.limits import MARGIN, milp_bytes, register_footprint
 from taopt.models.highs import solve_highs
 from taopt.models.routing import solve_routing
 from taopt.result import OPTIMAL, RELAXATION, Routes, Solution, finish, make_solution
+from taopt.runtime import MARGIN, milp_bytes, register_footprint
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 

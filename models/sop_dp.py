@@ -88,8 +88,8 @@ from taopt import ideals
 from taopt.errors import InstanceError
 from taopt.ideals import MAX_BITS, predecessor_masks
 from taopt.ideals import bits as node_bits
-from taopt.limits import MARGIN, Deadline
 from taopt.result import Order, Solution, finish
+from taopt.runtime import MARGIN, Deadline
 from taopt.sop.problem import SopProblem, path_cost
 
 __all__ = [

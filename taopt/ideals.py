@@ -82,7 +82,7 @@ def ideal_layers(
         Nodes (at most :data:`MAX_BITS`).
     cap : int
         Give up (None) once more than ``cap`` ideals are found.
-    deadline : taopt.limits.Deadline, optional
+    deadline : taopt.runtime.Deadline, optional
         Give up (None) when it expires.
     first : int
         The mask every ideal contains (the first layer), 0 for the empty set; it must be an

@@ -27,7 +27,6 @@ from typing import Any
 import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.errors import InstanceError, SolverError, TaoptError
-from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.registry import (
     CATEGORIES,
     ensure_families,
@@ -37,6 +36,7 @@ from taopt.registry import (
     methods,
 )
 from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
+from taopt.runtime import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.scoring import evaluate
 
 #: Relative tolerance between a method's reported objective and the scorer's value.
@@ -107,14 +107,14 @@ def solve(
     time_limit : float, optional
         Wall-clock seconds for the whole call (docs/architecture.md, invariant 4): the clock
         starts on entry; the warm-start heuristics of an exact method get a share of it
-        (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
+        (:data:`taopt.runtime.WARM_START_SHARE`), the method the remaining seconds. Methods
         that take no limit (fast heuristics) ignore it. An exact model stopped by it returns
         its best plan with status "time_limit" and a proven bound; with no plan found in
         time, status "time_limit", objective ``inf``, no payload, and the bound.
     max_memory_gb : float, optional
         The size guard's limit (default ``TAOPT_MAX_MEMORY_GB`` or
-        :data:`taopt.limits.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
-        whose estimated memory (:func:`taopt.limits.footprint`) is above it is refused
+        :data:`taopt.runtime.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
+        whose estimated memory (:func:`taopt.runtime.footprint`) is above it is refused
         before anything is built.
     **options
         Method-specific keyword options (an unknown one is an error naming it).

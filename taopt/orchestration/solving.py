@@ -36,10 +36,10 @@ from taopt.bounds import lower
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError
 from taopt.instance import Instance
 from taopt.io import load_json
-from taopt.limits import check_memory, navigation_bytes
 from taopt.orchestration.pipeline import default_methods, no_optimum_note, solve
 from taopt.registry import certifying_method, families, family_for_kind, family_of, get_method
 from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
+from taopt.runtime import check_memory, navigation_bytes
 from taopt.schemas import naming
 from taopt.scoring import evaluate
 
