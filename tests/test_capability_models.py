@@ -19,6 +19,7 @@ from taopt.errors import InstanceError
 from taopt.models import solve_capability
 from taopt.models.capability import build_printed, decode_printed, describe
 from taopt.orchestration.studies.capability_claims import exact_optimum, random_problem
+from taopt.runtime.workers import kept_pool
 
 EXAMPLE = (
     Path(__file__).parent.parent
@@ -241,17 +242,16 @@ def test_killed_worker_is_a_clear_error():
 
     from taopt.capability.instances import STUDY_CELL
     from taopt.errors import SolverError
-    from taopt.models import capability
     from taopt.orchestration.studies.capability import make_scenario
 
     # the benchmark's n90m10 |A| = 5 scenario: its hardest class takes about 10 s
     settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
     problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
     solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
-    pool = capability._POOLS[2]
+    pool = kept_pool(("capability", 2))
 
     def kill_one() -> None:
-        os.kill(next(iter(pool._processes)), signal.SIGKILL)
+        os.kill(pool.pids()[0], signal.SIGKILL)
 
     timer = threading.Timer(0.3, kill_one)
     timer.start()
@@ -260,7 +260,8 @@ def test_killed_worker_is_a_clear_error():
             solve_capability(problem, workers=2)
     finally:
         timer.cancel()
-    assert 2 not in capability._POOLS  # the broken pool is dropped; the next call starts anew
+    # the broken pool is dropped; the next call starts anew
+    assert kept_pool(("capability", 2)) is None
     small = thesis_scenario(9, 2, 2, seed=4).problem
     assert solve_capability(small, workers=2).objective == pytest.approx(
         solve_capability(small, workers=1).objective
@@ -270,8 +271,9 @@ def test_killed_worker_is_a_clear_error():
 CTRL_C_SCRIPT = """
 import os, sys, threading, time
 from taopt.capability.instances import STUDY_CELL
-from taopt.models import capability, solve_capability
+from taopt.models import solve_capability
 from taopt.orchestration.studies.capability import make_scenario
+from taopt.runtime.workers import kept_pool
 
 settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
 problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
@@ -279,8 +281,8 @@ pids = []
 def note():
     while len(pids) < 2:
         time.sleep(0.05)
-        pool = capability._POOLS.get(2)
-        pids[:] = list(getattr(pool, "_processes", None) or [])
+        pool = kept_pool(("capability", 2))
+        pids[:] = pool.pids() if pool is not None else []
 threading.Thread(target=note, daemon=True).start()
 print("ready", flush=True)
 try:
@@ -361,7 +363,7 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     result = solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
     assert result.runtime < 10.0
     assert result.status == "time_limit"
-    assert 2 not in capability._POOLS
+    assert kept_pool(("capability", 2)) is None
     killed = [c for c in result.info["classes"] if c["status"] == "time_limit"]
     assert killed
     assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)
