@@ -130,8 +130,10 @@ class Deadline:
 
     @property
     def limited(self) -> bool:
-        """Whether there is a time limit at all."""
-        return self.seconds is not None
+        """Whether the run is limited: by a time limit, or by a cancellation already asked
+        for (then :meth:`remaining` is 0 and :meth:`expired` true), so that a loop head's
+        ``deadline.limited and deadline.expired()`` stops on either."""
+        return self.seconds is not None or self.cancelled
 
     @property
     def cancelled(self) -> bool:
