@@ -59,6 +59,7 @@ import scipy.sparse as sp
 
 from taopt.errors import SolverError
 from taopt.result import ERROR
+from taopt.runtime.deadline import current_token
 from taopt.runtime.highs import (
     cvxpy_interruptible,
     interrupt_when,
@@ -351,6 +352,9 @@ class HighsModel:
         self._start: np.ndarray | None = None
         #: MIP runs re-done without presolve because HiGHS's answer contradicted its point
         self.reruns = 0
+        # HiGHS keeps the interrupt flag of an interrupted run: the next run needs the
+        # flag-clearing hook of taopt.runtime.highs.interrupt_when
+        self._interrupted = False
         if problem is None:  # filled by from_arrays
             return
         data, _, inverse = problem.get_problem_data(cp.HIGHS)
@@ -562,7 +566,9 @@ class HighsModel:
         Parameters
         ----------
         time_limit : float, optional
-            Seconds (at least 1 ms is passed); None for no limit.
+            Seconds (at least 1 ms is passed); None for no limit. The run also stops at
+            HiGHS's next interrupt callback once the cancel token of the innermost
+            :func:`taopt.runtime.cancel_scope` (if any) is set.
         mip_rel_gap : float, optional
             HiGHS ``mip_rel_gap`` (HiGHS's default 1e-4 when None).
         on_solution : callable, optional
@@ -596,10 +602,20 @@ class HighsModel:
         began = time.perf_counter()
         deadline = began + limit
         # HiGHS looks at time_limit rarely inside an LP; its interrupt callbacks come every
-        # simplex / IPM iteration and MIP node, so a limit is kept more closely
+        # simplex / IPM iteration and MIP node, so a limit is kept more closely; they also
+        # stop the run once the caller's cancel token is set (docs/architecture.md, "the
+        # runtime contract")
+        token = current_token()
         hooks = contextlib.ExitStack()
-        if time_limit is not None:
-            hooks.enter_context(interrupt_when(highs, lambda: time.perf_counter() >= deadline))
+        if time_limit is not None or token is not None or self._interrupted:
+            hooks.enter_context(
+                interrupt_when(
+                    highs,
+                    lambda: (
+                        time.perf_counter() >= deadline or (token is not None and token.cancelled)
+                    ),
+                )
+            )
 
         def give(event: Any) -> None:
             vector = offer()
@@ -656,6 +672,7 @@ class HighsModel:
             if offer is not None and is_mip:
                 highs.cbMipUserSolution.unsubscribe(give)
             hooks.close()
+            self._interrupted = highs.getModelStatus() == highspy.HighsModelStatus.kInterrupt
         return run
 
     def point_objective(self, solution: Any = None) -> float:

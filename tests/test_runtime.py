@@ -196,20 +196,26 @@ def test_bad_worker_count():
 
 
 # -- HiGHS's interrupt hooks -------------------------------------------------------------------
+def knapsack(n: int = 60):
+    """A multi-dimensional 0-1 knapsack HiGHS needs a few hundred nodes for."""
+    import cvxpy as cp
+
+    rng = np.random.default_rng(0)
+    x = cp.Variable(n, boolean=True)
+    weights = rng.integers(1, 1000, size=(10, n))
+    values = rng.integers(1, 1000, size=n)
+    return cp.Problem(cp.Maximize(values @ x), [weights @ x <= weights.sum(1) // 2])
+
+
 def test_highs_stops_when_told():
     """interrupt_when() stops a HiGHS MIP at its first interrupt callback (a pre-set stop,
     e.g. a cancelled token): HiGHS reports kInterrupt, and the hooks are removed after."""
-    import cvxpy as cp
     import highspy
 
     from taopt.models.highs import HighsModel
     from taopt.runtime.highs import interrupt_when
 
-    rng = np.random.default_rng(0)
-    x = cp.Variable(60, boolean=True)
-    weights = rng.integers(1, 1000, size=(10, 60))
-    values = rng.integers(1, 1000, size=60)
-    model = HighsModel(cp.Problem(cp.Maximize(values @ x), [weights @ x <= weights.sum(1) // 2]))
+    model = HighsModel(knapsack())
     token = CancelToken()
     token.cancel()
     with interrupt_when(model.highs, lambda: token.cancelled):
@@ -217,3 +223,17 @@ def test_highs_stops_when_told():
     assert model.highs.getModelStatus() == highspy.HighsModelStatus.kInterrupt
     model.highs.run()  # no hook left: the same model now runs to its optimum
     assert model.highs.getModelStatus() == highspy.HighsModelStatus.kOptimal
+
+
+def test_highs_model_stops_on_a_cancelled_token():
+    """HighsModel.solve under a cancelled cancel_scope stops at once without a proof; the
+    same model solved afterwards is proven optimal (HiGHS's stale interrupt flag cleared)."""
+    from taopt.models.highs import HighsModel
+
+    model = HighsModel(knapsack())
+    token = CancelToken()
+    token.cancel()
+    with cancel_scope(token):
+        stopped = model.solve()
+    assert stopped.status != "optimal" and stopped.solver_status == "user_limit"
+    assert model.solve(mip_rel_gap=1e-9).status == "optimal"

@@ -80,12 +80,15 @@ def stdout_discarded() -> Iterator[None]:
         os.close(saved)
 
 
-def _interrupt_hook(stop: Callable[[], bool]) -> Callable[[Any], None]:
-    """An interrupt callback that asks HiGHS to stop once ``stop()`` is true."""
+def _interrupt_hook(stop: Callable[[], bool], clear: bool = False) -> Callable[[Any], None]:
+    """An interrupt callback that asks HiGHS to stop once ``stop()`` is true; with
+    ``clear``, it also lowers the flag while ``stop()`` is false (see :func:`interrupt_when`)."""
 
     def on_interrupt(event: Any) -> None:
         if stop():
             event.interrupt()
+        elif clear:
+            event.interrupt(False)
 
     return on_interrupt
 
@@ -102,8 +105,16 @@ def _subscribe(highs: highspy.Highs, hook: Callable[[Any], None], on: bool = Tru
 @contextlib.contextmanager
 def interrupt_when(highs: highspy.Highs, stop: Callable[[], bool]) -> Iterator[None]:
     """While the block runs, HiGHS stops at its next interrupt callback once ``stop()``
-    is true (e.g. ``deadline.expired`` of a :class:`~taopt.runtime.deadline.Deadline`)."""
-    hook = _interrupt_hook(stop)
+    is true (e.g. ``deadline.expired`` of a :class:`~taopt.runtime.deadline.Deadline`).
+
+    HiGHS (1.11 to 1.16 at least) keeps the ``user_interrupt`` flag of an interrupted run in
+    its callback input, so the next run of the same object with any interrupt callback
+    subscribed would stop at its first callback; this hook lowers the flag while ``stop()``
+    is false. Enter it before any other interrupt hook (e.g. the Ctrl-C hook of
+    :func:`run_interruptibly`, which only raises the flag): callbacks fire in the order
+    they were subscribed.
+    """
+    hook = _interrupt_hook(stop, clear=True)
     _subscribe(highs, hook)
     try:
         yield
