@@ -237,3 +237,13 @@ def test_highs_model_stops_on_a_cancelled_token():
         stopped = model.solve()
     assert stopped.status != "optimal" and stopped.solver_status == "user_limit"
     assert model.solve(mip_rel_gap=1e-9).status == "optimal"
+
+
+def test_highs_model_solves_again_after_its_time_limit():
+    """A HighsModel stopped by its time limit (through the interrupt callbacks) is proven
+    optimal when solved again without one (before the fix the stale flag stopped it)."""
+    from taopt.models.highs import HighsModel
+
+    model = HighsModel(knapsack())
+    assert model.solve(time_limit=1e-3).status == "time_limit"
+    assert model.solve(mip_rel_gap=1e-9).status == "optimal"
