@@ -1,8 +1,9 @@
 """Worker processes: started one way, told the same things, and always reaped.
 
-Every process pool of taopt (the capability model's classes, the study runner's scenarios)
-is a :class:`WorkerPool`: a ``concurrent.futures`` executor over processes started with
-"spawn" (HiGHS's threads do not survive a fork), whose workers
+Every process pool of taopt (the capability model's classes, the study runner's scenarios,
+the navigation matrix's pairs) is a :class:`WorkerPool`: a ``concurrent.futures`` executor
+over processes started with "spawn" (HiGHS's threads do not survive a fork; "fork" on
+request), whose workers
 
 * run :func:`become_worker` first: their environment (one solver / BLAS thread each:
   the workers are the parallelism), Ctrl-C ignored (the parent handles it and stops them),
@@ -142,6 +143,10 @@ class WorkerPool(Executor):
         Processes (started on demand, at most this many).
     env : mapping, optional
         Environment set in every worker (default :data:`ONE_THREAD_ENV`).
+    context : str
+        ``multiprocessing`` start method: "spawn" (default; HiGHS's threads do not survive a
+        fork), or "fork" for workers that only compute with numpy / CasADi and are worth
+        starting fast (the navigation matrix).
     hide_main : bool
         Start workers with ``__main__`` hidden (:func:`main_hidden`): for tasks that are
         taopt's own functions, so that a caller's script is never re-run by a worker.
@@ -154,6 +159,7 @@ class WorkerPool(Executor):
         workers: int,
         *,
         env: Mapping[str, str] | None = None,
+        context: str = "spawn",
         hide_main: bool = False,
         initializer: Callable[..., Any] | None = None,
         initargs: tuple[Any, ...] = (),
@@ -164,7 +170,7 @@ class WorkerPool(Executor):
         self.hide_main = hide_main
         self._executor = ProcessPoolExecutor(
             max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
+            mp_context=multiprocessing.get_context(context),
             initializer=_initialise,
             initargs=(
                 os.getpid(),
