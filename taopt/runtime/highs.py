@@ -218,11 +218,12 @@ def cvxpy_interruptible() -> Iterator[None]:
     if not interrupt.sigint_catchable() or highspy.Highs is _InterruptibleHighs:
         yield
         return
-    original, highspy.Highs = highspy.Highs, _InterruptibleHighs
+    original = highspy.Highs
+    setattr(highspy, "Highs", _InterruptibleHighs)  # noqa: B010 (mypy: a class attribute)
     try:
         yield
     finally:
-        highspy.Highs = original
+        setattr(highspy, "Highs", original)  # noqa: B010
 
 
 __all__ = [
