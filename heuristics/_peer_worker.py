@@ -15,9 +15,19 @@ Protocol (pickle frames; the parent is the only peer on the pipes)
 * worker -> parent, once at start: ``("ready", {"peer": ..., "version": ...})``
   or ``("error", message)`` when the peer package cannot be imported;
 * parent -> worker: ``{"cost": int64 (n+m, n+m) array, "n": n, "m": m,
-  "options": {...}}``; worker -> parent: ``("ok", {"routes": [[...], ...],
-  "objective": int, ...})`` or ``("error", traceback text)``;
+  "options": {...}}``; worker -> parent: any number of ``("best", {...})`` frames, one per
+  improving solution found (the same keys as the final reply: the parent keeps the last one
+  and answers with it if it has to stop the worker at the deadline), then ``("ok",
+  {"routes": [[...], ...], "objective": int, ...})`` or ``("error", traceback text)``;
 * end of file on stdin: the worker exits.
+
+Time. ``options["time_limit"]`` is the seconds left of the caller's wall-clock limit when
+the request was sent; the worker takes its own deadline from the moment it reads the
+request, checks it while it builds a model (CP-SAT's is built in Python and can take
+seconds), and gives the solver what is left less :data:`REPLY_MARGIN` (the reply still has
+to be decoded and sent). ``options["no_improvement"]``, when set, stops a heuristic search
+after that many iterations (PyVRP's ``NoImprovement``) or solutions (OR-Tools routing)
+without a better one.
 
 The worker dies with its parent: it ignores Ctrl-C (the parent handles it and
 stops the worker), asks Linux for SIGKILL when the parent dies
@@ -37,6 +47,36 @@ import traceback
 from typing import Any
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
+
+#: Seconds of a request's time limit kept back for decoding and sending the reply.
+REPLY_MARGIN = 0.05
+#: The least time limit handed to a solver (a limit of 0 is refused by some of them).
+MIN_LIMIT = 1e-3
+
+
+def seconds_left(options: dict[str, Any]) -> float | None:
+    """Seconds the solver may still use (at least :data:`MIN_LIMIT`), None without a limit.
+
+    ``options["deadline"]`` is set by :func:`serve` when the request is read
+    (``time.monotonic()`` + the request's ``time_limit``)."""
+    deadline = options.get("deadline")
+    if deadline is None:
+        return None
+    return max(deadline - time.monotonic() - REPLY_MARGIN, MIN_LIMIT)
+
+
+def out_of_time(options: dict[str, Any]) -> bool:
+    """Whether the request's deadline (less :data:`REPLY_MARGIN`) has passed."""
+    deadline = options.get("deadline")
+    return deadline is not None and time.monotonic() + REPLY_MARGIN >= deadline
+
+
+def report(options: dict[str, Any], payload: dict[str, Any]) -> None:
+    """Send an improving solution to the parent as a ``("best", payload)`` frame (if the
+    request's sender listens: :func:`serve` sets ``options["report"]``)."""
+    send = options.get("report")
+    if send is not None:
+        send(payload)
 
 
 def open_routes_matrix(cost: Any) -> Any:
@@ -83,7 +123,9 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
     is None when the solution is incomplete) instead of raising.
     """
     import pyvrp
-    from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria
+    from pyvrp import IteratedLocalSearchParams, SolveParams
+    from pyvrp.IteratedLocalSearch import IteratedLocalSearchCallbacks
+    from pyvrp.stop import MaxIterations, MaxRuntime, MultipleCriteria, NoImprovement
 
     matrix = open_routes_matrix(cost)
     limited = _limited(options)
@@ -113,29 +155,52 @@ def solve_pyvrp(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str,
             for k in range(m)
         ]
     data = pyvrp.ProblemData(locations, clients, depots, vehicle_types, [matrix], [matrix])
-    criteria = []
-    if options.get("time_limit") is not None:
-        criteria.append(MaxRuntime(float(options["time_limit"])))
+    criteria: list[Any] = []
+    if options.get("deadline") is not None:
+        criteria.append(MaxRuntime(seconds_left(options)))
     if options.get("max_iterations") is not None:
         criteria.append(MaxIterations(int(options["max_iterations"])))
+    if options.get("no_improvement") is not None:
+        criteria.append(NoImprovement(int(options["no_improvement"])))
     stop = criteria[0] if len(criteria) == 1 else MultipleCriteria(criteria)
+
+    def answer(best: Any) -> dict[str, Any]:
+        routes: list[list[int]] = [[] for _ in range(m)]
+        for route in best.routes():
+            routes[route.vehicle_type()] = [int(act.idx) for act in route if act.is_client()]
+        found = {
+            "routes": routes if best.is_complete() else None,
+            "objective": int(best.distance_cost()) if best.is_feasible() else None,
+        }
+        if limited:
+            found["solver_feasible"] = bool(best.is_feasible())
+        return found
+
+    class Reporter(IteratedLocalSearchCallbacks):
+        """Sends each new feasible best to the parent (kept if the worker is stopped)."""
+
+        def on_start(self, ils: Any) -> None:
+            start = getattr(ils, "_init", None)  # its first local optimum, if it shows it
+            if start is not None:
+                self.on_best(start)
+
+        def on_best(self, best: Any) -> None:
+            if best.is_feasible() and best.is_complete():
+                report(options, answer(best))
+
+    params = SolveParams(ils=IteratedLocalSearchParams(callbacks=Reporter()))
     started = time.perf_counter()
-    result = pyvrp.solve(data, stop, seed=int(options["seed"]), collect_stats=False, display=False)
+    result = pyvrp.solve(
+        data, stop, seed=int(options["seed"]), collect_stats=False, display=False, params=params
+    )
     runtime = time.perf_counter() - started
     best = result.best
     if not limited and (not best.is_feasible() or not best.is_complete()):
         raise RuntimeError(f"PyVRP returned an incomplete or infeasible solution: {best!r}")
-    routes: list[list[int]] = [[] for _ in range(m)]
-    for route in best.routes():
-        routes[route.vehicle_type()] = [int(act.idx) for act in route if act.is_client()]
-    reply = {
-        "routes": routes if best.is_complete() else None,
-        "objective": int(result.cost()) if best.is_feasible() else None,
-        "iterations": int(result.num_iterations),
-        "solver_runtime": runtime,
-    }
-    if limited:
-        reply["solver_feasible"] = bool(best.is_feasible())
+    reply = answer(best)
+    if best.is_feasible():
+        reply["objective"] = int(result.cost())
+    reply.update(iterations=int(result.num_iterations), solver_runtime=runtime)
     return reply
 
 
@@ -185,14 +250,48 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = strategies.Value(first)
     params.local_search_metaheuristic = metaheuristics.Value(meta)
-    if options.get("time_limit") is not None:
-        params.time_limit.FromNanoseconds(int(round(float(options["time_limit"]) * 1e9)))
+    if options.get("deadline") is not None:
+        params.time_limit.FromNanoseconds(int(round(seconds_left(options) * 1e9)))
     if options.get("solution_limit") is not None:
         params.solution_limit = int(options["solution_limit"])
+
+    def current_routes(value: Any) -> list[list[int]]:
+        routes = []
+        for vehicle in range(m):
+            index = routing.Start(vehicle)
+            route = []
+            while not routing.IsEnd(index):
+                node = manager.IndexToNode(index)
+                if node < n:
+                    route.append(int(node))
+                index = value(routing.NextVar(index))
+            routes.append(route)
+        return routes
+
+    patience = options.get("no_improvement")
+    state = {"best": None, "since": 0, "solutions": 0}
+
+    def at_solution() -> None:
+        """Each solution of the search: report a new best; stop after ``no_improvement``
+        solutions without one (OR-Tools' routing search has no such limit of its own)."""
+        cost = routing.CostVar().Value()
+        state["solutions"] += 1
+        if state["best"] is None or cost < state["best"]:
+            state["best"], state["since"] = cost, 0
+            found = {"routes": current_routes(lambda var: var.Value()), "objective": int(cost)}
+            if limited:
+                found["solver_feasible"] = True
+            report(options, found)
+        else:
+            state["since"] += 1
+            if patience is not None and state["since"] >= int(patience):
+                routing.solver().FinishCurrentSearch()
+
+    routing.AddAtSolutionCallback(at_solution)
     started = time.perf_counter()
     assignment = routing.SolveWithParameters(params)
     runtime = time.perf_counter() - started
-    if assignment is None and (limited or options.get("time_limit") is not None):
+    if assignment is None and (limited or options.get("deadline") is not None):
         # nothing within the limits, or the time ran out before a first solution: an
         # outcome of the run (status "no_solution" in taopt), not a failure
         return {
@@ -204,20 +303,11 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
         }
     if assignment is None:
         raise RuntimeError(f"OR-Tools found no solution (routing status {routing.status()})")
-    routes = []
-    for vehicle in range(m):
-        index = routing.Start(vehicle)
-        route = []
-        while not routing.IsEnd(index):
-            node = manager.IndexToNode(index)
-            if node < n:
-                route.append(int(node))
-            index = assignment.Value(routing.NextVar(index))
-        routes.append(route)
     reply = {
-        "routes": routes,
+        "routes": current_routes(assignment.Value),
         "objective": int(assignment.ObjectiveValue()),
         "routing_status": int(routing.status()),
+        "solutions": state["solutions"],
         "solver_runtime": runtime,
     }
     if limited:
@@ -226,12 +316,12 @@ def solve_ortools(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[st
 
 
 def _cpsat_solver(options: dict[str, Any]) -> Any:
-    """A CP-SAT solver with the request's time limit, seed and number of workers."""
+    """A CP-SAT solver with the time left of the request, its seed and number of workers."""
     from ortools.sat.python import cp_model
 
     solver = cp_model.CpSolver()
-    if options.get("time_limit") is not None:
-        solver.parameters.max_time_in_seconds = float(options["time_limit"])
+    if options.get("deadline") is not None:
+        solver.parameters.max_time_in_seconds = seconds_left(options)
     solver.parameters.random_seed = int(options["seed"])
     solver.parameters.num_workers = int(options["num_workers"])
     return solver
@@ -252,6 +342,61 @@ def _cpsat_reply(solver: Any, status: int, started: float) -> dict[str, Any]:
     }
 
 
+def _cpsat_unsolved(started: float, why: str) -> dict[str, Any]:
+    """The reply of a CP-SAT request whose time ran out before the search (status UNKNOWN,
+    no solution, no bound)."""
+    return {
+        "cpsat_status": "UNKNOWN",
+        "objective": None,
+        "best_bound": None,
+        "solver_runtime": time.perf_counter() - started,
+        "branches": 0,
+        "stopped_during": why,
+    }
+
+
+def _cpsat_solve(model: Any, options: dict[str, Any], used: dict, decode: Any) -> dict[str, Any]:
+    """Solve ``model`` within the request's time, reporting every solution to the parent.
+
+    ``used`` maps each arc ``(i, j)`` to its literal; ``decode(successor)`` turns the chosen
+    arcs (``successor[i] = j``) into the reply's payload entries (``{"routes": ...}`` or
+    ``{"order": ...}``). Each solution CP-SAT finds is sent as a ``("best", ...)`` frame
+    with its objective and CP-SAT's bound at that moment, so a worker stopped at the
+    deadline still answers with the best it found.
+    """
+    import numpy as np
+    from ortools.sat.python import cp_model
+
+    arcs = list(used)
+    index = np.array([literal.Index() for literal in used.values()], dtype=np.int64)
+
+    def successors(values: Any) -> dict[int, int]:
+        chosen = np.flatnonzero(np.asarray(values, dtype=np.int64)[index] == 1)
+        return {arcs[k][0]: arcs[k][1] for k in chosen}
+
+    class Reporter(cp_model.CpSolverSolutionCallback):
+        def on_solution_callback(self) -> None:
+            found = {
+                "cpsat_status": "FEASIBLE",
+                "objective": int(round(self.objective_value)),
+                "best_bound": float(self.best_objective_bound),
+                "solver_runtime": time.perf_counter() - started,
+                "branches": int(self.num_branches),
+            }
+            found.update(decode(successors(self.response_proto.solution)))
+            report(options, found)
+
+    solver = _cpsat_solver(options)
+    started = time.perf_counter()
+    status = solver.Solve(model, Reporter() if options.get("report") else None)
+    reply = _cpsat_reply(solver, status, started)
+    if reply["objective"] is None:
+        reply.update(decode(None))
+    else:
+        reply.update(decode(successors(solver.response_proto.solution)))
+    return reply
+
+
 def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     """Sequential ordering as one circuit: the arcs of ``cost`` (-1: forbidden) plus a dummy
     ``end -> start`` arc, and position variables for the precedences.
@@ -264,6 +409,7 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     """
     from ortools.sat.python import cp_model
 
+    received = time.perf_counter()
     n = cost.shape[0]
     start, end = int(options["start"]), int(options["end"])
     model = cp_model.CpModel()
@@ -285,18 +431,18 @@ def solve_cpsat_sop(cost: Any, options: dict[str, Any]) -> dict[str, Any]:
     for r, j in options["precedences"]:
         model.Add(position[int(r)] < position[int(j)])
     model.Minimize(sum(terms))
-    solver = _cpsat_solver(options)
-    started = time.perf_counter()
-    status = solver.Solve(model)
-    reply = _cpsat_reply(solver, status, started)
-    order = None
-    if reply["objective"] is not None:
-        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
+    if out_of_time(options):  # the model took the time: no search, no solution
+        return {**_cpsat_unsolved(received, "model building"), "order": None}
+
+    def decode(successor: dict[int, int] | None) -> dict[str, Any]:
+        if successor is None:
+            return {"order": None}
         order = [start]
         while order[-1] != end and len(order) <= n:
             order.append(successor[order[-1]])
-    reply["order"] = order
-    return reply
+        return {"order": order}
+
+    return _cpsat_solve(model, options, used, decode)
 
 
 def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
@@ -326,8 +472,11 @@ def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> d
             terms.append(charge * literal)
         return literal
 
+    received = time.perf_counter()
     arc(dummy, n, 0)  # the circuit leaves D into vehicle 0's start
     for i in range(n + m):
+        if out_of_time(options):  # building in Python is slow: stop when the time is spent
+            return {**_cpsat_unsolved(received, "model building"), "routes": None}
         for j in range(n):  # into a target: same vehicle, cost charged
             if i != j:
                 literal = arc(i, j, int(cost[i, j]))
@@ -340,14 +489,13 @@ def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> d
         model.Add(vehicle[i] == m - 1).OnlyEnforceIf(literal)
     model.AddCircuit(arcs)
     model.Minimize(sum(terms))
-    solver = _cpsat_solver(options)
-    started = time.perf_counter()
-    status = solver.Solve(model)
-    reply = _cpsat_reply(solver, status, started)
-    routes = None
-    if reply["objective"] is not None:
-        successor = {i: j for (i, j), literal in used.items() if solver.BooleanValue(literal)}
-        routes = [[] for _ in range(m)]
+    if out_of_time(options):
+        return {**_cpsat_unsolved(received, "model building"), "routes": None}
+
+    def decode(successor: dict[int, int] | None) -> dict[str, Any]:
+        if successor is None:
+            return {"routes": None}
+        routes: list[list[int]] = [[] for _ in range(m)]
         at, current = successor[dummy], -1
         while at != dummy:
             if at >= n:
@@ -355,8 +503,9 @@ def solve_cpsat_routing(cost: Any, n: int, m: int, options: dict[str, Any]) -> d
             else:
                 routes[current].append(int(at))
             at = successor[at]
-    reply["routes"] = routes
-    return reply
+        return {"routes": routes}
+
+    return _cpsat_solve(model, options, used, decode)
 
 
 def solve_cpsat(cost: Any, n: int, m: int, options: dict[str, Any]) -> dict[str, Any]:
@@ -416,9 +565,18 @@ def serve(peer: str, parent_pid: int, use_pdeathsig: bool) -> None:
     sys.stdout = sys.stderr
     channel_in = sys.stdin.buffer
 
+    sending = threading.Lock()  # a solver's callback thread may report while we reply
+
     def send(message: Any) -> None:
-        pickle.dump(message, channel_out, protocol=pickle.HIGHEST_PROTOCOL)
-        channel_out.flush()
+        with sending:
+            pickle.dump(message, channel_out, protocol=pickle.HIGHEST_PROTOCOL)
+            channel_out.flush()
+
+    def send_best(payload: dict[str, Any]) -> None:
+        try:
+            send(("best", payload))
+        except (BrokenPipeError, OSError):  # the parent stopped listening: it will stop us
+            pass
 
     try:
         send(("ready", {"peer": peer, "version": _load(peer), "pid": os.getpid()}))
@@ -431,6 +589,10 @@ def serve(peer: str, parent_pid: int, use_pdeathsig: bool) -> None:
             request = pickle.load(channel_in)
         except EOFError:
             return
+        options = request["options"]
+        if options.get("time_limit") is not None:  # the worker's clock starts on reading it
+            options["deadline"] = time.monotonic() + float(options["time_limit"])
+        options["report"] = send_best if options.get("report_best", True) else None
         try:
             reply = ("ok", solver(request["cost"], request["n"], request["m"], request["options"]))
         except Exception:

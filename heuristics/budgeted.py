@@ -293,8 +293,11 @@ class LimitedDescent:
         self.points = np.arange(size)
         self.into_target = np.ascontiguousarray(cost[:size, :n].T)  # (n, n + m): t(u, k)
 
-    def run(self, routes: list[list[int]], max_moves: int = 1000) -> tuple[list[list[int]], int]:
-        """The descent from ``routes`` (see :func:`limited_local_search`)."""
+    def run(
+        self, routes: list[list[int]], max_moves: int = 1000, deadline: Deadline | None = None
+    ) -> tuple[list[list[int]], int]:
+        """The descent from ``routes`` (see :func:`limited_local_search`), stopped early (the
+        routes as improved so far, every limit still kept) once ``deadline`` has expired."""
         n, m, size = self.n, self.m, self.size
         cost, limit, capacity = self.cost, self.limit, self.capacity
         targets, points, into_target = self.targets, self.points, self.into_target
@@ -318,6 +321,8 @@ class LimitedDescent:
             book(j)
         moves = 0
         while moves < max_moves:
+            if deadline is not None and deadline.expired():
+                break
             after = successor[:n]
             arrive = cost[predecessor, targets]  # t(p_k, k)
             leave = cost[targets, after]  # t(k, s_k)
@@ -408,6 +413,7 @@ def improve_budgeted(problem: BudgetedProblem, routes: list[list[int]]) -> list[
 
 def limited_extended_voronoi_routes(
     problem: BudgetedProblem,
+    deadline: Deadline | None = None,
 ) -> tuple[list[list[int]], np.ndarray, int]:
     """Extended Voronoi clustering whose growth refuses a vehicle at its limit, then (2.18).
 
@@ -418,12 +424,15 @@ def limited_extended_voronoi_routes(
     good and the next cheapest pair is proposed. Each vehicle's route is the (2.18) sequence
     of its final cluster, the one checked at its last acceptance, so it is within limits.
 
+    Once ``deadline`` (optional) has expired no further pair is proposed: the targets not
+    yet clustered are returned in ``left``.
+
     Returns
     -------
     routes : list of m lists
         One route per vehicle (partial when targets were left).
     left : (r,) int array
-        Targets every vehicle refused.
+        Targets every vehicle refused (or not reached before the deadline).
     refusals : int
         Pairs refused.
 
@@ -446,6 +455,8 @@ def limited_extended_voronoi_routes(
     routes: list[list[int]] = [[] for _ in range(m)]
     refusals = 0
     while not done.all():
+        if deadline is not None and deadline.expired():
+            break
         masked = np.where(done[None, :] | refused, np.inf, reach)
         flat = int(np.argmin(masked.T))  # lowest target, then lowest vehicle
         k, j = divmod(flat, m)
@@ -529,10 +540,18 @@ def mc(
 
 
 @register_method(BudgetedProblem, "EVM", category="heuristic")
-def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) -> Solution:
+def evm(
+    problem: BudgetedProblem,
+    seed: int | np.random.Generator | None = 0,
+    time_limit: float | None = None,
+) -> Solution:
     """EVM made limit-aware: extended Voronoi growth that refuses a vehicle at its limit.
 
     See :func:`limited_extended_voronoi_routes`. Deterministic (``seed`` is recorded only).
+    ``time_limit`` (wall-clock seconds): when it expires the growth stops and the targets not
+    yet placed are reported unassigned (status "no_solution", ``info["stopped_by"] =
+    "time_limit"``), as :func:`mc` does; it is the exact model's warm start, which must keep
+    to its share of the limit.
 
     Returns
     -------
@@ -555,8 +574,13 @@ def evm(problem: BudgetedProblem, seed: int | np.random.Generator | None = 0) ->
     Thesis (2.12)–(2.14), (2.18)–(2.19), Theorem 2.6; §6.2.
     """
     start = time.perf_counter()
-    routes, left, refusals = limited_extended_voronoi_routes(problem)
+    deadline = Deadline(time_limit)
+    routes, left, refusals = limited_extended_voronoi_routes(
+        problem, deadline if deadline.limited else None
+    )
     info: dict[str, Any] = {"refusals": refusals}
+    if deadline.limited and deadline.expired() and left.size:
+        info["stopped_by"] = "time_limit"
     if left.size:
         return _answer(
             problem, None, "EVM", seed, start, {**info, **_no_solution("EVM", left.size)}
@@ -820,7 +844,7 @@ def genetic_algorithm(
         fitness, plain, violation = penalised_cost(problem, genes, penalty, unit)
         _polish(
             problem, (matrix, descent, penalised), genes, fitness, plain, violation, penalty,
-            unit, ops, counters, memo,
+            unit, ops, counters, memo, deadline,
         )  # fmt: skip
         elite = genes[int(np.argmin(fitness))].copy()
         keep_feasible(generation)
@@ -860,8 +884,10 @@ def _polish(
     ops: Any,
     counters: dict[str, int],
     memo: dict[Any, Any],
+    deadline: Deadline | None = None,
 ) -> None:
-    """On the best distinct children, in place, where the penalised fitness improves.
+    """On the best distinct children, in place, where the penalised fitness improves; once
+    ``deadline`` has expired no further child is polished and the searches stop early.
 
     With ``memetic="penalised"`` (``searches[2]`` set): the penalised local search
     (:class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch`), then :func:`repair`
@@ -875,6 +901,8 @@ def _polish(
     values, first = np.unique(fitness, return_index=True)
     limited = problem.has_capacity or problem.has_max_time
     for row in [int(r) for r in first[: ops.polish]]:
+        if deadline is not None and deadline.expired():
+            return
         key = genes[row].tobytes()
         if limited and key in memo:  # polished before (often the elite): same answer
             counters["memo_hits"] += 1
@@ -885,10 +913,12 @@ def _polish(
             continue
         path = path_nodes(problem.routing, genes[row])[0]
         if limited and penalised is not None:  # one candidate: the penalised search's
-            nodes, moves = penalised.run(matrix, path, ops.max_moves)
+            nodes, moves = penalised.run(matrix, path, ops.max_moves, deadline)
             starts: tuple[np.ndarray, ...] = (nodes_to_genes(problem.routing, nodes),)
         else:
-            nodes, moves, evaluations = local_search(matrix, path, ops.max_moves, ops.neighbourhood)
+            nodes, moves, evaluations = local_search(
+                matrix, path, ops.max_moves, ops.neighbourhood, deadline
+            )
             counters["move_evaluations"] += evaluations
             starts = (nodes_to_genes(problem.routing, nodes), genes[row]) if limited else ()
         counters["moves"] += moves
@@ -910,7 +940,11 @@ def _polish(
                     continue
                 counters["repaired"] += 1
             routes = _remembered(
-                memo, "descent", routes, counters, lambda r: _descend(descent, r, ops, counters)
+                memo,
+                "descent",
+                routes,
+                counters,
+                lambda r: _descend(descent, r, ops, counters, deadline),
             )
             candidate = encode(problem.routing, routes)
             value, total, over = penalised_cost(problem, candidate, penalty, unit)
@@ -924,10 +958,14 @@ def _polish(
 
 
 def _descend(
-    descent: LimitedDescent, routes: list[list[int]], ops: Any, counters: dict[str, int]
+    descent: LimitedDescent,
+    routes: list[list[int]],
+    ops: Any,
+    counters: dict[str, int],
+    deadline: Deadline | None = None,
 ) -> list[list[int]]:
     """:func:`limited_local_search` (the run's ``descent``) with its moves counted."""
-    routes, moves = descent.run(routes, ops.max_moves)
+    routes, moves = descent.run(routes, ops.max_moves, deadline)
     counters["moves"] += moves
     return routes
 

@@ -49,6 +49,7 @@ from taopt.errors import require
 from taopt.heuristics import peers
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
+from taopt.runtime import Deadline
 
 __all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown", "LARGEST_ENTRY"]
 
@@ -75,7 +76,12 @@ def integer_limits(problem: BudgetedProblem, scale: float) -> tuple[list, list]:
 
 
 def _solve(
-    peer: str, problem: BudgetedProblem, seed: int, scale: float | None, options: dict[str, Any]
+    peer: str,
+    problem: BudgetedProblem,
+    seed: int,
+    scale: float | None,
+    options: dict[str, Any],
+    deadline: Deadline,
 ) -> Solution:
     require(problem, BudgetedProblem, f"the {peer} peer")
     if scale is None:
@@ -89,19 +95,25 @@ def _solve(
         "m": problem.m,
         "options": {**options, "capacity": capacity, "max_time": max_time},
     }
-    reply, runtime, worker, startup = peers._call(peer, request, options.get("time_limit"))
+    answer = peers._call(peer, request, deadline)
+    reply = dict(answer.reply or {"routes": None, "objective": None})
     routes = reply.pop("routes")
     info: dict[str, Any] = {
         "solver_objective": reply.pop("objective"),
         "scale": scale,
-        "version": worker.version,
-        "startup": startup,
+        "version": answer.version,
+        "startup": answer.startup,
         **{key: value for key, value in options.items() if key != "seed"},
         **reply,
     }
+    if answer.stopped:
+        info["stopped_by"] = "time_limit"
+        info["worker"] = answer.stopped
     method = peer
+    runtime = deadline.elapsed()
     if routes is None:
-        info["error"] = f"{peer} found no route set (routing status {reply.get('routing_status')})"
+        why = answer.stopped or f"routing status {reply.get('routing_status')}"
+        info["error"] = f"{peer} found no route set ({why})"
         return Solution(
             math.inf, NO_SOLUTION, None, runtime=runtime, method=method, seed=seed, info=info
         )
@@ -117,7 +129,7 @@ def _solve(
         objective=evaluate_budgeted(problem, routes),
         status=FEASIBLE,
         solution=Routes(routes),
-        runtime=runtime,
+        runtime=deadline.elapsed(),
         method=method,
         seed=int(seed),
         info=info,
@@ -131,6 +143,7 @@ def pyvrp_budgeted(
     seed: int = 0,
     *,
     max_iterations: int | None = None,
+    no_improvement: int | str | None = "auto",
     scale: float | None = None,
 ) -> Solution:
     """PyVRP's iterated local search with capacity ``Q_k`` and maximum route time ``T_k``.
@@ -139,11 +152,16 @@ def pyvrp_budgeted(
     ----------
     problem : BudgetedProblem
     time_limit : float or None
-        Seconds of search; None for no time limit (then give ``max_iterations``).
+        Wall-clock seconds for the whole call, the worker's start-up included (see
+        :func:`taopt.heuristics.peers.pyvrp_solve`); None for no time limit.
     seed : int
         PyVRP's seed; with ``time_limit=None`` the same seed gives the same result.
     max_iterations : int, optional
         Stop after this many iterations.
+    no_improvement : int, "auto" or None
+        Stop after this many iterations without a better solution; "auto" (default):
+        :func:`taopt.heuristics.peers.default_no_improvement` unless ``max_iterations`` is
+        given; None: no such stop.
     scale : float, optional
         Integer units per unit of travel time (default: largest entry -> 1e10).
 
@@ -174,9 +192,17 @@ def pyvrp_budgeted(
     ----------
     Thesis §6.2; Wouda, Lan and Kool (2024).
     """
-    peers._check(problem.routing, time_limit, seed, "max_iterations", max_iterations)
-    options = {"time_limit": time_limit, "max_iterations": max_iterations, "seed": int(seed)}
-    return _solve("pyvrp", problem, seed, scale, options)
+    deadline = Deadline(time_limit)
+    require(problem, BudgetedProblem, "the pyvrp peer")
+    peers._check(
+        problem.routing, time_limit, seed, "max_iterations", max_iterations, no_improvement
+    )
+    options = {
+        "time_limit": time_limit,
+        **peers.stop_options("pyvrp", problem, "max_iterations", max_iterations, no_improvement),
+        "seed": int(seed),
+    }
+    return _solve("pyvrp", problem, seed, scale, options, deadline)
 
 
 @register_method(BudgetedProblem, "ortools", category="peer", requires=("ortools",))
@@ -186,6 +212,7 @@ def ortools_budgeted(
     seed: int = 0,
     *,
     solution_limit: int | None = None,
+    no_improvement: int | str | None = "auto",
     first_solution: str = "PATH_CHEAPEST_ARC",
     metaheuristic: str = "GUIDED_LOCAL_SEARCH",
     scale: float | None = None,
@@ -196,11 +223,16 @@ def ortools_budgeted(
     ----------
     problem : BudgetedProblem
     time_limit : float or None
-        Seconds of search; None for no time limit (then give ``solution_limit``).
+        Wall-clock seconds for the whole call, the worker's start-up included; None for no
+        time limit.
     seed : int
         Recorded only (OR-Tools' routing search has no seed).
     solution_limit : int, optional
         Stop after this many solutions.
+    no_improvement : int, "auto" or None
+        Stop after this many solutions without a better one; "auto" (default):
+        :func:`taopt.heuristics.peers.default_no_improvement` unless ``solution_limit`` is
+        given; None: no such stop.
     first_solution, metaheuristic : str
         OR-Tools' ``FirstSolutionStrategy`` / ``LocalSearchMetaheuristic`` names.
     scale : float, optional
@@ -226,19 +258,23 @@ def ortools_budgeted(
     >>> from taopt.budgeted import BudgetedProblem
     >>> x = np.array([1.0, 2.0, 4.0, 0.0, 5.0])
     >>> p = BudgetedProblem(abs(x[:, None] - x[None, :]), 3, max_time=[1.5, None])
-    >>> ortools_budgeted(p, time_limit=0.2).objective
+    >>> ortools_budgeted(p, time_limit=None).objective
     4.0
 
     References
     ----------
     Thesis §6.2; OR-Tools routing library (Google).
     """
-    peers._check(problem.routing, time_limit, seed, "solution_limit", solution_limit)
+    deadline = Deadline(time_limit)
+    require(problem, BudgetedProblem, "the ortools peer")
+    peers._check(
+        problem.routing, time_limit, seed, "solution_limit", solution_limit, no_improvement
+    )
     options = {
         "time_limit": time_limit,
-        "solution_limit": solution_limit,
+        **peers.stop_options("ortools", problem, "solution_limit", solution_limit, no_improvement),
         "first_solution": str(first_solution),
         "metaheuristic": str(metaheuristic),
         "seed": int(seed),
     }
-    return _solve("ortools", problem, seed, scale, options)
+    return _solve("ortools", problem, seed, scale, options, deadline)

@@ -34,6 +34,7 @@ import functools
 import numpy as np
 
 from taopt.errors import InstanceError
+from taopt.runtime import Deadline
 
 #: The local-search moves, in the order they are tried.
 NEIGHBOURHOOD = ("reverse", "relocate", "tails", "exchange")
@@ -44,6 +45,7 @@ def local_search(
     nodes: np.ndarray,
     max_moves: int = 1000,
     neighbourhood: tuple[str, ...] = NEIGHBOURHOOD,
+    deadline: Deadline | None = None,
 ) -> tuple[np.ndarray, int, int]:
     """Best-improvement descent of one path: 2-opt, or-opt, exchange and 2-opt* moves.
 
@@ -61,6 +63,9 @@ def local_search(
         positions i..j), "relocate" (move 1-3 consecutive genes elsewhere),
         "exchange" (swap two non-adjacent genes), "tails" (2-opt*: two routes
         swap what follows a cut in each, possibly nothing).
+    deadline : Deadline, optional
+        Stop (with the path as improved so far) once it has expired; it is looked at
+        before every move, so a caller's wall-clock limit holds on long paths too.
 
     Returns
     -------
@@ -110,6 +115,8 @@ def local_search(
         "exchange": (inner - 1) * (inner - 2) // 2,
     }
     while moves < max_moves:
+        if deadline is not None and deadline.expired():
+            break
         cost = matrix[nodes][:, nodes]
         forward = np.diagonal(cost, 1)  # a[k], k = 0..L
         tolerance = 1e-10 * max(float(forward.sum()), 1.0)

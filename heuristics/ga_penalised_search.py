@@ -59,6 +59,7 @@ import numpy as np
 from taopt.budgeted.problem import BudgetedProblem
 from taopt.errors import InstanceError
 from taopt.heuristics.ga_local_search import NEIGHBOURHOOD, _apply, _move_masks
+from taopt.runtime import Deadline
 
 #: A move of the search: (kind, row, column, segment length) of its table cell.
 Move = tuple[str, int, int, int]
@@ -130,9 +131,14 @@ class PenalisedSearch:
         self.counted = bool(np.isfinite(problem.capacity).any())
 
     def run(
-        self, matrix: np.ndarray, nodes: np.ndarray, max_moves: int = 1000
+        self,
+        matrix: np.ndarray,
+        nodes: np.ndarray,
+        max_moves: int = 1000,
+        deadline: Deadline | None = None,
     ) -> tuple[np.ndarray, int]:
-        """The descent from path ``nodes`` (:func:`~taopt.heuristics.ga_routing.path_nodes`).
+        """The descent from path ``nodes`` (:func:`~taopt.heuristics.ga_routing.path_nodes`),
+        stopped early (with the path so far) once ``deadline`` has expired.
 
         Returns
         -------
@@ -147,6 +153,8 @@ class PenalisedSearch:
         if inner < 2:
             return nodes, moves
         while moves < max_moves:
+            if deadline is not None and deadline.expired():
+                break
             found = self._improving_moves(matrix, nodes)
             if not found:
                 break

@@ -432,13 +432,17 @@ def _polish(
     ops: OperatorSet,
     skip: float,
     counters: dict[str, int],
+    deadline: Deadline | None = None,
 ) -> None:
-    """Local search on the ``ops.polish`` best children with distinct costs (in place)."""
+    """Local search on the ``ops.polish`` best children with distinct costs (in place),
+    stopped (each chromosome as improved so far) once ``deadline`` has expired."""
     values, first = np.unique(fitness, return_index=True)  # sorted, one row per value
     chosen = [int(row) for value, row in zip(values, first, strict=True) if value != skip]
     for row in chosen[: ops.polish]:
+        if deadline is not None and deadline.expired():
+            break
         nodes, moves, evaluations = local_search(
-            matrix, path_nodes(problem, genes[row])[0], ops.max_moves, ops.neighbourhood
+            matrix, path_nodes(problem, genes[row])[0], ops.max_moves, ops.neighbourhood, deadline
         )
         counters["moves"] += moves
         counters["move_evaluations"] += evaluations
@@ -482,8 +486,8 @@ def genetic_algorithm(
         A name from :data:`OPERATOR_SETS` -- "memetic" (default) or
         "ox-inversion" (the first version) -- or an :class:`OperatorSet`.
     time_limit : float, optional
-        Wall-clock seconds: the run stops after the generation during which it expires and
-        returns the best chromosome so far (``info["stopped_by"] == "time_limit"``,
+        Wall-clock seconds: the run stops at the first check after it expires (before each
+        generation and each local-search move) and returns the best chromosome so far (``info["stopped_by"] == "time_limit"``,
         ``info["generations_done"]`` fewer than ``generations``). A run stopped by time is
         not reproducible; tests stop on ``generations``.
 
@@ -565,7 +569,7 @@ def genetic_algorithm(
         genes = children
         fitness = population_cost(problem, genes, ops.markers)
         if ops.polish:
-            _polish(problem, matrix, genes, fitness, ops, best_cost, counters)
+            _polish(problem, matrix, genes, fitness, ops, best_cost, counters, deadline)
         best = int(np.argmin(fitness))
         if fitness[best] < best_cost:
             best_genes, best_cost = genes[best].copy(), float(fitness[best])

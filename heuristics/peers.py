@@ -42,19 +42,38 @@ imports ``taopt.models`` (hence highspy) at the top would break OR-Tools in
 its own worker. The worker dies with its parent (Linux ``PR_SET_PDEATHSIG``,
 a ``getppid`` watch, end of file on its stdin); on Ctrl-C during a call the
 caller stops it and re-raises; a worker that crashes or cannot import its
-package becomes a :class:`taopt.SolverError` naming the peer, and so does a
-call that overruns its ``time_limit`` by :data:`GRACE` seconds (the worker is
-then stopped; a call without a time limit waits as long as it takes).
+package becomes a :class:`taopt.SolverError` naming the peer.
 :func:`shutdown` stops the workers (also done at exit).
+
+Time limits
+-----------
+A ``time_limit`` is wall-clock from the call (docs/architecture.md, invariant 4), the
+worker's start-up included: the caller waits for a starting worker only as
+long as the limit allows (a worker still importing its package at the limit
+keeps starting, for the next call, and the call answers "no_solution"); the
+request carries the seconds left, which the worker counts from when it reads
+it (model building included; CP-SAT's is checked as it is built). Each
+improving solution the worker finds is sent to the caller at once; a worker
+that has not answered :func:`grace` seconds after the limit is stopped and
+the call answers with the last of them (or "no_solution"), never an
+exception. A call without a time limit waits as long as it takes.
+
+Default stop
+------------
+A heuristic peer stops by default after :func:`default_no_improvement`
+iterations (PyVRP) or solutions (OR-Tools) without a better solution, a count
+that grows with ``n + m``; the time limit is the ceiling. An explicit
+``max_iterations`` / ``solution_limit`` switches it off.
 
 Determinism
 -----------
-PyVRP is deterministic for a given ``seed`` when it stops on
-``max_iterations`` (pass ``time_limit=None``); stopped by time it is not (the
-number of iterations done in the time varies). OR-Tools' routing search has
-no random seed: ``seed`` is recorded but changes nothing; it is deterministic
-when it stops on ``solution_limit`` (pass ``time_limit=None``), not when it
-stops on time.
+PyVRP is deterministic for a given ``seed`` when it stops on a count
+(``max_iterations`` or the default no-improvement stop; pass
+``time_limit=None``); stopped by time it is not (the number of iterations done
+in the time varies). OR-Tools' routing search has no random seed: ``seed`` is
+recorded but changes nothing; it is deterministic when it stops on a count
+(``solution_limit`` or the no-improvement stop; pass ``time_limit=None``), not
+when it stops on time.
 
 References
 ----------
@@ -75,6 +94,7 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -92,6 +112,7 @@ from taopt.result import (
     make_solution,
 )
 from taopt.routing.problem import AssignmentProblem
+from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem
 from taopt.status import RAW_OUTCOMES
 
@@ -113,20 +134,58 @@ MAX_ENTRY = 10**12
 PEERS = {"pyvrp": "pyvrp", "ortools": "ortools", "cpsat": "ortools"}
 INSTALL_HINT = 'pip install "taopt[peers]"'
 WORKER_SCRIPT = Path(__file__).with_name("_peer_worker.py")
-#: Seconds a worker may take to import its package and say it is ready.
+#: Seconds a worker may take to import its package and say it is ready (a call with a
+#: time limit waits at most its limit; the worker then keeps starting for the next call).
 STARTUP_TIMEOUT = 120.0
-#: Extra seconds allowed beyond a call's time limit before the worker is declared hung.
-GRACE = 60.0
+#: A call with a time limit waits for its worker until the limit plus ``GRACE`` seconds
+#: plus ``GRACE_SHARE`` of the limit, then stops the worker and answers with the best
+#: solution the worker sent so far (or none): the overrun stays within max(1 s, 5 %).
+GRACE = 0.3
+GRACE_SHARE = 0.02
+#: Iterations (PyVRP) or solutions (OR-Tools routing) without a better solution after which
+#: a heuristic peer stops by default: ``max(NO_IMPROVEMENT_MIN[peer],
+#: NO_IMPROVEMENT_PER_POINT[peer] * (n + m))`` (:func:`default_no_improvement`).
+NO_IMPROVEMENT_MIN = {"pyvrp": 1000, "ortools": 100}
+NO_IMPROVEMENT_PER_POINT = {"pyvrp": 50, "ortools": 1}
+
+
+def default_no_improvement(peer: str, n: int, m: int) -> int:
+    """The default stop of a heuristic peer on n targets and m vehicles: this many iterations
+    (PyVRP's ``NoImprovement``) or solutions (OR-Tools) without a better solution.
+
+    It scales with the instance, so a small one answers in well under a second and a large
+    one searches longer; the time limit stays the ceiling.
+
+    Example
+    -------
+    >>> default_no_improvement("pyvrp", 3, 2), default_no_improvement("pyvrp", 200, 10)
+    (1000, 10500)
+    >>> default_no_improvement("ortools", 3, 2), default_no_improvement("ortools", 200, 10)
+    (100, 210)
+    """
+    return max(NO_IMPROVEMENT_MIN[peer], NO_IMPROVEMENT_PER_POINT[peer] * (n + m))
+
+
+def grace(time_limit: float) -> float:
+    """Seconds a call waits for its worker beyond ``time_limit`` before stopping it."""
+    return GRACE + GRACE_SHARE * time_limit
 
 
 class _Worker:
-    """One live worker process for one peer, with its reply queue."""
+    """One worker process for one peer, with its reply queue.
+
+    Starting it does not wait: the worker imports its package while the caller waits for
+    its "ready" frame (:meth:`wait_ready`) as long as its time limit allows.
+    """
 
     def __init__(self, peer: str) -> None:
         self.peer = peer
         self.owner = os.getpid()
         self.lock = threading.Lock()
-        started = time.perf_counter()
+        self.started = time.monotonic()
+        self.ready = False
+        self.version: str | None = None
+        self.startup = math.nan
         # PR_SET_PDEATHSIG fires when the *thread* that started the worker ends,
         # so it is only asked for from the main thread (which lives as long as us).
         main = "1" if threading.current_thread() is threading.main_thread() else "0"
@@ -138,19 +197,6 @@ class _Worker:
         )
         self.replies: queue.Queue = queue.Queue()
         threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
-        try:
-            kind, payload = self._wait(STARTUP_TIMEOUT, "start")
-        except BaseException:  # Ctrl-C while it starts: do not leave it behind
-            self.stop()
-            raise
-        if kind != "ready":
-            self.stop()
-            raise SolverError(
-                f"{peer} could not be imported in its worker process ({payload.strip()}); "
-                f"install the peers with {INSTALL_HINT}"
-            )
-        self.version = payload["version"]
-        self.startup = time.perf_counter() - started
 
     def _read(self) -> None:
         """Reader thread: every frame from the worker goes to the queue; None at end of file."""
@@ -162,15 +208,12 @@ class _Worker:
                 self.replies.put(None)
                 return
 
-    def _wait(self, timeout: float | None, what: str) -> tuple[str, Any]:
-        deadline = None if timeout is None else time.monotonic() + timeout
+    def _next(self, until: float | None, what: str) -> tuple[str, Any] | None:
+        """The next frame, or None once ``time.monotonic()`` passes ``until`` (None: wait)."""
         while True:
-            left = 1.0 if deadline is None else min(1.0, deadline - time.monotonic())
+            left = 1.0 if until is None else min(1.0, until - time.monotonic())
             if left <= 0:
-                self.stop(wait=0.0)
-                raise SolverError(
-                    f"{self.peer} worker did not answer ({what}) within {timeout:.0f} s; stopped it"
-                )
+                return None
             try:
                 reply = self.replies.get(timeout=left)
             except queue.Empty:
@@ -181,31 +224,79 @@ class _Worker:
                 raise SolverError(f"{self.peer} worker process died ({how}) during {what}")
             return reply
 
+    def wait_ready(self, until: float | None) -> bool:
+        """Wait (holding :attr:`lock`) for the worker's "ready" frame until ``until``
+        (``time.monotonic()``; None: up to :data:`STARTUP_TIMEOUT`). False when ``until``
+        came first: the worker goes on starting and a later call finds it ready.
+
+        Raises
+        ------
+        SolverError
+            The package cannot be imported in the worker, the worker died, or it did not
+            start within :data:`STARTUP_TIMEOUT` (it is then stopped).
+        """
+        if self.ready:
+            return True
+        hung = self.started + STARTUP_TIMEOUT
+        try:
+            frame = self._next(hung if until is None else min(until, hung), "start")
+        except BaseException:  # Ctrl-C while it starts, or it died: do not leave it behind
+            self.stop(wait=0.0)
+            raise
+        if frame is None:
+            if time.monotonic() < hung:
+                return False
+            self.stop(wait=0.0)
+            raise SolverError(
+                f"{self.peer} worker did not start within {STARTUP_TIMEOUT:.0f} s; stopped it"
+            )
+        kind, payload = frame
+        if kind != "ready":
+            self.stop()
+            raise SolverError(
+                f"{self.peer} could not be imported in its worker process ({payload.strip()}); "
+                f"install the peers with {INSTALL_HINT}"
+            )
+        self.ready, self.version = True, payload["version"]
+        self.startup = time.monotonic() - self.started
+        return True
+
     def alive(self) -> bool:
         return self.owner == os.getpid() and self.process.poll() is None
 
-    def call(self, request: dict[str, Any], timeout: float | None) -> dict[str, Any]:
-        """Send one request and wait for its reply; any interruption stops the worker.
+    def call(
+        self, request: dict[str, Any], until: float | None
+    ) -> tuple[dict[str, Any] | None, bool]:
+        """Send one request (holding :attr:`lock`, the worker ready) and wait for its reply.
 
-        Raises :class:`_Stopped` when another thread stopped this worker while
-        the call waited for it (nothing was sent; the caller takes a new worker).
+        Returns ``(reply, True)``; or, when ``time.monotonic()`` passes ``until`` first, the
+        worker is stopped and ``(the last "best" frame it sent or None, False)``. Any
+        interruption (Ctrl-C) stops the worker and is re-raised.
         """
-        with self.lock:
-            if not self.alive():
-                raise _Stopped(self.peer)
-            try:
-                pickle.dump(request, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
-                self.process.stdin.flush()
-                kind, payload = self._wait(timeout, "a solve")
-            except (BrokenPipeError, OSError) as exc:
-                self.stop()
-                raise SolverError(f"{self.peer} worker process is gone ({exc})") from None
-            except BaseException:  # Ctrl-C, a timeout: the reply would be stale
-                self.stop(wait=0.0)
-                raise
-        if kind != "ok":
-            raise SolverError(f"{self.peer} failed in its worker:\n{payload}")
-        return payload
+        best = None
+        try:
+            pickle.dump(request, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+            self.process.stdin.flush()
+            while True:
+                frame = self._next(until, "a solve")
+                if frame is None:  # past the deadline: stop it, answer with what it sent
+                    self.stop(wait=0.0)
+                    return best, False
+                kind, payload = frame
+                if kind == "best":
+                    best = payload
+                    continue
+                if kind != "ok":
+                    raise SolverError(f"{self.peer} failed in its worker:\n{payload}")
+                return payload, True
+        except (BrokenPipeError, OSError) as exc:
+            self.stop()
+            raise SolverError(f"{self.peer} worker process is gone ({exc})") from None
+        except SolverError:
+            raise
+        except BaseException:  # Ctrl-C: the reply would be stale
+            self.stop(wait=0.0)
+            raise
 
     def stop(self, wait: float = 2.0) -> None:
         """Close the worker's stdin (it exits), then kill it if it lingers."""
@@ -222,10 +313,6 @@ class _Worker:
             self.process.wait()
 
 
-class _Stopped(Exception):
-    """The worker was stopped before a request could be sent to it."""
-
-
 _WORKERS: dict[str, _Worker] = {}
 _WORKERS_LOCK = threading.Lock()
 
@@ -235,17 +322,15 @@ def _find_spec(name: str) -> Any:
     return importlib.util.find_spec(name)
 
 
-def _worker(peer: str) -> tuple[_Worker, float]:
-    """The live worker of ``peer`` (started if needed) and the seconds spent starting it."""
+def _worker(peer: str) -> _Worker:
+    """The live worker of ``peer``, started (not waited for) if there is none."""
     if _find_spec(PEERS[peer]) is None:
         raise SolverError(f"{peer} is not installed; install the peers with {INSTALL_HINT}")
     with _WORKERS_LOCK:
         worker = _WORKERS.get(peer)
-        if worker is not None and worker.alive():
-            return worker, 0.0
-        worker = _Worker(peer)
-        _WORKERS[peer] = worker
-        return worker, worker.startup
+        if worker is None or not worker.alive():
+            worker = _WORKERS[peer] = _Worker(peer)
+        return worker
 
 
 def shutdown() -> None:
@@ -284,16 +369,51 @@ def integer_costs(problem: AssignmentProblem, scale: float | None) -> tuple[np.n
     return np.rint(cost * scale).astype(np.int64), scale
 
 
-def _check(problem: Any, time_limit: float | None, seed: int, limit_name: str, limit: Any) -> None:
+def _check(
+    problem: Any,
+    time_limit: float | None,
+    seed: int,
+    limit_name: str,
+    limit: Any,
+    no_improvement: Any = None,
+) -> None:
     require(problem, AssignmentProblem, "the routing peers")
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
         raise InstanceError(f"time_limit must be a positive number of seconds, got {time_limit}")
     if limit is not None and (isinstance(limit, bool) or int(limit) != limit or limit < 1):
         raise InstanceError(f"{limit_name} must be a positive integer, got {limit}")
-    if time_limit is None and limit is None:
-        raise InstanceError(f"give time_limit or {limit_name}, or the search never stops")
+    if no_improvement is not None and no_improvement != "auto":
+        if (
+            isinstance(no_improvement, bool)
+            or not isinstance(no_improvement, (int, np.integer))
+            or no_improvement < 1
+        ):
+            raise InstanceError(
+                f'no_improvement must be a positive integer, "auto" or None, got {no_improvement!r}'
+            )
+    if time_limit is None and limit is None and no_improvement is None:
+        raise InstanceError(
+            f"give time_limit, {limit_name} or no_improvement, or the search never stops"
+        )
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= seed < 2**32:
         raise InstanceError(f"seed must be an integer in [0, 2**32), got {seed}")
+
+
+def stop_options(
+    peer: str, problem: Any, limit_name: str, limit: int | None, no_improvement: Any
+) -> dict[str, Any]:
+    """The worker's count limits: ``limit_name`` (``max_iterations`` or ``solution_limit``)
+    and ``no_improvement``, "auto" read as :func:`default_no_improvement` when no explicit
+    count limit is given (and as no such stop when one is: a run stopped by ``limit_name``
+    stays what it was)."""
+    if no_improvement == "auto":
+        no_improvement = (
+            None if limit is not None else default_no_improvement(peer, problem.n, problem.m)
+        )
+    return {
+        limit_name: None if limit is None else int(limit),
+        "no_improvement": None if no_improvement is None else int(no_improvement),
+    }
 
 
 def _solve(
@@ -302,26 +422,38 @@ def _solve(
     seed: int,
     scale: float | None,
     options: dict[str, Any],
+    deadline: Deadline,
 ) -> Solution:
     """Run ``peer`` in its worker and turn its routes into a re-scored Solution."""
     cost, scale = integer_costs(problem, scale)
     request = {"cost": cost, "n": problem.n, "m": problem.m, "options": options}
-    reply, runtime, worker, startup = _call(peer, request, options.get("time_limit"))
+    answer = _call(peer, request, deadline)
+    reply = dict(answer.reply or {"routes": None, "objective": None})
     info = {
-        "solver_objective": reply.pop("objective"),
+        "solver_objective": reply.pop("objective", None),
         "scale": scale,
-        "version": worker.version,
-        "startup": startup,
+        "version": answer.version,
+        "startup": answer.startup,
         **{key: value for key, value in options.items() if key != "seed"},
         **{key: value for key, value in reply.items() if key != "routes"},
     }
-    if reply["routes"] is None:  # the time limit ended the search before a first solution
+    if answer.stopped:
+        info["stopped_by"] = "time_limit"
+        info["worker"] = answer.stopped
+    if reply.get("routes") is None:  # the time limit ended the search before a first solution
         info["error"] = (
             f"{peer} found no route set within time_limit = {options.get('time_limit')} s "
-            f"(routing status {reply.get('routing_status')}); not a proof that none exists"
+            f"({answer.stopped or 'routing status ' + str(reply.get('routing_status'))}); "
+            "not a proof that none exists"
         )
         return Solution(
-            math.inf, NO_SOLUTION, None, runtime=runtime, method=peer, seed=int(seed), info=info
+            math.inf,
+            NO_SOLUTION,
+            None,
+            runtime=deadline.elapsed(),
+            method=peer,
+            seed=int(seed),
+            info=info,
         )
     try:  # the one scorer, once (taopt.solve does not score it again)
         return make_solution(
@@ -329,7 +461,7 @@ def _solve(
             Routes(reply["routes"]),
             method=peer,
             status=FEASIBLE,
-            runtime=runtime,
+            runtime=deadline.elapsed(),
             seed=int(seed),
             info=info,
         )
@@ -337,22 +469,64 @@ def _solve(
         raise SolverError(f"{peer} returned routes that fail the check: {exc}") from None
 
 
-def _call(
-    peer: str, request: dict[str, Any], time_limit: float | None
-) -> tuple[dict[str, Any], float, _Worker, float]:
-    """Send ``request`` to ``peer``'s worker: (reply, seconds, worker, startup seconds)."""
-    timeout = None if time_limit is None else time_limit + GRACE
+@dataclass
+class _Answer:
+    """What a worker call gave: its reply (None when there is none), the worker's package
+    version, the seconds this call waited for the worker to start, and why the call ended
+    without the worker's own reply ("" when it replied)."""
+
+    reply: dict[str, Any] | None
+    version: str | None
+    startup: float
+    stopped: str = ""
+
+
+def _call(peer: str, request: dict[str, Any], deadline: Deadline) -> _Answer:
+    """Send ``request`` to ``peer``'s worker within ``deadline`` (everything counts: the
+    worker's start-up, the request's time in the worker, the reply).
+
+    The worker gets the seconds left when the request is sent as its ``time_limit``. A
+    worker still starting when the deadline passes keeps starting (for the next call) and
+    the answer has no reply; a worker that has not replied :func:`grace` seconds after the
+    deadline is stopped and the answer is the last solution it sent ("best" frame), if any.
+    """
+    began = time.monotonic()
+    end = None
+    if deadline.limited:
+        end = began + deadline.remaining()
     for _attempt in range(3):
-        worker, startup = _worker(peer)
-        started = time.perf_counter()
+        worker = _worker(peer)
+        wait = -1.0 if end is None else max(0.0, end - time.monotonic())
+        if not worker.lock.acquire(timeout=wait):  # another thread's call holds it
+            why = "its worker was busy with another call until the time limit"
+            return _Answer(None, worker.version, 0.0, why)
         try:
-            reply = worker.call(request, timeout)
-            break
-        except _Stopped:  # stopped by another thread's failed call; take a fresh one
-            continue
-    else:
-        raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
-    return reply, time.perf_counter() - started, worker, startup
+            if not worker.alive():  # stopped by another thread's failed call: take a fresh one
+                continue
+            was_ready = worker.ready
+            ready = worker.wait_ready(end)
+            startup = 0.0 if was_ready else time.monotonic() - began
+            if not ready:
+                why = "its worker was still starting (importing its package) at the time limit"
+                return _Answer(None, None, startup, why)
+            options = dict(request["options"])
+            if end is not None:
+                left = end - time.monotonic()
+                if left <= 0:
+                    why = "the time limit was spent before the request was sent"
+                    return _Answer(None, worker.version, startup, why)
+                options["time_limit"] = left
+            until = None if end is None else end + grace(deadline.seconds or 0.0)
+            reply, answered = worker.call({**request, "options": options}, until)
+            if answered:
+                return _Answer(reply, worker.version, startup)
+            why = (
+                f"its worker had not answered {until - end:.2f} s after the time limit; stopped it"
+            )
+            return _Answer(reply, worker.version, startup, why)
+        finally:
+            worker.lock.release()
+    raise SolverError(f"{peer} worker kept being stopped by other threads; try again")
 
 
 @register_method(AssignmentProblem, "pyvrp", category="peer", requires="pyvrp")
@@ -362,25 +536,38 @@ def pyvrp_solve(
     seed: int = 0,
     *,
     max_iterations: int | None = None,
+    no_improvement: int | str | None = "auto",
     scale: float | None = None,
 ) -> Solution:
     """Solve the open multi-vehicle routing problem (2.2)–(2.5) with PyVRP.
 
     PyVRP's iterated local search on the model described in the module
     docstring (one start depot per vehicle, a free end depot), run in its
-    worker process.
+    worker process. By default it stops after
+    :func:`default_no_improvement` iterations without a better solution
+    (``max(1000, 50 (n + m))``: a few milliseconds on 3 targets), or at the
+    time limit if that comes first.
 
     Parameters
     ----------
     problem : AssignmentProblem
     time_limit : float or None
-        Seconds of search (PyVRP's ``MaxRuntime``); None for no time limit.
+        Wall-clock seconds for the whole call, the worker's start-up included
+        (PyVRP's ``MaxRuntime`` gets what is left); None for no time limit.
+        At the limit the worker is asked to stop; one that has not answered
+        :func:`grace` seconds later is stopped and the call answers with the
+        best solution it reported (or status "no_solution").
     seed : int
         PyVRP's random seed.
     max_iterations : int, optional
         Stop after this many iterations (``MaxIterations``). The search stops
         at whichever limit comes first; with ``time_limit=None`` the result is
         the same for the same seed, bit for bit.
+    no_improvement : int, "auto" or None
+        Stop after this many iterations without a better solution (PyVRP's
+        ``NoImprovement``). "auto" (default): :func:`default_no_improvement`,
+        unless ``max_iterations`` is given (then only the limits given stop
+        it); None: no such stop.
     scale : float, optional
         Integer units per unit of travel time (default: largest entry -> 1e7).
 
@@ -391,8 +578,11 @@ def pyvrp_solve(
         ``routes`` one list per vehicle, ``objective = taopt.evaluate(routes)``;
         ``info`` has ``solver_objective`` (PyVRP's integer cost, about
         ``objective * scale``), ``scale``, ``iterations``, ``solver_runtime``,
-        ``startup`` (seconds spent starting the worker in this call) and
-        ``version``. ``runtime`` is the call's wall time, without ``startup``.
+        ``startup`` (seconds this call waited for the worker to start) and
+        ``version``. ``runtime`` is the call's wall time, ``startup`` included.
+        Status "no_solution" (objective ``inf``, ``info["error"]`` says why)
+        when the time limit ran out before a first solution, e.g. while the
+        worker was still starting (it keeps starting for the next call).
 
     Raises
     ------
@@ -415,9 +605,14 @@ def pyvrp_solve(
     ----------
     Thesis §2.2.1; Wouda, Lan and Kool (2024), PyVRP.
     """
-    _check(problem, time_limit, seed, "max_iterations", max_iterations)
-    options = {"time_limit": time_limit, "max_iterations": max_iterations, "seed": int(seed)}
-    return _solve("pyvrp", problem, seed, scale, options)
+    deadline = Deadline(time_limit)
+    _check(problem, time_limit, seed, "max_iterations", max_iterations, no_improvement)
+    options = {
+        "time_limit": time_limit,
+        **stop_options("pyvrp", problem, "max_iterations", max_iterations, no_improvement),
+        "seed": int(seed),
+    }
+    return _solve("pyvrp", problem, seed, scale, options, deadline)
 
 
 @register_method(AssignmentProblem, "ortools", category="peer", requires="ortools")
@@ -427,6 +622,7 @@ def ortools_solve(
     seed: int = 0,
     *,
     solution_limit: int | None = None,
+    no_improvement: int | str | None = "auto",
     first_solution: str = "PATH_CHEAPEST_ARC",
     metaheuristic: str = "GUIDED_LOCAL_SEARCH",
     scale: float | None = None,
@@ -436,19 +632,27 @@ def ortools_solve(
     A first solution by ``first_solution``, improved by guided local search
     (by default) until a limit, on the model of the module docstring
     (per-vehicle starts, a dummy end node with zero-cost arcs into it), run in
-    its worker process.
+    its worker process. By default it stops after
+    :func:`default_no_improvement` solutions without a better one
+    (``max(100, n + m)``), or at the time limit if that comes first.
 
     Parameters
     ----------
     problem : AssignmentProblem
     time_limit : float or None
-        Seconds of search; None for no time limit. Guided local search only
-        stops at a limit.
+        Wall-clock seconds for the whole call, the worker's start-up included
+        (see :func:`pyvrp_solve`); None for no time limit. Guided local search
+        itself only stops at a limit.
     seed : int
         Recorded only: OR-Tools' routing search has no random seed.
     solution_limit : int, optional
         Stop after this many solutions. With ``time_limit=None`` the result
         is the same on every run; stopped by time it may differ.
+    no_improvement : int, "auto" or None
+        Stop after this many solutions without a better one (counted by a
+        solution callback, which then finishes the search). "auto" (default):
+        :func:`default_no_improvement`, unless ``solution_limit`` is given;
+        None: no such stop. Counted in solutions, the stop is deterministic.
     first_solution, metaheuristic : str
         Names from OR-Tools' ``FirstSolutionStrategy`` and
         ``LocalSearchMetaheuristic`` enums.
@@ -478,22 +682,23 @@ def ortools_solve(
     >>> import numpy as np, taopt
     >>> from taopt.heuristics.peers import ortools_solve
     >>> p = taopt.AssignmentProblem(np.array([[0, 2, 9], [1, 0, 9], [4, 3, 0]]), n_targets=2)
-    >>> ortools_solve(p, time_limit=0.2).objective
+    >>> ortools_solve(p, time_limit=None).objective
     4.0
 
     References
     ----------
     Thesis §2.2.1; OR-Tools routing library (Google).
     """
-    _check(problem, time_limit, seed, "solution_limit", solution_limit)
+    deadline = Deadline(time_limit)
+    _check(problem, time_limit, seed, "solution_limit", solution_limit, no_improvement)
     options = {
         "time_limit": time_limit,
-        "solution_limit": solution_limit,
+        **stop_options("ortools", problem, "solution_limit", solution_limit, no_improvement),
         "first_solution": str(first_solution),
         "metaheuristic": str(metaheuristic),
         "seed": int(seed),
     }
-    return _solve("ortools", problem, seed, scale, options)
+    return _solve("ortools", problem, seed, scale, options, deadline)
 
 
 # ----------------------------------------------------------------------------- CP-SAT
@@ -566,6 +771,7 @@ def _cpsat_run(
     slack: float,
     payload_type: type[Order] | type[Routes],
     payload_key: str,
+    deadline: Deadline,
 ) -> Solution:
     """Send one CP-SAT request to the worker and turn its reply into a Solution.
 
@@ -574,7 +780,14 @@ def _cpsat_run(
     """
     options = request["options"]
     time_limit = options["time_limit"]
-    reply, runtime, worker, startup = _call("cpsat", request, time_limit)
+    answer = _call("cpsat", request, deadline)
+    reply = answer.reply or {
+        "cpsat_status": "UNKNOWN",
+        "objective": None,
+        "best_bound": None,
+        "branches": 0,
+        "solver_runtime": 0.0,
+    }
     info = {
         "cpsat_status": reply["cpsat_status"],
         "solver_objective": reply["objective"],
@@ -585,9 +798,13 @@ def _cpsat_run(
         "solver_runtime": reply["solver_runtime"],
         "num_workers": options["num_workers"],
         "time_limit": time_limit,
-        "version": worker.version,
-        "startup": startup,
+        "version": answer.version,
+        "startup": answer.startup,
     }
+    if answer.stopped:
+        info["worker"] = answer.stopped
+    if reply.get("stopped_during"):
+        info["stopped_during"] = reply["stopped_during"]
     bound = _scaled_bound(reply, scale, slack)
     found = reply.get(payload_key)
     payload = None if found is None else payload_type(found)
@@ -602,9 +819,9 @@ def _cpsat_run(
             method="cpsat",
             stop=reply["cpsat_status"],
             solver="cpsat",
-            time_limited=time_limit is not None,
+            time_limited=time_limit is not None or bool(answer.stopped),
             bound=np.inf if infeasible else bound,
-            runtime=runtime,
+            runtime=deadline.elapsed(),
             seed=seed,
             info=info,
         )
@@ -671,6 +888,7 @@ def cpsat_sop(
     ----------
     Thesis §5.2 (5.7); Perron and Didier, CP-SAT (OR-Tools, Google).
     """
+    deadline = Deadline(time_limit)
     options = _cpsat_options(problem, SopProblem, time_limit, seed, num_workers)
     cost, scale, exact = _sop_integer_costs(problem, scale)
     options.update(
@@ -683,7 +901,7 @@ def cpsat_sop(
     slack = 0.0 if exact else 0.5 * (problem.n - 1)
     return _cpsat_run(
         problem, request, scale=scale, exact=exact, slack=slack,
-        payload_type=Order, payload_key="order",
+        payload_type=Order, payload_key="order", deadline=deadline,
     )  # fmt: skip
 
 
@@ -715,6 +933,7 @@ def cpsat_routing(
     ----------
     Thesis §2.2.1; Perron and Didier, CP-SAT (OR-Tools, Google).
     """
+    deadline = Deadline(time_limit)
     options = _cpsat_options(problem, AssignmentProblem, time_limit, seed, num_workers)
     cost, scale = integer_costs(problem, scale)
     exact = bool(np.all(problem.cost * scale == cost))
@@ -723,5 +942,5 @@ def cpsat_routing(
     slack = 0.0 if exact else 0.5 * problem.n
     return _cpsat_run(
         problem, request, scale=scale, exact=exact, slack=slack,
-        payload_type=Routes, payload_key="routes",
+        payload_type=Routes, payload_key="routes", deadline=deadline,
     )  # fmt: skip

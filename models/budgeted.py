@@ -652,12 +652,16 @@ def greedy_budgeted(problem: BudgetedProblem) -> list[list[int]] | None:
 
 
 def repaired_routes(
-    problem: BudgetedProblem, routes: list[list[int]], passes: int = 3
+    problem: BudgetedProblem,
+    routes: list[list[int]],
+    passes: int = 3,
+    deadline: Deadline | None = None,
 ) -> list[list[int]] | None:
     """A feasible start from any routes (e.g. chapter 2's optimum, which ignores the
     limits): cut every route back until it meets its limits, insert the targets cut off
     where they cost least without breaking a limit, then move single targets while that
-    lowers the total (``passes`` sweeps). None if a target fits nowhere (proves nothing).
+    lowers the total (``passes`` sweeps, cut short once ``deadline`` has expired: each move
+    keeps the limits). None if a target fits nowhere (proves nothing).
 
     Notes
     -----
@@ -697,6 +701,8 @@ def repaired_routes(
     for _ in range(passes):
         improved = False
         for target in range(n):
+            if deadline is not None and deadline.expired():
+                break
             k = next(v for v, route in enumerate(routes) if target in route)
             q = routes[k].index(target)
             points = [n + k, *routes[k]]
@@ -943,9 +949,10 @@ def solve_budgeted(
             best_routes, best_value = routes, value
 
     consider_start(best_routes)
-    consider_start(greedy_budgeted(problem))
-    if free.routes is not None:
-        consider_start(repaired_routes(problem, free.routes))
+    if not deadline.expired():  # each further start only when time is left for it
+        consider_start(greedy_budgeted(problem))
+    if free.routes is not None and not deadline.expired():
+        consider_start(repaired_routes(problem, free.routes, deadline=deadline))
 
     def stop(stopped_by: str, extra: dict[str, Any]) -> Solution:
         info.update(extra, mip_gap=mip_gap, improved=improved)

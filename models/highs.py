@@ -305,6 +305,16 @@ def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> 
     )
 
 
+#: HiGHS options (name -> (value in a time-limited MIP run, value otherwise)) for the MIP
+#: phases that do not look at HiGHS's clock: probing in presolve (rule 2^15) and a presolve
+#: restart after the root. With them a 3 s run of the 20-customer delivery MILP took 4.1 s
+#: and a 6 s run 7.8-13 s (HiGHS 1.16, issue 30); without them 3.2 s and 6.2 s.
+CLOCKLESS_MIP_PHASES: dict[str, tuple[Any, Any]] = {
+    "presolve_rule_off": (2**15, 0),
+    "mip_allow_restart": (False, True),
+}
+
+
 class HighsModel:
     """A cvxpy LP/MILP compiled once into a ``highspy.Highs`` that stays alive.
 
@@ -592,6 +602,10 @@ class HighsModel:
         highs.setOptionValue("time_limit", limit)
         highs.setOptionValue("mip_rel_gap", 1e-4 if mip_rel_gap is None else float(mip_rel_gap))
         is_mip = self.is_mip and not self._relaxed
+        if is_mip:  # a limited MIP run leaves out the phases that ignore the clock
+            for name, (limited, free) in CLOCKLESS_MIP_PHASES.items():
+                if name not in (options or {}):
+                    highs.setOptionValue(name, limited if time_limit is not None else free)
         for name, value in (options or {}).items():
             if highs.setOptionValue(name, value) == highspy.HighsStatus.kError:
                 raise SolverError(f"HiGHS refused option {name} = {value!r}")

@@ -790,7 +790,9 @@ def solve_sop_problem(
     if unreachable is not None:
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
+    counting = time.perf_counter()
     ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
+    counted_in = time.perf_counter() - counting
     info = {"ideals": ideals, "ideals_capped": capped}
 
     def milp(known, time_left, dp_result=None) -> Solution:
@@ -816,9 +818,19 @@ def solve_sop_problem(
             result = result.replace(bound=bound, status=status)
         return result
 
-    if deadline.expired(MARGIN):  # no time left after the warm start and the count
+    dp_next = engine != "milp" and problem.n <= MAX_NODES
+    # a DP stage first sets up its bounds and first layers outside its clock, about as long
+    # as the count just measured (both follow the machine's load): not started without that
+    dp_cannot_fit = (
+        dp_next
+        and deadline.limited
+        and deadline.remaining() * (1.0 if engine == "dp" or not capped else DP_SHARE)
+        < counted_in + MARGIN
+    )
+    if deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
-        result = _stopped(problem, known, None, began, "portfolio", {"model": "not run"})
+        stop_info = {"model": "not run", "count_seconds": counted_in}
+        result = _stopped(problem, known, None, began, "portfolio", stop_info)
         used = "none"
     elif engine == "milp" or problem.n > MAX_NODES:
         result = milp(incumbent, deadline.remaining())
@@ -835,7 +847,14 @@ def solve_sop_problem(
         share = deadline.share(DP_SHARE)
         result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
         used = "dp"
-        if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+        # a second stage sets up as the first did (its bounds, its first layers; seconds under
+        # load, outside the DP's clock): started only when its share covers twice that
+        setup = result.info.get("setup_seconds", 0.0)
+        second_share = deadline.share(SECOND_STAGE_SHARE)
+        short = second_share is not None and second_share < 2 * setup + MARGIN
+        if result.status == TIME_LIMIT and short:
+            info["second_stage"] = f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
+        elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
             # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
             # state, so not the first choice) with more states, from the best order so far
             first = result

@@ -751,7 +751,9 @@ def solve_sop_dp(
                 info["beam"] = beam[0]
     upper = np.inf if known is None else known[0]
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
+    setting_up = time.perf_counter()
     runs = [_Run(problem, False)] + ([_Run(reversed_problem(problem), True)] if both else [])
+    info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
     if both and both_prices:
         # the assignment LP is degenerate: the reversed problem's optimal prices (read
         # transposed) are other optimal prices, and often prune other states

@@ -266,12 +266,10 @@ def test_a_peer_answer_that_breaks_a_limit_is_reported(monkeypatch):
     """Routes breaking a capacity come back as status "no_solution" with the violation named."""
     problem = BudgetedProblem(random_cost(4, 2, 0), 4, capacity=[1, 3])
 
-    class Fake:
-        version = "fake"
-
-    def fake_call(peer, request, time_limit):
+    def fake_call(peer, request, deadline):
         assert request["options"]["capacity"] == [1, 3]
-        return {"routes": [[0, 1], [2, 3]], "objective": 1}, 0.0, Fake(), 0.0
+        reply = {"routes": [[0, 1], [2, 3]], "objective": 1}
+        return budgeted_peers.peers._Answer(reply, "fake", 0.0)
 
     monkeypatch.setattr(budgeted_peers.peers, "_call", fake_call)
     solution = budgeted_peers.ortools_budgeted(problem, time_limit=1.0)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -250,17 +251,25 @@ def test_worker_crash_is_a_solver_error_and_worker_restarts():
     assert peers._WORKERS["ortools"].process.pid != pid
 
 
-def test_overrun_is_a_solver_error_and_worker_restarts(monkeypatch):
-    """A call that overruns time_limit + GRACE stops its worker and raises a SolverError."""
+def test_overrun_stops_the_worker_and_answers_with_its_best(monkeypatch):
+    """A worker that has not answered by the limit plus the grace is stopped; the call answers
+    with the last solution it reported (scored) or no_solution, never an exception, and the
+    next call starts a fresh worker."""
     problem = uniform_current_problem(30, 4, 12)
     ortools_solve(problem, time_limit=0.1)
     pid = peers._WORKERS["ortools"].process.pid
     monkeypatch.setattr(peers, "GRACE", -0.7)  # wait 0.3 s for a 1 s search
-    with pytest.raises(SolverError, match="ortools worker did not answer"):
-        ortools_solve(problem, time_limit=1.0)
+    stopped = ortools_solve(problem, time_limit=1.0, no_improvement=None)
+    assert "stopped it" in stopped.info["worker"]
+    assert stopped.info["stopped_by"] == "time_limit"
+    if stopped.status == "feasible":  # its first solution came back as a "best" frame
+        assert taopt.evaluate(problem, stopped.solution) == pytest.approx(stopped.objective)
+    else:
+        assert stopped.status == "no_solution" and math.isinf(stopped.objective)
     assert wait_gone(pid, 5.0)
     monkeypatch.undo()
     assert ortools_solve(problem, time_limit=0.1).objective > 0
+    assert peers._WORKERS["ortools"].process.pid != pid
 
 
 def test_threads_share_a_worker():
@@ -304,7 +313,9 @@ def test_a_time_limit_before_the_first_solution_is_a_status():
     "call, match",
     [
         (lambda p: pyvrp_solve(p, time_limit=0), "time_limit"),
-        (lambda p: pyvrp_solve(p, time_limit=None), "never stops"),
+        (lambda p: pyvrp_solve(p, time_limit=None, no_improvement=None), "never stops"),
+        (lambda p: pyvrp_solve(p, no_improvement=0), "no_improvement"),
+        (lambda p: ortools_solve(p, no_improvement="soon"), "no_improvement"),
         (lambda p: ortools_solve(p, time_limit=None, solution_limit=0), "solution_limit"),
         (lambda p: pyvrp_solve(p, seed=-1), "seed"),
         (lambda p: ortools_solve(p, scale=-1.0), "scale"),
@@ -514,3 +525,146 @@ def test_cpsat_bad_arguments_are_clear(ref_sop):
         peers.cpsat_sop(problem, seed=-1)
     with pytest.raises(InstanceError, match="time_limit"):
         peers.cpsat_routing(routing_quick_tour().problem, time_limit=0)
+
+
+# -- the default stop and the wall-clock limit (issue 30 items 4 and 7) -------------------------
+
+EXAMPLE = Path(taopt.__file__).parent / "data" / "examples" / "assignment_problem.json"
+
+
+def test_default_stop_scales_with_the_instance():
+    """The default no-improvement count grows with n + m above a floor, per peer."""
+    assert peers.default_no_improvement("pyvrp", 3, 2) == peers.NO_IMPROVEMENT_MIN["pyvrp"]
+    assert peers.default_no_improvement("pyvrp", 200, 10) == 50 * 210
+    assert peers.default_no_improvement("ortools", 3, 2) == peers.NO_IMPROVEMENT_MIN["ortools"]
+    assert peers.default_no_improvement("ortools", 400, 10) == 410
+
+
+def test_explicit_count_limit_switches_the_default_stop_off(ref_routing_quick_tour):
+    """Given max_iterations / solution_limit (the studies' --peer-iterations), "auto" adds no
+    no-improvement stop, so such runs stop exactly as before."""
+    problem = ref_routing_quick_tour.problem
+    assert peers.stop_options("pyvrp", problem, "max_iterations", 2000, "auto") == {
+        "max_iterations": 2000,
+        "no_improvement": None,
+    }
+    assert peers.stop_options("ortools", problem, "solution_limit", None, "auto") == {
+        "solution_limit": None,
+        "no_improvement": 100,
+    }
+    assert peers.stop_options("pyvrp", problem, "max_iterations", None, 7)["no_improvement"] == 7
+
+
+@pytest.mark.parametrize("peer", ["pyvrp", "ortools"])
+def test_example_stops_on_no_improvement_before_its_limit(peer):
+    """On the README's 3-target example each heuristic peer stops on its no-improvement count,
+    not on the (long) time limit: the count of iterations / solutions it ran says so."""
+    from taopt.orchestration.solving import load_problem_file
+
+    problem, _ = load_problem_file(EXAMPLE, progress=False)
+    patience = peers.default_no_improvement(peer, problem.n, problem.m)
+    solution = taopt.solve(problem, peer, time_limit=600.0)
+    assert solution.status == "feasible" and solution.objective == pytest.approx(10.5)
+    assert solution.info["no_improvement"] == patience
+    assert "worker" not in solution.info  # it answered by itself
+    done = solution.info["iterations" if peer == "pyvrp" else "solutions"]
+    assert patience <= done <= 3 * patience
+
+
+@pytest.mark.parametrize("peer", ["pyvrp", "ortools"])
+def test_default_stop_is_deterministic(peer):
+    """Without a time limit the default stop (counted, not timed) gives the same routes."""
+    problem = uniform_current_problem(25, 3, 5)
+    solve = pyvrp_solve if peer == "pyvrp" else ortools_solve
+    first = solve(problem, time_limit=None, seed=2)
+    second = solve(problem, time_limit=None, seed=2)
+    assert first.routes == second.routes and first.objective == second.objective
+
+
+def expired_calls():
+    """(name, call) for every peer of every family, each given a limit spent before it starts."""
+    from taopt.heuristics import budgeted_peers
+
+    routing = uniform_current_problem(12, 3, 1)
+    budgeted = taopt.BudgetedProblem(routing.cost, n_targets=12, capacity=[5, 5, 5])
+    sop = random_sop(2, 8)
+    tiny = 1e-7
+    return [
+        ("pyvrp", lambda: pyvrp_solve(routing, time_limit=tiny)),
+        ("ortools", lambda: ortools_solve(routing, time_limit=tiny)),
+        ("cpsat-routing", lambda: peers.cpsat_routing(routing, time_limit=tiny)),
+        ("cpsat-sop", lambda: peers.cpsat_sop(sop, time_limit=tiny)),
+        ("pyvrp-budgeted", lambda: budgeted_peers.pyvrp_budgeted(budgeted, time_limit=tiny)),
+        ("ortools-budgeted", lambda: budgeted_peers.ortools_budgeted(budgeted, time_limit=tiny)),
+    ]
+
+
+@pytest.mark.parametrize("index", range(6), ids=[name for name, _ in expired_calls()])
+def test_an_expired_limit_answers_without_a_search(index):
+    """A limit spent before the request is sent answers at once, with no exception: no plan,
+    objective inf, a status (no_solution; CP-SAT's time_limit) and the reason in info."""
+    name, call = expired_calls()[index]
+    peer = name.split("-")[0]
+    peers._worker(peer).wait_ready(None)  # up already: only the request's limit is spent
+    solution = call()
+    assert solution.solution is None and math.isinf(solution.objective)
+    assert str(solution.status) == ("time_limit" if peer == "cpsat" else "no_solution")
+    assert "time limit was spent before the request was sent" in solution.info["worker"]
+
+
+def test_a_limit_that_ends_during_start_up_leaves_the_worker_starting(ref_routing_quick_tour):
+    """A call whose limit ends while its worker imports its package answers no_solution at
+    once; the worker goes on starting and serves the next call (same process)."""
+    peers.shutdown()
+    problem = ref_routing_quick_tour.problem
+    first = pyvrp_solve(problem, time_limit=1e-7)
+    assert first.status == "no_solution" and "still starting" in first.info["error"]
+    pid = peers._WORKERS["pyvrp"].process.pid
+    second = pyvrp_solve(problem, time_limit=None, max_iterations=50)
+    assert second.objective == 4.0 and peers._WORKERS["pyvrp"].process.pid == pid
+
+
+def test_cpsat_worker_stops_building_at_its_deadline():
+    """The worker checks its deadline while it builds the CP-SAT model: sent a request whose
+    time is spent, it replies at once with status UNKNOWN, no routes and where it stopped
+    (the request goes straight to the worker process; OR-Tools never loads in this one)."""
+    cost = np.rint(uniform_current_problem(40, 4, 3).cost).astype(np.int64)
+    options = {"time_limit": 1e-6, "seed": 0, "num_workers": 1, "kind": "routing"}
+    worker = peers._worker("cpsat")
+    with worker.lock:
+        assert worker.wait_ready(None)
+        reply, answered = worker.call({"cost": cost, "n": 40, "m": 4, "options": options}, None)
+    assert answered and reply["cpsat_status"] == "UNKNOWN" and reply["routes"] is None
+    assert reply["stopped_during"] == "model building"
+
+
+def test_reported_solutions_are_complete_route_sets():
+    """Every improving solution a worker streams (kept if it is stopped at the deadline) is a
+    complete route set whose integer cost is the one reported, for each routing peer."""
+    problem = uniform_current_problem(12, 3, 8)
+    cost, _ = peers.integer_costs(problem, None)
+    for peer, options in (
+        ("pyvrp", {"max_iterations": 300, "seed": 0}),
+        ("ortools", {"solution_limit": 50, "first_solution": "PATH_CHEAPEST_ARC",
+                     "metaheuristic": "GUIDED_LOCAL_SEARCH", "seed": 0}),
+        ("cpsat", {"seed": 0, "num_workers": 1, "kind": "routing", "time_limit": 20.0}),
+    ):  # fmt: skip
+        worker = peers._worker(peer)
+        request = {"cost": cost, "n": 12, "m": 3, "options": options}
+        with worker.lock:
+            assert worker.wait_ready(None)
+            worker.process.stdin.write(pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL))
+            worker.process.stdin.flush()
+            frames = []
+            while not frames or frames[-1][0] == "best":
+                frames.append(worker._next(None, "a solve"))
+        assert frames[-1][0] == "ok" and len(frames) >= 2, peer
+        for _, payload in frames[:-1]:
+            routes = payload["routes"]
+            assert sorted(t for route in routes for t in route) == list(range(12)), peer
+            walked = sum(
+                cost[a, b]
+                for k, route in enumerate(routes)
+                for a, b in zip([12 + k, *route], route, strict=False)
+            )
+            assert walked == payload["objective"], peer

@@ -347,3 +347,197 @@ def test_sop_under_a_generous_limit_still_certifies():
     for name in ("ESC07", "ESC11", "ESC12"):
         result = taopt.solve(SopProblem.load(name), "exact", time_limit=60)
         assert result.status == OPTIMAL and result.objective == KNOWN_OPTIMA[name]
+
+
+# -- issue 30 item 4: the clock is looked at inside the memetic steps too -----------------------
+
+
+class ExpiresAfter:
+    """A stand-in Deadline that is limited and expires after ``checks`` queries (no clock):
+    it tells which steps look at the deadline, whatever the machine's speed."""
+
+    def __init__(self, checks: int) -> None:
+        self.checks, self.asked = checks, 0
+        self.limited, self.seconds = True, 1.0
+
+    def expired(self, margin: float = 0.0) -> bool:
+        self.asked += 1
+        return self.asked > self.checks
+
+    def remaining(self) -> float:
+        return 0.0 if self.asked >= self.checks else 1.0
+
+    def elapsed(self) -> float:
+        return 0.0
+
+
+def test_local_searches_stop_at_an_expired_deadline():
+    """Each memetic descent makes no move once its deadline has expired (and some without)."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics.budgeted import LimitedDescent
+    from taopt.heuristics.ga_local_search import local_search
+    from taopt.heuristics.ga_penalised_search import PenalisedSearch
+    from taopt.heuristics.ga_routing import decode, path_matrix, path_nodes
+
+    problem = euclidean(40, 3, seed=4)
+    genes = np.random.default_rng(1).permutation(problem.n + problem.m - 1)
+    matrix, path = path_matrix(problem), path_nodes(problem, genes)[0]
+    spent = Deadline(1e-9)
+    assert local_search(matrix, path, deadline=spent)[1] == 0 < local_search(matrix, path)[1]
+    budgeted = BudgetedProblem(problem.cost, problem.n, capacity=[20, 20, 20])
+    search = PenalisedSearch(budgeted, 1.0, 0.1)
+    assert search.run(matrix, path, deadline=spent)[1] == 0 < search.run(matrix, path)[1]
+    routes = decode(problem, genes, "vehicle")
+    descent = LimitedDescent(budgeted)
+    assert descent.run(routes, deadline=spent)[1] == 0 < descent.run(routes)[1]
+
+
+@pytest.mark.parametrize("family", ["assignment", "budgeted"])
+def test_memetic_step_looks_at_the_deadline(family, monkeypatch):
+    """A deadline that expires once the first generation has begun stops the GA inside that
+    generation's local search (no move made, one generation, the best so far, scored): a
+    generation's polish on n = 200 took 15 s past a 1 s limit under load before."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics import budgeted, ga_routing
+
+    problem = euclidean(60, 3, seed=2)
+    module, ga = ga_routing, ga_routing.genetic_algorithm
+    if family == "budgeted":
+        problem = BudgetedProblem(problem.cost, problem.n, capacity=[25, 25, 25])
+        module, ga = budgeted, budgeted.genetic_algorithm
+    monkeypatch.setattr(module, "Deadline", lambda seconds: ExpiresAfter(1))
+    result = ga(problem, seed=0, time_limit=1.0)
+    assert result.info["generations_done"] == 1 and result.info["stopped_by"] == "time_limit"
+    assert result.info["moves"] == 0
+    assert taopt.evaluate(problem, result.solution) == pytest.approx(result.objective)
+
+
+def test_delivery_milp_with_a_spent_limit_builds_nothing():
+    """Given a limit already spent, the delivery MILP returns the incumbent with status
+    time_limit and a valid bound without building its model (it built it before)."""
+    from taopt.heuristics.sequencing import smma_delivery
+    from taopt.models.delivery import solve_delivery
+
+    instance = delivery(12)
+    incumbent = smma_delivery(instance)
+    result = solve_delivery(instance, time_limit=1e-9, incumbent=incumbent.solution)
+    assert result.info["model"] == "not built"
+    assert result.status == TIME_LIMIT and result.objective == pytest.approx(incumbent.objective)
+    assert result.bound is not None and result.bound <= result.objective
+
+
+def test_delivery_milp_skips_a_compile_that_cannot_fit(monkeypatch):
+    """The compile-and-presolve estimate follows the build's measured time (so it grows with
+    the machine's load): when it exceeds what is left, HiGHS is not started and the answer is
+    the incumbent with a bound (a 1 s limit took 2.4 s under load before)."""
+    from taopt.models import delivery as model
+
+    monkeypatch.setattr(model, "COMPILE_PER_BUILD_PER_CUSTOMER", 1e9)
+    instance = delivery(10)
+    result = taopt.solve(instance, "milp", time_limit=60.0)
+    assert result.info["model"] == "built, not compiled" and result.info["estimate"] > 60
+    assert result.status == TIME_LIMIT and result.solution is not None
+    assert taopt.evaluate(instance, result) == pytest.approx(result.objective)
+    assert result.bound is not None and result.bound <= result.objective
+
+
+def test_budgeted_warm_start_and_starts_keep_to_a_spent_limit(monkeypatch):
+    """Budgeted EVM (the exact model's warm start) stops at its limit with the targets not yet
+    placed reported (no_solution), and the exact model builds no further start once its limit
+    is spent (n = 100 at T = 0.5 took 1.5 s under load: EVM and the repair ignored the clock)."""
+    from taopt.budgeted import BudgetedProblem
+    from taopt.heuristics.budgeted import evm
+    from taopt.models import budgeted as model
+
+    problem = BudgetedProblem(euclidean(30, 3).cost, 30, capacity=[12, 12, 12])
+    stopped = evm(problem, time_limit=1e-9)
+    assert stopped.status == "no_solution" and stopped.info["stopped_by"] == "time_limit"
+    assert stopped.info["unassigned"] == 30 and math.isinf(stopped.objective)
+    assert evm(problem).status == "feasible"  # without a limit it places them all
+
+    def never(*args, **kwargs):
+        raise AssertionError("a start was built after the limit")
+
+    monkeypatch.setattr(model, "greedy_budgeted", never)
+    monkeypatch.setattr(model, "repaired_routes", never)
+    result = model.solve_budgeted(problem, time_limit=1e-9)
+    assert result.status == TIME_LIMIT and result.bound is not None
+
+
+def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch):
+    """The SOP portfolio starts its second DP stage only when its share covers twice the first
+    stage's measured setup (ESC47 at T = 0.5 took 2 s under load: each stage's setup is
+    outside the DP's clock); the answer still carries the first stage's order and bound."""
+    from taopt.models import sop_dp
+    from taopt.sop.problem import SopProblem
+
+    real, calls = sop_dp.solve_sop_dp, []
+
+    def first_stage_slow_to_set_up(problem, time_limit=None, **options):
+        calls.append(options)
+        result = real(problem, 1e-3, **options)
+        return result.replace(info={**result.info, "setup_seconds": 1e6})
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stage_slow_to_set_up)
+    problem = SopProblem.load("ESC47")
+    result = taopt.solve(problem, "exact", time_limit=1.0)
+    assert len(calls) == 1 and result.info["second_stage"].startswith("skipped")
+    assert result.status == TIME_LIMIT and result.bound <= result.objective
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
+def test_delivery_milp_limited_runs_leave_out_the_clockless_highs_phases(monkeypatch):
+    """A time-limited delivery MILP asks HiGHS for no probing and no restart (both ignore
+    its clock: 6 s took up to 13 s); the answer is still certified on a small instance."""
+    from taopt.models import delivery as model
+
+    seen = []
+    real = model.HighsModel.solve
+
+    def recording(self, time_limit=None, mip_rel_gap=None, on_solution=None, options=None, **kw):
+        seen.append(dict(options or {}))
+        return real(self, time_limit, mip_rel_gap, on_solution, options, **kw)
+
+    monkeypatch.setattr(model.HighsModel, "solve", recording)
+    instance = delivery(6)
+    result = taopt.solve(instance, "milp", time_limit=60.0)
+    assert seen and all(
+        o["presolve_rule_off"] == 2**15 and o["mip_allow_restart"] is False for o in seen
+    )
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(taopt.solve(instance, "exact").objective)
+
+
+def test_sop_portfolio_starts_no_dp_stage_it_cannot_set_up(monkeypatch):
+    """The portfolio starts a DP stage only when its share covers the ideal count just
+    measured (a stage sets up about as long, outside its clock: under load ESC47 at T = 1
+    took 2.8 s); otherwise it answers at once with the warm start's order and a bound."""
+    from taopt.models import sop as model
+    from taopt.sop.problem import SopProblem
+
+    monkeypatch.setattr(model, "DP_SHARE", 1e-9)  # a first stage's share below any count
+    problem = SopProblem.load("ESC47")
+    result = taopt.solve(problem, "exact", time_limit=2.0)
+    assert result.info["model"] == "not run" and result.info["engine"] == "none"
+    assert result.status == TIME_LIMIT and result.bound <= result.objective
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
+def test_limited_mip_runs_leave_out_highs_clockless_phases():
+    """Every time-limited MIP run of a HighsModel (all exact models) turns off HiGHS's probing
+    and restarts, which ignore its clock (the budgeted model's 5 s took 6.3 s, routing's
+    5.7 s); a run without a limit turns them back on."""
+    import cvxpy as cp
+
+    from taopt.models.highs import CLOCKLESS_MIP_PHASES, HighsModel
+
+    x = cp.Variable(3, integer=True)
+    model = HighsModel(cp.Problem(cp.Minimize(cp.sum(x)), [x >= 0.5, x[0] + x[1] >= 3]))
+
+    def phases():
+        return {name: model.highs.getOptionValue(name)[1] for name in CLOCKLESS_MIP_PHASES}
+
+    assert model.solve(time_limit=10.0).objective == 4.0
+    assert phases() == {"presolve_rule_off": 2**15, "mip_allow_restart": False}
+    assert model.solve().objective == 4.0
+    assert phases() == {"presolve_rule_off": 0, "mip_allow_restart": True}

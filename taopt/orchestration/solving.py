@@ -141,7 +141,7 @@ def method_table(
     (InstanceError) before anything runs. Ctrl-C (KeyboardInterrupt) stops the whole run.
 
     ``progress``: a bar on stderr over the methods, naming the one running and, for an exact
-    method or a peer, the time limit it may take (a peer proves nothing, so it runs to it).
+    method or a peer, the time limit it may take (a peer stops sooner once it stops improving).
     """
     methods = list(methods) if methods else default_methods(problem)
     specs = {m: get_method(problem, m) for m in methods}  # an unknown name: refused first

@@ -7,7 +7,12 @@ start, model building, separation and decoding all count. A method that runs out
 best plan with a proven bound and status "time_limit" (objective ``inf`` and no payload when
 it found no plan): never an exception. The promise holds on a loaded machine too: a call
 with ``time_limit=T`` returns within ``T + overrun_allowance(T)`` = ``T + max(1 s, 5 % of
-T)`` (:func:`overrun_allowance`).
+T)`` (:func:`overrun_allowance`), so every step that does not look at the clock itself is
+either short or estimated from a measured step of the same call (the delivery MILP's compile
+and presolve), heuristics look at their deadline inside their local searches, and a peer's
+worker (its start-up and import included) is stopped at the deadline plus a grace with the
+best solution it reported (``benchmarks/bench_time_limits.py`` measures every method under a
+load it creates).
 
 **Cancellation** is a :class:`CancelToken`: whoever owns the run (a study, a thread, a user's
 callback) calls :meth:`CancelToken.cancel`; a :class:`Deadline` that carries the token then
