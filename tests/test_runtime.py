@@ -247,3 +247,47 @@ def test_highs_model_solves_again_after_its_time_limit():
     model = HighsModel(knapsack())
     assert model.solve(time_limit=1e-3).status == "time_limit"
     assert model.solve(mip_rel_gap=1e-9).status == "optimal"
+
+
+ECHO_SCRIPT = """
+import pickle, sys
+parent, pdeathsig = sys.argv[-2:]
+out = sys.stdout.buffer
+pickle.dump(("ready", {"args": sys.argv[1:]}), out)
+out.flush()
+while True:
+    try:
+        message = pickle.load(sys.stdin.buffer)
+    except EOFError:
+        sys.exit(0)
+    if message == "die":
+        sys.exit(3)
+    pickle.dump(("echo", message), out)
+    out.flush()
+"""
+
+
+def test_script_worker_talks_stops_and_names_its_death(tmp_path):
+    """A ScriptWorker gets its arguments plus this pid and "1" (main thread), echoes frames,
+    exits on end of input (reaped), and a worker that dies is a SolverError naming it."""
+    from taopt.errors import SolverError
+
+    script = tmp_path / "echo.py"
+    script.write_text(ECHO_SCRIPT)
+    worker = workers.ScriptWorker(script, ["a"], name="echo")
+    try:
+        assert worker.next_frame(None, "start") == ("ready", {"args": ["a", str(os.getpid()), "1"]})
+        worker.send({"x": 1})
+        assert worker.next_frame(None, "a call") == ("echo", {"x": 1})
+        assert worker.next_frame(0.0, "a call") is None  # nothing more: None at its deadline
+    finally:
+        worker.stop()
+    assert worker.process.returncode == 0 and not worker.alive()
+    dying = workers.ScriptWorker(script, [], name="echo")
+    try:
+        dying.send("die")
+        with pytest.raises(SolverError, match=r"echo worker process died \(exit status 3\)"):
+            while True:
+                dying.next_frame(None, "a call")
+    finally:
+        dying.stop()

@@ -19,9 +19,13 @@ down, is not :attr:`~WorkerPool.usable`; :func:`shared_pool` hands out one live 
 and replaces such a pool on the next request, and :func:`drop_pool` terminates it. Pools are
 shut down at interpreter exit (without waiting for running tasks).
 
-A worker that is not a pool's (the peers' worker script, run by a fresh interpreter so that
-it never shares a process with highspy) runs the same steps itself; see
-:mod:`taopt.heuristics.peers`.
+A worker that must not share anything with this process (the peers' worker script: the
+``ortools`` and ``highspy`` wheels cannot be loaded into one process) is a
+:class:`ScriptWorker`: a script run by a fresh interpreter (``subprocess``), talking in
+pickle frames on its standard input and output. It gets this process's pid and whether to
+ask for ``PR_SET_PDEATHSIG`` as its last two arguments, and runs the same steps as
+:func:`become_worker` itself (it does not import taopt); :meth:`ScriptWorker.stop` closes
+its input and kills it if it lingers, and its owner stops it at exit.
 
 Example
 -------
@@ -38,15 +42,19 @@ import ctypes
 import multiprocessing
 import multiprocessing.process
 import os
+import pickle
+import queue
 import signal
+import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Hashable, Iterator, Mapping
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from taopt.errors import SolverError
 from taopt.runtime.interrupt import ignore_sigint
 
 #: Environment of worker processes: one solver / BLAS thread each.
@@ -282,6 +290,100 @@ def drop_pool(key: Hashable) -> None:
         pool.terminate()
 
 
+class ScriptWorker:
+    """A worker process that is a Python script run by a fresh interpreter, answering pickle
+    frames on its standard input with pickle frames on its standard output.
+
+    Started at construction (not waited for); a reader thread puts every frame it sends in a
+    queue, read with :meth:`next_frame`. Its own session (``start_new_session``): the
+    terminal's Ctrl-C is this process's to handle, and it stops the worker.
+
+    Parameters
+    ----------
+    script : path
+        The script; run as ``python SCRIPT *args PARENT_PID PDEATHSIG`` where ``PDEATHSIG``
+        is "1" when the starting thread is the main thread (Linux's ``PR_SET_PDEATHSIG``
+        fires when the *thread* that started the child ends, so it is only asked for from
+        the thread that lives as long as the process), else "0".
+    args : sequence of str
+        The script's own arguments.
+    name : str
+        Names the worker in errors ("pyvrp worker process died ...").
+    """
+
+    def __init__(self, script: str | os.PathLike[str], args: Sequence[str], name: str) -> None:
+        self.name = name
+        self.owner = os.getpid()
+        self.started = time.monotonic()
+        pdeathsig = "1" if threading.current_thread() is threading.main_thread() else "0"
+        self.process = subprocess.Popen(
+            [sys.executable, os.fspath(script), *args, str(os.getpid()), pdeathsig],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            start_new_session=os.name == "posix",
+        )
+        self.frames: queue.Queue[Any] = queue.Queue()
+        threading.Thread(target=self._read, name=f"{name}-reader", daemon=True).start()
+
+    def _read(self) -> None:
+        """Reader thread: every frame from the worker goes to the queue; None at end of file."""
+        stream = self.process.stdout
+        while True:
+            try:
+                self.frames.put(pickle.load(stream))  # type: ignore[arg-type]
+            except (EOFError, OSError, pickle.UnpicklingError, ValueError):
+                self.frames.put(None)
+                return
+
+    def send(self, message: Any) -> None:
+        """Write one frame to the worker (``BrokenPipeError`` / ``OSError`` if it is gone)."""
+        stdin = self.process.stdin
+        assert stdin is not None
+        pickle.dump(message, stdin, protocol=pickle.HIGHEST_PROTOCOL)
+        stdin.flush()
+
+    def next_frame(self, until: float | None, what: str) -> Any:
+        """The next frame, or None once ``time.monotonic()`` passes ``until`` (None: wait).
+
+        Raises
+        ------
+        SolverError
+            The worker ended (its output closed) during ``what``; the message names the
+            worker, how it ended (exit status or signal) and ``what``.
+        """
+        while True:
+            left = 1.0 if until is None else min(1.0, until - time.monotonic())
+            if left <= 0:
+                return None
+            try:
+                frame = self.frames.get(timeout=left)
+            except queue.Empty:
+                continue
+            if frame is None:
+                code = self.process.wait()
+                how = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
+                raise SolverError(f"{self.name} worker process died ({how}) during {what}")
+            return frame
+
+    def alive(self) -> bool:
+        """Whether the worker runs and is this process's (not inherited through a fork)."""
+        return self.owner == os.getpid() and self.process.poll() is None
+
+    def stop(self, wait: float = 2.0) -> None:
+        """Close the worker's input (it exits), then kill it if it lingers ``wait`` seconds;
+        always reaped. Nothing is done in a forked child (the worker is not its own)."""
+        if self.owner != os.getpid():
+            return
+        with contextlib.suppress(OSError):
+            if self.process.stdin is not None:
+                self.process.stdin.close()
+        try:
+            self.process.wait(timeout=wait)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+
+
 def kill_processes(pids: list[int]) -> None:
     """SIGKILL each of ``pids`` that still exists (processes that are not this pool's
     children, e.g. a local Dask cluster's workers)."""
@@ -292,6 +394,7 @@ def kill_processes(pids: list[int]) -> None:
 
 __all__ = [
     "ONE_THREAD_ENV",
+    "ScriptWorker",
     "WorkerPool",
     "become_worker",
     "die_with_parent",
