@@ -74,16 +74,19 @@ def test_overrun_allowance():
 
 
 def test_method_stops_on_a_cancelled_token():
-    """A heuristic started under a cancelled token stops at its first loop head (GA: no
-    generation done out of a million) and still returns its scored best answer."""
+    """A heuristic given a cancelled token (taopt.solve's cancel=, or a cancel_scope) stops at
+    its first loop head (GA: no generation done out of 100,000) and still returns its scored
+    best answer."""
     rng = np.random.default_rng(0)
     problem = taopt.AssignmentProblem(rng.uniform(1, 10, size=(8, 8)), n_targets=6)
     token = CancelToken()
     token.cancel()
-    with cancel_scope(token):
-        result = taopt.solve(problem, "GA", seed=0, generations=10**6)
+    result = taopt.solve(problem, "GA", seed=0, generations=100_000, cancel=token)
     assert result.info["generations_done"] == 0
     assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes))
+    with cancel_scope(token):  # the same through a scope around the call
+        assert taopt.solve(problem, "GA", seed=0, generations=100_000).info["generations_done"] == 0
+    assert current_token() is None
 
 
 # -- signals ---------------------------------------------------------------------------------

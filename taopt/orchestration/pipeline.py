@@ -36,7 +36,14 @@ from taopt.registry import (
     methods,
 )
 from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
-from taopt.runtime import MARGIN, WARM_START_SHARE, Deadline, check_footprint
+from taopt.runtime import (
+    MARGIN,
+    WARM_START_SHARE,
+    CancelToken,
+    Deadline,
+    cancel_scope,
+    check_footprint,
+)
 from taopt.scoring import evaluate
 
 #: Relative tolerance between a method's reported objective and the scorer's value.
@@ -92,6 +99,7 @@ def solve(
     seed: int | None = None,
     time_limit: float | None = None,
     max_memory_gb: float | None = None,
+    cancel: CancelToken | None = None,
     **options: Any,
 ) -> Solution:
     """Solve ``problem`` with the registered ``method``.
@@ -116,6 +124,10 @@ def solve(
         :data:`taopt.runtime.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
         whose estimated memory (:func:`taopt.runtime.footprint`) is above it is refused
         before anything is built.
+    cancel : taopt.runtime.CancelToken, optional
+        Stops the run early once another thread cancels it: the method stops at its next
+        check of its deadline (and a HiGHS run at its next interrupt callback) and returns
+        its best answer as at a time limit (docs/architecture.md, "the runtime contract").
     **options
         Method-specific keyword options (an unknown one is an error naming it).
         ``incumbent=None`` switches off the warm start of an exact model.
@@ -134,6 +146,12 @@ def solve(
     SolverError
         The method's objective differs from the scorer's value of its payload.
     """
+    if cancel is not None:  # every deadline made during the call carries the token
+        with cancel_scope(cancel):
+            return solve(
+                problem, method, seed=seed, time_limit=time_limit, max_memory_gb=max_memory_gb,
+                **options,
+            )  # fmt: skip
     deadline = Deadline(None)  # replaced below once time_limit is checked
     if time_limit is not None:
         if isinstance(time_limit, bool) or not (
