@@ -597,9 +597,10 @@ COMPILE_SECONDS_PER_COLUMN = 3e-5
 #: build at n = 8, 1.1-1.2x at 12, 2.2-2.7x at 20 and 4.3-5.4x at 30 (residential generator).
 #: Measured on the build of the same call, the estimate follows the machine's load.
 COMPILE_PER_BUILD_PER_CUSTOMER = 0.2
-#: HiGHS's MIP presolve does not look at the clock: 0.8x the build at n = 8, 1.2-3.9x at 20,
-#: 2.7x at 30. A run is only started when what is left covers it (then HiGHS stops on time).
-PRESOLVE_PER_BUILD_PER_CUSTOMER = 0.15
+#: HiGHS's MIP presolve and setup do not look at the clock: without probing (see
+#: :data:`LIMITED_RUN_OPTIONS`) 0.05-0.08 n times the build (n = 12, 20, 30). A run is only
+#: started when what is left covers this estimate (then HiGHS stops on time).
+PRESOLVE_PER_BUILD_PER_CUSTOMER = 0.1
 #: HiGHS options of a time-limited run: its probing (presolve rule 2^15) and its restarts
 #: (a second presolve after the root) overran the limit by 30-110 % on the 20-customer
 #: example (HiGHS 1.16: 3 s took 4.1 s, 6 s took 7.8-13 s; without them 3.2 s and 6.2 s).

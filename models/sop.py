@@ -791,7 +791,11 @@ def solve_sop_problem(
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
     counting = time.perf_counter()
-    ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
+    ideals, capped = (
+        count_ideals(problem, cap, deadline if deadline.limited else None)
+        if problem.n <= MAX_NODES
+        else (0, True)
+    )
     counted_in = time.perf_counter() - counting
     info = {"ideals": ideals, "ideals_capped": capped}
 

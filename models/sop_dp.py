@@ -138,7 +138,9 @@ def _predecessor_masks(problem: SopProblem) -> np.ndarray:
     return predecessor_masks(problem.n, problem.closure.edges)
 
 
-def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
+def count_ideals(
+    problem: SopProblem, cap: int = IDEAL_CAP, deadline: Deadline | None = None
+) -> tuple[int, bool]:
     """Number of order ideals containing ``start`` (the DP's sets), counted up to ``cap``.
 
     Parameters
@@ -146,13 +148,18 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     problem : SopProblem
     cap : int
         Stop once more than ``cap`` ideals are counted.
+    deadline : Deadline, optional
+        Stop, as if capped, once it has expired (looked at for every node of every layer);
+        given one, a layer whose candidates prove the cap passed (each ideal has at most
+        as many parents as removable nodes) ends the count as capped without merging them.
 
     Returns
     -------
     count : int
         The exact number of ideals, or ``cap + 1`` when ``capped``.
     capped : bool
-        True when there are more than ``cap`` (the true number is larger).
+        True when the count passed ``cap`` or the deadline came first (the true number
+        is larger or unknown).
 
     Notes
     -----
@@ -168,7 +175,9 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     if problem.n > MAX_NODES:
         return cap + 1, True
     first = int(_ONE << np.uint64(problem.start))
-    return ideals.count_ideals(_predecessor_masks(problem), problem.n, cap, first=first)
+    return ideals.count_ideals(
+        _predecessor_masks(problem), problem.n, cap, first=first, deadline=deadline
+    )
 
 
 class _Bound:

@@ -541,3 +541,21 @@ def test_limited_mip_runs_leave_out_highs_clockless_phases():
     assert phases() == {"presolve_rule_off": 2**15, "mip_allow_restart": False}
     assert model.solve().objective == 4.0
     assert phases() == {"presolve_rule_off": 0, "mip_allow_restart": True}
+
+
+def test_ideal_count_under_a_deadline_stops_early_and_stays_a_lower_bound():
+    """count_ideals with a deadline returns "capped" with a lower bound on the count, either
+    because the deadline passed or because a layer's candidates prove the cap is passed
+    (each ideal has at most as many parents as removable nodes), never above the true count."""
+    from taopt.models.sop_dp import count_ideals
+
+    n = 16
+    cost = np.random.default_rng(5).integers(1, 40, (n, n)).astype(float)
+    problem = taopt.SopProblem(cost, ((1, 2), (3, 4), (5, 6)), 0, n - 1)
+    exact, capped = count_ideals(problem, cap=10**6)
+    assert not capped and exact > 1000
+    for deadline in (Deadline(1e-9), Deadline(60.0)):
+        found, capped = count_ideals(problem, cap=1000, deadline=deadline)
+        assert capped and found <= exact
+    assert count_ideals(problem, cap=1000, deadline=Deadline(60.0))[0] > 1000
+    assert count_ideals(problem, cap=1000) == (count_ideals(problem, cap=1000)[0], True)
