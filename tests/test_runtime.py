@@ -199,8 +199,8 @@ def test_bad_worker_count():
 
 
 # -- HiGHS's interrupt hooks -------------------------------------------------------------------
-def knapsack(n: int = 60):
-    """A multi-dimensional 0-1 knapsack HiGHS needs a few hundred nodes for."""
+def knapsack(n: int = 30):
+    """A small multi-dimensional 0-1 knapsack: HiGHS needs simplex iterations and nodes for it."""
     import cvxpy as cp
 
     rng = np.random.default_rng(0)
