@@ -1,7 +1,7 @@
 """Wall-clock time limits under load: every registered method of every family, wall time / T.
 
-The contract (docs/architecture.md, invariant 4; issue 30 item 4): ``taopt.solve(problem, method,
-time_limit=T)`` returns within ``T + max(1 s, 5 % of T)`` of being called, everything
+The contract (docs/architecture.md, "the runtime contract"; issue 30 item 4):
+``taopt.solve(problem, method, time_limit=T)`` returns within ``T + max(1 s, 5 % of T)`` of being called, everything
 included (a peer's worker start-up and import, model building, warm starts, decoding), on a
 loaded machine too, with a status and no exception.
 
@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 import taopt
-from taopt.limits import overrun_allowance
+from taopt.runtime import overrun_allowance
 
 # the public TSPLIB files beside the checkout (../shared/benchmarks/tsplib)
 BENCHMARKS = Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "tsplib"

@@ -538,7 +538,11 @@ def _load(peer: str) -> str:
 
 
 def _die_with_parent(parent_pid: int, use_pdeathsig: bool) -> None:
-    """Exit as soon as the parent is gone, even if it was killed."""
+    """Exit as soon as the parent is gone, even if it was killed.
+
+    The steps of :func:`taopt.runtime.workers.die_with_parent`, written out here because
+    this script does not import taopt (the parent is :class:`taopt.runtime.workers.ScriptWorker`).
+    """
     if use_pdeathsig and sys.platform.startswith("linux"):
         try:
             import ctypes

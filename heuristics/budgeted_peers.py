@@ -47,9 +47,9 @@ from typing import Any
 from taopt.budgeted.problem import TIME_TOLERANCE, BudgetedProblem, evaluate_budgeted, violations
 from taopt.errors import require
 from taopt.heuristics import peers
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, NO_SOLUTION, Routes, Solution
+from taopt.runtime import Deadline
 
 __all__ = ["pyvrp_budgeted", "ortools_budgeted", "integer_limits", "shutdown", "LARGEST_ENTRY"]
 

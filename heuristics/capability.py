@@ -29,9 +29,9 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError
 from taopt.heuristics.clustering import mc
 from taopt.heuristics.ga_routing import genetic_algorithm, improve_routes
-from taopt.limits import Deadline
 from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
+from taopt.runtime import Deadline
 
 __all__ = ["class_seed", "ga_per_class", "mc_per_class"]
 

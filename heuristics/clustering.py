@@ -39,11 +39,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
 from taopt.routing.bounds import mcga_tree
 from taopt.routing.problem import AssignmentProblem
+from taopt.runtime import Deadline
 
 # -- clustering strategies ------------------------------------------------------------
 

@@ -74,9 +74,9 @@ from taopt.comm.problem import CommProblem
 from taopt.comm.routes import InsertionTable, insert, insertion_costs, removal_savings
 from taopt.errors import ConvergenceError
 from taopt.heuristics.ga_routing import improve_routes
-from taopt.limits import Deadline
 from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, TIME_LIMIT, Solution, make_solution
+from taopt.runtime import Deadline
 
 #: Savings below this (metres) do not count as an improvement (HDA's stopping rule).
 SAVING_TOLERANCE = 1e-9

@@ -51,9 +51,9 @@ from taopt.heuristics.fleet import (
     infeasible_solution,
     servers,
 )
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Solution, make_solution
+from taopt.runtime import Deadline
 
 #: Customers between two snapshots of the current decode (:class:`_Search`).
 SNAPSHOT_EVERY = 8

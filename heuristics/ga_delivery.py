@@ -55,9 +55,9 @@ from taopt.heuristics.sequencing import (
     path_cost,
     schedule_order,
 )
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution, make_solution
+from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem
 
 __all__ = ["ga_order", "ga_search"]

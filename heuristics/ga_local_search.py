@@ -34,7 +34,7 @@ import functools
 import numpy as np
 
 from taopt.errors import InstanceError
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 
 #: The local-search moves, in the order they are tried.
 NEIGHBOURHOOD = ("reverse", "relocate", "tails", "exchange")

@@ -59,7 +59,7 @@ import numpy as np
 from taopt.budgeted.problem import BudgetedProblem
 from taopt.errors import InstanceError
 from taopt.heuristics.ga_local_search import NEIGHBOURHOOD, _apply, _move_masks
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 
 #: A move of the search: (kind, row, column, segment length) of its table cell.
 Move = tuple[str, int, int, int]

@@ -83,10 +83,10 @@ from taopt.errors import InstanceError
 # the local search (and its NEIGHBOURHOOD) lives in taopt.heuristics.ga_local_search;
 # re-exported here, where it was defined before
 from taopt.heuristics.ga_local_search import NEIGHBOURHOOD, local_search
-from taopt.limits import Deadline
 from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, Routes, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem
+from taopt.runtime import Deadline
 
 MARKERS = ("position", "vehicle")
 CROSSOVERS = ("ox", "obx")

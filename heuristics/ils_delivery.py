@@ -23,7 +23,7 @@ Search
   or within a factor ``1 + accept_worse`` of the best order found ("better or slightly
   worse"); the best order is always kept.
 * **Stop**: after ``iterations`` perturbations, or when ``time_limit`` wall-clock seconds
-  (:class:`taopt.limits.Deadline`) have passed; tests and studies stop on iterations, so
+  (:class:`taopt.runtime.Deadline`) have passed; tests and studies stop on iterations, so
   the same seed gives the same result.
 
 Incremental evaluation
@@ -68,9 +68,9 @@ from taopt.heuristics.sequencing import (
     ordered_or_repaired,
     path_cost,
 )
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import FEASIBLE, Order, Solution, make_solution
+from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem
 
 __all__ = ["ScheduleStates", "PathStates", "Screen", "ils_search", "forward_states"]

@@ -35,8 +35,8 @@ libraries with the same soname: whichever is imported second fails to load
 (and cvxpy then silently loses its HIGHS solver). So each peer runs in its own
 worker process, started on first use and kept alive for later calls (starting
 costs about a second), and this module imports neither package. The worker is
-the script ``_peer_worker.py`` run by a fresh interpreter (``subprocess``),
-not a :mod:`multiprocessing` "spawn" child: a spawn child re-runs the
+the script ``_peer_worker.py`` run by a fresh interpreter
+(:class:`taopt.runtime.workers.ScriptWorker`), not a :mod:`multiprocessing` "spawn" child: a spawn child re-runs the
 top-level imports of the caller's ``__main__`` script, so a script that
 imports ``taopt.models`` (hence highspy) at the top would break OR-Tools in
 its own worker. The worker dies with its parent (Linux ``PR_SET_PDEATHSIG``,
@@ -47,7 +47,7 @@ package becomes a :class:`taopt.SolverError` naming the peer.
 
 Time limits
 -----------
-A ``time_limit`` is wall-clock from the call (DESIGN.md invariant 4), the
+A ``time_limit`` is wall-clock from the call (docs/architecture.md, invariant 4), the
 worker's start-up included: the caller waits for a starting worker only as
 long as the limit allows (a worker still importing its package at the limit
 keeps starting, for the next call, and the call answers "no_solution"); the
@@ -87,21 +87,15 @@ from __future__ import annotations
 import atexit
 import importlib.util
 import math
-import os
-import pickle
-import queue
-import subprocess
-import sys
 import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any, cast
+from typing import Any
 
 import numpy as np
 
 from taopt.errors import InstanceError, SolverError, require
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import (
     FEASIBLE,
@@ -113,6 +107,8 @@ from taopt.result import (
     make_solution,
 )
 from taopt.routing.problem import AssignmentProblem
+from taopt.runtime import Deadline
+from taopt.runtime.workers import ScriptWorker
 from taopt.sop.problem import SopProblem
 from taopt.status import RAW_OUTCOMES
 
@@ -171,61 +167,21 @@ def grace(time_limit: float) -> float:
     return GRACE + GRACE_SHARE * time_limit
 
 
-class _Worker:
-    """One worker process for one peer, with its reply queue.
+class _Worker(ScriptWorker):
+    """One worker process for one peer (a :class:`~taopt.runtime.workers.ScriptWorker`
+    running ``_peer_worker.py``), and the lock its calls hold.
 
     Starting it does not wait: the worker imports its package while the caller waits for
     its "ready" frame (:meth:`wait_ready`) as long as its time limit allows.
     """
 
     def __init__(self, peer: str) -> None:
+        super().__init__(WORKER_SCRIPT, [peer], name=peer)
         self.peer = peer
-        self.owner = os.getpid()
         self.lock = threading.Lock()
-        self.started = time.monotonic()
         self.ready = False
         self.version: str | None = None
         self.startup = math.nan
-        # PR_SET_PDEATHSIG fires when the *thread* that started the worker ends,
-        # so it is only asked for from the main thread (which lives as long as us).
-        main = "1" if threading.current_thread() is threading.main_thread() else "0"
-        self.process = subprocess.Popen(
-            [sys.executable, str(WORKER_SCRIPT), peer, str(os.getpid()), main],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            start_new_session=os.name == "posix",  # the terminal's Ctrl-C is ours, not its
-        )
-        # the two pipes asked for above (Popen types them Optional)
-        self.stdin = cast(IO[bytes], self.process.stdin)
-        self.stdout = cast(IO[bytes], self.process.stdout)
-        self.replies: queue.Queue = queue.Queue()
-        threading.Thread(target=self._read, name=f"{peer}-reader", daemon=True).start()
-
-    def _read(self) -> None:
-        """Reader thread: every frame from the worker goes to the queue; None at end of file."""
-        stream = self.stdout
-        while True:
-            try:
-                self.replies.put(pickle.load(stream))
-            except (EOFError, OSError, pickle.UnpicklingError, ValueError):
-                self.replies.put(None)
-                return
-
-    def _next(self, until: float | None, what: str) -> tuple[str, Any] | None:
-        """The next frame, or None once ``time.monotonic()`` passes ``until`` (None: wait)."""
-        while True:
-            left = 1.0 if until is None else min(1.0, until - time.monotonic())
-            if left <= 0:
-                return None
-            try:
-                reply = self.replies.get(timeout=left)
-            except queue.Empty:
-                continue
-            if reply is None:
-                code = self.process.wait()
-                how = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
-                raise SolverError(f"{self.peer} worker process died ({how}) during {what}")
-            return reply
 
     def wait_ready(self, until: float | None) -> bool:
         """Wait (holding :attr:`lock`) for the worker's "ready" frame until ``until``
@@ -242,7 +198,7 @@ class _Worker:
             return True
         hung = self.started + STARTUP_TIMEOUT
         try:
-            frame = self._next(hung if until is None else min(until, hung), "start")
+            frame = self.next_frame(hung if until is None else min(until, hung), "start")
         except BaseException:  # Ctrl-C while it starts, or it died: do not leave it behind
             self.stop(wait=0.0)
             raise
@@ -264,9 +220,6 @@ class _Worker:
         self.startup = time.monotonic() - self.started
         return True
 
-    def alive(self) -> bool:
-        return self.owner == os.getpid() and self.process.poll() is None
-
     def call(
         self, request: dict[str, Any], until: float | None
     ) -> tuple[dict[str, Any] | None, bool]:
@@ -278,10 +231,9 @@ class _Worker:
         """
         best = None
         try:
-            pickle.dump(request, self.stdin, protocol=pickle.HIGHEST_PROTOCOL)
-            self.stdin.flush()
+            self.send(request)
             while True:
-                frame = self._next(until, "a solve")
+                frame = self.next_frame(until, "a solve")
                 if frame is None:  # past the deadline: stop it, answer with what it sent
                     self.stop(wait=0.0)
                     return best, False
@@ -300,20 +252,6 @@ class _Worker:
         except BaseException:  # Ctrl-C: the reply would be stale
             self.stop(wait=0.0)
             raise
-
-    def stop(self, wait: float = 2.0) -> None:
-        """Close the worker's stdin (it exits), then kill it if it lingers."""
-        if self.owner != os.getpid():  # inherited through fork: not ours to stop
-            return
-        try:
-            self.stdin.close()
-        except OSError:
-            pass
-        try:
-            self.process.wait(timeout=wait)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
 
 
 _WORKERS: dict[str, _Worker] = {}

@@ -31,7 +31,6 @@ from taopt.capability.problem import CapabilityProblem
 from taopt.delivery.ideal_dp import count_ideals, ideal_dp
 from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import optimal_plan
-from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability import solve_capability, solve_exact, solve_joint
 from taopt.models.comm import solve_comm  # registers CommProblem "exact"
 from taopt.models.delivery import solve_delivery
@@ -39,6 +38,7 @@ from taopt.models.routing import solve_routing
 from taopt.models.sop import solve_sop, solve_sop_problem
 from taopt.registry import register_method
 from taopt.routing.problem import AssignmentProblem
+from taopt.runtime import milp_bytes, register_footprint
 from taopt.sop.problem import SopProblem
 
 

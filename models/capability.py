@@ -58,25 +58,18 @@ Example
 
 from __future__ import annotations
 
-import atexit
-import contextlib
-import ctypes
 import inspect
 import logging
 import math
-import multiprocessing
 import os
-import signal
-import sys
 import time
 from collections.abc import Hashable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from taopt.capability.problem import CapabilityProblem
 from taopt.errors import InstanceError, SolverError
-from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability_corrected import (
     ClassSolve,
     _solve_corrected,
@@ -99,6 +92,8 @@ from taopt.models.capability_printed import (
 )
 from taopt.models.routing import solve_routing
 from taopt.result import Solution
+from taopt.runtime import milp_bytes, register_footprint
+from taopt.runtime.workers import WorkerPool, drop_pool, shared_pool
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 
@@ -130,14 +125,6 @@ def _routing_takes_incumbent() -> bool:
 #: Seconds a worker may run past its class's time limit before the pool is killed and the
 #: class counted as unfinished (``solve_routing`` keeps its limit within about 0.5 s).
 WORKER_GRACE = 5.0
-#: Environment of the worker processes: one HiGHS / BLAS thread each (the workers are the
-#: parallelism), and a nested ``solve_capability`` inside a worker stays serial.
-WORKER_ENV = {
-    "OMP_NUM_THREADS": "1",
-    "OPENBLAS_NUM_THREADS": "1",
-    "MKL_NUM_THREADS": "1",
-    "TAOPT_SOLVER_THREADS": "1",
-}
 
 #: A class counts towards the default number of workers from this many targets (smaller
 #: ones are certified in milliseconds: not worth starting a process for).
@@ -146,8 +133,6 @@ PARALLEL_MIN_TARGETS = 20
 #: A time limit below this many seconds solves the classes in this process (default
 #: ``workers``): starting worker processes takes 1-3 s, more on a loaded machine.
 PARALLEL_MIN_SECONDS = 10.0
-
-_POOLS: dict[int, ProcessPoolExecutor] = {}
 
 
 def available_cores() -> int:
@@ -173,69 +158,22 @@ def _auto_workers(classes: list[Any]) -> int:
     return 1 if large < 2 else min(large, available_cores())
 
 
-def _worker_init(parent: int) -> None:  # pragma: no cover - runs in the workers
-    """One solver thread; Ctrl-C ignored (the parent stops the pool); die with the parent."""
-    os.environ.update(WORKER_ENV)
-    with contextlib.suppress(ValueError, OSError):
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL("libc.so.6", use_errno=True)
-            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG: killed when the parent dies
+def _pool_key(workers: int) -> tuple[str, int]:
+    """The key of the capability model's pool of ``workers`` processes
+    (:func:`taopt.runtime.workers.shared_pool`)."""
+    return ("capability", workers)
 
 
-def _class_pool(workers: int) -> ProcessPoolExecutor:
+def _class_pool(workers: int) -> WorkerPool:
     """A pool of ``workers`` spawned processes, created on first use and kept for reuse.
 
-    "spawn", not "fork": HiGHS's threads do not survive a fork. The first call pays the
-    workers' start-up (the imports, about a second each); later calls reuse them.
+    "spawn", not "fork": HiGHS's threads do not survive a fork. One HiGHS / BLAS thread each
+    (the workers are the parallelism, and a nested ``solve_capability`` inside a worker stays
+    serial); ``__main__`` hidden while they start, so a caller's script without a
+    ``__main__`` guard is not run again by them. The first call pays the workers' start-up
+    (the imports, about a second each); later calls reuse them.
     """
-    pool = _POOLS.get(workers)
-    if pool is None or getattr(pool, "_broken", False):
-        pool = ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_worker_init,
-            initargs=(os.getpid(),),
-        )
-        _POOLS[workers] = pool
-        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
-    return pool
-
-
-def _kill_pool(workers: int) -> None:
-    """Kill the pool's processes at once (after Ctrl-C, an error or a hung worker)."""
-    pool = _POOLS.pop(workers, None)
-    if pool is None:
-        return
-    for process in list(getattr(pool, "_processes", {}).values()):
-        with contextlib.suppress(Exception):
-            process.kill()
-    with contextlib.suppress(Exception):
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
-@contextlib.contextmanager
-def _main_not_rerun() -> Any:
-    """While workers are started: hide ``__main__``'s file and spec, so that a spawned worker
-    does not run the caller's script again (spawn re-imports it, and a script without an
-    ``if __name__ == "__main__":`` guard would start the solve anew in every worker). The
-    workers unpickle only this module's function and taopt's objects, never ``__main__``'s.
-    """
-    main = sys.modules.get("__main__")
-    if main is None:
-        yield
-        return
-    saved: dict[str, Any] = {
-        key: main.__dict__[key] for key in ("__file__", "__spec__") if key in main.__dict__
-    }
-    main.__dict__.pop("__file__", None)
-    main.__spec__ = None
-    try:
-        yield
-    finally:
-        main.__dict__.pop("__spec__", None)
-        main.__dict__.update(saved)
+    return shared_pool(_pool_key(workers), workers, hide_main=True)
 
 
 def _solve_class(problem: Any, options: dict[str, Any], submitted: float) -> Solution:
@@ -293,10 +231,7 @@ def _solve_classes_parallel(
                 cls, given = waiting.pop(0)
                 waves = math.ceil((len(waiting) + 1) / workers)
                 share = left() / waves if math.isfinite(left()) else None
-                with _main_not_rerun():  # the pool starts its workers in submit()
-                    future = pool.submit(
-                        _solve_class, cls.problem, options(share, given), time.time()
-                    )
+                future = pool.submit(_solve_class, cls.problem, options(share, given), time.time())
                 running[future] = cls.capability
             done, _ = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
             for future in done:
@@ -314,10 +249,10 @@ def _solve_classes_parallel(
                     sorted(map(str, running.values())),
                     WORKER_GRACE,
                 )
-                _kill_pool(workers)
+                drop_pool(_pool_key(workers))
                 break
     except BaseException:  # Ctrl-C or a class's error: stop every worker, then raise
-        _kill_pool(workers)
+        drop_pool(_pool_key(workers))
         raise
     return results
 

@@ -20,10 +20,10 @@ import scipy.sparse as sp
 from taopt.bounds import arborescence as arborescence_lower
 from taopt.capability.problem import CapabilityProblem, evaluate_capability
 from taopt.errors import InstanceError, SolverError
-from taopt.limits import MARGIN
 from taopt.models.capability_model import CapabilityModel, _check
 from taopt.models.highs import solve_highs
 from taopt.result import Routes, Solution, finish
+from taopt.runtime import MARGIN
 
 JOINT_SUBTOUR_ELIMINATIONS = ("dfj", "mtz")
 

@@ -29,10 +29,10 @@ from taopt.capability.problem import CapabilityClass
 from taopt.comm.problem import CommProblem
 from taopt.comm.trajectories import Trajectories
 from taopt.errors import InstanceError
-from taopt.limits import milp_bytes, register_footprint
 from taopt.models.capability import solve_classes
 from taopt.registry import register_method
 from taopt.result import Routes, Solution, finish
+from taopt.runtime import milp_bytes, register_footprint
 
 
 def drive(problem: CommProblem, routes: Sequence[Sequence[int]]) -> Trajectories:

@@ -106,9 +106,9 @@ from taopt.delivery.bounds import arborescence_bound
 from taopt.delivery.evaluate import evaluate_plan
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import InstanceError, SolverError
-from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.models.highs import HighsModel, solve_highs
 from taopt.result import FEASIBLE, INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, finish
+from taopt.runtime import MARGIN, Deadline, milp_bytes, register_footprint
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 

@@ -52,10 +52,10 @@ import scipy.sparse as sp
 from taopt.errors import InstanceError, SolverError
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.limits import MARGIN, Deadline
 from taopt.models.highs import solve_highs
 from taopt.registry import register_method
 from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, finish
+from taopt.runtime import MARGIN, Deadline
 from taopt.status import STOPS
 
 

@@ -43,18 +43,12 @@ Example
 
 from __future__ import annotations
 
-import atexit
 import contextlib
-import ctypes
 import logging
 import math
 import os
-import signal
-import sys
-import threading
 import time
 import warnings
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -62,10 +56,16 @@ import cvxpy as cp
 import highspy
 import numpy as np
 import scipy.sparse as sp
-from highspy._core import _Highs
 
 from taopt.errors import SolverError
 from taopt.result import ERROR
+from taopt.runtime.deadline import current_token
+from taopt.runtime.highs import (
+    cvxpy_interruptible,
+    interrupt_when,
+    run_interruptibly,
+    stdout_discarded,
+)
 from taopt.status import OPTIMALITY_TOLERANCE, decide, relative_gap
 
 #: A MIP run whose reported objective differs from ``c·x + offset`` of its own point by more
@@ -76,52 +76,12 @@ logger = logging.getLogger("taopt")
 
 __all__ = [
     "OPTIMALITY_TOLERANCE",
-    "INTERRUPT_GRACE",
-    "run_interruptibly",
-    "solver_interrupted",
     "HighsModel",
     "HighsRun",
     "new_highs",
     "relative_gap",
     "solve_highs",
 ]
-
-
-def _flush_c_stdout() -> None:
-    """Flush the C library's ``stdout`` buffer (HiGHS prints through it)."""
-    try:
-        ctypes.CDLL(None).fflush(None)
-    except (OSError, AttributeError):  # no libc symbol table (not on Linux/macOS)
-        pass
-
-
-@contextlib.contextmanager
-def _stdout_discarded() -> Iterator[None]:
-    """Send file descriptor 1 to the null device for the duration of the block.
-
-    HiGHS writes its banner from C++ straight to the process's standard output,
-    before any option can be set, so ``output_flag`` cannot stop it; only the
-    file descriptor can. Python's and C's buffers are flushed on both sides so
-    no line of anybody else's is lost or moved.
-    """
-    try:
-        sys.stdout.flush()
-    except (AttributeError, ValueError, OSError):
-        pass
-    _flush_c_stdout()
-    try:
-        saved = os.dup(1)
-    except OSError:  # no standard output at all: nothing to protect
-        yield
-        return
-    try:
-        with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 1)
-        yield
-    finally:
-        _flush_c_stdout()
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 def new_highs(verbose: bool = False) -> highspy.Highs:
@@ -132,7 +92,7 @@ def new_highs(verbose: bool = False) -> highspy.Highs:
     can be switched off; older versions print nothing. Every HiGHS object of
     taopt is made here, so no version's banner reaches a user's table.
     """
-    with _stdout_discarded():
+    with stdout_discarded():
         highs = highspy.Highs()
         highs.setOptionValue("output_flag", bool(verbose))
     return highs
@@ -141,157 +101,6 @@ def new_highs(verbose: bool = False) -> highspy.Highs:
 # The banner is printed once per process, by whichever Highs() comes first:
 # cvxpy's HiGHS interface builds its own, so take the first one here, quietly.
 new_highs()
-
-
-# ------------------------------------------------------------------ Ctrl-C
-#: Seconds a Ctrl-C waits for HiGHS to stop at its next interrupt callback before the run
-#: is abandoned (HiGHS calls ``kCallbackMipInterrupt`` between nodes, but may go seconds
-#: without one at the root).
-INTERRUPT_GRACE = 1.0
-
-_INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
-_ABANDONED: list[threading.Event] = []  # the "finished" events of abandoned runs
-_INTERRUPTED = threading.Event()
-
-
-def solver_interrupted() -> bool:
-    """Whether Ctrl-C stopped a HiGHS run in this process.
-
-    The interpreter's teardown after such a run can race HiGHS's own threads and static
-    objects (an abort or a segmentation fault at exit, now and then), so the command line
-    ends the process at once (``os._exit(130)``) when this is true.
-    """
-    return _INTERRUPTED.is_set()
-
-
-def _exit_if_abandoned() -> None:
-    """At interpreter exit: a HiGHS run abandoned on Ctrl-C still running in C++ would race
-    the interpreter's teardown (and HiGHS's own static objects); end the process at once
-    with the interrupt's exit code instead."""
-    if not all(finished.is_set() for finished in _ABANDONED):
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(Exception):
-                stream.flush()
-        os._exit(130)
-
-
-def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
-    """``highs.run()`` that Ctrl-C stops within :data:`INTERRUPT_GRACE` seconds.
-
-    Python handles a signal only in the main thread and only between bytecodes; while the
-    main thread is inside ``Highs.run()`` that happens in HiGHS's callbacks, where the
-    ``KeyboardInterrupt`` becomes a HiGHS error, or never (the run goes on to its end).
-    So, on the main thread, HiGHS runs in a helper thread (``Highs.run`` releases the GIL)
-    while the main thread waits, ready for Ctrl-C. On Ctrl-C the interrupt callbacks
-    (``kCallbackSimplexInterrupt``, ``kCallbackIpmInterrupt``, ``kCallbackMipInterrupt``)
-    set ``user_interrupt`` and HiGHS returns; a run that has not stopped after the grace
-    period is left to finish on its own (the process, ending, exits at once with code
-    130). ``KeyboardInterrupt`` is then raised in the caller. Off the main thread, or with
-    SIGINT ignored (a study's worker processes), the run is plain: the helper thread costs
-    about 2 ms per run.
-
-    Parameters
-    ----------
-    highs : highspy.Highs
-    run : callable, optional
-        The run to call (default ``highs.run``).
-
-    Returns
-    -------
-    HighsStatus
-        What ``run()`` returned.
-
-    Raises
-    ------
-    KeyboardInterrupt
-        Ctrl-C during the run.
-    """
-    run = run or highs.run
-    if threading.current_thread() is not threading.main_thread() or not callable(
-        signal.getsignal(signal.SIGINT)
-    ):
-        return run()  # no Ctrl-C to wait for (a worker thread, or SIGINT ignored)
-    stop = threading.Event()
-
-    def on_interrupt(event: Any) -> None:
-        if stop.is_set():
-            event.interrupt()
-
-    for name in _INTERRUPT_CALLBACKS:
-        getattr(highs, name).subscribe(on_interrupt)
-    outcome: dict[str, Any] = {}
-    # the end of the run, as an Event: Thread.join() interrupted by Ctrl-C can mark a
-    # running thread as stopped (CPython's bpo-45274 clean-up), so it cannot be trusted
-    finished = threading.Event()
-
-    def target() -> None:
-        try:
-            outcome["status"] = run()
-        except BaseException as exc:  # noqa: BLE001 -- handed to the waiting thread
-            outcome["error"] = exc
-        finally:
-            # HiGHS keeps a task scheduler per calling thread; release this thread's, as
-            # highspy's own threaded solve does. After a Ctrl-C, wait for its workers to
-            # end: the process is about to exit, and a worker still joinable when HiGHS's
-            # static objects are destroyed aborts it ("terminate called ...").
-            # (newer highspy only; older versions keep one global scheduler and have nothing
-            # per thread to release)
-            try:
-                reset = getattr(_Highs, "resetThreadScheduler", None)
-                if reset is not None:
-                    reset(stop.is_set())
-            finally:
-                finished.set()  # whatever happened, the waiting thread must not hang
-
-    worker = threading.Thread(target=target, name="highs-run", daemon=True)
-    worker.start()
-    try:
-        while not finished.wait(0.05):
-            pass
-    except KeyboardInterrupt:
-        stop.set()
-        _INTERRUPTED.set()
-        try:
-            finished.wait(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
-        finally:
-            if not finished.is_set():
-                if not _ABANDONED:
-                    atexit.register(_exit_if_abandoned)
-                _ABANDONED.append(finished)
-        raise
-    finally:
-        if finished.is_set():
-            for name in _INTERRUPT_CALLBACKS:
-                getattr(highs, name).unsubscribe(on_interrupt)
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome.get("status")
-
-
-class _InterruptibleHighs(highspy.Highs):
-    """``highspy.Highs`` whose ``run()`` is :func:`run_interruptibly` (for cvxpy's object)."""
-
-    def run(self) -> Any:
-        return run_interruptibly(self, super().run)
-
-
-@contextlib.contextmanager
-def _cvxpy_interruptible() -> Any:
-    """cvxpy's HiGHS interface builds its own ``highspy.Highs()`` and calls ``run()``: on
-    the main thread, let it build an :class:`_InterruptibleHighs` instead."""
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or not callable(signal.getsignal(signal.SIGINT))
-        or highspy.Highs is _InterruptibleHighs
-    ):
-        yield
-        return
-    original = highspy.Highs
-    highspy.Highs = _InterruptibleHighs  # type: ignore[misc]  # a deliberate monkeypatch
-    try:
-        yield
-    finally:
-        highspy.Highs = original  # type: ignore[misc]  # undone
 
 
 @dataclass(frozen=True)
@@ -398,7 +207,7 @@ def solve_highs(
         options["objective_bound"] = float(objective_bound)
     options.update(extra or {})
     try:
-        with warnings.catch_warnings(), _cvxpy_interruptible():
+        with warnings.catch_warnings(), cvxpy_interruptible():
             # cvxpy warns "Solution may be inaccurate" on every limit; the status says it
             warnings.filterwarnings("ignore", message="Solution may be inaccurate")
             problem.solve(solver=cp.HIGHS, verbose=verbose, **options)
@@ -558,6 +367,9 @@ class HighsModel:
         self._start: np.ndarray | None = None
         #: MIP runs re-done without presolve because HiGHS's answer contradicted its point
         self.reruns = 0
+        # HiGHS keeps the interrupt flag of an interrupted run: the next run needs the
+        # flag-clearing hook of taopt.runtime.highs.interrupt_when
+        self._interrupted = False
         if problem is None:  # filled by from_arrays
             return
         data, _, inverse = problem.get_problem_data(cp.HIGHS)
@@ -778,7 +590,9 @@ class HighsModel:
         Parameters
         ----------
         time_limit : float, optional
-            Seconds (at least 1 ms is passed); None for no limit.
+            Seconds (at least 1 ms is passed); None for no limit. The run also stops at
+            HiGHS's next interrupt callback once the cancel token of the innermost
+            :func:`taopt.runtime.cancel_scope` (if any) is set.
         mip_rel_gap : float, optional
             HiGHS ``mip_rel_gap`` (HiGHS's default 1e-4 when None).
         on_solution : callable, optional
@@ -815,17 +629,21 @@ class HighsModel:
 
         began = time.perf_counter()
         deadline = began + limit
-
-        def stop_at_deadline(event: Any) -> None:
-            # HiGHS looks at time_limit rarely inside an LP; these callbacks come every
-            # simplex / IPM iteration and MIP node, so a limit is kept more closely
-            if time.perf_counter() >= deadline:
-                event.interrupt()
-
-        interrupts = (highs.cbSimplexInterrupt, highs.cbIpmInterrupt, highs.cbMipInterrupt)
-        if time_limit is not None:
-            for callback in interrupts:
-                callback.subscribe(stop_at_deadline)
+        # HiGHS looks at time_limit rarely inside an LP; its interrupt callbacks come every
+        # simplex / IPM iteration and MIP node, so a limit is kept more closely; they also
+        # stop the run once the caller's cancel token is set (docs/architecture.md, "the
+        # runtime contract")
+        token = current_token()
+        hooks = contextlib.ExitStack()
+        if time_limit is not None or token is not None or self._interrupted:
+            hooks.enter_context(
+                interrupt_when(
+                    highs,
+                    lambda: (
+                        time.perf_counter() >= deadline or (token is not None and token.cancelled)
+                    ),
+                )
+            )
 
         def give(event: Any) -> None:
             vector = offer()
@@ -881,9 +699,8 @@ class HighsModel:
                 highs.cbMipSolution.unsubscribe(forward)
             if offer is not None and is_mip:
                 highs.cbMipUserSolution.unsubscribe(give)
-            if time_limit is not None:
-                for callback in interrupts:
-                    callback.unsubscribe(stop_at_deadline)
+            hooks.close()
+            self._interrupted = highs.getModelStatus() == highspy.HighsModelStatus.kInterrupt
         return run
 
     def point_objective(self, solution: Any = None) -> float:

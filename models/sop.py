@@ -68,7 +68,6 @@ import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError
-from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.models.highs import HighsModel, solve_highs
 from taopt.result import (
     FEASIBLE,
@@ -79,6 +78,7 @@ from taopt.result import (
     Solution,
     finish,
 )
+from taopt.runtime import MARGIN, Deadline, milp_bytes, register_footprint
 from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.status import decide
 

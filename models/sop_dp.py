@@ -89,8 +89,8 @@ from taopt import ideals
 from taopt.errors import InstanceError
 from taopt.ideals import MAX_BITS, predecessor_masks
 from taopt.ideals import bits as node_bits
-from taopt.limits import MARGIN, Deadline
 from taopt.result import Order, Solution, finish
+from taopt.runtime import MARGIN, Deadline
 from taopt.sop.problem import SopProblem, path_cost
 
 __all__ = [
@@ -152,7 +152,7 @@ def count_ideals(
     deadline : Deadline, optional
         Stop, as if capped, once it has expired (looked at for every node of every layer);
         given one, a layer whose candidates prove the cap passed (each ideal has at most
-        as many parents as removable nodes) returns that lower bound without counting it.
+        as many parents as removable nodes) ends the count as capped without merging them.
 
     Returns
     -------

@@ -19,6 +19,7 @@ from taopt.errors import InstanceError
 from taopt.models import solve_capability
 from taopt.models.capability import build_printed, decode_printed, describe
 from taopt.orchestration.studies.capability_claims import exact_optimum, random_problem
+from taopt.runtime.workers import kept_pool
 
 EXAMPLE = (
     Path(__file__).parent.parent
@@ -233,56 +234,44 @@ def test_workers_option_checked():
             solve_capability(problem, workers=bad)
 
 
-def test_killed_worker_is_a_clear_error():
-    """A worker process killed mid-solve raises SolverError naming its class, never hangs."""
-    import os
-    import signal
-    import threading
+def test_killed_worker_is_a_clear_error(monkeypatch):
+    """A worker process killed mid-solve raises SolverError naming its class, never hangs;
+    the broken pool is dropped and the next call starts anew."""
+    import runtime_tasks
 
-    from taopt.capability.instances import STUDY_CELL
     from taopt.errors import SolverError
     from taopt.models import capability
-    from taopt.orchestration.studies.capability import make_scenario
 
-    # the benchmark's n90m10 |A| = 5 scenario: its hardest class takes about 10 s
-    settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
-    problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
-    solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
-    pool = capability._POOLS[2]
-
-    def kill_one() -> None:
-        os.kill(next(iter(pool._processes)), signal.SIGKILL)
-
-    timer = threading.Timer(0.3, kill_one)
-    timer.start()
-    try:
-        with pytest.raises(SolverError, match="worker process"):
+    problem = thesis_scenario(9, 2, 2, seed=4).problem
+    with monkeypatch.context() as patch:
+        patch.setattr(capability, "_solve_class", runtime_tasks.die)  # the worker dies in it
+        with pytest.raises(SolverError, match="worker process solving capability class"):
             solve_capability(problem, workers=2)
-    finally:
-        timer.cancel()
-    assert 2 not in capability._POOLS  # the broken pool is dropped; the next call starts anew
-    small = thesis_scenario(9, 2, 2, seed=4).problem
-    assert solve_capability(small, workers=2).objective == pytest.approx(
-        solve_capability(small, workers=1).objective
+    assert kept_pool(("capability", 2)) is None
+    assert solve_capability(problem, workers=2).objective == pytest.approx(
+        solve_capability(problem, workers=1).objective
     )
 
 
 CTRL_C_SCRIPT = """
-import os, sys, threading, time
-from taopt.capability.instances import STUDY_CELL
+import os, sys, time
+sys.path.insert(0, {tests!r})  # the workers inherit it and import runtime_tasks
+import runtime_tasks
+from taopt.capability.instances import thesis_scenario
 from taopt.models import capability, solve_capability
-from taopt.orchestration.studies.capability import make_scenario
+from taopt.runtime.workers import kept_pool
 
-settings = {"seed": 1, "cell": STUDY_CELL, "neighbours": 16}
-problem = make_scenario({"n": 90, "m": 10, "A": 5, "scenario": 0}, settings).problem
+capability._solve_class = runtime_tasks.busy  # every class keeps its worker busy
+problem = thesis_scenario(9, 2, 2, seed=4).problem
 pids = []
 def note():
     while len(pids) < 2:
         time.sleep(0.05)
-        pool = capability._POOLS.get(2)
-        pids[:] = list(getattr(pool, "_processes", None) or [])
+        pool = kept_pool(("capability", 2))
+        pids[:] = pool.pids() if pool is not None else []
+    print("ready", flush=True)  # both workers are at work
+import threading
 threading.Thread(target=note, daemon=True).start()
-print("ready", flush=True)
 try:
     solve_capability(problem, workers=2)
 except KeyboardInterrupt:
@@ -306,8 +295,9 @@ def test_ctrl_c_stops_the_workers():
     import sys
     import time
 
+    tests = str(Path(__file__).resolve().parent)
     process = subprocess.Popen(
-        [sys.executable, "-c", CTRL_C_SCRIPT],
+        [sys.executable, "-c", CTRL_C_SCRIPT.format(tests=tests)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -315,7 +305,6 @@ def test_ctrl_c_stops_the_workers():
     )
     try:
         assert process.stdout.readline().strip() == "ready", process.communicate()
-        time.sleep(2.0)  # the workers start (about 1 s) and are solving
         assert process.poll() is None, process.communicate()
         sent = time.monotonic()
         process.send_signal(signal.SIGINT)
@@ -361,7 +350,7 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     result = solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
     assert result.runtime < 10.0
     assert result.status == "time_limit"
-    assert 2 not in capability._POOLS
+    assert kept_pool(("capability", 2)) is None
     killed = [c for c in result.info["classes"] if c["status"] == "time_limit"]
     assert killed
     assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)

@@ -242,7 +242,7 @@ def test_plot_writes_map_and_gantt(tmp_path):
 def test_search_value_from_snapshots_equals_a_full_decode():
     """The searches' prefix re-decode gives decode()'s objective for random moves."""
     from taopt.heuristics.fleet_search import _Search
-    from taopt.limits import Deadline
+    from taopt.runtime import Deadline
 
     p = residential_fleet(30, trucks=2, drones=2, capacity=2, seed=7)
     search = _Search(p, np.random.default_rng(0), Deadline(None))

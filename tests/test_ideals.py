@@ -67,3 +67,14 @@ def test_both_families_count_through_the_core():
     sop = taopt.SopProblem.load("ESC07")
     closure = predecessor_masks(sop.n, sop.closure.edges)
     assert sop_count(sop) == count_ideals(closure, sop.n, first=1 << sop.start) == (41, False)
+
+
+def test_count_stops_at_an_expired_deadline_or_a_proven_cap():
+    """Given a deadline, the count ends as capped when it has expired, or when a layer's
+    candidates alone prove more than ``cap`` ideals; the exact count otherwise."""
+    from taopt.runtime import Deadline
+
+    free = predecessor_masks(12, [])  # 2^12 ideals
+    assert count_ideals(free, 12, cap=10**6, deadline=Deadline(0.0)) == (10**6 + 1, True)
+    assert count_ideals(free, 12, cap=100, deadline=Deadline(60.0)) == (101, True)
+    assert count_ideals(free, 12, cap=10**6, deadline=Deadline(60.0)) == (2**12, False)

@@ -23,8 +23,9 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-import taopt.models.highs as highs_module
-from taopt.models.highs import INTERRUPT_GRACE, HighsModel, solve_highs
+from taopt.models.highs import HighsModel, solve_highs
+from taopt.runtime import interrupt as runtime_interrupt
+from taopt.runtime.highs import INTERRUPT_GRACE
 
 #: Seconds from SIGINT to exit accepted here (interpreter teardown included, under load).
 STOP_BOUND = 6.0
@@ -156,8 +157,9 @@ def interrupt_when_highs_runs(solve) -> float:
         return time.monotonic() - sent["at"]
     finally:
         signal.signal(signal.SIGINT, previous)
-        for finished in highs_module._ABANDONED:  # a run left to its time limit: let it end
-            finished.wait(70)  # (else the exit hook would end pytest with code 130)
+        # a run left to its time limit: let it end (else the exit hook would end pytest
+        # with code 130)
+        runtime_interrupt.wait_abandoned(70)
 
 
 def test_highs_model_run_interrupted():

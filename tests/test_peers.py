@@ -657,7 +657,7 @@ def test_reported_solutions_are_complete_route_sets():
             worker.process.stdin.flush()
             frames = []
             while not frames or frames[-1][0] == "best":
-                frames.append(worker._next(None, "a solve"))
+                frames.append(worker.next_frame(None, "a solve"))
         assert frames[-1][0] == "ok" and len(frames) >= 2, peer
         for _, payload in frames[:-1]:
             routes = payload["routes"]

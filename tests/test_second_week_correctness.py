@@ -21,7 +21,7 @@ from taopt.budgeted import BudgetedProblem
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.heuristics import budgeted, peers
 from taopt.heuristics.budgeted import genetic_algorithm
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem, evaluate_order
 
 # -- defect 2: the budgeted GA -------------------------------------------------------------------

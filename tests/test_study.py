@@ -247,7 +247,9 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     assert stopped < 30  # 400 scenarios would take a minute or more
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and "interrupted" in lines[0] and "resume" in lines[0], err
-    time.sleep(1.0)
+    gone_by = time.monotonic() + 1.0  # the workers are killed, then reaped: within 1 s
+    while any(_alive(pid) for pid in children) and time.monotonic() < gone_by:
+        time.sleep(0.05)
     left = [pid for pid in children if _alive(pid)]
     for pid in left:  # do not leak them into the rest of the test run
         os.kill(pid, signal.SIGKILL)

@@ -18,7 +18,8 @@ import pytest
 
 import taopt
 from taopt.errors import InstanceError
-from taopt.limits import (
+from taopt.result import OPTIMAL, TIME_LIMIT
+from taopt.runtime import (
     DEFAULT_MAX_MEMORY_GB,
     MEMORY_ENV,
     MIN_SHARE,
@@ -27,7 +28,6 @@ from taopt.limits import (
     check_memory,
     max_memory_gb,
 )
-from taopt.result import OPTIMAL, TIME_LIMIT
 
 LIMIT = 0.2
 SLACK = 3.0

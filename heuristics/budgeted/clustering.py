@@ -13,9 +13,9 @@ from taopt.budgeted.problem import BudgetedProblem
 from taopt.heuristics.budgeted.common import _answer, _fits, _no_solution
 from taopt.heuristics.clustering import insertion_costs, marginal_cost_sequence
 from taopt.heuristics.ga_penalised_search import SLACK
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import Solution
+from taopt.runtime import Deadline
 
 # -- MC (2.15), limit-aware ----------------------------------------------------------------
 

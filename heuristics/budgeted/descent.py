@@ -14,8 +14,8 @@ from taopt.heuristics.ga_penalised_search import slack_limits
 from taopt.heuristics.ga_routing import (
     improve_routes,
 )
-from taopt.limits import Deadline
 from taopt.registry import register_improver
+from taopt.runtime import Deadline
 
 
 def repair(problem: BudgetedProblem, routes: list[list[int]]) -> list[list[int]] | None:

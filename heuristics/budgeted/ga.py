@@ -27,9 +27,9 @@ from taopt.heuristics.ga_routing import (
     path_matrix,
     path_nodes,
 )
-from taopt.limits import Deadline
 from taopt.registry import register_method
 from taopt.result import Solution
+from taopt.runtime import Deadline
 
 #: The GA's memetic steps under limits (:func:`genetic_algorithm`, ``memetic``).
 MEMETIC_STEPS = ("penalised", "chapter2")

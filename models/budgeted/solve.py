@@ -20,7 +20,6 @@ import numpy as np
 
 from taopt.budgeted.problem import BudgetedProblem, evaluate_budgeted, violations
 from taopt.errors import InstanceError, SolverError, require
-from taopt.limits import Deadline, milp_bytes, register_footprint
 from taopt.models.budgeted.arc_vehicle import BudgetedModel
 from taopt.models.budgeted.resource import ResourceModel
 from taopt.models.budgeted.separation import entry_times, separate_capacity
@@ -43,6 +42,7 @@ from taopt.models.routing.dfj import IMPROVE_MIN_SECONDS
 from taopt.registry import register_method
 from taopt.result import Routes, Solution, finish, make_solution
 from taopt.routing.bounds import arborescence_bound
+from taopt.runtime import Deadline, milp_bytes, register_footprint
 
 #: HiGHS options of the MIP rounds (as chapter 2's DFJ loop).
 MIP_OPTIONS = {"mip_pool_soft_limit": 500}
@@ -446,7 +446,7 @@ def solve_budgeted(
     ----------
     problem : BudgetedProblem
     time_limit : float, optional
-        Wall-clock seconds for the whole call (:class:`taopt.limits.Deadline`): it returns
+        Wall-clock seconds for the whole call (:class:`taopt.runtime.Deadline`): it returns
         with status "time_limit", the best routes found (None if none) and a proven bound.
     mip_gap : float
         HiGHS's ``mip_rel_gap``; "optimal" only when the final gap is at most 1e-6.

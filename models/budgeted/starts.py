@@ -13,7 +13,7 @@ from taopt.budgeted.problem import (
     BudgetedProblem,
     violations,
 )
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 
 
 def greedy_budgeted(problem: BudgetedProblem) -> list[list[int]] | None:

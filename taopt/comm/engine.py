@@ -348,7 +348,7 @@ class Simulation:
     ) -> None:
         self.problem = problem
         self.policy = policy
-        #: a taopt.limits.Deadline, or None: run() raises SimulationStopped when it expires
+        #: a taopt.runtime.Deadline, or None: run() raises SimulationStopped when it expires
         self.deadline: Any = None
         self.rng = np.random.default_rng(seed)
         self.check = check

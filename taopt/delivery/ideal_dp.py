@@ -36,8 +36,8 @@ from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.delivery.schedule import _matches, _sortie_data, schedule
 from taopt.errors import InstanceError
 from taopt.ideals import distinct, ideal_layers, predecessor_masks
-from taopt.limits import Deadline, max_memory_gb
 from taopt.result import FEASIBLE, Solution, finish, make_solution
+from taopt.runtime import Deadline, max_memory_gb
 
 #: Largest number of customers (ideals are bit masks in an unsigned 64-bit integer).
 MAX_CUSTOMERS = 63
@@ -386,7 +386,7 @@ def ideal_dp(
     instance : DeliveryInstance
         At most :data:`MAX_CUSTOMERS` customers.
     time_limit : float, optional
-        Wall-clock seconds (:class:`taopt.limits.Deadline`). When the DP has not finished,
+        Wall-clock seconds (:class:`taopt.runtime.Deadline`). When the DP has not finished,
         the result has status "time_limit", the incumbent (or no plan, objective inf) and
         the bound ``max(min over open states of R + B, arborescence_bound)``.
     incumbent : Plan or Solution, optional
@@ -395,7 +395,7 @@ def ideal_dp(
     max_states : int, optional
         Size guard: the run stops like a time limit (``info["stopped_by"] == "size"``) when
         the states kept, or the cells of one layer's table, would exceed it. Default: the
-        memory limit of :func:`taopt.limits.max_memory_gb` (``TAOPT_MAX_MEMORY_GB``, 4 GB)
+        memory limit of :func:`taopt.runtime.max_memory_gb` (``TAOPT_MAX_MEMORY_GB``, 4 GB)
         divided by :data:`BYTES_PER_STATE` (100,000,000 at 4 GB).
     dominance, prune, relaxation : bool
         Switch the dominance rule, the bound pruning or the sequencing relaxation of the

@@ -27,8 +27,8 @@ import numpy as np
 
 from taopt.delivery.instance import DeliveryInstance, Plan
 from taopt.errors import FeasibilityError, InstanceError, SolverError
-from taopt.limits import Deadline
 from taopt.result import FEASIBLE, Solution, finish, make_solution
+from taopt.runtime import Deadline
 
 #: Largest relative difference allowed between a DP's own makespan and the scorer's (5.1).
 MATCH_TOLERANCE = 1e-9

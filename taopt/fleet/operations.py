@@ -33,7 +33,7 @@ from taopt.errors import SolverError
 from taopt.fleet.bounds import reach_bound
 from taopt.fleet.evaluate import evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 
 #: Largest table cells ``2^n s²`` this DP allocates (8 bytes each, a few copies).
 MAX_CELLS = 40_000_000

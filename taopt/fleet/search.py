@@ -52,7 +52,7 @@ import numpy as np
 from taopt.errors import FeasibilityError, SolverError
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.limits import Deadline
+from taopt.runtime import Deadline
 
 #: Default cap on the labels kept (about 1 KB each with their bookkeeping).
 DEFAULT_MAX_LABELS = 3_000_000

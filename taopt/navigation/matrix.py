@@ -27,7 +27,7 @@ import multiprocessing
 import os
 import warnings
 from collections.abc import Mapping
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from typing import Any, Literal, overload
 
 import numpy as np
@@ -44,6 +44,7 @@ from taopt.navigation.collocation import (
 from taopt.navigation.path import as_field, as_speed, check_drift
 from taopt.navigation.pmp import is_analytic, pmp_travel_times, triangle_violations
 from taopt.navigation.uniform import uniform_travel_times
+from taopt.runtime.workers import WorkerPool
 
 METHODS = ("auto", "pmp", "collocation", "shooting")
 BATCH_SIZE = 32  # pairs per IPOPT call (measured: ~2x faster per pair than single solves)
@@ -433,18 +434,21 @@ def _parallel(
 ) -> np.ndarray:
     """Solve ``pairs`` in ``jobs`` processes; returns rows in the order of ``pairs``."""
     methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
     n_chunks = max(jobs * 8, 1)
     chunk = BATCH_SIZE * max(1, -(-len(pairs) // (n_chunks * BATCH_SIZE)))
     order = np.arange(len(pairs))
     results = np.empty((len(pairs), 3))
     bar = _bar(len(pairs), progress)
-    with ProcessPoolExecutor(
-        max_workers=jobs,
-        mp_context=context,
+    # the workers keep the environment (env={}), ignore Ctrl-C and die with this process;
+    # on Ctrl-C or an error they are killed at once (docs/architecture.md, the runtime contract)
+    pool = WorkerPool(
+        jobs,
+        env={},
+        context="fork" if "fork" in methods else "spawn",
         initializer=_worker_init,
         initargs=(field.to_dict(), grid, pts, speed),
-    ) as pool:
+    )
+    try:
         futures = {}
         for lo in range(0, len(pairs), chunk):
             futures[pool.submit(_worker_solve, pairs[lo : lo + chunk])] = order[lo : lo + chunk]
@@ -453,5 +457,9 @@ def _parallel(
             _, out = future.result()
             results[rows] = out
             bar.update(len(rows))
+    except BaseException:
+        pool.terminate()
+        raise
+    pool.shutdown()
     bar.close()
     return results

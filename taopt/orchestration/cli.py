@@ -22,7 +22,7 @@ imports what it needs.
 :func:`main` turns any :class:`~taopt.errors.TaoptError` or bad value into a one-line error
 on stderr and exit code 2; Ctrl-C prints one line (``taopt solve: interrupted``; a study
 says where its rows are) and exits with 130, no traceback: a HiGHS run stops through its
-interrupt callbacks (:mod:`taopt.models.highs`), Python code between
+interrupt callbacks (:mod:`taopt.runtime.highs`), Python code between
 bytecodes.
 """
 
@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -727,16 +726,10 @@ def _end_after_interrupt(script: bool, study: bool) -> None:
     atomically; the message is printed and the streams are flushed first). A study keeps
     the ordinary exit, whose hooks close its executor.
     """
-    highs = sys.modules.get("taopt.models.highs")
-    solver = highs is not None and highs.solver_interrupted()
-    if not (solver or (script and not study)):
-        return
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError):
-            pass
-    os._exit(130)
+    from taopt.runtime.interrupt import exit_now, solver_interrupted
+
+    if solver_interrupted() or (script and not study):
+        exit_now(130)
 
 
 def _main(argv: Sequence[str] | None) -> int:

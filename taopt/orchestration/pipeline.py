@@ -28,7 +28,6 @@ import taopt.heuristics  # noqa: F401  (registers the heuristics)
 import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError, SolverError, TaoptError
-from taopt.limits import MARGIN, WARM_START_SHARE, Deadline, check_footprint
 from taopt.registry import (
     CATEGORIES,
     ensure_families,
@@ -38,6 +37,14 @@ from taopt.registry import (
     methods,
 )
 from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
+from taopt.runtime import (
+    MARGIN,
+    WARM_START_SHARE,
+    CancelToken,
+    Deadline,
+    cancel_scope,
+    check_footprint,
+)
 from taopt.scoring import evaluate
 
 #: Relative tolerance between a method's reported objective and the scorer's value.
@@ -93,6 +100,7 @@ def solve(
     seed: int | None = SEED,
     time_limit: float | None = TIME_LIMIT,
     max_memory_gb: float | None = None,
+    cancel: CancelToken | None = None,
     **options: Any,
 ) -> Solution:
     """Solve ``problem`` with the registered ``method``.
@@ -111,15 +119,19 @@ def solve(
         None for no limit.
         Wall-clock seconds for the whole call (docs/architecture.md, invariant 4): the clock
         starts on entry; the warm-start heuristics of an exact method get a share of it
-        (:data:`taopt.limits.WARM_START_SHARE`), the method the remaining seconds. Methods
+        (:data:`taopt.runtime.WARM_START_SHARE`), the method the remaining seconds. Methods
         that take no limit (fast heuristics) ignore it. An exact model stopped by it returns
         its best plan with status "time_limit" and a proven bound; with no plan found in
         time, status "time_limit", objective ``inf``, no payload, and the bound.
     max_memory_gb : float, optional
         The size guard's limit (default ``TAOPT_MAX_MEMORY_GB`` or
-        :data:`taopt.limits.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
-        whose estimated memory (:func:`taopt.limits.footprint`) is above it is refused
+        :data:`taopt.runtime.DEFAULT_MAX_MEMORY_GB`; ``math.inf`` switches it off): a method
+        whose estimated memory (:func:`taopt.runtime.footprint`) is above it is refused
         before anything is built.
+    cancel : taopt.runtime.CancelToken, optional
+        Stops the run early once another thread cancels it: the method stops at its next
+        check of its deadline (and a HiGHS run at its next interrupt callback) and returns
+        its best answer as at a time limit (docs/architecture.md, "the runtime contract").
     **options
         Method-specific keyword options (an unknown one is an error naming it).
         ``incumbent=None`` switches off the warm start of an exact model.
@@ -138,6 +150,12 @@ def solve(
     SolverError
         The method's objective differs from the scorer's value of its payload.
     """
+    if cancel is not None:  # every deadline made during the call carries the token
+        with cancel_scope(cancel):
+            return solve(
+                problem, method, seed=seed, time_limit=time_limit, max_memory_gb=max_memory_gb,
+                **options,
+            )  # fmt: skip
     deadline = Deadline(None)  # replaced below once time_limit is checked
     if time_limit is not None:
         if isinstance(time_limit, bool) or not (

@@ -39,7 +39,6 @@ from taopt.examples import resolve as resolve_example
 from taopt.fields import FIELD_KINDS
 from taopt.instance import Instance
 from taopt.io import atomic_path, check_writable, check_writable_file, load_json
-from taopt.limits import check_memory, navigation_bytes
 from taopt.orchestration.pipeline import (
     available_methods,
     default_methods,
@@ -55,6 +54,7 @@ from taopt.registry import (
     get_method,
 )
 from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
+from taopt.runtime import check_memory, navigation_bytes
 from taopt.schemas import naming
 from taopt.scoring import evaluate
 

@@ -27,8 +27,8 @@ Execution
   (:class:`~taopt.orchestration.studyio.StudyLocked`, naming the holder's pid). A folder whose rows are all
   finished is only read: no lock, nothing written (a read-only folder can be reported on).
 * Ctrl-C (SIGINT) or SIGTERM stops the study at once: pending tasks are cancelled, worker processes are
-  killed (pool workers also die with their parent if it is killed: ``PR_SET_PDEATHSIG`` on
-  Linux, plus a watchdog thread), finished rows stay on disk, and :class:`StudyInterrupted`
+  killed (pool workers also die with their parent if it is killed:
+  :class:`taopt.runtime.workers.WorkerPool`), finished rows stay on disk, and :class:`StudyInterrupted`
   is raised; running the same call again resumes.
 
 Rows: the key columns, the scenario columns, ``method, objective, status, bound, runtime,
@@ -39,18 +39,14 @@ rows (timing aside) whatever the executor.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import json
 import logging
 import math
 import os
 import signal
-import sys
-import threading
-import time
 import zlib
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
 from typing import Any, Literal, overload
 
@@ -61,17 +57,21 @@ from taopt.errors import InstanceError, TaoptError
 from taopt.orchestration.pipeline import solve
 from taopt.orchestration.studyio import ResultsStore, StudyLocked, folder_lock, normalize_key
 from taopt.registry import get_method
+from taopt.runtime.interrupt import handled, raise_interrupt
+from taopt.runtime.workers import (
+    ONE_THREAD_ENV,
+    WorkerPool,
+    become_worker,
+    drop_pool,
+    kill_processes,
+    shared_pool,
+)
 
 logger = logging.getLogger("taopt")
 
 RESULT_COLUMNS = ("method", "objective", "status", "bound", "runtime", "seed")
 #: Environment for worker processes: one solver / BLAS thread per task.
-THREAD_ENV = {
-    "OMP_NUM_THREADS": "1",
-    "OPENBLAS_NUM_THREADS": "1",
-    "MKL_NUM_THREADS": "1",
-    "TAOPT_SOLVER_THREADS": "1",
-}
+THREAD_ENV = ONE_THREAD_ENV
 
 #: Method options a study checks before anything is written (the methods check them again):
 #: option name -> ("integer", smallest) or ("rate",) for a number in [0, 1].
@@ -173,28 +173,9 @@ def _default_seed(key: Mapping[str, Any], settings: Mapping[str, Any]) -> int:
 
 
 def _configure_worker() -> None:
-    """One thread per solver; ignore Ctrl-C (the client handles it); die with the parent."""
-    os.environ.update(THREAD_ENV)
-    if threading.current_thread() is threading.main_thread():
-        with contextlib.suppress(ValueError, OSError):
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _pool_worker_init(parent: int) -> None:
-    _configure_worker()
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL("libc.so.6", use_errno=True)
-            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG: killed when the parent dies
-    watchdog = threading.Thread(target=_watch_parent, args=(parent,), daemon=True)
-    watchdog.start()
-
-
-def _watch_parent(parent: int) -> None:  # pragma: no cover - runs in workers
-    while True:
-        time.sleep(0.5)
-        if os.getppid() != parent:
-            os._exit(1)
+    """One thread per solver; ignore Ctrl-C (the client handles it). A pool's workers also
+    die with the parent (:class:`taopt.runtime.workers.WorkerPool`)."""
+    become_worker(env=THREAD_ENV)
 
 
 def run_task(
@@ -415,25 +396,9 @@ def available_defaults(problem_type: Any, names: Sequence[str]) -> list[str]:
     return [name for name in names if get_method(problem_type, name).available]
 
 
-_POOLS: dict[int, ProcessPoolExecutor] = {}
-
-
-def _pool(jobs: int) -> ProcessPoolExecutor:
+def _pool(jobs: int) -> WorkerPool:
     """A spawned pool of ``jobs`` workers, kept for the next study of this process."""
-    import atexit
-    import multiprocessing
-
-    pool = _POOLS.get(jobs)
-    if pool is None or getattr(pool, "_broken", False) or getattr(pool, "_shutdown_thread", False):
-        pool = ProcessPoolExecutor(
-            max_workers=int(jobs),
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_pool_worker_init,
-            initargs=(os.getpid(),),
-        )
-        _POOLS[jobs] = pool
-        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
-    return pool
+    return shared_pool(("study", jobs), jobs, env=THREAD_ENV)
 
 
 def _executor(
@@ -442,17 +407,7 @@ def _executor(
     """(executor, close, kill) for a process pool or a Dask cluster."""
     if dask is None:
         pool = _pool(int(jobs))
-
-        def kill() -> None:
-            _POOLS.pop(int(jobs), None)
-            for process in list(getattr(pool, "_processes", {}).values()):
-                with contextlib.suppress(Exception):
-                    process.kill()
-            # the pool sees its workers die, marks itself broken and releases its queues
-            with contextlib.suppress(Exception):
-                pool.shutdown(wait=True, cancel_futures=True)
-
-        return pool, lambda: None, kill
+        return pool, lambda: None, lambda: drop_pool(("study", int(jobs)))
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:
@@ -490,9 +445,7 @@ def _executor(
             for nanny in list(getattr(cluster, "workers", {}).values()):
                 with contextlib.suppress(Exception):
                     nanny.close_gracefully()  # do not restart the worker it is about to lose
-        for pid in local:
-            with contextlib.suppress(OSError):
-                os.kill(pid, signal.SIGKILL)
+        kill_processes(local)
         if cluster is not None:
             # its workers are gone: Dask's exit hook would otherwise wait 10 s to close it
             cluster.shutdown_on_close = False
@@ -664,7 +617,8 @@ def _run_tasks(
         unit="scenario",
     )
     close = kill = None
-    previous = _stop_on_sigterm()
+    signals = contextlib.ExitStack()  # SIGTERM (a job scheduler's stop) ends it as Ctrl-C does
+    signals.enter_context(handled(signal.SIGTERM, raise_interrupt))
     try:
         if tasks:
             if executor is None:
@@ -695,8 +649,7 @@ def _run_tasks(
         if close is not None:
             close()
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        signals.close()
 
 
 def _flag_uncertified(
@@ -716,17 +669,6 @@ def _flag_uncertified(
                 row["status"],
                 key,
             )
-
-
-def _interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
-
-
-def _stop_on_sigterm() -> Any:
-    """Make SIGTERM (a job scheduler's stop) end a study as Ctrl-C does; return the old handler."""
-    if threading.current_thread() is not threading.main_thread():
-        return None
-    return signal.signal(signal.SIGTERM, _interrupt)
 
 
 def _table(

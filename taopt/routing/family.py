@@ -51,8 +51,8 @@ def _plot_routes(
 def _from_instance(instance: Any, progress: bool = True) -> AssignmentProblem | None:
     """The chapter 2 problem (2.2)–(2.5) of an instance with one capability, one speed and no
     obstacles (travel times by navigation in its drift field); None for any other instance."""
-    from taopt.limits import check_memory, navigation_bytes
     from taopt.navigation import travel_time_matrix
+    from taopt.runtime import check_memory, navigation_bytes
 
     speeds = {v.speed for v in instance.vehicles}
     capabilities = {v.capability for v in instance.vehicles}

@@ -1,19 +1,6 @@
-"""Wall-clock budgets and size guards: what a run may spend, checked before it spends it.
+"""Size guards: the memory a run would need, checked before it spends it.
 
-Two promises of :func:`taopt.solve` live here.
-
-**A time limit is wall-clock** (docs/architecture.md, invariant 4). A :class:`Deadline` is taken when
-the call starts; the warm-start heuristics get a share of it (:data:`WARM_START_SHARE`) and
-the method the *remaining* seconds, so warm start, model building, separation and decoding
-all count. A method that runs out returns its best plan with a proven bound and status
-"time_limit" (objective ``inf`` and no payload when it found no plan): never an exception.
-The promise holds on a loaded machine too: ``taopt.solve`` returns within
-``T + overrun_allowance(T)`` = ``T + max(1 s, 5 % of T)`` (:func:`overrun_allowance`), so
-every step that does not look at the clock itself is either short or estimated from a
-measured step of the same call (the delivery MILP's compile and presolve), heuristics look
-at their deadline inside their local searches, and a peer's worker (its start-up and import
-included) is stopped at the deadline plus a grace with the best solution it reported
-(``benchmarks/bench_time_limits.py`` measures every method under a load it creates).
+(The time a run may spend is :mod:`taopt.runtime.deadline`.)
 
 **A size guard refuses what cannot fit.** Before anything is built, the memory a method would
 need is estimated from the problem's size (:func:`footprint`, one estimator registered per
@@ -29,9 +16,6 @@ and only need to tell 200 MB from 20 GB.
 
 Example
 -------
->>> d = Deadline(10.0)
->>> 9.0 < d.remaining() <= 10.0, Deadline(None).remaining() is None
-(True, True)
 >>> check_memory(2e9, "a model", max_memory_gb=4)
 >>> check_memory(8e9, "a model of 10,000 targets", max_memory_gb=4)
 Traceback (most recent call last):
@@ -41,9 +25,7 @@ taopt.errors.InstanceError: a model of 10,000 targets needs about 8.0 GB, above 
 
 from __future__ import annotations
 
-import math
 import os
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -55,15 +37,6 @@ DEFAULT_MAX_MEMORY_GB = 4.0
 #: Environment variable that sets the memory limit (GB; "inf" switches the guard off).
 MEMORY_ENV = "TAOPT_MAX_MEMORY_GB"
 
-#: Share of a time limit the warm-start heuristics of an exact method may use.
-WARM_START_SHARE = 0.25
-
-#: Seconds a method keeps in hand for what follows its last check (decoding, scoring).
-MARGIN = 0.05
-
-#: The least budget :meth:`Deadline.share` hands out (seconds).
-MIN_SHARE = 1e-3
-
 #: Bytes per ordered pair of points when a travel-time matrix is built by navigation: the
 #: float64 matrix and the vectorised solvers' work arrays (an instance of 10,000 targets
 #: failed at 7.6 GB, about 76 bytes per pair).
@@ -73,62 +46,6 @@ NAVIGATION_BYTES_PER_PAIR = 80.0
 #: form, the sparse matrices and HiGHS's copy): about 1 KB per column on the SOP flow
 #: model of ESC47 (100,611 columns, 93 MB) and 2 KB per arc on the routing model.
 MILP_BYTES_PER_COLUMN = 2048.0
-
-
-def overrun_allowance(seconds: float) -> float:
-    """The most a call with ``time_limit=seconds`` may run past it: max(1 s, 5 %).
-
-    Example
-    -------
-    >>> overrun_allowance(0.5), overrun_allowance(60.0)
-    (1.0, 3.0)
-    """
-    return max(1.0, 0.05 * float(seconds))
-
-
-class Deadline:
-    """A wall-clock budget taken at construction.
-
-    Parameters
-    ----------
-    seconds : float or None
-        The budget; None means no limit (every query answers "no limit").
-    """
-
-    def __init__(self, seconds: float | None) -> None:
-        self.began = time.perf_counter()
-        self.seconds = None if seconds is None else float(seconds)
-        self.end = math.inf if seconds is None else self.began + float(seconds)
-
-    @property
-    def limited(self) -> bool:
-        """Whether there is a limit at all."""
-        return self.seconds is not None
-
-    def elapsed(self) -> float:
-        """Seconds since the deadline was taken."""
-        return time.perf_counter() - self.began
-
-    def remaining(self) -> float | None:
-        """Seconds left (never below 0), or None without a limit."""
-        if self.seconds is None:
-            return None
-        return max(0.0, self.end - time.perf_counter())
-
-    def expired(self, margin: float = 0.0) -> bool:
-        """Whether fewer than ``margin`` seconds are left."""
-        return time.perf_counter() + margin >= self.end
-
-    def share(self, fraction: float) -> float | None:
-        """``fraction`` of the remaining seconds, at least :data:`MIN_SHARE` (None without a
-        limit): a stage started once the time is spent gets the least positive limit, which
-        every solver here accepts and stops on at once (a limit of 0 is refused as bad
-        input, and a time-limited run must end with a status, never an exception)."""
-        left = self.remaining()
-        return None if left is None else max(left * fraction, MIN_SHARE)
-
-    def __repr__(self) -> str:
-        return f"Deadline({self.seconds!r}, remaining={self.remaining()!r})"
 
 
 def max_memory_gb(value: float | None = None) -> float:
@@ -238,11 +155,6 @@ def check_footprint(
 __all__ = [
     "DEFAULT_MAX_MEMORY_GB",
     "MEMORY_ENV",
-    "WARM_START_SHARE",
-    "MARGIN",
-    "MIN_SHARE",
-    "Deadline",
-    "overrun_allowance",
     "max_memory_gb",
     "check_memory",
     "navigation_bytes",

@@ -1,0 +1,237 @@
+"""HiGHS's runtime hooks: its interrupt callbacks (Ctrl-C, deadlines, cancellation) and its
+quiet start.
+
+:mod:`taopt.models.highs` is the HiGHS adapter (models built, solved, results read); what
+belongs to *running* HiGHS lives here:
+
+* :func:`run_interruptibly` — ``Highs.run()`` that Ctrl-C stops within
+  :data:`INTERRUPT_GRACE` seconds through HiGHS's interrupt callbacks
+  (``kCallbackSimplexInterrupt``, ``kCallbackIpmInterrupt``, ``kCallbackMipInterrupt``);
+  :func:`cvxpy_interruptible` does the same for the ``Highs`` object cvxpy builds itself;
+* :func:`interrupt_when` — the same callbacks stop a run when a predicate holds (a
+  :class:`~taopt.runtime.deadline.Deadline` expired or its cancel token was set): HiGHS
+  looks at its own ``time_limit`` rarely inside an LP, these callbacks come every simplex /
+  IPM iteration and MIP node;
+* :func:`stdout_discarded` and :func:`flush_c_stdout` — HiGHS prints its banner from C++
+  straight to file descriptor 1 before any option can be set.
+
+The Ctrl-C state (a run was interrupted, a run was abandoned) is kept by
+:mod:`taopt.runtime.interrupt`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import highspy
+from highspy._core import _Highs
+
+from taopt.runtime import interrupt
+
+#: Seconds a Ctrl-C waits for HiGHS to stop at its next interrupt callback before the run
+#: is abandoned (HiGHS calls ``kCallbackMipInterrupt`` between nodes, but may go seconds
+#: without one at the root).
+INTERRUPT_GRACE = 1.0
+
+#: The callbacks through which HiGHS can be asked to stop.
+INTERRUPT_CALLBACKS = ("cbSimplexInterrupt", "cbIpmInterrupt", "cbMipInterrupt")
+
+
+def flush_c_stdout() -> None:
+    """Flush the C library's ``stdout`` buffer (HiGHS prints through it)."""
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # no libc symbol table (not on Linux/macOS)
+        pass
+
+
+@contextlib.contextmanager
+def stdout_discarded() -> Iterator[None]:
+    """Send file descriptor 1 to the null device for the duration of the block.
+
+    HiGHS writes its banner from C++ straight to the process's standard output,
+    before any option can be set, so ``output_flag`` cannot stop it; only the
+    file descriptor can. Python's and C's buffers are flushed on both sides so
+    no line of anybody else's is lost or moved.
+    """
+    try:
+        sys.stdout.flush()
+    except (AttributeError, ValueError, OSError):
+        pass
+    flush_c_stdout()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no standard output at all: nothing to protect
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        flush_c_stdout()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _interrupt_hook(stop: Callable[[], bool], clear: bool = False) -> Callable[[Any], None]:
+    """An interrupt callback that asks HiGHS to stop once ``stop()`` is true; with
+    ``clear``, it also lowers the flag while ``stop()`` is false (see :func:`interrupt_when`)."""
+
+    def on_interrupt(event: Any) -> None:
+        if stop():
+            event.interrupt()
+        elif clear:
+            event.interrupt(False)
+
+    return on_interrupt
+
+
+def _subscribe(highs: highspy.Highs, hook: Callable[[Any], None], on: bool = True) -> None:
+    for name in INTERRUPT_CALLBACKS:
+        callback = getattr(highs, name)
+        if on:
+            callback.subscribe(hook)
+        else:
+            callback.unsubscribe(hook)
+
+
+@contextlib.contextmanager
+def interrupt_when(highs: highspy.Highs, stop: Callable[[], bool]) -> Iterator[None]:
+    """While the block runs, HiGHS stops at its next interrupt callback once ``stop()``
+    is true (e.g. ``deadline.expired`` of a :class:`~taopt.runtime.deadline.Deadline`).
+
+    HiGHS (1.11 to 1.16 at least) keeps the ``user_interrupt`` flag of an interrupted run in
+    its callback input, so the next run of the same object with any interrupt callback
+    subscribed would stop at its first callback; this hook lowers the flag while ``stop()``
+    is false. Enter it before any other interrupt hook (e.g. the Ctrl-C hook of
+    :func:`run_interruptibly`, which only raises the flag): callbacks fire in the order
+    they were subscribed.
+    """
+    hook = _interrupt_hook(stop, clear=True)
+    _subscribe(highs, hook)
+    try:
+        yield
+    finally:
+        _subscribe(highs, hook, on=False)
+
+
+def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
+    """``highs.run()`` that Ctrl-C stops within :data:`INTERRUPT_GRACE` seconds.
+
+    Python handles a signal only in the main thread and only between bytecodes; while the
+    main thread is inside ``Highs.run()`` that happens in HiGHS's callbacks, where the
+    ``KeyboardInterrupt`` becomes a HiGHS error, or never (the run goes on to its end).
+    So, on the main thread, HiGHS runs in a helper thread (``Highs.run`` releases the GIL)
+    while the main thread waits, ready for Ctrl-C. On Ctrl-C the interrupt callbacks
+    set ``user_interrupt`` and HiGHS returns; a run that has not stopped after the grace
+    period is left to finish on its own (:func:`taopt.runtime.interrupt.abandon`: the
+    process, ending, exits at once with code 130). ``KeyboardInterrupt`` is then raised in
+    the caller. Off the main thread, or with SIGINT ignored (a worker process), the run is
+    plain: the helper thread costs about 2 ms per run.
+
+    Parameters
+    ----------
+    highs : highspy.Highs
+    run : callable, optional
+        The run to call (default ``highs.run``).
+
+    Returns
+    -------
+    HighsStatus
+        What ``run()`` returned.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C during the run.
+    """
+    run = run or highs.run
+    if not interrupt.sigint_catchable():
+        return run()  # no Ctrl-C to wait for (a worker thread, or SIGINT ignored)
+    stop = threading.Event()
+    outcome: dict[str, Any] = {}
+    # the end of the run, as an Event: Thread.join() interrupted by Ctrl-C can mark a
+    # running thread as stopped (CPython's bpo-45274 clean-up), so it cannot be trusted
+    finished = threading.Event()
+
+    def target() -> None:
+        try:
+            outcome["status"] = run()
+        except BaseException as exc:  # noqa: BLE001 -- handed to the waiting thread
+            outcome["error"] = exc
+        finally:
+            # HiGHS keeps a task scheduler per calling thread; release this thread's, as
+            # highspy's own threaded solve does. After a Ctrl-C, wait for its workers to
+            # end: the process is about to exit, and a worker still joinable when HiGHS's
+            # static objects are destroyed aborts it ("terminate called ...").
+            # (newer highspy only; older versions keep one global scheduler and have nothing
+            # per thread to release)
+            try:
+                reset = getattr(_Highs, "resetThreadScheduler", None)
+                if reset is not None:
+                    reset(stop.is_set())
+            finally:
+                finished.set()  # whatever happened, the waiting thread must not hang
+
+    hook = _interrupt_hook(stop.is_set)
+    _subscribe(highs, hook)
+    worker = threading.Thread(target=target, name="highs-run", daemon=True)
+    worker.start()
+    try:
+        while not finished.wait(0.05):
+            pass
+    except KeyboardInterrupt:
+        stop.set()
+        interrupt.note_solver_interrupted()
+        try:
+            finished.wait(INTERRUPT_GRACE)  # a second Ctrl-C cuts the grace short
+        finally:
+            if not finished.is_set():
+                interrupt.abandon(finished)
+        raise
+    finally:
+        if finished.is_set():  # an abandoned run keeps its callbacks until it ends
+            _subscribe(highs, hook, on=False)
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome.get("status")
+
+
+class _InterruptibleHighs(highspy.Highs):
+    """``highspy.Highs`` whose ``run()`` is :func:`run_interruptibly` (for cvxpy's object)."""
+
+    def run(self) -> Any:
+        return run_interruptibly(self, super().run)
+
+
+@contextlib.contextmanager
+def cvxpy_interruptible() -> Iterator[None]:
+    """cvxpy's HiGHS interface builds its own ``highspy.Highs()`` and calls ``run()``: on
+    the main thread, let it build an :class:`_InterruptibleHighs` instead."""
+    if not interrupt.sigint_catchable() or highspy.Highs is _InterruptibleHighs:
+        yield
+        return
+    original = highspy.Highs
+    setattr(highspy, "Highs", _InterruptibleHighs)  # noqa: B010 (mypy: a class attribute)
+    try:
+        yield
+    finally:
+        setattr(highspy, "Highs", original)  # noqa: B010
+
+
+__all__ = [
+    "INTERRUPT_GRACE",
+    "INTERRUPT_CALLBACKS",
+    "flush_c_stdout",
+    "stdout_discarded",
+    "interrupt_when",
+    "run_interruptibly",
+    "cvxpy_interruptible",
+]
