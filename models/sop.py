@@ -780,8 +780,9 @@ def solve_sop_problem(
     (rbg050c), and if that has not either the flow
     MILP (:func:`solve_sop`) gets the rest, warm-started with the best order so far; the
     bound reported is the larger of the two proven bounds (never below the assignment
-    and arborescence bounds). More than 64 nodes: the MILP alone. The figures behind the
-    rule are in ``docs/benchmarks.md`` (SOP section).
+    and arborescence bounds). The rule is the same for any number of nodes (the DP's masks
+    take several words beyond 64). The figures behind the rule are in
+    ``docs/benchmarks.md`` (SOP section).
 
     Parameters
     ----------
@@ -806,7 +807,7 @@ def solve_sop_problem(
         ``engine`` ("dp", "milp", "dp+dp", "dp+milp" or "dp+dp+milp"), ``ideals`` and ``ideals_capped``, and the
         DP's ``states``/``pruned`` when it ran.
     """
-    from taopt.models.sop_dp import IDEAL_CAP, MAX_NODES, count_ideals, solve_sop_dp
+    from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
 
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -818,7 +819,7 @@ def solve_sop_problem(
     if unreachable is not None:
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
-    ideals, capped = count_ideals(problem, cap) if problem.n <= MAX_NODES else (0, True)
+    ideals, capped = count_ideals(problem, cap)
     info = {"ideals": ideals, "ideals_capped": capped}
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
@@ -848,7 +849,7 @@ def solve_sop_problem(
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
         result = _stopped(problem, known, None, began, "portfolio", {"model": "not run"})
         used = "none"
-    elif engine == "milp" or problem.n > MAX_NODES:
+    elif engine == "milp":
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:

@@ -15,8 +15,9 @@ recursion restricted to ideals; ``end`` succeeds every node, so it only closes t
 path). The optimum is ``f(V, end)``. Only ideals are ever generated, so the work grows
 with the number of ideals (tens of thousands on the TSPLIB ``.4`` instances, where
 precedence is dense), not with 2^n. The DP is expanded layer by layer (``|I| = k``),
-vectorised with numpy: ideals are ``uint64`` bitmasks, so ``n <= 64``
-(:data:`MAX_NODES`); a layer is sorted to keep the best value of each ``(I, v)``.
+vectorised with numpy: ideals are ``uint64`` bitmasks, one word per mask up to 64 nodes and
+rows of ``ceil(n / 64)`` words beyond (:mod:`taopt.ideals`), so any ``n``; a layer is sorted
+to keep the best value of each ``(I, v)``.
 
 Completion bound. For a state ``(I, v)`` with ``U = V \\ I`` still to visit, the rest
 of any feasible path is ``v -> u_1 -> ... -> end`` through exactly ``U``, on arcs a
@@ -87,8 +88,8 @@ import numpy as np
 
 from taopt import ideals
 from taopt.errors import InstanceError
-from taopt.ideals import MAX_BITS, predecessor_masks
 from taopt.ideals import bits as node_bits
+from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
 from taopt.limits import MARGIN, Deadline
 from taopt.result import Order, Solution, finish
 from taopt.sop.problem import SopProblem, path_cost
@@ -102,8 +103,9 @@ __all__ = [
     "solve_sop_dp",
 ]
 
-#: Ideals are uint64 bitmasks: the DP takes at most 64 nodes.
-MAX_NODES = MAX_BITS
+#: No limit on the nodes any more (masks of more than 64 nodes are rows of several words,
+#: :mod:`taopt.ideals`); kept for callers that compared against it.
+MAX_NODES = 1 << 30
 
 #: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
 IDEAL_CAP = 20_000
@@ -166,9 +168,7 @@ def count_ideals(problem: SopProblem, cap: int = IDEAL_CAP) -> tuple[int, bool]:
     >>> count_ideals(SopProblem.load("ESC07"))
     (41, False)
     """
-    if problem.n > MAX_NODES:
-        return cap + 1, True
-    first = int(_ONE << np.uint64(problem.start))
+    first = 1 << problem.start
     return ideals.count_ideals(_predecessor_masks(problem), problem.n, cap, first=first)
 
 
@@ -197,42 +197,48 @@ class _Bound:
         self.beta: np.ndarray = potentials[1]
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
-        self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
         bits = node_bits(n)
+        self.pred = np.zeros_like(bits) if pred is None else pred
         self.bits = bits
+        self.wide = bits.ndim == 2
         self.into = [self._sorted(usable[:, w], bits) for w in range(n)]
         self.out = [self._sorted(usable[u, :], bits) for u in range(n)]
 
     @staticmethod
-    def _sorted(costs: np.ndarray, bits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _sorted(costs: np.ndarray, bits: np.ndarray) -> tuple[np.ndarray, ...]:
         ends = np.flatnonzero(np.isfinite(costs))
         ends = ends[np.argsort(costs[ends], kind="stable")]
-        prefix = np.zeros(len(ends) + 1, dtype=np.uint64)
+        prefix = np.zeros((len(ends) + 1,) + bits.shape[1:], dtype=np.uint64)
         if len(ends):
-            prefix[1:] = np.bitwise_or.accumulate(bits[ends])
+            prefix[1:] = np.bitwise_or.accumulate(bits[ends], axis=0)
         values = np.append(costs[ends], np.inf)  # index len(ends): no arc left
-        return prefix, values
+        # wide masks: each end's word and bit, for the direct test
+        return prefix, values, ends // 64, (ends % 64).astype(np.uint64)
 
     @staticmethod
-    def _cheapest(open_mask: np.ndarray, table: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    def _cheapest(open_mask: np.ndarray, table: tuple[np.ndarray, ...]) -> np.ndarray:
         """Per state, the cheapest arc whose other end is in ``open_mask`` (inf if none)."""
-        prefix, values = table
+        prefix, values, word, shift = table
         k = len(prefix) - 1
+        wide = prefix.ndim == 2
         if len(open_mask) * k <= _DIRECT:  # small: one 2-D test, no loop (less overhead)
-            hit = (open_mask[:, None] & prefix[None, 1:]) != 0
+            if wide:  # the bit of each end, gathered from its word
+                hit = ((open_mask[:, word] >> shift[None, :]) & _ONE) != 0
+            else:
+                hit = (open_mask[:, None] & prefix[None, 1:]) != 0
             first = np.argmax(hit, axis=1) if k else np.zeros(len(open_mask), dtype=np.int64)
             found = hit.any(axis=1) if k else np.zeros(len(open_mask), dtype=bool)
             return np.where(found, values[first], np.inf)
         lo = np.zeros(len(open_mask), dtype=np.int64)
         # the answer is the first arc t (0-based) whose end is open, in [lo, hi]
         hi = np.full(len(open_mask), max(k - 1, 0), dtype=np.int64)
-        found = (prefix[k] & open_mask) != 0
+        found = nonzero(prefix[k] & open_mask, wide)
         while True:
             active = lo < hi
             if not active.any():
                 break
             mid = (lo + hi) // 2  # < hi <= k - 1 where active; unused elsewhere
-            hit = (prefix[np.minimum(mid + 1, k)] & open_mask) != 0  # an end among 0..mid
+            hit = nonzero(prefix[np.minimum(mid + 1, k)] & open_mask, wide)  # an end in 0..mid
             hi = np.where(active & hit, mid, hi)
             lo = np.where(active & ~hit, mid + 1, lo)
         return np.where(found, values[np.minimum(lo, k)], np.inf)
@@ -243,7 +249,7 @@ class _Bound:
         constant = self.alpha[last].astype(float)
         for w in range(self.n):
             if w != self.start:
-                todo = (mask & self.bits[w]) == 0
+                todo = ~has(mask, w)
                 constant[todo] += self.beta[w] + (self.alpha[w] if w != self.end else 0.0)
         return constant
 
@@ -261,24 +267,23 @@ class _Bound:
         towards an available node.
         """
         n, bits, pred = self.n, self.bits, self.pred
-        full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
-        unvisited = ~mask & full
+        unvisited = ~mask & ideals.full(n)
         count = len(mask)
         total_in = np.zeros(count)
         total_out = np.zeros(count)
         swap = np.full(count, np.inf)  # least c'[v, w] - in_U(w) over available w
         forced = np.zeros(count, dtype=np.int64)  # nodes of U enterable from v only
         forced_cost = np.zeros(count)
-        available = np.zeros(count, dtype=np.uint64)
+        available = np.zeros_like(mask)
         for w in range(n):
             if w == self.start:
                 continue
-            todo = (mask & bits[w]) == 0
+            todo = ~has(mask, w)
             if not todo.any():
                 continue
             others = unvisited[todo] & ~bits[w]
             from_open = self._cheapest(others, self.into[w])
-            ready = (mask[todo] & pred[w]) == pred[w]
+            ready = holds(mask[todo], pred[w])
             from_last = np.where(ready, self.usable[last[todo], w], np.inf)
             available[np.flatnonzero(todo)[ready]] |= bits[w]
             finite = np.isfinite(from_open)
@@ -294,9 +299,10 @@ class _Bound:
                 total_out[todo] += self._cheapest(others, self.out[w])
         # no forced node: one swap; one: it is the node entered from v; more: infeasible
         total_in += np.where(forced == 0, swap, np.where(forced == 1, forced_cost, np.inf))
-        total_in[unvisited == 0] = 0.0
+        done = ~nonzero(unvisited, self.wide)
+        total_in[done] = 0.0
         total_out += self._cheapest_from_last(available, last)
-        total_out[unvisited == 0] = 0.0
+        total_out[done] = 0.0
         return np.maximum(total_in, total_out)
 
     def _cheapest_from_last(self, unvisited: np.ndarray, last: np.ndarray) -> np.ndarray:
@@ -304,7 +310,7 @@ class _Bound:
         for v in np.unique(last):
             here = last == v
             result[here] = self._cheapest(unvisited[here], self.out[v])
-        return np.where(unvisited == 0, 0.0, result)
+        return np.where(nonzero(unvisited, self.wide), result, 0.0)
 
 
 def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | None = None) -> _Bound:
@@ -394,7 +400,7 @@ def completion_bound(problem: SopProblem, visited: set[int], last: int) -> float
     usable = np.full((problem.n, problem.n), np.inf)
     usable[tails, heads] = problem.cost[tails, heads]
     bound = _completion(usable, problem.start, problem.end, _predecessor_masks(problem))
-    mask = np.array([sum(1 << v for v in visited)], dtype=np.uint64)
+    mask = np.array([ideals.from_int(sum(1 << v for v in visited), problem.n)], dtype=np.uint64)
     return float(bound(mask, np.array([last]))[0])
 
 
@@ -424,7 +430,7 @@ class _Search:
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         start = self.problem.start
         return (
-            np.array([self.bits[start]], dtype=np.uint64),
+            np.array([self.bits[start]], dtype=np.uint64),  # (1,) or (1, W)
             np.array([start], dtype=np.int64),
             np.zeros(1),
             np.array([-1], dtype=np.int64),
@@ -449,7 +455,7 @@ class _Search:
                 continue
             if deadline.expired(MARGIN):
                 return None
-            ok = ((mask & bits[w]) == 0) & ((mask & pred[w]) == pred[w])
+            ok = ~has(mask, w) & holds(mask, pred[w])
             if not ok.any():
                 continue
             step = usable[last[ok], w]
@@ -466,15 +472,15 @@ class _Search:
             new_parent.append(chosen)
         if not new_mask:
             empty = np.zeros(0)
-            return (empty.astype(np.uint64), empty.astype(np.int64), empty, empty.astype(np.int64))
+            return (mask[:0], empty.astype(np.int64), empty, empty.astype(np.int64))
         c_mask = np.concatenate(new_mask)
         c_last = np.concatenate(new_last)
         c_value = np.concatenate(new_value)
         c_parent = np.concatenate(new_parent)
-        order = np.lexsort((c_value, c_last, c_mask))
+        order = np.lexsort((c_value, c_last, *lex_keys(c_mask)))
         c_mask, c_last = c_mask[order], c_last[order]
         first = np.ones(len(c_mask), dtype=bool)
-        first[1:] = (c_mask[1:] != c_mask[:-1]) | (c_last[1:] != c_last[:-1])
+        first[1:] = differs(c_mask) | (c_last[1:] != c_last[:-1])
         order = order[first]
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
@@ -621,10 +627,10 @@ def _join(forward: _Run, backward: _Run, cost: np.ndarray) -> tuple[float, list[
     other = n - 2 - top  # the backward layer with the complementary sets
     f_mask, f_last, f_value, _ = forward.layers[top]
     b_mask, b_first, b_value, _ = backward.layers[other]
-    full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
-    order = np.argsort(b_mask, kind="stable")
-    sorted_mask = b_mask[order]
-    wanted = ~f_mask & full
+    b_keys = row_keys(b_mask)
+    order = np.argsort(b_keys, kind="stable")
+    sorted_mask = b_keys[order]
+    wanted = row_keys(~f_mask & ideals.full(n))
     lo = np.searchsorted(sorted_mask, wanted, side="left")
     hi = np.searchsorted(sorted_mask, wanted, side="right")
     counts = hi - lo
@@ -652,8 +658,6 @@ def beam_order(
     value plus completion bound. Returns ``(cost, order)`` or None (no path kept, or the
     time limit passed). Deterministic; ``O(width · n^2 log n)``.
     """
-    if problem.n > MAX_NODES:
-        return None
     deadline = Deadline(time_limit)
     search = _Search(problem)
     mask, last, value, parent = search.first()
@@ -694,7 +698,7 @@ def solve_sop_dp(
     Parameters
     ----------
     problem : SopProblem
-        At most :data:`MAX_NODES` nodes.
+        Any number of nodes (masks of several words beyond 64).
     time_limit : float, optional
         Wall-clock seconds; on the limit the incumbent (or no path, objective ``inf``) is
         returned with status "time_limit" and the proven bound of the module docstring.
@@ -736,7 +740,7 @@ def solve_sop_dp(
     Raises
     ------
     InstanceError
-        More than :data:`MAX_NODES` nodes, or a non-positive time limit.
+        A non-positive time limit.
 
     Notes
     -----
@@ -755,9 +759,6 @@ def solve_sop_dp(
     began = time.perf_counter()
     if time_limit is not None and not time_limit > 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
-    n = problem.n
-    if n > MAX_NODES:
-        raise InstanceError(f"the ideal DP takes at most {MAX_NODES} nodes, got n = {n}")
     deadline = Deadline(time_limit)
     known = _incumbent(problem, incumbent)
     info: dict[str, Any] = {"beam": None}
