@@ -456,14 +456,65 @@ def column_count(
     return len(tails) + int(usable.sum())
 
 
+#: Peak resident bytes of a process that has imported taopt, numpy, scipy, cvxpy and highspy
+#: and loaded an instance (measured: 150-160 MB on ESC07-ESC25, ``benchmarks/bench_sop.py
+#: --resources``).
+BASE_BYTES = 160e6
+
+#: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
+#: of the largest layer's extensions, merge and completion bound; fitted on generated
+#: instances, ``benchmarks/bench_sop.py --resources --generated``); 8 more per extra word.
+DP_BYTES_PER_STATE = 200.0
+
+
+def dp_bytes(n: int, states: float) -> float:
+    """Estimated peak bytes of the DP keeping ``states`` states on ``n`` nodes (beyond the
+    process's :data:`BASE_BYTES`)."""
+    from taopt.ideals import is_wide, words
+
+    extra = 8.0 * (words(n) - 1) if is_wide(n) else 0.0
+    return (DP_BYTES_PER_STATE + extra) * float(states)
+
+
+def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
+    """The most states (at most ``wanted``) the DP may keep within the memory limit."""
+    from taopt.limits import max_memory_gb as limit_gb
+
+    room = limit_gb(max_memory_gb) * 1e9 - BASE_BYTES
+    return int(max(1_000, min(wanted, room / dp_bytes(n, 1))))
+
+
+def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
+    """Whether the MILP's estimated memory (:func:`taopt.limits.milp_bytes`) is within the
+    limit."""
+    from taopt.limits import max_memory_gb as limit_gb
+
+    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    return BASE_BYTES + milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
+
+
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
+    """The portfolio's peak: the larger of its DP stages (their state caps, or the states
+    the ideals allow) and the MILP when it fits the limit; above the limit the MILP is
+    skipped and the DP's caps shrink to fit, so the estimate fits too (never a refusal
+    for size alone)."""
+    from taopt.limits import max_memory_gb as limit_gb
+    from taopt.models.sop_dp import IDEAL_CAP, count_ideals
+
     formulation = options.get("formulation", "flow")
-    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    limit = options.get("max_memory_gb")
     name = f" {problem.name}" if problem.name else ""
-    return milp_bytes(columns), (
-        f"the SOP {formulation} model of{name} ({problem.n} nodes, {columns:,} columns)"
-    )
+    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
+    wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
+    states = dp_state_cap(problem.n, limit, wanted if capped else problem.n * count)
+    total = BASE_BYTES + dp_bytes(problem.n, states)
+    what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
+    if options.get("engine") != "dp" and milp_fits(problem, formulation, limit):
+        columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+        total = max(total, BASE_BYTES + milp_bytes(columns))
+        what += f", {formulation} model of {columns:,} columns"
+    return min(total, limit_gb(limit) * 1e9), what + ")"
 
 
 def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> float:
@@ -754,6 +805,23 @@ SECOND_STAGE_SHARE = 0.75
 
 PORTFOLIO_ENGINES = ("auto", "dp", "milp")
 
+#: ``info["model"]`` of a MILP run that stopped before HiGHS ran (the portfolio then gives
+#: the time left to the DP).
+STOPPED_EARLY = ("not built", "built, not compiled", "compiled, not solved")
+
+
+def _combine(first: Solution, second: Solution) -> Solution:
+    """Two runs on one problem: ``second`` when it finished; else the better order with the
+    larger of the two proven bounds (status by the one rule)."""
+    if second.status != TIME_LIMIT:
+        return second
+    best = second if second.objective <= first.objective else first
+    bound = min(max(first.bound or 0.0, second.bound or 0.0), best.objective)
+    status = TIME_LIMIT
+    if np.isfinite(best.objective):
+        status, _ = decide("time_limit", best.objective, bound)
+    return best.replace(bound=bound, status=status)
+
 
 def solve_sop_problem(
     problem: SopProblem,
@@ -765,6 +833,7 @@ def solve_sop_problem(
     engine: str = "auto",
     ideal_cap: int | None = None,
     max_states: int = PORTFOLIO_MAX_STATES,
+    max_memory_gb: float | None = None,
 ) -> Solution:
     """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
     MILP for sparse precedence.
@@ -798,7 +867,13 @@ def solve_sop_problem(
     ideal_cap : int, optional
         Cap of the ideal count (default :data:`taopt.models.sop_dp.IDEAL_CAP`).
     max_states : int
-        States the DP may keep when the ideals passed the cap.
+        States the DP may keep when the ideals passed the cap (lowered to fit the memory
+        limit, :func:`dp_state_cap`).
+    max_memory_gb : float, optional
+        The memory limit (default :func:`taopt.limits.max_memory_gb`, passed on by
+        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink: the
+        run degrades to what fits and returns ``time_limit`` with its best order and a
+        proven bound, never a refusal for size alone.
 
     Returns
     -------
@@ -820,9 +895,16 @@ def solve_sop_problem(
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
     ideals, capped = count_ideals(problem, cap)
-    info = {"ideals": ideals, "ideals_capped": capped}
+    info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
+    second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
+    milp_ok = milp_fits(problem, formulation, max_memory_gb)
+    if not milp_ok:
+        info["milp"] = "skipped: its memory estimate is above the limit"
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
+        if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
+            return more_dp(dp_result, time_left)
         result = solve_sop(
             problem.cost,
             problem.precedences,
@@ -843,7 +925,27 @@ def solve_sop_problem(
                 stopped_by = result.info.get("stopped_by") or "time_limit"
                 status, _ = decide(stopped_by, result.objective, bound)
             result = result.replace(bound=bound, status=status)
+        if result.info.get("model") in STOPPED_EARLY and dp_result is not None:
+            # the model could not be built or compiled in time: the DP uses the rest
+            info["milp"] = result.info["model"]
+            result = more_dp(result, deadline.remaining())
         return result
+
+    def more_dp(before: Solution | None, time_left: float | None) -> Solution:
+        """Another DP stage from the best order so far (both price sets, the memory-fitted
+        cap) for the time left; the better order and the larger bound are kept."""
+        if before is not None and time_left is not None and time_left <= MARGIN:
+            return before
+        known = incumbent if before is None or before.solution is None else before.solution
+        again = solve_sop_dp(
+            problem,
+            None if time_left is None else max(time_left - MARGIN, MARGIN),
+            incumbent=known,
+            max_states=second_states,
+            both_prices=True,
+            beam_width=0 if before is not None else 1024,
+        )
+        return again if before is None else _combine(before, again)
 
     if deadline.expired(MARGIN):  # no time left after the warm start and the count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
@@ -871,20 +973,13 @@ def solve_sop_problem(
             known = first.solution if first.solution is not None else incumbent
             second = solve_sop_dp(
                 problem,
-                deadline.share(SECOND_STAGE_SHARE),
+                deadline.share(SECOND_STAGE_SHARE if milp_ok else 1.0),
                 incumbent=known,
-                max_states=max(max_states, SECOND_STAGE_MAX_STATES),
+                max_states=second_states,
                 both_prices=True,
             )
             used = "dp+dp"
-            if second.status == TIME_LIMIT:  # keep the better order and the larger bound
-                best = second if second.objective <= first.objective else first
-                bound = min(max(first.bound or 0.0, second.bound or 0.0), best.objective)
-                status = TIME_LIMIT
-                if np.isfinite(best.objective):
-                    status, _ = decide("time_limit", best.objective, bound)
-                second = best.replace(bound=bound, status=status)
-            result = second
+            result = _combine(first, second)
         if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
             info.update({f"dp_{k}": v for k, v in result.info.items()})
             known = result.solution if result.solution is not None else incumbent

@@ -186,3 +186,16 @@ def test_generated_instances_are_valid():
     problem = atsp_sop(ftv, 0.2, 0)
     assert problem.n == 13 and problem.start == 0 and problem.end == 12
     assert solve_sop_dp(problem).status == OPTIMAL
+
+
+def test_above_the_memory_limit_the_portfolio_degrades_instead_of_refusing():
+    """A MILP above the memory limit is skipped, not refused: time_limit (or optimal) with
+    a feasible order and a bound no higher than its cost (was an InstanceError)."""
+    import taopt
+
+    problem = random_sop(40, 0.05, 3)
+    result = taopt.solve(problem, "exact", time_limit=1.0, max_memory_gb=0.08)
+    assert str(result.status) in ("time_limit", "optimal")
+    assert evaluate_order(problem, result.order) == result.objective
+    assert 0 < result.bound <= result.objective
+    assert result.info["milp"].startswith("skipped")
