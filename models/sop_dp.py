@@ -130,6 +130,9 @@ SECOND_PRICES_MIN_SHARE = 0.02
 #: completion bound (200,000 states on 49 nodes; under 0.5 s of numpy on 2 shared cores).
 CHUNK_WORK = 10_000_000
 
+#: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
+MERGE_SECONDS = 3e-7
+
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
 PRUNE_TOLERANCE = 1e-9
 
@@ -453,6 +456,8 @@ class _Search:
         self.more_bounds: list[_Bound] = []  # the same bound on other prices (max taken)
         self.trial: dict[int, list[int]] = {}  # per extra bound: states evaluated, pruned
         self.problem = problem
+        #: Seconds per extension merged (sorted and deduplicated), the slowest seen.
+        self.merge_rate = MERGE_SECONDS
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         start = self.problem.start
@@ -500,6 +505,12 @@ class _Search:
         if not new_mask:
             empty = np.zeros(0)
             return (mask[:0], empty.astype(np.int64), empty, empty.astype(np.int64))
+        # the merge below cannot be interrupted: start it only if it should end in time (at
+        # the slowest rate seen so far; millions of extensions take seconds on a loaded core)
+        left = deadline.remaining()
+        if left is not None and count * self.merge_rate > left - MARGIN:
+            return None
+        began = time.perf_counter()
         c_mask = np.concatenate(new_mask)
         c_last = np.concatenate(new_last)
         c_value = np.concatenate(new_value)
@@ -509,6 +520,8 @@ class _Search:
         first = np.ones(len(c_mask), dtype=bool)
         first[1:] = differs(c_mask) | (c_last[1:] != c_last[:-1])
         order = order[first]
+        if count >= 10_000:
+            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / count)
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
     def totals(
