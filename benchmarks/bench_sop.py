@@ -182,14 +182,18 @@ from taopt.orchestration import pipeline  # imported before the clock: the call 
 sys.path.insert(0, {bench!r})
 from bench_sop import load_any
 problem = load_any({name!r})
-estimate = footprint(problem, "exact", {{}})[0]
+from taopt.models.sop import BASE_BYTES, dp_bytes, sop_milp_bytes
+estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
 t0 = time.perf_counter()
 result = taopt.solve(problem, "exact", time_limit={limit!r})
 wall = time.perf_counter() - t0
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+info = result.info
+states = max(info.get("states") or 0, info.get("dp_states") or 0)
+model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(info.get("variables") or 0)
 print(json.dumps(dict(status=str(result.status), objective=result.objective, bound=result.bound,
-    wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=result.info.get("engine"),
-    stage=result.info.get("model"))))
+    wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=info.get("engine"),
+    states=states, columns=info.get("variables") or 0, model=model)))
 """
 
 
@@ -218,9 +222,10 @@ def resources(names: list[str], limit: float, load: bool) -> None:
     print(f"time limit {limit:g} s per run, each in its own process; load: {load}")
     print(
         "| instance | n | status | objective | bound | wall (s) | over | peak RSS (MB) |"
-        " estimate (MB) | peak / estimate | engine |"
+        " estimate (MB) | peak / estimate | states kept | MILP columns | model (MB) |"
+        " peak / model | engine |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     try:
         for name in names:
             code = _CHILD.format(bench=here, name=name, limit=limit)
@@ -241,7 +246,8 @@ def resources(names: list[str], limit: float, load: bool) -> None:
             print(
                 f"| {name} | {r['n']} | {r['status']} | {r['objective']:g} | {r['bound']:g} | "
                 f"{r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
-                f"{ratio:.2f} | {r['engine']} |",
+                f"{ratio:.2f} | {r['states']:,} | {r['columns']:,} | {r['model'] / 1e6:.0f} | "
+                f"{r['peak'] / r['model']:.2f} | {r['engine']} |",
                 flush=True,
             )
     finally:

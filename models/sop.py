@@ -68,7 +68,7 @@ import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError
-from taopt.limits import MARGIN, Deadline, milp_bytes, register_footprint
+from taopt.limits import MARGIN, Deadline, register_footprint
 from taopt.models.highs import HighsModel, solve_highs
 from taopt.result import (
     FEASIBLE,
@@ -467,6 +467,27 @@ BASE_BYTES = 160e6
 DP_BYTES_PER_STATE = 200.0
 
 
+#: Peak bytes per column of the flow MILP built with cvxpy, compiled for HiGHS and solved
+#: for a few seconds (measured on generated instances of 20-80 nodes, 4,680-176,551 columns:
+#: 4.4-13.8 KB per column above the process's base, ``benchmarks/bench_sop.py`` notes; the
+#: generic :data:`taopt.limits.MILP_BYTES_PER_COLUMN`, 2 KB, was 3-7 times too low here).
+SOP_MILP_BYTES_PER_COLUMN = 8000.0
+
+
+def sop_milp_bytes(columns: float) -> float:
+    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base)."""
+    return SOP_MILP_BYTES_PER_COLUMN * float(columns)
+
+
+#: States the DP keeps per second at most (measured on generated instances: 27,000 a
+#: second on a random 50-node SOP of sparse precedence, the fastest growth seen).
+DP_STATES_PER_SECOND = 40_000
+
+#: The share of a time limit the MILP stage gets after the warm start and the two DP
+#: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
+MILP_TIME_SHARE = 0.1
+
+
 def dp_bytes(n: int, states: float) -> float:
     """Estimated peak bytes of the DP keeping ``states`` states on ``n`` nodes (beyond the
     process's :data:`BASE_BYTES`)."""
@@ -485,12 +506,11 @@ def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
 
 
 def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
-    """Whether the MILP's estimated memory (:func:`taopt.limits.milp_bytes`) is within the
-    limit."""
+    """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
     from taopt.limits import max_memory_gb as limit_gb
 
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-    return BASE_BYTES + milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
+    return BASE_BYTES + sop_milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
 
 
 @register_footprint(SopProblem, "exact")
@@ -504,15 +524,26 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
 
     formulation = options.get("formulation", "flow")
     limit = options.get("max_memory_gb")
+    seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
+    if seconds is not None:  # a run keeps no more states than it can make in its time
+        wanted = min(wanted, int(DP_STATES_PER_SECOND * seconds))
     states = dp_state_cap(problem.n, limit, wanted if capped else problem.n * count)
     total = BASE_BYTES + dp_bytes(problem.n, states)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
-    if options.get("engine") != "dp" and milp_fits(problem, formulation, limit):
-        columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-        total = max(total, BASE_BYTES + milp_bytes(columns))
+    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    # the MILP runs only after capped DP stages, and is built only when its build fits the
+    # time it gets then (solve_sop's rule)
+    built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
+    if options.get("engine") == "milp" or (
+        capped
+        and built
+        and options.get("engine") != "dp"
+        and milp_fits(problem, formulation, limit)
+    ):
+        total = max(total, BASE_BYTES + sop_milp_bytes(columns))
         what += f", {formulation} model of {columns:,} columns"
     return min(total, limit_gb(limit) * 1e9), what + ")"
 
