@@ -156,6 +156,7 @@ def build(
     end: int,
     formulation: str = "flow",
     relax: bool = False,
+    deadline: Deadline | None = None,
 ) -> SopModel:
     """Build the SOP model (see the module docstring for the formulation).
 
@@ -170,6 +171,8 @@ def build(
     formulation : {"flow", "mtz"}
     relax : bool
         Continuous ``0 ≤ x ≤ 1``: the LP relaxation.
+    deadline : taopt.limits.Deadline, optional
+        Checked while the rows are built: :class:`BuildStopped` when it passes.
 
     Returns
     -------
@@ -198,7 +201,7 @@ def build(
     # ignore: the problem (None for now) is set below, once the row builders added their rows
     model = SopModel(None, arc_use, tails, heads, cost, start, end, formulation)  # type: ignore[arg-type]
     if formulation == "flow":
-        constraints += _flow_rows(model, closure)
+        constraints += _flow_rows(model, closure, deadline)
     else:
         constraints += _mtz_rows(model, closure)
     objective = cp.Minimize(cost[tails, heads] @ arc_use)
@@ -206,7 +209,17 @@ def build(
     return model
 
 
-def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
+class BuildStopped(Exception):
+    """The deadline passed while :func:`build` made the rows (internal: the caller returns
+    its incumbent with status ``time_limit``)."""
+
+
+def _check(deadline: Deadline | None) -> None:
+    if deadline is not None and deadline.expired(MARGIN):
+        raise BuildStopped
+
+
+def _flow_rows(model: SopModel, closure: nx.DiGraph, deadline: Deadline | None = None) -> list:
     """Multi-commodity flow rows: connectivity and precedence (see module docstring)."""
     tails, heads, start, n = model.tails, model.heads, model.start, model.cost.shape[0]
     commodities = np.array([k for k in range(n) if k != start])
@@ -245,6 +258,7 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
             "by any usable arc (forbidden arcs and precedences leave no path)"
         )
     keep = np.flatnonzero(touched)
+    _check(deadline)
     capacity = sp.csr_matrix((np.ones(n_pairs), (pairs, pair_a)), shape=(n_pairs, len(tails)))
     rows = [
         (balance[keep] @ flow == supply[keep]).set_label(
@@ -284,7 +298,9 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
         pair_of[pair_k, pair_a] = pairs
         nest_row, nest_col, nest_val = [], [], []
         count = 0
-        for r, k in closure.edges():
+        for number, (r, k) in enumerate(closure.edges()):
+            if number % 256 == 0:
+                _check(deadline)
             if r == start:
                 continue
             r_pairs = pair_of[np.searchsorted(commodities, r)]
@@ -746,7 +762,11 @@ def solve_sop(
             info = {"model": "not built", "columns": columns, "build_estimate": estimate}
             return _stopped(problem, known, None, began, formulation, info)
     building = time.perf_counter()
-    model = build(cost, precedences, start, end, formulation)
+    try:
+        model = build(cost, precedences, start, end, formulation, deadline=deadline)
+    except BuildStopped:
+        assert problem is not None  # built above under a limit
+        return _stopped(problem, known, None, began, formulation, {"model": "not built"})
     built_in = time.perf_counter() - building
     values = None
     left = deadline.remaining()

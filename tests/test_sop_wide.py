@@ -199,3 +199,15 @@ def test_above_the_memory_limit_the_portfolio_degrades_instead_of_refusing():
     assert evaluate_order(problem, result.order) == result.objective
     assert 0 < result.bound <= result.objective
     assert result.info["milp"].startswith("skipped")
+
+
+def test_building_the_flow_model_stops_at_the_deadline():
+    """An expired deadline stops the flow model's construction (BuildStopped), none builds."""
+    from taopt.limits import Deadline
+    from taopt.models.sop import BuildStopped, build
+
+    problem = random_sop(12, 0.2, 1)
+    args = (problem.cost, problem.precedences, problem.start, problem.end)
+    with pytest.raises(BuildStopped):
+        build(*args, deadline=Deadline(1e-9))
+    assert build(*args, deadline=Deadline(None)).flow is not None
