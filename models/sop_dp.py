@@ -127,8 +127,8 @@ SECOND_PRICES_TRIAL = 20_000
 SECOND_PRICES_MIN_SHARE = 0.02
 
 #: States times nodes times mask words bounded between two deadline checks of the
-#: completion bound (200,000 states on 49 nodes; under 0.5 s of numpy on 2 shared cores).
-CHUNK_WORK = 10_000_000
+#: completion bound (40,000 states on 49 nodes: 200,000 took 2-3 s on a loaded core, ESC47).
+CHUNK_WORK = 2_000_000
 
 #: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
 MERGE_SECONDS = 3e-7
