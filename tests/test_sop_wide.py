@@ -97,7 +97,17 @@ def test_wide_dp_equals_brute_force(seed, wide):
     assert evaluate_order(problem, result.order) == result.objective
 
 
-@pytest.mark.parametrize("name", ["ESC07", "ESC11", "ESC12"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "ESC07",
+        "ESC11",
+        "ESC12",
+        pytest.param("br17.10", marks=pytest.mark.slow),
+        pytest.param("br17.12", marks=pytest.mark.slow),
+        pytest.param("rbg048a", marks=pytest.mark.slow),
+    ],
+)
 def test_wide_dp_equals_the_one_word_dp_on_shipped_files(name, monkeypatch):
     """Forcing wide masks leaves the answer, bound and states of the DP unchanged."""
     problem = SopProblem.load(name)
