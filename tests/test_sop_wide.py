@@ -221,3 +221,24 @@ def test_building_the_flow_model_stops_at_the_deadline():
     with pytest.raises(BuildStopped):
         build(*args, deadline=Deadline(1e-9))
     assert build(*args, deadline=Deadline(None)).flow is not None
+
+
+@pytest.mark.parametrize("n, density", [(9, 0.0), (20, 0.1), (40, 0.3), (70, 0.05), (120, 0.2)])
+def test_matching_prices_are_optimal_assignment_duals(n, density):
+    """The prices from the matching (used beyond 64 nodes) leave no negative reduced cost
+    and sum to the assignment bound, as the LP's do."""
+    from taopt.models.sop import assignment_bound, usable_arcs
+    from taopt.models.sop_dp import _matching_potentials
+
+    problem = random_sop(n, density, 4)
+    tails, heads = usable_arcs(problem.cost, problem.closure)
+    usable = np.full((n, n), np.inf)
+    usable[tails, heads] = problem.cost[tails, heads]
+    prices = _matching_potentials(usable, problem.start, problem.end)
+    assert prices is not None
+    alpha, beta = prices
+    reduced = usable - alpha[:, None] - beta[None, :]
+    assert reduced[np.isfinite(reduced)].min() >= 0.0
+    total = alpha.sum() - alpha[problem.end] + beta.sum() - beta[problem.start]
+    expected = assignment_bound(problem.cost, problem.closure, problem.start, problem.end)
+    assert total == pytest.approx(expected, rel=1e-9)
