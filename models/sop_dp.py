@@ -521,6 +521,7 @@ class _Search:
         self.problem = problem
         #: Seconds per extension merged (sorted and deduplicated), the slowest seen.
         self.merge_rate = MERGE_SECONDS
+        self.merge_refused = False
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         start = self.problem.start
@@ -572,6 +573,7 @@ class _Search:
         # the slowest rate seen so far; millions of extensions take seconds on a loaded core)
         left = deadline.remaining()
         if left is not None and count * self.merge_rate > left - MARGIN:
+            self.merge_refused = True  # out of time, not of states
             return None
         began = time.perf_counter()
         c_mask = np.concatenate(new_mask)
@@ -686,7 +688,8 @@ class _Run:
         mask, last, value, _ = self.layers[-1]
         grown = self.search.grow(mask, last, value, deadline, limit)
         if grown is None:
-            return "time_limit" if deadline.expired(MARGIN) else "max_states"
+            out_of_time = deadline.expired(MARGIN) or self.search.merge_refused
+            return "time_limit" if out_of_time else "max_states"
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
         total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)
