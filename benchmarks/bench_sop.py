@@ -9,6 +9,17 @@ Run::
     python benchmarks/bench_sop.py --compare 60       # portfolio, DP, MILP, CP-SAT side by side
     python benchmarks/bench_sop.py --compare 60 ESC25 p43.4
 
+    python benchmarks/bench_sop.py --resources 10 --load   # wall time and peak RSS, per process
+
+``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
+every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints status,
+objective, bound, wall time (``time.perf_counter`` around the call), the overrun over
+``T + max(1 s, 5 %)``, the peak resident memory of that process (``resource.getrusage``,
+``ru_maxrss``) and the memory guard's estimate (:func:`taopt.runtime.footprint`, with the
+ratio measured / estimated). ``--load`` starts a second process spinning on one core for the
+duration (the shared-machine condition of issue 33). ``--generated`` adds the generated
+instances of :data:`GENERATED` (``taopt.sop.generate``).
+
 ``--compare T`` runs, on each instance (default: :data:`COMPARE`, read from the shipped
 files or from ``../shared/benchmarks/tsplib``), ``taopt.solve(problem, "exact")`` (the
 portfolio of :func:`taopt.models.sop.solve_sop_problem`), the same with
@@ -68,7 +79,14 @@ COMPARE = [
 #: Optima of the comparison set not shipped with taopt (shared/benchmarks/tsplib/README.md).
 MORE_OPTIMA = {"rbg048a": 351, "rbg050c": 467, "ry48p.4": 31446, "ft53.4": 14425}
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / "tsplib"
+SHARED = next(
+    (
+        up / "shared" / "benchmarks" / "tsplib"
+        for up in Path(__file__).resolve().parents[1:4]
+        if (up / "shared" / "benchmarks" / "tsplib").is_dir()
+    ),
+    Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks" / "tsplib",
+)
 
 
 def load_problem(name: str):
@@ -122,6 +140,121 @@ def compare(names: list[str], limit: float) -> None:
             )
 
 
+#: Every SOP file shipped or kept in ../shared/benchmarks/tsplib (resources run).
+RESOURCES = [
+    "ESC07",
+    "ESC11",
+    "ESC12",
+    "br17.10",
+    "br17.12",
+    "ESC25",
+    "ESC47",
+    "p43.1",
+    "p43.4",
+    "prob.42",
+    "ry48p.1",
+    "ry48p.4",
+    "ft53.1",
+    "ft53.4",
+    "rbg048a",
+    "rbg050c",
+]
+
+#: Generated instances (name -> constructor call in taopt.sop.generate).
+GENERATED = {
+    "random-40-0.1": ("random_sop", (40, 0.1, 1)),
+    "random-60-0.3": ("random_sop", (60, 0.3, 1)),
+    "random-100-0.3": ("random_sop", (100, 0.3, 1)),
+    "random-150-0.6": ("random_sop", (150, 0.6, 1)),
+    "chains-80-3": ("chain_sop", (80, 3, 1)),
+    "chains-120-3": ("chain_sop", (120, 3, 1)),
+    "chains-150-4": ("chain_sop", (150, 4, 2)),
+}
+
+_CHILD = """
+import json, resource, sys, time
+began = time.perf_counter()
+import taopt
+import taopt.heuristics
+import taopt.models
+from taopt.runtime import footprint
+from taopt.orchestration import pipeline  # imported before the clock: the call alone is timed
+sys.path.insert(0, {bench!r})
+from bench_sop import load_any
+problem = load_any({name!r})
+from taopt.models.sop import BASE_BYTES, dp_bytes, sop_milp_bytes
+estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
+t0 = time.perf_counter()
+result = taopt.solve(problem, "exact", time_limit={limit!r})
+wall = time.perf_counter() - t0
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+info = result.info
+states = max(info.get("states") or 0, info.get("dp_states") or 0)
+model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(info.get("variables") or 0)
+print(json.dumps(dict(status=str(result.status), objective=result.objective, bound=result.bound,
+    wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=info.get("engine"),
+    states=states, columns=info.get("variables") or 0, model=model)))
+"""
+
+
+def load_any(name: str):
+    """A shipped or shared SOP file, or a generated instance of :data:`GENERATED`."""
+    if name in GENERATED:
+        from taopt.sop import generate
+
+        func, args = GENERATED[name]
+        return getattr(generate, func)(*args)
+    return load_problem(name)
+
+
+def resources(names: list[str], limit: float, load: bool) -> None:
+    """The wall-time and peak-memory table of ``--resources`` (module docstring)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    spinner = None
+    if load:
+        spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    here = str(Path(__file__).resolve().parent)
+    env = dict(os.environ)
+    print(f"time limit {limit:g} s per run, each in its own process; load: {load}")
+    print(
+        "| instance | n | status | objective | bound | wall (s) | over | peak RSS (MB) |"
+        " estimate (MB) | peak / estimate | states kept | MILP columns | model (MB) |"
+        " peak / model | engine |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    try:
+        for name in names:
+            code = _CHILD.format(bench=here, name=name, limit=limit)
+            run = subprocess.run(
+                [sys.executable, "-c", code], capture_output=True, text=True, env=env
+            )
+            if run.returncode != 0:
+                print(
+                    f"| {name} | | process failed ({run.returncode}): "
+                    f"{run.stderr.strip().splitlines()[-1:]} |",
+                    flush=True,
+                )
+                continue
+            r = json.loads(run.stdout.strip().splitlines()[-1])
+            allowed = limit + max(1.0, 0.05 * limit)
+            over = "yes" if r["wall"] > allowed else "no"
+            ratio = r["peak"] / r["estimate"] if r["estimate"] else float("nan")
+            print(
+                f"| {name} | {r['n']} | {r['status']} | {r['objective']:g} | {r['bound']:g} | "
+                f"{r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
+                f"{ratio:.2f} | {r['states']:,} | {r['columns']:,} | {r['model'] / 1e6:.0f} | "
+                f"{r['peak'] / r['model']:.2f} | {r['engine']} |",
+                flush=True,
+            )
+    finally:
+        if spinner is not None:
+            spinner.kill()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("names", nargs="*", default=None)
@@ -131,7 +264,16 @@ def main() -> None:
     parser.add_argument("--time-limit", type=float, default=300.0)
     parser.add_argument("--esc25", action="store_true", help="add ESC25")
     parser.add_argument("--mtz", type=float, default=0.0, help="also run MTZ with this limit")
+    parser.add_argument(
+        "--resources", type=float, default=0.0, help="wall time and peak RSS at this limit"
+    )
+    parser.add_argument("--load", action="store_true", help="a second process loads a core")
+    parser.add_argument("--generated", action="store_true", help="add the generated instances")
     args = parser.parse_args()
+    if args.resources > 0:
+        names = args.names or RESOURCES + (list(GENERATED) if args.generated else [])
+        resources(names, args.resources, args.load)
+        return
     if args.compare > 0:
         compare(args.names or COMPARE, args.compare)
         return

@@ -78,7 +78,7 @@ from taopt.result import (
     Solution,
     finish,
 )
-from taopt.runtime import MARGIN, Deadline, milp_bytes, register_footprint
+from taopt.runtime import MARGIN, Deadline, register_footprint
 from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.status import decide
 
@@ -156,6 +156,7 @@ def build(
     end: int,
     formulation: str = "flow",
     relax: bool = False,
+    deadline: Deadline | None = None,
 ) -> SopModel:
     """Build the SOP model (see the module docstring for the formulation).
 
@@ -170,6 +171,8 @@ def build(
     formulation : {"flow", "mtz"}
     relax : bool
         Continuous ``0 ≤ x ≤ 1``: the LP relaxation.
+    deadline : taopt.runtime.Deadline, optional
+        Checked while the rows are built: :class:`BuildStopped` when it passes.
 
     Returns
     -------
@@ -198,7 +201,7 @@ def build(
     # ignore: the problem (None for now) is set below, once the row builders added their rows
     model = SopModel(None, arc_use, tails, heads, cost, start, end, formulation)  # type: ignore[arg-type]
     if formulation == "flow":
-        constraints += _flow_rows(model, closure)
+        constraints += _flow_rows(model, closure, deadline)
     else:
         constraints += _mtz_rows(model, closure)
     objective = cp.Minimize(cost[tails, heads] @ arc_use)
@@ -206,7 +209,17 @@ def build(
     return model
 
 
-def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
+class BuildStopped(Exception):
+    """The deadline passed while :func:`build` made the rows (internal: the caller returns
+    its incumbent with status ``time_limit``)."""
+
+
+def _check(deadline: Deadline | None) -> None:
+    if deadline is not None and deadline.expired(MARGIN):
+        raise BuildStopped
+
+
+def _flow_rows(model: SopModel, closure: nx.DiGraph, deadline: Deadline | None = None) -> list:
     """Multi-commodity flow rows: connectivity and precedence (see module docstring)."""
     tails, heads, start, n = model.tails, model.heads, model.start, model.cost.shape[0]
     commodities = np.array([k for k in range(n) if k != start])
@@ -245,6 +258,7 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
             "by any usable arc (forbidden arcs and precedences leave no path)"
         )
     keep = np.flatnonzero(touched)
+    _check(deadline)
     capacity = sp.csr_matrix((np.ones(n_pairs), (pairs, pair_a)), shape=(n_pairs, len(tails)))
     rows = [
         (balance[keep] @ flow == supply[keep]).set_label(
@@ -284,7 +298,9 @@ def _flow_rows(model: SopModel, closure: nx.DiGraph) -> list:
         pair_of[pair_k, pair_a] = pairs
         nest_row, nest_col, nest_val = [], [], []
         count = 0
-        for r, k in closure.edges():
+        for number, (r, k) in enumerate(closure.edges()):
+            if number % 256 == 0:
+                _check(deadline)
             if r == start:
                 continue
             r_pairs = pair_of[np.searchsorted(commodities, r)]
@@ -456,14 +472,96 @@ def column_count(
     return len(tails) + int(usable.sum())
 
 
+#: Peak resident bytes of a process that has imported taopt, numpy, scipy, cvxpy and highspy
+#: and loaded an instance (measured: 150-160 MB on ESC07-ESC25, ``benchmarks/bench_sop.py
+#: --resources``).
+BASE_BYTES = 160e6
+
+#: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
+#: of the largest layer's extensions, merge and completion bound; fitted on generated
+#: instances, ``benchmarks/bench_sop.py --resources --generated``); 8 more per extra word.
+DP_BYTES_PER_STATE = 200.0
+
+
+#: Peak bytes per column of the flow MILP built with cvxpy, compiled for HiGHS and solved
+#: for a few seconds (measured on generated instances of 20-80 nodes, 4,680-176,551 columns:
+#: 4.4-13.8 KB per column above the process's base, ``benchmarks/bench_sop.py`` notes; the
+#: generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB, was 3-7 times too low here).
+SOP_MILP_BYTES_PER_COLUMN = 8000.0
+
+
+def sop_milp_bytes(columns: float) -> float:
+    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base)."""
+    return SOP_MILP_BYTES_PER_COLUMN * float(columns)
+
+
+#: States the DP keeps per second at most (measured on generated instances: 27,000 a
+#: second on a random 50-node SOP of sparse precedence, the fastest growth seen).
+DP_STATES_PER_SECOND = 40_000
+
+#: The share of a time limit the MILP stage gets after the warm start and the two DP
+#: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
+MILP_TIME_SHARE = 0.1
+
+
+def dp_bytes(n: int, states: float) -> float:
+    """Estimated peak bytes of the DP keeping ``states`` states on ``n`` nodes (beyond the
+    process's :data:`BASE_BYTES`)."""
+    from taopt.ideals import is_wide, words
+
+    extra = 8.0 * (words(n) - 1) if is_wide(n) else 0.0
+    return (DP_BYTES_PER_STATE + extra) * float(states)
+
+
+def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
+    """The most states (at most ``wanted``) the DP may keep within the memory limit."""
+    from taopt.runtime import max_memory_gb as limit_gb
+
+    room = limit_gb(max_memory_gb) * 1e9 - BASE_BYTES
+    return int(max(1_000, min(wanted, room / dp_bytes(n, 1))))
+
+
+def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
+    """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
+    from taopt.runtime import max_memory_gb as limit_gb
+
+    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    return BASE_BYTES + sop_milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
+
+
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
+    """The portfolio's peak: the larger of its DP stages (their state caps, or the states
+    the ideals allow) and the MILP when it fits the limit; above the limit the MILP is
+    skipped and the DP's caps shrink to fit, so the estimate fits too (never a refusal
+    for size alone)."""
+    from taopt.models.sop_dp import IDEAL_CAP, count_ideals
+    from taopt.runtime import max_memory_gb as limit_gb
+
     formulation = options.get("formulation", "flow")
-    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    limit = options.get("max_memory_gb")
+    seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
-    return milp_bytes(columns), (
-        f"the SOP {formulation} model of{name} ({problem.n} nodes, {columns:,} columns)"
-    )
+    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
+    wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
+    if seconds is not None:  # a run keeps no more states than it can make in its time
+        wanted = min(wanted, int(DP_STATES_PER_SECOND * seconds))
+    states = dp_state_cap(problem.n, limit, wanted if capped else problem.n * count)
+    total = BASE_BYTES + dp_bytes(problem.n, states)
+    what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
+    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+    # the MILP runs only after capped DP stages, and is built only when its build fits the
+    # time it gets then (solve_sop's rule)
+    built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
+    if options.get("engine") == "milp" or (
+        capped
+        and built
+        and options.get("engine") != "dp"
+        and milp_fits(problem, formulation, limit)
+    ):
+        total = max(total, BASE_BYTES + sop_milp_bytes(columns))
+        what += f", {formulation} model of {columns:,} columns"
+    return min(total, limit_gb(limit) * 1e9), what + ")"
 
 
 def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> float:
@@ -664,7 +762,11 @@ def solve_sop(
             info = {"model": "not built", "columns": columns, "build_estimate": estimate}
             return _stopped(problem, known, None, began, formulation, info)
     building = time.perf_counter()
-    model = build(cost, precedences, start, end, formulation)
+    try:
+        model = build(cost, precedences, start, end, formulation, deadline=deadline)
+    except BuildStopped:
+        assert problem is not None  # built above under a limit
+        return _stopped(problem, known, None, began, formulation, {"model": "not built"})
     built_in = time.perf_counter() - building
     if deadline.limited:
         assert problem is not None  # built above under a limit
@@ -762,6 +864,23 @@ SECOND_STAGE_SHARE = 0.75
 
 PORTFOLIO_ENGINES = ("auto", "dp", "milp")
 
+#: ``info["model"]`` of a MILP run that stopped before HiGHS ran (the portfolio then gives
+#: the time left to the DP).
+STOPPED_EARLY = ("not built", "built, not compiled", "compiled, not solved")
+
+
+def _combine(first: Solution, second: Solution) -> Solution:
+    """Two runs on one problem: ``second`` when it finished; else the better order with the
+    larger of the two proven bounds (status by the one rule)."""
+    if second.status != TIME_LIMIT:
+        return second
+    best = second if second.objective <= first.objective else first
+    bound = min(max(first.bound or 0.0, second.bound or 0.0), best.objective)
+    status = TIME_LIMIT
+    if np.isfinite(best.objective):
+        status, _ = decide("time_limit", best.objective, bound)
+    return best.replace(bound=bound, status=status)
+
 
 def solve_sop_problem(
     problem: SopProblem,
@@ -773,6 +892,7 @@ def solve_sop_problem(
     engine: str = "auto",
     ideal_cap: int | None = None,
     max_states: int = PORTFOLIO_MAX_STATES,
+    max_memory_gb: float | None = None,
 ) -> Solution:
     """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
     MILP for sparse precedence.
@@ -788,8 +908,9 @@ def solve_sop_problem(
     (rbg050c), and if that has not either the flow
     MILP (:func:`solve_sop`) gets the rest, warm-started with the best order so far; the
     bound reported is the larger of the two proven bounds (never below the assignment
-    and arborescence bounds). More than 64 nodes: the MILP alone. The figures behind the
-    rule are in ``docs/benchmarks.md`` (SOP section).
+    and arborescence bounds). The rule is the same for any number of nodes (the DP's masks
+    take several words beyond 64). The figures behind the rule are in
+    ``docs/benchmarks.md`` (SOP section).
 
     Parameters
     ----------
@@ -805,7 +926,13 @@ def solve_sop_problem(
     ideal_cap : int, optional
         Cap of the ideal count (default :data:`taopt.models.sop_dp.IDEAL_CAP`).
     max_states : int
-        States the DP may keep when the ideals passed the cap.
+        States the DP may keep when the ideals passed the cap (lowered to fit the memory
+        limit, :func:`dp_state_cap`).
+    max_memory_gb : float, optional
+        The memory limit (default :func:`taopt.runtime.max_memory_gb`, passed on by
+        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink: the
+        run degrades to what fits and returns ``time_limit`` with its best order and a
+        proven bound, never a refusal for size alone.
 
     Returns
     -------
@@ -814,7 +941,7 @@ def solve_sop_problem(
         ``engine`` ("dp", "milp", "dp+dp", "dp+milp" or "dp+dp+milp"), ``ideals`` and ``ideals_capped``, and the
         DP's ``states``/``pruned`` when it ran.
     """
-    from taopt.models.sop_dp import IDEAL_CAP, MAX_NODES, count_ideals, solve_sop_dp
+    from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
 
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -827,15 +954,19 @@ def solve_sop_problem(
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
     counting = time.perf_counter()
-    ideals, capped = (
-        count_ideals(problem, cap, deadline if deadline.limited else None)
-        if problem.n <= MAX_NODES
-        else (0, True)
-    )
+    ideals, capped = count_ideals(problem, cap, deadline if deadline.limited else None)
     counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
+    second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
+    milp_ok = milp_fits(problem, formulation, max_memory_gb)
+    if not milp_ok:
+        info["milp"] = "skipped: its memory estimate is above the limit"
+    setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
+        if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
+            return more_dp(dp_result, time_left)
         result = solve_sop(
             problem.cost,
             problem.precedences,
@@ -856,9 +987,35 @@ def solve_sop_problem(
                 stopped_by = result.info.get("stopped_by") or "time_limit"
                 status, _ = decide(stopped_by, result.objective, bound)
             result = result.replace(bound=bound, status=status)
+        if result.info.get("model") in STOPPED_EARLY and dp_result is not None:
+            # the model could not be built or compiled in time: the DP uses the rest
+            info["milp"] = result.info["model"]
+            result = more_dp(result, deadline.remaining())
         return result
 
-    dp_next = engine != "milp" and problem.n <= MAX_NODES
+    def more_dp(before: Solution | None, time_left: float | None) -> Solution:
+        """Another DP stage from the best order so far (both price sets, the memory-fitted
+        cap) for the time left; the better order and the larger bound are kept. Not started
+        when the time left does not cover twice the setup measured on an earlier stage."""
+        if before is not None and time_left is not None:
+            setup = max(setups, default=0.0)
+            if time_left <= MARGIN or (setups and time_left < 2 * setup + MARGIN):
+                if setups:
+                    info["more_dp"] = f"skipped: {time_left:.2f} s left for a {setup:.2f} s setup"
+                return before
+        known = incumbent if before is None or before.solution is None else before.solution
+        again = solve_sop_dp(
+            problem,
+            None if time_left is None else max(time_left - MARGIN, MARGIN),
+            incumbent=known,
+            max_states=second_states,
+            both_prices=True,
+            beam_width=0 if before is not None else 1024,
+        )
+        setups.append(again.info.get("setup_seconds", 0.0))
+        return again if before is None else _combine(before, again)
+
+    dp_next = engine != "milp"
     # a DP stage first sets up its bounds and first layers outside its clock, about as long
     # as the count just measured (both follow the machine's load): not started without that
     dp_cannot_fit = (
@@ -872,7 +1029,7 @@ def solve_sop_problem(
         stop_info = {"model": "not run", "count_seconds": counted_in}
         result = _stopped(problem, known, None, began, "portfolio", stop_info)
         used = "none"
-    elif engine == "milp" or problem.n > MAX_NODES:
+    elif engine == "milp":
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:
@@ -890,7 +1047,9 @@ def solve_sop_problem(
         # a second stage sets up as the first did (its bounds, its first layers; seconds under
         # load, outside the DP's clock): started only when its share covers twice that
         setup = result.info.get("setup_seconds", 0.0)
-        second_share = deadline.share(SECOND_STAGE_SHARE)
+        setups.append(setup)
+        # without the MILP (above the memory limit) the second stage gets all the time left
+        second_share = deadline.share(SECOND_STAGE_SHARE if milp_ok else 1.0)
         short = second_share is not None and second_share < 2 * setup + MARGIN
         if result.status == TIME_LIMIT and short:
             info["second_stage"] = f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
@@ -901,20 +1060,13 @@ def solve_sop_problem(
             known = first.solution if first.solution is not None else incumbent
             second = solve_sop_dp(
                 problem,
-                deadline.share(SECOND_STAGE_SHARE),
+                second_share,
                 incumbent=known,
-                max_states=max(max_states, SECOND_STAGE_MAX_STATES),
+                max_states=second_states,
                 both_prices=True,
             )
             used = "dp+dp"
-            if second.status == TIME_LIMIT:  # keep the better order and the larger bound
-                best = second if second.objective <= first.objective else first
-                bound = min(max(first.bound or 0.0, second.bound or 0.0), best.objective)
-                status = TIME_LIMIT
-                if np.isfinite(best.objective):
-                    status, _ = decide("time_limit", best.objective, bound)
-                second = best.replace(bound=bound, status=status)
-            result = second
+            result = _combine(first, second)
         if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
             info.update({f"dp_{k}": v for k, v in result.info.items()})
             known = result.solution if result.solution is not None else incumbent

@@ -15,8 +15,9 @@ recursion restricted to ideals; ``end`` succeeds every node, so it only closes t
 path). The optimum is ``f(V, end)``. Only ideals are ever generated, so the work grows
 with the number of ideals (tens of thousands on the TSPLIB ``.4`` instances, where
 precedence is dense), not with 2^n. The DP is expanded layer by layer (``|I| = k``),
-vectorised with numpy: ideals are ``uint64`` bitmasks, so ``n <= 64``
-(:data:`MAX_NODES`); a layer is sorted to keep the best value of each ``(I, v)``.
+vectorised with numpy: ideals are ``uint64`` bitmasks, one word per mask up to 64 nodes and
+rows of ``ceil(n / 64)`` words beyond (:mod:`taopt.ideals`), so any ``n``; a layer is sorted
+to keep the best value of each ``(I, v)``.
 
 Completion bound. For a state ``(I, v)`` with ``U = V \\ I`` still to visit, the rest
 of any feasible path is ``v -> u_1 -> ... -> end`` through exactly ``U``, on arcs a
@@ -87,8 +88,8 @@ import numpy as np
 
 from taopt import ideals
 from taopt.errors import InstanceError
-from taopt.ideals import MAX_BITS, predecessor_masks
 from taopt.ideals import bits as node_bits
+from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.sop.problem import SopProblem, path_cost
@@ -102,8 +103,9 @@ __all__ = [
     "solve_sop_dp",
 ]
 
-#: Ideals are uint64 bitmasks: the DP takes at most 64 nodes.
-MAX_NODES = MAX_BITS
+#: No limit on the nodes any more (masks of more than 64 nodes are rows of several words,
+#: :mod:`taopt.ideals`); kept for callers that compared against it.
+MAX_NODES = 1 << 30
 
 #: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
 IDEAL_CAP = 20_000
@@ -123,6 +125,13 @@ BOTH_PRICES = False
 #: and the second bound doubled the time).
 SECOND_PRICES_TRIAL = 20_000
 SECOND_PRICES_MIN_SHARE = 0.02
+
+#: States times nodes times mask words bounded between two deadline checks of the
+#: completion bound (40,000 states on 49 nodes: 200,000 took 2-3 s on a loaded core, ESC47).
+CHUNK_WORK = 2_000_000
+
+#: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
+MERGE_SECONDS = 3e-7
 
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
 PRUNE_TOLERANCE = 1e-9
@@ -173,9 +182,7 @@ def count_ideals(
     >>> count_ideals(SopProblem.load("ESC07"))
     (41, False)
     """
-    if problem.n > MAX_NODES:
-        return cap + 1, True
-    first = int(_ONE << np.uint64(problem.start))
+    first = 1 << problem.start
     return ideals.count_ideals(
         _predecessor_masks(problem), problem.n, cap, first=first, deadline=deadline
     )
@@ -206,42 +213,48 @@ class _Bound:
         self.beta: np.ndarray = potentials[1]
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
-        self.pred = np.zeros(n, dtype=np.uint64) if pred is None else pred
         bits = node_bits(n)
+        self.pred = np.zeros_like(bits) if pred is None else pred
         self.bits = bits
+        self.wide = bits.ndim == 2
         self.into = [self._sorted(usable[:, w], bits) for w in range(n)]
         self.out = [self._sorted(usable[u, :], bits) for u in range(n)]
 
     @staticmethod
-    def _sorted(costs: np.ndarray, bits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _sorted(costs: np.ndarray, bits: np.ndarray) -> tuple[np.ndarray, ...]:
         ends = np.flatnonzero(np.isfinite(costs))
         ends = ends[np.argsort(costs[ends], kind="stable")]
-        prefix = np.zeros(len(ends) + 1, dtype=np.uint64)
+        prefix = np.zeros((len(ends) + 1,) + bits.shape[1:], dtype=np.uint64)
         if len(ends):
-            prefix[1:] = np.bitwise_or.accumulate(bits[ends])
+            prefix[1:] = np.bitwise_or.accumulate(bits[ends], axis=0)
         values = np.append(costs[ends], np.inf)  # index len(ends): no arc left
-        return prefix, values
+        # wide masks: each end's word and bit, for the direct test
+        return prefix, values, ends // 64, (ends % 64).astype(np.uint64)
 
     @staticmethod
-    def _cheapest(open_mask: np.ndarray, table: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    def _cheapest(open_mask: np.ndarray, table: tuple[np.ndarray, ...]) -> np.ndarray:
         """Per state, the cheapest arc whose other end is in ``open_mask`` (inf if none)."""
-        prefix, values = table
+        prefix, values, word, shift = table
         k = len(prefix) - 1
+        wide = prefix.ndim == 2
         if len(open_mask) * k <= _DIRECT:  # small: one 2-D test, no loop (less overhead)
-            hit = (open_mask[:, None] & prefix[None, 1:]) != 0
+            if wide:  # the bit of each end, gathered from its word
+                hit = ((open_mask[:, word] >> shift[None, :]) & _ONE) != 0
+            else:
+                hit = (open_mask[:, None] & prefix[None, 1:]) != 0
             first = np.argmax(hit, axis=1) if k else np.zeros(len(open_mask), dtype=np.int64)
             found = hit.any(axis=1) if k else np.zeros(len(open_mask), dtype=bool)
             return np.where(found, values[first], np.inf)
         lo = np.zeros(len(open_mask), dtype=np.int64)
         # the answer is the first arc t (0-based) whose end is open, in [lo, hi]
         hi = np.full(len(open_mask), max(k - 1, 0), dtype=np.int64)
-        found = (prefix[k] & open_mask) != 0
+        found = nonzero(prefix[k] & open_mask, wide)
         while True:
             active = lo < hi
             if not active.any():
                 break
             mid = (lo + hi) // 2  # < hi <= k - 1 where active; unused elsewhere
-            hit = (prefix[np.minimum(mid + 1, k)] & open_mask) != 0  # an end among 0..mid
+            hit = nonzero(prefix[np.minimum(mid + 1, k)] & open_mask, wide)  # an end in 0..mid
             hi = np.where(active & hit, mid, hi)
             lo = np.where(active & ~hit, mid + 1, lo)
         return np.where(found, values[np.minimum(lo, k)], np.inf)
@@ -252,7 +265,7 @@ class _Bound:
         constant = self.alpha[last].astype(float)
         for w in range(self.n):
             if w != self.start:
-                todo = (mask & self.bits[w]) == 0
+                todo = ~has(mask, w)
                 constant[todo] += self.beta[w] + (self.alpha[w] if w != self.end else 0.0)
         return constant
 
@@ -270,24 +283,23 @@ class _Bound:
         towards an available node.
         """
         n, bits, pred = self.n, self.bits, self.pred
-        full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
-        unvisited = ~mask & full
+        unvisited = ~mask & ideals.full(n)
         count = len(mask)
         total_in = np.zeros(count)
         total_out = np.zeros(count)
         swap = np.full(count, np.inf)  # least c'[v, w] - in_U(w) over available w
         forced = np.zeros(count, dtype=np.int64)  # nodes of U enterable from v only
         forced_cost = np.zeros(count)
-        available = np.zeros(count, dtype=np.uint64)
+        available = np.zeros_like(mask)
         for w in range(n):
             if w == self.start:
                 continue
-            todo = (mask & bits[w]) == 0
+            todo = ~has(mask, w)
             if not todo.any():
                 continue
             others = unvisited[todo] & ~bits[w]
             from_open = self._cheapest(others, self.into[w])
-            ready = (mask[todo] & pred[w]) == pred[w]
+            ready = holds(mask[todo], pred[w])
             from_last = np.where(ready, self.usable[last[todo], w], np.inf)
             available[np.flatnonzero(todo)[ready]] |= bits[w]
             finite = np.isfinite(from_open)
@@ -303,9 +315,10 @@ class _Bound:
                 total_out[todo] += self._cheapest(others, self.out[w])
         # no forced node: one swap; one: it is the node entered from v; more: infeasible
         total_in += np.where(forced == 0, swap, np.where(forced == 1, forced_cost, np.inf))
-        total_in[unvisited == 0] = 0.0
+        done = ~nonzero(unvisited, self.wide)
+        total_in[done] = 0.0
         total_out += self._cheapest_from_last(available, last)
-        total_out[unvisited == 0] = 0.0
+        total_out[done] = 0.0
         return np.maximum(total_in, total_out)
 
     def _cheapest_from_last(self, unvisited: np.ndarray, last: np.ndarray) -> np.ndarray:
@@ -313,7 +326,7 @@ class _Bound:
         for v in np.unique(last):
             here = last == v
             result[here] = self._cheapest(unvisited[here], self.out[v])
-        return np.where(unvisited == 0, 0.0, result)
+        return np.where(nonzero(unvisited, self.wide), result, 0.0)
 
 
 def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | None = None) -> _Bound:
@@ -325,7 +338,93 @@ def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | Non
     return _Bound(usable, start, end, assignment_potentials(usable, start, end), pred)
 
 
+#: The last few assignment prices, by a digest of their data: a portfolio run builds the
+#: same search up to six times (beam passes, both directions, two stages), 0.4 s of LP each
+#: on 150 nodes.
+_PRICES: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+
 def assignment_potentials(
+    usable: np.ndarray, start: int, end: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_assignment_potentials`, remembered for the last few inputs."""
+    import hashlib
+
+    key = hashlib.blake2b(
+        np.ascontiguousarray(usable).tobytes() + np.array([start, end]).tobytes()
+    ).digest()
+    if key not in _PRICES:
+        if len(_PRICES) >= 8:
+            _PRICES.pop(next(iter(_PRICES)))
+        fast = None
+        if ideals.is_wide(usable.shape[0]):  # the LP took 19 s on 300 nodes (90,000 arcs)
+            fast = _matching_potentials(usable, start, end)
+        _PRICES[key] = fast if fast is not None else _assignment_potentials(usable, start, end)
+    alpha, beta = _PRICES[key]
+    return alpha.copy(), beta.copy()
+
+
+def _matching_potentials(
+    usable: np.ndarray, start: int, end: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Optimal prices of the same assignment LP from an optimal matching, without an LP.
+
+    With the optimal assignment ``a`` (:func:`scipy.optimize.linear_sum_assignment`), the
+    prices with ``alpha_i + beta_a(i) = c[i, a(i)]`` and ``alpha_i + beta_j <= c[i, j]`` are
+    ``beta`` = shortest distances in the graph of arcs ``a(i) -> j`` of length
+    ``c[i, j] - c[i, a(i)]`` (no negative cycle, the assignment being optimal), ``alpha_i =
+    c[i, a(i)] - beta_a(i)``: milliseconds where HiGHS's LP took seconds. Used beyond 64
+    nodes (up to 64 the LP's prices are kept, so the DP's search is unchanged there). None
+    when no assignment uses usable arcs only (the caller falls back to the LP).
+    """
+    from scipy.optimize import linear_sum_assignment
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import NegativeCycleError, shortest_path
+
+    n = usable.shape[0]
+    rows = np.array([v for v in range(n) if v != end])
+    cols = np.array([v for v in range(n) if v != start])
+    sub = usable[np.ix_(rows, cols)]
+    finite = np.isfinite(sub)
+    if not finite.any(axis=1).all() or not finite.any(axis=0).all():
+        return None
+    big = 1.0 + 2.0 * n * float(np.abs(sub[finite]).max(initial=0.0))
+    r_idx, c_idx = linear_sum_assignment(np.where(finite, sub, big))
+    if not finite[r_idx, c_idx].all():
+        return None
+    match = np.empty(len(rows), dtype=np.int64)
+    match[r_idx] = c_idx  # row i -> column match[i]
+    matched_cost = sub[np.arange(len(rows)), match]
+    i_idx, j_idx = np.nonzero(finite)
+    # edge match[i] -> j of length c[i, j] - c[i, match[i]]; a source 0 to every column
+    m = len(cols)
+    lengths = sub[i_idx, j_idx] - matched_cost[i_idx]
+    tails = np.concatenate([match[i_idx] + 1, np.zeros(m, dtype=np.int64)])
+    heads = np.concatenate([j_idx + 1, np.arange(1, m + 1)])
+    weights = np.concatenate([lengths, np.zeros(m)])
+    keep = tails != heads  # the matched arc itself is a self-loop of length 0
+    # csgraph drops explicit zeros: a zero length becomes the smallest positive float (an
+    # error of at most m * 2e-308, absorbed by the lowering of beta below)
+    weights = np.where(weights == 0.0, np.finfo(float).tiny, weights)
+    graph = csr_matrix((weights[keep], (tails[keep], heads[keep])), shape=(m + 1, m + 1))
+    try:
+        dist = shortest_path(graph, method="BF", directed=True, indices=0)
+    except NegativeCycleError:
+        return None
+    beta_cols = np.minimum(dist[1:], 0.0)
+    if not np.isfinite(beta_cols).all():
+        return None
+    alpha, beta = np.zeros(n), np.zeros(n)
+    beta[cols] = beta_cols
+    alpha[rows] = matched_cost - beta_cols[match]
+    # exactness as the LP's prices: every reduced cost >= 0 (tolerance lowered into beta)
+    reduced = usable - alpha[:, None] - beta[None, :]
+    lowest = np.min(np.where(np.isfinite(reduced), reduced, np.inf), axis=0)
+    beta += np.minimum(np.where(np.isfinite(lowest), lowest, 0.0), 0.0)
+    return alpha, beta
+
+
+def _assignment_potentials(
     usable: np.ndarray, start: int, end: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Dual prices ``(alpha, beta)`` of the assignment LP on the usable arcs.
@@ -403,7 +502,7 @@ def completion_bound(problem: SopProblem, visited: set[int], last: int) -> float
     usable = np.full((problem.n, problem.n), np.inf)
     usable[tails, heads] = problem.cost[tails, heads]
     bound = _completion(usable, problem.start, problem.end, _predecessor_masks(problem))
-    mask = np.array([sum(1 << v for v in visited)], dtype=np.uint64)
+    mask = np.array([ideals.from_int(sum(1 << v for v in visited), problem.n)], dtype=np.uint64)
     return float(bound(mask, np.array([last]))[0])
 
 
@@ -429,11 +528,14 @@ class _Search:
         self.more_bounds: list[_Bound] = []  # the same bound on other prices (max taken)
         self.trial: dict[int, list[int]] = {}  # per extra bound: states evaluated, pruned
         self.problem = problem
+        #: Seconds per extension merged (sorted and deduplicated), the slowest seen.
+        self.merge_rate = MERGE_SECONDS
+        self.merge_refused = False
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         start = self.problem.start
         return (
-            np.array([self.bits[start]], dtype=np.uint64),
+            np.array([self.bits[start]], dtype=np.uint64),  # (1,) or (1, W)
             np.array([start], dtype=np.int64),
             np.zeros(1),
             np.array([-1], dtype=np.int64),
@@ -458,7 +560,7 @@ class _Search:
                 continue
             if deadline.expired(MARGIN):
                 return None
-            ok = ((mask & bits[w]) == 0) & ((mask & pred[w]) == pred[w])
+            ok = ~has(mask, w) & holds(mask, pred[w])
             if not ok.any():
                 continue
             step = usable[last[ok], w]
@@ -475,16 +577,25 @@ class _Search:
             new_parent.append(chosen)
         if not new_mask:
             empty = np.zeros(0)
-            return (empty.astype(np.uint64), empty.astype(np.int64), empty, empty.astype(np.int64))
+            return (mask[:0], empty.astype(np.int64), empty, empty.astype(np.int64))
+        # the merge below cannot be interrupted: start it only if it should end in time (at
+        # the slowest rate seen so far; millions of extensions take seconds on a loaded core)
+        left = deadline.remaining()
+        if left is not None and count * self.merge_rate > left - MARGIN:
+            self.merge_refused = True  # out of time, not of states
+            return None
+        began = time.perf_counter()
         c_mask = np.concatenate(new_mask)
         c_last = np.concatenate(new_last)
         c_value = np.concatenate(new_value)
         c_parent = np.concatenate(new_parent)
-        order = np.lexsort((c_value, c_last, c_mask))
+        order = np.lexsort((c_value, c_last, *lex_keys(c_mask)))
         c_mask, c_last = c_mask[order], c_last[order]
         first = np.ones(len(c_mask), dtype=bool)
-        first[1:] = (c_mask[1:] != c_mask[:-1]) | (c_last[1:] != c_last[:-1])
+        first[1:] = differs(c_mask) | (c_last[1:] != c_last[:-1])
         order = order[first]
+        if count >= 10_000:
+            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / count)
         return c_mask[first], c_last[first], c_value[order], c_parent[order]
 
     def totals(
@@ -494,7 +605,7 @@ class _Search:
         value: np.ndarray,
         deadline: Deadline,
         cutoff: float = np.inf,
-        chunk: int = 200_000,
+        chunk: int | None = None,
     ) -> np.ndarray | None:
         """``f + g`` per state, in chunks between deadline checks; None when it passed.
 
@@ -502,6 +613,9 @@ class _Search:
         it is pruned anyway, so ``max(in', out')`` is not computed for it (the reduced costs
         are non-negative, :func:`assignment_potentials`).
         """
+        if chunk is None:  # about the same work between two checks whatever n and width
+            words = self.bits.shape[1] if self.bits.ndim == 2 else 1
+            chunk = max(1_000, int(CHUNK_WORK / (self.problem.n * words)))
         best = None
         for bound in [self.bound, *self.more_bounds]:
             out = value + bound.potential(mask, last)
@@ -583,7 +697,8 @@ class _Run:
         mask, last, value, _ = self.layers[-1]
         grown = self.search.grow(mask, last, value, deadline, limit)
         if grown is None:
-            return "time_limit" if deadline.expired(MARGIN) else "max_states"
+            out_of_time = deadline.expired(MARGIN) or self.search.merge_refused
+            return "time_limit" if out_of_time else "max_states"
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
         total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)
@@ -630,10 +745,10 @@ def _join(forward: _Run, backward: _Run, cost: np.ndarray) -> tuple[float, list[
     other = n - 2 - top  # the backward layer with the complementary sets
     f_mask, f_last, f_value, _ = forward.layers[top]
     b_mask, b_first, b_value, _ = backward.layers[other]
-    full = np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
-    order = np.argsort(b_mask, kind="stable")
-    sorted_mask = b_mask[order]
-    wanted = ~f_mask & full
+    b_keys = row_keys(b_mask)
+    order = np.argsort(b_keys, kind="stable")
+    sorted_mask = b_keys[order]
+    wanted = row_keys(~f_mask & ideals.full(n))
     lo = np.searchsorted(sorted_mask, wanted, side="left")
     hi = np.searchsorted(sorted_mask, wanted, side="right")
     counts = hi - lo
@@ -661,8 +776,6 @@ def beam_order(
     value plus completion bound. Returns ``(cost, order)`` or None (no path kept, or the
     time limit passed). Deterministic; ``O(width · n^2 log n)``.
     """
-    if problem.n > MAX_NODES:
-        return None
     deadline = Deadline(time_limit)
     search = _Search(problem)
     mask, last, value, parent = search.first()
@@ -703,7 +816,7 @@ def solve_sop_dp(
     Parameters
     ----------
     problem : SopProblem
-        At most :data:`MAX_NODES` nodes.
+        Any number of nodes (masks of several words beyond 64).
     time_limit : float, optional
         Wall-clock seconds; on the limit the incumbent (or no path, objective ``inf``) is
         returned with status "time_limit" and the proven bound of the module docstring.
@@ -745,7 +858,7 @@ def solve_sop_dp(
     Raises
     ------
     InstanceError
-        More than :data:`MAX_NODES` nodes, or a non-positive time limit.
+        A non-positive time limit.
 
     Notes
     -----
@@ -764,9 +877,6 @@ def solve_sop_dp(
     began = time.perf_counter()
     if time_limit is not None and not time_limit > 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
-    n = problem.n
-    if n > MAX_NODES:
-        raise InstanceError(f"the ideal DP takes at most {MAX_NODES} nodes, got n = {n}")
     deadline = Deadline(time_limit)
     info: dict[str, Any] = {"beam": None}
     known = _beam_start(problem, _incumbent(problem, incumbent), beam_width, deadline, info)

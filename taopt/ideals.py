@@ -7,9 +7,13 @@ precedence closure (:func:`taopt.models.sop_dp.solve_sop_dp`): the sets a partia
 schedule or path may have served, never all 2^n subsets. Both families take the ideals
 from here.
 
-Representation: node ``j`` is bit ``j`` of a ``uint64`` mask, so at most :data:`MAX_BITS`
-nodes; ``need[j]`` is the mask of every node that must precede ``j``. A layer is a sorted
-array of distinct masks of one size.
+Representation: node ``j`` is bit ``j % 64`` of word ``j // 64``. Up to :data:`MAX_BITS`
+nodes a mask is one ``uint64`` (a set of masks is a 1-D array, as before); beyond, a mask is a
+row of :func:`words` ``uint64`` words (a set of masks is a ``(k, W)`` array), so any ``n``
+works. ``need[j]`` is the mask of every node that must precede ``j``. A layer is an array of
+distinct masks of one size, sorted (1-D) or in the lexicographic order of its rows (2-D).
+The helpers :func:`has`, :func:`holds`, :func:`nonzero` and :func:`distinct` take either
+form, so the code above them is written once.
 
 Example
 -------
@@ -33,15 +37,110 @@ from typing import Any
 
 import numpy as np
 
-#: Ideals are uint64 bitmasks: at most this many nodes.
+#: A mask of at most this many nodes is one uint64 (1-D arrays of masks); more nodes take
+#: several words per mask (2-D arrays, :func:`words`).
 MAX_BITS = 64
 
 _ONE = np.uint64(1)
 
 
+def words(n: int) -> int:
+    """uint64 words per mask of ``n`` nodes when masks are wide (``n > MAX_BITS``)."""
+    return max(1, (n + 63) // 64)
+
+
+def is_wide(n: int) -> bool:
+    """True when masks of ``n`` nodes are rows of several words (``n > MAX_BITS``)."""
+    return n > MAX_BITS
+
+
 def bits(n: int) -> np.ndarray:
-    """``bits[j] = 1 << j`` as uint64, for j < n."""
-    return np.left_shift(_ONE, np.arange(n, dtype=np.uint64))
+    """``bits[j]``: the mask of node ``j`` alone, for j < n ((n,) or (n, W) uint64)."""
+    if not is_wide(n):
+        return np.left_shift(_ONE, np.arange(n, dtype=np.uint64))
+    out = np.zeros((n, words(n)), dtype=np.uint64)
+    j = np.arange(n)
+    out[j, j // 64] = np.left_shift(_ONE, (j % 64).astype(np.uint64))
+    return out
+
+
+def full(n: int) -> np.ndarray:
+    """The mask of all ``n`` nodes (a uint64 scalar, or a (W,) row)."""
+    if not is_wide(n):
+        return np.uint64((1 << n) - 1) if n < 64 else np.uint64(2**64 - 1)
+    return from_int((1 << n) - 1, n)
+
+
+def from_int(value: int, n: int) -> Any:
+    """The mask of the Python int ``value`` (bit j = node j): a uint64, or a (W,) row."""
+    if not is_wide(n):
+        return np.uint64(value)
+    return np.array([(value >> (64 * i)) & (2**64 - 1) for i in range(words(n))], np.uint64)
+
+
+def to_int(mask: Any) -> int:
+    """The Python int of one mask (a uint64 or a row of words)."""
+    row = np.atleast_1d(np.asarray(mask, dtype=np.uint64))
+    return sum(int(w) << (64 * i) for i, w in enumerate(row))
+
+
+def has(masks: np.ndarray, j: int) -> np.ndarray:
+    """Per mask, whether it holds node ``j`` (bool array)."""
+    if masks.ndim == 1:
+        return (masks & (_ONE << np.uint64(j))) != 0
+    return ((masks[:, j // 64] >> np.uint64(j % 64)) & _ONE) != 0
+
+
+def holds(masks: np.ndarray, need: Any) -> np.ndarray:
+    """Per mask, whether it holds every node of ``need`` (one mask)."""
+    if masks.ndim == 1:
+        return (masks & need) == need
+    missing = need[0] & ~masks[:, 0]
+    for i in range(1, masks.shape[1]):
+        missing |= need[i] & ~masks[:, i]
+    return missing == 0
+
+
+def nonzero(masks: np.ndarray, wide: bool) -> np.ndarray:
+    """Per mask, whether it is not empty (``wide``: the last axis holds the words).
+
+    The words are or-ed one by one: ``any`` over a short last axis is 5-10x slower.
+    """
+    if not wide:
+        return masks != 0
+    acc = masks[..., 0].copy()
+    for i in range(1, masks.shape[-1]):
+        acc |= masks[..., i]
+    return acc != 0
+
+
+def count(mask: Any) -> int:
+    """Nodes in one mask."""
+    return to_int(mask).bit_count()
+
+
+def row_keys(masks: np.ndarray) -> np.ndarray:
+    """A 1-D array with one comparable item per mask (the masks themselves when 1-D; a
+    structured view of the words otherwise), for ``np.sort``/``np.searchsorted``."""
+    if masks.ndim == 1:
+        return masks
+    w = masks.shape[1]
+    kind = np.dtype([(f"w{i}", "<u8") for i in range(w)])
+    return np.ascontiguousarray(masks).view(kind).ravel()
+
+
+def lex_keys(masks: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The keys of ``masks`` for :func:`numpy.lexsort` (last key primary): one per word."""
+    if masks.ndim == 1:
+        return (masks,)
+    return tuple(masks[:, i] for i in range(masks.shape[1]))
+
+
+def differs(masks: np.ndarray) -> np.ndarray:
+    """``masks[i + 1] != masks[i]`` per consecutive pair (bool array of length k - 1)."""
+    if masks.ndim == 1:
+        return masks[1:] != masks[:-1]
+    return nonzero(masks[1:] ^ masks[:-1], True)
 
 
 def predecessor_masks(n: int, pairs: Iterable[tuple[int, int]]) -> np.ndarray:
@@ -49,7 +148,13 @@ def predecessor_masks(n: int, pairs: Iterable[tuple[int, int]]) -> np.ndarray:
 
     Pass the transitive closure's pairs for a closed relation; ideals are the same either
     way (closure under the given pairs implies closure under their transitive closure).
+    Shape (n,) up to :data:`MAX_BITS` nodes, (n, :func:`words`) beyond.
     """
+    if is_wide(n):
+        rows = np.zeros((n, words(n)), dtype=np.uint64)
+        for r, j in pairs:
+            rows[j, r // 64] |= _ONE << np.uint64(r % 64)
+        return rows
     need = np.zeros(n, dtype=np.uint64)
     for r, j in pairs:
         need[j] |= _ONE << np.uint64(r)
@@ -57,8 +162,13 @@ def predecessor_masks(n: int, pairs: Iterable[tuple[int, int]]) -> np.ndarray:
 
 
 def distinct(masks: np.ndarray) -> np.ndarray:
-    """Sorted distinct values (``np.unique`` of numpy 2.4 hashes unsigned arrays, 10-20x
-    slower than sorting them here)."""
+    """Sorted distinct masks (``np.unique`` of numpy 2.4 hashes unsigned arrays, 10-20x
+    slower than sorting them here); 2-D: distinct rows in lexicographic order."""
+    if masks.ndim == 2:
+        if len(masks):
+            masks = masks[np.lexsort(lex_keys(masks)[::-1])]
+            masks = masks[np.concatenate(([True], differs(masks)))]
+        return masks
     masks = np.sort(masks)
     if masks.size:
         masks = masks[np.concatenate(([True], masks[1:] != masks[:-1]))]
@@ -76,18 +186,18 @@ def ideal_layers(
 
     Parameters
     ----------
-    need : (n,) uint64 array
+    need : (n,) or (n, W) uint64 array
         ``need[j]``: the nodes that must precede j (:func:`predecessor_masks`).
     n : int
-        Nodes (at most :data:`MAX_BITS`).
+        Nodes (any number; wide masks beyond :data:`MAX_BITS`).
     cap : int
         Give up (None) once more than ``cap`` ideals are found.
     deadline : taopt.runtime.Deadline, optional
         Give up (None) when it expires, or when the next layer's candidates alone prove more
         than ``cap`` ideals (checked before they are merged, which is the slow step).
     first : int
-        The mask every ideal contains (the first layer), 0 for the empty set; it must be an
-        ideal itself.
+        The set every ideal contains (a Python int, bit j = node j; the first layer), 0 for
+        the empty set; it must be an ideal itself.
 
     Returns
     -------
@@ -101,23 +211,23 @@ def ideal_layers(
     whose predecessors it holds. O(n · ideals) numpy work; duplicates are merged early so
     memory stays O(ideals of two layers) even near the cap.
     """
-    layers = [np.array([first], dtype=np.uint64)]
+    layers = [np.array([from_int(first, n)], dtype=np.uint64)]
     total = 1
     limited = deadline is not None and deadline.limited
+    node = bits(n)
     for k in range(n - int(first).bit_count()):
         cur = layers[-1]
         parts = []
         size = 0
         for j in range(n):
-            bit = _ONE << np.uint64(j)
-            part = cur[((cur & bit) == 0) & ((cur & need[j]) == need[j])] | bit
+            part = cur[~has(cur, j) & holds(cur, need[j])] | node[j]
             parts.append(part)
-            size += part.size
+            size += len(part)
             if limited and deadline.expired():
                 return None
             if size > 2 * (cap - total) + 1024:  # merge duplicates early, stop past the cap
                 parts = [distinct(np.concatenate(parts))]
-                size = parts[0].size
+                size = len(parts[0])
                 if size > cap - total:
                     return None
         if limited and total + -(-size // (k + 1)) > cap:
@@ -126,7 +236,7 @@ def ideal_layers(
             # 0.12 s on ESC47, over 1 s under load, between two looks at the clock)
             return None
         layers.append(distinct(np.concatenate(parts)))
-        total += layers[-1].size
+        total += len(layers[-1])
         if total > cap or (limited and deadline.expired()):
             return None
     return layers
@@ -145,20 +255,36 @@ def count_ideals(
     count : int
         The exact number, or ``cap + 1`` when ``capped``.
     capped : bool
-        True when there are more than ``cap`` ideals, or more than :data:`MAX_BITS` nodes, or
-        the deadline came first (the true number is then larger or unknown).
+        True when there are more than ``cap`` ideals, or the deadline came first.
 
     Example
     -------
     >>> count_ideals(predecessor_masks(4, [(0, 1), (1, 2), (2, 3)]), 4)  # a chain: n + 1
     (5, False)
     """
-    if n > MAX_BITS:
-        return cap + 1, True
     layers = ideal_layers(need, n, cap, deadline=deadline, first=first)
     if layers is None:
         return cap + 1, True
-    return sum(int(layer.size) for layer in layers), False
+    return sum(len(layer) for layer in layers), False
 
 
-__all__ = ["MAX_BITS", "bits", "predecessor_masks", "distinct", "ideal_layers", "count_ideals"]
+__all__ = [
+    "MAX_BITS",
+    "words",
+    "is_wide",
+    "bits",
+    "full",
+    "from_int",
+    "to_int",
+    "has",
+    "holds",
+    "nonzero",
+    "count",
+    "row_keys",
+    "lex_keys",
+    "differs",
+    "predecessor_masks",
+    "distinct",
+    "ideal_layers",
+    "count_ideals",
+]

@@ -487,6 +487,28 @@ def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch):
     assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
 
 
+def test_sop_portfolio_without_the_milp_skips_a_dp_stage_it_cannot_set_up(monkeypatch):
+    """Above the memory limit (no MILP) the portfolio's extra DP stage is not started either
+    when the time left is under twice the measured setup: one DP run, its order and bound."""
+    from taopt.models import sop_dp
+    from taopt.sop.problem import SopProblem
+
+    real, calls = sop_dp.solve_sop_dp, []
+
+    def first_stage_slow_to_set_up(problem, time_limit=None, **options):
+        calls.append(options)
+        result = real(problem, 1e-3, **options)
+        return result.replace(info={**result.info, "setup_seconds": 1e6})
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stage_slow_to_set_up)
+    problem = SopProblem.load("ESC47")
+    result = taopt.solve(problem, "exact", time_limit=1.0, max_memory_gb=0.08)
+    assert result.info["milp"].startswith("skipped")
+    assert len(calls) == 1 and result.info["more_dp"].startswith("skipped")
+    assert result.status == TIME_LIMIT and result.bound <= result.objective
+    assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
+
+
 def test_delivery_milp_limited_runs_leave_out_the_clockless_highs_phases(monkeypatch):
     """A time-limited delivery MILP asks HiGHS for no probing and no restart (both ignore
     its clock: 6 s took up to 13 s); the answer is still certified on a small instance."""

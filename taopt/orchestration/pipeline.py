@@ -174,6 +174,8 @@ def solve(
         kwargs["time_limit"] = time_limit
     spec.check_options(kwargs)
     # the size guard: refuse before anything is built (milliseconds, not a MemoryError)
+    if max_memory_gb is not None and spec.accepts("max_memory_gb"):
+        kwargs.setdefault("max_memory_gb", max_memory_gb)  # a method that degrades to fit
     check_footprint(problem, method, kwargs, max_memory_gb)
     warm_info = None
     if spec.warm_start and spec.accepts("incumbent") and "incumbent" not in kwargs:
