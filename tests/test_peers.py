@@ -358,7 +358,7 @@ PARENT = """
     problem = taopt.AssignmentProblem(rng.uniform(1, 100, (45, 45)), 40)
     ortools_solve(problem, time_limit=0.1)
     print(peers._WORKERS["ortools"].process.pid, flush=True)
-    ortools_solve(problem, time_limit=60)  # busy when the parent is stopped
+    ortools_solve(problem, time_limit=60, no_improvement=None)  # busy when the parent is stopped
 """
 
 
