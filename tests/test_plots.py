@@ -537,11 +537,11 @@ def test_solve_prints_the_plotted_routes_with_the_plotted_ids(tmp_path, capsys):
         (["solve", "delivery_instance.json", "--gantt", "x.svg"], "must end in .png"),
         (
             ["solve", "sop_problem.json", "--gantt", "x.png"],
-            "--gantt draws a Gantt chart of a delivery_instance only",
+            "--gantt draws a Gantt chart of a delivery_instance, fleet_problem only",
         ),
         (
             ["solve", "instance.json", "--gantt", "x.png"],
-            "--gantt draws a Gantt chart of a delivery_instance only",
+            "--gantt draws a Gantt chart of a delivery_instance, fleet_problem only",
         ),
         (["simulate", "comm_problem.json", "--animate", "x.mp4"], "must end in .gif"),
         (
