@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from reference import REFERENCES, brute_force_routing
-from test_exact_brute_force import sop_brute_force, sop_instance
+from reference_exact import sop_brute_force, sop_instance
 
 import taopt
 from taopt.delivery.bounds import (

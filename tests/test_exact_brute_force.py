@@ -10,21 +10,23 @@ asymmetric costs, zero and equal costs, 1–7 vehicles.
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import networkx as nx
 import numpy as np
 import pytest
-from reference import BRUTE_FORCE, brute_force, brute_force_delivery, brute_force_routing
+from reference import BRUTE_FORCE, brute_force_routing
 from reference_budgeted import brute_force_budgeted
-from test_models_routing import dp_optimum
+from reference_exact import (
+    budgeted_instance,
+    delivery_instance,
+    dp_optimum,
+    exact_failures,
+    routing_instance,
+    sop_instance,
+)
 
 import taopt
-from taopt.budgeted import BudgetedProblem
-from taopt.comm.problem import random_problem
-
-REL = 1e-6
 
 #: The file of issue 15: DFJ ended "feasible" 4 with bound 3 (HiGHS accepted its MIP start,
 #: valued in the presolved space, as optimal); the optimum is 3.
@@ -34,197 +36,6 @@ ISSUE_15 = {
     "n_targets": 4,
     "cost": [[0, 1, 2, 1, 2], [0, 0, 0, 2, 1], [2, 2, 0, 0, 3], [0, 3, 3, 0, 3], [3, 3, 3, 3, 0]],
 }
-
-
-# ----------------------------------------------------------------------- generators
-def _costs(rng: np.random.Generator, size: int, kind: int) -> np.ndarray:
-    """Asymmetric costs: uniform reals, small integers (many ties), or 0/1 (many zeros)."""
-    if kind == 0:
-        return rng.uniform(0.0, 100.0, size=(size, size))
-    if kind == 1:
-        return rng.integers(0, 4, size=(size, size)).astype(float)
-    return np.where(rng.random((size, size)) < 0.5, 0.0, 1.0)
-
-
-def routing_instance(seed: int) -> taopt.AssignmentProblem:
-    """1–7 targets, 1–7 vehicles (fewer vehicles for more targets), three cost kinds."""
-    rng = np.random.default_rng([15, seed])
-    n = int(rng.integers(1, 8))
-    m = int(rng.integers(1, 8 if n <= 5 else 4))
-    return taopt.AssignmentProblem(_costs(rng, n + m, seed % 3), n, name=f"rand-{seed}")
-
-
-def delivery_instance(seed: int, customers: int) -> taopt.DeliveryInstance:
-    """Customers on a 3×3 street grid with random precedences (a DAG by index order)."""
-    rng = np.random.default_rng([16, seed])
-    pairs = [(a, b) for a, b in itertools.combinations(range(customers), 2) if rng.random() < 0.3]
-    return taopt.DeliveryInstance.grid(
-        rng.uniform(0, 600, size=(customers, 2)),
-        3,
-        600.0,
-        float(rng.uniform(1.0, 3.0)),
-        1.0,
-        float(rng.uniform(450.0, 1200.0)),  # every sortie to a nearest stop fits
-        precedences=pairs,
-    )
-
-
-def sop_instance(seed: int) -> taopt.SopProblem:
-    """4–7 nodes, start 0 and end n-1, random precedences among the inner nodes."""
-    rng = np.random.default_rng([17, seed])
-    n = int(rng.integers(4, 8))
-    cost = _costs(rng, n, seed % 3)
-    inner = range(1, n - 1)
-    pairs = [(a, b) for a, b in itertools.combinations(inner, 2) if rng.random() < 0.25]
-    return taopt.SopProblem(cost, pairs, 0, n - 1, name=f"sop-{seed}")
-
-
-def sop_brute_force(problem: taopt.SopProblem) -> float:
-    """Cheapest precedence-respecting path from start to end over every order of the rest."""
-    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
-    best = math.inf
-    for order in itertools.permutations(inner):
-        position = {v: i for i, v in enumerate(order)}
-        if all(position[a] < position[b] for a, b in problem.precedences):
-            path = [problem.start, *order, problem.end]
-            best = min(best, sum(problem.cost[a, b] for a, b in itertools.pairwise(path)))
-    return best
-
-
-def capability_instance(seed: int) -> taopt.CapabilityProblem:
-    """2–5 targets demanding one or both of {a, b}, 2–4 vehicles holding each at least once."""
-    rng = np.random.default_rng([18, seed])
-    n, m = int(rng.integers(2, 6)), int(rng.integers(2, 5))
-    kinds = ["a", "b"] + [str(rng.choice(["a", "b"])) for _ in range(m - 2)]
-    rng.shuffle(kinds)
-    options = [{"a"}, {"b"}, {"a", "b"}]
-    demands = [options[int(rng.integers(0, 3))] for _ in range(n)]
-    return taopt.CapabilityProblem(_costs(rng, n + m, seed % 3), n, kinds, demands)
-
-
-def capability_brute_force(problem: taopt.CapabilityProblem) -> float:
-    """Sum of per-class brute-force optima (the §3.6 split)."""
-    return sum(
-        brute_force_routing(c.problem.cost, c.problem.n) for c in problem.classes if c.problem
-    )
-
-
-def comm_instance(seed: int) -> taopt.CommProblem:
-    """Chapter 4: 2–6 targets, 2–4 vehicles, 1–2 attributes, random range."""
-    rng = np.random.default_rng([19, seed])
-    n, m = int(rng.integers(2, 7)), int(rng.integers(2, 5))
-    attributes = int(rng.integers(1, 3))
-    return random_problem(n, m, attributes, float(rng.uniform(50, 500)), seed=rng, side=1000.0)
-
-
-def comm_brute_force(problem: taopt.CommProblem) -> float:
-    """f_o: brute force per attribute class of the full-information problem."""
-    full = problem.full_information()
-    classes = getattr(full, "classes", None)
-    if classes is None:
-        return dp_optimum(full)
-    return sum(dp_optimum(c.problem) for c in classes if c.problem)
-
-
-def budgeted_instance(seed: int) -> BudgetedProblem:
-    """§6.2: 2–6 targets, 1–3 vehicles, the three cost kinds; per vehicle a capacity and a
-    time limit around its share of the targets (or none), so that on some instances a limit
-    binds and on some no assignment meets the limits."""
-    rng = np.random.default_rng([20, seed])
-    n, m = int(rng.integers(2, 7)), int(rng.integers(1, 4))
-    cost = _costs(rng, n + m, seed % 3)
-    leg = float(np.median(cost)) + 1.0
-    share = n / m
-    capacity = [
-        max(1, math.ceil(share * rng.uniform(0.5, 1.5))) if rng.random() < 0.8 else None
-        for _ in range(m)
-    ]
-    max_time = [
-        float(leg * share * rng.uniform(0.3, 1.2)) if rng.random() < 0.7 else None for _ in range(m)
-    ]
-    return BudgetedProblem(cost, n, capacity, max_time, name=f"budgeted-{seed}")
-
-
-# -------------------------------------------------------------------------- checking
-def _failures(cases, method: str) -> list[str]:
-    """Run ``method`` without a time limit on each (problem, optimum); describe every miss.
-    An infinite optimum (no assignment within a family's limits) must be status
-    "infeasible" with no answer."""
-    failures = []
-    for problem, optimum in cases:
-        solution = taopt.solve(problem, method)
-        if math.isinf(optimum):
-            if solution.status != "infeasible" or solution.solution is not None:
-                failures.append(
-                    f"{problem.name}: {solution.status} {solution.objective}, brute force: "
-                    "no assignment within the limits"
-                )
-            continue
-        value = taopt.evaluate(problem, solution.solution)
-        tolerance = REL * max(1.0, abs(optimum))
-        if (
-            solution.status != "optimal"
-            or abs(solution.objective - optimum) > tolerance
-            or abs(value - optimum) > tolerance
-            or solution.bound is None
-            or solution.bound > optimum + tolerance
-        ):
-            failures.append(
-                f"{getattr(problem, 'name', '') or problem!r}: {solution.status} "
-                f"{solution.objective} (bound {solution.bound}), brute force {optimum}"
-            )
-    return failures
-
-
-# the checks (reference.brute_force registers each; a family added later lists its own as
-# BRUTE_FORCE in tests/reference_<family>.py). Default run: 270 instances; slow run: 2,670
-# more (seeds after the default run's).
-@brute_force("routing", "exact", fast=100, slow=1200)
-def _routing_cases(seeds):
-    return [(p, dp_optimum(p)) for p in map(routing_instance, seeds)]
-
-
-def _delivery_cases(seeds, customers):
-    cases = []
-    for seed in seeds:
-        instance = delivery_instance(seed, customers(seed))
-        cases.append((instance, brute_force_delivery(instance)))
-    return cases
-
-
-@brute_force("dp", "exact", fast=30, slow=250)
-def _dp_cases(seeds):
-    return _delivery_cases(seeds, lambda s: 3 + s % 4)
-
-
-@brute_force("milp", "milp", fast=10, slow=60)
-def _milp_cases(seeds):
-    return _delivery_cases(seeds, lambda s: 2 + s % 2)
-
-
-@brute_force("sop", "exact", fast=40, slow=250)
-def _sop_cases(seeds):
-    return [(p, sop_brute_force(p)) for p in map(sop_instance, seeds)]
-
-
-@brute_force("capability", "exact", fast=20, slow=150)
-def _capability_cases(seeds):
-    return [(p, capability_brute_force(p)) for p in map(capability_instance, seeds)]
-
-
-@brute_force("joint", "joint", fast=10, slow=60)
-def _joint_cases(seeds):
-    return _capability_cases(seeds)
-
-
-@brute_force("comm", "exact", fast=20, slow=100)
-def _comm_cases(seeds):
-    return [(p, comm_brute_force(p)) for p in map(comm_instance, seeds)]
-
-
-@brute_force("budgeted", "exact", fast=40, slow=600)
-def _budgeted_cases(seeds):
-    return [(p, brute_force_budgeted(p)) for p in map(budgeted_instance, seeds)]
 
 
 CHECKS = {check.name: check for check in BRUTE_FORCE}
@@ -313,7 +124,7 @@ def test_highs_model_solves_again_after_a_solve_error(monkeypatch, tmp_path):
 def test_exact_equals_brute_force(family):
     """Exact method of each family: optimal with the brute-force value on every instance."""
     check = CHECKS[family]
-    failures = _failures(check.cases(range(check.fast)), check.method)
+    failures = exact_failures(check.cases(range(check.fast)), check.method)
     assert not failures, f"{len(failures)} of {check.fast}:\n" + "\n".join(failures[:10])
 
 
@@ -322,7 +133,7 @@ def test_exact_equals_brute_force(family):
 def test_exact_equals_brute_force_on_two_thousand(family):
     """The same on 2,670 more instances in all (seeds after the default run's)."""
     check = CHECKS[family]
-    failures = _failures(check.cases(range(check.fast, check.fast + check.slow)), check.method)
+    failures = exact_failures(check.cases(range(check.fast, check.fast + check.slow)), check.method)
     assert not failures, f"{len(failures)} of {check.slow}:\n" + "\n".join(failures[:10])
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-import test_exact_brute_force  # noqa: F401  (registers its brute-force checks)
 from conftest import DATA
 from reference import BRUTE_FORCE, REFERENCES
 

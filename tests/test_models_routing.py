@@ -7,6 +7,7 @@ from itertools import combinations
 
 import numpy as np
 import pytest
+from reference_exact import dp_optimum
 from scipy.sparse.csgraph import floyd_warshall
 
 import taopt
@@ -33,41 +34,6 @@ def metric_problem(n: int, m: int, seed: int) -> AssignmentProblem:
     cost = rng.integers(1, 100, size=(n + m, n + m)).astype(float)
     np.fill_diagonal(cost, 0)
     return AssignmentProblem(floyd_warshall(cost), n)
-
-
-def dp_optimum(problem: AssignmentProblem) -> float:
-    """Independent exact value: Held–Karp per vehicle, then a DP over vehicles and subsets."""
-    n, m, cost = problem.n, problem.m, problem.cost
-    full = 1 << n
-    # path[k][S] = cheapest open route of vehicle k visiting exactly the set S
-    path = np.full((m, full), np.inf)
-    for k in range(m):
-        end = np.full((full, n), np.inf)  # end[S, j]: route over S finishing at j
-        for j in range(n):
-            end[1 << j, j] = cost[n + k, j]
-        for subset in range(1, full):
-            for j in range(n):
-                if not subset >> j & 1 or not np.isfinite(end[subset, j]):
-                    continue
-                for nxt in range(n):
-                    if subset >> nxt & 1:
-                        continue
-                    bigger = subset | 1 << nxt
-                    end[bigger, nxt] = min(end[bigger, nxt], end[subset, j] + cost[j, nxt])
-        path[k] = end.min(axis=1)
-        path[k, 0] = 0.0
-    best = path[0].copy()
-    for k in range(1, m):
-        new = np.full(full, np.inf)
-        for subset in range(full):
-            part = subset
-            while True:  # every part of subset goes to vehicle k
-                new[subset] = min(new[subset], best[subset ^ part] + path[k, part])
-                if part == 0:
-                    break
-                part = (part - 1) & subset
-        best = new
-    return float(best[full - 1])
 
 
 CASES = [
