@@ -5,7 +5,7 @@ the tree. Chapter 2's valid bound (:func:`taopt.routing.bounds.arborescence_boun
 valid replacement of the thesis's Algorithm 1), chapter 5's Proposition 5.3
 (:func:`taopt.delivery.bounds.arborescence_bound`), the SOP's and the budgeted family's
 bounds all call it. networkx's ``minimum_spanning_arborescence`` computes the same value in
-pure Python and is the reference in ``tests/test_arborescence.py``; this version works on the
+pure Python and is the reference in ``tests/core/test_arborescence.py``; this version works on the
 weight matrix with numpy and is several hundred times faster at the studies' sizes (121
 vertices: about 20 ms against about 10 s).
 

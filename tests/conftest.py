@@ -20,8 +20,11 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import reference  # noqa: E402  (tests/ is on sys.path: pytest's rootdir conftest insertion)
 
+#: The repository's root (tests/conftest.py sits one level below it); the tests in the
+#: sub-folders of tests/ compute their paths from it, never from their own ``__file__``.
+ROOT = Path(__file__).resolve().parents[1]
 #: The instance files shipped with the package (examples of every kind, TSPLIB, the demo).
-DATA = Path(__file__).resolve().parents[1] / "taopt" / "data"
+DATA = ROOT / "taopt" / "data"
 
 
 def valid_lower_bounds(family: Any) -> dict[str, Callable[..., float]]:

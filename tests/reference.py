@@ -76,7 +76,7 @@ class BruteForce:
     slow: int
 
 
-#: Every brute-force check of ``tests/test_exact_brute_force.py``: those registered with
+#: Every brute-force check of ``tests/core/test_exact_brute_force.py``: those registered with
 #: :func:`brute_force` there, then each ``tests/reference_<family>.py`` module's
 #: ``BRUTE_FORCE``.
 BRUTE_FORCE: list[BruteForce] = []

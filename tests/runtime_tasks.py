@@ -1,4 +1,4 @@
-"""Stand-ins for a worker's task in the worker-process tests (tests/test_capability_models.py):
+"""Stand-ins for a worker's task in the worker-process tests (tests/capability/test_capability_models.py):
 module-level functions, so that a spawned worker (which inherits ``sys.path``) can import them.
 
 They replace ``taopt.models.capability._solve_class`` to reach a state deterministically and at

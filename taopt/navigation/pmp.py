@@ -77,7 +77,7 @@ re-solves it by collocation and reports its ``(i, j)``:
    ``T`` (where it is also Newton's Jacobian). Example: against a jet current,
    the straight path on the jet's axis is an extremal past its conjugate point;
    collocation converges to it too, the restarts find the faster path that
-   leaves the axis (tests/test_navigation_pmp.py).
+   leaves the axis (tests/navigation/test_navigation_pmp.py).
 3. *Not slower than the straight line*: flying the segment ``a -> b`` with the
    heading that keeps the net velocity on it (3.4) is feasible under Assumption
    2.1; its time (a 32-point Gauss-Legendre quadrature of ``1 / v_net``) bounds

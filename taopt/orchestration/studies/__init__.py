@@ -5,5 +5,5 @@ One module per study or claim set: :mod:`~taopt.orchestration.studies.drift` (ch
 §4.4), :mod:`~taopt.orchestration.studies.delivery` (chapter 5, §5.5), and the executable claim checks
 :mod:`~taopt.orchestration.studies.routing_claims`, :mod:`~taopt.orchestration.studies.capability_claims` and
 :mod:`~taopt.orchestration.studies.comm_claims`. A regular package (not a namespace one), so the docstring
-examples of its modules are collected by ``tests/test_doctests.py``.
+examples of its modules are collected by ``tests/orchestration/test_doctests.py``.
 """

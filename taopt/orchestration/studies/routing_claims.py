@@ -32,7 +32,7 @@ What the checks found (``check_claims(samples=300, seed=0)``, n 2..7, m 1..3):
 Lemma 2.4 fails on every asymmetric class (12-26 % of instances, smallest
 n = 2, m = 1: Algorithm 1's greedy growth is not a minimum arborescence);
 Theorem 2.7 fails on every class, Euclidean included (1-4 %; a 3-target
-Euclidean case is worked by hand in ``tests/test_claims.py``); Theorem 2.6
+Euclidean case is worked by hand in ``tests/routing/test_claims.py``); Theorem 2.6
 fails rarely on "metric" (2 of 1500 in ``check_claims(1500, seed=1,
 classes=("euclidean", "uniform-drift", "metric"), n_range=(2, 5))``, n = 3). Lemmas 2.3 and 2.5
 held on every sample.

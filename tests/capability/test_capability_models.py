@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,14 +21,7 @@ from taopt.models.capability import build_printed, decode_printed, describe
 from taopt.orchestration.studies.capability_claims import exact_optimum, random_problem
 from taopt.runtime.workers import kept_pool
 
-EXAMPLE = (
-    Path(__file__).parent.parent
-    / "docs"
-    / "reproduction"
-    / "data"
-    / "chapter3"
-    / "printed_vs_corrected.json"
-)
+EXAMPLE = ROOT / "docs" / "reproduction" / "data" / "chapter3" / "printed_vs_corrected.json"
 
 
 def brute_force(problem: CapabilityProblem) -> float:
@@ -295,7 +288,7 @@ def test_ctrl_c_stops_the_workers():
     import sys
     import time
 
-    tests = str(Path(__file__).resolve().parent)
+    tests = str(ROOT / "tests")
     process = subprocess.Popen(
         [sys.executable, "-c", CTRL_C_SCRIPT.format(tests=tests)],
         stdout=subprocess.PIPE,

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from conftest import ROOT
 from nbclient import NotebookClient
 
-NOTEBOOKS = sorted((Path(__file__).parent.parent / "notebooks").glob("*.ipynb"))
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 
 #: Smaller sizes per notebook, overriding names of its ``parameters`` cell.
 SMALLER: dict[str, dict[str, object]] = {

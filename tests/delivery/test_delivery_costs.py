@@ -132,7 +132,7 @@ def test_feasible_edges_rules():
 
 def test_numpy_and_networkx_bounds_agree():
     """Both methods of Proposition 5.3's bound (the dense Edmonds itself is checked
-    against networkx in tests/test_arborescence.py)."""
+    against networkx in tests/core/test_arborescence.py)."""
     inst = grid_instance(3, n=12, k=4)
     assert arborescence_bound(inst) == pytest.approx(arborescence_bound(inst, method="networkx"))
 

@@ -6,10 +6,11 @@ import json
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
 from taopt.orchestration.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "taopt" / "data" / "examples"
+EXAMPLES = ROOT / "taopt" / "data" / "examples"
 
 
 @pytest.mark.parametrize(

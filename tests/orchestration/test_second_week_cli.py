@@ -11,17 +11,15 @@ import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from taopt import examples
 from taopt.errors import InstanceError, OutputError
 from taopt.io import load_json, save_json
 from taopt.orchestration.cli import main
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _error_line(capsys) -> str:

@@ -4,7 +4,7 @@ docs/architecture.md, invariant 4: without a time limit an exact method ends "op
 the brute-force value (every instance is feasible but the budgeted family's, whose limits
 may admit no assignment: then "infeasible", proven). The default run checks a few hundred
 instances; the ``slow`` run checks more than 2,000 (``pytest -m slow
-tests/test_exact_brute_force.py``). Generators favour the cases that broke the DFJ loop:
+tests/core/test_exact_brute_force.py``). Generators favour the cases that broke the DFJ loop:
 asymmetric costs, zero and equal costs, 1–7 vehicles.
 """
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from taopt.bounds import arborescence
 from taopt.capability import CapabilityProblem
@@ -17,7 +18,7 @@ from taopt.orchestration.studies.capability_claims import (
     triangle_excess,
 )
 
-FOLDER = Path(__file__).parent.parent / "docs" / "reproduction" / "counterexamples" / "chapter3"
+FOLDER = ROOT / "docs" / "reproduction" / "counterexamples" / "chapter3"
 FILES = sorted(FOLDER.glob("*.json"))
 CLAIMS = {
     "theorem-3-4": "Theorem 3.4 (f^a <= f^o)",

@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "taopt" / "data" / "examples"
 
 # Lines that no taopt command writes: solver banners and licence notices.

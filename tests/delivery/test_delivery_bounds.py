@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import itertools
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from reference import REFERENCES, brute_force_routing
 from reference_exact import sop_brute_force, sop_instance
 
@@ -31,10 +31,7 @@ from taopt.delivery.schedule import optimal_plan
 from taopt.errors import InstanceError
 
 REL = 1e-9
-DAG40_EXACT = (
-    Path(__file__).resolve().parent.parent
-    / "docs/reproduction/data/chapter5/delivery_dag40_exact.csv"
-)
+DAG40_EXACT = ROOT / "docs/reproduction/data/chapter5/delivery_dag40_exact.csv"
 
 
 def _random_delivery(seed: int, precedences: bool) -> DeliveryInstance:

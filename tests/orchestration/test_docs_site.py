@@ -3,7 +3,7 @@
 The first tests read the sources only (default run, no extra needed). The ``docs``-marked
 tests open the site built by ``python docs/build.py`` in headless Chromium (Debian's
 ``chromium`` and ``chromium-driver``, the ``docs`` extra's selenium); they are opt-in
-(``pytest -m docs tests/test_docs_site.py``) and run by ``.ci/run`` after the build.
+(``pytest -m docs tests/orchestration/test_docs_site.py``) and run by ``.ci/run`` after the build.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 SITE = DOCS / "_build" / "html"
 #: The page of the API reference the browser test opens (a module with maths and tables).

@@ -11,8 +11,9 @@ import importlib
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
-BENCHMARKS = sorted((Path(__file__).resolve().parents[1] / "benchmarks").glob("*.py"))
+BENCHMARKS = sorted((ROOT / "benchmarks").glob("*.py"))
 
 
 def _taopt_imports(path: Path) -> list[tuple[str, str | None]]:

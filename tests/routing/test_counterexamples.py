@@ -9,13 +9,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import ROOT
 
 from taopt import AssignmentProblem
 from taopt.bounds import arborescence
 from taopt.models import solve_routing
 from taopt.orchestration.studies.routing_claims import claim_values
 
-FOLDER = Path(__file__).parent.parent / "docs" / "reproduction" / "counterexamples"
+FOLDER = ROOT / "docs" / "reproduction" / "counterexamples"
 FILES = sorted(FOLDER.glob("*.json"))
 CLAIMS = {"lemma-2-4": "Lemma 2.4 (f_a <= f_o)", "theorem-2-7": "Theorem 2.7 (f_MC <= f_EVM)"}
 

@@ -1,7 +1,7 @@
 """The fleet family's heuristics (NIA, MMA, SMMA, 3P, ILS), its lower bound and teaching MILP.
 
 Optima come from the certified ``"exact"`` method (itself checked against brute force in
-``tests/test_fleet*.py``) and, for a few, from :func:`taopt.fleet.brute.brute_force` directly.
+``tests/fleet/test_fleet*.py``) and, for a few, from :func:`taopt.fleet.brute.brute_force` directly.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Ctrl-C in `taopt solve`, `verify`, `simulate` and `claims`: one line, exit 130, no traceback.
 
 Each command runs in a subprocess with SIGINT at its default (as from a terminal, even when
-pytest runs in the background with SIGINT ignored; see tests/test_study.py), is sent SIGINT
+pytest runs in the background with SIGINT ignored; see tests/orchestration/test_study.py), is sent SIGINT
 once it is running, and must stop promptly with exit code 130 and the single line
 ``taopt COMMAND: interrupted`` on stderr. The stop latency is measured in the report of
 the change (2 s is the target on an idle machine); the bound here only separates "stopped"

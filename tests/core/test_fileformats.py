@@ -16,6 +16,7 @@ from typing import Any
 import jsonschema
 import numpy as np
 import pytest
+from conftest import ROOT
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -345,7 +346,7 @@ def test_shipped_data_files_pass_their_schemas():
 
     Instance.load(DEMO_PATH)
     DeliveryInstance.load(EXAMPLE_PATH)
-    folder = Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "counterexamples"
+    folder = ROOT / "docs" / "reproduction" / "counterexamples"
     files = sorted(folder.glob("**/*.json"))
     folders = {folder} | {p for p in folder.rglob("*") if p.is_dir()}
     empty = sorted(str(f.relative_to(folder)) for f in folders if not any(f.glob("*.json")))
@@ -802,7 +803,7 @@ def test_docs_examples_are_the_shipped_examples():
     """Every JSON example in docs/file-formats.md is one of taopt/data/examples, byte for byte
     after parsing, and every shipped example appears in the docs: there, or (a family's
     example) on the kinds page generated from the specs (docs/generated.py)."""
-    docs = Path(__file__).resolve().parents[1] / "docs" / "file-formats.md"
+    docs = ROOT / "docs" / "file-formats.md"
     blocks = re.findall(r"```json\n(.*?)```", docs.read_text(encoding="utf-8"), flags=re.S)
     shown = [json.loads(block) for block in blocks]
     shipped = [read(path) for path in sorted(EXAMPLES.glob("*.json"))]

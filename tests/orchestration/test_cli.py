@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from taopt.errors import InstanceError
 from taopt.fields import LinearField, UniformField, thesis_field
@@ -302,9 +303,8 @@ def test_shared_flags_have_one_name_and_meaning():
 def test_old_spelling_still_works_and_warns(tmp_path, capsys):
     """`solve --save DIR` (now --out) still writes the solutions and warns on stderr."""
     problem = "taopt/data/examples/assignment_problem.json"
-    from pathlib import Path
 
-    problem = str(Path(__file__).parent.parent / problem)
+    problem = str(ROOT / problem)
     assert main(["solve", problem, "--methods", "MC", "--save", str(tmp_path), "--quiet"]) == 0
     err = capsys.readouterr().err
     assert "DeprecationWarning" in err and "--save" in err and "--out" in err
@@ -461,9 +461,8 @@ def test_a_family_that_fails_to_import_fails_loudly(monkeypatch):
 
 def test_solve_delivery_example_shows_the_certified_optimum(capsys):
     """`taopt solve delivery_instance.json` prints an optimal row with its bound by default."""
-    from pathlib import Path
 
-    path = Path(__file__).parent.parent / "taopt/data/examples/delivery_instance.json"
+    path = ROOT / "taopt/data/examples/delivery_instance.json"
     assert main(["solve", str(path), "--quiet"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     optimal = [row for row in rows if len(row) > 3 and row[1] == "optimal"]
@@ -531,9 +530,8 @@ def test_study_comm_takes_exact_as_a_method(tmp_path, capsys):
 def test_solve_shows_which_method_runs_and_its_limit(capsys):
     """`taopt solve` shows a bar on stderr naming each method as it runs, with the time limit
     an exact method may take; `--quiet` shows none; stdout has the table either way."""
-    from pathlib import Path
 
-    path = Path(__file__).parent.parent / "taopt/data/examples/budgeted_problem.json"
+    path = ROOT / "taopt/data/examples/budgeted_problem.json"
     assert main(["solve", str(path), "--methods", "exact,MC", "--time-limit", "7"]) == 0
     captured = capsys.readouterr()
     assert "exact (up to 7 s)" in captured.err

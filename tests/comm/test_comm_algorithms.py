@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import taopt
 from taopt.comm import CommProblem, random_problem
@@ -15,9 +16,7 @@ from taopt.comm.engine import initially_connected, simulate
 from taopt.heuristics.comm import CAA, DAA, HDA, central_auction
 
 ALGORITHMS = ("CAA", "DAA", "HDA")
-COUNTEREXAMPLES = (
-    Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "counterexamples" / "chapter4"
-)
+COUNTEREXAMPLES = ROOT / "docs" / "reproduction" / "counterexamples" / "chapter4"
 DIAGONAL = 1000.0 * math.sqrt(2.0)
 
 

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import networkx as nx
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import taopt
 from taopt.errors import FeasibilityError, InstanceError
 from taopt.fleet import FleetPlan, FleetProblem, schedule
 
-ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "taopt/data/examples/fleet_problem.json"
 
 

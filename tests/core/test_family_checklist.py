@@ -6,17 +6,14 @@ in docs/architecture.md ("Adding a family") and checked here, so the list stays 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
-from conftest import DATA
+from conftest import DATA, ROOT
 from reference import BRUTE_FORCE, REFERENCES
 
 import taopt.orchestration.pipeline  # noqa: F401  (registers every method)
 from taopt.registry import Family, families, family_of, methods
 from taopt.result import payload_schemas
 
-ROOT = Path(__file__).resolve().parents[1]
 FAMILIES = {family.kind: family for family in families()}
 
 
