@@ -209,8 +209,8 @@ def _alive(pid: int) -> bool:
 def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     """Ctrl-C stops the study (one line, exit 130), leaves no process, and a re-run resumes.
 
-    The stop latency is measured in benchmarks/bench_study.py; here a generous bound only
-    separates "stopped" from "ran on to the end". The scenarios are small (8 targets in a
+    The stop latency is measured in benchmarks/bench_study.py; here the rows written (fewer
+    than the 400 scenarios) separate "stopped" from "ran on to the end", without a clock. The scenarios are small (8 targets in a
     uniform drift, 30 GA generations: ~0.1 s each) and the signal comes after the first row,
     so the cost is mostly two interpreter starts; the resume runs in this process.
     """
@@ -246,12 +246,9 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
         time.sleep(0.2)
     children = _descendants(process.pid)
     assert children, "the study runs its tasks in worker processes"
-    sent = time.monotonic()
     process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=60)
-    stopped = time.monotonic() - sent
+    _, err = process.communicate(timeout=60)  # a hang guard, not a measurement
     assert process.returncode == 130, err
-    assert stopped < 30  # 400 scenarios would take a minute or more
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and "interrupted" in lines[0] and "resume" in lines[0], err
     gone_by = time.monotonic() + 1.0  # the workers are killed, then reaped: within 1 s
@@ -262,7 +259,7 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
         os.kill(pid, signal.SIGKILL)
     assert not left, f"processes left behind: {left}"
     done = pd.read_csv(csv)
-    assert 0 < len(done) < 400 and (done["complete"] == 1).all()
+    assert 0 < len(done) < 400 and (done["complete"] == 1).all()  # stopped, not run to the end
     # the same command resumes: here with a smaller count, so that it finishes quickly, and
     # in this process (the command line is the same; only the interpreter start is saved)
     from taopt.orchestration.cli import main
