@@ -277,11 +277,21 @@ def test_memory_limit_from_option_environment_and_default(monkeypatch):
         check_memory(1.0, "x", max_memory_gb=0)
 
 
-def test_large_assignment_exact_is_refused_fast():
+def test_large_assignment_exact_is_refused_fast(monkeypatch):
     """3,000 targets: the exact model is refused before building, naming size and limit."""
+    from taopt.models.routing import compact, dfj
+
     p = euclidean(3000)
-    with pytest.raises(InstanceError, match=r"3,000 targets.*GB.*limit of 4 GB"):
-        taopt.solve(p, "exact", time_limit=30, max_memory_gb=4)
+
+    def never(*args, **kwargs):  # refused fast: before anything is built or started
+        raise AssertionError("the model was built before the size guard refused it")
+
+    with monkeypatch.context() as patch:
+        for module, name in [(dfj, "DfjModel"), (dfj, "HighsModel"), (compact, "build")]:
+            patch.setattr(module, name, never)
+        patch.setattr(compact, "HighsModel", never)
+        with pytest.raises(InstanceError, match=r"3,000 targets.*GB.*limit of 4 GB"):
+            taopt.solve(p, "exact", time_limit=30, max_memory_gb=4)
     check_footprint(p, "exact", max_memory_gb=math.inf)  # the override lifts the guard
     assert taopt.solve(p, "MC", time_limit=0.05, max_memory_gb=4).routes is not None
 
