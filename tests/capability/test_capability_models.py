@@ -207,16 +207,27 @@ def test_workers_give_the_serial_optimum(seed):
     )
 
 
-def test_workers_respect_the_time_limit():
-    """In workers, a short limit is kept and the result certified or time_limit, bound <= f."""
+def limited_in_workers():
+    """The 60-target scenario, its DTAA plan, and the capability model on it in 2 workers
+    with a 0.3 s limit (the pool started beforehand)."""
     problem = thesis_scenario(60, 6, 3, seed=7).problem
     dtaa = taopt.solve(problem, "DTAA")
     solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
-    limited = solve_capability(problem, time_limit=0.3, incumbent=dtaa, workers=2)
-    assert limited.runtime < 0.3 + 1.5
+    return problem, dtaa, solve_capability(problem, time_limit=0.3, incumbent=dtaa, workers=2)
+
+
+def test_workers_respect_the_time_limit():
+    """In workers, a short limit gives a certified or time_limit result, bound <= f."""
+    _, dtaa, limited = limited_in_workers()
     assert limited.status in ("optimal", "time_limit")
     assert limited.bound <= limited.objective * (1 + 1e-9)
     assert limited.objective <= dtaa.objective * (1 + 1e-9)
+
+
+@pytest.mark.timing
+def test_workers_keep_the_time_limit_on_the_clock():
+    """In workers, a 0.3 s limit returns within 0.3 + 1.5 s of wall-clock time."""
+    assert limited_in_workers()[2].runtime < 0.3 + 1.5
 
 
 def test_workers_option_checked():
@@ -281,8 +292,9 @@ print("finished", flush=True)
 """
 
 
-def test_ctrl_c_stops_the_workers():
-    """Ctrl-C during a solve in workers: KeyboardInterrupt at once, every worker gone."""
+def ctrl_c_the_workers() -> tuple[int, str, str, float]:
+    """Run CTRL_C_SCRIPT, send SIGINT once both workers are busy: (code, stdout, stderr,
+    seconds from the signal to the exit)."""
     import signal
     import subprocess
     import sys
@@ -305,9 +317,23 @@ def test_ctrl_c_stops_the_workers():
     finally:
         if process.poll() is None:
             process.kill()
-    assert time.monotonic() - sent < 6.0
-    assert process.returncode == 130, err
+    return process.returncode, out, err, time.monotonic() - sent
+
+
+def test_ctrl_c_stops_the_workers():
+    """Ctrl-C during a solve in workers: KeyboardInterrupt, every worker gone (within the
+    60 s hang guard; how fast: test_ctrl_c_stops_the_workers_at_once)."""
+    code, out, err, _ = ctrl_c_the_workers()
+    assert code == 130, err
     assert out.split() == ["interrupted", "2", "alive", "[]"], (out, err)
+
+
+@pytest.mark.timing
+def test_ctrl_c_stops_the_workers_at_once():
+    """Ctrl-C during a solve in workers ends the process within 6 s of wall-clock time."""
+    code, out, err, seconds = ctrl_c_the_workers()
+    assert code == 130, err
+    assert seconds < 6.0, f"{seconds:.2f} s"
 
 
 def test_default_workers(monkeypatch):
@@ -329,8 +355,9 @@ def test_default_workers(monkeypatch):
     assert capability._auto_workers(classes) == 1
 
 
-def test_worker_past_its_limit_is_killed(monkeypatch):
-    """A worker past limit + grace is killed: time_limit, the incumbent's routes, bound <= f."""
+def past_its_limit(monkeypatch):
+    """The 90-target study scenario, its DTAA plan, and the capability model on it in 2
+    workers with a 30 s limit and a grace of -29 s (the workers are "past" it after 1 s)."""
     from taopt.capability.instances import STUDY_CELL
     from taopt.models import capability
     from taopt.orchestration.studies.capability import make_scenario
@@ -340,8 +367,12 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     dtaa = taopt.solve(problem, "DTAA")
     solve_capability(thesis_scenario(9, 2, 2, seed=1).problem, workers=2)  # pool started
     monkeypatch.setattr(capability, "WORKER_GRACE", -29.0)  # "past" 1 s into a 30 s limit
-    result = solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
-    assert result.runtime < 10.0
+    return problem, dtaa, solve_capability(problem, time_limit=30.0, incumbent=dtaa, workers=2)
+
+
+def test_worker_past_its_limit_is_killed(monkeypatch):
+    """A worker past limit + grace is killed: time_limit, the incumbent's routes, bound <= f."""
+    problem, dtaa, result = past_its_limit(monkeypatch)
     assert result.status == "time_limit"
     assert kept_pool(("capability", 2)) is None
     killed = [c for c in result.info["classes"] if c["status"] == "time_limit"]
@@ -349,6 +380,12 @@ def test_worker_past_its_limit_is_killed(monkeypatch):
     assert result.objective == pytest.approx(taopt.evaluate(problem, result.routes), rel=1e-12)
     assert result.objective <= dtaa.objective * (1 + 1e-9)
     assert result.bound <= result.objective
+
+
+@pytest.mark.timing
+def test_worker_past_its_limit_is_killed_at_once(monkeypatch):
+    """Workers past limit + grace (1 s into a 30 s limit) are killed within 10 s of wall-clock."""
+    assert past_its_limit(monkeypatch)[2].runtime < 10.0
 
 
 def test_corrected_model_hands_the_improver_to_every_class():

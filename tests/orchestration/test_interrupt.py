@@ -3,10 +3,12 @@
 Each command runs in a subprocess with SIGINT at its default (as from a terminal, even when
 pytest runs in the background with SIGINT ignored; see tests/orchestration/test_study.py), is sent SIGINT
 once it is running, and must stop promptly with exit code 130 and the single line
-``taopt COMMAND: interrupted`` on stderr. The stop latency is measured in the report of
-the change (2 s is the target on an idle machine); the bound here only separates "stopped"
-from "ran on". Two in-process tests check the HiGHS mechanism itself: a MIP stopped through
-its interrupt callback, on both of taopt's ways to run HiGHS.
+``taopt COMMAND: interrupted`` on stderr (a 60 s hang guard separates "stopped" from "ran
+on"). Two in-process tests check the HiGHS mechanism itself: a MIP stopped through its
+interrupt callback within the grace (not abandoned), on both of taopt's ways to run HiGHS.
+How fast each stops is a wall-clock property: the ``timing`` group at the end of this file
+(``pytest -m timing -n 0``, docs/architecture.md "Tests"; 2 s is the target on an idle
+machine, :data:`STOP_BOUND` the bound under load).
 """
 
 from __future__ import annotations
@@ -62,12 +64,12 @@ def interrupt(tmp_path: Path, args: list[str], delay: float) -> tuple[int, str, 
     return process.returncode, err, time.monotonic() - sent
 
 
-def assert_interrupted(code: int, err: str, seconds: float, command: str) -> None:
+def assert_interrupted(code: int, err: str, command: str) -> None:
+    """Exit code 130 and the one line ``taopt COMMAND: interrupted``, no traceback."""
     lines = [line for line in err.splitlines() if line.strip()]
     assert "Traceback" not in err, err
     assert code == 130, err
     assert lines == [f"taopt {command}: interrupted"], err
-    assert seconds < STOP_BOUND, f"{seconds:.2f} s"
 
 
 def delivery_file(tmp_path: Path, n: int) -> Path:
@@ -80,18 +82,21 @@ def delivery_file(tmp_path: Path, n: int) -> Path:
     return path
 
 
+def solve_milp_args(tmp_path: Path) -> list[str]:
+    """`taopt solve --methods milp` on 10 customers (the cvxpy-HiGHS MILP, minutes)."""
+    path = delivery_file(tmp_path, 10)
+    return ["solve", str(path), "--methods", "milp", "--quiet"]
+
+
 def test_solve_delivery_milp(tmp_path):
     """`taopt solve --methods milp` on 10 customers (the cvxpy-HiGHS MILP, minutes): Ctrl-C."""
-    path = delivery_file(tmp_path, 10)
-    args = ["solve", str(path), "--methods", "milp", "--quiet"]
-    assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "solve")
+    code, err, _ = interrupt(tmp_path, solve_milp_args(tmp_path), delay=1.0)
+    assert_interrupted(code, err, "solve")
 
 
-def test_verify_exact(tmp_path):
-    """`taopt verify --exact` re-solving 24 customers without precedences (2^24 order ideals:
-    the exact DP runs for minutes): Ctrl-C."""
-    import numpy as np
-
+def verify_exact_args(tmp_path: Path) -> list[str]:
+    """`taopt verify --exact` re-solving 24 customers without precedences (2^24 order
+    ideals: the exact DP runs for minutes)."""
     import taopt
     from taopt.delivery.instance import DeliveryInstance
 
@@ -100,18 +105,29 @@ def test_verify_exact(tmp_path):
     DeliveryInstance.grid(customers, 11, 1000.0, 1.0, 1.0, 300.0).save(path)
     plan = taopt.solve(DeliveryInstance.load(path), "NIA")
     plan.replace(status="optimal", bound=plan.objective).save(tmp_path / "nia.json")
-    args = ["verify", str(tmp_path / "nia.json"), str(path), "--exact"]
-    assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "verify")
+    return ["verify", str(tmp_path / "nia.json"), str(path), "--exact"]
+
+
+def test_verify_exact(tmp_path):
+    """`taopt verify --exact` re-solving 24 customers without precedences (2^24 order ideals:
+    the exact DP runs for minutes): Ctrl-C."""
+    code, err, _ = interrupt(tmp_path, verify_exact_args(tmp_path), delay=1.0)
+    assert_interrupted(code, err, "verify")
+
+
+def claims_args(tmp_path: Path) -> list[str]:
+    """`taopt claims` over many samples (pure Python loops; no progress bar on stderr)."""
+    return ["claims", "--samples", "100000", "--quiet"]
 
 
 def test_claims(tmp_path):
     """`taopt claims` over many samples (pure Python loops): Ctrl-C."""
-    args = ["claims", "--samples", "100000", "--quiet"]  # no progress bar on stderr
-    assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "claims")
+    code, err, _ = interrupt(tmp_path, claims_args(tmp_path), delay=1.0)
+    assert_interrupted(code, err, "claims")
 
 
-def test_simulate(tmp_path):
-    """`taopt simulate` of a large chapter 4 problem (the event engine): Ctrl-C."""
+def simulate_args(tmp_path: Path) -> list[str]:
+    """`taopt simulate` of a large chapter 4 problem (the event engine)."""
     from taopt.comm import CommProblem
 
     rng = np.random.default_rng(1)
@@ -120,8 +136,31 @@ def test_simulate(tmp_path):
     problem = CommProblem(targets, vehicles, ["a"] * 1500, ["a"] * 12, 300.0)
     path = tmp_path / "comm.json"
     problem.save(path)
-    args = ["simulate", str(path)]
-    assert_interrupted(*interrupt(tmp_path, args, delay=1.0), "simulate")
+    return ["simulate", str(path)]
+
+
+def test_simulate(tmp_path):
+    """`taopt simulate` of a large chapter 4 problem (the event engine): Ctrl-C."""
+    code, err, _ = interrupt(tmp_path, simulate_args(tmp_path), delay=1.0)
+    assert_interrupted(code, err, "simulate")
+
+
+#: The commands above, by the name in their interrupted line.
+COMMANDS = {
+    "solve": solve_milp_args,
+    "verify": verify_exact_args,
+    "claims": claims_args,
+    "simulate": simulate_args,
+}
+
+
+@pytest.mark.timing
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_ctrl_c_stops_promptly(tmp_path, command):
+    """Each command above exits (130) within STOP_BOUND s of wall-clock time after Ctrl-C."""
+    code, err, seconds = interrupt(tmp_path, COMMANDS[command](tmp_path), delay=1.0)
+    assert_interrupted(code, err, command)
+    assert seconds < STOP_BOUND, f"{seconds:.2f} s"
 
 
 # ------------------------------------------------------------------ the HiGHS mechanism
@@ -135,8 +174,9 @@ def hard_mip() -> cp.Problem:
     return cp.Problem(cp.Maximize(values @ x), [weights @ x <= weights.sum(axis=1) // 2])
 
 
-def interrupt_when_highs_runs(solve) -> float:
-    """Call ``solve()`` on the main thread, send SIGINT once HiGHS runs; seconds to stop."""
+def interrupt_when_highs_runs(solve) -> tuple[float, int]:
+    """Call ``solve()`` on the main thread, send SIGINT once HiGHS runs; (seconds to stop,
+    runs abandoned: not stopped by the interrupt callbacks within INTERRUPT_GRACE)."""
     sent = {}
 
     def fire() -> None:
@@ -154,7 +194,7 @@ def interrupt_when_highs_runs(solve) -> float:
         threading.Thread(target=fire, daemon=True).start()
         with pytest.raises(KeyboardInterrupt):
             solve()
-        return time.monotonic() - sent["at"]
+        return time.monotonic() - sent["at"], runtime_interrupt.abandoned()
     finally:
         signal.signal(signal.SIGINT, previous)
         # a run left to its time limit: let it end (else the exit hook would end pytest
@@ -163,17 +203,34 @@ def interrupt_when_highs_runs(solve) -> float:
 
 
 def test_highs_model_run_interrupted():
-    """A live HighsModel MIP stops at Ctrl-C through its interrupt callback (no solver error)."""
+    """A live HighsModel MIP stops at Ctrl-C through its interrupt callback within the grace
+    (the run is not abandoned; no solver error)."""
     model = HighsModel(hard_mip())
-    seconds = interrupt_when_highs_runs(lambda: model.solve(time_limit=60))
-    assert seconds < INTERRUPT_GRACE + 1.0
+    _, abandoned = interrupt_when_highs_runs(lambda: model.solve(time_limit=60))
+    assert abandoned == 0
 
 
 def test_cvxpy_highs_run_interrupted():
-    """cvxpy's own HiGHS object (solve_highs) stops at Ctrl-C too, and highspy is restored."""
+    """cvxpy's own HiGHS object (solve_highs) stops at Ctrl-C within the grace too (not
+    abandoned), and highspy is restored."""
     import highspy
 
     original = highspy.Highs
-    seconds = interrupt_when_highs_runs(lambda: solve_highs(hard_mip(), time_limit=60))
-    assert seconds < INTERRUPT_GRACE + 1.0
+    _, abandoned = interrupt_when_highs_runs(lambda: solve_highs(hard_mip(), time_limit=60))
+    assert abandoned == 0
     assert highspy.Highs is original
+
+
+HIGHS_RUNS = {
+    "HighsModel": lambda: HighsModel(hard_mip()).solve(time_limit=60),
+    "solve_highs": lambda: solve_highs(hard_mip(), time_limit=60),
+}
+
+
+@pytest.mark.timing
+@pytest.mark.parametrize("way", list(HIGHS_RUNS))
+def test_highs_run_stops_within_the_grace_on_the_clock(way):
+    """Both ways to run HiGHS stop within INTERRUPT_GRACE + 1 s of wall-clock after Ctrl-C."""
+    seconds, abandoned = interrupt_when_highs_runs(HIGHS_RUNS[way])
+    assert abandoned == 0
+    assert seconds < INTERRUPT_GRACE + 1.0, f"{seconds:.2f} s"

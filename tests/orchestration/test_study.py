@@ -17,6 +17,7 @@ from taopt.fields import UniformField
 from taopt.orchestration.studies.capability import capability_study
 from taopt.orchestration.studies.delivery import delivery_study
 from taopt.orchestration.studies.drift import drift_study
+from taopt.orchestration.study import DASK_CONNECT_TIMEOUT
 from taopt.orchestration.studyio import LOCK, StudyLocked, folder_lock
 
 FIELD = UniformField(0.3, 0.1)  # closed-form travel times: scenarios are cheap
@@ -99,22 +100,28 @@ def test_the_six_invalid_arguments_write_nothing(tmp_path, run, message):
     """--ga-generations -1, --vd-ratio 0/-1, --cell 0/-10, --capabilities x and an unreachable
     --dask address are refused by name, quickly, before any folder is created."""
     out = tmp_path / "study"
-    started = time.monotonic()
-    with pytest.raises(InstanceError, match=message):
+    with pytest.raises(InstanceError, match=message) as refused:
         run(out)
-    assert time.monotonic() - started < 15  # the Dask probe waits 5 s at most
+    if "Dask" in message:  # the probe waits DASK_CONNECT_TIMEOUT (5 s) at most, and says so
+        assert DASK_CONNECT_TIMEOUT <= 5
+        assert f"within {DASK_CONNECT_TIMEOUT:g} s" in str(refused.value)
     assert list(tmp_path.iterdir()) == []
 
 
-def test_second_study_on_a_folder_in_use_is_refused(tmp_path):
+def never_wait(seconds: float) -> None:
+    """Stands in for time.sleep where a refusal must come at once: any wait fails the test."""
+    raise AssertionError(f"waited {seconds} s instead of refusing at once")
+
+
+def test_second_study_on_a_folder_in_use_is_refused(tmp_path, monkeypatch):
     """While another run holds the folder, a study needing to write is refused at once with
     the folder and the holder's pid, and writes no row."""
     out = tmp_path / "study"
     with folder_lock(out):
-        started = time.monotonic()
-        with pytest.raises(StudyLocked, match=rf"{out} is in use by another study \(pid "):
-            small(out, methods="MC")
-        assert time.monotonic() - started < 5
+        with monkeypatch.context() as patch:
+            patch.setattr(time, "sleep", never_wait)  # refused at once: it never waits
+            with pytest.raises(StudyLocked, match=rf"{out} is in use by another study \(pid "):
+                small(out, methods="MC")
         assert not (out / "drift.csv").exists()
     assert len(small(out, methods="MC")) == 3  # free again: the same call runs
 
@@ -202,8 +209,8 @@ def _alive(pid: int) -> bool:
 def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
     """Ctrl-C stops the study (one line, exit 130), leaves no process, and a re-run resumes.
 
-    The stop latency is measured in benchmarks/bench_study.py; here a generous bound only
-    separates "stopped" from "ran on to the end". The scenarios are small (8 targets in a
+    The stop latency is measured in benchmarks/bench_study.py; here the rows written (fewer
+    than the 400 scenarios) separate "stopped" from "ran on to the end", without a clock. The scenarios are small (8 targets in a
     uniform drift, 30 GA generations: ~0.1 s each) and the signal comes after the first row,
     so the cost is mostly two interpreter starts; the resume runs in this process.
     """
@@ -239,12 +246,9 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
         time.sleep(0.2)
     children = _descendants(process.pid)
     assert children, "the study runs its tasks in worker processes"
-    sent = time.monotonic()
     process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=60)
-    stopped = time.monotonic() - sent
+    _, err = process.communicate(timeout=60)  # a hang guard, not a measurement
     assert process.returncode == 130, err
-    assert stopped < 30  # 400 scenarios would take a minute or more
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and "interrupted" in lines[0] and "resume" in lines[0], err
     gone_by = time.monotonic() + 1.0  # the workers are killed, then reaped: within 1 s
@@ -255,7 +259,7 @@ def test_sigint_stops_cleanly_and_the_folder_resumes(tmp_path, mode):
         os.kill(pid, signal.SIGKILL)
     assert not left, f"processes left behind: {left}"
     done = pd.read_csv(csv)
-    assert 0 < len(done) < 400 and (done["complete"] == 1).all()
+    assert 0 < len(done) < 400 and (done["complete"] == 1).all()  # stopped, not run to the end
     # the same command resumes: here with a smaller count, so that it finishes quickly, and
     # in this process (the command line is the same; only the interpreter start is saved)
     from taopt.orchestration.cli import main

@@ -147,15 +147,20 @@ def test_torn_header_only(tmp_path):
 
 
 # -- one writer, temporary files, read-only folders (issue 15, item 7) --------------------------------
-def test_second_writer_in_this_process_is_refused_at_once(tmp_path):
-    """While a folder is locked, a second lock is refused at once, naming the folder and pid;
-    after release it can be taken again."""
+def never_wait(seconds: float) -> None:
+    """Stands in for time.sleep where a refusal must come at once: any wait fails the test."""
+    raise AssertionError(f"waited {seconds} s for the lock instead of refusing at once")
+
+
+def test_second_writer_in_this_process_is_refused_at_once(tmp_path, monkeypatch):
+    """While a folder is locked, a second lock is refused at once (it never waits), naming
+    the folder and pid; after release it can be taken again."""
     with folder_lock(tmp_path / "study"):
-        started = time.monotonic()
-        with pytest.raises(StudyLocked, match=rf"in use by another study \(pid {os.getpid()} "):
-            with folder_lock(tmp_path / "study"):
-                pass
-        assert time.monotonic() - started < 2
+        with monkeypatch.context() as patch:
+            patch.setattr(time, "sleep", never_wait)
+            with pytest.raises(StudyLocked, match=rf"in use by another study \(pid {os.getpid()} "):
+                with folder_lock(tmp_path / "study"):
+                    pass
     with folder_lock(tmp_path / "study"):
         pass
 
