@@ -13,6 +13,11 @@ import time
 from typing import Any
 
 
+def worker_state() -> tuple[int, object, str | None]:
+    """In a worker: its pid, its SIGINT handler and its solver threads (``OMP_NUM_THREADS``)."""
+    return os.getpid(), signal.getsignal(signal.SIGINT), os.environ.get("OMP_NUM_THREADS")
+
+
 def die(*args: Any) -> None:
     """The worker is killed (SIGKILL) in the middle of its task."""
     os.kill(os.getpid(), signal.SIGKILL)

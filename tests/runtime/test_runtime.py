@@ -17,6 +17,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 import pytest
+import runtime_tasks
 
 import taopt
 from taopt.runtime import (
@@ -142,16 +143,14 @@ def test_exit_now_skips_exit_hooks_and_flushes():
 
 
 # -- worker processes ------------------------------------------------------------------------
-def _worker_state() -> tuple[int, object, str | None]:
-    return os.getpid(), signal.getsignal(signal.SIGINT), os.environ.get("OMP_NUM_THREADS")
-
-
 def test_worker_pool_is_set_up_and_terminated():
     """A pool's worker ignores Ctrl-C and has one solver thread; terminate() kills and reaps
     it at once (no child left) and the pool takes no more tasks."""
     pool = workers.WorkerPool(1)
     try:
-        pid, sigint, threads = pool.submit(_worker_state).result(timeout=120)
+        pid, sigint, threads = pool.submit(
+            runtime_tasks.worker_state
+        )  # importable in a spawned worker.result(timeout=120)
         assert pool.pids() == [pid] and sigint == signal.SIG_IGN and threads == "1"
         long = pool.submit(signal.sigtimedwait, [signal.SIGUSR1], 600)  # a task that waits
     finally:
