@@ -148,9 +148,8 @@ def test_worker_pool_is_set_up_and_terminated():
     it at once (no child left) and the pool takes no more tasks."""
     pool = workers.WorkerPool(1)
     try:
-        pid, sigint, threads = pool.submit(
-            runtime_tasks.worker_state
-        )  # importable in a spawned worker.result(timeout=120)
+        # the task is a module-level function of a helper module a spawned worker can import
+        pid, sigint, threads = pool.submit(runtime_tasks.worker_state).result(timeout=120)
         assert pool.pids() == [pid] and sigint == signal.SIG_IGN and threads == "1"
         long = pool.submit(signal.sigtimedwait, [signal.SIGUSR1], 600)  # a task that waits
     finally:
