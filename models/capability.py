@@ -231,7 +231,16 @@ def _solve_classes_parallel(
                 cls, given = waiting.pop(0)
                 waves = math.ceil((len(waiting) + 1) / workers)
                 share = left() / waves if math.isfinite(left()) else None
-                future = pool.submit(_solve_class, cls.problem, options(share, given), time.time())
+                try:
+                    future = pool.submit(
+                        _solve_class, cls.problem, options(share, given), time.time()
+                    )
+                except BrokenProcessPool as error:  # a worker died before this submission
+                    dead = sorted(map(str, running.values())) or [str(cls.capability)]
+                    raise SolverError(
+                        f"the worker process solving capability class {', '.join(dead)} died "
+                        "(killed, or out of memory); run again with workers=1 to see why"
+                    ) from error
                 running[future] = cls.capability
             done, _ = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
             for future in done:
