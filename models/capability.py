@@ -22,7 +22,7 @@ Three formulations (``solve_capability(problem, formulation=...)``):
   never entered, or another vehicle's start, or a target its class does not visit), and
   nothing keeps the label k along a route (a route may "change vehicle" mid-way). Every
   feasible routing satisfies (3.2)–(3.3), so the printed optimum is a **lower bound** on
-  the true optimum; :func:`decode_printed` shows what went wrong in its arcs.
+  the true optimum; :func:`~taopt.models.capability_printed.decode_printed` shows what went wrong in its arcs.
 
 * ``"corrected"`` — the problem splits exactly by class (§3.4.2, §3.6: classes share no
   vehicle and no (target, capability) demand, and (3.1) is the sum of the classes' totals),

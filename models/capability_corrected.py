@@ -1,10 +1,10 @@
 """Chapter 3's corrected model (``solve_capability(problem, "corrected")``, what
 ``taopt.solve(problem, "exact")`` runs): one certified (2.2)–(2.5) per capability class
-(:func:`solve_classes`, shared with chapter 4's f_o), joined.
+(:func:`~taopt.models.capability_corrected.solve_classes`, shared with chapter 4's f_o), joined.
 
 The classes run in this process or in the worker processes of
 :mod:`taopt.models.capability`, which imports this module; its pool functions are therefore
-looked up there when :func:`solve_classes` runs.
+looked up there when :func:`~taopt.models.capability_corrected.solve_classes` runs.
 
 References
 ----------
@@ -43,7 +43,7 @@ def class_incumbents(
 
 @dataclass
 class ClassSolve:
-    """The classes of a split problem, each certified by :func:`solve_routing`.
+    """The classes of a split problem, each certified by :func:`~taopt.models.routing.solve_routing`.
 
     Attributes
     ----------
@@ -104,7 +104,7 @@ def solve_classes(
     incumbents : mapping, optional
         Capability -> routes in the class's indexing (or None), offered to each class.
     sec, mip_gap, verbose, improve
-        Passed to :func:`solve_routing` (``improve`` must be a module-level function when
+        Passed to :func:`~taopt.models.routing.solve_routing` (``improve`` must be a module-level function when
         the classes run in worker processes).
     workers : int, optional
         Processes (default: :func:`_auto_workers`).
@@ -225,7 +225,7 @@ def _solve_corrected(
     workers: int | None = None,
     improve: Any = None,
 ) -> Solution:
-    """One certified (2.2)–(2.5) per class (:func:`solve_classes`), joined."""
+    """One certified (2.2)–(2.5) per class (:func:`~taopt.models.capability_corrected.solve_classes`), joined."""
     split = solve_classes(
         problem.classes,
         time_limit=time_limit,

@@ -1,5 +1,5 @@
 """Chapter 3's (3.1)–(3.3) as printed (``solve_capability(problem, "printed")``): the model,
-a relaxation, and :func:`decode_printed`, which names every way its arcs fail to be routes.
+a relaxation, and :func:`~taopt.models.capability_printed.decode_printed`, which names every way its arcs fail to be routes.
 
 The formulation and why it is only a lower bound: :mod:`taopt.models.capability`.
 

@@ -85,7 +85,7 @@ def limited_local_search(
 class LimitedDescent:
     """:func:`limited_local_search` with its per-problem arrays built once.
 
-    The memetic step of :func:`genetic_algorithm` runs the descent some hundreds of times
+    The memetic step of :func:`~taopt.heuristics.budgeted.ga.genetic_algorithm` runs the descent some hundreds of times
     on one problem; the padded cost matrix, the fixed insertion terms and the limits are
     the same every time. Every table of a move is priced with the same arithmetic as the
     function's docstring states, each quantity gathered once per move (O(n (n + m)) numpy
@@ -190,7 +190,7 @@ def improve_budgeted(problem: BudgetedProblem, routes: list[list[int]]) -> list[
 
     The improver of the exact model (:func:`taopt.models.budgeted.solve_budgeted` takes it
     as ``improve``; :func:`taopt.solve` passes it, the model imports no heuristic). The
-    better of two candidates, as :func:`genetic_algorithm` polishes a child with
+    better of two candidates, as :func:`~taopt.heuristics.budgeted.ga.genetic_algorithm` polishes a child with
     ``memetic="chapter2"`` (a penalised-search candidate added to these made no difference
     to the exact model's time at n50m10 mid tightness, scenarios 0–4: median 1.89 s
     against 2.26 s, within this machine's noise, every optimum equal): chapter 2's

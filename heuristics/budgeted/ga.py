@@ -157,7 +157,7 @@ def genetic_algorithm(
     keep the route starts in place, each priced by its exact change of the penalised
     fitness), then, if a limit is still broken, :func:`repair` (cut each route to its
     longest prefix within limits, re-insert the rest by the limit-aware cheapest
-    insertion), then :func:`limited_local_search` (relocations and exchanges that keep every
+    insertion), then :func:`~taopt.heuristics.budgeted.descent.limited_local_search` (relocations and exchanges that keep every
     limit); the result replaces the child when the *penalised* fitness improves. The
     population is kept free of clones (chapter 2's ``distinct`` option), without which it
     collapsed onto one infeasible chromosome on a 6-target instance. Without limits the
@@ -393,10 +393,10 @@ def _polish(
 
     With ``memetic="penalised"`` (``searches[2]`` set): the penalised local search
     (:class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch`), then :func:`repair`
-    if a limit is still broken, then :func:`limited_local_search`. With "chapter2": the
+    if a limit is still broken, then :func:`~taopt.heuristics.budgeted.descent.limited_local_search`. With "chapter2": the
     better of two candidates, chapter 2's local search then :func:`repair` then
-    :func:`limited_local_search`, and the child itself repaired then
-    :func:`limited_local_search`. Without limits: chapter 2's local search only.
+    :func:`~taopt.heuristics.budgeted.descent.limited_local_search`, and the child itself repaired then
+    :func:`~taopt.heuristics.budgeted.descent.limited_local_search`. Without limits: chapter 2's local search only.
     ``searches``: the path matrix, the run's :class:`LimitedDescent` and its
     :class:`~taopt.heuristics.ga_penalised_search.PenalisedSearch` (or None)."""
     matrix, descent, penalised = searches
@@ -466,7 +466,7 @@ def _descend(
     counters: dict[str, int],
     deadline: Deadline | None = None,
 ) -> list[list[int]]:
-    """:func:`limited_local_search` (the run's ``descent``) with its moves counted."""
+    """:func:`~taopt.heuristics.budgeted.descent.limited_local_search` (the run's ``descent``) with its moves counted."""
     routes, moves = descent.run(routes, ops.max_moves, deadline)
     counters["moves"] += moves
     return routes
@@ -480,7 +480,7 @@ def _remembered(
     compute: Any,
 ) -> Any:
     """``compute(routes)``, remembered per (step, routes): :func:`repair` and
-    :func:`limited_local_search` are deterministic functions of the routes, and about half
+    :func:`~taopt.heuristics.budgeted.descent.limited_local_search` are deterministic functions of the routes, and about half
     of their calls in a run repeat an earlier input (n50m10 at Q1 and Q1.5). Returns a
     fresh copy of the routes (or None), so callers may change them."""
     key = (step, tuple(tuple(route) for route in routes))

@@ -150,7 +150,7 @@ class ResourceModel:
         return len(new)
 
     def add_capacity_cuts(self, cuts: list[tuple[tuple[int, ...], int]]) -> int:
-        """Add rounded capacity rows (:func:`separate_capacity`) not in the model yet."""
+        """Add rounded capacity rows (:func:`~taopt.models.budgeted.separation.separate_capacity`) not in the model yet."""
         new = [(subset, k) for subset, k in cuts if (subset, k) not in self._known_capacity]
         if new:
             self._known_capacity.update(new)

@@ -70,7 +70,7 @@ def separate_capacity(
     """Target sets S whose rounded route-count inequality ``σ(δ⁻(S)) >= k(S)`` is
     violated by σ, found heuristically; ``k(S)`` the larger of the capacity count
     ``route_counts(problem)[|S|]`` and the time count ``time_counts(problem, Σ_{j∈S}
-    e_j)`` (:func:`route_counts`, :func:`time_counts`, ``e = entry`` from
+    e_j)`` (:func:`~taopt.models.budgeted.separation.route_counts`, :func:`~taopt.models.budgeted.separation.time_counts`, ``e = entry`` from
     :func:`entry_times`, or no time count when None).
 
     Under (2.3) ``σ(δ⁻(S)) = |S| − σ(A(S))`` with ``A(S)`` the arcs inside S, so along a
@@ -155,7 +155,7 @@ def capacity_rows(
     heads: np.ndarray,
 ) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
     """Rows of rounded capacity inequalities, each in its sparser equivalent form:
-    ``σ(δ⁻(S)) >= k`` or, by (2.3), ``σ(A(S)) <= |S| − k`` (as :func:`cut_rows`)."""
+    ``σ(δ⁻(S)) >= k`` or, by (2.3), ``σ(A(S)) <= |S| − k`` (as :func:`~taopt.routing.subtours.cut_rows`)."""
     size = problem.n + problem.m
     rows, columns = [], []
     lower = np.empty(len(cuts))

@@ -503,9 +503,9 @@ def solve_budgeted(
     -----
     The model and why it is written so: module docstring. The loop: (1) the root LP with
     (2.5) separated exactly until no row is violated, then (``capacity_cuts``) rounded
-    route-count inequalities ``σ(δ⁻(S)) >= k(S)`` (:func:`separate_capacity`: k(S) from
-    the capacities, :func:`route_counts`, and, with ``time_cuts``, from the time limits,
-    :func:`time_counts`) separated heuristically, round after round until neither finds
+    route-count inequalities ``σ(δ⁻(S)) >= k(S)`` (:func:`~taopt.models.budgeted.separation.separate_capacity`: k(S) from
+    the capacities, :func:`~taopt.models.budgeted.separation.route_counts`, and, with ``time_cuts``, from the time limits,
+    :func:`~taopt.models.budgeted.separation.time_counts`) separated heuristically, round after round until neither finds
     a violated row; the MTZ-type capacity rows alone leave the LP bound near chapter 2's
     optimum (drift n50m10, ``Q_k = 8``, ``T_k = 2 f0/m``: root LP 4192 → 4281 on scenario
     2, 4369 → 4411 on scenario 1, optima 4288.7 and 4458.9); (1b) (``lp_start``) chapter

@@ -196,8 +196,8 @@ def work_bound(problem: FleetProblem, grid: int = 101) -> float:
 def chapter5_bound(problem: FleetProblem, strength: str = "auto") -> float:
     """Chapter 5's own bound when the fleet *is* chapter 5's problem: one drone in the whole
     fleet, c = 1 and every customer drone-only (trucks without a drone can do nothing, so the
-    optimum is chapter 5's with the drone's truck). Then :func:`taopt.delivery.bounds.
-    delivery_lower` (Proposition 5.3 and its strengthenings) bounds the last service, hence
+    optimum is chapter 5's with the drone's truck). Then
+    :func:`taopt.delivery.bounds.delivery_lower` (Proposition 5.3 and its strengthenings) bounds the last service, hence
     also the return time. 0 when the fleet is not of that form.
     """
     if problem.D != 1 or problem.capacity != 1:

@@ -63,6 +63,7 @@ from taopt.orchestration.cli import terminal_width
 from taopt.orchestration.study import Scenario, StudySpec, check_integer, run_study, with_optimum
 from taopt.routing.scenarios import drift_scenario, scenario_seed
 
+#: The study's methods when every one is installed (the defaults are those installed here).
 METHODS = ("MC", "EVM", "GA", "pyvrp", "ortools", "exact")
 LEVELS = ("none", "Q2", "Q1.5", "Q1.2", "Q1", "T1", "T0.8", "T0.6", "T0.5")
 SIZES = ("n50m10", "n120m10")
