@@ -33,23 +33,6 @@ def _chapter5_shape(problem: FleetProblem) -> bool:
     )
 
 
-def _to_delivery(problem: FleetProblem) -> Any:
-    from taopt.delivery.instance import DeliveryInstance
-
-    return DeliveryInstance(
-        customers=problem.customers,
-        stops=problem.stops,
-        graph=problem.graph,
-        depot=problem.depot,
-        v_drone=problem.v_drone,
-        v_truck=problem.v_truck,
-        flight_range=problem.flight_range,
-        precedences=problem.precedences,
-        service_time=problem.service_time,
-        name=problem.name,
-    )
-
-
 def _operations_shape(problem: FleetProblem) -> bool:
     return all(d == 1 for d in problem.drones) and problem.capacity == 1 and not problem.precedences
 
@@ -114,7 +97,7 @@ def solve_fleet(
     if choice == "ideal_dp":
         from taopt.delivery.ideal_dp import ideal_dp
 
-        inner = ideal_dp(_to_delivery(problem), time_limit=time_limit)
+        inner = ideal_dp(problem.to_delivery(), time_limit=time_limit)
         plan = (
             FleetPlan.from_delivery_plan(inner.solution, problem.depot)
             if inner.solution is not None

@@ -205,21 +205,10 @@ def chapter5_bound(problem: FleetProblem, strength: str = "auto") -> float:
     if any(problem.service[j] != "drone" for j in range(problem.n)):
         return 0.0
     from taopt.delivery.bounds import delivery_lower
-    from taopt.delivery.instance import DeliveryInstance
     from taopt.errors import InstanceError
 
     try:
-        instance = DeliveryInstance(
-            customers=problem.customers,
-            stops=problem.stops,
-            graph=problem.graph,
-            depot=problem.depot,
-            v_drone=problem.v_drone,
-            v_truck=problem.v_truck,
-            flight_range=problem.flight_range,
-            precedences=problem.precedences,
-            service_time=problem.service_time,
-        )
+        instance = problem.to_delivery()
     except InstanceError:
         return 0.0
     return float(delivery_lower(instance, strength))

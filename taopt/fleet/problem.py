@@ -379,6 +379,31 @@ class FleetProblem:
                 out.append(j)
         return out
 
+    def to_delivery(self) -> Any:
+        """Chapter 5's :class:`~taopt.delivery.instance.DeliveryInstance` on the same street
+        network, customers, speeds, range, precedences and τ (the fleet's K = D = c = 1 reading;
+        trucks, drones, capacity, service modes and the objective are dropped).
+
+        Raises
+        ------
+        InstanceError
+            When chapter 5's own checks refuse the data (e.g. a customer out of range).
+        """
+        from taopt.delivery.instance import DeliveryInstance
+
+        return DeliveryInstance(
+            customers=self.customers,
+            stops=self.stops,
+            graph=self.graph,
+            depot=self.depot,
+            v_drone=self.v_drone,
+            v_truck=self.v_truck,
+            flight_range=self.flight_range,
+            precedences=self.precedences,
+            service_time=self.service_time,
+            name=self.name,
+        )
+
     def replace(self, **changes: Any) -> FleetProblem:
         """A validated copy with some fields changed (e.g. ``capacity=2``)."""
         if "drones" in changes and "trucks" not in changes and isinstance(changes["drones"], int):
