@@ -74,3 +74,30 @@ def test_every_bound_is_the_same_with_or_without_the_methods_imported():
     from taopt.registry import families as registered
 
     assert families == {family.kind for family in registered()}
+
+
+CERTIFYING = r"""
+import json, sys
+if sys.argv[1] == "methods-first":
+    import taopt.models  # noqa: F401
+from taopt.registry import certifying_method
+import reference
+
+print(json.dumps([certifying_method(make().problem) for make in reference.REFERENCES]))
+"""
+
+
+def test_certifying_method_is_the_same_with_or_without_the_models_imported():
+    """certifying_method names the same exact method for every reference problem in fresh
+    interpreters that do and do not import taopt.models first (it was None without)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests")])}
+    answers = []
+    for order in ("core-only", "methods-first"):
+        done = subprocess.run(
+            [sys.executable, "-c", CERTIFYING, order],
+            capture_output=True, text=True, cwd=ROOT, env=env, check=False,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr[-3000:]
+        answers.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    assert answers[0] == answers[1]
+    assert None not in answers[0]
