@@ -62,3 +62,12 @@ def test_plots_save_png(tmp_path):
     ax = plot_gantt(inst, sol)
     assert np.isclose(ax.lines[0].get_xdata()[0], sol.objective)
     plt.close(ax.figure)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_example_builder_is_valid_for_any_seed(seed):
+    """build_example_instance gives a valid instance for every seed (seed 0 with 8 customers
+    raised: rounding the stops made a street shorter than its straight line)."""
+    inst = build_example_instance(seed=seed, n=8)
+    for u, v, data in inst.graph.edges(data=True):
+        assert data["length"] >= np.hypot(*(inst.stops[u] - inst.stops[v])) - 1e-9
