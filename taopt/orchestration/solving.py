@@ -22,9 +22,7 @@ from __future__ import annotations
 
 import logging
 import math
-import signal
 import sys
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +53,7 @@ from taopt.registry import (
 )
 from taopt.result import ERROR, NO_SOLUTION, OPTIMAL, Solution, Status
 from taopt.runtime import check_memory, navigation_bytes
+from taopt.runtime.interrupt import OutOfTime, alarm_after
 from taopt.schemas import naming
 from taopt.scoring import evaluate
 
@@ -576,32 +575,17 @@ def _run_within(problem: Any, method: str, time_limit: float | None) -> Solution
     spec = get_method(problem, method)
     if time_limit is None or spec.accepts("time_limit"):
         return solve(problem, method, time_limit=time_limit)
-    if threading.current_thread() is not threading.main_thread() or not hasattr(
-        signal, "setitimer"
-    ):
-        return solve(problem, method)
-
-    class _OutOfTime(Exception):
-        pass
-
-    def alarm(signum: int, frame: Any) -> None:
-        raise _OutOfTime
-
     began = time.perf_counter()
-    previous = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, float(time_limit))
     try:
-        return solve(problem, method)
-    except _OutOfTime:
+        with alarm_after(float(time_limit)):
+            return solve(problem, method)
+    except OutOfTime:
         return Solution(
             objective=math.nan,
             status=Status.TIME_LIMIT,
             runtime=time.perf_counter() - began,
             method=method,
         )
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 def _check_plot_request(path: str | Path, plot: str | None, gantt: str | None) -> None:

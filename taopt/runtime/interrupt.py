@@ -77,6 +77,35 @@ def handled(signum: int, handler: Any) -> Iterator[bool]:
         signal.signal(signum, previous)
 
 
+class OutOfTime(Exception):
+    """Raised inside an :func:`alarm_after` block when its seconds are up."""
+
+
+@contextlib.contextmanager
+def alarm_after(seconds: float) -> Iterator[bool]:
+    """Raise :class:`OutOfTime` in the block after ``seconds`` of wall-clock time (a SIGALRM
+    interval timer): the stop for pure-Python code that takes no deadline of its own.
+
+    Yields whether the timer was set: False off the main thread or where the platform has no
+    ``setitimer`` (Windows); the block then runs unbounded and the caller must say so. The
+    previous SIGALRM handler and a zero timer are restored on the way out.
+    """
+    if not on_main_thread() or not hasattr(signal, "setitimer"):
+        yield False
+        return
+
+    def alarm(signum: int, frame: Any) -> None:
+        raise OutOfTime
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, max(float(seconds), 1e-6))
+    try:
+        yield True
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def ignore_sigint() -> bool:
     """Ignore Ctrl-C in this process from now on (a worker: its parent handles it).
     Returns whether it could (main thread)."""

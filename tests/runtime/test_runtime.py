@@ -292,3 +292,24 @@ def test_script_worker_talks_stops_and_names_its_death(tmp_path):
                 dying.next_frame(None, "a call")
     finally:
         dying.stop()
+
+
+def test_alarm_after_stops_pure_python_and_restores_the_handler():
+    """alarm_after raises OutOfTime inside a busy pure-Python block, then restores the previous
+    SIGALRM handler and leaves no timer running."""
+    import signal
+
+    from taopt.runtime.interrupt import OutOfTime, alarm_after
+
+    before = signal.getsignal(signal.SIGALRM)
+    stopped = False
+    try:
+        with alarm_after(0.01) as armed:
+            assert armed
+            for _ in range(10**10):  # stopped long before the end
+                pass
+    except OutOfTime:
+        stopped = True
+    assert stopped
+    assert signal.getsignal(signal.SIGALRM) is before
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
