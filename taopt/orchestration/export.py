@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import itertools
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -105,8 +105,8 @@ def _indexed(stem: str, keys: Sequence[Any]) -> Namer:
 # ----------------------------------------------------------------------------- cvxpy -> HiGHS
 def highs_model(
     problem: cp.Problem,
-    columns: dict[int, Namer] | None = None,
-    rows: dict[int, Namer] | None = None,
+    columns: Mapping[int, Namer] | None = None,
+    rows: Mapping[int, Namer] | None = None,
 ) -> highspy.Highs:
     """A HiGHS model holding a cvxpy MILP/LP, with named columns and rows.
 
@@ -333,14 +333,10 @@ def _capability(problem: Any, model: str) -> highspy.Highs:
             parts += built.problem.constraints
             objective = objective + built.problem.objective.expr
         return highs_model(cp.Problem(cp.Minimize(objective), parts), columns, rows)
-    if model == "printed":
-        built = build_printed(problem)
-        stem = "sigma"
-    else:
-        built = _capability_joint(problem, build_joint)
-        stem = "sigma"
-    keys = list(zip(built.tails.tolist(), built.heads.tolist(), built.labels.tolist(), strict=True))
-    return highs_model(built.problem, {built.arc_use.id: _indexed(stem, keys)})
+    # σ_ijk: k the vehicle (printed) or the class q (joint)
+    arcs = build_printed(problem) if model == "printed" else _capability_joint(problem, build_joint)
+    keys = list(zip(arcs.tails.tolist(), arcs.heads.tolist(), arcs.labels.tolist(), strict=True))
+    return highs_model(arcs.problem, {arcs.arc_use.id: _indexed("sigma", keys)})
 
 
 def _prefixed(tag: str, namer: Namer) -> Namer:
@@ -430,7 +426,8 @@ def _budgeted(problem: Any, cuts: Any) -> highspy.Highs:
             if highs.getModelStatus() != highspy_status("kOptimal"):
                 break  # infeasible: nothing to cut, the file says so when re-solved
             decoded = built.decode(np.asarray(highs.getSolution().col_value))
-            if decoded is None or not decoded[1] or not built.add_cuts(decoded[1]):
+            cycles = [] if decoded is None else [tuple(c) for c in decoded[1]]
+            if not cycles or not built.add_cuts(cycles):
                 break
     tails, heads = built.tails, built.heads
     for c in range(built.n_columns):
