@@ -1,11 +1,11 @@
 """A student's formulation against the certified optimum: the smallest counterexample.
 
-:func:`check_formulation` solves a student's cvxpy model on random small instances of a
-family (seeded) and on the family's packaged example when it is small, compares each
-answer with the certified optimum of ``taopt.solve(problem, "exact")``, and on the first
-disagreement shrinks the instance (one target/customer less, one vehicle less, while the
-disagreement persists) to the smallest counterexample it finds. The answer is a
-:class:`FormulationReport` (``str(report)`` prints it).
+:func:`~taopt.orchestration.checker.check_formulation` solves a student's cvxpy model on
+random small instances of a family (seeded) and on the family's packaged example when it is
+small, compares each answer with the certified optimum of ``taopt.solve(problem, "exact")``,
+and on the first disagreement shrinks the instance (one target/customer less, one vehicle
+less, while the disagreement persists) to the smallest counterexample it finds. The answer is a
+:class:`~taopt.orchestration.checker.FormulationReport` (``str(report)`` prints it).
 
 The contract a student's ``build`` follows::
 
@@ -52,7 +52,7 @@ Build = Callable[[Any], tuple[Any, Callable[[Any], Any]]]
 
 @dataclass
 class FormulationReport:
-    """What :func:`check_formulation` found.
+    """What :func:`~taopt.orchestration.checker.check_formulation` found.
 
     Attributes
     ----------
@@ -61,7 +61,8 @@ class FormulationReport:
     tried : int
         Instances checked before the first disagreement (all of them when none was found).
     failed : str or None
-        One of :data:`FAILURES`, or None when the student's model agreed everywhere.
+        One of :data:`~taopt.orchestration.checker.FAILURES`, or None when the student's model
+        agreed everywhere.
     detail : str
         Why: the violated constraint named by the family's ``evaluate``, or the two values.
     instance : problem or None
@@ -97,7 +98,7 @@ class FormulationReport:
     def __str__(self) -> str:
         if self.ok:
             return f"{self.family}: no counterexample in {self.tried} instances"
-        size = ", ".join(f"{v} {k}" for k, v in self.sizes.items())
+        size = ", ".join(f"{v} {k[:-1] if v == 1 else k}" for k, v in self.sizes.items())
         lines = [
             f"{self.family}: counterexample after {self.tried} instances "
             f"(shrunk from {self.shrunk_from} to {size})",
@@ -126,6 +127,8 @@ def _plan_text(plan: Any) -> str:
             f"order {list(plan.order)}, launch stops {list(plan.launch)}, "
             f"landing stops {list(plan.landing)}"
         )
+    if hasattr(plan, "routes") or isinstance(plan, (list, tuple)):  # routes, as lists
+        return str([list(route) for route in plan])
     return str(plan)
 
 
@@ -141,7 +144,8 @@ def _instance_text(problem: Any) -> list[str]:
         ]
     cost = np.asarray(problem.cost)
     head = (
-        f"{problem.n} targets, {problem.m} vehicles (points n..n+m-1 are starts)"
+        f"targets 0..{problem.n - 1}, start points {problem.n}..{problem.n + problem.m - 1} "
+        "(one per vehicle)"
         if hasattr(problem, "m")
         else f"nodes 0..{len(cost) - 1}, start {problem.start}, end {problem.end}, "
         f"precedences {list(problem.precedences)}"
@@ -352,7 +356,7 @@ def _check_one(build: Build, problem: Any) -> _Verdict:
         verdict.failed = FAILURES[2]
         verdict.detail = (
             f"the model's optimum {value:.6g} is below the certified optimum {optimum:.6g}: "
-            "a constraint is missing"
+            "a constraint (or a cost term) is missing"
         )
     elif score > value + scale:
         verdict.failed = FAILURES[2]
@@ -441,10 +445,11 @@ def check_formulation(
     -------
     FormulationReport
         ``report.ok`` when every instance agreed; otherwise the smallest counterexample
-        found, the failed property (:data:`FAILURES`: ``infeasible plan`` with the
-        violated constraint named by ``evaluate``, ``objective too low`` (a missing
-        constraint), ``objective too high`` (an over-constraint), ``student model
-        infeasible/unbounded``), both objectives and both plans. ``print(report)``.
+        found, the failed property (:data:`~taopt.orchestration.checker.FAILURES`:
+        ``infeasible plan`` with the violated constraint named by ``evaluate``,
+        ``objective too low`` (a missing constraint), ``objective too high`` (an
+        over-constraint), ``student model infeasible/unbounded``), both objectives and both
+        plans. ``print(report)``.
 
     Raises
     ------

@@ -1,7 +1,7 @@
 """Every MILP the toolkit builds, written as an LP or MPS file with the thesis's names.
 
-:func:`export` builds the named model of a problem with the model's own builder
-(:mod:`taopt.models`), turns it into one HiGHS model and writes it with
+:func:`~taopt.orchestration.export.export` builds the named model of a problem with the
+model's own builder (:mod:`taopt.models`), turns it into one HiGHS model and writes it with
 ``highspy.Highs.writeModel`` (the file's extension picks the format). The cvxpy models are
 turned into HiGHS models through the matrices cvxpy hands HiGHS (``get_problem_data``): the
 rows of every labelled cvxpy constraint are found again in those matrices, so each row and
@@ -9,19 +9,18 @@ column gets a name built from the thesis's symbols and equation numbers (``sigma
 σ_ij of the arc from start point 5 to target 0, ``eq2_3_in_0`` for row (2.3) of target 0).
 The budgeted model, which lives on a HiGHS model already, is named in place.
 
-The models, per family (:data:`MODELS`):
+The models, per family (:data:`~taopt.orchestration.export.MODELS`):
 
-========================  ===============================================================
-``AssignmentProblem``     ``dfj`` (2.2)–(2.5) with the subtour rows of a cut loop, ``mtz``,
-                          ``flow`` (:func:`taopt.models.routing.build`)
-``CapabilityProblem``     ``printed`` (3.1)–(3.3), ``corrected`` (one MTZ routing model per
-                          class, side by side), ``joint`` (:mod:`taopt.models.capability_joint`)
-``DeliveryInstance``      ``milp``: the linear (5.1)–(5.7) (:func:`taopt.models.delivery.build`)
-``SopProblem``            ``flow``, ``mtz`` (:func:`taopt.models.sop.build`)
-``BudgetedProblem``       ``arc-vehicle``: §6.2's three-index model with the subtour rows of a
-                          cut loop
-``FleetProblem``          ``milp``: the fleet teaching MILP (:mod:`taopt.models.fleet_milp`)
-========================  ===============================================================
+* ``AssignmentProblem``: ``dfj`` (2.2)–(2.5) with the subtour rows of a cut loop, ``mtz``,
+  ``flow`` (:func:`taopt.models.routing.formulation.build`);
+* ``CapabilityProblem``: ``printed`` (3.1)–(3.3) as printed, ``corrected`` (§3.6: one MTZ
+  routing model per class, side by side), ``joint`` (:mod:`taopt.models.capability_joint`);
+* ``DeliveryInstance``: ``milp``, the linear (5.1)–(5.7) (:func:`taopt.models.delivery.build`);
+* ``SopProblem``: ``flow``, ``mtz`` (:func:`taopt.models.sop.build`);
+* ``BudgetedProblem``: ``arc-vehicle``, §6.2's three-index model
+  (:class:`taopt.models.budgeted.arc_vehicle.BudgetedModel`) with the subtour rows of a cut
+  loop;
+* ``FleetProblem``: ``milp``, the fleet teaching MILP (:mod:`taopt.models.fleet_milp`).
 
 The DFJ models (``dfj``, ``joint``, ``arc-vehicle``) hold the subtour rows (2.5) of a cut
 loop run to its end: solve, add a row for every subtour of the integral solution, re-solve,
@@ -47,10 +46,12 @@ if TYPE_CHECKING:
 
 __all__ = ["FORMATS", "MODELS", "export", "export_model", "highs_model"]
 
-#: The file formats :func:`export` writes (the extension of ``path`` picks one).
+#: The file formats :func:`~taopt.orchestration.export.export` writes (the extension of
+#: ``path`` picks one).
 FORMATS = ("lp", "mps")
 
-#: Family problem type name -> the model names :func:`export` builds for it.
+#: Family problem type name -> the model names :func:`~taopt.orchestration.export.export`
+#: builds for it.
 MODELS: dict[str, tuple[str, ...]] = {
     "AssignmentProblem": ("dfj", "mtz", "flow"),
     "CapabilityProblem": ("printed", "corrected", "joint"),
@@ -63,7 +64,8 @@ MODELS: dict[str, tuple[str, ...]] = {
 #: Subsets of (2.5) written in full by ``cuts="all"`` up to this many targets (2^n rows).
 ALL_CUTS_MAX_TARGETS = 12
 
-#: Rounds of the cut loop before :func:`export` gives up (each round re-solves the MILP).
+#: Rounds of the cut loop before :func:`~taopt.orchestration.export.export` gives up (each
+#: round re-solves the MILP).
 MAX_CUT_ROUNDS = 200
 
 Namer = Callable[[int], str]
@@ -123,7 +125,7 @@ def highs_model(
         ``<variable name>_<i>``.
     rows : dict, optional
         ``constraint.id -> name(r)`` for row ``r`` of the constraint; default
-        ``<label stem>_<r>`` (:func:`label_name`).
+        ``<label stem>_<r>`` (:func:`~taopt.orchestration.export.label_name`).
 
     Returns
     -------
@@ -498,7 +500,8 @@ def export(
         :class:`~taopt.routing.problem.AssignmentProblem`, ``CapabilityProblem``,
         ``DeliveryInstance``, ``SopProblem``, ``BudgetedProblem`` or ``FleetProblem``.
     model : str
-        One of :data:`MODELS` for the problem's type (e.g. ``"dfj"``, ``"mtz"``, ``"flow"``).
+        One of :data:`~taopt.orchestration.export.MODELS` for the problem's type (e.g.
+        ``"dfj"``, ``"mtz"``, ``"flow"``).
     path : str or Path
         Where to write; written atomically (a temporary file renamed into place).
     format : {"lp", "mps"}, optional
@@ -506,7 +509,8 @@ def export(
     cuts : None, "all" or list of subsets
         DFJ models only: the subtour rows (2.5) written. None (default): the pool at the end
         of a cut loop (the file's optimum is the certified optimum); ``"all"``: every subset
-        of two or more targets (at most :data:`ALL_CUTS_MAX_TARGETS` targets); a list: those.
+        of two or more targets (at most
+        :data:`~taopt.orchestration.export.ALL_CUTS_MAX_TARGETS` targets); a list: those.
 
     Returns
     -------
@@ -536,7 +540,8 @@ def export(
     ``eq2_5_mtz_i_j``, ``eq2_5_flow_*`` (2.5); chapter 3's σ_ijk ``sigma_i_j_k`` (k a
     vehicle for ``printed``, the class for ``joint``); chapter 5's ``y_p_i_j_k``, ``w_p_k_i``,
     ``S_p``, ``t_p``, ``R_p``; a row of any other labelled constraint is named by its
-    equation number and first words (:func:`label_name`) and its index.
+    equation number and first words (:func:`~taopt.orchestration.export.label_name`) and its
+    index.
 
     References
     ----------
