@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import reference
 import teaching_models as tm
+from conftest import ROOT
 
 import taopt
 from taopt.errors import InstanceError
@@ -14,6 +15,16 @@ from taopt.orchestration.solving import load_problem_file
 
 ROUTING = "assignment_problem"
 DELIVERY = "delivery_instance"
+
+
+def _shown_in_docs(report) -> bool:
+    """The report's lines (but the plans, which may tie, and the saved path) appear in
+    docs/export-and-checker.md, which prints it."""
+    page = (ROOT / "docs" / "export-and-checker.md").read_text(encoding="utf-8")
+    lines = [
+        line for line in str(report).splitlines() if "plan:" not in line and "saved:" not in line
+    ]
+    return "\n".join(lines[:4]) in page and "\n".join(lines[4:]) in page
 
 
 def _references(kind: str) -> list:
@@ -47,6 +58,7 @@ def test_wrong_textbook_model_gets_a_small_counterexample(build, family, failed,
         taopt.evaluate(report.instance, report.student_plan)
     text = str(report)
     assert f"failed property: {failed}" in text and "optimal plan" in text
+    assert _shown_in_docs(report)
 
 
 def test_counterexample_is_minimal_by_one_removal():
@@ -65,6 +77,7 @@ def test_objective_too_low_for_a_missing_cost_term():
     assert report.failed == "objective too low"
     assert report.student_objective < report.optimum
     assert taopt.evaluate(report.instance, report.student_plan) >= report.optimum - 1e-9
+    assert _shown_in_docs(report)
 
 
 def test_over_constraint_is_too_high_or_infeasible():
@@ -74,6 +87,7 @@ def test_over_constraint_is_too_high_or_infeasible():
     assert report.failed in ("objective too high", "student model infeasible/unbounded")
     assert report.sizes["targets"] == 1 and report.sizes["vehicles"] == 2
     assert report.failed in FAILURES
+    assert _shown_in_docs(report)
 
 
 @pytest.mark.parametrize("build", [tm.mtz_complete, tm.toolkit_routing], ids=["mtz", "toolkit"])
