@@ -438,7 +438,7 @@ def _budgeted(problem: Any, cuts: Any) -> highspy.Highs:
     names = [f"eq2_3_in_{j}" for j in range(n)]
     names += [f"eq2_4_flow_{j}_{k}" for j in range(n) for k in range(m)]
     names += [f"eq2_4_start_{k}" for k in range(m)]
-    for stem, limits in (("eq6_capacity", problem.capacity), ("eq6_time", problem.max_time)):
+    for stem, limits in (("sec6_2_capacity", problem.capacity), ("sec6_2_time", problem.max_time)):
         names += [f"{stem}_{k}" for k in np.flatnonzero(np.isfinite(limits))]
     names += ["eq2_5_dfj_" + "_".join(map(str, s)) for s in built.cuts]
     for r, name in enumerate(names[: highs.getNumRow()]):

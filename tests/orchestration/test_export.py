@@ -155,3 +155,33 @@ def test_cli_export_unknown_model_exits_2(capsys, tmp_path):
     )
     assert code == 2
     assert "choose one of flow, mtz" in capsys.readouterr().err
+
+
+def _rows_of(h) -> tuple[list[str], list[str], np.ndarray]:
+    """Column names, row names and the dense matrix of a HiGHS model."""
+    lp = h.getLp()
+    matrix = np.zeros((lp.num_row_, lp.num_col_))
+    start, index, value = lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_
+    for c in range(lp.num_col_):
+        matrix[index[start[c] : start[c + 1]], c] = value[start[c] : start[c + 1]]
+    return list(lp.col_names_), list(lp.row_names_), matrix
+
+
+def test_budgeted_names_follow_the_model():
+    """The budgeted file: x_k_i_j columns; eq2_3_in_j holds the arcs into j of every vehicle,
+    each eq2_5_dfj_<S> row only arcs inside S, one sec6_2_* row per limited vehicle."""
+    refs = [make() for make in reference.REFERENCES]
+    problem = next(r.problem for r in refs if type(r.problem).__name__ == "BudgetedProblem")
+    cols, rows, matrix = _rows_of(export_model(problem, "arc-vehicle"))
+    assert len(set(rows)) == len(rows) and all(c.startswith("x_") for c in cols)
+    for j in range(problem.n):
+        used = [cols[c] for c in np.flatnonzero(matrix[rows.index(f"eq2_3_in_{j}")])]
+        assert used and all(name.endswith(f"_{j}") for name in used)
+    for r, name in enumerate(rows):
+        if name.startswith("eq2_5_dfj_"):
+            inside = set(name.removeprefix("eq2_5_dfj_").split("_"))
+            for c in np.flatnonzero(matrix[r]):
+                _, _, tail, head = cols[c].split("_")
+                assert {tail, head} <= inside
+    limited = np.isfinite(problem.capacity).sum() + np.isfinite(problem.max_time).sum()
+    assert sum(name.startswith("sec6_2_") for name in rows) == limited
