@@ -125,7 +125,8 @@ def highs_model(
         ``<variable name>_<i>``.
     rows : dict, optional
         ``constraint.id -> name(r)`` for row ``r`` of the constraint; default
-        ``<label stem>_<r>`` (:func:`~taopt.orchestration.export.label_name`).
+        ``<label stem>_<r>`` (:func:`~taopt.orchestration.export.label_name`), ``c<id>_<r>``
+        for a constraint without a label.
 
     Returns
     -------
@@ -170,9 +171,8 @@ def highs_model(
         if written is None:
             row_names += [f"bound_{canonical.id}_{r}" for r in range(size)]
             continue
-        namer = rows.get(written.id) or _indexed(
-            label_name(written.label or type(written).__name__), range(size)
-        )
+        stem = label_name(written.label) if written.label else f"c{written.id}"
+        namer = rows.get(written.id) or _indexed(stem, range(size))
         row_names += [namer(r) for r in range(size)]
 
     matrix = data["A"].tocsc()
@@ -183,9 +183,12 @@ def highs_model(
     inf = highspy.kHighsInf
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = n_cols, matrix.shape[0]
-    lp.col_cost_ = np.asarray(data["c"], dtype=float)
+    cost = np.asarray(data["c"], dtype=float)
     offset = float(solver.get("offset", 0.0))
-    lp.offset_ = offset
+    if isinstance(problem.objective, cp.Maximize):  # cvxpy minimises -f: write max f
+        cost, offset = -cost, -offset
+        lp.sense_ = highspy.ObjSense.kMaximize
+    lp.col_cost_, lp.offset_ = cost, offset
     lower = data["lower_bounds"]
     upper = data["upper_bounds"]
     col_lower = np.full(n_cols, -inf) if lower is None else np.asarray(lower, dtype=float).copy()

@@ -185,3 +185,25 @@ def test_budgeted_names_follow_the_model():
                 assert {tail, head} <= inside
     limited = np.isfinite(problem.capacity).sum() + np.isfinite(problem.max_time).sum()
     assert sum(name.startswith("sec6_2_") for name in rows) == limited
+
+
+def test_any_cvxpy_milp_keeps_its_sense_and_labels(tmp_path):
+    """highs_model on a maximising cvxpy MILP: the file keeps 'max' and the optimum, a labelled
+    row is named by its equation, an unlabelled one by its id."""
+    import cvxpy as cp
+
+    from taopt.orchestration.export import highs_model
+
+    x = cp.Variable(2, integer=True, name="x")
+    budget = (x[0] + x[1] <= 4.5).set_label("(9.1) budget")
+    cap = x[0] <= 2
+    model = cp.Problem(cp.Maximize(3 * x[0] + 2 * x[1] + 5), [budget, x >= 0, cap])
+    model.solve(solver=cp.HIGHS)
+    path = tmp_path / "max.lp"
+    highs_model(model).writeModel(str(path))
+    text = path.read_text()
+    assert text.startswith("\\") and "\nmax\n" in text
+    assert "eq9_1_budget_0:" in text and f"c{cap.id}_0:" in text
+    status, value = _resolve(path)
+    assert status == highspy.HighsModelStatus.kOptimal
+    assert value == pytest.approx(model.value) == 15.0
