@@ -574,8 +574,13 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         sub, "export", cmd_export, "write a problem's MILP as an LP or MPS file (thesis names)"
     )
     export.add_argument("file", help="a JSON problem file, or example:NAME (a packaged example)")
+    from taopt.orchestration.export import MODELS  # light: no numpy, cvxpy or highspy
+
     export.add_argument(
-        "--model", required=True, help="the model: dfj|mtz|flow, printed|corrected|joint, milp, ..."
+        "--model",
+        required=True,
+        help="the model, per problem type: "
+        + "; ".join(f"{kind} {'|'.join(names)}" for kind, names in MODELS.items()),
     )
     export.add_argument(
         "--format", choices=("lp", "mps"), default=None, help="default: the extension of --out"
