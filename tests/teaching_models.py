@@ -122,3 +122,19 @@ def toolkit_delivery(problem: Any) -> tuple[cp.Problem, Any]:
 
     built = build(problem)
     return built.problem, lambda problem: decode(built, problem)
+
+
+def toolkit_sop(problem: Any) -> tuple[cp.Problem, Any]:
+    """Correct: the toolkit's SOP model (:func:`taopt.models.sop.build`, MTZ form)."""
+    from taopt.models.sop import build, decode
+
+    built = build(problem.cost, problem.precedences, problem.start, problem.end, "mtz")
+    return built.problem, lambda problem: decode(built)
+
+
+def sop_without_precedences(problem: Any) -> tuple[cp.Problem, Any]:
+    """WRONG: the SOP model built without its precedence rows (a plain Hamiltonian path)."""
+    from taopt.models.sop import build, decode
+
+    built = build(problem.cost, (), problem.start, problem.end, "mtz")
+    return built.problem, lambda problem: decode(built)

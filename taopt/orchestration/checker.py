@@ -122,14 +122,16 @@ def _number(value: float) -> str:
 def _plan_text(plan: Any) -> str:
     if plan is None:
         return "-"
-    if hasattr(plan, "order"):  # a delivery Plan
+    if hasattr(plan, "launch"):  # a delivery Plan
         return (
             f"order {list(plan.order)}, launch stops {list(plan.launch)}, "
             f"landing stops {list(plan.landing)}"
         )
-    if hasattr(plan, "routes") or isinstance(plan, (list, tuple)):  # routes, as lists
-        return str([list(route) for route in plan])
-    return str(plan)
+    try:  # routes (a Routes payload too), as lists; an order, as a list
+        items = list(plan)
+        return str([list(route) if hasattr(route, "__iter__") else route for route in items])
+    except TypeError:
+        return str(plan)
 
 
 def _instance_text(problem: Any) -> list[str]:

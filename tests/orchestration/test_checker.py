@@ -131,3 +131,12 @@ def test_unknown_family_is_refused():
     """A family the checker has no generator for is an InstanceError listing the ones it has."""
     with pytest.raises(InstanceError, match="assignment_problem"):
         taopt.check_formulation(tm.mtz_complete, "comm_problem")
+
+
+def test_sop_models():
+    """SOP: the toolkit's model agrees on 10 random instances; without its precedence rows the
+    plan breaks a precedence, which evaluate names."""
+    assert taopt.check_formulation(tm.toolkit_sop, "sop_problem", trials=10, seed=2).ok
+    report = taopt.check_formulation(tm.sop_without_precedences, "SopProblem", trials=10)
+    assert report.failed == "infeasible plan" and "precedence" in report.detail
+    assert report.sizes["nodes"] <= 7
