@@ -114,9 +114,13 @@ def test_correct_delivery_model_has_no_counterexample():
     ids=["mtz", "toolkit-routing", "toolkit-delivery"],
 )
 def test_correct_models_survive_200_trials(build, family):
-    """The correct models: no counterexample in 200 random instances (sizes 2-5)."""
-    report = taopt.check_formulation(build, family, trials=200, seed=7)
+    """The correct models: no counterexample in 200 random instances (sizes 2-5) and the
+    family's reference instances."""
+    kind = "AssignmentProblem" if family == ROUTING else "DeliveryInstance"
+    references = _references(kind)
+    report = taopt.check_formulation(build, family, trials=200, seed=7, instances=references)
     assert report.ok, str(report)
+    assert report.tried == 200 + len(references) + 1
 
 
 def test_same_seed_same_report():
