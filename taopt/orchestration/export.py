@@ -104,6 +104,17 @@ def _indexed(stem: str, keys: Sequence[Any]) -> Namer:
     return name
 
 
+def _entries(shape: tuple[int, ...]) -> list[Any]:
+    """The index of each entry of an array of ``shape`` in cvxpy's (column-major) order: an
+    int for a vector, a tuple ``(i, j)`` for a matrix."""
+    import numpy as np
+
+    size = int(np.prod(shape, dtype=int))
+    if len(shape) <= 1:
+        return list(range(size))
+    return list(zip(*np.unravel_index(np.arange(size), shape, order="F"), strict=True))
+
+
 # ----------------------------------------------------------------------------- cvxpy -> HiGHS
 def highs_model(
     problem: cp.Problem,
@@ -121,8 +132,8 @@ def highs_model(
     problem : cvxpy.Problem
         Linear (a MILP or an LP).
     columns : dict, optional
-        ``variable.id -> name(i)`` for entry ``i`` of the variable; default
-        ``<variable name>_<i>``.
+        ``variable.id -> name(i)`` for entry ``i`` of the variable (cvxpy's column-major
+        order); default ``<variable name>_<i>`` (``_<i>_<j>`` for a matrix).
     rows : dict, optional
         ``constraint.id -> name(r)`` for row ``r`` of the constraint; default
         ``<label stem>_<r>`` (:func:`~taopt.orchestration.export.label_name`), ``c<id>_<r>``
@@ -159,7 +170,7 @@ def highs_model(
     for var_id, offset in stuffing.var_offsets.items():
         variable = stuffing.id2var[var_id]
         namer = columns.get(var_id) or _indexed(
-            _clean(variable.name()) or "x", range(variable.size)
+            _clean(variable.name()) or "x", _entries(variable.shape)
         )
         for i in range(int(np.prod(variable.shape, dtype=int))):
             col_names[offset + i] = namer(i)
@@ -172,7 +183,8 @@ def highs_model(
             row_names += [f"bound_{canonical.id}_{r}" for r in range(size)]
             continue
         stem = label_name(written.label) if written.label else f"c{written.id}"
-        namer = rows.get(written.id) or _indexed(stem, range(size))
+        shape = written.shape if int(np.prod(written.shape, dtype=int)) == size else (size,)
+        namer = rows.get(written.id) or _indexed(stem, _entries(shape))
         row_names += [namer(r) for r in range(size)]
 
     matrix = data["A"].tocsc()
