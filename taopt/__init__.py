@@ -36,6 +36,9 @@ _LAZY: dict[str, tuple[str, str]] = {
     "evaluate": ("taopt.scoring", "evaluate"),
     "schedule": ("taopt.delivery.schedule", "schedule"),
     "lower": ("taopt.orchestration.pipeline", "lower"),
+    # teaching: every MILP as an LP/MPS file, a student's formulation checked
+    "export": ("taopt.orchestration.export", "export"),
+    "check_formulation": ("taopt.orchestration.checker", "check_formulation"),
     # the instance file's parts (each family's problem type and payload are in its spec:
     # ``exports``, found by __getattr__)
     "Instance": ("taopt.instance", "Instance"),

@@ -205,6 +205,17 @@ def cmd_solve(args: argparse.Namespace) -> int:
     return 1 if result["failed"] else 0
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    """Write one of the toolkit's MILPs of a problem file as LP or MPS (thesis names)."""
+    from taopt.orchestration.export import export
+    from taopt.orchestration.solving import load_problem_file
+
+    problem, _ = load_problem_file(args.file, progress=not args.quiet)
+    path = export(problem, args.model, args.out, format=args.format)
+    print(f"wrote {path} ({args.model}, {args.format or path.suffix.lstrip('.')})")
+    return 0
+
+
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a saved solution from the problem file alone (exit codes in the help)."""
     from taopt.orchestration.solving import verify_file
@@ -558,6 +569,23 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         help="write each solution as DIR/<method>.json, for taopt verify (default: none)",
     )
     deprecated(solve, "--save", "out", "--out DIR", metavar="DIR")
+
+    export = add_subcommand(
+        sub, "export", cmd_export, "write a problem's MILP as an LP or MPS file (thesis names)"
+    )
+    export.add_argument("file", help="a JSON problem file, or example:NAME (a packaged example)")
+    from taopt.orchestration.export import MODELS  # light: no numpy, cvxpy or highspy
+
+    export.add_argument(
+        "--model",
+        required=True,
+        help="the model, per problem type: "
+        + "; ".join(f"{kind} {'|'.join(names)}" for kind, names in MODELS.items()),
+    )
+    export.add_argument(
+        "--format", choices=("lp", "mps"), default=None, help="default: the extension of --out"
+    )
+    export.add_argument("--out", required=True, metavar="PATH", help="the file to write")
 
     verify = add_subcommand(
         sub,

@@ -251,7 +251,7 @@ def test_every_command_is_listed():
     studies = {f"study {s.name}" for f in families() for s in f.studies}
     assert {"study drift", "study delivery", "study capability", "study comm"} <= studies
     assert names == {
-        "navigate", "demo", "solve", "verify", "kinds", "claims", "simulate", *studies,
+        "navigate", "demo", "solve", "export", "verify", "kinds", "claims", "simulate", *studies,
     }  # fmt: skip
 
 
