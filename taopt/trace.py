@@ -18,7 +18,7 @@ Example
 -------
 >>> import numpy as np, taopt
 >>> cost = np.array([[0, 1, 9, 9], [1, 0, 9, 9], [9, 9, 0, 9], [5, 6, 4, 0.0]])
->>> solution = taopt.solve(taopt.AssignmentProblem(cost, 1), "exact", trace=True)
+>>> solution = taopt.solve(taopt.AssignmentProblem(cost, 3), "exact", trace=True)
 >>> [r["stage"] for r in rounds(solution)][:2], rounds(solution)[0]["subtours"]
 (['root', 'root'], [[0, 1]])
 
@@ -404,12 +404,15 @@ def animate_trace(
             right.set_xlim(0.5, frames[-1]["round"] + 0.5)
         else:
             draw_layers(found, (left, right), upto=k + 1)
-        fig.tight_layout(rect=(0.0, 0.05 if caption else 0.0, 1.0, 1.0))
-        if caption and not fig.texts:
-            fig.text(0.5, 0.01, caption, ha="center", va="bottom", fontsize=8, color="0.25")
         return []
 
-    animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
+    # the layout once, from the first frame: the axes keep their places (a steady picture,
+    # and tight_layout per frame cost more than the drawing)
+    draw(0)
+    fig.tight_layout(rect=(0.0, 0.05 if caption else 0.0, 1.0, 1.0))
+    if caption:
+        fig.text(0.5, 0.01, caption, ha="center", va="bottom", fontsize=8, color="0.25")
+    animation = FuncAnimation(fig, draw, frames=len(frames), init_func=list, blit=False)
     with atomic_path(path) as tmp:
         animation.save(os.fspath(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
     return len(frames)
