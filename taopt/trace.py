@@ -97,7 +97,7 @@ def _points(problem: Any, instance: Any = None) -> tuple[np.ndarray, str, list[s
 
     return (
         schematic_layout(problem.cost),
-        "s, schematic layout of the travel times",
+        "s, schematic",
         [f"t{k}" for k in range(n)],
         [f"v{k}" for k in range(m)],
     )
@@ -113,7 +113,8 @@ def draw_round(
     """One DFJ round on the map of targets: its point's arcs and the sets it violates.
 
     Arcs with σ = 1 are solid arrows, fractional ones (0 < σ < 1, an LP point) dashed
-    with their value written at the middle; every target set S whose subtour row (2.5)
+    with their value written at the middle (each arrow slightly bent, so the two arcs of a
+    2-cycle stay apart); every target set S whose subtour row (2.5)
     ``Σ_{i,j∈S} σ_ij ≤ |S| − 1`` the point violates is shaded in its own colour.
 
     Parameters
@@ -124,7 +125,7 @@ def draw_round(
     ax : matplotlib Axes
     instance : Instance, optional
         Its positions make the map (metres); without one the points are placed by
-        :func:`taopt.plot.schematic_layout` from the travel times.
+        :func:`taopt.plot.schematic_layout` from the travel times (axes "s, schematic").
     legend : bool
         Draw the legend (outside the axes, right).
 
@@ -169,6 +170,8 @@ def draw_round(
                 "linestyle": "-" if integral else "--",
                 "shrinkA": 5,
                 "shrinkB": 5,
+                # slightly bent: the two arcs of a 2-cycle i -> j -> i stay apart
+                "connectionstyle": "arc3,rad=0.12",
             },
             zorder=2,
         )
