@@ -34,7 +34,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from matplotlib.ticker import MaxNLocator
 
 from taopt.errors import InstanceError
 
@@ -225,6 +224,8 @@ def round_title(record: Mapping[str, Any]) -> str:
 
 def draw_progress(found: Mapping[str, Any], ax: Any, upto: int | None = None) -> Any:
     """Value and proven bound per round (DFJ), with the incumbent of the MIP rounds."""
+    from matplotlib.ticker import MaxNLocator
+
     records = found["rounds"][:upto]
     index = [r["round"] for r in records]
 
@@ -246,6 +247,8 @@ def draw_progress(found: Mapping[str, Any], ax: Any, upto: int | None = None) ->
 def draw_layers(found: Mapping[str, Any], axes: Sequence[Any], upto: int | None = None) -> Any:
     """The ideal DP per layer: states reached, dominated, pruned and kept (left, log scale);
     the proven bound and the incumbent's makespan (right)."""
+    from matplotlib.ticker import MaxNLocator
+
     layers = found["layers"][:upto]
     served = [layer["served"] for layer in layers]
     left, right = axes
