@@ -10,7 +10,8 @@ every plot of taopt live here:
 * :func:`place_labels` — the same, each label on the side where it covers the fewest others;
 * :func:`dodge` — a small sideways shift per series, so equal values do not hide markers;
 * :func:`schematic_layout` — 2-D positions for a problem given only by a cost matrix;
-* :func:`save` — PNG with the outside legend kept in the picture.
+* :func:`save` — PNG with the outside legend kept in the picture;
+* :func:`trace` — the rounds of a traced exact run (:mod:`taopt.trace`).
 """
 
 from __future__ import annotations
@@ -441,3 +442,23 @@ def figure_2_1(
     if path_out is not None:
         save(ax, path_out)
     return ax.figure
+
+
+def trace(
+    solution: Any,
+    problem: Any = None,
+    path: str | os.PathLike[str] | None = None,
+    instance: Any = None,
+    which: Sequence[int] | None = None,
+    columns: int = 3,
+) -> Any:
+    """Draw the trace of a run solved with ``trace=True``: :func:`taopt.trace.plot_trace`.
+
+    The DFJ cut loop of chapter 2 one panel per round (each round's fractional arcs on the
+    map of targets, the violated sets S of (2.5) shaded, then value and bound per round);
+    the ideal DP of chapter 5 as states per layer and bound vs layer. The GIF, one frame
+    per round, is :func:`taopt.trace.animate_trace` (``taopt solve FILE --trace X.gif``).
+    """
+    from taopt.trace import plot_trace
+
+    return plot_trace(solution, problem, path, instance=instance, which=which, columns=columns)

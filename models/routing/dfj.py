@@ -106,6 +106,40 @@ IMPROVE_MIN_SECONDS = 1.0
 FALLBACK_SEC = "flow"
 
 
+#: Arcs whose σ is at most this are left out of a traced point (``trace=True``).
+TRACE_ZERO = 1e-9
+
+
+def _finite(value: Any) -> float | None:
+    """``value`` as a float, or None when it is not finite (JSON has no infinity)."""
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
+def trace_point(dfj: DfjModel, values: np.ndarray | None) -> list[list[float]]:
+    """The nonzero arcs of a point as ``[tail, head, σ]`` (σ rounded to 1e-9), for a trace."""
+    if values is None:
+        return []
+    used = np.flatnonzero(np.asarray(values) > TRACE_ZERO)
+    return [[int(dfj.tails[a]), int(dfj.heads[a]), round(float(values[a]), 9)] for a in used]
+
+
+def _sets(subsets: Any) -> list[list[int]]:
+    """Subsets as sorted lists of ints (JSON-able, comparable)."""
+    return [sorted(int(v) for v in subset) for subset in subsets]
+
+
+def _lifted_plain(cut: tuple) -> dict[str, Any]:
+    """A lifted row (:meth:`DfjModel.add_lifted`) as JSON-able data."""
+    if cut[0] == "blossom":
+        return {
+            "kind": "blossom",
+            "handle": sorted(int(v) for v in cut[1]),
+            "teeth": [[int(a), int(b)] for a, b in cut[2]],
+        }
+    return {"kind": f"D_k{cut[0]}", "sequence": [int(v) for v in cut[1]]}
+
+
 @dataclass
 class RootRelaxation:
     """The DFJ LP relaxation at the root: (2.2)–(2.4) plus separated (2.5) rows.
@@ -191,6 +225,9 @@ class DfjModel:
         self.arc_index = np.full((size, n), -1, dtype=np.int64)
         self.arc_index[self.tails, self.heads] = np.arange(n_arcs)
         self._formulation: RoutingModel | None = None
+        #: the rounds recorded when a trace is asked for (``trace=True``), else None: one
+        #: dict per LP of :meth:`root` and per MIP round (:func:`_solve_dfj`)
+        self.trace: list[dict[str, Any]] | None = None
 
     @property
     def formulation(self) -> RoutingModel:
@@ -264,6 +301,11 @@ class DfjModel:
         self._known_lifted.clear()
         self.lifted.clear()
 
+    def _trace_cuts(self, n_known: int) -> None:
+        """Record the (2.5) rows added since the model had ``n_known`` in the last round."""
+        if self.trace is not None and self.trace:
+            self.trace[-1]["cuts"] += _sets(self.cuts[n_known:])
+
     def arc_values(self, solution: np.ndarray | None = None) -> np.ndarray:
         """σ of every arc in the last solution (or in ``solution``, a full column vector)."""
         if solution is None:
@@ -335,10 +377,27 @@ class DfjModel:
                 found = separate_subtours(
                     self.problem, self.tails, self.heads, values, deadline=deadline
                 )
+                n_known = len(self.cuts)
+                if self.trace is not None:
+                    self.trace.append(
+                        {
+                            "round": len(self.trace) + 1,
+                            "stage": "root",
+                            "value": _finite(value),
+                            "bound": _finite(bound),
+                            "arcs": trace_point(self, values),
+                            "subtours": _sets(found),
+                            "cuts": [],
+                            "lifted": [],
+                        }
+                    )
                 if deadline is not None and time.perf_counter() >= deadline:
                     self.add_cuts(found)  # valid rows, but the separation may be unfinished
+                    self._trace_cuts(n_known)
                     break
-                if self.add_cuts(found):
+                added = self.add_cuts(found)
+                self._trace_cuts(n_known)
+                if added:
                     complete = False
                     continue
                 complete = True  # no (2.5) row violated: the DFJ bound
@@ -358,14 +417,22 @@ class DfjModel:
                     )
                 if "blossom" in LIFTED_FAMILIES:
                     lifted_cuts += separate_blossoms(self.problem, self.tails, self.heads, values)
+                n_lifted = len(self.lifted)
                 if not self.add_lifted(lifted_cuts):
                     break
+                if self.trace is not None:
+                    self.trace[-1]["lifted"] = [_lifted_plain(c) for c in self.lifted[n_lifted:]]
             if snapshot is not None and self.lifted and complete:
                 n_rows, n_cuts, *before = snapshot
                 closed = bound - before[1]
                 if closed < LIFTED_MIN_GAIN * abs(before[1]):
                     self._rollback(n_rows, n_cuts)
                     value, bound, reduced, values, rounds = before
+                    if self.trace is not None:  # the rounds after the snapshot were undone
+                        root_rounds = [r for r in self.trace if r["stage"] == "root"]
+                        for record in root_rounds[rounds:]:
+                            record["discarded"] = True
+                        root_rounds[rounds - 1]["lifted"] = []
         finally:
             self.model.relax(False)
         return RootRelaxation(
@@ -568,7 +635,23 @@ class _Rounds:
                 search.keep(candidate, value)
             if self.candidates:  # the round's best answer, improved (often the next optimum)
                 search.offer(min(self.candidates, key=lambda pair: pair[0])[1])
+            n_known = len(dfj.cuts)
+            if dfj.trace is not None:
+                dfj.trace.append(
+                    {
+                        "round": len(dfj.trace) + 1,
+                        "stage": "mip",
+                        "value": _finite(run.objective) if run.has_point else None,
+                        "bound": _finite(search.best_bound),
+                        "incumbent": _finite(search.best_value),
+                        "core_arcs": int(core.mask.sum()),
+                        "arcs": trace_point(dfj, dfj.arc_values()) if run.has_point else [],
+                        "subtours": _sets(subtours),
+                        "cuts": [],
+                    }
+                )
             dfj.add_cuts([*map(tuple, subtours), *self.harvested])
+            dfj._trace_cuts(n_known)
             stopped_by = run.stopped_by
             best_value = search.best_value
             if relative_gap(best_value, min(search.best_bound, best_value)) <= target_gap:
@@ -601,10 +684,14 @@ def _solve_dfj(
     given: list[list[int]] | None,
     started: float,
     improve: Any = None,
+    trace: bool = False,
 ) -> Solution:
     """The DFJ loop (module docstring): first bounds, the root LP with exact separation (at
     most half of a time limit), the reduced-cost core, MIP rounds on it (:class:`_Rounds`)
-    and, if they stall with an open gap, the compact :data:`FALLBACK_SEC` model."""
+    and, if they stall with an open gap, the compact :data:`FALLBACK_SEC` model.
+
+    ``trace``: ``info["trace"]`` holds every round (:func:`~taopt.models.routing.solve_routing`).
+    """
     search = _Search(problem, time_limit, started, improve, given)
     search.offer(search.best_routes)
     n, m = problem.n, problem.m
@@ -618,8 +705,12 @@ def _solve_dfj(
         # no time to build the model: the incumbent with the bounds proven so far
         info: dict[str, Any] = {"rounds": 0, "cuts": 0, "arcs": n_arcs, "stopped_by": "time_limit"}
         info.update(solver_status="", stage="build", mip_gap=mip_gap)
+        if trace:
+            info["trace"] = new_trace(problem, [])
         return search.finish("time_limit", info)
     dfj = DfjModel(problem, verbose=verbose)
+    if trace:
+        dfj.trace = []
     # 1. root LP with exact separation; at most half of a time limit
     budget = search.remaining()
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
@@ -639,6 +730,21 @@ def _solve_dfj(
             search.best_bound = max(search.best_bound, fallback.bound)
         stopped_by = fallback.info["stopped_by"]
         solver_status = fallback.info["solver_status"]
+        if dfj.trace is not None and fallback.routes is not None:
+            fallback_point = np.zeros(len(dfj.arcs))
+            fallback_point[dfj.route_arcs(fallback.routes)] = 1.0
+            dfj.trace.append(
+                {
+                    "round": len(dfj.trace) + 1,
+                    "stage": "fallback",
+                    "value": _finite(fallback.objective),
+                    "bound": _finite(search.best_bound),
+                    "incumbent": _finite(search.best_value),
+                    "arcs": trace_point(dfj, fallback_point),
+                    "subtours": [],
+                    "cuts": [],
+                }
+            )
     info = {
         "rounds": rounds,
         "cuts": len(dfj.cuts),
@@ -655,7 +761,14 @@ def _solve_dfj(
         "fallback": FALLBACK_SEC if stall else None,
         "improved": search.improved,
     }
+    if dfj.trace is not None:
+        info["trace"] = new_trace(problem, dfj.trace)
     return search.finish(stopped_by, info)
+
+
+def new_trace(problem: AssignmentProblem, rounds: list[dict[str, Any]]) -> dict[str, Any]:
+    """The ``info["trace"]`` of a DFJ run: its size and its rounds (plain JSON data)."""
+    return {"kind": "dfj", "n": int(problem.n), "m": int(problem.m), "rounds": rounds}
 
 
 __all__ = [
@@ -665,6 +778,7 @@ __all__ = [
     "LP_SECONDS_PER_ARC",
     "FALLBACK_SEC",
     "IMPROVE_MIN_SECONDS",
+    "TRACE_ZERO",
     "LIFTED_FAMILIES",
     "LIFTED_MIN_GAIN",
     "LIFTED_ROUNDS",

@@ -21,7 +21,7 @@ from typing import Any
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import HighsModel
 from taopt.models.routing.compact import _solve_compact
-from taopt.models.routing.dfj import DfjModel, _solve_dfj
+from taopt.models.routing.dfj import DfjModel, _solve_dfj, new_trace
 from taopt.models.routing.formulation import _check, build
 from taopt.result import RELAXATION, Solution, make_solution
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
@@ -47,6 +47,7 @@ def solve_routing(
     max_rounds: int = 10_000,
     incumbent: Any = None,
     improve: Any = None,
+    trace: bool = False,
 ) -> Solution:
     """Solve (2.2)–(2.5) exactly with HiGHS (or its LP relaxation).
 
@@ -99,6 +100,23 @@ def solve_routing(
         the rounds (chapter 3's n90m10 classes: 0.76× the CPU time, ``docs/benchmarks.md``).
         Under a time limit it is not called with less than
         :data:`~taopt.models.routing.dfj.IMPROVE_MIN_SECONDS` left.
+    trace : bool
+        Keep the DFJ loop round by round in ``info["trace"]`` (plain JSON data, so it is
+        saved with the solution): ``{"kind": "dfj", "n", "m", "rounds"}``, one round per
+        LP of the root (``"stage": "root"``) and per MIP round (``"mip"``; ``"fallback"``
+        for the compact model's answer should the loop stall). A round holds the point
+        (``"arcs"``: ``[tail, head, σ]`` for every σ above
+        :data:`~taopt.models.routing.dfj.TRACE_ZERO`; points ``0..n-1`` are targets,
+        ``n..n+m-1`` start points), ``"value"`` (the LP value, or the MIP point's cost),
+        ``"bound"`` (proven so far), ``"subtours"`` (the target sets S whose (2.5) row the
+        point violates: separated exactly at the root, the cycles of a MIP point),
+        ``"cuts"`` (the (2.5) rows this round added: its subtours, and in a MIP round the
+        cycles of the other solutions HiGHS found), ``"lifted"`` (root: lifted rows added),
+        ``"incumbent"`` and ``"core_arcs"`` (MIP rounds); a root round whose rows were
+        rolled back is marked ``"discarded"``. Drawn by :func:`taopt.plot.trace`. Only
+        ``sec="dfj"`` keeps a trace (an :class:`~taopt.errors.InstanceError` otherwise);
+        ``relax=True`` keeps the root's LPs. False (the default) records nothing and
+        changes nothing.
 
     Returns
     -------
@@ -114,7 +132,8 @@ def solve_routing(
     Raises
     ------
     InstanceError
-        Not an AssignmentProblem or unknown ``sec``.
+        Not an AssignmentProblem or unknown ``sec``, or ``trace`` asked of MTZ / flow
+        (compact: no rounds to show).
     FeasibilityError
         ``incumbent`` is not a feasible solution.
     SolverError
@@ -166,34 +185,45 @@ def solve_routing(
     """
     _check(problem, sec)
     started = time.perf_counter()
+    if trace and sec != "dfj":
+        raise InstanceError(
+            f"trace=True: only the DFJ loop (sec='dfj') has rounds to trace, not sec={sec!r} "
+            "(one compact solve)"
+        )
     if relax:
-        return _solve_relaxation(problem, sec, started, verbose)
+        return _solve_relaxation(problem, sec, started, verbose, bool(trace))
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
     given = _as_routes(problem, incumbent)
     if sec == "dfj":
         return _solve_dfj(
-            problem, time_limit, mip_gap, verbose, max_rounds, given, started, improve
+            problem, time_limit, mip_gap, verbose, max_rounds, given, started, improve, trace
         )
     return _solve_compact(problem, sec, time_limit, mip_gap, verbose, given, started)
 
 
 def _solve_relaxation(
-    problem: AssignmentProblem, sec: str, started: float, verbose: bool
+    problem: AssignmentProblem, sec: str, started: float, verbose: bool, trace: bool = False
 ) -> Solution:
     """LP value of (2.2)–(2.5): DFJ with all of (2.5) (exact separation), or MTZ / flow."""
+    recorded: dict[str, Any] = {}
     if sec == "dfj":
-        root = DfjModel(problem, verbose=verbose).root(lifted=0)
+        dfj = DfjModel(problem, verbose=verbose)
+        if trace:
+            dfj.trace = []
+        root = dfj.root(lifted=0)
         if not root.complete:
             raise SolverError("the DFJ LP relaxation did not finish")
         value, rounds, cuts = float(root.value), root.rounds, len(root.cuts)
+        if dfj.trace is not None:
+            recorded["trace"] = new_trace(problem, dfj.trace)
     else:
         model = HighsModel(build(problem, sec, relax=True).problem, verbose=verbose)
         run = model.solve()
         if run.solver_status != "optimal" or run.bound is None:
             raise SolverError(f"LP relaxation ended with status {run.solver_status!r}")
         value, rounds, cuts = float(run.bound), 1, 0
-    info = {"rounds": rounds, "cuts": cuts}
+    info = {"rounds": rounds, "cuts": cuts, **recorded}
     return make_solution(
         problem,
         None,

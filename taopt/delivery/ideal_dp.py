@@ -366,6 +366,29 @@ def _stopped(
     )
 
 
+def _layer_record(
+    served: int,
+    n_ideals: int,
+    states: int,
+    dominated: int,
+    pruned: int,
+    bound: np.ndarray,
+    incumbent: float,
+) -> dict[str, Any]:
+    """One layer of an :func:`ideal_dp` trace (plain JSON data; None for infinity)."""
+    least = min(float(bound.min()), incumbent) if bound.size else incumbent
+    return {
+        "served": int(served),
+        "ideals": int(n_ideals),
+        "states": int(states),
+        "dominated": int(dominated),
+        "pruned": int(pruned),
+        "kept": int(states - dominated - pruned),
+        "bound": least if math.isfinite(least) else None,
+        "incumbent": incumbent if math.isfinite(incumbent) else None,
+    }
+
+
 def ideal_dp(
     instance: DeliveryInstance,
     time_limit: float | None = None,
@@ -375,6 +398,7 @@ def ideal_dp(
     prune: bool = True,
     relaxation: bool = True,
     beam: int = 2000,
+    trace: bool = False,
     _beam: int | None = None,
     _shared: tuple | None = None,
     _start: tuple[int, int, float] | None = None,
@@ -402,6 +426,16 @@ def ideal_dp(
         bound off (for measurements).
     beam : int
         Width of the restricted pass that finds an incumbent (0: none).
+    trace : bool
+        Keep the exact pass layer by layer in ``info["trace"]`` (plain JSON data, saved
+        with the solution): ``{"kind": "ideal_dp", "n", "layers"}``, one entry per layer
+        (``"served"``: customers served by its ideals, 0 for the start) with
+        ``"ideals"`` (the ideals of that size reached), ``"states"`` (states (I, k) reached
+        with a finite recovery time), ``"dominated"``, ``"pruned"`` (by the completion
+        bound against the incumbent), ``"kept"``, ``"bound"`` (the least R + B over the
+        kept states, capped at the incumbent: a proven lower bound on the optimum once the
+        layer is done) and ``"incumbent"`` (its makespan, None without one). Drawn by
+        :func:`taopt.plot.trace`. False (the default) records nothing and changes nothing.
 
     Returns
     -------
@@ -528,6 +562,10 @@ def ideal_dp(
         if quick.plan is not None and quick.objective < inc_value:
             inc_plan, inc_value = quick.plan, quick.objective
     st_bound = st_val + _completion(tab, full, ideals[st_idx], st_stop, in_table, relax)
+    layers: list[dict[str, Any]] | None = None
+    if trace and _beam is None:
+        layers = [_layer_record(size0, 1, 1, 0, 0, st_bound, inc_value)]
+        counts["trace"] = {"kind": "ideal_dp", "n": n, "layers": layers}
 
     def halt(why: str) -> Solution:
         # every optimal completion passes through an open state of the current layer
@@ -614,10 +652,15 @@ def ideal_dp(
         val = table[idx, stop]
         # -- pruning by the completion bound ----------------------------------------------
         bound = val + _completion(tab, full, new_ideals[idx], stop, in_table, relax)
+        pruned = 0
         if prune and math.isfinite(inc_value):
             ok = bound * (1.0 - BOUND_SLACK) < inc_value
-            counts["states_pruned"] += int((~ok).sum())
+            pruned = int((~ok).sum())
+            counts["states_pruned"] += pruned
             idx, stop, val, bound = idx[ok], stop[ok], val[ok], bound[ok]
+        if layers is not None:
+            dominated = before - int(keep.sum()) if dominance else 0
+            layers.append(_layer_record(_size + 1, m, before, dominated, pruned, bound, inc_value))
         if _beam is not None and idx.size > _beam:
             best = np.sort(np.argpartition(bound, _beam)[:_beam])
             idx, stop, val, bound = idx[best], stop[best], val[best], bound[best]

@@ -201,6 +201,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         gantt=args.gantt,
         save=args.out,
         progress=not args.quiet,
+        trace=args.trace,
     )
     return 1 if result["failed"] else 0
 
@@ -563,6 +564,13 @@ def build_parser(with_studies: bool = True) -> argparse.ArgumentParser:
         help="delivery files: truck and drone timelines (default: none)",
     )
     solve.add_argument(
+        "--trace",
+        default=None,
+        metavar="GIF",
+        help="an animation of the exact method's rounds, one frame per round: the DFJ cut loop "
+        "(routing) or the ideal DP's layers (delivery) (default: none)",
+    )
+    solve.add_argument(
         "--out",
         default=None,
         metavar="DIR",
@@ -712,7 +720,12 @@ def _study_flags(parser: argparse.ArgumentParser, csv: str) -> None:
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse an image or animation file of the wrong kind, or in a folder that cannot be
     written, before any work starts (nothing is written by the check)."""
-    for option, suffix in (("plot", ".png"), ("gantt", ".png"), ("animate", ".gif")):
+    for option, suffix in (
+        ("plot", ".png"),
+        ("gantt", ".png"),
+        ("animate", ".gif"),
+        ("trace", ".gif"),
+    ):
         if getattr(args, option, None) is not None:
             from taopt.io import check_writable_file
             from taopt.plot import check_output

@@ -135,6 +135,11 @@ def solve(
     **options
         Method-specific keyword options (an unknown one is an error naming it).
         ``incumbent=None`` switches off the warm start of an exact model.
+        ``trace=True`` keeps a method's rounds in ``info["trace"]`` (the DFJ loop,
+        :func:`taopt.models.routing.solve_routing`; the ideal DP,
+        :func:`taopt.delivery.ideal_dp.ideal_dp`), drawn by :func:`taopt.plot.trace`; a
+        method that keeps none refuses ``trace=True`` (InstanceError naming it) and
+        ignores ``trace=False``.
 
     Returns
     -------
@@ -168,6 +173,14 @@ def solve(
     spec = get_method(problem, method)
     method = spec.name  # the registered spelling ("mc" -> "MC")
     kwargs = dict(options)
+    if "trace" in kwargs and not spec.accepts("trace"):
+        if kwargs["trace"]:
+            raise InstanceError(
+                f"method {method!r} keeps no trace (trace=True); the exact DFJ loop of "
+                "chapter 2 (AssignmentProblem, 'exact') and the exact ideal DP of chapter 5 "
+                "(DeliveryInstance, 'exact') do"
+            )
+        del kwargs["trace"]  # trace=False: nothing to keep, whatever the method
     if seed is not None and spec.accepts("seed"):
         kwargs["seed"] = seed
     if time_limit is not None and spec.accepts("time_limit"):

@@ -155,6 +155,7 @@ def method_table(
     seed: int = SEED,
     time_limit: float | None = TIME_LIMIT,
     progress: bool = False,
+    trace: bool = False,
 ) -> tuple[pd.DataFrame, dict[str, Solution]]:
     """Solve ``problem`` with each method; a table of objectives, bounds and gaps.
 
@@ -172,6 +173,9 @@ def method_table(
 
     ``progress``: a bar on stderr over the methods, naming the one running and, for an exact
     method or a peer, the time limit it may take (a peer stops sooner once it stops improving).
+
+    ``trace``: the methods that keep a trace are run with ``trace=True`` (their rounds in
+    ``info["trace"]``, :func:`taopt.plot.trace`); the others as usual.
     """
     methods = resolve_methods(problem, methods)  # an unknown name: refused first
     specs = {m: get_method(problem, m) for m in methods}
@@ -182,7 +186,8 @@ def method_table(
         for method in bar:
             limited = time_limit is not None and specs[method].category in ("exact", "peer")
             bar.set_description(method + (f" (up to {time_limit:g} s)" if limited else ""))
-            solutions[method] = _run_method(problem, method, seed, time_limit)
+            traced = trace and specs[method].accepts("trace")
+            solutions[method] = _run_method(problem, method, seed, time_limit, traced)
     ratios = _ratio_columns(problem)
     optima = [s.objective for s in solutions.values() if s.status == OPTIMAL]
     optimum = min(optima) if optima else math.nan
@@ -335,7 +340,9 @@ def _short(text: str, width: int = 120) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-def _run_method(problem: Any, method: str, seed: int, time_limit: float | None) -> Solution:
+def _run_method(
+    problem: Any, method: str, seed: int, time_limit: float | None, trace: bool = False
+) -> Solution:
     """``solve(problem, method)``, or an "error" row saying what failed and why.
 
     Any ``Exception`` of one method (a heuristic's dead end, a solver failure, a bug) is
@@ -344,7 +351,8 @@ def _run_method(problem: Any, method: str, seed: int, time_limit: float | None) 
     """
     began = time.perf_counter()
     try:
-        return solve(problem, method, seed=seed, time_limit=time_limit)
+        options: dict[str, Any] = {"trace": True} if trace else {}
+        return solve(problem, method, seed=seed, time_limit=time_limit, **options)
     except Exception as exc:  # noqa: BLE001 -- one failing method must not sink the table
         text = str(exc).splitlines()[0] if str(exc) else ""
         message = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
@@ -368,6 +376,7 @@ def solve_file(
     save: str | Path | None = None,
     out: IO[str] | None = None,
     progress: bool = True,
+    trace: str | Path | None = None,
 ) -> dict[str, Any]:
     """Load ``path``, solve it with ``methods`` and print the gap table.
 
@@ -398,12 +407,21 @@ def solve_file(
     progress : bool
         Progress bars on stderr: the travel-time matrix of an instance file, and the
         methods (:func:`method_table`).
+    trace : str or Path, optional
+        A ``.gif``: the first method that keeps a trace (``exact`` on chapter 2's routing,
+        the DFJ loop; on chapter 5's delivery, the ideal DP) is run with ``trace=True`` and
+        its rounds written as an animation, one frame per round (per layer for the DP):
+        :func:`taopt.trace.animate_trace`. Refused (InstanceError) before anything is
+        solved when none of the methods keeps one.
 
     Raises
     ------
     OutputError
-        ``plot`` or ``gantt`` not a ``.png`` file, or a Gantt chart asked of a file that is
-        not a delivery instance: raised before the file is loaded or anything solved.
+        ``plot`` or ``gantt`` not a ``.png`` file, ``trace`` not a ``.gif``, or a Gantt chart
+        asked of a file that is not a delivery instance: raised before the file is loaded or
+        anything solved.
+    InstanceError
+        ``trace`` asked and none of the methods keeps a trace.
 
     Returns
     -------
@@ -420,11 +438,25 @@ def solve_file(
         check_writable(save, "--out folder", create=False)
     check_writable_file(plot, "--plot")
     check_writable_file(gantt, "--gantt")
+    if trace is not None:
+        from taopt.plot import check_output
+
+        check_output(trace, ".gif", "--trace")
+        check_writable_file(trace, "--trace")
     problem, instance = load_problem_file(path, progress=progress)
     family = family_of(problem)
+    if trace is not None and not any(
+        get_method(problem, m).accepts("trace") for m in resolve_methods(problem, methods)
+    ):
+        raise InstanceError(
+            f"--trace: none of the methods {', '.join(resolve_methods(problem, methods))} keeps "
+            "a trace (the exact DFJ loop of chapter 2 and the exact ideal DP of chapter 5 do: "
+            "add --methods exact)"
+        )
     table, solutions = method_table(
-        problem, methods, seed=seed, time_limit=time_limit, progress=progress
-    )
+        problem, methods, seed=seed, time_limit=time_limit, progress=progress,
+        trace=trace is not None,
+    )  # fmt: skip
     print(f"{problem!r} from {path}", file=out)
     text, message_notes = format_table(table)
     print(text, file=out)
@@ -460,6 +492,20 @@ def solve_file(
                 problem, best.solution, str(tmp), instance=instance, method=best.method
             )
         print(f"Gantt chart of {best.method} written to {gantt}", file=out)
+    if trace is not None:
+        traced = [(m, s) for m, s in solutions.items() if "trace" in s.info]
+        if traced:
+            from taopt.trace import animate_trace
+
+            method, sol = traced[0]
+            frames = animate_trace(sol, problem, trace, instance=instance)
+            unit = "layer" if sol.info["trace"]["kind"] == "ideal_dp" else "round"
+            print(
+                f"trace of {method} written to {trace} ({frames} frames, one per {unit})",
+                file=out,
+            )
+        else:
+            print("no trace written: the tracing method failed (see the table)", file=out)
     if unanswered:
         print(
             f"no feasible answer: {', '.join(unanswered)} (their outcome, not a proof that "

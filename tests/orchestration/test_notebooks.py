@@ -28,6 +28,8 @@ SMALLER: dict[str, dict[str, object]] = {
     },
     "04_limited_communication.ipynb": {"RANGE_SCENARIOS": 4},
     "05_truck_drone.ipynb": {"GA_GENERATIONS": 50},
+    "06_budgeted.ipynb": {"GA_GENERATIONS": 20, "TIGHTNESS": (0.4, 0.5, 1.0)},
+    "07_fleet.ipynb": {"FLEET_CUSTOMERS": 4, "SEARCH_ITERATIONS": 3},
 }
 
 
