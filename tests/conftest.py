@@ -185,3 +185,19 @@ def sop_esc47() -> Any:
     from taopt.sop.problem import SopProblem
 
     return SopProblem.load("ESC47")
+
+
+#: The settings of :func:`delivery_tiny_study` (chapter 5's study, setup "small").
+DELIVERY_TINY: dict[str, Any] = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
+
+
+@pytest.fixture(scope="session")
+def delivery_tiny_study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+    """Chapter 5's study on its "small" setup (:data:`DELIVERY_TINY`: 2 instances x 2 ratios)
+    with NIA and the subset DP, run once: ``(folder, rows)``. A test that writes to the folder
+    copies it first (``shutil.copytree``); the rows carry the bounds, the optimum and q."""
+    from taopt.orchestration.studies.delivery import delivery_study
+
+    folder = tmp_path_factory.mktemp("delivery-tiny") / "study"
+    rows = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **DELIVERY_TINY)
+    return folder, rows

@@ -6,6 +6,7 @@ import shutil
 
 import pandas as pd
 import pytest
+from conftest import DELIVERY_TINY
 
 from taopt.errors import InstanceError
 from taopt.orchestration.cli import main
@@ -76,15 +77,7 @@ def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
 
 # -- the resumable CSV (taopt.orchestration.studyio): method sets, settings, torn lines, order --------------
 STABLE = [c for c in COLUMNS if c != "runtime"]
-TINY = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
-
-
-@pytest.fixture(scope="module")
-def tiny_study(tmp_path_factory):
-    """The TINY study of NIA and the subset DP, run once for the module: (folder, rows). A
-    test that writes to it works on a copy (:func:`copy_of`)."""
-    folder = tmp_path_factory.mktemp("tiny") / "study"
-    return folder, delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **TINY)
+TINY = DELIVERY_TINY  # the settings of conftest's delivery_tiny_study
 
 
 @pytest.fixture(scope="module")
@@ -102,10 +95,10 @@ def copy_of(folder, to):
     return to
 
 
-def test_other_method_set_keeps_earlier_rows(tmp_path, tiny_study):
+def test_other_method_set_keeps_earlier_rows(tmp_path, delivery_tiny_study):
     """Asking for other methods extends the file; nothing is recomputed."""
-    tmp_path = copy_of(tiny_study[0], tmp_path / "study")
-    first = tiny_study[1]
+    tmp_path = copy_of(delivery_tiny_study[0], tmp_path / "study")
+    first = delivery_tiny_study[1]
     only_mma = delivery_study("small", methods=("MMA",), out_dir=tmp_path, **TINY)
     assert set(only_mma.method) == {"MMA"} and len(only_mma) == 4
     on_disk = pd.read_csv(tmp_path / "delivery_small.csv")
@@ -143,10 +136,10 @@ def test_setups_share_a_folder(tmp_path):
 
 
 @pytest.mark.parametrize("cut", ["mid-number", "after-field"])
-def test_torn_row_dropped_and_recomputed(tmp_path, cut, tiny_study):
+def test_torn_row_dropped_and_recomputed(tmp_path, cut, delivery_tiny_study):
     """A row torn by a crash is dropped and recomputed; later appends stay intact."""
-    reference = tiny_study[1]
-    folder = copy_of(tiny_study[0], tmp_path / "torn")
+    reference = delivery_tiny_study[1]
+    folder = copy_of(delivery_tiny_study[0], tmp_path / "torn")
     csv = folder / "delivery_small.csv"
     text = csv.read_text()
     last = text.splitlines()[-1]
