@@ -1,8 +1,22 @@
-"""Pages of the documentation site written from the family specs at every build."""
+"""Pages of the documentation site written from the family specs at every build, and the
+README's generated block.
+
+``python docs/generated.py --write-readme`` rewrites the README's block between
+``<!-- families:begin -->`` and ``<!-- families:end -->`` in place (``--check-readme`` exits 1
+when it is stale; ``tests/orchestration/test_readme.py`` fails then too).
+"""
 
 from __future__ import annotations
 
 import json
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+BEGIN = "<!-- families:begin -->"
+END = "<!-- families:end -->"
 
 
 def thesis_order(family: object) -> tuple[int, bool, str]:
@@ -51,6 +65,12 @@ def generated_pages() -> dict[str, str]:
             "|---|---|---|---|---|---|---|",
             *rows,
             "",
+            "## Methods by problem type",
+            "",
+            "The table the README shows (the same function writes both, "
+            "`python docs/generated.py --write-readme`):",
+            "",
+            families_table(),
             *[
                 line
                 for family in sorted(families(), key=thesis_order)
@@ -106,7 +126,76 @@ def generated_pages() -> dict[str, str]:
         "schemas.md": "\n".join(parts),
         "api/index.md": api_index(),
         "_includes/family-kinds.md": family_kinds_table(),
+        "_includes/payload-kinds.md": payload_kinds_table(),
     }
+
+
+def _registered(problem_type: type, peers: bool) -> list[str]:
+    """Every method registered for ``problem_type``, exact first (the order of
+    :func:`~taopt.orchestration.pipeline.available_methods`), peers only or none of them;
+    whatever is installed on the machine that writes the table."""
+    import taopt.orchestration.pipeline  # noqa: F401  (imports every method package)
+    from taopt.registry import CATEGORIES, methods
+
+    found = [
+        spec
+        for spec in methods(problem_type).values()
+        if (spec.category == "peer") == peers and spec.category != "relaxation"
+    ]
+    found.sort(key=lambda spec: CATEGORIES.index(spec.category))
+    return [spec.name for spec in found]
+
+
+def families_table() -> str:
+    """The README's table of the problem families, one row per family spec in the thesis's
+    order: problem type, family (its spec's title), the methods (non-peer, exact first, as
+    :func:`~taopt.orchestration.pipeline.available_methods` lists them after ``pip install
+    .``), the peers (with ``taopt[peers]``) and its studies."""
+    from taopt.registry import families
+
+    rows = [
+        "| problem type | family | methods | peers | study |",
+        "|---|---|---|---|---|",
+    ]
+    for family in sorted(families(), key=thesis_order):
+        peers = ", ".join(_registered(family.problem_type, peers=True)) or "—"
+        studies = ", ".join(f"`taopt study {s.name}`" for s in family.studies) or "—"
+        rows.append(
+            f"| `{family.problem_type.__name__}` | {family.title} | "
+            f"{', '.join(_registered(family.problem_type, peers=False))} | {peers} | {studies} |"
+        )
+    return "\n".join(rows) + "\n"
+
+
+def readme_block() -> str:
+    """The README's generated block, markers included."""
+    return (
+        f"{BEGIN}\n<!-- written by `python docs/generated.py --write-readme` from the family "
+        f"specs; do not edit by hand -->\n\n{families_table()}\n{END}"
+    )
+
+
+def readme_with_block(text: str) -> str:
+    """``text`` (the README) with its generated block replaced by :func:`readme_block`."""
+    pattern = re.compile(re.escape(BEGIN) + r".*?" + re.escape(END), re.S)
+    if not pattern.search(text):
+        raise SystemExit(f"README.md has no {BEGIN} ... {END} block")
+    return pattern.sub(lambda _: readme_block(), text, count=1)
+
+
+def payload_kinds_table() -> str:
+    """docs/file-formats.md's table of the ``payload_kind`` values of a solution: every
+    registered payload and the problem kinds whose solutions carry it."""
+    from taopt.registry import families
+    from taopt.result import payload_schemas
+
+    rows = ["| `payload_kind` | solutions of |", "|---|---|"]
+    for name in payload_schemas():
+        kinds = sorted(
+            f"`{f.kind}`" for f in families() if getattr(f.payload, "payload_kind", "") == name
+        )
+        rows.append(f"| `{name}` | {', '.join(kinds)} |")
+    return "\n".join(rows) + "\n"
 
 
 def family_kinds_table() -> str:
@@ -167,3 +256,24 @@ def api_index() -> str:
             "",
         ]
     )
+
+
+def main(argv: list[str]) -> int:
+    """``--write-readme``: rewrite the README's block in place; ``--check-readme``: 1 if stale."""
+    sys.path.insert(0, str(ROOT))
+    text = README.read_text()
+    new = readme_with_block(text)
+    if "--write-readme" in argv:
+        if new != text:
+            README.write_text(new)
+        print("README.md: block", "rewritten" if new != text else "already current")
+        return 0
+    if "--check-readme" in argv:
+        print("README.md: block", "stale" if new != text else "current")
+        return int(new != text)
+    print("usage: python docs/generated.py --write-readme | --check-readme")
+    return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))

@@ -115,3 +115,89 @@ def ref_sop() -> reference.Reference:
 def ref_sop_esc12() -> reference.Reference:
     """TSPLIB's ESC12 sequential ordering problem (14 nodes); optimum 1675 (TSPLIB95)."""
     return reference.sop_esc12()
+
+
+# -- named instances several test files build the same way --------------------------------------
+# Session-scoped: the problems are immutable; a test that needs a variant calls ``replace``.
+
+
+@pytest.fixture(scope="session")
+def assignment_example_file() -> Path:
+    """The shipped chapter-2 example file (``taopt/data/examples/assignment_problem.json``;
+    certified optimum 10.5), the file ``example:assignment_problem`` names."""
+    return DATA / "examples" / "assignment_problem.json"
+
+
+@pytest.fixture(scope="session")
+def solution_example_file() -> Path:
+    """The shipped certificate of the assignment example (``solution.json``: the exact
+    method's routes, optimal 10.5), the file the ``taopt verify`` tests tamper with."""
+    return DATA / "examples" / "solution.json"
+
+
+@pytest.fixture(scope="session")
+def assignment_example(assignment_example_file: Path) -> Any:
+    """The problem of the shipped chapter-2 example file, loaded."""
+    from taopt.routing.problem import AssignmentProblem
+
+    return AssignmentProblem.load(assignment_example_file)
+
+
+@pytest.fixture(scope="session")
+def budgeted_example_file() -> Path:
+    """The shipped §6.2 example file (``budgeted_problem.json``: n = 8, m = 3, capacities and
+    travel-time limits that bind: its optimum is above the unlimited one)."""
+    return DATA / "examples" / "budgeted_problem.json"
+
+
+@pytest.fixture(scope="session")
+def delivery_example() -> Any:
+    """Chapter 5's stored 20-customer residential example at flight range L = 250 m
+    (``taopt.delivery.example_instance(250.0)``, Fig. 5.6's setup; certified optimum
+    1793.7145 by the ideal DP)."""
+    from taopt.delivery import example_instance
+
+    return example_instance(250.0)
+
+
+@pytest.fixture(scope="session")
+def capability_9x2() -> Any:
+    """A small §3.7 scenario (``thesis_scenario(9, 2, 2, seed=4)``: 9 targets, 2 vehicles, 2
+    capabilities, obstacles): the capability model's worker and option tests."""
+    from taopt.capability.instances import thesis_scenario
+
+    return thesis_scenario(9, 2, 2, seed=4).problem
+
+
+@pytest.fixture(scope="session")
+def sop_esc25() -> Any:
+    """TSPLIB's ESC25 (27 nodes; optimum 1681, TSPLIB95): large enough that a small state cap
+    or a 0.2 s limit stops the DP before it proves the optimum."""
+    from taopt.sop.problem import SopProblem
+
+    return SopProblem.load("ESC25")
+
+
+@pytest.fixture(scope="session")
+def sop_esc47() -> Any:
+    """TSPLIB's ESC47 (49 nodes; optimum 1288, TSPLIB95): seconds to prove, so a limit of
+    a second or less always binds."""
+    from taopt.sop.problem import SopProblem
+
+    return SopProblem.load("ESC47")
+
+
+#: The settings of :func:`delivery_tiny_study` (chapter 5's study, setup "small").
+DELIVERY_TINY: dict[str, Any] = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
+
+
+@pytest.fixture(scope="session")
+def delivery_tiny_study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+    """Chapter 5's study on its "small" setup (:data:`DELIVERY_TINY`: 2 instances x 2 ratios)
+    with NIA and the subset DP, run once: ``(folder, rows)``. A test that writes to the folder
+    copies it first (``shutil.copytree``); the rows carry the bounds, the optimum and q."""
+    from taopt.orchestration.studies.delivery import delivery_study
+
+    folder = tmp_path_factory.mktemp("delivery-tiny") / "study"
+    rows = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **DELIVERY_TINY)
+    return folder, rows

@@ -14,6 +14,7 @@ from taopt.budgeted.problem import (
     TIME_TOLERANCE,
     BudgetedProblem,
 )
+from taopt.routing.subtours import rounded_cut_rows
 
 
 def route_counts(problem: BudgetedProblem) -> np.ndarray:
@@ -154,29 +155,7 @@ def capacity_rows(
     tails: np.ndarray,
     heads: np.ndarray,
 ) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
-    """Rows of rounded capacity inequalities, each in its sparser equivalent form:
-    ``σ(δ⁻(S)) >= k`` or, by (2.3), ``σ(A(S)) <= |S| − k`` (as :func:`~taopt.routing.subtours.cut_rows`)."""
-    size = problem.n + problem.m
-    rows, columns = [], []
-    lower = np.empty(len(cuts))
-    upper = np.empty(len(cuts))
-    for r, (subset, k) in enumerate(cuts):
-        inside = np.zeros(size, dtype=bool)
-        inside[list(subset)] = True
-        s = len(subset)
-        if s * (s - 1) <= (size - s) * s:
-            arcs = np.flatnonzero(inside[tails] & inside[heads])
-            lower[r], upper[r] = -np.inf, s - k
-        else:
-            arcs = np.flatnonzero(~inside[tails] & inside[heads])
-            lower[r], upper[r] = float(k), np.inf
-        rows.append(np.full(len(arcs), r))
-        columns.append(arcs)
-    matrix = sp.csr_matrix(
-        (
-            np.ones(sum(len(c) for c in columns)),
-            (np.concatenate(rows) if rows else [], np.concatenate(columns) if columns else []),
-        ),
-        shape=(len(cuts), len(tails)),
-    )
-    return matrix, lower, upper
+    """Rows of rounded capacity inequalities ``σ(δ⁻(S)) >= k``, each in its sparser equivalent
+    form (the core's :func:`~taopt.routing.subtours.rounded_cut_rows`, which writes chapter
+    2's subtour rows too)."""
+    return rounded_cut_rows(problem.n + problem.m, cuts, tails, heads)

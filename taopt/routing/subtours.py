@@ -63,20 +63,50 @@ def cut_rows(
     lower, upper : arrays
         Row bounds (``-inf`` / ``inf`` for an open side).
     """
-    size = problem.n + problem.m
+    return rounded_cut_rows(problem.n + problem.m, [(subset, 1) for subset in cuts], tails, heads)
+
+
+def rounded_cut_rows(
+    size: int,
+    cuts: list[tuple[tuple[int, ...], int]],
+    tails: np.ndarray,
+    heads: np.ndarray,
+) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """Rows ``σ(δ⁻(S)) ≥ k`` for the pairs ``(S, k)`` of ``cuts``, each in its sparser form.
+
+    Under (2.3) (every target entered once), ``σ(δ⁻(S)) ≥ k`` is the same row as
+    ``σ(A(S)) ≤ |S| − k`` (the arcs inside S); each pair gets whichever form has fewer
+    coefficients. ``k = 1`` is the subtour row (2.5) (:func:`cut_rows`); ``k > 1`` a rounded
+    capacity inequality (the budgeted model's ``capacity_rows``).
+
+    Parameters
+    ----------
+    size : int
+        ``n + m``, the nodes of the arc list.
+    cuts : list of (tuple of int, int)
+        Subsets of targets and their right-hand sides ``k``.
+    tails, heads : arrays
+        The arc list (:func:`arc_list`).
+
+    Returns
+    -------
+    matrix : (len(cuts), arcs) csr_matrix
+    lower, upper : arrays
+        Row bounds (``-inf`` / ``inf`` for an open side).
+    """
     rows, columns = [], []
     lower = np.empty(len(cuts))
     upper = np.empty(len(cuts))
-    for r, subset in enumerate(cuts):
+    for r, (subset, k) in enumerate(cuts):
         inside = np.zeros(size, dtype=bool)
         inside[list(subset)] = True
-        k = len(subset)
-        if k * (k - 1) <= (size - k) * k:
+        s = len(subset)
+        if s * (s - 1) <= (size - s) * s:
             arcs = np.flatnonzero(inside[tails] & inside[heads])
-            lower[r], upper[r] = -np.inf, k - 1  # (2.5) as printed
+            lower[r], upper[r] = -np.inf, s - k  # (2.5) as printed when k = 1
         else:
             arcs = np.flatnonzero(~inside[tails] & inside[heads])
-            lower[r], upper[r] = 1.0, np.inf  # (2.5) in cut form, by (2.3)
+            lower[r], upper[r] = float(k), np.inf  # the cut form, by (2.3)
         rows.append(np.full(len(arcs), r))
         columns.append(arcs)
     matrix = sp.csr_matrix(

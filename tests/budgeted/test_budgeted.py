@@ -111,12 +111,9 @@ def test_schema_rejects_bad_files(tmp_path):
             BudgetedProblem.from_dict(bad)
 
 
-def test_shipped_example_loads_and_a_limit_binds():
+def test_shipped_example_loads_and_a_limit_binds(budgeted_example_file):
     """The example file loads, and its optimum differs from the unlimited one."""
-    from taopt.data import examples
-
-    path = examples.__path__[0] + "/budgeted_problem.json"
-    p = BudgetedProblem.load(path)
+    p = BudgetedProblem.load(budgeted_example_file)
     limited = solve_budgeted(p)
     free = taopt.solve(p.routing, "exact")
     assert limited.status == "optimal"

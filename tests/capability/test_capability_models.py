@@ -230,15 +230,15 @@ def test_workers_keep_the_time_limit_on_the_clock():
     assert limited_in_workers()[2].runtime < 0.3 + 1.5
 
 
-def test_workers_option_checked():
+def test_workers_option_checked(capability_9x2):
     """workers must be a positive integer; 1 is the serial path."""
-    problem = thesis_scenario(9, 2, 2, seed=4).problem
+    problem = capability_9x2
     for bad in (0, -1, 1.5, True):
         with pytest.raises(InstanceError, match="workers"):
             solve_capability(problem, workers=bad)
 
 
-def test_killed_worker_is_a_clear_error(monkeypatch):
+def test_killed_worker_is_a_clear_error(monkeypatch, capability_9x2):
     """A worker process killed mid-solve raises SolverError naming its class, never hangs;
     the broken pool is dropped and the next call starts anew."""
     import runtime_tasks
@@ -246,7 +246,7 @@ def test_killed_worker_is_a_clear_error(monkeypatch):
     from taopt.errors import SolverError
     from taopt.models import capability
 
-    problem = thesis_scenario(9, 2, 2, seed=4).problem
+    problem = capability_9x2
     with monkeypatch.context() as patch:
         patch.setattr(capability, "_solve_class", runtime_tasks.die)  # the worker dies in it
         with pytest.raises(SolverError, match="worker process solving capability class"):
@@ -336,11 +336,11 @@ def test_ctrl_c_stops_the_workers_at_once():
     assert seconds < 6.0, f"{seconds:.2f} s"
 
 
-def test_default_workers(monkeypatch):
+def test_default_workers(monkeypatch, capability_9x2):
     """Default workers: 1 for small classes or inside a study's task, else one per core."""
     from taopt.models import capability
 
-    small = thesis_scenario(9, 2, 2, seed=4).problem
+    small = capability_9x2
     assert solve_capability(small).info["workers"] == 1
     large = thesis_scenario(60, 6, 2, seed=7).problem
     classes = [c for c in large.classes if c.problem]

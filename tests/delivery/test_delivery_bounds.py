@@ -203,13 +203,9 @@ def test_lower_rejects_unknown_inputs(ref_routing_small):
         taopt.bounds.lower(object())
 
 
-def test_study_reports_strong_bound_between_prop_5_3_and_optimum(tmp_path):
+def test_study_reports_strong_bound_between_prop_5_3_and_optimum(delivery_tiny_study):
     """The delivery study's strong_bound column: valid_bound <= strong_bound <= optimum."""
-    from taopt.orchestration.studies.delivery import delivery_study
-
-    df = delivery_study(
-        "small", instances=2, ratios=[0.3], methods=["NIA"], out_dir=tmp_path, progress=False
-    )
+    df = delivery_tiny_study[1]
     assert (df.valid_bound <= df.strong_bound * (1 + REL)).all()
     assert (df.strong_bound <= df.optimum * (1 + REL)).all()
     assert np.allclose(df.q_strong, df.objective / df.strong_bound)

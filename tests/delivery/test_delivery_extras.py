@@ -33,8 +33,8 @@ def test_paired_precedences():
         paired_precedences(7)
 
 
-def test_example_instance_matches_its_builder_and_both_ranges_work():
-    inst = example_instance()
+def test_example_instance_matches_its_builder_and_both_ranges_work(delivery_example):
+    inst = delivery_example
     assert inst.to_dict() == build_example_instance().to_dict()
     assert (inst.n, inst.service_time, inst.flight_range) == (20, 30.0, 250.0)
     assert inst.v_drone == pytest.approx(30 / 3.6) and inst.v_truck == pytest.approx(40 / 3.6)
@@ -48,10 +48,10 @@ def test_example_instance_matches_its_builder_and_both_ranges_work():
     assert nx.is_connected(graph) and len(customers) == 20
 
 
-def test_plots_save_png(tmp_path):
+def test_plots_save_png(tmp_path, delivery_example):
     import matplotlib.pyplot as plt
 
-    inst = example_instance()
+    inst = delivery_example
     sol = taopt.schedule(inst, list(nx.topological_sort(inst.precedence_graph)))
     fig, axes = plt.subplots(1, 2, figsize=(12, 5))
     assert plot_plan(inst, sol, ax=axes[0]) is axes[0]

@@ -193,10 +193,10 @@ def test_registered_as_exact_and_certifying():
     assert sol.objective == pytest.approx(taopt.solve(inst, "subset-dp").objective, rel=REL)
 
 
-def test_example_instance_is_certified_and_below_every_heuristic():
+def test_example_instance_is_certified_and_below_every_heuristic(delivery_example):
     """Fig. 5.6's setup: optimal, equal to an independent plain DP over ideals, <= NIA, MMA,
     SMMA, above Proposition 5.3's bound."""
-    inst = taopt.delivery.example_instance(250.0)
+    inst = delivery_example
     sol = taopt.solve(inst, "exact")
     assert sol.status == "optimal" and evaluate_plan(inst, sol.plan) == sol.objective
     assert sol.objective == pytest.approx(plain_ideal_dp(inst), rel=REL)

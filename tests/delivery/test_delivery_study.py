@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import shutil
+
 import pandas as pd
 import pytest
+from conftest import DELIVERY_TINY
 
 from taopt.errors import InstanceError
 from taopt.orchestration.cli import main
@@ -74,12 +77,28 @@ def test_taopt_study_delivery_command_writes_plot(tmp_path, capsys):
 
 # -- the resumable CSV (taopt.orchestration.studyio): method sets, settings, torn lines, order --------------
 STABLE = [c for c in COLUMNS if c != "runtime"]
-TINY = dict(instances=2, ratios=(0.3, 0.9), seed=3, progress=False)
+TINY = DELIVERY_TINY  # the settings of conftest's delivery_tiny_study
 
 
-def test_other_method_set_keeps_earlier_rows(tmp_path):
+@pytest.fixture(scope="module")
+def one_instance_study(tmp_path_factory):
+    """A one-instance TINY study of NIA (GA options recorded), run once: its folder."""
+    folder = tmp_path_factory.mktemp("one") / "study"
+    base = {**TINY, "instances": 1, "out_dir": folder, "methods": ("NIA",)}
+    delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}})
+    return folder
+
+
+def copy_of(folder, to):
+    """A finished study folder copied to ``to`` (the rows and settings a run there finds)."""
+    shutil.copytree(folder, to)
+    return to
+
+
+def test_other_method_set_keeps_earlier_rows(tmp_path, delivery_tiny_study):
     """Asking for other methods extends the file; nothing is recomputed."""
-    first = delivery_study("small", methods=("NIA", "subset-dp"), out_dir=tmp_path, **TINY)
+    tmp_path = copy_of(delivery_tiny_study[0], tmp_path / "study")
+    first = delivery_tiny_study[1]
     only_mma = delivery_study("small", methods=("MMA",), out_dir=tmp_path, **TINY)
     assert set(only_mma.method) == {"MMA"} and len(only_mma) == 4
     on_disk = pd.read_csv(tmp_path / "delivery_small.csv")
@@ -97,10 +116,10 @@ def test_other_method_set_keeps_earlier_rows(tmp_path):
         ({"exact_max_n": 0}, "exact_max_n"),
     ],
 )
-def test_other_settings_refused_naming_the_key(tmp_path, change, key):
+def test_other_settings_refused_naming_the_key(tmp_path, change, key, one_instance_study):
     """Other settings on a folder with rows are refused, naming the key."""
+    tmp_path = copy_of(one_instance_study, tmp_path / "study")
     base = {**TINY, "instances": 1, "out_dir": tmp_path, "methods": ("NIA",)}
-    delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}})
     with pytest.raises(InstanceError, match=rf"{key}=.* there, {key}=.* now"):
         delivery_study("small", **{**base, "method_options": {"GA": {"generations": 2}}, **change})
     # the setup's own v_d / v_t given explicitly is the same setting
@@ -117,13 +136,10 @@ def test_setups_share_a_folder(tmp_path):
 
 
 @pytest.mark.parametrize("cut", ["mid-number", "after-field"])
-def test_torn_row_dropped_and_recomputed(tmp_path, cut):
+def test_torn_row_dropped_and_recomputed(tmp_path, cut, delivery_tiny_study):
     """A row torn by a crash is dropped and recomputed; later appends stay intact."""
-    reference = delivery_study(
-        "small", methods=("NIA", "subset-dp"), out_dir=tmp_path / "ref", **TINY
-    )
-    folder = tmp_path / "torn"
-    delivery_study("small", methods=("NIA", "subset-dp"), out_dir=folder, **TINY)
+    reference = delivery_tiny_study[1]
+    folder = copy_of(delivery_tiny_study[0], tmp_path / "torn")
     csv = folder / "delivery_small.csv"
     text = csv.read_text()
     last = text.splitlines()[-1]

@@ -190,13 +190,11 @@ def test_solve_command_on_each_file_kind(tmp_path, capsys):
     assert table.loc["MMA", "objective"] >= exact * (1 - 1e-9)
 
 
-def test_a_heuristic_without_an_answer_is_not_a_failure(tmp_path, capsys):
+def test_a_heuristic_without_an_answer_is_not_a_failure(tmp_path, capsys, budgeted_example_file):
     """The budgeted example: EVM finds no feasible answer (status no_solution, the reason in
     the message column), the exact optimum stands, the exit code is 0; saved and verified,
     the no-answer file claims nothing and passes."""
-    from taopt.data import examples
-
-    example = examples.__path__[0] + "/budgeted_problem.json"
+    example = str(budgeted_example_file)
     argv = ["solve", example, "--methods", "exact,EVM", "--quiet", "--save", str(tmp_path)]
     assert main(argv) == 0
     out = capsys.readouterr().out
@@ -527,11 +525,11 @@ def test_study_comm_takes_exact_as_a_method(tmp_path, capsys):
     assert "beside 'exact'" in capsys.readouterr().err
 
 
-def test_solve_shows_which_method_runs_and_its_limit(capsys):
+def test_solve_shows_which_method_runs_and_its_limit(capsys, budgeted_example_file):
     """`taopt solve` shows a bar on stderr naming each method as it runs, with the time limit
     an exact method may take; `--quiet` shows none; stdout has the table either way."""
 
-    path = ROOT / "taopt/data/examples/budgeted_problem.json"
+    path = budgeted_example_file
     assert main(["solve", str(path), "--methods", "exact,MC", "--time-limit", "7"]) == 0
     captured = capsys.readouterr()
     assert "exact (up to 7 s)" in captured.err

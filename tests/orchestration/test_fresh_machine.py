@@ -11,8 +11,6 @@ from pathlib import Path
 import pytest
 from conftest import ROOT
 
-EXAMPLES = ROOT / "taopt" / "data" / "examples"
-
 # Lines that no taopt command writes: solver banners and licence notices.
 FOREIGN = re.compile(r"Running HiGHS|Copyright|THIRD_PARTY|licen[cs]e terms", re.I)
 
@@ -49,9 +47,9 @@ def test_demo_prints_only_taopt_lines(tmp_path: Path, quiet: bool):
     assert foreign_lines(done.stdout) == []
 
 
-def test_solve_verify_and_study_print_only_taopt_lines(tmp_path: Path):
+def test_solve_verify_and_study_print_only_taopt_lines(tmp_path: Path, assignment_example_file):
     """`taopt solve`, `verify` and a small study write no line of HiGHS's on stdout."""
-    problem = EXAMPLES / "assignment_problem.json"
+    problem = assignment_example_file
     solved = run_cli("solve", str(problem), "--out", str(tmp_path / "sols"), cwd=tmp_path)
     assert solved.returncode == 0, solved.stderr
     assert foreign_lines(solved.stdout) == []

@@ -529,8 +529,6 @@ def test_cpsat_bad_arguments_are_clear(ref_sop):
 
 # -- the default stop and the wall-clock limit (issue 30 items 4 and 7) -------------------------
 
-EXAMPLE = Path(taopt.__file__).parent / "data" / "examples" / "assignment_problem.json"
-
 
 def test_default_stop_scales_with_the_instance():
     """The default no-improvement count grows with n + m above a floor, per peer."""
@@ -556,12 +554,10 @@ def test_explicit_count_limit_switches_the_default_stop_off(ref_routing_quick_to
 
 
 @pytest.mark.parametrize("peer", ["pyvrp", "ortools"])
-def test_example_stops_on_no_improvement_before_its_limit(peer):
+def test_example_stops_on_no_improvement_before_its_limit(peer, assignment_example):
     """On the README's 3-target example each heuristic peer stops on its no-improvement count,
     not on the (long) time limit: the count of iterations / solutions it ran says so."""
-    from taopt.orchestration.solving import load_problem_file
-
-    problem, _ = load_problem_file(EXAMPLE, progress=False)
+    problem = assignment_example
     patience = peers.default_no_improvement(peer, problem.n, problem.m)
     solution = taopt.solve(problem, peer, time_limit=600.0)
     assert solution.status == "feasible" and solution.objective == pytest.approx(10.5)

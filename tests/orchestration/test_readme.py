@@ -9,7 +9,6 @@ import shlex
 import subprocess
 import sys
 
-import pytest
 from conftest import ROOT
 
 README = ROOT / "README.md"
@@ -83,42 +82,56 @@ def test_readme_command_lines_parse_without_deprecated_flags(capsys) -> None:
     assert capsys.readouterr().err == ""
 
 
-def _kinds() -> list[str]:
-    from taopt.registry import file_kinds
+def _generated():
+    """docs/generated.py, loaded by path (the docs folder is no package)."""
+    import importlib.util
 
-    return sorted(file_kinds())
+    spec = importlib.util.spec_from_file_location("generated", ROOT / "docs" / "generated.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
-@pytest.mark.parametrize("kind", _kinds())
-def test_readme_method_table_is_what_available_methods_lists(kind: str) -> None:
-    """The README's table of methods is taopt.available_methods of each family (peers aside)."""
+def test_readme_families_block_is_current() -> None:
+    """The README's families block is what docs/generated.py writes from the specs today
+    (stale: run ``python docs/generated.py --write-readme``), and the docs site has the same table."""
+    generated = _generated()
+    assert generated.readme_with_block(TEXT) == TEXT, (
+        "README.md's families block is stale: python docs/generated.py --write-readme"
+    )
+    assert generated.families_table() in generated.generated_pages()["kinds.md"]
+
+
+def test_readme_families_block_lists_what_available_methods_lists() -> None:
+    """Each row's methods are taopt.available_methods of the family's example (peers aside)."""
     import taopt
     from taopt.orchestration.solving import load_problem_file
+    from taopt.registry import file_kinds
 
-    problem, _ = load_problem_file(ROOT / "taopt" / "data" / "examples" / f"{kind}.json")
-    name = type(problem).__name__
-    row = re.search(rf"^\| `{name}` \| [^|]+ \| ([^|]+) \|$", TEXT, re.M)
-    assert row, f"no README row for {name}"
-    listed = [m.strip() for m in row.group(1).split(",")]
-    peers = set(taopt.available_methods(problem, "peer"))
-    assert listed == [m for m in taopt.available_methods(problem) if m not in peers]
+    for kind in file_kinds():
+        problem, _ = load_problem_file(ROOT / "taopt" / "data" / "examples" / f"{kind}.json")
+        name = type(problem).__name__
+        row = re.search(rf"^\| `{name}` \| [^|]+ \| ([^|]+) \|", TEXT, re.M)
+        assert row, f"no README row for {name}"
+        listed = [m.strip() for m in row.group(1).split(",")]
+        peers = set(taopt.available_methods(problem, "peer"))
+        assert listed == [m for m in taopt.available_methods(problem) if m not in peers], name
 
 
 def test_file_formats_doc_lists_every_kind() -> None:
     """docs/file-formats.md's table names the kinds that are no family's; the generated pages
     (docs/generated.py, from the family specs and the schema folder) name every kind."""
-    import importlib.util
-
     from taopt.registry import file_kinds
+    from taopt.result import payload_schemas
     from taopt.schemas import kinds
 
     doc = (ROOT / "docs" / "file-formats.md").read_text()
     table = set(re.findall(r"^\| `(\w+)` \| \[`\w+\.schema\.json`\]", doc, re.M))
     assert set(kinds()) - set(file_kinds()) <= table  # instance, field, solution
-    spec = importlib.util.spec_from_file_location("generated", ROOT / "docs" / "generated.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    pages = module.generated_pages()
+    pages = _generated().generated_pages()
+    assert "```{include} _includes/payload-kinds.md" in doc  # the payload kinds: generated
+    for name in payload_schemas():
+        assert f"| `{name}` |" in pages["_includes/payload-kinds.md"], name
     assert "```{include} _includes/family-kinds.md" in doc  # the problem kinds: generated
     for kind in file_kinds():
         assert f"| `{kind}` |" in pages["kinds.md"], kind

@@ -184,20 +184,18 @@ def test_assignment_exact_under_a_tiny_limit():
     assert result.info["warm_start"]["method"] == "MC"
 
 
-def test_sop_exact_returns_a_bound_not_an_error():
+def test_sop_exact_returns_a_bound_not_an_error(sop_esc25):
     """SOP exact on ESC25 at T = 0.2: time_limit with SMMA's order and a bound, no SolverError."""
-    from taopt.sop.problem import SopProblem
-
-    result, _ = run(SopProblem.load("ESC25"), "exact")
+    result, _ = run(sop_esc25, "exact")
     assert result.status == TIME_LIMIT and result.solution is not None
 
 
-def test_sop_exact_without_incumbent_stops_with_a_bound():
+def test_sop_exact_without_incumbent_stops_with_a_bound(sop_esc47):
     """Without a warm start and with almost no time, SOP exact stops with a bound and either
     no plan (objective inf) or a feasible one, never a raise."""
-    from taopt.sop.problem import SopProblem, evaluate_order
+    from taopt.sop.problem import evaluate_order
 
-    problem = SopProblem.load("ESC47")  # 2-5 s to prove: 10 ms cannot
+    problem = sop_esc47  # 2-5 s to prove: 10 ms cannot
     result, _ = run(problem, "exact", time_limit=0.01, incumbent=None)
     assert result.status == TIME_LIMIT and result.bound is not None
     if result.solution is None:
@@ -492,12 +490,11 @@ def test_budgeted_warm_start_and_starts_keep_to_a_spent_limit(monkeypatch):
     assert result.status == TIME_LIMIT and result.bound is not None
 
 
-def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch):
+def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch, sop_esc47):
     """The SOP portfolio starts its second DP stage only when its share covers twice the first
     stage's measured setup (ESC47 at T = 0.5 took 2 s under load: each stage's setup is
     outside the DP's clock); the answer still carries the first stage's order and bound."""
     from taopt.models import sop_dp
-    from taopt.sop.problem import SopProblem
 
     real, calls = sop_dp.solve_sop_dp, []
 
@@ -507,18 +504,17 @@ def test_sop_portfolio_skips_a_second_stage_it_cannot_set_up(monkeypatch):
         return result.replace(info={**result.info, "setup_seconds": 1e6})
 
     monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stage_slow_to_set_up)
-    problem = SopProblem.load("ESC47")
+    problem = sop_esc47
     result = taopt.solve(problem, "exact", time_limit=1.0)
     assert len(calls) == 1 and result.info["second_stage"].startswith("skipped")
     assert result.status == TIME_LIMIT and result.bound <= result.objective
     assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
 
 
-def test_sop_portfolio_without_the_milp_skips_a_dp_stage_it_cannot_set_up(monkeypatch):
+def test_sop_portfolio_without_the_milp_skips_a_dp_stage_it_cannot_set_up(monkeypatch, sop_esc47):
     """Above the memory limit (no MILP) the portfolio's extra DP stage is not started either
     when the time left is under twice the measured setup: one DP run, its order and bound."""
     from taopt.models import sop_dp
-    from taopt.sop.problem import SopProblem
 
     real, calls = sop_dp.solve_sop_dp, []
 
@@ -528,7 +524,7 @@ def test_sop_portfolio_without_the_milp_skips_a_dp_stage_it_cannot_set_up(monkey
         return result.replace(info={**result.info, "setup_seconds": 1e6})
 
     monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stage_slow_to_set_up)
-    problem = SopProblem.load("ESC47")
+    problem = sop_esc47
     result = taopt.solve(problem, "exact", time_limit=1.0, max_memory_gb=0.08)
     assert result.info["milp"].startswith("skipped")
     assert len(calls) == 1 and result.info["more_dp"].startswith("skipped")
@@ -558,15 +554,14 @@ def test_delivery_milp_limited_runs_leave_out_the_clockless_highs_phases(monkeyp
     assert result.objective == pytest.approx(taopt.solve(instance, "exact").objective)
 
 
-def test_sop_portfolio_starts_no_dp_stage_it_cannot_set_up(monkeypatch):
+def test_sop_portfolio_starts_no_dp_stage_it_cannot_set_up(monkeypatch, sop_esc47):
     """The portfolio starts a DP stage only when its share covers the ideal count just
     measured (a stage sets up about as long, outside its clock: under load ESC47 at T = 1
     took 2.8 s); otherwise it answers at once with the warm start's order and a bound."""
     from taopt.models import sop as model
-    from taopt.sop.problem import SopProblem
 
     monkeypatch.setattr(model, "DP_SHARE", 1e-9)  # a first stage's share below any count
-    problem = SopProblem.load("ESC47")
+    problem = sop_esc47
     result = taopt.solve(problem, "exact", time_limit=2.0)
     assert result.info["model"] == "not run" and result.info["engine"] == "none"
     assert result.status == TIME_LIMIT and result.bound <= result.objective

@@ -35,17 +35,17 @@ def test_saved_solutions_verify(tmp_path, kind, capsys):
     assert "NOT VALID" not in capsys.readouterr().out
 
 
-def test_swapped_arguments_say_the_order(capsys):
+def test_swapped_arguments_say_the_order(capsys, assignment_example_file, solution_example_file):
     """`taopt verify PROBLEM SOLUTION` (swapped) is exit 2 with the right order named."""
-    problem, solution = EXAMPLES / "assignment_problem.json", EXAMPLES / "solution.json"
+    problem, solution = assignment_example_file, solution_example_file
     assert main(["verify", str(problem), str(solution)]) == 2
     assert "takes the solution first, then the problem" in capsys.readouterr().err
 
 
-def test_tampered_solutions_fail(tmp_path, capsys):
+def test_tampered_solutions_fail(tmp_path, capsys, assignment_example_file, solution_example_file):
     """A changed objective, a false 'optimal' claim or infeasible routes are each caught."""
-    problem = EXAMPLES / "assignment_problem.json"
-    good = json.loads((EXAMPLES / "solution.json").read_text())
+    problem = assignment_example_file
+    good = json.loads(solution_example_file.read_text())
     cases = {
         "objective": {**good, "objective": good["objective"] - 1},
         "claim": {**good, "status": "optimal", "bound": good["objective"] / 2},
@@ -91,11 +91,11 @@ def ten_customer_delivery():
     return layered_grid_delivery(10).replace(name="ten")
 
 
-def test_unchecked_optimality_is_said(tmp_path, capsys):
+def test_unchecked_optimality_is_said(tmp_path, capsys, assignment_example_file):
     """A solution relabelled "optimal" (bound = objective) is not called plainly VALID without --exact."""
     worse = _worse_routes()
     relabelled = {**worse, "status": "optimal", "bound": worse["objective"]}
-    problem = EXAMPLES / "assignment_problem.json"
+    problem = assignment_example_file
     solution = _write(tmp_path, "relabelled", relabelled)
     assert main(["verify", str(solution), str(problem)]) == 3
     out = capsys.readouterr().out
@@ -107,29 +107,33 @@ def test_unchecked_optimality_is_said(tmp_path, capsys):
     assert _last_line(out) == "NOT VALID"
 
 
-def test_fully_checked_certificate_is_plainly_valid(tmp_path, capsys):
+def test_fully_checked_certificate_is_plainly_valid(
+    tmp_path, capsys, assignment_example_file, solution_example_file
+):
     """The shipped optimal solution: every claim checked with --exact, exit 0, last line VALID."""
-    solution, problem = EXAMPLES / "solution.json", EXAMPLES / "assignment_problem.json"
+    solution, problem = solution_example_file, assignment_example_file
     assert main(["verify", str(solution), str(problem), "--exact"]) == 0
     out = capsys.readouterr().out
     assert "[not checked]" not in out and _last_line(out) == "VALID"
 
 
 @pytest.mark.parametrize("status", ["infeasible", "error", "relaxation"])
-def test_status_contradicting_a_feasible_payload(tmp_path, capsys, status):
+def test_status_contradicting_a_feasible_payload(
+    tmp_path, capsys, status, assignment_example_file, solution_example_file
+):
     """A feasible payload saved with a status that says it is no solution is rejected."""
-    good = json.loads((EXAMPLES / "solution.json").read_text())
+    good = json.loads(solution_example_file.read_text())
     solution = _write(tmp_path, status, {**good, "status": status, "bound": None})
-    assert main(["verify", str(solution), str(EXAMPLES / "assignment_problem.json")]) == 1
+    assert main(["verify", str(solution), str(assignment_example_file)]) == 1
     assert f"status '{status}' contradicts a feasible payload" in capsys.readouterr().out
 
 
-def test_false_bound_caught_with_exact(tmp_path, capsys):
+def test_false_bound_caught_with_exact(tmp_path, capsys, assignment_example_file):
     """A bound above the optimum (but below the objective) is unchecked alone, refuted with --exact."""
     worse = _worse_routes()
     tampered = {**worse, "status": "feasible", "bound": worse["objective"] - 0.1}
     solution = _write(tmp_path, "bound", tampered)
-    problem = EXAMPLES / "assignment_problem.json"
+    problem = assignment_example_file
     assert main(["verify", str(solution), str(problem)]) == 3
     assert main(["verify", str(solution), str(problem), "--exact"]) == 1
     assert "is above a solution the re-solve found" in capsys.readouterr().out
@@ -190,11 +194,13 @@ MALFORMED = {
 
 
 @pytest.mark.parametrize("name", sorted(MALFORMED))
-def test_malformed_certificates_clear_error(tmp_path, capsys, name):
+def test_malformed_certificates_clear_error(
+    tmp_path, capsys, name, assignment_example_file, solution_example_file
+):
     """Every malformed certificate ends in a FAIL line or a one-line error naming the file."""
-    good = json.loads((EXAMPLES / "solution.json").read_text())
+    good = json.loads(solution_example_file.read_text())
     solution = _write(tmp_path, "bad", {**good, **MALFORMED[name]})
-    code = main(["verify", str(solution), str(EXAMPLES / "assignment_problem.json")])
+    code = main(["verify", str(solution), str(assignment_example_file)])
     captured = capsys.readouterr()
     assert code in (1, 2)
     if code == 2:

@@ -150,18 +150,18 @@ def test_portfolio_certifies_the_shipped_tsplib_optima(name):
     assert evaluate_order(problem, result.order) == KNOWN_OPTIMA[name]
 
 
-def test_esc47_with_one_second_returns_a_bound_not_an_error():
+def test_esc47_with_one_second_returns_a_bound_not_an_error(sop_esc47):
     """ESC47 at time_limit=1 s: time_limit (or optimal) with a feasible order and a bound <= 1288."""
-    problem = SopProblem.load("ESC47")
+    problem = sop_esc47
     result = taopt.solve(problem, "exact", time_limit=1.0)
     assert result.status in (TIME_LIMIT, OPTIMAL)
     assert 0 < result.bound <= KNOWN_OPTIMA["ESC47"] <= result.objective
     assert evaluate_order(problem, result.order) == result.objective
 
 
-def test_a_stopped_dp_returns_the_incumbent_and_a_valid_bound():
+def test_a_stopped_dp_returns_the_incumbent_and_a_valid_bound(sop_esc25):
     """The DP stopped by max_states keeps NIA's order and proves a bound <= the optimum."""
-    problem = SopProblem.load("ESC25")
+    problem = sop_esc25
     nia = taopt.solve(problem, "NIA")
     result = solve_sop_dp(problem, incumbent=nia, max_states=200, beam_width=0)
     assert result.status == TIME_LIMIT and result.info["stopped_by"] == "max_states"
@@ -169,9 +169,9 @@ def test_a_stopped_dp_returns_the_incumbent_and_a_valid_bound():
     assert 0 < result.bound <= KNOWN_OPTIMA["ESC25"]
 
 
-def test_a_stopped_dp_without_incumbent_has_no_path_but_a_bound():
+def test_a_stopped_dp_without_incumbent_has_no_path_but_a_bound(sop_esc25):
     """Stopped with no incumbent and no beam: objective inf, no order, a positive valid bound."""
-    problem = SopProblem.load("ESC25")
+    problem = sop_esc25
     result = solve_sop_dp(problem, max_states=200, beam_width=0)
     assert result.status == TIME_LIMIT and result.solution is None
     assert result.objective == np.inf and 0 < result.bound <= KNOWN_OPTIMA["ESC25"]
