@@ -59,7 +59,7 @@ def test_solve_verify_and_study_print_only_taopt_lines(tmp_path: Path, assignmen
     assert verified.returncode == 0, verified.stderr
     assert foreign_lines(verified.stdout) == []
     study = run_cli(
-        "study", "delivery", "--setup", "small", "--instances", "1", "--methods", "NIA,exact",
+        "study", "delivery", "--setup", "small", "--scenarios", "1", "--methods", "NIA,exact",
         "--ratios", "0.5", "--out", str(tmp_path / "study"), "--quiet", cwd=tmp_path,
     )  # fmt: skip
     assert study.returncode == 0, study.stderr
