@@ -70,6 +70,10 @@ CUT_TOLERANCE = 1e-4
 #: Rows added per separation round at most (the most violated first).
 CUTS_PER_ROUND = 400
 
+#: The root loop separates every pair from its first round (True), or the pairs
+#: ``(start, k)`` alone until they stall (False).
+ALL_PAIRS_FIRST = True
+
 #: LP rounds of the root cut loop at most.
 ROOT_ROUNDS = 200
 
@@ -203,9 +207,27 @@ class SopCutModel:
         self.cut_rows += fresh
         return len(fresh)
 
-    def separate(self, values: np.ndarray, limit: int = CUTS_PER_ROUND) -> list[np.ndarray]:
+    def separate(
+        self, values: np.ndarray, limit: int = CUTS_PER_ROUND, every: bool = False
+    ) -> list[np.ndarray]:
         """Violated precedence path cuts at the point ``values`` (exact: one maximum flow
-        per closure pair), most violated first, at most ``limit``."""
+        per closure pair), most violated first, at most ``limit``.
+
+        The pairs ``(start, k)`` (the strengthened subtour rows) are tried first; the other
+        pairs only when those give no row (most LP rounds of the root loop need only them),
+        or always with ``every``.
+        """
+        first = self.pairs[:, 0] == self.problem.start
+        found = self._separate(values, self.pairs[first])
+        if every:
+            found += self._separate(values, self.pairs[~first])
+        elif not found:
+            found = self._separate(values, self.pairs[~first])
+        found.sort(key=lambda item: item[0])
+        return [arcs for _, arcs in found[:limit]]
+
+    def _separate(self, values: np.ndarray, pairs: np.ndarray) -> list[tuple[float, np.ndarray]]:
+        """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``."""
         n = self.n
         support = values > 1e-9
         tails, heads = self.tails[support], self.heads[support]
@@ -213,7 +235,7 @@ class SopCutModel:
         before = self.before
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
-        for i, j in self.pairs:
+        for i, j in pairs:
             inside = ~before[:, i] & ~before[j, :]  # W(i, j)
             keep = inside[tails] & inside[heads]
             if not keep.any():
@@ -242,8 +264,7 @@ class SopCutModel:
                 continue
             seen.add(key)
             found.append((lhs, arcs))
-        found.sort(key=lambda item: item[0])
-        return [arcs for _, arcs in found[:limit]]
+        return found
 
     # ------------------------------------------------------------------ solves
     def _run(self, deadline: Deadline | None, stop: Any = None) -> None:
@@ -290,7 +311,7 @@ class SopCutModel:
         stalls, ``rounds`` LPs were solved or the deadline passes."""
         value, bound, done, complete = -math.inf, -math.inf, 0, False
         values = None
-        stall = 0
+        stall, every = 0, ALL_PAIRS_FIRST
         while done < rounds:
             if deadline is not None and deadline.expired(MARGIN):
                 break
@@ -304,8 +325,10 @@ class SopCutModel:
             stall = stall + 1 if new_value - value <= ROOT_STALL * max(abs(value), 1.0) else 0
             value = new_value
             if stall >= ROOT_STALL_ROUNDS:
-                break
-            cuts = self.separate(values)
+                if every:
+                    break
+                every, stall = True, 0  # the subtour rows stall: every pair from now on
+            cuts = self.separate(values, every=every)
             if not cuts:
                 complete = True
                 break
