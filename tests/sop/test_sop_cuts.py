@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from taopt.models.sop import solve_sop_problem
 from taopt.models.sop_cuts import SopCutModel, cut_bound, polish, round_point, solve_sop_cuts
 from taopt.result import OPTIMAL, TIME_LIMIT
 from taopt.sop.problem import SopProblem, evaluate_order, load_sop
@@ -108,3 +109,19 @@ def test_time_limited_run_keeps_a_proven_bound():
     result = solve_sop_cuts(_esc12(), time_limit=1e-3)
     assert result.status in (TIME_LIMIT, OPTIMAL)
     assert result.bound is None or result.bound <= 1675 + 1e-6
+
+
+@pytest.mark.parametrize("seed", range(0, 30, 3))
+def test_portfolio_cut_stage_matches_brute_force(seed):
+    """The portfolio's MILP stage (now the cut engine), forced and after a capped DP, gives
+    the brute-force optimum and never a false optimal."""
+    problem = sop_instance(seed)
+    optimum = sop_brute_force(problem)
+    for options in ({"engine": "milp"}, {"ideal_cap": 1, "max_states": 1}):
+        result = solve_sop_problem(problem, **options)
+        if not math.isfinite(optimum):
+            assert result.status == "infeasible"
+            continue
+        assert result.status == OPTIMAL, options
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
