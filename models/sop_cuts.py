@@ -1,7 +1,7 @@
 """A precedence-aware cut model of the SOP, built as arrays straight into HiGHS.
 
 The model is the arc formulation of :mod:`taopt.models.sop` without its flow columns:
-binary ``x_a`` per usable arc (:func:`~taopt.models.sop.usable_arcs`), the two degree
+binary ``x_a`` per usable arc (``taopt.models.sop.usable_arcs``), the two degree
 rows, and rows added in a cut loop. Every row added is a *precedence path cut*:
 
     For a pair ``i ≺ j`` of the precedence closure (which holds ``start ≺ v`` and
@@ -20,7 +20,7 @@ dropping the arcs that leave a successor of j; with general pairs they carry the
 precedences (5.7) into the LP, in the spirit of the predecessor/successor inequalities of
 Balas, Fischetti & Pulleyblank (1995) used by Ascheuer, Jünger & Reinelt (2000). They are
 separated *exactly* on an LP point: for each pair one maximum flow from i to j on the
-point's support restricted to ``W(i, j)`` (:func:`scipy.sparse.csgraph.maximum_flow`); a
+point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``); a
 flow below 1 gives a violated row (the source side of a minimum cut).
 
 :class:`SopCutModel` holds one live HiGHS model; :meth:`SopCutModel.root` runs the LP cut
