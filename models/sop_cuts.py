@@ -57,7 +57,25 @@ from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
 from taopt.sop.problem import SopProblem
 
-__all__ = ["RootCuts", "SopCutModel", "cut_bound", "solve_sop_cuts"]
+__all__ = [
+    "ALL_PAIRS_FIRST",
+    "BAD_POINTS",
+    "CUTS_PER_ROUND",
+    "CUT_TOLERANCE",
+    "FLOW_SCALE",
+    "MIP_ROUNDS",
+    "POLISH_PASSES",
+    "ROOT_ROUNDS",
+    "ROOT_STALL",
+    "ROOT_STALL_ROUNDS",
+    "ROUND_LP_ROUNDS",
+    "RootCuts",
+    "SopCutModel",
+    "cut_bound",
+    "polish",
+    "round_point",
+    "solve_sop_cuts",
+]
 
 #: Capacities of the maximum flows are the LP values times this, rounded down (scipy's
 #: maximum flow takes integers); a cut is added only if its value in floating point is
