@@ -226,25 +226,32 @@ class SopCutModel:
         return len(fresh)
 
     def separate(
-        self, values: np.ndarray, limit: int = CUTS_PER_ROUND, every: bool = False
+        self,
+        values: np.ndarray,
+        limit: int = CUTS_PER_ROUND,
+        every: bool = False,
+        deadline: Deadline | None = None,
     ) -> list[np.ndarray]:
         """Violated precedence path cuts at the point ``values`` (exact: one maximum flow
         per closure pair), most violated first, at most ``limit``.
 
         The pairs ``(start, k)`` (the strengthened subtour rows) are tried first; the other
         pairs only when those give no row (most LP rounds of the root loop need only them),
-        or always with ``every``.
+        or always with ``every``. Stops early (with the rows found so far) when
+        ``deadline`` passes.
         """
         first = self.pairs[:, 0] == self.problem.start
-        found = self._separate(values, self.pairs[first])
+        found = self._separate(values, self.pairs[first], deadline)
         if every:
-            found += self._separate(values, self.pairs[~first])
+            found += self._separate(values, self.pairs[~first], deadline)
         elif not found:
-            found = self._separate(values, self.pairs[~first])
+            found = self._separate(values, self.pairs[~first], deadline)
         found.sort(key=lambda item: item[0])
         return [arcs for _, arcs in found[:limit]]
 
-    def _separate(self, values: np.ndarray, pairs: np.ndarray) -> list[tuple[float, np.ndarray]]:
+    def _separate(
+        self, values: np.ndarray, pairs: np.ndarray, deadline: Deadline | None = None
+    ) -> list[tuple[float, np.ndarray]]:
         """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``."""
         n = self.n
         support = values > 1e-9
@@ -253,7 +260,9 @@ class SopCutModel:
         before = self.before
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
-        for i, j in pairs:
+        for number, (i, j) in enumerate(pairs):
+            if number % 64 == 63 and deadline is not None and deadline.expired(MARGIN):
+                break
             inside = ~before[:, i] & ~before[j, :]  # W(i, j)
             keep = inside[tails] & inside[heads]
             if not keep.any():
@@ -346,9 +355,9 @@ class SopCutModel:
                 if every:
                     break
                 every, stall = True, 0  # the subtour rows stall: every pair from now on
-            cuts = self.separate(values, every=every)
-            if not cuts:
-                complete = True
+            cuts = self.separate(values, every=every, deadline=deadline)
+            if not cuts:  # none violated, unless the deadline cut the separation short
+                complete = deadline is None or not deadline.expired(MARGIN)
                 break
             self.add_cuts(cuts)
         return RootCuts(value, bound, done, len(self.cut_rows), complete, values)
@@ -540,7 +549,7 @@ def _mip_rounds(
                 return "optimal", rounds, known, bound
             if not points:
                 break  # stopped by the clock (or a HiGHS limit) with no point to cut
-            cuts = [cut for point in points for cut in model.separate(point)]
+            cuts = [cut for point in points for cut in model.separate(point, deadline=deadline)]
             if not cuts:
                 break  # an integral point that is no order violates a row: stay safe
             model.add_cuts(cuts)
