@@ -434,12 +434,13 @@ def solve_sop_cuts(
     deadline = Deadline(time_limit)
     known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
     model = SopCutModel(problem, verbose)
+    cheap = _cheap_bound(problem)
     root = model.root(deadline)
     if root.values is not None:
-        rounded = round_point(model, root.values)
+        rounded = round_point(model, root.values, deadline)
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
-    bound = max(root.bound, _cheap_bound(problem))
+    bound = max(root.bound, cheap)
     info: dict[str, Any] = {
         "root_bound": root.bound,
         "root_lp": root.value,
@@ -530,7 +531,7 @@ def _mip_rounds(
                 return "infeasible", rounds, None, math.inf
             points = list(bad)
             for point in points:  # each point, rounded and polished, may be a better order
-                rounded = round_point(model, point)
+                rounded = round_point(model, point, deadline)
                 if rounded is not None and (known is None or rounded[0] < known[0]):
                     known = rounded
             if mip_info.primal_solution_status == 2:
@@ -582,12 +583,14 @@ def _solution(values: np.ndarray) -> highspy.HighsSolution:
 POLISH_PASSES = 20
 
 
-def round_point(model: SopCutModel, values: np.ndarray) -> tuple[float, list[int]] | None:
+def round_point(
+    model: SopCutModel, values: np.ndarray, deadline: Deadline | None = None
+) -> tuple[float, list[int]] | None:
     """An order built from the point ``values`` (LP or integral), polished by relocation.
 
     From start, the next node is the eligible one (unvisited, all its predecessors visited,
     a usable arc from the last node) of the largest ``x[last, v]``, ties by cost; end comes
-    last. Returns ``(cost, order)`` or None at a dead end.
+    last. Returns ``(cost, order)`` or None at a dead end. The polish stops at ``deadline``.
     """
     problem = model.problem
     n, cost, before = model.n, problem.cost, model.before
@@ -611,16 +614,21 @@ def round_point(model: SopCutModel, values: np.ndarray) -> tuple[float, list[int
         missing[before[best]] -= 1
     if order[-1] != problem.end:
         return None
-    return polish(model, order)
+    return polish(model, order, deadline)
 
 
-def polish(model: SopCutModel, order: list[int]) -> tuple[float, list[int]]:
+def polish(
+    model: SopCutModel, order: list[int], deadline: Deadline | None = None
+) -> tuple[float, list[int]]:
     """Relocation search: move one node to another place while that keeps the precedences
-    and lowers the path's cost (first improvement, :data:`POLISH_PASSES` passes at most)."""
+    and lowers the path's cost (first improvement, :data:`POLISH_PASSES` passes at most,
+    none started after ``deadline``)."""
     cost, before = model.problem.cost, model.before
     order = list(order)
     n = len(order)
     for _ in range(POLISH_PASSES):
+        if deadline is not None and deadline.expired(MARGIN):
+            break
         improved = False
         for p in range(1, n - 1):
             v = order[p]
