@@ -46,6 +46,11 @@ in 9–13 s and ESC25 in ~52 s; MTZ proves ESC07/11/12 but stops at bound 38
 br17.x: without them the flow LP bound of br17.10 is 39.7 and a 120 s run
 ended at bound 47; with them the LP bound is the optimum 55. "flow" is therefore the default.
 
+The portfolio (:func:`solve_sop_problem`) no longer uses this model by default: its MILP
+stage is the arc model with precedence path cuts of :mod:`taopt.models.sop_cuts`, built as
+arrays straight into HiGHS (root bound 28,098 on p43.1, optimum 28,140, where this flow
+model's LP is not solved within 30 s on a loaded machine and the portfolio proved 2,720).
+
 Example
 -------
 >>> from taopt.sop.problem import load_sop
