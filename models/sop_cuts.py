@@ -658,9 +658,9 @@ def _best_place(
     cost: np.ndarray, before: np.ndarray, rest: list[int], run: list[int], removed: float
 ) -> int | None:
     """The place in ``rest`` where ``run`` saves most against ``removed`` (None: no saving)."""
-    rest_arr = np.array(rest)
-    preds = before[np.ix_(rest_arr, run)].any(axis=1)
-    succs = before[np.ix_(run, rest_arr)].any(axis=0)
+    rest_arr, run_arr = np.array(rest), np.array(run)
+    preds = before[np.ix_(rest_arr, run_arr)].any(axis=1)
+    succs = before[np.ix_(run_arr, rest_arr)].any(axis=0)
     lo = int(np.flatnonzero(preds).max()) + 1 if preds.any() else 1
     hi = int(np.flatnonzero(succs).min()) if succs.any() else len(rest) - 1
     if lo > hi:
