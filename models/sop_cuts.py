@@ -511,19 +511,32 @@ def _mip_rounds(
     stop, rounds = "time_limit", 0
     try:
         while rounds < MIP_ROUNDS and not deadline.expired(MARGIN):
-            if known is not None:
-                start = np.zeros(model.n_arcs)
-                start[model.arc_index[known[1][:-1], known[1][1:]]] = 1.0
-                model.highs.setSolution(_solution(start))
             if rounds:  # separate the new rows' fractional consequences on the LP first
                 model.make_integral(False)
                 model.root(deadline, ROUND_LP_ROUNDS)
                 model.make_integral()
+            # integral costs: an order better than the best costs at most best - 1, so HiGHS
+            # may cut off every node above best - 1/2; no point below it proves the best
+            cutoff = known[0] - 0.5 if known is not None and model.integral_costs else None
+            if known is not None and cutoff is None:
+                start = np.zeros(model.n_arcs)
+                start[model.arc_index[known[1][:-1], known[1][1:]]] = 1.0
+                model.highs.setSolution(_solution(start))
             bad.clear()
-            model._run(deadline)
+            model.highs.setOptionValue(
+                "objective_bound", highspy.kHighsInf if cutoff is None else cutoff
+            )
+            try:
+                model._run(deadline)
+            finally:  # the LP loop must not stop at the cutoff
+                model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             rounds += 1
             status = model.highs.getModelStatus()
             mip_info = model.highs.getInfo()
+            if status == highspy.HighsModelStatus.kInfeasible and known is not None:
+                if cutoff is None:  # a relaxation without the best order: cannot happen
+                    break
+                return "optimal", rounds, known, known[0]  # nothing below best - 1/2
             dual = float(mip_info.mip_dual_bound)
             if math.isfinite(dual):  # a bound of a relaxation: a bound of the SOP
                 bound = max(bound, math.ceil(dual - 1e-6) if model.integral_costs else dual)

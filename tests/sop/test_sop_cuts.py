@@ -125,3 +125,13 @@ def test_portfolio_cut_stage_matches_brute_force(seed):
         assert result.status == OPTIMAL, options
         assert result.objective == pytest.approx(optimum)
         assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+def test_optimal_incumbent_is_certified_by_the_cutoff():
+    """Given an optimal order of ESC12 (integral costs), the cut engine proves it optimal."""
+    problem = _esc12()
+    first = solve_sop_cuts(problem)
+    again = solve_sop_cuts(problem, incumbent=first.order)
+    assert again.status == OPTIMAL
+    assert again.objective == pytest.approx(1675)
+    assert again.bound == pytest.approx(1675)
