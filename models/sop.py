@@ -92,7 +92,9 @@ logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 FORMULATIONS = ("flow", "mtz")
 
 __all__ = [
+    "CUTS_SECOND_STAGE_GAP",
     "FORMULATIONS",
+    "PORTFOLIO_FORMULATION",
     "SopModel",
     "build",
     "decode",
