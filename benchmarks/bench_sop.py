@@ -10,6 +10,8 @@ Run::
     python benchmarks/bench_sop.py --compare 60 ESC25 p43.4
 
     python benchmarks/bench_sop.py --resources 10 --load   # wall time and peak RSS, per process
+    python benchmarks/bench_sop.py --table 60 --load  # every SOP: exact beside CP-SAT
+    python benchmarks/bench_sop.py --roots 120        # root bounds: flow LP vs precedence cuts
 
 ``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
 every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints status,
@@ -77,7 +79,16 @@ COMPARE = [
 ]
 
 #: Optima of the comparison set not shipped with taopt (shared/benchmarks/tsplib/README.md).
-MORE_OPTIMA = {"rbg048a": 351, "rbg050c": 467, "ry48p.4": 31446, "ft53.4": 14425}
+MORE_OPTIMA = {
+    "rbg048a": 351,
+    "rbg050c": 467,
+    "ry48p.4": 31446,
+    "ft53.4": 14425,
+    "p43.1": 28140,
+    "ry48p.1": 15805,
+    "ft53.1": 7531,
+    "prob.42": 243,
+}
 
 SHARED = next(
     (
@@ -255,6 +266,104 @@ def resources(names: list[str], limit: float, load: bool) -> None:
             spinner.kill()
 
 
+_SIDE = """
+import json, resource, sys, time
+import taopt
+import taopt.heuristics
+import taopt.models
+from taopt.orchestration import pipeline
+sys.path.insert(0, {bench!r})
+from bench_sop import load_any
+from taopt.sop.problem import evaluate_order
+problem = load_any({name!r})
+options = {{"num_workers": 2}} if {method!r} == "cpsat" else {{}}
+t0 = time.perf_counter()
+result = taopt.solve(problem, {method!r}, time_limit={limit!r}, **options)
+wall = time.perf_counter() - t0
+if result.solution is not None:  # every order re-scored from the data
+    assert abs(evaluate_order(problem, result.order) - result.objective) < 1e-6
+peak = max(resource.getrusage(who).ru_maxrss for who in
+           (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)) * 1024
+print(json.dumps(dict(status=str(result.status), objective=result.objective,
+    bound=result.bound, wall=wall, peak=peak, engine=result.info.get("engine", ""))))
+"""
+
+
+def side_by_side(names: list[str], limit: float, load: bool) -> None:
+    """``--table T``: "exact" (the portfolio) and CP-SAT on each instance, each call in its
+    own process: status, objective, bound, wall time, peak memory (the larger of the process
+    and its workers, ``ru_maxrss``), and the TSPLIB optimum."""
+    import json
+    import subprocess
+    import sys
+
+    spinner = None
+    if load:
+        spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    here = str(Path(__file__).resolve().parent)
+    print(f"time limit {limit:g} s per run, each in its own process; load: {load}")
+    print(
+        "| instance | n | optimum | exact: status | objective | bound | wall (s) | peak (MB) |"
+        " CP-SAT: status | objective | bound | wall (s) | peak (MB) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    try:
+        for name in names:
+            cells = []
+            for method in ("exact", "cpsat"):
+                code = _SIDE.format(bench=here, name=name, limit=limit, method=method)
+                run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+                if run.returncode != 0:
+                    cells.append(f"failed ({run.returncode}) | | | |")
+                    continue
+                r = json.loads(run.stdout.strip().splitlines()[-1])
+                bound = "" if r["bound"] is None else f"{r['bound']:g}"
+                cells.append(
+                    f"{r['status']} | {r['objective']:g} | {bound} | {r['wall']:.1f} | "
+                    f"{r['peak'] / 1e6:.0f}"
+                )
+            optimum = KNOWN_OPTIMA.get(name, MORE_OPTIMA.get(name, ""))
+            n = load_any(name).n
+            print(f"| {name} | {n} | {optimum} | {cells[0]} | {cells[1]} |", flush=True)
+    finally:
+        if spinner is not None:
+            spinner.kill()
+
+
+def roots(names: list[str], limit: float) -> None:
+    """``--roots T``: root bounds before and after the precedence path cuts: the flow
+    model's LP relaxation (:func:`taopt.models.sop.build` with ``relax=True``, HiGHS, at
+    most T s), the cut loop's root (:func:`taopt.models.sop_cuts.cut_bound`), the assignment
+    and arborescence bounds, and the optimum."""
+    from taopt.models.highs import solve_highs
+    from taopt.models.sop import _cheap_bound, build
+    from taopt.models.sop_cuts import cut_bound
+
+    print(f"flow LP at most {limit:g} s")
+    print(
+        "| instance | n | optimum | assignment/arborescence | flow LP root (s) |"
+        " precedence path cuts root (s) | cuts root / optimum |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for name in names:
+        problem = load_any(name)
+        optimum = KNOWN_OPTIMA.get(name, MORE_OPTIMA.get(name))
+        began = time.perf_counter()
+        model = build(problem.cost, problem.precedences, problem.start, problem.end, relax=True)
+        run = solve_highs(model.problem, time_limit=limit)
+        flow = f"{run.bound:.1f}" if run.bound is not None else "not solved"
+        flow_s = time.perf_counter() - began
+        began = time.perf_counter()
+        root = cut_bound(problem)
+        cut_s = time.perf_counter() - began
+        share = f"{root.bound / optimum:.4f}" if optimum else ""
+        print(
+            f"| {name} | {problem.n} | {optimum or ''} | {_cheap_bound(problem):g} | "
+            f"{flow} ({flow_s:.1f}) | {root.bound:g} ({cut_s:.1f}) | {share} |",
+            flush=True,
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("names", nargs="*", default=None)
@@ -269,7 +378,19 @@ def main() -> None:
     )
     parser.add_argument("--load", action="store_true", help="a second process loads a core")
     parser.add_argument("--generated", action="store_true", help="add the generated instances")
+    parser.add_argument(
+        "--table", type=float, default=0.0, help="exact beside CP-SAT, every SOP, this limit"
+    )
+    parser.add_argument(
+        "--roots", type=float, default=0.0, help="root bounds: flow LP (this limit) vs cuts"
+    )
     args = parser.parse_args()
+    if args.table > 0:
+        side_by_side(args.names or RESOURCES, args.table, args.load)
+        return
+    if args.roots > 0:
+        roots(args.names or RESOURCES, args.roots)
+        return
     if args.resources > 0:
         names = args.names or RESOURCES + (list(GENERATED) if args.generated else [])
         resources(names, args.resources, args.load)

@@ -46,6 +46,11 @@ in 9–13 s and ESC25 in ~52 s; MTZ proves ESC07/11/12 but stops at bound 38
 br17.x: without them the flow LP bound of br17.10 is 39.7 and a 120 s run
 ended at bound 47; with them the LP bound is the optimum 55. "flow" is therefore the default.
 
+The portfolio (:func:`solve_sop_problem`) no longer uses this model by default: its MILP
+stage is the arc model with precedence path cuts of :mod:`taopt.models.sop_cuts`, built as
+arrays straight into HiGHS (root bound 28,098 on p43.1, optimum 28,140, where this flow
+model's LP is not solved within 30 s on a loaded machine and the portfolio proved 2,720).
+
 Example
 -------
 >>> from taopt.sop.problem import load_sop
@@ -87,7 +92,9 @@ logger = logging.getLogger(__name__)  # a child of the "taopt" logger
 FORMULATIONS = ("flow", "mtz")
 
 __all__ = [
+    "CUTS_SECOND_STAGE_GAP",
     "FORMULATIONS",
+    "PORTFOLIO_FORMULATION",
     "SopModel",
     "build",
     "decode",
@@ -463,6 +470,8 @@ def column_count(
     """Number of variables of the model :func:`build` would make, without building it."""
     tails, heads = usable_arcs(cost, closure)
     n = cost.shape[0]
+    if formulation == "cuts":  # the arc model of taopt.models.sop_cuts: one column per arc
+        return len(tails)
     if formulation == "mtz":
         return len(tails) + n
     before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
@@ -538,7 +547,7 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals
     from taopt.runtime import max_memory_gb as limit_gb
 
-    formulation = options.get("formulation", "flow")
+    formulation = options.get("formulation", PORTFOLIO_FORMULATION)
     limit = options.get("max_memory_gb")
     seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
@@ -864,6 +873,13 @@ SECOND_STAGE_SHARE = 0.75
 
 PORTFOLIO_ENGINES = ("auto", "dp", "milp")
 
+#: The portfolio's MILP stage: ``"cuts"``, the arc model with precedence path cuts
+#: (:func:`taopt.models.sop_cuts.solve_sop_cuts`; root bound 28,098 on p43.1 against the flow
+#: model's 2,720, optimum 28,140), or ``"flow"``/``"mtz"`` (:func:`solve_sop`). With
+#: ``"cuts"`` the second DP stage is skipped when the first left a wide gap
+#: (:data:`CUTS_SECOND_STAGE_GAP`): the cut engine gets the time after the first.
+PORTFOLIO_FORMULATION = "cuts"
+
 #: ``info["model"]`` of a MILP run that stopped before HiGHS ran (the portfolio then gives
 #: the time left to the DP).
 STOPPED_EARLY = ("not built", "built, not compiled", "compiled, not solved")
@@ -882,10 +898,24 @@ def _combine(first: Solution, second: Solution) -> Solution:
     return best.replace(bound=bound, status=status)
 
 
+#: With the cut engine, the second DP stage runs only when the first one's relative gap is
+#: at most this (rbg050c: 468 / 462 after the first stage, closed by the second; p43.1:
+#: 28,845 / 2,720, prob.42: 276 / 182, where the DP's bound is far and the cuts' is close).
+CUTS_SECOND_STAGE_GAP = 0.05
+
+
+def _far(result: Solution) -> bool:
+    """The run's relative gap is above :data:`CUTS_SECOND_STAGE_GAP` (or unknown)."""
+    bound, value = result.bound, result.objective
+    if bound is None or not np.isfinite(value) or value <= 0:
+        return True
+    return (value - bound) / value > CUTS_SECOND_STAGE_GAP
+
+
 def solve_sop_problem(
     problem: SopProblem,
     time_limit: float | None = None,
-    formulation: str = "flow",
+    formulation: str = PORTFOLIO_FORMULATION,
     mip_gap: float = 1e-9,
     verbose: bool = False,
     incumbent: Any = None,
@@ -917,8 +947,12 @@ def solve_sop_problem(
     problem : SopProblem
     time_limit : float, optional
         Wall-clock seconds for the whole portfolio.
-    formulation, mip_gap, verbose
-        Passed to :func:`solve_sop` when the MILP runs.
+    formulation : {"cuts", "flow", "mtz"}
+        The MILP stage (:data:`PORTFOLIO_FORMULATION`): "cuts" runs
+        :func:`~taopt.models.sop_cuts.solve_sop_cuts` (precedence path cuts on the arc
+        model), "flow"/"mtz" :func:`solve_sop`.
+    mip_gap, verbose
+        Passed to the MILP stage.
     incumbent : Order, list of int or Solution, optional
         The warm start's order (NIA, MMA, SMMA through the registry).
     engine : {"auto", "dp", "milp"}
@@ -967,18 +1001,23 @@ def solve_sop_problem(
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
-        result = solve_sop(
-            problem.cost,
-            problem.precedences,
-            problem.start,
-            problem.end,
-            time_limit=time_left,
-            formulation=formulation,
-            mip_gap=mip_gap,
-            verbose=verbose,
-            incumbent=known,
-            problem=problem,
-        )
+        if formulation == "cuts":
+            from taopt.models.sop_cuts import solve_sop_cuts
+
+            result = solve_sop_cuts(problem, time_left, known, verbose=verbose, mip_gap=mip_gap)
+        else:
+            result = solve_sop(
+                problem.cost,
+                problem.precedences,
+                problem.start,
+                problem.end,
+                time_limit=time_left,
+                formulation=formulation,
+                mip_gap=mip_gap,
+                verbose=verbose,
+                incumbent=known,
+                problem=problem,
+            )
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)
             bound = min(bound, result.objective)
@@ -1053,6 +1092,8 @@ def solve_sop_problem(
         short = second_share is not None and second_share < 2 * setup + MARGIN
         if result.status == TIME_LIMIT and short:
             info["second_stage"] = f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
+        elif result.status == TIME_LIMIT and formulation == "cuts" and _far(result):
+            info["second_stage"] = "skipped: the DP's gap is wide, the cut engine gets the time"
         elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
             # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
             # state, so not the first choice) with more states, from the best order so far
