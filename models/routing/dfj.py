@@ -465,6 +465,44 @@ def dfj_root(problem: AssignmentProblem, time_limit: float | None = None) -> Roo
     return DfjModel(problem).root(budget=time_limit, lifted=0)
 
 
+def rounded_routes(
+    problem: AssignmentProblem, dfj: DfjModel, values: np.ndarray
+) -> list[list[int]] | None:
+    """Routes near a fractional σ (the root LP's point): an incumbent for the MIP rounds.
+
+    The assignment (:func:`scipy.optimize.linear_sum_assignment`) that gives every target one
+    predecessor and every point at most one successor with the most LP weight (ties to the
+    cheaper arc) is an integral point of (2.3)-(2.4); its subtours are patched into the
+    routes (:func:`~taopt.models.routing.formulation.repair`). When the LP point is
+    already one set of routes this returns them, and the incumbent then meets the root bound
+    without a MIP round (rbg403: the root LP is the optimum).
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    n, size = problem.n, problem.n + problem.m
+    tails, heads = dfj.tails, dfj.heads
+    cost = problem.cost[tails, heads]
+    scale = float(np.abs(cost).max()) or 1.0
+    forbidden, bonus = -1e9, float(size + 1)
+    weight = np.full((size, n + size), forbidden)
+    # an arc's weight: its LP value, a small tie-break to the cheaper arc, and a bonus that
+    # makes covering every target worth more than any choice of weights
+    weight[tails, heads] = bonus + values - 1e-3 * cost / scale
+    outflow = np.bincount(tails, weights=values, minlength=size)
+    weight[np.arange(size), n + np.arange(size)] = 1.0 - outflow  # point i has no successor
+    rows, columns = linear_sum_assignment(weight, maximize=True)
+    chosen = columns < n
+    if int(chosen.sum()) != n or (weight[rows, columns] <= forbidden / 2).any():
+        return None
+    point = np.zeros(len(tails))
+    point[dfj.arc_index[rows[chosen], columns[chosen]]] = 1.0
+    try:
+        routes, subtours = decode(problem, dfj, point)
+    except SolverError:
+        return None
+    return repair(problem, routes, subtours) if subtours else routes
+
+
 class _Search:
     """The state of one :func:`_solve_dfj` call: the incumbent (best routes and value), the
     proven lower bound, the clock and the improver."""
@@ -604,6 +642,13 @@ class _Rounds:
         rounds = 0
         solver_status, stopped_by = "", "time_limit"
         while True:
+            if relative_gap(search.best_value, min(search.best_bound, search.best_value)) <= (
+                target_gap
+            ):
+                # the incumbent already meets the bound (the rounded root point)
+                gap = relative_gap(search.best_value, min(search.best_bound, search.best_value))
+                stopped_by = "optimal" if gap <= OPTIMALITY_TOLERANCE else "mip_gap"
+                break
             left = search.remaining()
             if left is not None and left < LP_SECONDS_PER_ARC * int(core.mask.sum()):
                 stopped_by = "time_limit"  # HiGHS would overrun the limit before its first check
@@ -716,6 +761,11 @@ def _solve_dfj(
     root = dfj.root(budget=None if budget is None else 0.5 * budget)
     root_cuts = len(dfj.cuts)
     search.best_bound = max(search.best_bound, root.bound)
+    if root.values is not None:  # the root point rounded: often the optimum itself
+        rounded = rounded_routes(problem, dfj, root.values)
+        if rounded is not None:
+            search.keep(rounded, evaluate_routes(problem, rounded))
+            search.offer(rounded)
     # 2. the core; 3. MIP rounds on it
     core = _Core(dfj, root, n, m)
     core.resize(search.best_value, search.best_routes)
@@ -785,4 +835,5 @@ __all__ = [
     "RootRelaxation",
     "DfjModel",
     "dfj_root",
+    "rounded_routes",
 ]
