@@ -155,8 +155,13 @@ def _affordable(problem: FleetProblem) -> bool:
     return problem.n <= 5
 
 
-register_method(FleetProblem, "exact", category="exact", certifies=_affordable, style=("-", "*"))(
-    solve_fleet
-)
+register_method(
+    FleetProblem,
+    "exact",
+    category="exact",
+    warm_start=("SMMA", "ILS"),
+    certifies=_affordable,
+    style=("-", "*"),
+)(solve_fleet)
 
 __all__ = ["solve_fleet"]
