@@ -7,9 +7,12 @@
 2. chapter 5's shape (K = D = c = 1, every customer drone-only, ``last_service``): chapter 5's
    DP over the order ideals of G^p (:func:`taopt.delivery.ideal_dp.ideal_dp`), its plan carried
    over by :meth:`taopt.fleet.problem.FleetPlan.from_delivery_plan`;
-3. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
+3. one truck with one drone, every customer drone-only, c > 1 or ``"return"``: the sortie DP
+   over the order ideals (:func:`taopt.fleet.sorties.sortie_dp`, chapter 5's DP with
+   multi-parcel sorties);
+4. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
    operations DP over customer subsets (:func:`taopt.fleet.operations.operations_dp`);
-4. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
+5. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
 """
 
 from __future__ import annotations
@@ -20,8 +23,22 @@ from typing import Any
 from taopt.errors import require
 from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
+from taopt.fleet.sorties import applies as sorties_applies
+from taopt.fleet.sorties import sortie_dp
 from taopt.registry import register_method
 from taopt.result import Solution, finish
+
+
+def _score_or_inf(problem: FleetProblem, plan: Any) -> float:
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+
+    if plan is None:
+        return float("inf")
+    try:
+        return evaluate_fleet(problem, plan)
+    except FeasibilityError:
+        return float("inf")
 
 
 def _chapter5_shape(problem: FleetProblem) -> bool:
@@ -57,7 +74,7 @@ def solve_fleet(
     max_labels : int, optional
         Memory guard of the label search (:data:`taopt.fleet.search.DEFAULT_MAX_LABELS`): the
         run stops like a time limit (``info["stopped_by"] == "size"``).
-    algorithm : {"auto", "search", "operations", "ideal_dp"}
+    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp"}
         Force one algorithm (``"auto"``: the fastest that applies; for measurements).
 
     Returns
@@ -90,6 +107,8 @@ def solve_fleet(
     if choice == "auto":
         if _chapter5_shape(problem):
             choice = "ideal_dp"
+        elif sorties_applies(problem):
+            choice = "sortie_dp"
         elif _operations_shape(problem):
             choice = "operations"
         else:
@@ -122,6 +141,21 @@ def solve_fleet(
         from taopt.fleet.operations import operations_dp
 
         result = operations_dp(problem, time_limit=time_limit)
+    elif choice == "sortie_dp":
+        from taopt.fleet.bounds import fleet_lower
+        from taopt.fleet.evaluate import as_plan
+        from taopt.fleet.search import _simple_plan
+
+        result = sortie_dp(problem, time_limit=time_limit, max_steps=max_labels)
+        result["bound"] = result["value"]
+        if result["plan"] is None:  # stopped: the incumbent (or a simple plan), a proven bound
+            result["bound"] = fleet_lower(problem)
+            result["plan"] = _simple_plan(problem)
+            if incumbent is not None:
+                result["plan"] = min(
+                    (result["plan"], as_plan(incumbent)),
+                    key=lambda plan: _score_or_inf(problem, plan),
+                )
     else:
         result = label_search(
             problem, time_limit=time_limit, incumbent=incumbent, max_labels=max_labels
@@ -147,9 +181,11 @@ def solve_fleet(
 def _affordable(problem: FleetProblem) -> bool:
     """Where the exact method typically certifies within a minute (measured, see
     docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers, the
-    label search up to 5 customers."""
+    sortie DP (one truck, one drone) up to 10, the label search up to 5 customers."""
     if _chapter5_shape(problem):
         return True
+    if sorties_applies(problem):
+        return problem.n <= 10
     if _operations_shape(problem):
         return problem.n <= 12
     return problem.n <= 5
