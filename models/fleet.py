@@ -28,6 +28,9 @@ from taopt.fleet.sorties import sortie_dp
 from taopt.registry import register_method
 from taopt.result import Solution, finish
 
+#: Share of the time limit the label search gives the improver (the ILS) before searching.
+IMPROVE_SHARE = 0.2
+
 
 def _score_or_inf(problem: FleetProblem, plan: Any) -> float:
     from taopt.errors import FeasibilityError
@@ -60,6 +63,7 @@ def solve_fleet(
     incumbent: Any = None,
     max_labels: int | None = None,
     algorithm: str = "auto",
+    improve: Any = None,
 ) -> Solution:
     """Certified optimum of a fleet problem (module docstring for the algorithm used).
 
@@ -76,6 +80,11 @@ def solve_fleet(
         run stops like a time limit (``info["stopped_by"] == "size"``).
     algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp"}
         Force one algorithm (``"auto"``: the fastest that applies; for measurements).
+    improve : callable, optional
+        ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
+        :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
+        before the label search only (the DPs need no incumbent), with
+        :data:`IMPROVE_SHARE` of the time limit.
 
     Returns
     -------
@@ -157,9 +166,13 @@ def solve_fleet(
                     key=lambda plan: _score_or_inf(problem, plan),
                 )
     else:
-        result = label_search(
-            problem, time_limit=time_limit, incumbent=incumbent, max_labels=max_labels
-        )
+        left = time_limit
+        if improve is not None:
+            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            incumbent = improve(problem, incumbent, share)
+            if time_limit is not None:
+                left = max(time_limit - (time.perf_counter() - start), 0.0)
+        result = label_search(problem, time_limit=left, incumbent=incumbent, max_labels=max_labels)
     info = {
         "algorithm": choice,
         **{k: v for k, v in result.items() if k not in ("plan", "value", "bound")},
@@ -195,9 +208,9 @@ register_method(
     FleetProblem,
     "exact",
     category="exact",
-    warm_start=("SMMA", "ILS"),
+    warm_start=("SMMA",),
     certifies=_affordable,
     style=("-", "*"),
 )(solve_fleet)
 
-__all__ = ["solve_fleet"]
+__all__ = ["IMPROVE_SHARE", "solve_fleet"]
