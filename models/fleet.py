@@ -84,7 +84,7 @@ def solve_fleet(
         ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
         :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
         before the label search only (the DPs need no incumbent), with
-        :data:`IMPROVE_SHARE` of the time limit.
+        :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit.
 
     Returns
     -------
