@@ -12,7 +12,11 @@
    multi-parcel sorties);
 4. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
    operations DP over customer subsets (:func:`taopt.fleet.operations.operations_dp`);
-5. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
+5. several trucks with one drone each, every customer drone-only: the customers split over
+   the trucks, each truck by the sortie DP, a bound over the splits
+   (:func:`taopt.fleet.sorties.split_dp`; certified when the cross-truck precedences do not
+   make the best split's plan wait);
+6. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from taopt.errors import require
 from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
 from taopt.fleet.sorties import applies as sorties_applies
-from taopt.fleet.sorties import sortie_dp
+from taopt.fleet.sorties import sortie_dp, split_applies, split_dp
 from taopt.registry import register_method
 from taopt.result import Solution, finish
 
@@ -78,7 +82,7 @@ def solve_fleet(
     max_labels : int, optional
         Memory guard of the label search (:data:`taopt.fleet.search.DEFAULT_MAX_LABELS`): the
         run stops like a time limit (``info["stopped_by"] == "size"``).
-    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp"}
+    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp", "split_dp"}
         Force one algorithm (``"auto"``: the fastest that applies; for measurements).
     improve : callable, optional
         ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
@@ -120,6 +124,8 @@ def solve_fleet(
             choice = "sortie_dp"
         elif _operations_shape(problem):
             choice = "operations"
+        elif split_applies(problem):
+            choice = "split_dp"
         else:
             choice = "search"
     if choice == "ideal_dp":
@@ -165,6 +171,15 @@ def solve_fleet(
                     (result["plan"], as_plan(incumbent)),
                     key=lambda plan: _score_or_inf(problem, plan),
                 )
+    elif choice == "split_dp":
+        from taopt.fleet.evaluate import as_plan
+        from taopt.fleet.search import _simple_plan
+
+        result = split_dp(problem, time_limit=time_limit)
+        candidates = [result["plan"], _simple_plan(problem)]
+        if incumbent is not None:
+            candidates.append(as_plan(incumbent))
+        result["plan"] = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
     else:
         left = time_limit
         if improve is not None:

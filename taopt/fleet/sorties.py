@@ -66,10 +66,12 @@ def applies(problem: FleetProblem) -> bool:
     return problem.drones == (1,) and all(mode == "drone" for mode in problem.service)
 
 
-def _sequences(problem: FleetProblem) -> list[tuple[int, ...]]:
-    """Every sortie order of at most c distinct customers that respects G^p within itself."""
+def _sequences(problem: Any, pairs: Any = None) -> list[tuple[int, ...]]:
+    """Every sortie order of at most c distinct customers that respects G^p (or ``pairs``)
+    within itself."""
     n, c = problem.n, min(problem.capacity, problem.n)
-    before = {(int(r), int(j)) for r, j in problem.precedences}
+    pairs = problem.precedences if pairs is None else pairs
+    before = {(int(r), int(j)) for r, j in pairs}
     out: list[tuple[int, ...]] = []
     for m in range(1, c + 1):
         for seq in itertools.permutations(range(n), m):
@@ -79,28 +81,10 @@ def _sequences(problem: FleetProblem) -> list[tuple[int, ...]]:
     return out
 
 
-def sortie_dp(
-    problem: FleetProblem, time_limit: float | None = None, max_steps: int | None = None
-) -> dict[str, Any]:
-    """Run the DP (module docstring); a dict like :func:`taopt.fleet.search.label_search`'s:
-    ``plan`` (None when stopped), ``value`` (inf when stopped), ``stopped_by`` ("optimal",
-    "time_limit" or "size") and counters (``states``, ``steps``)."""
-    if not applies(problem):
-        raise SolverError("sortie_dp: needs one truck with one drone and drone-only customers")
-    deadline = Deadline(time_limit)
-    cap = DEFAULT_MAX_STEPS if max_steps is None else int(max_steps)
-    n, s, tau = problem.n, problem.s, problem.service_time
-    depot = problem.depot
-    ret = problem.objective == "return"
-    tt = problem.truck_time
-    fsd, fcd = problem.flight_stop, problem.flight_customer
-    v = problem.v_drone
-    limit = problem.flight_limit
-    need = [0] * n
-    for r, j in problem.precedences:
-        need[int(j)] |= 1 << int(r)
-    seqs = _sequences(problem)
-    # per sequence: its mask, C_σ (s, s) and the final cost F_σ (s,)
+def _table(problem: Any, seqs: list[tuple[int, ...]]) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Per sequence σ: its mask, C_σ (s, s) and the final cost F_σ (s,) (module docstring)."""
+    tau, v, limit = problem.service_time, problem.v_drone, problem.flight_limit
+    tt, fsd, fcd = problem.truck_time, problem.flight_stop, problem.flight_customer
     table: list[tuple[int, np.ndarray, np.ndarray]] = []
     for seq in seqs:
         inner = sum(float(fcd[seq[i], seq[i + 1]]) for i in range(len(seq) - 1))
@@ -113,9 +97,51 @@ def sortie_dp(
         cost = np.min(tt[:, :, None] + body[None, :, :], axis=1)  # (w, w_2)
         final = np.where(ok.any(axis=1), a, np.inf)
         final_cost = np.min(tt + final[None, :], axis=1)  # (w,)
-        mask = sum(1 << j for j in seq)
-        table.append((mask, cost, final_cost))
-    full = (1 << n) - 1
+        table.append((sum(1 << j for j in seq), cost, final_cost))
+    return table
+
+
+def sortie_dp(
+    problem: FleetProblem, time_limit: float | None = None, max_steps: int | None = None
+) -> dict[str, Any]:
+    """Run the DP (module docstring); a dict like :func:`taopt.fleet.search.label_search`'s:
+    ``plan`` (None when stopped), ``value`` (inf when stopped), ``stopped_by`` ("optimal",
+    "time_limit" or "size") and counters (``states``, ``steps``)."""
+    if not applies(problem):
+        raise SolverError("sortie_dp: needs one truck with one drone and drone-only customers")
+    return _sortie_dp(problem, time_limit, max_steps, check=True)
+
+
+def _sortie_dp(
+    problem: FleetProblem,
+    time_limit: float | None,
+    max_steps: int | None,
+    check: bool,
+    members: int | None = None,
+    pairs: Any = None,
+    pre: tuple[list[tuple[int, ...]], list[tuple[int, np.ndarray, np.ndarray]]] | None = None,
+) -> dict[str, Any]:
+    """:func:`sortie_dp`, or one truck with one drone serving only the customers of the mask
+    ``members`` under the precedence ``pairs`` among them (``pre``: the sequences and their
+    costs, computed once for all; ``check``: re-score the plan)."""
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_STEPS if max_steps is None else int(max_steps)
+    n, s = problem.n, problem.s
+    depot = problem.depot
+    ret = problem.objective == "return"
+    tt = problem.truck_time
+    full = (1 << n) - 1 if members is None else members
+    need = [0] * n
+    for r, j in problem.precedences if pairs is None else pairs:
+        if full >> int(r) & 1 and full >> int(j) & 1:
+            need[int(j)] |= 1 << int(r)
+    if pre is None:
+        seqs = _sequences(problem)
+        table = _table(problem, seqs)
+    else:
+        keep = [q for q, (mask, _, _) in enumerate(pre[1]) if not mask & ~full]
+        seqs = [pre[0][q] for q in keep]
+        table = [pre[1][q] for q in keep]
     start = np.full(s, np.inf)
     start[depot] = 0.0
     value: dict[int, np.ndarray] = {0: start}
@@ -192,6 +218,9 @@ def sortie_dp(
         result.update(plan=None, value=math.inf)
         return result
     plan = _rebuild(problem, seqs, parent, best_end)
+    if not check:
+        result.update(plan=plan, value=best)
+        return result
     scored = evaluate_fleet(problem, plan)
     if abs(scored - best) > MATCH_TOLERANCE * max(1.0, abs(best)):
         raise SolverError(f"fleet sortie DP: the plan scores {scored!r} but the DP says {best!r}")
@@ -200,7 +229,7 @@ def sortie_dp(
 
 
 def _launch_recovery(
-    problem: FleetProblem, seq: tuple[int, ...], w: int, w2: int | None
+    problem: Any, seq: tuple[int, ...], w: int, w2: int | None
 ) -> tuple[int, int | None]:
     """The launch stop w_1 (and recovery w_2 when given) attaining C_σ(w, w_2), or F_σ(w)."""
     tt, fsd, fcd = problem.truck_time, problem.flight_stop, problem.flight_customer
@@ -220,7 +249,7 @@ def _launch_recovery(
 
 
 def _rebuild(
-    problem: FleetProblem,
+    problem: Any,
     seqs: list[tuple[int, ...]],
     parent: dict[int, tuple[np.ndarray, np.ndarray]],
     end: tuple[int, int, int],
@@ -252,4 +281,157 @@ def _rebuild(
     return FleetPlan([route], [[]], [[sorties]])
 
 
-__all__ = ["DEFAULT_MAX_STEPS", "applies", "sortie_dp"]
+# -- several trucks, one drone each: split the customers, each truck by the sortie DP -----------
+
+
+def split_applies(problem: FleetProblem) -> bool:
+    """Several trucks, one drone each, every customer drone-only (any capacity, objective)."""
+    return (
+        problem.K > 1
+        and all(d == 1 for d in problem.drones)
+        and all(mode == "drone" for mode in problem.service)
+    )
+
+
+def _free_values(problem: FleetProblem) -> list[float]:
+    """``opt_free(X)`` for every customer set X (bit mask): the optimum of one truck with one
+    drone serving exactly X with no precedence at all — the sortie DP over all subsets."""
+    n, depot = problem.n, problem.depot
+    ret = problem.objective == "return"
+    tt = problem.truck_time
+    free = problem.replace(precedences=())
+    table = _table(free, _sequences(free))
+    start = np.full(problem.s, np.inf)
+    start[depot] = 0.0
+    value: list[np.ndarray | None] = [None] * (1 << n)
+    value[0] = start
+    out = [math.inf] * (1 << n)
+    out[0] = 0.0
+    for S in sorted(range(1 << n), key=int.bit_count):
+        R = value[S]
+        if R is None:
+            continue
+        if ret:
+            out[S] = float(np.min(R + tt[:, depot]))
+        for mask, cost, final_cost in table:
+            if mask & S:
+                continue
+            S2 = S | mask
+            if not ret:
+                out[S2] = min(out[S2], float(np.min(R + final_cost)))
+            new = np.min(R[:, None] + cost, axis=0)
+            old = value[S2]
+            value[S2] = new if old is None else np.minimum(old, new)
+    return out
+
+
+def split_dp(problem: FleetProblem, time_limit: float | None = None) -> dict[str, Any]:
+    """Several trucks with one drone each (:func:`split_applies`): exact by splitting.
+
+    *Bound.* Dropping the precedence pairs between customers of different trucks leaves one
+    independent one-truck, one-drone problem per truck, so for every split (X_1, ..., X_K) of
+    the customers over the trucks the optimum with that split is at least ``max_k
+    opt(X_k)``, ``opt`` the sortie DP's optimum of X_k with the precedence closure's pairs
+    inside X_k (each still holds: t_r <= t_m <= t_j through any chain), and at least ``max_k
+    opt_free(X_k)`` (no precedence at all, :func:`_free_values`). The optimum is the least
+    over the splits, hence at least the least of these bounds.
+
+    *Search.* Splits in increasing ``max_k opt_free`` (identical trucks: each split once);
+    for each, the sortie DP per truck gives the split's bound and plans, combined into one
+    plan and scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck
+    precedences may make a drone wait, or deadlock: then no plan from that split). The run
+    stops when the best plan is no worse than the least bound of the splits left (certified
+    optimal), or at the time limit with the best plan and that least bound (proven).
+
+    Returns a dict like :func:`sortie_dp`'s plus ``bound`` and ``splits`` (examined).
+    """
+    import itertools
+
+    import networkx as nx
+
+    from taopt.errors import FeasibilityError
+
+    deadline = Deadline(time_limit)
+    n, K = problem.n, problem.K
+    free = _free_values(problem)
+    closure = {
+        (int(r), int(j)) for r, j in nx.transitive_closure_dag(problem.precedence_graph).edges
+    }
+    seqs = _sequences(problem, closure)
+    pre = (seqs, _table(problem, seqs))
+    seen: set[tuple[int, ...]] = set()
+    splits: list[tuple[float, tuple[int, ...]]] = []
+    for assign in itertools.product(range(K), repeat=n):
+        masks = [0] * K
+        for j, k in enumerate(assign):
+            masks[k] |= 1 << j
+        key = tuple(sorted(masks))  # the trucks are identical (one drone each, same depot)
+        if key in seen:
+            continue
+        seen.add(key)
+        splits.append((max(free[m] for m in key), key))
+    splits.sort()
+    best, best_plan = math.inf, None
+    bound_done = math.inf  # least bound over the splits examined
+    examined = 0
+    stopped_by = "optimal"
+    cache: dict[int, dict[str, Any]] = {}
+    stop_at = len(splits)  # the first split not examined
+    for at, (lower, key) in enumerate(splits):
+        stop_at = at
+        if best <= min(lower, bound_done) * (1 + MATCH_TOLERANCE):
+            break
+        if deadline.expired():
+            stopped_by = "time_limit"
+            break
+        parts = []
+        for mask in key:
+            if mask not in cache:
+                if mask:
+                    found = _sortie_dp(
+                        problem, deadline.remaining(), None, False, mask, closure, pre
+                    )
+                    if found["stopped_by"] != "optimal":
+                        break
+                    cache[mask] = found
+                else:
+                    cache[mask] = {"value": 0.0, "plan": None}
+            parts.append(cache[mask])
+        if len(parts) < len(key):  # a truck's DP stopped on the clock: this split not examined
+            stopped_by = "time_limit"
+            break
+        examined += 1
+        bound_done = min(bound_done, max(part["value"] for part in parts))
+        routes: list[list[int]] = []
+        sorties: list[list[list[Sortie]]] = []
+        for part in parts:
+            if part["plan"] is None:
+                routes.append([problem.depot])
+                sorties.append([[]])
+                continue
+            routes.append(list(part["plan"].routes[0]))
+            sorties.append([list(part["plan"].sorties[0][0])])
+        plan = FleetPlan(routes, [[] for _ in range(K)], sorties)
+        try:
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            continue
+        if value < best:
+            best, best_plan = value, plan
+    else:
+        stop_at = len(splits)
+    left = min((lo for lo, _ in splits[stop_at:]), default=math.inf)
+    bound = min(best, bound_done, left)
+    if stopped_by == "optimal" and best > bound * (1 + MATCH_TOLERANCE):
+        stopped_by = "gap"  # every split examined, cross-truck waits keep a gap
+    return {
+        "plan": best_plan,
+        "value": best,
+        "bound": bound,
+        "stopped_by": stopped_by,
+        "splits": examined,
+        "of_splits": len(seen),
+    }
+
+
+__all__ = ["DEFAULT_MAX_STEPS", "applies", "sortie_dp", "split_applies", "split_dp"]

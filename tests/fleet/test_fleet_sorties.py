@@ -98,3 +98,18 @@ def test_label_search_root_bound_never_above_the_optimum(seed):
         for d in problem.drones
     )
     assert _bound(tab, (0, 0.0, (-1.0,) * problem.n, trucks)) <= value + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_split_dp_bound_and_plan_bracket_the_brute_force_optimum(seed):
+    """Two trucks with one drone each: bound <= optimum <= plan; equal when certified."""
+    from taopt.models.fleet import solve_fleet
+
+    p = tiny_instance(300 + seed, 3, 2, 1, 1 + seed % 2, bool(seed % 3), "last_service", stops=2)
+    p = p.replace(service=["drone"] * p.n, customer_stop=[None] * p.n)
+    value = brute_force(p)[0]
+    solution = solve_fleet(p, algorithm="split_dp")
+    assert solution.bound <= value + 1e-9 <= solution.objective + 2e-9
+    assert taopt.evaluate(p, solution.solution) == pytest.approx(solution.objective)
+    if solution.status == "optimal":
+        assert solution.objective == pytest.approx(value, rel=1e-9, abs=1e-9)
