@@ -54,8 +54,16 @@ from taopt.fleet.evaluate import evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
 
-#: Most (state, sortie) steps the DP takes before stopping like a time limit (memory guard).
+#: Most (state, sortie) steps the DP takes before stopping like a time limit.
 DEFAULT_MAX_STEPS = 5_000_000
+
+#: Most states (S, ·) kept (memory guard: three arrays of s numbers each, ≈ 200 MB at s = 42).
+MAX_STATES = 200_000
+
+#: Largest fleet the split DP takes: at most this many customers and this many splits K^n
+#: (its no-precedence DP keeps 2^n arrays of s numbers); beyond, the label search runs.
+SPLIT_MAX_N = 12
+SPLIT_MAX_SPLITS = 600_000
 
 #: Relative agreement required between the DP's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
@@ -157,7 +165,7 @@ def _sortie_dp(
             if deadline.expired():
                 stopped_by = "time_limit"
                 break
-            if steps > cap:
+            if steps > cap or len(value) > MAX_STATES:
                 stopped_by = "size"
                 break
             R = value[S]
@@ -285,9 +293,12 @@ def _rebuild(
 
 
 def split_applies(problem: FleetProblem) -> bool:
-    """Several trucks, one drone each, every customer drone-only (any capacity, objective)."""
+    """Several trucks, one drone each, every customer drone-only (any capacity, objective),
+    at most :data:`SPLIT_MAX_N` customers and :data:`SPLIT_MAX_SPLITS` splits."""
     return (
         problem.K > 1
+        and problem.n <= SPLIT_MAX_N
+        and problem.K**problem.n <= SPLIT_MAX_SPLITS
         and all(d == 1 for d in problem.drones)
         and all(mode == "drone" for mode in problem.service)
     )
