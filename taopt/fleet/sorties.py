@@ -294,7 +294,8 @@ def _rebuild(
 
 def split_applies(problem: FleetProblem) -> bool:
     """Several trucks, one drone each, every customer drone-only (any capacity, objective),
-    at most :data:`SPLIT_MAX_N` customers and :data:`SPLIT_MAX_SPLITS` splits."""
+    at most :data:`~taopt.fleet.sorties.SPLIT_MAX_N` customers and
+    :data:`~taopt.fleet.sorties.SPLIT_MAX_SPLITS` splits."""
     return (
         problem.K > 1
         and problem.n <= SPLIT_MAX_N
@@ -344,7 +345,7 @@ def split_dp(problem: FleetProblem, time_limit: float | None = None) -> dict[str
     the customers over the trucks the optimum with that split is at least ``max_k
     opt(X_k)``, ``opt`` the sortie DP's optimum of X_k with the precedence closure's pairs
     inside X_k (each still holds: t_r <= t_m <= t_j through any chain), and at least ``max_k
-    opt_free(X_k)`` (no precedence at all, :func:`_free_values`). The optimum is the least
+    opt_free(X_k)`` (no precedence at all: one DP over every subset). The optimum is the least
     over the splits, hence at least the least of these bounds.
 
     *Search.* Splits in increasing ``max_k opt_free`` (identical trucks: each split once);
@@ -445,4 +446,13 @@ def split_dp(problem: FleetProblem, time_limit: float | None = None) -> dict[str
     }
 
 
-__all__ = ["DEFAULT_MAX_STEPS", "applies", "sortie_dp", "split_applies", "split_dp"]
+__all__ = [
+    "DEFAULT_MAX_STEPS",
+    "MAX_STATES",
+    "SPLIT_MAX_N",
+    "SPLIT_MAX_SPLITS",
+    "applies",
+    "sortie_dp",
+    "split_applies",
+    "split_dp",
+]
