@@ -180,6 +180,26 @@ def solve_fleet(
         if incumbent is not None:
             candidates.append(as_plan(incumbent))
         result["plan"] = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
+        left = None if time_limit is None else time_limit - (time.perf_counter() - start)
+        if result["stopped_by"] == "gap" and (left is None or left > 0):
+            # not closed by the splits (cross-truck waits): the label search from the split's
+            # plan for the time left; both bounds are valid, so the larger one is kept
+            searched = label_search(
+                problem, time_limit=left, incumbent=result["plan"], max_labels=max_labels
+            )
+            bound = max(result["bound"], searched["bound"])
+            plan = result["plan"]
+            if searched["plan"] is not None:
+                plan = min((plan, searched["plan"]), key=lambda p: _score_or_inf(problem, p))
+            value = _score_or_inf(problem, plan)
+            closed = searched["stopped_by"] == "optimal" or value <= bound * (1 + 1e-12)
+            result.update(
+                plan=plan,
+                value=value,
+                bound=min(bound, value),
+                stopped_by="optimal" if closed else searched["stopped_by"],
+                searched_labels=searched["labels"],
+            )
     else:
         left = time_limit
         if improve is not None:
