@@ -8,7 +8,8 @@
 
 Each solve has a wall-clock limit (``--time-limit``); a solve that stops there counts as that
 long and is reported with its status and gap. Run: ``python benchmarks/bench_fleet.py [--sets
-tspd,fleet8,fleet10] [--time-limit 60] [--seeds 3]``. The machine's load average is printed
+tspd,fleet8,fleet10] [--time-limit 60] [--seeds 3] [--no-milp]``; the teaching MILP
+(``"milp"``) is solved beside the exact method on every fleet instance, same limit. The machine's load average is printed
 (timings on shared cores scale with it).
 """
 
@@ -26,9 +27,11 @@ from taopt.fleet.instances import residential_fleet
 from taopt.fleet.tspd import published_optimum, tspd_instances
 
 
-def _solve(problem: FleetProblem, limit: float) -> tuple[float, taopt.Solution]:
+def _solve(
+    problem: FleetProblem, limit: float, method: str = "exact"
+) -> tuple[float, taopt.Solution]:
     start = time.perf_counter()
-    solution = taopt.solve(problem, "exact", time_limit=limit)
+    solution = taopt.solve(problem, method, time_limit=limit)
     return time.perf_counter() - start, solution
 
 
@@ -50,22 +53,32 @@ def tspd(limit: float) -> None:
     print(f"published optimum missed on {wrong} of {sum(map(len, by_size.values()))}")
 
 
-def fleet(n: int, grid: list[tuple[int, int, int]], seeds: int, limit: float) -> None:
+def fleet(n: int, grid: list[tuple[int, int, int]], seeds: int, limit: float, milp: bool) -> None:
     print(
-        f"{'n':>3} {'K':>2} {'D':>2} {'c':>2} {'seed':>4} {'status':>10} {'gap':>7} {'s':>7} algorithm"
+        f"{'n':>3} {'K':>2} {'D':>2} {'c':>2} {'seed':>4} {'method':>6} {'status':>10} {'value':>8} "
+        f"{'bound':>8} {'gap':>7} {'s':>7} algorithm"
     )
-    times = []
+    times: dict[str, list[float]] = {}
+    certified: dict[str, int] = {}
     for (K, D, c), seed in itertools.product(grid, range(seeds)):
         problem = residential_fleet(n, K, D, c, seed=seed)
-        seconds, solution = _solve(problem, limit)
-        times.append(seconds)
-        gap = solution.gap if solution.gap is not None else float("nan")
+        for method in ("exact", "milp") if milp else ("exact",):
+            seconds, solution = _solve(problem, limit, method)
+            times.setdefault(method, []).append(seconds)
+            certified[method] = certified.get(method, 0) + (solution.status == "optimal")
+            gap = solution.gap if solution.gap is not None else float("nan")
+            bound = solution.bound if solution.bound is not None else float("nan")
+            print(
+                f"{n:>3} {K:>2} {D:>2} {c:>2} {seed:>4} {method:>6} {solution.status!s:>10} "
+                f"{solution.objective:>8.2f} {bound:>8.2f} {gap:>7.3f} {seconds:>7.2f} "
+                f"{solution.info.get('algorithm', '')}",
+                flush=True,
+            )
+    for method, values in times.items():
         print(
-            f"{n:>3} {K:>2} {D:>2} {c:>2} {seed:>4} {solution.status!s:>10} {gap:>7.3f} "
-            f"{seconds:>7.2f} {solution.info.get('algorithm', '')}",
-            flush=True,
+            f"n = {n} {method}: certified {certified[method]} of {len(values)}, median "
+            f"{statistics.median(values):.2f} s, max {max(values):.2f} s"
         )
-    print(f"n = {n}: median {statistics.median(times):.2f} s, max {max(times):.2f} s")
 
 
 def main() -> None:
@@ -73,6 +86,7 @@ def main() -> None:
     parser.add_argument("--sets", default="tspd,fleet8,fleet10")
     parser.add_argument("--time-limit", type=float, default=60.0)
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--no-milp", action="store_true", help="leave the teaching MILP out")
     args = parser.parse_args()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     sets = args.sets.split(",")
@@ -80,9 +94,9 @@ def main() -> None:
         tspd(args.time_limit)
     if "fleet8" in sets:
         grid = list(itertools.product((1, 2, 3), repeat=3))
-        fleet(8, grid, 1, min(args.time_limit, 10.0))
+        fleet(8, grid, 1, min(args.time_limit, 10.0), not args.no_milp)
     if "fleet10" in sets:
-        fleet(10, [(2, 2, 2)], args.seeds, args.time_limit)
+        fleet(10, [(2, 2, 2)], args.seeds, args.time_limit, not args.no_milp)
 
 
 if __name__ == "__main__":

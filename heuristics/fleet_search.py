@@ -51,7 +51,7 @@ from taopt.heuristics.fleet import (
     infeasible_solution,
     servers,
 )
-from taopt.registry import register_method
+from taopt.registry import register_improver, register_method
 from taopt.result import FEASIBLE, Solution, make_solution
 from taopt.runtime import Deadline
 
@@ -415,4 +415,27 @@ def ils_fleet(
     return _finish(problem, "ILS", best[1], best[2], began, seed, info)
 
 
-__all__ = ["ils_fleet", "three_phase", "truck_routes"]
+@register_improver(FleetProblem)
+def improve_fleet(
+    problem: FleetProblem, plan: Any, time_limit: float | None = None, seed: int = 0
+) -> Any:
+    """The better of ``plan`` and :func:`ils_fleet`'s (within ``time_limit``): never worse.
+
+    The improver of the fleet's label search (:func:`taopt.models.fleet.solve_fleet` takes it
+    as ``improve`` and calls it before searching, so pruning starts at a good plan;
+    :func:`taopt.solve` passes it, the model imports no heuristic).
+    """
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import as_plan, evaluate_fleet
+
+    found = ils_fleet(problem, seed=seed, time_limit=time_limit)
+    if plan is None:
+        return found.solution
+    try:
+        value = evaluate_fleet(problem, as_plan(plan))
+    except FeasibilityError:
+        return found.solution
+    return found.solution if found.objective < value else plan
+
+
+__all__ = ["ils_fleet", "improve_fleet", "three_phase", "truck_routes"]

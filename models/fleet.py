@@ -7,9 +7,16 @@
 2. chapter 5's shape (K = D = c = 1, every customer drone-only, ``last_service``): chapter 5's
    DP over the order ideals of G^p (:func:`taopt.delivery.ideal_dp.ideal_dp`), its plan carried
    over by :meth:`taopt.fleet.problem.FleetPlan.from_delivery_plan`;
-3. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
+3. one truck with one drone, every customer drone-only, c > 1 or ``"return"``: the sortie DP
+   over the order ideals (:func:`taopt.fleet.sorties.sortie_dp`, chapter 5's DP with
+   multi-parcel sorties);
+4. one drone per truck, c = 1 and no precedence (TSP-D and its multi-truck version): the
    operations DP over customer subsets (:func:`taopt.fleet.operations.operations_dp`);
-4. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
+5. several trucks with one drone each, every customer drone-only: the customers split over
+   the trucks, each truck by the sortie DP, a bound over the splits
+   (:func:`taopt.fleet.sorties.split_dp`; certified when the cross-truck precedences do not
+   make the best split's plan wait);
+6. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
 """
 
 from __future__ import annotations
@@ -20,8 +27,25 @@ from typing import Any
 from taopt.errors import require
 from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
+from taopt.fleet.sorties import applies as sorties_applies
+from taopt.fleet.sorties import sortie_dp, split_applies, split_dp
 from taopt.registry import register_method
 from taopt.result import Solution, finish
+
+#: Share of the time limit the label search gives the improver (the ILS) before searching.
+IMPROVE_SHARE = 0.2
+
+
+def _score_or_inf(problem: FleetProblem, plan: Any) -> float:
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+
+    if plan is None:
+        return float("inf")
+    try:
+        return evaluate_fleet(problem, plan)
+    except FeasibilityError:
+        return float("inf")
 
 
 def _chapter5_shape(problem: FleetProblem) -> bool:
@@ -43,6 +67,7 @@ def solve_fleet(
     incumbent: Any = None,
     max_labels: int | None = None,
     algorithm: str = "auto",
+    improve: Any = None,
 ) -> Solution:
     """Certified optimum of a fleet problem (module docstring for the algorithm used).
 
@@ -57,8 +82,13 @@ def solve_fleet(
     max_labels : int, optional
         Memory guard of the label search (:data:`taopt.fleet.search.DEFAULT_MAX_LABELS`): the
         run stops like a time limit (``info["stopped_by"] == "size"``).
-    algorithm : {"auto", "search", "operations", "ideal_dp"}
+    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp", "split_dp"}
         Force one algorithm (``"auto"``: the fastest that applies; for measurements).
+    improve : callable, optional
+        ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
+        :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
+        before the label search only (the DPs need no incumbent), with
+        :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit.
 
     Returns
     -------
@@ -90,8 +120,12 @@ def solve_fleet(
     if choice == "auto":
         if _chapter5_shape(problem):
             choice = "ideal_dp"
+        elif sorties_applies(problem):
+            choice = "sortie_dp"
         elif _operations_shape(problem):
             choice = "operations"
+        elif split_applies(problem):
+            choice = "split_dp"
         else:
             choice = "search"
     if choice == "ideal_dp":
@@ -122,10 +156,58 @@ def solve_fleet(
         from taopt.fleet.operations import operations_dp
 
         result = operations_dp(problem, time_limit=time_limit)
+    elif choice == "sortie_dp":
+        from taopt.fleet.bounds import fleet_lower
+        from taopt.fleet.evaluate import as_plan
+        from taopt.fleet.search import _simple_plan
+
+        result = sortie_dp(problem, time_limit=time_limit, max_steps=max_labels)
+        result["bound"] = result["value"]
+        if result["plan"] is None:  # stopped: the incumbent (or a simple plan), a proven bound
+            result["bound"] = fleet_lower(problem)
+            result["plan"] = _simple_plan(problem)
+            if incumbent is not None:
+                result["plan"] = min(
+                    (result["plan"], as_plan(incumbent)),
+                    key=lambda plan: _score_or_inf(problem, plan),
+                )
+    elif choice == "split_dp":
+        from taopt.fleet.evaluate import as_plan
+        from taopt.fleet.search import _simple_plan
+
+        result = split_dp(problem, time_limit=time_limit)
+        candidates = [result["plan"], _simple_plan(problem)]
+        if incumbent is not None:
+            candidates.append(as_plan(incumbent))
+        result["plan"] = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
+        left = None if time_limit is None else time_limit - (time.perf_counter() - start)
+        if result["stopped_by"] == "gap" and (left is None or left > 0):
+            # not closed by the splits (cross-truck waits): the label search from the split's
+            # plan for the time left; both bounds are valid, so the larger one is kept
+            searched = label_search(
+                problem, time_limit=left, incumbent=result["plan"], max_labels=max_labels
+            )
+            bound = max(result["bound"], searched["bound"])
+            plan = result["plan"]
+            if searched["plan"] is not None:
+                plan = min((plan, searched["plan"]), key=lambda p: _score_or_inf(problem, p))
+            value = _score_or_inf(problem, plan)
+            closed = searched["stopped_by"] == "optimal" or value <= bound * (1 + 1e-12)
+            result.update(
+                plan=plan,
+                value=value,
+                bound=min(bound, value),
+                stopped_by="optimal" if closed else searched["stopped_by"],
+                searched_labels=searched["labels"],
+            )
     else:
-        result = label_search(
-            problem, time_limit=time_limit, incumbent=incumbent, max_labels=max_labels
-        )
+        left = time_limit
+        if improve is not None:
+            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            incumbent = improve(problem, incumbent, share)
+            if time_limit is not None:
+                left = max(time_limit - (time.perf_counter() - start), 0.0)
+        result = label_search(problem, time_limit=left, incumbent=incumbent, max_labels=max_labels)
     info = {
         "algorithm": choice,
         **{k: v for k, v in result.items() if k not in ("plan", "value", "bound")},
@@ -147,16 +229,23 @@ def solve_fleet(
 def _affordable(problem: FleetProblem) -> bool:
     """Where the exact method typically certifies within a minute (measured, see
     docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers, the
-    label search up to 5 customers."""
+    sortie DP (one truck, one drone) up to 10, the label search up to 5 customers."""
     if _chapter5_shape(problem):
         return True
+    if sorties_applies(problem):
+        return problem.n <= 10
     if _operations_shape(problem):
         return problem.n <= 12
     return problem.n <= 5
 
 
-register_method(FleetProblem, "exact", category="exact", certifies=_affordable, style=("-", "*"))(
-    solve_fleet
-)
+register_method(
+    FleetProblem,
+    "exact",
+    category="exact",
+    warm_start=("SMMA",),
+    certifies=_affordable,
+    style=("-", "*"),
+)(solve_fleet)
 
-__all__ = ["solve_fleet"]
+__all__ = ["IMPROVE_SHARE", "solve_fleet"]

@@ -113,15 +113,20 @@ class _Tables:
         self.back = back
         self.ret = p.objective == "return"
         # work[j]: drone time serving a drone-only customer costs at least (landing τ and the
-        # shortest leg into it, from a stop or another customer); 0 for truck-servable ones
-        into = np.minimum(
-            p.flight_stop.min(axis=1),
-            np.where(np.eye(n, dtype=bool), INF, p.flight_customer).min(axis=1),
-        )
+        # shortest leg into it, from a stop or, when c > 1, another customer); 0 for
+        # truck-servable ones
+        into = p.flight_stop.min(axis=1)
+        if p.capacity > 1 and n > 1:
+            into = np.minimum(
+                into, np.where(np.eye(n, dtype=bool), INF, p.flight_customer).min(axis=1)
+            )
         self.work = [
             0.0 if self.truck_ok[j] else float(into[j] / p.v_drone + p.service_time)
             for j in range(n)
         ]
+        # rec: a recovery costs its drone at least the shortest flight from a customer to a stop
+        # and the landing τ
+        self.rec = float(p.flight_stop.min() / p.v_drone + p.service_time) if n else 0.0
         self.full = (1 << n) - 1
         # launch_ok[w]: customers a sortie launched at w can serve first (and still land)
         self.launch_ok = [
@@ -140,27 +145,52 @@ class _Tables:
 
 
 def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
-    """The drones' shared work: every unserved drone-only customer j costs its drone at least
-    ``work[j]`` after the drone is available (a_d: launch no sooner than its truck's arrival
-    A or its recovery ρ; an airborne drone from its last time t). A drone that serves a load
-    finishes its last service no sooner than ``a_d + load``, so the last service time F
-    satisfies ``Σ_d max(0, F - a_d) >= W`` (the total work): F is at least the water level
-    that fills W over the availabilities. 0 when no drone-only customer is left."""
+    """The drones' shared work: a lower bound on the last drone service (``"last_service"``)
+    or on the last recovery (``"return"``) of every completion.
+
+    Every unserved drone-only customer j costs the drone serving it at least ``work[j]``: its
+    in-leg (the shortest flight into j, from a stop or, when c > 1, another customer) and the
+    landing τ. Recoveries cost ``rec`` each (the shortest flight from a customer to a stop and
+    the recovery τ). Let m be the unserved drone-only customers, r the room left in the
+    sorties still open (c - m_d for each airborne drone that may still take customers) and a
+    the aboard drones: at least ``q = ceil(max(0, m - r) / c)`` new sorties are flown. A drone
+    flying n_d >= 1 new sorties is recovered n_d - 1 times before its last service when it is
+    aboard now, n_d times when it is airborne now (its current sortie first); so, summed over
+    the drones, at least ``q - a`` recoveries happen before the drones' last services (under
+    ``"return"`` every recovery counts: at least ``q`` plus one per airborne drone). These
+    intervals (legs, landings, recoveries) are disjoint on a drone's timeline and start after
+    its availability a_d (an aboard drone: launch no sooner than its truck's arrival A or its
+    recovery ρ; an airborne one: its last time t). A drone with load L_d ends no sooner than
+    ``a_d + L_d``, so the bounded time F satisfies ``Σ_d max(0, F - a_d) >= W`` (the total
+    work): F is at least the water level that fills W over the availabilities. 0 when no
+    drone-only customer is left."""
     W = 0.0
+    m = 0
     for j in range(tab.n):
-        if not S >> j & 1:
+        if not S >> j & 1 and tab.work[j] > 0.0:
             W += tab.work[j]
-    if W <= 0.0:
+            m += 1
+    if m == 0:
         return 0.0
     avail = []
+    room = aboard = airborne = 0
+    c = tab.c
     for _w, A, _T, _ev, fin, _F, drones in trucks:
         if fin:
             continue
         for dr in drones:
             if dr[0] == 0:
                 avail.append(dr[1] if dr[1] > A else A)
+                aboard += 1
             else:
                 avail.append(dr[3])
+                airborne += 1
+                if dr[5]:
+                    room += c - dr[2]
+    new = -(-(m - room) // c) if m > room else 0
+    recoveries = new + airborne if tab.ret else new - aboard
+    if recoveries > 0:
+        W += recoveries * tab.rec
     if not avail:
         return INF
     avail.sort()
