@@ -513,6 +513,20 @@ def dp_bytes(n: int, states: float) -> float:
     return (DP_BYTES_PER_STATE + extra) * float(states)
 
 
+#: Peak bytes per beam slot (width x nodes) of :func:`taopt.models.sop_dp.beam_order`: its
+#: layers kept for the path and the extensions of one layer before the cut (fitted by
+#: ``benchmarks/bench_sop_memory.py --fit``).
+BEAM_BYTES_PER_SLOT = 100.0
+
+
+def beam_bytes(n: int, width: int) -> float:
+    """Estimated peak bytes of a beam pass of ``width`` on ``n`` nodes (beyond the base)."""
+    from taopt.ideals import is_wide, words
+
+    extra = 8.0 * (words(n) - 1) if is_wide(n) else 0.0
+    return (BEAM_BYTES_PER_SLOT + extra) * float(width) * float(n)
+
+
 def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
     """The most states (at most ``wanted``) the DP may keep within the memory limit."""
     from taopt.runtime import max_memory_gb as limit_gb
@@ -942,6 +956,7 @@ def solve_sop_problem(
         DP's ``states``/``pruned`` when it ran.
     """
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
+    from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -959,14 +974,35 @@ def solve_sop_problem(
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
     second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
+    # all the states the ideals allow (both directions), unless the memory caps them
+    every_state = 2 * problem.n * ideals
+    alone_states = dp_state_cap(problem.n, max_memory_gb, every_state)
+    plan = memory_plan(problem.n, max_memory_gb)  # "dp", or a degraded stage that fits
+    info["memory_plan"] = plan
     milp_ok = milp_fits(problem, formulation, max_memory_gb)
     if not milp_ok:
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
 
+    def expect(states: float = 0.0, seconds: float | None = None, columns: float = 0.0) -> None:
+        """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
+        largest over the stages run): a DP stage keeps at most its cap, the states the ideals
+        allow and :data:`DP_STATES_PER_SECOND` a second (after its beam pass); a MILP its
+        columns."""
+        if seconds is not None:
+            states = min(states, DP_STATES_PER_SECOND * seconds)
+        if not capped:
+            states = min(states, every_state)
+        dp = max(dp_bytes(problem.n, states), beam_bytes(problem.n, 1024)) if states else 0.0
+        stage(BASE_BYTES + dp + sop_milp_bytes(columns))
+
+    def stage(need: float) -> None:
+        info["memory_estimate"] = max(info.get("memory_estimate", BASE_BYTES), need)
+
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
+        columns = column_count(problem.cost, problem.closure, problem.start, formulation)
         result = solve_sop(
             problem.cost,
             problem.precedences,
@@ -979,6 +1015,8 @@ def solve_sop_problem(
             incumbent=known,
             problem=problem,
         )
+        if result.info.get("model") != "not built":
+            expect(columns=columns)
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)
             bound = min(bound, result.objective)
@@ -1004,6 +1042,7 @@ def solve_sop_problem(
                     info["more_dp"] = f"skipped: {time_left:.2f} s left for a {setup:.2f} s setup"
                 return before
         known = incumbent if before is None or before.solution is None else before.solution
+        expect(second_states, time_left)
         again = solve_sop_dp(
             problem,
             None if time_left is None else max(time_left - MARGIN, MARGIN),
@@ -1024,7 +1063,10 @@ def solve_sop_problem(
         and (deadline.remaining() or 0.0) * (1.0 if engine == "dp" or not capped else DP_SHARE)
         < counted_in + MARGIN
     )
-    if deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
+    if plan != "dp" and engine != "milp":  # the DP does not fit the memory: a stage that does
+        result = degraded(problem, plan, deadline, incumbent, max_memory_gb, began, stage)
+        used = plan
+    elif deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
         stop_info = {"model": "not run", "count_seconds": counted_in}
         result = _stopped(problem, known, None, began, "portfolio", stop_info)
@@ -1033,15 +1075,13 @@ def solve_sop_problem(
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:
-        result = solve_sop_dp(
-            problem,
-            deadline.remaining(),
-            incumbent=incumbent,
-            max_states=max_states if capped else None,
-        )
+        cap = max_states if capped else (None if alone_states >= every_state else alone_states)
+        expect(every_state if cap is None else cap, deadline.remaining())
+        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=cap)
         used = "dp"
     else:
         share = deadline.share(DP_SHARE)
+        expect(max_states, share)
         result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
         used = "dp"
         # a second stage sets up as the first did (its bounds, its first layers; seconds under
@@ -1058,6 +1098,7 @@ def solve_sop_problem(
             # state, so not the first choice) with more states, from the best order so far
             first = result
             known = first.solution if first.solution is not None else incumbent
+            expect(second_states, second_share)
             second = solve_sop_dp(
                 problem,
                 second_share,
@@ -1072,6 +1113,15 @@ def solve_sop_problem(
             known = result.solution if result.solution is not None else incumbent
             result = milp(known, deadline.remaining(), dp_result=result)
             used += "+milp"
+    full = plan == "dp" or engine == "milp"  # a degraded stage has used the limit already
+    if full and result.status == TIME_LIMIT and deadline.limited and not deadline.expired(MARGIN):
+        # the stages ended before the limit without a proof: go on while it lasts (a DP with
+        # more states while they fit the memory, unless the caller fixed them; wider beams)
+        grow = engine != "dp" and plan == "dp"
+        last_cap = max(second_states, max_states) if grow else 1 << 62
+        setup = max(setups, default=0.0)
+        result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
+    stage(BASE_BYTES)  # the process itself, whatever ran
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",
