@@ -125,7 +125,8 @@ if hasattr(result, "info"):
     out.update(status=str(result.status), objective=result.objective, bound=result.bound,
                states=max(info.get("states") or 0, info.get("dp_states") or 0),
                engine=info.get("engine"), model=info.get("model"),
-               staged=info.get("memory_estimate"), variables=info.get("variables"))
+               staged=info.get("memory_estimate"), variables=info.get("variables"),
+               peak_layer=info.get("peak_layer"), rest=info.get("rest"))
 print(json.dumps(out))
 """
 
@@ -178,8 +179,8 @@ def feature(r: dict) -> float | None:
         return float(r.get("states") or 0)
     if stage == "beam":
         return float(r.get("slots") or 0)
-    if stage == "milp":
-        return float(r.get("variables") or r.get("columns") or 0)
+    if stage == "milp":  # only runs where HiGHS ran (a model not built takes nothing)
+        return float(r.get("variables") or 0)
     if stage == "cpsat":
         return float(r["n"] * r["arcs"])
     return None
@@ -201,14 +202,16 @@ def fit(runs: list[dict]) -> None:
         pairs = [p for p in pairs if p[0]]
         if not pairs:
             continue
-        best = (math.inf, 0.0)
-        for step in range(0, 4001):
-            k = 10 ** (-2 + step * 8 / 4000)  # 0.01 to 1e6 bytes per unit
-            worst = max(abs(math.log((b + k * f) / peak)) for f, peak, b in pairs)
-            best = min(best, (worst, k))
+        best = (math.inf, 0.0, 0.0)
+        fixed = [0.0] if stage in ("dp", "beam") else [m * 5e6 for m in range(0, 21)]
+        for start in fixed:  # the MILP has a fixed part (HiGHS and cvxpy's work space)
+            for step in range(0, 2001):
+                k = 10 ** (-2 + step * 8 / 2000)  # 0.01 to 1e6 bytes per unit
+                worst = max(abs(math.log((b + start + k * f) / peak)) for f, peak, b in pairs)
+                best = min(best, (worst, k, start))
         print(
-            f"{stage}: {best[1]:,.1f} bytes per unit over {len(pairs)} runs; estimate within "
-            f"{math.exp(best[0]):.2f}x of every peak"
+            f"{stage}: {best[1]:,.1f} bytes per unit + {best[2] / 1e6:.0f} MB over {len(pairs)} "
+            f"runs; estimate within {math.exp(best[0]):.2f}x of every peak"
         )
 
 

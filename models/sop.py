@@ -513,7 +513,7 @@ def dp_bytes(n: int, states: float) -> float:
     return (DP_BYTES_PER_STATE + extra) * float(states)
 
 
-#: Peak bytes per beam slot (width x nodes) of :func:`taopt.models.sop_dp.beam_order`: its
+#: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
 #: layers kept for the path and the extensions of one layer before the cut (fitted by
 #: ``benchmarks/bench_sop_memory.py --fit``).
 BEAM_BYTES_PER_SLOT = 100.0
@@ -545,22 +545,32 @@ def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None
 
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
-    """The portfolio's peak: the larger of its DP stages (their state caps, or the states
-    the ideals allow) and the MILP when it fits the limit; above the limit the MILP is
-    skipped and the DP's caps shrink to fit, so the estimate fits too (never a refusal
-    for size alone)."""
+    """The portfolio's peak: the larger of its DP stages (their state caps, the states the
+    ideals allow, the states it can make in its time) and the MILP when it fits the limit;
+    above the limit the stage that fits (:func:`taopt.models.sop_stages.memory_plan`: the
+    DP with a smaller cap, the beam, the bounds alone), so the estimate fits too (never a
+    refusal for size alone)."""
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals
+    from taopt.models.sop_stages import beam_width_cap, memory_plan
     from taopt.runtime import max_memory_gb as limit_gb
 
     formulation = options.get("formulation", "flow")
     limit = options.get("max_memory_gb")
     seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
+    plan = memory_plan(problem.n, limit)
+    if plan != "dp" and options.get("engine") != "milp":
+        width = beam_width_cap(problem.n, limit) if plan == "beam" else 0
+        total = BASE_BYTES + beam_bytes(problem.n, width)
+        return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
-    if seconds is not None:  # a run keeps no more states than it can make in its time
-        wanted = min(wanted, int(DP_STATES_PER_SECOND * seconds))
-    states = dp_state_cap(problem.n, limit, wanted if capped else problem.n * count)
+    if seconds is not None:  # a run keeps no more states than it can make in its time (its
+        # DP stages may double their caps to use the time left, memory permitting)
+        wanted = int(DP_STATES_PER_SECOND * seconds)
+    states = dp_state_cap(
+        problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
+    )
     total = BASE_BYTES + dp_bytes(problem.n, states)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
@@ -1015,7 +1025,7 @@ def solve_sop_problem(
             incumbent=known,
             problem=problem,
         )
-        if result.info.get("model") != "not built":
+        if result.info.get("model") not in STOPPED_EARLY:  # compiled for HiGHS and solved
             expect(columns=columns)
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)
@@ -1075,9 +1085,10 @@ def solve_sop_problem(
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:
-        cap = max_states if capped else (None if alone_states >= every_state else alone_states)
-        expect(every_state if cap is None else cap, deadline.remaining())
-        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=cap)
+        alone = None if alone_states >= every_state else alone_states  # None: no cap
+        dp_cap = max_states if capped else alone
+        expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
+        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
         share = deadline.share(DP_SHARE)

@@ -12,9 +12,9 @@ strongest stage down (:func:`memory_plan`):
 
 1. ``"dp"``: the DP over order ideals with a state cap that fits (at least
    :data:`MIN_DP_STATES` states), and the flow MILP when its columns fit too;
-2. ``"beam"``: the DP's beam search (:func:`taopt.models.sop_dp.beam_order`), its width fitted
+2. ``"beam"``: the DP's beam search (``taopt.models.sop_dp.beam_order``), its width fitted
    to the memory (at least :data:`MIN_BEAM_WIDTH`), widened while time is left, with the
-   assignment and arborescence bounds (:func:`taopt.models.sop._cheap_bound`);
+   assignment and arborescence bounds (``taopt.models.sop._cheap_bound``);
 3. ``"bound"``: the warm start's order and the same bounds (memory O(n^2), which the problem
    itself takes).
 
@@ -26,7 +26,7 @@ optimum (a DP stopped by its state cap, a MILP that could not be built in its sh
 (:func:`use_the_rest`): a DP stage with twice the state cap while that fits the memory, then
 beam passes of doubling width from the best order (the anytime beam search of Libralesso et
 al., 2020) until the limit. Each pass re-proves nothing it does not keep: the best order and
-the larger proven bound are kept (:func:`taopt.models.sop._combine`).
+the larger proven bound are kept (``taopt.models.sop._combine``).
 
 References
 ----------
@@ -48,6 +48,7 @@ __all__ = [
     "MIN_DP_STATES",
     "MIN_BEAM_WIDTH",
     "FIRST_FILL_WIDTH",
+    "MAX_FILL_WIDTH",
     "memory_plan",
     "beam_width_cap",
     "degraded",
@@ -61,8 +62,10 @@ MIN_DP_STATES = 20_000
 #: Narrowest beam run; below, only the warm start's order and the cheap bounds fit.
 MIN_BEAM_WIDTH = 8
 
-#: Width of the first beam pass that uses the time left (the DP's own beam pass was 1,024).
-FIRST_FILL_WIDTH = 2048
+#: Width of the first beam pass that uses the time left; the widths double from it, skipping
+#: those the DP's own beam passes ran (``NARROW_BEAM`` of :mod:`taopt.models.sop_dp` and 1,024), so a
+#: pass that cannot end in the time left costs at most as long as all the passes before it.
+FIRST_FILL_WIDTH = 128
 
 #: Widest beam pass (memory permitting): past it a pass takes minutes on 100+ nodes.
 MAX_FILL_WIDTH = 1 << 20
@@ -99,6 +102,7 @@ def _widen(
     widest: int,
     info: dict[str, Any],
     stage: Callable[[float], None] | None = None,
+    skip: tuple[int, ...] | None = None,
 ) -> tuple[tuple[float, list[int]] | None, bool]:
     """Beam passes of width ``first``, doubling up to ``widest``, until the deadline; the
     best order and whether the widest pass ended (False: the deadline came first).
@@ -107,8 +111,12 @@ def _widen(
     from taopt.models.sop_dp import beam_order
 
     widths: list[int] = info.setdefault("beam_widths", [])
+    done = set() if skip is None else set(skip)
     width = max(MIN_BEAM_WIDTH, min(first, widest))
     while not deadline.expired(MARGIN):
+        if width in done and width < widest:
+            width = min(2 * width, widest)
+            continue
         left = deadline.remaining()
         if stage is not None:
             stage(BASE_BYTES + beam_bytes(problem.n, width))
@@ -171,7 +179,7 @@ def use_the_rest(
     it). ``info["rest"]`` lists what ran; ``stage(bytes)`` is told each stage's estimated
     peak before it runs."""
     from taopt.models.sop import BASE_BYTES, _combine, dp_bytes, dp_state_cap
-    from taopt.models.sop_dp import solve_sop_dp
+    from taopt.models.sop_dp import NARROW_BEAM, solve_sop_dp
 
     ran: list[str] = []
     memory_cap = dp_state_cap(problem.n, max_memory_gb, 1 << 40)
@@ -200,10 +208,13 @@ def use_the_rest(
         widest = beam_width_cap(problem.n, max_memory_gb)
         if widest:
             known = None
-            if result.solution is not None:
+            if result.order is not None:
                 known = (result.objective, list(result.order))
             info: dict[str, Any] = {}
-            found, _ = _widen(problem, known, deadline, FIRST_FILL_WIDTH, widest, info, stage)
+            ran_before = (NARROW_BEAM, 1024)  # the DP's own beam passes
+            found, _ = _widen(
+                problem, known, deadline, FIRST_FILL_WIDTH, widest, info, stage, ran_before
+            )
             ran += [f"beam {w:,}" for w in info.get("beam_widths", [])]
             if found is not None and (known is None or found[0] < known[0]):
                 better = finish(
