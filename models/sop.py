@@ -562,6 +562,9 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     if plan != "dp" and options.get("engine") != "milp":
         width = beam_width_cap(problem.n, limit) if plan == "beam" else 0
         total = BASE_BYTES + beam_bytes(problem.n, width)
+        # a limit below the process's own base: the stage adds nothing above what is spent
+        # already, so it is not refused (the answer is the cheap bounds and the warm start)
+        total = min(total, limit_gb(limit) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
@@ -574,9 +577,11 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     total = BASE_BYTES + dp_bytes(problem.n, states)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-    # the MILP runs only after capped DP stages, and is built only when its build fits the
-    # time it gets then (solve_sop's rule)
-    built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
+    # the MILP runs only after capped DP stages, and takes its memory when it is compiled for
+    # HiGHS: only when its build and its compile (COMPILE_PER_BUILD times a build of about a
+    # third of SECONDS_PER_COLUMN a column) fit the time it gets then (solve_sop's rule)
+    compile_seconds = columns * SECONDS_PER_COLUMN * (1.0 + COMPILE_PER_BUILD / 3.0)
+    built = seconds is None or compile_seconds <= MILP_TIME_SHARE * seconds
     if options.get("engine") == "milp" or (
         capped
         and built
