@@ -179,8 +179,9 @@ def feature(r: dict) -> float | None:
         return float(r.get("states") or 0)
     if stage == "beam":
         return float(r.get("slots") or 0)
-    if stage == "milp":  # only runs where HiGHS ran (a model not built takes nothing)
-        return float(r.get("variables") or 0)
+    if stage == "milp":  # only runs where HiGHS ran (not a model left uncompiled)
+        ran = r.get("model") in (None, "solved")
+        return float(r.get("variables") or r.get("columns") or 0) if ran else 0.0
     if stage == "cpsat":
         return float(r["n"] * r["arcs"])
     return None

@@ -472,32 +472,47 @@ def column_count(
     return len(tails) + int(usable.sum())
 
 
+# The memory model below is measured, not derived: ``python benchmarks/bench_sop_memory.py
+# --stages dp,beam,milp,cpsat --generated --time-limit 5 --out runs.jsonl`` runs each stage
+# on each of the 16 TSPLIB SOP files (shipped and ../shared/benchmarks/tsplib) and 6
+# generated instances of 100-380 nodes in a fresh interpreter and records its peak RSS
+# (``ru_maxrss``); ``--fit runs.jsonl`` prints the constants (minimax of the ratio estimate /
+# peak). Re-run both after the flow model changes.
+
 #: Peak resident bytes of a process that has imported taopt, numpy, scipy, cvxpy and highspy
-#: and loaded an instance (measured: 150-160 MB on ESC07-ESC25, ``benchmarks/bench_sop.py
-#: --resources``).
-BASE_BYTES = 160e6
+#: and loaded an instance (measured: 154-155 MB over 67 runs, 2026-11).
+BASE_BYTES = 155e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
-#: of the largest layer's extensions, merge and completion bound; fitted on generated
-#: instances, ``benchmarks/bench_sop.py --resources --generated``); 8 more per extra word.
-DP_BYTES_PER_STATE = 200.0
+#: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
+#: Fitted: 470 keeps every one of 17 measured DP runs (10 to 186,000 states) within 1.33x;
+#: per state alone the peaks spread from 94 B (p43.4, dense precedence: few extensions per
+#: state) to 1.5 KB (ESC47, sparse: many), which the base absorbs at these sizes.
+DP_BYTES_PER_STATE = 470.0
 
 
 #: Peak bytes per column of the flow MILP built with cvxpy, compiled for HiGHS and solved
-#: for a few seconds (measured on generated instances of 20-80 nodes, 4,680-176,551 columns:
-#: 4.4-13.8 KB per column above the process's base, ``benchmarks/bench_sop.py`` notes; the
-#: generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB, was 3-7 times too low here).
-SOP_MILP_BYTES_PER_COLUMN = 8000.0
+#: (fitted with :data:`SOP_MILP_BYTES`: within 1.26x of 9 measured runs, 262-134,550
+#: columns; the generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB, is low here).
+SOP_MILP_BYTES_PER_COLUMN = 3700.0
+
+#: Fixed peak bytes of a compiled flow MILP (HiGHS's and cvxpy's work space).
+SOP_MILP_BYTES = 50e6
 
 
 def sop_milp_bytes(columns: float) -> float:
-    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base)."""
-    return SOP_MILP_BYTES_PER_COLUMN * float(columns)
+    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base; 0 for
+    no model)."""
+    if not columns:
+        return 0.0
+    return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_COLUMN * float(columns)
 
 
-#: States the DP keeps per second at most (measured on generated instances: 27,000 a
-#: second on a random 50-node SOP of sparse precedence, the fastest growth seen).
-DP_STATES_PER_SECOND = 40_000
+#: States a DP stage keeps per second, typically (measured under load: 2,500-37,000 a second
+#: over the 5 s DP runs of the memory fit, prob.42 the fastest): what the estimate of a DP
+#: stage counts, below its state cap. Not a limit: the cap (:func:`dp_state_cap`) is what
+#: keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 10_000
 
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
@@ -514,9 +529,10 @@ def dp_bytes(n: int, states: float) -> float:
 
 
 #: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
-#: layers kept for the path and the extensions of one layer before the cut (fitted by
-#: ``benchmarks/bench_sop_memory.py --fit``).
-BEAM_BYTES_PER_SLOT = 100.0
+#: layers kept for the path and the extensions of one layer before the cut (fitted: 37 B
+#: within 1.08x of 17 passes of width 4,096 on 9-380 nodes; 50 B kept, as the wider passes
+#: cut off by the 5 s limit stopped before their widest layers).
+BEAM_BYTES_PER_SLOT = 50.0
 
 
 def beam_bytes(n: int, width: int) -> float:
