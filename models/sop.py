@@ -975,16 +975,23 @@ def solve_sop_problem(
         limit, :func:`dp_state_cap`).
     max_memory_gb : float, optional
         The memory limit (default :func:`taopt.runtime.max_memory_gb`, passed on by
-        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink: the
-        run degrades to what fits and returns ``time_limit`` with its best order and a
-        proven bound, never a refusal for size alone.
+        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink; below
+        what the DP needs, the beam or the cheap bounds alone run
+        (:func:`taopt.models.sop_stages.memory_plan`): the run degrades to what fits and
+        returns ``time_limit`` with its best order and a proven bound, never a refusal for
+        size alone. A run whose stages end before its limit without a proof goes on with
+        larger DP caps while they fit, then wider beams
+        (:func:`taopt.models.sop_stages.use_the_rest`), so it uses its whole limit.
 
     Returns
     -------
     Solution
         As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
-        ``engine`` ("dp", "milp", "dp+dp", "dp+milp" or "dp+dp+milp"), ``ideals`` and ``ideals_capped``, and the
-        DP's ``states``/``pruned`` when it ran.
+        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", or the degraded
+        "beam" / "bound"), ``ideals`` and ``ideals_capped``, the DP's ``states``/``pruned``
+        when it ran, ``memory_plan``, ``memory_estimate`` (the estimated peak bytes of the
+        stages run, each estimated before it started) and ``rest`` (what ran after the
+        stages, if anything).
     """
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
