@@ -1158,7 +1158,7 @@ def solve_sop_problem(
         # more states while they fit the memory, unless the caller fixed them; wider beams)
         grow = engine != "dp" and plan == "dp"
         last_cap = max(second_states, max_states) if grow else 1 << 62
-        setup = max(setups, default=0.0)
+        setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
     stage(BASE_BYTES)  # the process itself, whatever ran
     return result.replace(

@@ -103,24 +103,34 @@ def _widen(
     info: dict[str, Any],
     stage: Callable[[float], None] | None = None,
     skip: tuple[int, ...] | None = None,
+    setup: float = 0.0,
 ) -> tuple[tuple[float, list[int]] | None, bool]:
     """Beam passes of width ``first``, doubling up to ``widest``, until the deadline; the
     best order and whether the widest pass ended (False: the deadline came first).
-    ``stage(bytes)`` is told each pass's estimated peak before it runs."""
+    ``stage(bytes)`` is told each pass's estimated peak before it runs. A pass sets up its
+    completion bound before it looks at the clock: it starts only when the time left covers
+    the shortest pass seen so far (``setup`` before the first), so none overruns the limit."""
     from taopt.models.sop import BASE_BYTES, beam_bytes
     from taopt.models.sop_dp import beam_order
 
     widths: list[int] = info.setdefault("beam_widths", [])
     done = set() if skip is None else set(skip)
     width = max(MIN_BEAM_WIDTH, min(first, widest))
+    shortest = setup  # a pass's setup is at most the shortest whole pass
     while not deadline.expired(MARGIN):
         if width in done and width < widest:
             width = min(2 * width, widest)
             continue
         left = deadline.remaining()
+        if left is not None and left < shortest + MARGIN:
+            info["beam_stopped"] = f"{left:.2f} s left for a pass of at least {shortest:.2f} s"
+            break
         if stage is not None:
             stage(BASE_BYTES + beam_bytes(problem.n, width))
+        began = time.perf_counter()
         beam = beam_order(problem, width, None if left is None else left - MARGIN)
+        took = time.perf_counter() - began
+        shortest = took if not widths else min(shortest, took)
         if beam is None and deadline.expired(MARGIN):
             break  # the pass was stopped by the deadline
         widths.append(width)
@@ -213,8 +223,9 @@ def use_the_rest(
             info: dict[str, Any] = {}
             ran_before = (NARROW_BEAM, 1024)  # the DP's own beam passes
             found, _ = _widen(
-                problem, known, deadline, FIRST_FILL_WIDTH, widest, info, stage, ran_before
-            )
+                problem, known, deadline, FIRST_FILL_WIDTH, widest, info, stage, ran_before,
+                setup / 2,  # one direction's bound of the two a DP stage sets up
+            )  # fmt: skip
             ran += [f"beam {w:,}" for w in info.get("beam_widths", [])]
             if found is not None and (known is None or found[0] < known[0]):
                 better = finish(
