@@ -584,9 +584,12 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
-    if seconds is not None:  # a run keeps no more states than it can make in its time (its
-        # DP stages may double their caps to use the time left, memory permitting)
-        wanted = int(DP_STATES_PER_SECOND * seconds)
+    if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
+        # stage frees its states when it ends, so the peak is the longest stage's: the whole
+        # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
+        # those using the time left share the other half)
+        share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
+        wanted = int(DP_STATES_PER_SECOND * seconds * share)
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
