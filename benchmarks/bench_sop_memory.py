@@ -24,7 +24,8 @@ polling that process's RSS with ``psutil`` every 50 ms. Stages:
     :func:`taopt.models.sop_dp.beam_order` of width :data:`BEAM_WIDTH` (feature: width x n).
 ``milp``
     :func:`taopt.models.sop.solve_sop`, the flow model built, compiled and solved (feature:
-    its columns). Skipped when the model would have more than ``--max-columns`` columns
+    its nonzeros, :func:`taopt.models.sop.nonzero_count`; a model the run left built but not
+    compiled is fitted apart, ``milp-build``). Skipped when the model would have more than ``--max-columns`` columns
     (the machine is shared).
 ``cpsat``
     ``taopt.solve(problem, "cpsat", time_limit=T)``: the worker's peak (feature: usable arcs).
@@ -33,7 +34,8 @@ polling that process's RSS with ``psutil`` every 50 ms. Stages:
 feature`` that keeps ``base + constant x feature`` within the smallest factor of every
 measured peak (minimax of ``|log(estimate / peak)|``), the factor reached and the median
 base. These are the constants of :mod:`taopt.models.sop` (``BASE_BYTES``,
-``DP_BYTES_PER_STATE``, ``BEAM_BYTES_PER_SLOT``, ``SOP_MILP_BYTES_PER_COLUMN``) and re-running
+``DP_BYTES_PER_STATE``, ``BEAM_BYTES_PER_SLOT``, ``SOP_MILP_BYTES`` and
+``SOP_MILP_BYTES_PER_NONZERO``, ``SOP_BUILD_BYTES_PER_NONZERO``) and re-running
 the fit after the flow model changes refits the last one.
 """
 
@@ -78,13 +80,14 @@ sys.path.insert(0, {here!r})
 import taopt, taopt.models, taopt.heuristics
 from taopt.orchestration import pipeline
 from taopt.runtime import footprint
-from taopt.models.sop import column_count, usable_arcs
+from taopt.models.sop import column_count, nonzero_count, usable_arcs
 from bench_sop_memory import load_any
 problem = load_any({name!r})
 stage, limit = {stage!r}, {limit!r}
 features = dict(n=problem.n, arcs=int(len(usable_arcs(problem.cost, problem.closure)[0])))
 if stage in ("milp", "portfolio"):
     features["columns"] = column_count(problem.cost, problem.closure, problem.start)
+    features["nonzeros"] = nonzero_count(problem.cost, problem.closure, problem.start)
     if stage == "milp" and features["columns"] > {max_columns!r}:
         print(json.dumps(dict(skipped="columns", **features)))
         sys.exit(0)
@@ -172,6 +175,16 @@ def run(name: str, stage: str, limit: float, max_columns: int) -> dict:
     }
 
 
+def nonzeros(r: dict) -> float:
+    """The flow model's nonzeros of a run (counted again for runs saved without them)."""
+    if "nonzeros" not in r:
+        from taopt.models.sop import nonzero_count
+
+        problem = load_any(r["name"])
+        r["nonzeros"] = nonzero_count(problem.cost, problem.closure, problem.start)
+    return float(r["nonzeros"])
+
+
 def feature(r: dict) -> float | None:
     """The unit a stage's memory is fitted on."""
     stage = r["stage"]
@@ -180,8 +193,10 @@ def feature(r: dict) -> float | None:
     if stage == "beam":
         return float(r.get("slots") or 0)
     if stage == "milp":  # only runs where HiGHS ran (not a model left uncompiled)
-        ran = r.get("model") in (None, "solved")
-        return float(r.get("variables") or r.get("columns") or 0) if ran else 0.0
+        ran = r.get("model") in (None, "solved", "compiled, not solved")
+        return nonzeros(r) if ran else 0.0
+    if stage == "milp-build":  # a model built but not compiled
+        return nonzeros(r) if r.get("model") == "built, not compiled" else 0.0
     if stage == "cpsat":
         return float(r["n"] * r["arcs"])
     return None
@@ -194,7 +209,12 @@ def fit(runs: list[dict]) -> None:
     print(
         f"base (median of {len(bases)}): {base / 1e6:.0f} MB ({bases[0] / 1e6:.0f}-{bases[-1] / 1e6:.0f})"
     )
-    for stage in ("dp", "beam", "milp", "cpsat"):
+    runs = runs + [
+        {**r, "stage": "milp-build"}
+        for r in runs
+        if r.get("stage") == "milp" and r.get("model") == "built, not compiled"
+    ]
+    for stage in ("dp", "beam", "milp", "milp-build", "cpsat"):
         rows = [r for r in runs if r.get("stage") == stage and "peak" in r]
         if stage == "cpsat":
             pairs = [(feature(r), r["worker"], 0.0) for r in rows if r["worker"]]
@@ -223,7 +243,6 @@ def table(runs: list[dict], header: bool = True) -> None:
     per_unit = {
         "dp": sop.DP_BYTES_PER_STATE,
         "beam": getattr(sop, "BEAM_BYTES_PER_SLOT", float("nan")),
-        "milp": sop.SOP_MILP_BYTES_PER_COLUMN,
     }
     if header:
         print(
@@ -245,6 +264,13 @@ def table(runs: list[dict], header: bool = True) -> None:
             estimate = float("nan")
             what = f"{unit:,.0f}"
             peak = r["worker"]
+        elif r["stage"] == "milp":
+            compiled = r.get("model") != "built, not compiled"
+            built = r.get("model") != "not built"
+            unit = nonzeros(r)
+            estimate = sop.BASE_BYTES + (sop.sop_milp_bytes(unit, compiled) if built else 0.0)
+            what = f"{unit:,.0f} nonzeros" + ("" if compiled else " (built only)")
+            peak = r["peak"]
         else:
             assert unit is not None
             estimate = sop.BASE_BYTES + per_unit[r["stage"]] * unit

@@ -93,6 +93,7 @@ __all__ = [
     "decode",
     "assignment_bound",
     "column_count",
+    "nonzero_count",
     "describe",
     "solve_sop",
     "solve_sop_problem",
@@ -472,6 +473,28 @@ def column_count(
     return len(tails) + int(usable.sum())
 
 
+def nonzero_count(
+    cost: np.ndarray, closure: nx.DiGraph, start: int, formulation: str = "flow"
+) -> int:
+    """About the nonzeros of the constraint matrix :func:`build` would make, without building
+    it: three per flow column (conservation twice, capacity) and two per nesting entry (one
+    per arc commodity r may use, for every precedence r before k). The memory of the flow
+    model follows these, not its columns: the nesting rows dominate under dense precedence
+    (rbg, chains)."""
+    tails, heads = usable_arcs(cost, closure)
+    n = cost.shape[0]
+    if formulation == "mtz":
+        return 4 * len(tails) + 2 * n + 2 * closure.number_of_edges()
+    before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
+    commodities = np.array([k for k in range(n) if k != start])
+    usable = ~before[commodities][:, tails] & ~before[commodities][:, heads]
+    usable &= tails[None, :] != commodities[:, None]
+    per = usable.sum(axis=1)
+    tail_of = np.array([r for r, _k in closure.edges() if r != start], dtype=np.int64)
+    nesting = int(per[np.searchsorted(commodities, tail_of)].sum()) if len(tail_of) else 0
+    return 3 * int(per.sum()) + 2 * len(tails) + 2 * nesting
+
+
 # The memory model below is measured, not derived: ``python benchmarks/bench_sop_memory.py
 # --stages dp,beam,milp,cpsat --generated --time-limit 5 --out runs.jsonl`` runs each stage
 # on each of the 16 TSPLIB SOP files (shipped and ../shared/benchmarks/tsplib) and 6
@@ -485,27 +508,36 @@ BASE_BYTES = 155e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
 #: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
-#: Fitted: 470 keeps every one of 17 measured DP runs (10 to 186,000 states) within 1.33x;
+#: Fitted: 590 keeps every one of 22 measured DP runs (2 to 186,000 states) within 1.44x;
 #: per state alone the peaks spread from 94 B (p43.4, dense precedence: few extensions per
 #: state) to 1.5 KB (ESC47, sparse: many), which the base absorbs at these sizes.
-DP_BYTES_PER_STATE = 470.0
+DP_BYTES_PER_STATE = 590.0
 
 
-#: Peak bytes per column of the flow MILP built with cvxpy, compiled for HiGHS and solved
-#: (fitted with :data:`SOP_MILP_BYTES`: within 1.26x of 9 measured runs, 262-134,550
-#: columns; the generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB, is low here).
-SOP_MILP_BYTES_PER_COLUMN = 3700.0
+#: Peak bytes per nonzero (:func:`nonzero_count`) of the flow MILP built with cvxpy,
+#: compiled for HiGHS and solved, above :data:`SOP_MILP_BYTES` (fitted: within 1.16x of 9
+#: measured runs, 1,300-471,000 nonzeros; per column the same runs spread from 3 KB (p43.1)
+#: to 9 KB (p43.4); the generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB,
+#: is low here).
+SOP_MILP_BYTES_PER_NONZERO = 510.0
 
 #: Fixed peak bytes of a compiled flow MILP (HiGHS's and cvxpy's work space).
-SOP_MILP_BYTES = 50e6
+SOP_MILP_BYTES = 35e6
+
+#: Peak bytes per nonzero of the flow model built with cvxpy but not compiled (the portfolio
+#: stops there when the compile cannot end in time): 65 B within 1.03x of 8 measured runs,
+#: 0.56-6.1 million nonzeros (ESC47, ry48p.x, rbg048a, rbg050c, ft53.x, a 100-node chain SOP).
+SOP_BUILD_BYTES_PER_NONZERO = 65.0
 
 
-def sop_milp_bytes(columns: float) -> float:
-    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base; 0 for
-    no model)."""
-    if not columns:
+def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
+    """Estimated peak bytes of the flow MILP of ``nonzeros`` nonzeros (:func:`nonzero_count`)
+    beyond the base: compiled for HiGHS and solved, or only built; 0 for no model."""
+    if not nonzeros:
         return 0.0
-    return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_COLUMN * float(columns)
+    if not compiled:
+        return SOP_BUILD_BYTES_PER_NONZERO * float(nonzeros)
+    return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
 #: States a DP stage keeps per second, typically (measured under load: 2,500-37,000 a second
@@ -555,8 +587,8 @@ def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None
     """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
     from taopt.runtime import max_memory_gb as limit_gb
 
-    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-    return BASE_BYTES + sop_milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
+    nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
+    return BASE_BYTES + sop_milp_bytes(nonzeros) <= limit_gb(max_memory_gb) * 1e9
 
 
 @register_footprint(SopProblem, "exact")
@@ -600,14 +632,16 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     # HiGHS: only when its build and its compile (COMPILE_PER_BUILD times a build of about a
     # third of SECONDS_PER_COLUMN a column) fit the time it gets then (solve_sop's rule)
     compile_seconds = columns * SECONDS_PER_COLUMN * (1.0 + COMPILE_PER_BUILD / 3.0)
-    built = seconds is None or compile_seconds <= MILP_TIME_SHARE * seconds
+    compiled = seconds is None or compile_seconds <= MILP_TIME_SHARE * seconds
+    built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
     if options.get("engine") == "milp" or (
         capped
         and built
         and options.get("engine") != "dp"
         and milp_fits(problem, formulation, limit)
     ):
-        total = max(total, BASE_BYTES + sop_milp_bytes(columns))
+        nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
+        total = max(total, BASE_BYTES + sop_milp_bytes(nonzeros, compiled))
         what += f", {formulation} model of {columns:,} columns"
     return min(total, limit_gb(limit) * 1e9), what + ")"
 
@@ -1025,17 +1059,22 @@ def solve_sop_problem(
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
 
-    def expect(states: float = 0.0, seconds: float | None = None, columns: float = 0.0) -> None:
+    def expect(
+        states: float = 0.0,
+        seconds: float | None = None,
+        nonzeros: float = 0.0,
+        compiled: bool = True,
+    ) -> None:
         """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
         largest over the stages run): a DP stage keeps at most its cap, the states the ideals
         allow and :data:`DP_STATES_PER_SECOND` a second (after its beam pass); a MILP its
-        columns."""
+        nonzeros, compiled or only built."""
         if seconds is not None:
             states = min(states, DP_STATES_PER_SECOND * seconds)
         if not capped:
             states = min(states, every_state)
         dp = max(dp_bytes(problem.n, states), beam_bytes(problem.n, 1024)) if states else 0.0
-        stage(BASE_BYTES + dp + sop_milp_bytes(columns))
+        stage(BASE_BYTES + dp + sop_milp_bytes(nonzeros, compiled))
 
     def stage(need: float) -> None:
         info["memory_estimate"] = max(info.get("memory_estimate", BASE_BYTES), need)
@@ -1043,7 +1082,7 @@ def solve_sop_problem(
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
-        columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+        nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
         result = solve_sop(
             problem.cost,
             problem.precedences,
@@ -1056,8 +1095,8 @@ def solve_sop_problem(
             incumbent=known,
             problem=problem,
         )
-        if result.info.get("model") not in STOPPED_EARLY:  # compiled for HiGHS and solved
-            expect(columns=columns)
+        if result.info.get("model") != "not built":  # built; compiled unless it says not
+            expect(nonzeros=nonzeros, compiled=result.info.get("model") != STOPPED_EARLY[1])
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)
             bound = min(bound, result.objective)
