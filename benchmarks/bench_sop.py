@@ -184,7 +184,7 @@ from taopt.orchestration import pipeline  # imported before the clock: the call 
 sys.path.insert(0, {bench!r})
 from bench_sop import load_any
 problem = load_any({name!r})
-from taopt.models.sop import BASE_BYTES, dp_bytes, sop_milp_bytes
+from taopt.models.sop import BASE_BYTES, dp_bytes, nonzero_count, sop_milp_bytes
 estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
 t0 = time.perf_counter()
 result = taopt.solve(problem, "exact", time_limit={limit!r})
@@ -193,7 +193,8 @@ peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 info = result.info
 states = max(info.get("states") or 0, info.get("dp_states") or 0)
 staged = info.get("memory_estimate") or estimate
-model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(info.get("variables") or 0)
+nonzeros = nonzero_count(problem.cost, problem.closure, problem.start) if info.get("variables") else 0
+model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(nonzeros)
 print(json.dumps(dict(status=str(result.status), objective=result.objective, bound=result.bound,
     wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=info.get("engine"),
     states=states, columns=info.get("variables") or 0, model=model, staged=staged,
