@@ -540,11 +540,11 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
-#: States a DP stage keeps per second, typically (measured under load: 2,500-37,000 a second
-#: over the 5 s DP runs of the memory fit, prob.42 the fastest): what the estimate of a DP
-#: stage counts, below its state cap. Not a limit: the cap (:func:`dp_state_cap`) is what
-#: keeps a DP stage within the memory.
-DP_STATES_PER_SECOND = 10_000
+#: States a DP stage keeps per second, typically (measured under load: 1,600-37,000 a second
+#: over the 5 s DP runs of the memory fit, median 7,500; prob.42 the fastest): what the
+#: estimate of a DP stage counts, below its state cap. Not a limit: the cap
+#: (:func:`dp_state_cap`) is what keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 8_000
 
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
@@ -672,12 +672,26 @@ def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int
     return float(sub[chosen_rows, chosen_cols].sum())
 
 
+#: The cheap bound of the last few problems (by identity; the problem is kept so its id is
+#: not reused): a stopped stage needs it after its deadline, when seconds of Edmonds on 380
+#: nodes under load would overrun the limit, so the portfolio computes it once, first.
+_CHEAP: dict[int, tuple[SopProblem, float]] = {}
+
+
 def _cheap_bound(problem: SopProblem) -> float:
-    """The larger of the assignment and arborescence bounds (both valid, both fast)."""
-    return max(
+    """The larger of the assignment and arborescence bounds (both valid, both fast),
+    remembered for the last few problems."""
+    known = _CHEAP.get(id(problem))
+    if known is not None and known[0] is problem:
+        return known[1]
+    value = max(
         assignment_bound(problem.cost, problem.closure, problem.start, problem.end),
         sop_arborescence_bound(problem),
     )
+    if len(_CHEAP) >= 4:
+        _CHEAP.pop(next(iter(_CHEAP)))
+    _CHEAP[id(problem)] = (problem, value)
+    return value
 
 
 def _known_order(
@@ -1047,6 +1061,7 @@ def solve_sop_problem(
     ideals, capped = count_ideals(problem, cap, deadline if deadline.limited else None)
     counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
     second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
     # all the states the ideals allow (both directions), unless the memory caps them
