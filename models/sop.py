@@ -458,6 +458,19 @@ COMPILE_SHARE = 0.8
 COMPILE_PER_BUILD = 8.0
 
 
+#: The portfolio builds the flow model after its DP stages only when the time left is at
+#: least this many times :func:`compile_seconds` (a loaded machine compiles 2-4 times slower
+#: than :data:`SECONDS_PER_COLUMN` says, and cvxpy's compile cannot be interrupted).
+MILP_SAFETY = 3.0
+
+
+def compile_seconds(columns: float) -> float:
+    """Estimated seconds to build the flow model of ``columns`` columns and compile it for
+    HiGHS: :data:`SECONDS_PER_COLUMN` a column to build and :data:`COMPILE_PER_BUILD` times a
+    build of about a third of that to compile."""
+    return float(columns) * SECONDS_PER_COLUMN * (1.0 + COMPILE_PER_BUILD / 3.0)
+
+
 def column_count(
     cost: np.ndarray, closure: nx.DiGraph, start: int, formulation: str = "flow"
 ) -> int:
@@ -631,8 +644,9 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     # the MILP runs only after capped DP stages, and takes its memory when it is compiled for
     # HiGHS: only when its build and its compile (COMPILE_PER_BUILD times a build of about a
     # third of SECONDS_PER_COLUMN a column) fit the time it gets then (solve_sop's rule)
-    compile_seconds = columns * SECONDS_PER_COLUMN * (1.0 + COMPILE_PER_BUILD / 3.0)
-    compiled = seconds is None or compile_seconds <= MILP_TIME_SHARE * seconds
+    compiled = (
+        seconds is None or MILP_SAFETY * compile_seconds(columns) <= MILP_TIME_SHARE * seconds
+    )
     built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
     if options.get("engine") == "milp" or (
         capped
@@ -1097,6 +1111,15 @@ def solve_sop_problem(
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
+        if dp_result is not None and time_left is not None:
+            # cvxpy's compile cannot be interrupted: after the DP stages the model is built
+            # only when the time left covers MILP_SAFETY times its estimated build and
+            # compile (p43.1 at 60 s under load: compiled in the last 6 s, ended at 71 s)
+            columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+            need = MILP_SAFETY * compile_seconds(columns)
+            if time_left < need:
+                info["milp"] = f"skipped: {time_left:.1f} s left, {need:.1f} s needed"
+                return more_dp(dp_result, time_left)
         nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
         result = solve_sop(
             problem.cost,
