@@ -1232,7 +1232,8 @@ def solve_sop_problem(
             known = result.solution if result.solution is not None else incumbent
             result = milp(known, deadline.remaining(), dp_result=result)
             used += "+milp"
-    full = plan == "dp" or engine == "milp"  # a degraded stage has used the limit already
+    # a degraded stage has used the limit already; "none": too little time for a stage
+    full = (plan == "dp" or engine == "milp") and used != "none"
     if full and result.status == TIME_LIMIT and deadline.limited and not deadline.expired(MARGIN):
         # the stages ended before the limit without a proof: go on while it lasts (a DP with
         # more states while they fit the memory, unless the caller fixed them; wider beams)
