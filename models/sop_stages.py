@@ -188,7 +188,13 @@ def use_the_rest(
     setup measured on a DP stage (a DP stage starts only when the time left covers twice
     it). ``info["rest"]`` lists what ran; ``stage(bytes)`` is told each stage's estimated
     peak before it runs."""
-    from taopt.models.sop import BASE_BYTES, _combine, dp_bytes, dp_state_cap
+    from taopt.models.sop import (
+        BASE_BYTES,
+        DP_STATES_PER_SECOND,
+        _combine,
+        dp_bytes,
+        dp_state_cap,
+    )
     from taopt.models.sop_dp import NARROW_BEAM, solve_sop_dp
 
     ran: list[str] = []
@@ -199,8 +205,9 @@ def use_the_rest(
         if left is not None and left < 2 * setup + MARGIN:
             break
         cap = min(2 * cap, memory_cap)
-        if stage is not None:
-            stage(BASE_BYTES + dp_bytes(problem.n, cap))
+        if stage is not None:  # the states it can keep in its time, at most its cap
+            made = cap if left is None else min(cap, DP_STATES_PER_SECOND * left)
+            stage(BASE_BYTES + dp_bytes(problem.n, made))
         again = solve_sop_dp(
             problem,
             None if left is None else max(left - MARGIN, MARGIN),
