@@ -131,8 +131,9 @@ def _widen(
         beam = beam_order(problem, width, None if left is None else left - MARGIN)
         took = time.perf_counter() - began
         shortest = took if not widths else min(shortest, took)
-        if beam is None and deadline.expired(MARGIN):
-            break  # the pass was stopped by the deadline
+        if beam is None:  # stopped by the deadline, or refused a layer it could not end in
+            info["beam_stopped"] = f"width {width:,}: no order in the time left"
+            break  # time (a wider pass would not either)
         widths.append(width)
         if beam is not None and (known is None or beam[0] < known[0]):
             known = beam
