@@ -180,6 +180,8 @@ GENERATED = {
     "chains-80-3": ("chain_sop", (80, 3, 1)),
     "chains-120-3": ("chain_sop", (120, 3, 1)),
     "chains-150-4": ("chain_sop", (150, 4, 2)),
+    "chains-380-8-x0.01": ("chain_sop", (380, 8, 1, 0.01)),
+    "random-300-0.02": ("random_sop", (300, 0.02, 1)),
 }
 
 _CHILD = """
@@ -193,7 +195,7 @@ from taopt.orchestration import pipeline  # imported before the clock: the call 
 sys.path.insert(0, {bench!r})
 from bench_sop import load_any
 problem = load_any({name!r})
-from taopt.models.sop import BASE_BYTES, dp_bytes, sop_milp_bytes
+from taopt.models.sop import BASE_BYTES, dp_bytes, nonzero_count, sop_milp_bytes
 estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
 t0 = time.perf_counter()
 result = taopt.solve(problem, "exact", time_limit={limit!r})
@@ -201,10 +203,13 @@ wall = time.perf_counter() - t0
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 info = result.info
 states = max(info.get("states") or 0, info.get("dp_states") or 0)
-model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(info.get("variables") or 0)
+staged = info.get("memory_estimate") or estimate
+nonzeros = nonzero_count(problem.cost, problem.closure, problem.start) if info.get("variables") else 0
+model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(nonzeros)
 print(json.dumps(dict(status=str(result.status), objective=result.objective, bound=result.bound,
     wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=info.get("engine"),
-    states=states, columns=info.get("variables") or 0, model=model)))
+    states=states, columns=info.get("variables") or 0, model=model, staged=staged,
+    rest=info.get("rest"))))
 """
 
 
@@ -234,9 +239,9 @@ def resources(names: list[str], limit: float, load: bool) -> None:
     print(
         "| instance | n | status | objective | bound | wall (s) | over | peak RSS (MB) |"
         " estimate (MB) | peak / estimate | states kept | MILP columns | model (MB) |"
-        " peak / model | engine |"
+        " peak / model | engine | stages' estimate (MB) | peak / it | after the stages |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     try:
         for name in names:
             code = _CHILD.format(bench=here, name=name, limit=limit)
@@ -258,7 +263,8 @@ def resources(names: list[str], limit: float, load: bool) -> None:
                 f"| {name} | {r['n']} | {r['status']} | {r['objective']:g} | {r['bound']:g} | "
                 f"{r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
                 f"{ratio:.2f} | {r['states']:,} | {r['columns']:,} | {r['model'] / 1e6:.0f} | "
-                f"{r['peak'] / r['model']:.2f} | {r['engine']} |",
+                f"{r['peak'] / r['model']:.2f} | {r['engine']} | {r['staged'] / 1e6:.0f} | "
+                f"{r['peak'] / r['staged']:.2f} | {', '.join(r['rest'] or [])} |",
                 flush=True,
             )
     finally:

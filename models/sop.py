@@ -100,6 +100,7 @@ __all__ = [
     "decode",
     "assignment_bound",
     "column_count",
+    "nonzero_count",
     "describe",
     "solve_sop",
     "solve_sop_problem",
@@ -464,6 +465,19 @@ COMPILE_SHARE = 0.8
 COMPILE_PER_BUILD = 8.0
 
 
+#: The portfolio builds the flow model after its DP stages only when the time left is at
+#: least this many times :func:`compile_seconds` (a loaded machine compiles 2-4 times slower
+#: than :data:`SECONDS_PER_COLUMN` says, and cvxpy's compile cannot be interrupted).
+MILP_SAFETY = 3.0
+
+
+def compile_seconds(columns: float) -> float:
+    """Estimated seconds to build the flow model of ``columns`` columns and compile it for
+    HiGHS: :data:`SECONDS_PER_COLUMN` a column to build and :data:`COMPILE_PER_BUILD` times a
+    build of about a third of that to compile."""
+    return float(columns) * SECONDS_PER_COLUMN * (1.0 + COMPILE_PER_BUILD / 3.0)
+
+
 def column_count(
     cost: np.ndarray, closure: nx.DiGraph, start: int, formulation: str = "flow"
 ) -> int:
@@ -481,32 +495,82 @@ def column_count(
     return len(tails) + int(usable.sum())
 
 
+def nonzero_count(
+    cost: np.ndarray, closure: nx.DiGraph, start: int, formulation: str = "flow"
+) -> int:
+    """About the nonzeros of the constraint matrix :func:`build` would make, without building
+    it: three per flow column (conservation twice, capacity) and two per nesting entry (one
+    per arc commodity r may use, for every precedence r before k). The memory of the flow
+    model follows these, not its columns: the nesting rows dominate under dense precedence
+    (rbg, chains)."""
+    tails, heads = usable_arcs(cost, closure)
+    n = cost.shape[0]
+    if formulation == "cuts":
+        # the arc model of taopt.models.sop_cuts: two degree rows per arc, and the cut pool
+        # (rows added in the loop; not measured: counted as one more entry per arc)
+        return 3 * len(tails)
+    if formulation == "mtz":
+        return 4 * len(tails) + 2 * n + 2 * closure.number_of_edges()
+    before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
+    commodities = np.array([k for k in range(n) if k != start])
+    usable = ~before[commodities][:, tails] & ~before[commodities][:, heads]
+    usable &= tails[None, :] != commodities[:, None]
+    per = usable.sum(axis=1)
+    tail_of = np.array([r for r, _k in closure.edges() if r != start], dtype=np.int64)
+    nesting = int(per[np.searchsorted(commodities, tail_of)].sum()) if len(tail_of) else 0
+    return 3 * int(per.sum()) + 2 * len(tails) + 2 * nesting
+
+
+# The memory model below is measured, not derived: ``python benchmarks/bench_sop_memory.py
+# --stages dp,beam,milp,cpsat --generated --time-limit 5 --out runs.jsonl`` runs each stage
+# on each of the 16 TSPLIB SOP files (shipped and ../shared/benchmarks/tsplib) and 6
+# generated instances of 100-380 nodes in a fresh interpreter and records its peak RSS
+# (``ru_maxrss``); ``--fit runs.jsonl`` prints the constants (minimax of the ratio estimate /
+# peak). Re-run both after the flow model changes.
+
 #: Peak resident bytes of a process that has imported taopt, numpy, scipy, cvxpy and highspy
-#: and loaded an instance (measured: 150-160 MB on ESC07-ESC25, ``benchmarks/bench_sop.py
-#: --resources``).
-BASE_BYTES = 160e6
+#: and loaded an instance (measured: 154-155 MB over 67 runs, 2026-11).
+BASE_BYTES = 155e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
-#: of the largest layer's extensions, merge and completion bound; fitted on generated
-#: instances, ``benchmarks/bench_sop.py --resources --generated``); 8 more per extra word.
-DP_BYTES_PER_STATE = 200.0
+#: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
+#: Fitted: 590 keeps every one of 22 measured DP runs (2 to 186,000 states) within 1.44x;
+#: per state alone the peaks spread from 94 B (p43.4, dense precedence: few extensions per
+#: state) to 1.5 KB (ESC47, sparse: many), which the base absorbs at these sizes.
+DP_BYTES_PER_STATE = 590.0
 
 
-#: Peak bytes per column of the flow MILP built with cvxpy, compiled for HiGHS and solved
-#: for a few seconds (measured on generated instances of 20-80 nodes, 4,680-176,551 columns:
-#: 4.4-13.8 KB per column above the process's base, ``benchmarks/bench_sop.py`` notes; the
-#: generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB, was 3-7 times too low here).
-SOP_MILP_BYTES_PER_COLUMN = 8000.0
+#: Peak bytes per nonzero (:func:`nonzero_count`) of the flow MILP built with cvxpy,
+#: compiled for HiGHS and solved, above :data:`SOP_MILP_BYTES` (fitted: within 1.16x of 9
+#: measured runs, 1,300-471,000 nonzeros; per column the same runs spread from 3 KB (p43.1)
+#: to 9 KB (p43.4); the generic :data:`taopt.runtime.memory.MILP_BYTES_PER_COLUMN`, 2 KB,
+#: is low here).
+SOP_MILP_BYTES_PER_NONZERO = 510.0
+
+#: Fixed peak bytes of a compiled flow MILP (HiGHS's and cvxpy's work space).
+SOP_MILP_BYTES = 35e6
+
+#: Peak bytes per nonzero of the flow model built with cvxpy but not compiled (the portfolio
+#: stops there when the compile cannot end in time): 65 B within 1.03x of 8 measured runs,
+#: 0.56-6.1 million nonzeros (ESC47, ry48p.x, rbg048a, rbg050c, ft53.x, a 100-node chain SOP).
+SOP_BUILD_BYTES_PER_NONZERO = 65.0
 
 
-def sop_milp_bytes(columns: float) -> float:
-    """Estimated peak bytes of the flow MILP of ``columns`` columns (beyond the base)."""
-    return SOP_MILP_BYTES_PER_COLUMN * float(columns)
+def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
+    """Estimated peak bytes of the flow MILP of ``nonzeros`` nonzeros (:func:`nonzero_count`)
+    beyond the base: compiled for HiGHS and solved, or only built; 0 for no model."""
+    if not nonzeros:
+        return 0.0
+    if not compiled:
+        return SOP_BUILD_BYTES_PER_NONZERO * float(nonzeros)
+    return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
-#: States the DP keeps per second at most (measured on generated instances: 27,000 a
-#: second on a random 50-node SOP of sparse precedence, the fastest growth seen).
-DP_STATES_PER_SECOND = 40_000
+#: States a DP stage keeps per second, typically (measured under load: 1,600-37,000 a second
+#: over the 5 s DP runs of the memory fit, median 7,500; prob.42 the fastest): what the
+#: estimate of a DP stage counts, below its state cap. Not a limit: the cap
+#: (:func:`dp_state_cap`) is what keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 8_000
 
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
@@ -522,6 +586,21 @@ def dp_bytes(n: int, states: float) -> float:
     return (DP_BYTES_PER_STATE + extra) * float(states)
 
 
+#: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
+#: layers kept for the path and the extensions of one layer before the cut (fitted: 37 B
+#: within 1.08x of 17 passes of width 4,096 on 9-380 nodes; 50 B kept, as the wider passes
+#: cut off by the 5 s limit stopped before their widest layers).
+BEAM_BYTES_PER_SLOT = 50.0
+
+
+def beam_bytes(n: int, width: int) -> float:
+    """Estimated peak bytes of a beam pass of ``width`` on ``n`` nodes (beyond the base)."""
+    from taopt.ideals import is_wide, words
+
+    extra = 8.0 * (words(n) - 1) if is_wide(n) else 0.0
+    return (BEAM_BYTES_PER_SLOT + extra) * float(width) * float(n)
+
+
 def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
     """The most states (at most ``wanted``) the DP may keep within the memory limit."""
     from taopt.runtime import max_memory_gb as limit_gb
@@ -534,33 +613,53 @@ def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None
     """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
     from taopt.runtime import max_memory_gb as limit_gb
 
-    columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-    return BASE_BYTES + sop_milp_bytes(columns) <= limit_gb(max_memory_gb) * 1e9
+    nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
+    return BASE_BYTES + sop_milp_bytes(nonzeros) <= limit_gb(max_memory_gb) * 1e9
 
 
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
-    """The portfolio's peak: the larger of its DP stages (their state caps, or the states
-    the ideals allow) and the MILP when it fits the limit; above the limit the MILP is
-    skipped and the DP's caps shrink to fit, so the estimate fits too (never a refusal
-    for size alone)."""
+    """The portfolio's peak: the larger of its DP stages (their state caps, the states the
+    ideals allow, the states it can make in its time) and the MILP when it fits the limit;
+    above the limit the stage that fits (:func:`taopt.models.sop_stages.memory_plan`: the
+    DP with a smaller cap, the beam, the bounds alone), so the estimate fits too (never a
+    refusal for size alone)."""
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals
+    from taopt.models.sop_stages import beam_width_cap, memory_plan
     from taopt.runtime import max_memory_gb as limit_gb
 
     formulation = options.get("formulation", PORTFOLIO_FORMULATION)
     limit = options.get("max_memory_gb")
     seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
+    plan = memory_plan(problem.n, limit)
+    if plan != "dp" and options.get("engine") != "milp":
+        width = beam_width_cap(problem.n, limit) if plan == "beam" else 0
+        total = BASE_BYTES + beam_bytes(problem.n, width)
+        # a limit below the process's own base: the stage adds nothing above what is spent
+        # already, so it is not refused (the answer is the cheap bounds and the warm start)
+        total = min(total, limit_gb(limit) * 1e9)
+        return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
-    if seconds is not None:  # a run keeps no more states than it can make in its time
-        wanted = min(wanted, int(DP_STATES_PER_SECOND * seconds))
-    states = dp_state_cap(problem.n, limit, wanted if capped else problem.n * count)
+    if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
+        # stage frees its states when it ends, so the peak is the longest stage's: the whole
+        # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
+        # those using the time left share the other half)
+        share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
+        wanted = int(DP_STATES_PER_SECOND * seconds * share)
+    states = dp_state_cap(
+        problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
+    )
     total = BASE_BYTES + dp_bytes(problem.n, states)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
-    # the MILP runs only after capped DP stages, and is built only when its build fits the
-    # time it gets then (solve_sop's rule)
+    # the MILP runs only after capped DP stages, and takes its memory when it is compiled for
+    # HiGHS: only when its build and its compile (COMPILE_PER_BUILD times a build of about a
+    # third of SECONDS_PER_COLUMN a column) fit the time it gets then (solve_sop's rule)
+    compiled = (
+        seconds is None or MILP_SAFETY * compile_seconds(columns) <= MILP_TIME_SHARE * seconds
+    )
     built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
     if options.get("engine") == "milp" or (
         capped
@@ -568,7 +667,8 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         and options.get("engine") != "dp"
         and milp_fits(problem, formulation, limit)
     ):
-        total = max(total, BASE_BYTES + sop_milp_bytes(columns))
+        nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
+        total = max(total, BASE_BYTES + sop_milp_bytes(nonzeros, compiled))
         what += f", {formulation} model of {columns:,} columns"
     return min(total, limit_gb(limit) * 1e9), what + ")"
 
@@ -599,12 +699,26 @@ def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int
     return float(sub[chosen_rows, chosen_cols].sum())
 
 
+#: The cheap bound of the last few problems (by identity; the problem is kept so its id is
+#: not reused): a stopped stage needs it after its deadline, when seconds of Edmonds on 380
+#: nodes under load would overrun the limit, so the portfolio computes it once, first.
+_CHEAP: dict[int, tuple[SopProblem, float]] = {}
+
+
 def _cheap_bound(problem: SopProblem) -> float:
-    """The larger of the assignment and arborescence bounds (both valid, both fast)."""
-    return max(
+    """The larger of the assignment and arborescence bounds (both valid, both fast),
+    remembered for the last few problems."""
+    known = _CHEAP.get(id(problem))
+    if known is not None and known[0] is problem:
+        return known[1]
+    value = max(
         assignment_bound(problem.cost, problem.closure, problem.start, problem.end),
         sop_arborescence_bound(problem),
     )
+    if len(_CHEAP) >= 4:
+        _CHEAP.pop(next(iter(_CHEAP)))
+    _CHEAP[id(problem)] = (problem, value)
+    return value
 
 
 def _known_order(
@@ -964,18 +1078,26 @@ def solve_sop_problem(
         limit, :func:`dp_state_cap`).
     max_memory_gb : float, optional
         The memory limit (default :func:`taopt.runtime.max_memory_gb`, passed on by
-        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink: the
-        run degrades to what fits and returns ``time_limit`` with its best order and a
-        proven bound, never a refusal for size alone.
+        ``taopt.solve``). Above it the MILP is skipped and the DP's state caps shrink; below
+        what the DP needs, the beam or the cheap bounds alone run
+        (:func:`taopt.models.sop_stages.memory_plan`): the run degrades to what fits and
+        returns ``time_limit`` with its best order and a proven bound, never a refusal for
+        size alone. A run whose stages end before its limit without a proof goes on with
+        larger DP caps while they fit, then wider beams
+        (:func:`taopt.models.sop_stages.use_the_rest`), so it uses its whole limit.
 
     Returns
     -------
     Solution
         As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
-        ``engine`` ("dp", "milp", "dp+dp", "dp+milp" or "dp+dp+milp"), ``ideals`` and ``ideals_capped``, and the
-        DP's ``states``/``pruned`` when it ran.
+        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", or the degraded
+        "beam" / "bound"), ``ideals`` and ``ideals_capped``, the DP's ``states``/``pruned``
+        when it ran, ``memory_plan``, ``memory_estimate`` (the estimated peak bytes of the
+        stages run, each estimated before it started) and ``rest`` (what ran after the
+        stages, if anything).
     """
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
+    from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -991,21 +1113,58 @@ def solve_sop_problem(
     ideals, capped = count_ideals(problem, cap, deadline if deadline.limited else None)
     counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
     second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
+    # all the states the ideals allow (both directions), unless the memory caps them
+    every_state = 2 * problem.n * ideals
+    alone_states = dp_state_cap(problem.n, max_memory_gb, every_state)
+    plan = memory_plan(problem.n, max_memory_gb)  # "dp", or a degraded stage that fits
+    info["memory_plan"] = plan
     milp_ok = milp_fits(problem, formulation, max_memory_gb)
     if not milp_ok:
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
 
+    def expect(
+        states: float = 0.0,
+        seconds: float | None = None,
+        nonzeros: float = 0.0,
+        compiled: bool = True,
+    ) -> None:
+        """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
+        largest over the stages run): a DP stage keeps at most its cap, the states the ideals
+        allow and :data:`DP_STATES_PER_SECOND` a second (after its beam pass); a MILP its
+        nonzeros, compiled or only built."""
+        if seconds is not None:
+            states = min(states, DP_STATES_PER_SECOND * seconds)
+        if not capped:
+            states = min(states, every_state)
+        dp = max(dp_bytes(problem.n, states), beam_bytes(problem.n, 1024)) if states else 0.0
+        stage(BASE_BYTES + dp + sop_milp_bytes(nonzeros, compiled))
+
+    def stage(need: float) -> None:
+        info["memory_estimate"] = max(info.get("memory_estimate", BASE_BYTES), need)
+
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
-        if formulation == "cuts":
+        if formulation == "cuts":  # array-built and interruptible: no compile to fear
             from taopt.models.sop_cuts import solve_sop_cuts
 
             result = solve_sop_cuts(problem, time_left, known, verbose=verbose, mip_gap=mip_gap)
+            expect(nonzeros=nonzero_count(problem.cost, problem.closure, problem.start, "cuts"))
         else:
+            if dp_result is not None and time_left is not None:
+                # cvxpy's compile cannot be interrupted: after the DP stages the model is built
+                # only when the time left covers MILP_SAFETY times its estimated build and
+                # compile (p43.1 at 60 s under load: compiled in the last 6 s, ended at 71 s)
+                columns = column_count(problem.cost, problem.closure, problem.start, formulation)
+                need = MILP_SAFETY * compile_seconds(columns)
+                if time_left < need:
+                    info["milp"] = f"skipped: {time_left:.1f} s left, {need:.1f} s needed"
+                    return more_dp(dp_result, time_left)
+            nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
             result = solve_sop(
                 problem.cost,
                 problem.precedences,
@@ -1018,6 +1177,8 @@ def solve_sop_problem(
                 incumbent=known,
                 problem=problem,
             )
+            if result.info.get("model") != "not built":  # built; compiled unless it says not
+                expect(nonzeros=nonzeros, compiled=result.info.get("model") != STOPPED_EARLY[1])
         if dp_result is not None and result.status in (TIME_LIMIT, FEASIBLE):
             bound = max(result.bound or 0.0, dp_result.bound or 0.0)
             bound = min(bound, result.objective)
@@ -1043,6 +1204,7 @@ def solve_sop_problem(
                     info["more_dp"] = f"skipped: {time_left:.2f} s left for a {setup:.2f} s setup"
                 return before
         known = incumbent if before is None or before.solution is None else before.solution
+        expect(second_states, time_left)
         again = solve_sop_dp(
             problem,
             None if time_left is None else max(time_left - MARGIN, MARGIN),
@@ -1063,7 +1225,10 @@ def solve_sop_problem(
         and (deadline.remaining() or 0.0) * (1.0 if engine == "dp" or not capped else DP_SHARE)
         < counted_in + MARGIN
     )
-    if deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
+    if plan != "dp" and engine != "milp":  # the DP does not fit the memory: a stage that does
+        result = degraded(problem, plan, deadline, incumbent, max_memory_gb, began, stage)
+        used = plan
+    elif deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
         stop_info = {"model": "not run", "count_seconds": counted_in}
         result = _stopped(problem, known, None, began, "portfolio", stop_info)
@@ -1072,15 +1237,14 @@ def solve_sop_problem(
         result = milp(incumbent, deadline.remaining())
         used = "milp"
     elif engine == "dp" or not capped:
-        result = solve_sop_dp(
-            problem,
-            deadline.remaining(),
-            incumbent=incumbent,
-            max_states=max_states if capped else None,
-        )
+        alone = None if alone_states >= every_state else alone_states  # None: no cap
+        dp_cap = max_states if capped else alone
+        expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
+        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
         share = deadline.share(DP_SHARE)
+        expect(max_states, share)
         result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
         used = "dp"
         # a second stage sets up as the first did (its bounds, its first layers; seconds under
@@ -1099,6 +1263,7 @@ def solve_sop_problem(
             # state, so not the first choice) with more states, from the best order so far
             first = result
             known = first.solution if first.solution is not None else incumbent
+            expect(second_states, second_share)
             second = solve_sop_dp(
                 problem,
                 second_share,
@@ -1113,6 +1278,16 @@ def solve_sop_problem(
             known = result.solution if result.solution is not None else incumbent
             result = milp(known, deadline.remaining(), dp_result=result)
             used += "+milp"
+    # a degraded stage has used the limit already; "none": too little time for a stage
+    full = (plan == "dp" or engine == "milp") and used != "none"
+    if full and result.status == TIME_LIMIT and deadline.limited and not deadline.expired(MARGIN):
+        # the stages ended before the limit without a proof: go on while it lasts (a DP with
+        # more states while they fit the memory, unless the caller fixed them; wider beams)
+        grow = engine != "dp" and plan == "dp"
+        last_cap = max(second_states, max_states) if grow else 1 << 62
+        setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
+        result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
+    stage(BASE_BYTES)  # the process itself, whatever ran
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",

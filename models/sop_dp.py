@@ -126,9 +126,13 @@ BOTH_PRICES = False
 SECOND_PRICES_TRIAL = 20_000
 SECOND_PRICES_MIN_SHARE = 0.02
 
-#: States times nodes times mask words bounded between two deadline checks of the
-#: completion bound (40,000 states on 49 nodes: 200,000 took 2-3 s on a loaded core, ESC47).
-CHUNK_WORK = 2_000_000
+#: Seconds of completion bound between two deadline checks (the chunk of states is sized
+#: by the rate measured on the last chunk).
+CHUNK_SECONDS = 0.25
+
+#: Seconds per state, node and mask word of the completion bound before one chunk was timed
+#: (200,000 states on 49 nodes took 2-3 s on a loaded core, ESC47).
+BOUND_SECONDS = 3e-7
 
 #: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
 MERGE_SECONDS = 3e-7
@@ -530,6 +534,8 @@ class _Search:
         self.problem = problem
         #: Seconds per extension merged (sorted and deduplicated), the slowest seen.
         self.merge_rate = MERGE_SECONDS
+        #: Seconds per state, node and word of the completion bound, the last measured.
+        self.bound_rate = BOUND_SECONDS
         self.merge_refused = False
 
     def first(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -613,20 +619,34 @@ class _Search:
         it is pruned anyway, so ``max(in', out')`` is not computed for it (the reduced costs
         are non-negative, :func:`assignment_potentials`).
         """
-        if chunk is None:  # about the same work between two checks whatever n and width
-            words = self.bits.shape[1] if self.bits.ndim == 2 else 1
-            chunk = max(1_000, int(CHUNK_WORK / (self.problem.n * words)))
+        words = self.bits.shape[1] if self.bits.ndim == 2 else 1
+        unit = self.problem.n * words  # the work of one state
         best = None
         for bound in [self.bound, *self.more_bounds]:
             out = value + bound.potential(mask, last)
             if best is not None:  # a second price set: only where the first did not prune
                 out = np.maximum(out, best)
             need = np.flatnonzero(out < cutoff)
-            for lo in range(0, len(need), chunk):
+            lo = 0
+            while lo < len(need):
                 if deadline.expired(MARGIN):
                     return None
-                part = need[lo : lo + chunk]
+                # a chunk takes about CHUNK_SECONDS at the rate last measured (the load
+                # changes it: 37,000 states on 54 nodes took 4.8 s at load 16), and never
+                # more than the time left, so the deadline is looked at in time
+                size = chunk or max(1_000, int(CHUNK_SECONDS / (self.bound_rate * unit)))
+                left = deadline.remaining()
+                if left is not None:
+                    fits = int((left - MARGIN) / (self.bound_rate * unit))
+                    if fits < min(size, len(need) - lo, 100):
+                        return None  # not even a small chunk ends in time
+                    size = min(size, max(fits, 100))
+                part = need[lo : lo + size]
+                began = time.perf_counter()
                 out[part] = np.maximum(out[part], value[part] + bound(mask[part], last[part]))
+                if len(part) >= 500:
+                    self.bound_rate = (time.perf_counter() - began) / (len(part) * unit)
+                lo += len(part)
             if best is not None:
                 self._judge(bound, len(need), int((out[need] >= cutoff).sum()))
             best = out

@@ -14,6 +14,14 @@ The estimates are rough on purpose (a factor of two either way): they were measu
 models as built (``benchmarks/bench_time_limits.py`` prints them next to the measured peaks)
 and only need to tell 200 MB from 20 GB.
 
+**A method that degrades is never refused.** A method that takes ``max_memory_gb`` is handed
+the limit and fits itself to it; its registered estimate is then the footprint of the stage it
+will run, at most the limit. The SOP portfolio is one (:mod:`taopt.models.sop_stages`): its
+estimate per stage is a model fitted on peak resident memory measured per stage in fresh
+processes (``benchmarks/bench_sop_memory.py``), each stage checks its own estimate before it
+starts, and above the limit it runs a weaker stage that fits (the DP with fewer states, a beam
+search, the cheap bounds alone) and answers ``time_limit`` with a proven bound.
+
 Example
 -------
 >>> check_memory(2e9, "a model", max_memory_gb=4)

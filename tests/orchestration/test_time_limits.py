@@ -523,10 +523,13 @@ def test_sop_portfolio_without_the_milp_skips_a_dp_stage_it_cannot_set_up(monkey
         result = real(problem, 1e-3, **options)
         return result.replace(info={**result.info, "setup_seconds": 1e6})
 
+    from taopt.models.sop import BASE_BYTES, dp_bytes
+
     monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stage_slow_to_set_up)
     problem = sop_esc47
-    result = taopt.solve(problem, "exact", time_limit=1.0, max_memory_gb=0.08)
-    assert result.info["milp"].startswith("skipped")
+    room_for_the_dp = (BASE_BYTES + dp_bytes(problem.n, 50_000)) / 1e9  # not for the MILP
+    result = taopt.solve(problem, "exact", time_limit=1.0, max_memory_gb=room_for_the_dp)
+    assert result.info["memory_plan"] == "dp" and result.info["milp"].startswith("skipped")
     assert len(calls) == 1 and result.info["more_dp"].startswith("skipped")
     assert result.status == TIME_LIMIT and result.bound <= result.objective
     assert taopt.evaluate(problem, result) == pytest.approx(result.objective)
