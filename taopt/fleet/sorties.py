@@ -63,6 +63,8 @@ MAX_STATES = 200_000
 #: Largest fleet the split DP takes: at most this many customers and this many splits K^n
 #: (its no-precedence DP keeps 2^n arrays of s numbers); beyond, the label search runs.
 SPLIT_MAX_N = 12
+
+#: Most splits K^n of the customers among the trucks the split DP examines.
 SPLIT_MAX_SPLITS = 600_000
 
 #: Relative agreement required between the DP's value and the scorer's.
