@@ -502,11 +502,11 @@ def certifying_method(problem: Any) -> str | None:
 
     The first exact method registered with ``certifies`` true for the problem (e.g. the
     DP over order ideals of a delivery instance with at most 2,000,000 ideals); else the family's
-    method "exact"; else its first exact method; None when it has none. It imports
-    ``taopt.models`` first (every exact method registers there), so the answer does not
-    depend on what the caller imported before.
+    method "exact"; else its first exact method; None when it has none. Only methods
+    whose modules are imported count (see :func:`methods`): the core imports no method, so
+    callers use :func:`taopt.orchestration.pipeline.certifying_method`, which has imported
+    every one (the same answer whatever was imported before).
     """
-    importlib.import_module("taopt.models")
     exact = methods(problem, "exact")
     for name, spec in exact.items():
         if spec.certifies_for(problem):

@@ -36,6 +36,7 @@ from taopt.registry import (
     improver,
     methods,
 )
+from taopt.registry import certifying_method as _certifying_method
 from taopt.result import ERROR, INFEASIBLE, NO_SOLUTION, RELAXATION, Solution
 from taopt.runtime import (
     MARGIN,
@@ -223,6 +224,13 @@ def solve(
     return result.replace(method=method, runtime=runtime, info=info)
 
 
+def certifying_method(problem: Any) -> str | None:
+    """The exact method that certifies ``problem`` fastest, among every registered one
+    (:func:`taopt.registry.certifying_method` after this module has imported
+    ``taopt.models``): what ``taopt verify --exact`` re-solves with."""
+    return _certifying_method(problem)
+
+
 def available_methods(problem: Any, category: str | None = None) -> list[str]:
     """Names of the methods usable on ``problem`` here: exact methods first.
 
@@ -309,6 +317,7 @@ def load_problem(data: Any) -> Any:
 
 __all__ = [
     "solve",
+    "certifying_method",
     "available_methods",
     "default_methods",
     "no_optimum_note",

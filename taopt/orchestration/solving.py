@@ -39,12 +39,12 @@ from taopt.instance import Instance
 from taopt.io import atomic_path, check_writable, check_writable_file, load_json
 from taopt.orchestration.pipeline import (
     available_methods,
+    certifying_method,
     default_methods,
     no_optimum_note,
     solve,
 )
 from taopt.registry import (
-    certifying_method,
     families,
     family_for_kind,
     family_of,
@@ -686,7 +686,7 @@ def verify_file(
     Checked only with ``exact=True`` (else reported ``[not checked]``): that an "optimal"
     solution is optimal, that a saved bound is a valid lower bound (not above the optimum)
     and that an "infeasible" problem has no solution. The problem is re-solved with the
-    family's certifying method (:func:`taopt.registry.certifying_method`: the DP over
+    family's certifying method (:func:`taopt.orchestration.pipeline.certifying_method`: the DP over
     order ideals for a delivery instance with affordable ideals, the exact model otherwise), within
     ``time_limit`` seconds; a re-solve stopped by the limit still refutes a claim its
     incumbent beats, and proves one its bound reaches, and leaves the rest

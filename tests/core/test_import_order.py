@@ -80,7 +80,7 @@ CERTIFYING = r"""
 import json, sys
 if sys.argv[1] == "methods-first":
     import taopt.models  # noqa: F401
-from taopt.registry import certifying_method
+from taopt.orchestration.pipeline import certifying_method
 import reference
 
 print(json.dumps([certifying_method(make().problem) for make in reference.REFERENCES]))
@@ -88,8 +88,9 @@ print(json.dumps([certifying_method(make().problem) for make in reference.REFERE
 
 
 def test_certifying_method_is_the_same_with_or_without_the_models_imported():
-    """certifying_method names the same exact method for every reference problem in fresh
-    interpreters that do and do not import taopt.models first (it was None without)."""
+    """The public certifying_method (the orchestration's) names the same exact method for every
+    reference problem in fresh interpreters that do and do not import taopt.models first (the
+    registry's lookup alone gave None without them: verify --exact depended on import order)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests")])}
     answers = []
     for order in ("core-only", "methods-first"):

@@ -17,8 +17,7 @@ from taopt.delivery.instance import DeliveryInstance
 from taopt.delivery.schedule import _sortie_data, _sortie_step, optimal_plan
 from taopt.errors import InstanceError
 from taopt.models.delivery import solve_delivery
-from taopt.orchestration.pipeline import default_methods
-from taopt.registry import certifying_method
+from taopt.orchestration.pipeline import certifying_method, default_methods
 
 REL = 1e-9
 

@@ -142,7 +142,7 @@ def test_false_bound_caught_with_exact(tmp_path, capsys, assignment_example_file
 def test_delivery_exact_uses_dp_and_rejects_relabelled_smma(tmp_path, capsys):
     """--exact on 10 customers re-solves with the ideal DP and rejects a relabelled SMMA plan."""
     import taopt
-    from taopt.registry import certifying_method
+    from taopt.orchestration.pipeline import certifying_method
 
     instance = ten_customer_delivery()
     assert certifying_method(instance) == "exact"
