@@ -21,6 +21,7 @@ from taopt.models.routing import (
     arc_list,
     cut_rows,
 )
+from taopt.routing.subtours import new_subsets
 
 
 class BudgetedModel:
@@ -126,12 +127,7 @@ class BudgetedModel:
 
     def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
         """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
-        new = []
-        for subset in cuts:
-            subset = tuple(sorted(int(v) for v in subset))
-            if len(subset) >= 2 and subset not in self._known:
-                self._known.add(subset)
-                new.append(subset)
+        new = new_subsets(cuts, self._known)
         if new:
             rows, low, high = cut_rows(self.problem.routing, new, self.tails, self.heads)
             self.model.add_rows(rows @ self.aggregate, low, high)

@@ -24,6 +24,7 @@ from taopt.models.routing import (
     cut_rows,
     decode,
 )
+from taopt.routing.subtours import new_subsets
 
 
 class ResourceModel:
@@ -136,12 +137,7 @@ class ResourceModel:
 
     def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
         """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
-        new = []
-        for subset in cuts:
-            subset = tuple(sorted(int(v) for v in subset))
-            if len(subset) >= 2 and subset not in self._known:
-                self._known.add(subset)
-                new.append(subset)
+        new = new_subsets(cuts, self._known)
         if new:
             rows, low, high = cut_rows(self.problem.routing, new, self.tails, self.heads)
             pad = sp.csr_matrix((rows.shape[0], self.n_columns - len(self.tails)))

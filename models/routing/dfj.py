@@ -48,6 +48,7 @@ from taopt.models.routing.separation import (
 )
 from taopt.result import Routes, Solution, finish
 from taopt.routing.problem import AssignmentProblem, evaluate_routes
+from taopt.routing.subtours import new_subsets
 from taopt.status import OPTIMALITY_TOLERANCE, relative_gap
 
 #: First core of the DFJ loop: at most this many arcs per point (n + m), by reduced cost.
@@ -238,12 +239,7 @@ class DfjModel:
 
     def add_cuts(self, cuts: list[tuple[int, ...]]) -> int:
         """Add the (2.5) rows of the subsets not in the model yet; returns how many."""
-        new = []
-        for subset in cuts:
-            subset = tuple(sorted(int(v) for v in subset))
-            if len(subset) >= 2 and subset not in self._known:
-                self._known.add(subset)
-                new.append(subset)
+        new = new_subsets(cuts, self._known)
         if new:
             rows, lower, upper = cut_rows(self.problem, new, self.tails, self.heads)
             full = sp.csr_matrix(

@@ -14,6 +14,7 @@ Thesis (2.5); Padberg and Rinaldi's exact separation of subtour constraints.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -40,6 +41,19 @@ CUT_TOLERANCE = 1e-6
 
 #: Fixed-point scale of σ for scipy's integer maximum flow (errors below 2**-25 per arc).
 _FLOW_SCALE = 2**24
+
+
+def new_subsets(cuts: Any, known: set[tuple[int, ...]]) -> list[tuple[int, ...]]:
+    """The subsets of ``cuts`` (each sorted into a tuple) not in ``known`` and of at least two
+    targets, in order; each is added to ``known``. The bookkeeping of every model that keeps a
+    pool of (2.5) rows (the DFJ loop, the budgeted models)."""
+    new = []
+    for subset in cuts:
+        subset = tuple(sorted(int(v) for v in subset))
+        if len(subset) >= 2 and subset not in known:
+            known.add(subset)
+            new.append(subset)
+    return new
 
 
 def cut_rows(
@@ -275,4 +289,4 @@ def _reachable(graph: sp.csr_matrix, sources: np.ndarray) -> np.ndarray:
     return mask
 
 
-__all__ = ["CUT_TOLERANCE", "arc_list", "cut_rows", "separate_subtours"]
+__all__ = ["CUT_TOLERANCE", "arc_list", "cut_rows", "new_subsets", "separate_subtours"]
