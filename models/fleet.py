@@ -228,14 +228,17 @@ def solve_fleet(
 
 def _affordable(problem: FleetProblem) -> bool:
     """Where the exact method typically certifies within a minute (measured, see
-    docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers, the
+    docs/families/fleet.md): chapter 5's shape, the operations DP up to 12 customers (the
+    geometric TSP-D's sparse DP up to 16), the
     sortie DP (one truck, one drone) up to 10, the label search up to 5 customers."""
     if _chapter5_shape(problem):
         return True
     if sorties_applies(problem):
         return problem.n <= 10
     if _operations_shape(problem):
-        return problem.n <= 12
+        from taopt.fleet.tspd_dp import tspd_applies
+
+        return problem.n <= (16 if tspd_applies(problem) else 12)
     return problem.n <= 5
 
 

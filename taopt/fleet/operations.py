@@ -45,8 +45,14 @@ def _bits(mask: int) -> list[int]:
     return [j for j in range(mask.bit_length()) if mask >> j & 1]
 
 
-def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dict[str, Any]:
+def operations_dp(
+    problem: FleetProblem, time_limit: float | None = None, fast: bool = True
+) -> dict[str, Any]:
     """Optimum of a problem with one drone per truck, c = 1 and no precedence.
+
+    With ``fast`` (the default), a geometric TSP-D (:func:`taopt.fleet.tspd_dp.tspd_applies`)
+    goes to the sparse operations DP :func:`taopt.fleet.tspd_dp.tspd_dp` (same optimum, 16
+    customers in seconds); ``fast=False`` keeps this full DP (the tests' reference).
 
     Returns a dict like :func:`taopt.fleet.search.label_search`: ``plan``, ``value``, ``bound``,
     ``stopped_by`` ("optimal", "time_limit" or "size").
@@ -55,6 +61,11 @@ def operations_dp(problem: FleetProblem, time_limit: float | None = None) -> dic
         raise SolverError("operations_dp needs one drone per truck and c = 1")
     if problem.precedences:
         raise SolverError("operations_dp needs an instance without precedences")
+    if fast:
+        from taopt.fleet.tspd_dp import tspd_applies, tspd_dp
+
+        if tspd_applies(problem):
+            return tspd_dp(problem, time_limit)
     deadline = Deadline(time_limit)
     n, s = problem.n, problem.s
     N = 1 << n

@@ -199,6 +199,14 @@ def _prune(data: _Data, U: np.ndarray, V: np.ndarray, W: np.ndarray, C: np.ndarr
     return C < best
 
 
+def _sums(bits: np.ndarray) -> np.ndarray:
+    """Row p: the sum of the rows of ``bits`` (h, g) selected by the bits of p, (2^h, g)."""
+    out = np.zeros((1, bits.shape[1]), dtype=np.int64)
+    for row in bits:
+        out = np.concatenate([out, out + row])
+    return out
+
+
 def _subset_pass(
     data: _Data, ops: tuple[np.ndarray, ...], deadline: Deadline
 ) -> tuple[np.ndarray, np.ndarray, int] | None:
@@ -218,34 +226,38 @@ def _subset_pass(
     valid = np.zeros((N, L), dtype=bool)
     valid[:, 0] = True
     valid[:, 1:] = (np.arange(N)[:, None] >> np.arange(n)[None, :]) & 1 == 1
-    groups: dict[tuple[int, int], tuple[np.ndarray, ...]] = {}
+    groups: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, int]] = {}
     for key in set(zip(m_.tolist(), r_.tolist(), strict=True)):
         sel = np.flatnonzero((m_ == key[0]) & (r_ == key[1]))
         f = n - key[0] - key[1]
-        pos = np.zeros((sel.size, max(f, 1)), dtype=np.int64)
+        pos = np.zeros((f, sel.size), dtype=np.int64)  # the free bits of each operation
         rest = free[sel].copy()
         for i in range(f):
             low = rest & -rest
-            pos[:, i] = low
+            pos[i] = low
             rest ^= low
         groups[key] = (sel, pos, f)
+    values = F.reshape(-1)
     combos = 0
     for k in range(1, n + 1):
         for (m, r), (sel, pos, f) in groups.items():
             t = k - m - r
             if t < 0 or t > f:
                 continue
-            pattern = np.array(list(itertools.combinations(range(f), t)), dtype=np.int64)
-            pattern = pattern.reshape(len(pattern), t)
-            step = max(1, CHUNK // len(pattern))
+            # t of the f free bits, as (low half, high half) indices into per-operation sums
+            half = f // 2
+            chosen = [sum(1 << i for i in c) for c in itertools.combinations(range(f), t)]
+            low = np.array([c & ((1 << half) - 1) for c in chosen], dtype=np.int64)
+            high = np.array([c >> half for c in chosen], dtype=np.int64)
+            step = max(1, CHUNK // len(chosen))
             for lo in range(0, sel.size, step):
                 if deadline.expired():
                     return None
                 idx = sel[lo : lo + step]
-                A = req[idx][:, None] | pos[lo : lo + step][:, pattern].sum(axis=2)  # (g, P)
-                vals = F[A, V[idx][:, None]] + C[idx][:, None]
-                target = (A | U[idx][:, None]) * L + W[idx][:, None]
-                np.minimum.at(flat, target.ravel(), vals.ravel())
+                A = _sums(pos[:half, lo : lo + step])[low] + _sums(pos[half:, lo : lo + step])[high]
+                A += req[idx]  # the served sets A, (P, g)
+                vals = values.take(A * L + V[idx]) + C[idx]
+                np.minimum.at(flat, ((A + U[idx]) * L + W[idx]).ravel(), vals.ravel())
                 combos += vals.size
         layer = np.flatnonzero(popcount == k)
         block = Fop[layer]
