@@ -111,18 +111,25 @@ def _generate(data: _Data, deadline: Deadline) -> tuple[np.ndarray, ...] | None:
     """Every operation of arguments 2 and 3: ``(U, v, w, cost)``, the least cost per key."""
     n, L, D, fly = data.n, data.L, data.D, data.fly
     parts: list[tuple[np.ndarray, ...]] = []
+    d: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    j: np.ndarray
     # truck-only single steps
-    v, j = np.meshgrid(np.arange(L), np.arange(n), indexing="ij")
-    v, j = v.ravel(), j.ravel()
+    v, j = (a.ravel() for a in np.meshgrid(np.arange(L), np.arange(n), indexing="ij"))
     ok = v != j + 1
     parts.append((1 << j[ok], v[ok], j[ok] + 1, D[v[ok], j[ok] + 1]))
     # drone operations with an empty truck walk: the truck drives v -> w
-    d, v, w = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(L), np.arange(L), indexing="ij"))
+    d, v, w = (
+        a.ravel() for a in np.meshgrid(np.arange(n), np.arange(L), np.arange(L), indexing="ij")
+    )
     cost = np.maximum(D[v, w], fly[d, v, w])
     ok = (v != d + 1) & (w != d + 1) & np.isfinite(cost)
     parts.append((1 << d[ok], v[ok], w[ok], cost[ok]))
     # the frontier of restricted walks: drone customer d, start v, walk set R ending at j
-    d, v, j = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(L), np.arange(n), indexing="ij"))
+    d, v, j = (
+        a.ravel() for a in np.meshgrid(np.arange(n), np.arange(L), np.arange(n), indexing="ij")
+    )
     ok = data.drone_ok[d] & (d != j) & (v != d + 1) & (v != j + 1)
     d, v, j = d[ok], v[ok], j[ok]
     R = (1 << j).astype(np.int64)
@@ -187,12 +194,12 @@ def _prune(data: _Data, U: np.ndarray, V: np.ndarray, W: np.ndarray, C: np.ndarr
         has = ((U >> x) & 1 == 1) & (U != (1 << x))
         # a truck step v -> x first
         a = np.flatnonzero(has & (W != xl))
-        best[a] = np.minimum(best[a], D[V[a], xl] + look(U[a] ^ (1 << x), np.full(a.size, xl), W[a]))
+        best[a] = np.minimum(
+            best[a], D[V[a], xl] + look(U[a] ^ (1 << x), np.full(a.size, xl), W[a])
+        )
         # a truck step x -> w last (w in U)
         b = np.flatnonzero(has & w_in & (W != xl))
-        best[b] = np.minimum(
-            best[b], look(U[b] ^ wbit[b], V[b], np.full(b.size, xl)) + D[xl, W[b]]
-        )
+        best[b] = np.minimum(best[b], look(U[b] ^ wbit[b], V[b], np.full(b.size, xl)) + D[xl, W[b]])
         # recovery at x in U, then a drive to w
         c = np.flatnonzero(has & elsewhere)
         best[c] = np.minimum(best[c], look(U[c], V[c], np.full(c.size, xl)) + D[xl, W[c]])
