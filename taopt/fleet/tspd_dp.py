@@ -50,7 +50,7 @@ from taopt.runtime import Deadline
 INF = math.inf
 
 #: Largest number of customers the subset table ``2^n (n + 1)`` is built for.
-MAX_CUSTOMERS = 22
+MAX_CUSTOMERS = 20
 
 #: Combinations (served set, operation) handled per numpy chunk.
 CHUNK = 1 << 20
@@ -208,10 +208,24 @@ def _prune(data: _Data, U: np.ndarray, V: np.ndarray, W: np.ndarray, C: np.ndarr
 
 def _sums(bits: np.ndarray) -> np.ndarray:
     """Row p: the sum of the rows of ``bits`` (h, g) selected by the bits of p, (2^h, g)."""
-    out = np.zeros((1, bits.shape[1]), dtype=np.int64)
+    out = np.zeros((1, bits.shape[1]), dtype=bits.dtype)
     for row in bits:
         out = np.concatenate([out, out + row])
     return out
+
+
+def _served_sets(pos: np.ndarray, f: int, t: int) -> tuple[Any, ...]:
+    """How :func:`_subset_pass` forms ``A · L`` for every way to choose t of the f free bits:
+    ("halves", low, high, half) indexes per-operation sums of each half; ("rows", cols) adds
+    t rows (cheaper when the choices are few)."""
+    chosen = list(itertools.combinations(range(f), t))
+    half = f // 2
+    if len(chosen) >= 1 << half:
+        masks = [sum(1 << i for i in c) for c in chosen]
+        low = np.array([c & ((1 << half) - 1) for c in masks], dtype=np.int64)
+        high = np.array([c >> half for c in masks], dtype=np.int64)
+        return ("halves", low, high, half)
+    return ("rows", np.array(chosen, dtype=np.int64).reshape(len(chosen), t))
 
 
 def _subset_pass(
@@ -225,6 +239,9 @@ def _subset_pass(
     req = data.locbit[V] | np.where((data.locbit[W] & U) == 0, data.locbit[W], 0)
     free = full & ~U & ~req
     m_, r_ = _popcount(U), _popcount(req)
+    # flat offsets into (2^n, L): read F[A, v] at A·L + src, write (A ∪ U, w) at A·L + dst
+    src = (req * L + V).astype(np.int32)
+    dst = ((req + U) * L + W).astype(np.int32)
     F = np.full((N, L), INF)
     Fop = np.full((N, L), INF)
     F[0, 0] = Fop[0, 0] = 0.0
@@ -237,11 +254,11 @@ def _subset_pass(
     for key in set(zip(m_.tolist(), r_.tolist(), strict=True)):
         sel = np.flatnonzero((m_ == key[0]) & (r_ == key[1]))
         f = n - key[0] - key[1]
-        pos = np.zeros((f, sel.size), dtype=np.int64)  # the free bits of each operation
+        pos = np.zeros((f, sel.size), dtype=np.int32)  # each operation's free bits, times L
         rest = free[sel].copy()
         for i in range(f):
             low = rest & -rest
-            pos[i] = low
+            pos[i] = low * L
             rest ^= low
         groups[key] = (sel, pos, f)
     values = F.reshape(-1)
@@ -251,20 +268,23 @@ def _subset_pass(
             t = k - m - r
             if t < 0 or t > f:
                 continue
-            # t of the f free bits, as (low half, high half) indices into per-operation sums
-            half = f // 2
-            chosen = [sum(1 << i for i in c) for c in itertools.combinations(range(f), t)]
-            low = np.array([c & ((1 << half) - 1) for c in chosen], dtype=np.int64)
-            high = np.array([c >> half for c in chosen], dtype=np.int64)
-            step = max(1, CHUNK // len(chosen))
+            how = _served_sets(pos, f, t)
+            count = len(how[1])
+            step = max(1, CHUNK // count)
             for lo in range(0, sel.size, step):
                 if deadline.expired():
                     return None
                 idx = sel[lo : lo + step]
-                A = _sums(pos[:half, lo : lo + step])[low] + _sums(pos[half:, lo : lo + step])[high]
-                A += req[idx]  # the served sets A, (P, g)
-                vals = values.take(A * L + V[idx]) + C[idx]
-                np.minimum.at(flat, ((A + U[idx]) * L + W[idx]).ravel(), vals.ravel())
+                part = pos[:, lo : lo + step]
+                if how[0] == "halves":
+                    _, low, high, half = how
+                    AL = _sums(part[:half])[low] + _sums(part[half:])[high]  # (P, g)
+                else:
+                    AL = np.zeros((count, idx.size), dtype=np.int32)
+                    for c in range(t):
+                        AL += part[how[1][:, c]]
+                vals = values.take(AL + src[idx]) + C[idx]
+                np.minimum.at(flat, (AL + dst[idx]).ravel(), vals.ravel())
                 combos += vals.size
         layer = np.flatnonzero(popcount == k)
         block = Fop[layer]
