@@ -18,10 +18,22 @@ from taopt.fleet.tspd import (
 )
 from taopt.fleet.tspd_dp import tspd_applies, tspd_dp
 
-#: Optima of our generated 14-15 node instances, by the sparse DP, equal (relative 1e-12) to
-#: the full operations DP (``operations_dp(fast=False)``, run once, docs/families/fleet.md).
+#: Optima of our generated instances by the sparse DP (6 decimals). The full operations DP
+#: (``operations_dp(fast=False)``) gave the same values at 14-15 nodes (all six, in
+#: ``benchmarks/bench_fleet.py --before``); see docs/families/fleet.md for 16-17.
 GENERATED_OPTIMA = {
-    "gen-1-n14": None,
+    "gen-1-n14": 263.068525,
+    "gen-2-n14": 275.173872,
+    "gen-3-n14": 230.471628,
+    "gen-1-n15": 253.627775,
+    "gen-2-n15": 258.691353,
+    "gen-3-n15": 273.581081,
+    "gen-1-n16": 222.448326,
+    "gen-2-n16": 252.291175,
+    "gen-3-n16": 260.053362,
+    "gen-1-n17": 258.942456,
+    "gen-2-n17": 250.134500,
+    "gen-3-n17": 276.010153,
 }
 
 RANDOM_CASES = [
@@ -115,3 +127,14 @@ def test_generated_instances_are_shipped():
         n for n in range(14, 18) for _ in range(3)
     ]
     assert all(tspd_applies(FleetProblem.from_tspd(p)) for p in paths)
+
+
+@pytest.mark.slow
+def test_generated_14_to_17_node_instances_keep_their_optima():
+    """Every generated instance: certified by the exact method, its recorded optimum (6 dp)."""
+    paths = generated_instances()
+    assert sorted(p.stem for p in paths) == sorted(GENERATED_OPTIMA)
+    for path in paths:
+        solution = taopt.solve(FleetProblem.from_tspd(path), "exact")
+        assert solution.status == "optimal", path.name
+        assert solution.objective == pytest.approx(GENERATED_OPTIMA[path.stem], abs=2e-6), path.name
