@@ -14,7 +14,8 @@ four exact arguments, to a sparse list of operations and to ``(T, w)`` with w se
 2. **Restricted truck walks.** In a drone operation with walk ``v, r_1, ..., r_k`` (then a drive
    to w), if the truck reaches some ``r_i``, i < k, at ``t_i >= fly(v, d, r_i)``, recovering the
    drone at ``r_i`` and serving ``r_{i+1}..r_k`` by truck-only steps takes
-   ``t_i + (rest of the walk) <= max(P, fly)``. So only walks whose every node but the last is
+   ``t_i + (rest of the walk) <= max(P, fly)`` (fly is infinite out of range, so a walk whose
+   drone could not land at ``r_i`` is never split there). So only walks whose every node but the last is
    reached strictly before the drone could be there are generated (a sparse Held–Karp frontier
    per drone customer d), and truck-only operations are single steps ``({j}, v, j)``.
 3. **Recovery at the walk's end, at the launch stop, the depot or a served customer** (a walk
@@ -30,7 +31,7 @@ disjoint from U that hold its launch (and recovery) customer; the plan is rebuil
 and re-scored by :func:`taopt.fleet.evaluate.evaluate_fleet`. The value is a proof (the DP is
 exhaustive over the restricted space, which holds an optimum): status ``optimal``, bound = value.
 
-References: N. Agatz, P. Bouman, M. Schmidt, Transportation Science 52(4):965–981 (2018);
+This is the fleet family's (thesis §6.2) exact method for the TSP-D case. References: N. Agatz, P. Bouman, M. Schmidt, Transportation Science 52(4):965–981 (2018);
 P. Bouman, N. Agatz, M. Schmidt, Networks 72(4):528–542 (2018).
 """
 
@@ -412,6 +413,14 @@ def tspd_dp(problem: FleetProblem, time_limit: float | None = None) -> dict[str,
     Returns a dict like :func:`taopt.fleet.operations.operations_dp`: ``plan``, ``value``,
     ``bound``, ``stopped_by`` ("optimal", "time_limit" or "infeasible"), and counts
     ``operations`` (kept / generated) and ``combinations`` (pairs served set × operation).
+    ``time_limit`` (seconds, wall clock, the operations' generation included) is checked
+    between numpy chunks; when it passes, the result is a simple feasible plan with the
+    reach bound of :func:`taopt.fleet.bounds.reach_bound`, ``stopped_by = "time_limit"``.
+
+    Time: generating the restricted walks is linear in their number (about 10^5 at 17 nodes);
+    the subset pass costs one gather and one scatter per pair (served set, kept operation),
+    2.4–3.7·10^8 pairs at 17 nodes, against ``3^n s²`` ≈ 1.2·10^10 for the full DP; memory
+    two ``2^n × (n + 1)`` tables of floats.
 
     Raises
     ------
