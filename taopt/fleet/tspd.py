@@ -68,14 +68,20 @@ def generate_tspd(
     return "\n".join(lines) + "\n"
 
 
-def write_tspd(path: str | os.PathLike[str], nodes: int, seed: int, **options: object) -> Path:
-    """Write :func:`generate_tspd` ``(nodes, seed, **options)`` to ``path``; returns the path.
+def write_tspd(
+    path: str | os.PathLike[str],
+    nodes: int,
+    seed: int,
+    maxfly: float | None = None,
+    novisit: Iterable[int] = (),
+) -> Path:
+    """Write :func:`generate_tspd` ``(nodes, seed, maxfly, novisit)`` to ``path``; returns it.
 
     ``python -m taopt.fleet.tspd FOLDER`` writes the shipped ``generated/`` set:
     ``gen-<seed>-n<nodes>.txt`` for nodes 14..17 and seeds 1..3, seed = 1000 * id + nodes.
     """
     path = Path(path)
-    path.write_text(generate_tspd(nodes, seed, **options), encoding="utf-8")  # type: ignore[arg-type]
+    path.write_text(generate_tspd(nodes, seed, maxfly, novisit), encoding="utf-8")
     return path
 
 
