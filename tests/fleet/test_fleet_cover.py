@@ -74,9 +74,10 @@ def test_root_sortie_walk_bound_certifies_without_search():
     method is optimal without a label, at the brute-force optimum (33.855975..., computed by
     :func:`~taopt.fleet.brute.brute_force` in 99 s, so recorded here)."""
     import taopt
+    from taopt.models.fleet import solve_fleet
 
     problem = tiny_instance(38, 3, 2, 2, 2, False, "last_service", stops=3)
-    solution = taopt.solve(problem, "exact")
+    solution = solve_fleet(problem)
     assert solution.status == "optimal"
     assert solution.info["algorithm"] == "search" and "labels" not in solution.info
     assert solution.objective == pytest.approx(33.85597515507222, rel=1e-9)
