@@ -303,6 +303,7 @@ def sortie_walks(
     ready: float,
     release: np.ndarray,
     budget_sets: int = 1 << 16,
+    deadline: Deadline | None = None,
 ) -> np.ndarray | None:
     """The customer sets (bitmasks over ``stab.required``) one drone can serve by ``T``
     (``"last_service"``; under ``"return"``: with every sortie recovered and its truck home by
@@ -317,6 +318,8 @@ def sortie_walks(
     only if its launch and recovery legs are (:class:`SortieTables`). The other drones of the
     truck and the truck's own service are dropped, so each drone gets a truck of its own: a
     relaxation. A DP over (served set, last recovery stop) keeping the earliest recovery.
+    None (nothing proven) when there are more than ``budget_sets`` sets or the deadline
+    expires first.
     """
     m = len(stab.required)
     size = 1 << m
@@ -337,6 +340,8 @@ def sortie_walks(
     for S in range(size):
         if not alive[S]:
             continue
+        if deadline is not None and S & 63 == 0 and deadline.expired():
+            return None
         launch = np.min(R[S][:, None] + tt, axis=0)  # (s,): truck and drone at w
         free = (stab.mask & S) == 0
         if not free.any():
@@ -391,6 +396,7 @@ def fleet_coverable(
     trucks: Sequence[tuple[int, float, float, int]],
     release: np.ndarray,
     budget: int = 1 << 16,
+    deadline: Deadline | None = None,
 ) -> bool:
     """Whether the trucks' walks (truck service only, :func:`coverable`'s DP) and the drones'
     sortie walks (:func:`sortie_walks`, one per drone) can serve every customer of
@@ -420,7 +426,9 @@ def fleet_coverable(
         for _ in range(drones):
             key = ("drone", stop, arrival)
             if key not in memo:
-                memo[key] = sortie_walks(tab, stab, T, stop, arrival, release[req], budget)
+                memo[key] = sortie_walks(
+                    tab, stab, T, stop, arrival, release[req], budget, deadline
+                )
             walks = memo[key]
             if walks is None:
                 return True
@@ -467,7 +475,7 @@ def fleet_cover_bound(
         return lower
 
     def test(T: float) -> bool:
-        return fleet_coverable(tab, stab, T, trucks, release)
+        return fleet_coverable(tab, stab, T, trucks, release, deadline=deadline)
 
     if not test(top):
         return top
