@@ -11,7 +11,8 @@
 
 Each solve has a wall-clock limit (``--time-limit``); a solve that stops there counts as that
 long and is reported with its status and gap. Run: ``python benchmarks/bench_fleet.py [--sets
-tspd,fleet8,fleet10] [--time-limit 60] [--seeds 3] [--no-milp] [--before]``; the teaching MILP
+tspd,fleet8,fleet10] [--time-limit 60] [--seeds 3] [--no-milp] [--before]``; the exact rows end with
+the algorithm and, where computed, the root sortie-walk bound; the teaching MILP
 (``"milp"``) is solved beside the exact method on every fleet instance, same limit. The machine's load average is printed
 (timings on shared cores scale with it).
 """
@@ -38,6 +39,12 @@ def _solve(
     start = time.perf_counter()
     solution = taopt.solve(problem, method, time_limit=limit)
     return time.perf_counter() - start, solution
+
+
+def _root(solution: taopt.Solution) -> str:
+    """The root sortie-walk bound (``taopt.fleet.cover``) when the exact method computed one."""
+    root = solution.info.get("root_cover_bound")
+    return "" if root is None else f"root {root:.2f}"
 
 
 def _before(problem: FleetProblem, limit: float) -> tuple[float, dict[str, object]]:
@@ -113,7 +120,7 @@ def fleet(n: int, grid: list[tuple[int, int, int]], seeds: int, limit: float, mi
             print(
                 f"{n:>3} {K:>2} {D:>2} {c:>2} {seed:>4} {method:>6} {solution.status!s:>10} "
                 f"{solution.objective:>8.2f} {bound:>8.2f} {gap:>7.3f} {seconds:>7.2f} "
-                f"{solution.info.get('algorithm', '')}",
+                f"{solution.info.get('algorithm', '')} {_root(solution)}",
                 flush=True,
             )
     for method, values in times.items():

@@ -25,6 +25,7 @@ import time
 from typing import Any
 
 from taopt.errors import require
+from taopt.fleet.evaluate import as_plan
 from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
 from taopt.fleet.sorties import applies as sorties_applies
@@ -34,6 +35,9 @@ from taopt.result import Solution, finish
 
 #: Share of the time limit the label search gives the improver (the ILS) before searching.
 IMPROVE_SHARE = 0.2
+
+#: Share of the time limit the root sortie-walk bound may take (its bisection stops there).
+COVER_SHARE = 0.2
 
 
 def _score_or_inf(problem: FleetProblem, plan: Any) -> float:
@@ -158,7 +162,6 @@ def solve_fleet(
         result = operations_dp(problem, time_limit=time_limit)
     elif choice == "sortie_dp":
         from taopt.fleet.bounds import fleet_lower
-        from taopt.fleet.evaluate import as_plan
         from taopt.fleet.search import _simple_plan
 
         result = sortie_dp(problem, time_limit=time_limit, max_steps=max_labels)
@@ -172,7 +175,6 @@ def solve_fleet(
                     key=lambda plan: _score_or_inf(problem, plan),
                 )
     elif choice == "split_dp":
-        from taopt.fleet.evaluate import as_plan
         from taopt.fleet.search import _simple_plan
 
         result = split_dp(problem, time_limit=time_limit)
@@ -182,8 +184,15 @@ def solve_fleet(
         result["plan"] = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
         left = None if time_limit is None else time_limit - (time.perf_counter() - start)
         if result["stopped_by"] == "gap" and (left is None or left > 0):
-            # not closed by the splits (cross-truck waits): the label search from the split's
-            # plan for the time left; both bounds are valid, so the larger one is kept
+            # not closed by the splits (cross-truck waits): the sortie-walk bound, then the
+            # label search from the split's plan for the time left; every bound is valid, so
+            # the largest is kept
+            floor, _ = _root_cover(problem, result["plan"], left)
+            result["bound"] = max(result["bound"], floor)
+            result["root_cover_bound"] = floor
+            left = None if time_limit is None else time_limit - (time.perf_counter() - start)
+            if _score_or_inf(problem, result["plan"]) <= floor * (1 + 1e-6):
+                left = 0.0  # certified by the bound: no search
             searched = label_search(
                 problem, time_limit=left, incumbent=result["plan"], max_labels=max_labels
             )
@@ -207,7 +216,26 @@ def solve_fleet(
             incumbent = improve(problem, incumbent, share)
             if time_limit is not None:
                 left = max(time_limit - (time.perf_counter() - start), 0.0)
-        result = label_search(problem, time_limit=left, incumbent=incumbent, max_labels=max_labels)
+        floor, incumbent = _root_cover(problem, incumbent, time_limit)
+        value = _score_or_inf(problem, incumbent)
+        if value <= floor * (1 + 1e-6):
+            # the sortie-walk bound meets the incumbent: certified without searching
+            result = {
+                "plan": as_plan(incumbent),
+                "value": value,
+                "bound": floor,
+                "stopped_by": "optimal",
+                "root_cover_bound": floor,
+            }
+        else:
+            if time_limit is not None:
+                left = max(time_limit - (time.perf_counter() - start), 0.0)
+            result = label_search(
+                problem, time_limit=left, incumbent=incumbent, max_labels=max_labels
+            )
+            result["root_cover_bound"] = floor
+            if result["stopped_by"] != "optimal":
+                result["bound"] = min(max(result["bound"], floor), result["value"])
     info = {
         "algorithm": choice,
         **{k: v for k, v in result.items() if k not in ("plan", "value", "bound")},
@@ -224,6 +252,28 @@ def solve_fleet(
         runtime=time.perf_counter() - start,
         info=info,
     )
+
+
+def _root_cover(
+    problem: FleetProblem, incumbent: Any, time_limit: float | None
+) -> tuple[float, Any]:
+    """The root sortie-walk bound (:func:`taopt.fleet.cover.fleet_cover_bound`) between
+    :func:`taopt.fleet.bounds.fleet_lower` and the incumbent's value (the incumbent, or the
+    simple sequential plan when it is better or missing), with at most
+    :data:`COVER_SHARE` of the time limit; returns (bound, incumbent)."""
+    from taopt.fleet.bounds import fleet_lower
+    from taopt.fleet.cover import fleet_cover_bound
+    from taopt.fleet.search import _simple_plan
+    from taopt.runtime import Deadline
+
+    candidates = [_simple_plan(problem)]
+    if incumbent is not None:
+        candidates.append(as_plan(incumbent))
+    incumbent = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
+    lower = fleet_lower(problem, "fast")
+    deadline = Deadline(None if time_limit is None else COVER_SHARE * time_limit)
+    bound = fleet_cover_bound(problem, lower, _score_or_inf(problem, incumbent), deadline)
+    return bound, incumbent
 
 
 def _affordable(problem: FleetProblem) -> bool:
@@ -251,4 +301,4 @@ register_method(
     style=("-", "*"),
 )(solve_fleet)
 
-__all__ = ["IMPROVE_SHARE", "solve_fleet"]
+__all__ = ["COVER_SHARE", "IMPROVE_SHARE", "solve_fleet"]

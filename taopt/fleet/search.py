@@ -102,6 +102,12 @@ class _Tables:
             if ok[j].any():
                 G[:, j] = np.min(tt[:, ok[j]] + ft[j, ok[j]][None, :], axis=1)
         self.G = G.tolist()
+        self.Gnp = G
+        # F[w, j]: a sortie launched at w itself reaches j after ft(w, j) (inf when out of range)
+        self.Fnp = np.where(ok.T, ft.T, INF)
+        self.tt_np = np.asarray(tt, dtype=float)
+        self.fst_np = np.asarray(ft, dtype=float)  # (n, s) flight times customer -> stop
+        self.fsd_np = np.asarray(p.flight_stop, dtype=float)
         home = ft + p.service_time + tt[:, p.depot][None, :]  # (n, s)
         self.home = home.min(axis=1).tolist()  # drone at customer j: recovery and drive home
         back = self.home[:]
@@ -203,6 +209,50 @@ def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
     return INF  # not reached
 
 
+def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
+    """Per truck, per customer j: the least time a sortie of that truck not yet launched
+    serves j (``inf`` where none can).
+
+    An aboard drone launches here no sooner than ``max(A, ρ)`` (only toward customers a sortie
+    from this stop can reach and still land: ``F``), or at another stop after the truck leaves
+    (no sooner than its departure bound T) and drives there (``T + G[w, j]``, G the least
+    drive-and-fly time). An airborne drone must first be recovered at some stop q within its
+    range: no sooner than ``max(t + ft(ℓ, q), arrival at q) + τ`` (the truck is at q at A if q is
+    its stop, else no sooner than ``T + tt(w, q)``; a drone that has served nobody yet is
+    charged no flight to q), then ``G[q, j]``. Then τ at j. Each is a relaxation of the
+    actions of :func:`_children`, which only add constraints."""
+    out: list[Any] = []
+    tau = tab.tau
+    for w, A, T, _ev, fin, _F, drones in trucks:
+        if fin or not drones:
+            out.append(None)
+            continue
+        rho = INF
+        for dr in drones:
+            if dr[0] == 0 and dr[1] < rho:
+                rho = dr[1]
+        if rho < INF:
+            best = np.minimum((rho if rho > A else A) + tab.Fnp[w], T + tab.Gnp[w])
+        else:
+            best = np.full(tab.n, INF)
+        arrive = None
+        for dr in drones:
+            if dr[0] != 1:
+                continue
+            if arrive is None:
+                arrive = T + tab.tt_np[w]
+                arrive[w] = A
+            o = dr[1]
+            if o >= 0:
+                back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tau
+                back[dr[4] + tab.fsd_np[o] > tab.limit] = INF
+            else:
+                back = np.maximum(dr[3], arrive) + tau
+            best = np.minimum(best, np.min(back[:, None] + tab.Gnp, axis=0))
+        out.append((best + tau).tolist())
+    return out
+
+
 def _bound(tab: _Tables, label: tuple) -> float:
     """A lower bound on the objective of every completion of ``label`` (module docstring)."""
     S, M, svc, trucks = label
@@ -211,8 +261,8 @@ def _bound(tab: _Tables, label: tuple) -> float:
     est = [0.0] * n
     full = (1 << n) - 1
     if S != full:
-        G, tt, fct, fst, fcd, fsd, near = (
-            tab.G,
+        fresh = _fresh_sorties(tab, trucks)
+        tt, fct, fst, fcd, fsd, near = (
             tab.tt,
             tab.fct,
             tab.fst,
@@ -227,15 +277,16 @@ def _bound(tab: _Tables, label: tuple) -> float:
                 continue
             e = INF
             tok, dok = tab.truck_ok[j], tab.drone_ok[j]
-            for w, A, _T, _ev, fin, _F, drones in trucks:
+            for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
                 if fin:
                     continue
                 if tok:
-                    v = A + tt[w][tab.cstop[j]]
+                    js = tab.cstop[j]
+                    v = A if js == w else T + tt[w][js]
                     if v < e:
                         e = v
                 if dok and drones:
-                    v = A + G[w][j] + tau
+                    v = fresh[k][j]
                     if v < e:
                         e = v
                     for dr in drones:

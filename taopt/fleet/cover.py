@@ -1,0 +1,503 @@
+"""The covering-walk bound of the fleet family: the trucks' routing, relaxed to deadlines.
+
+For a trial objective value T, every customer j must be *covered* by some truck's walk: a truck
+serving it stands at its stop no later than its deadline, and a drone serving it was launched
+from a stop its truck stood at early enough. Relaxing everything else (the number of drones,
+their capacity, the sorties' sharing of a drone, the range beyond one direct flight, the
+precedences), the question "can K walks cover every customer by T" is a DP over (covered set,
+last stop) per truck and an OR-convolution over the trucks; the least T that passes is a lower
+bound on the optimum, found by bisection. See :func:`coverable` for the proof.
+
+Timing conventions are those of :mod:`taopt.fleet.evaluate` (chapter 5's (5.1)–(5.7)): a
+truck-served customer j at position p has ``t_j >= A[k, p]``; a sortie launched at position p
+(stop w) has ``L >= A[k, p]`` and its i-th customer ``t_{c_i} >= L + ft(w, c_1) + τ + ...
+>= L + ft(w, c_i) + τ`` (straight lines: the triangle inequality); under ``"return"`` the
+truck carrying the drone is home no sooner than ``t_j + ft(j, q) + τ + tt(q, depot)`` for
+the recovery stop q.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from taopt.fleet.problem import FleetProblem
+from taopt.runtime import Deadline
+
+INF = math.inf
+
+
+class CoverTables:
+    """Per-instance arrays of the covering-walk bound.
+
+    Attributes
+    ----------
+    offset : dict bool -> (s, n) float array
+        ``offset[has_drones][w, j]``: the least time from a truck standing at stop w to the
+        objective's clock for customer j served from there (``inf`` when it cannot be): 0 for a
+        truck-servable j at its own stop w (plus ``tt(w, depot)`` under ``"return"``);
+        ``ft(w, j) + τ`` for a drone-servable j when the truck carries drones and some
+        single-customer sortie w -> j -> q is within range (plus ``min_q ft(j, q) + τ +
+        tt(q, depot)`` under ``"return"``); the minimum of the two.
+    """
+
+    def __init__(self, problem: FleetProblem) -> None:
+        p = problem
+        n, s = p.n, p.s
+        self.n, self.s = n, s
+        self.tt = np.asarray(p.truck_time, dtype=float)
+        self.depot = p.depot
+        self.ret = p.objective == "return"
+        self.drones = list(p.drones)
+        self.home_truck = self.tt[:, p.depot].copy()
+        fs = p.flight_stop  # (n, s) distances
+        ft = fs / p.v_drone
+        tau = p.service_time
+        # a sortie serving j from launch w and landing at q flies at least d(w, j) + d(j, q)
+        reach = fs.T + fs.min(axis=1)[None, :]  # (s, n)
+        drone = np.where(reach <= p.flight_limit, ft.T + tau, INF)
+        if self.ret:
+            home = (ft + tau + self.tt[:, p.depot][None, :]).min(axis=1)  # (n,)
+            drone = drone + home[None, :]
+        truck = np.full((s, n), INF)
+        for j in range(n):
+            if p.truck_servable(j):
+                w = p.customer_stop[j]
+                assert w is not None
+                truck[w, j] = self.home_truck[w] if self.ret else 0.0
+        no_drone = truck
+        with_drone = np.minimum(
+            truck, np.where([p.drone_servable(j) for j in range(n)], drone, INF)
+        )
+        self.offset = {False: no_drone, True: with_drone}
+        self.ft_customer = p.flight_customer / p.v_drone
+        self.home_drone = (ft + tau + self.tt[:, p.depot][None, :]).min(axis=1)
+        self.tau = tau
+        self.limit = p.flight_limit
+        self.fs = fs
+        self.fc = p.flight_customer
+        self.near = fs.min(axis=1)
+        self.v_drone = p.v_drone
+
+
+def _reached(
+    tab: CoverTables,
+    off: np.ndarray,
+    T: float,
+    stop: int,
+    arrival: float,
+    leave: float,
+    budget: int,
+) -> np.ndarray | None:
+    """The covered sets (bitmasks over the columns of ``off``) one truck's walks reach by
+    ``T``: the truck stands at ``stop`` from ``arrival`` and may leave at ``leave``.
+
+    Only maximal-enough sets matter (a subset of a reached set is covered too); each state
+    (set, stop) keeps its earliest time, which covers a superset of any later one."""
+    m = off.shape[1]
+    weights = (1 << np.arange(m, dtype=np.int64)) if m else np.zeros(0, dtype=np.int64)
+    slack = T - off  # (s, m): the latest arrival at w that still covers j
+    tt = tab.tt
+    home = tab.home_truck
+
+    def cover(times: np.ndarray) -> np.ndarray:
+        return ((slack >= times[:, None]) @ weights).astype(np.int64)  # (s,)
+
+    start = int(cover(np.full(tab.s, arrival))[stop])
+    if tab.ret and leave + home[stop] > T:
+        return np.zeros(0, dtype=np.int64)
+    best: dict[int, np.ndarray] = {}
+    first = np.full(tab.s, INF)
+    first[stop] = leave
+    best[start] = first
+    order = [start]
+    import heapq
+
+    heapq.heapify(order)
+    out = []
+    while order:
+        S = heapq.heappop(order)
+        dep = best[S]
+        out.append(S)
+        if len(best) > budget:
+            return None
+        arr = np.min(dep[:, None] + tt, axis=0)  # (s,)
+        ok = arr <= T
+        if tab.ret:
+            ok &= arr + home <= T
+        if not ok.any():
+            continue
+        cov = cover(np.where(ok, arr, INF))
+        for w in np.flatnonzero(ok & ((cov | S) != S)):
+            S2 = int(cov[w]) | S
+            row = best.get(S2)
+            if row is None:
+                row = np.full(tab.s, INF)
+                best[S2] = row
+                heapq.heappush(order, S2)
+            if arr[w] < row[w]:
+                row[w] = arr[w]
+    return np.unique(np.asarray(out, dtype=np.int64))
+
+
+def coverable(
+    tab: CoverTables,
+    T: float,
+    trucks: Sequence[tuple[int, float, float, int]],
+    required: Sequence[int],
+    budget: int = 1 << 16,
+) -> bool:
+    """Whether K truck walks can cover the ``required`` customers by ``T`` (relaxation).
+
+    ``trucks``: per unfinished truck (stop, arrival, earliest departure, drones carried).
+
+    Proof that a plan of objective ``<= T`` passes. Take its earliest schedule (module
+    :mod:`taopt.fleet.evaluate`). Each customer j is served by (a) a truck at position p at
+    stop ``customer_stop[j]`` with ``A[k, p] <= t_j <= T`` (under ``"return"`` the truck then
+    drives home: ``A[k, p] + tt(w, depot) <= T``); or (b) a drone of a sortie launched at
+    position p (stop w) of truck k: ``t_j >= L + ft(w, j) + τ >= A[k, p] + ft(w, j) + τ``
+    (straight lines are shortest), the sortie flies at least ``d(w, j) + d(j, q)`` for its
+    recovery stop q (so ``d(w, j) + min_q d(j, q) <= range``), and under ``"return"`` the
+    truck is home no sooner than ``t_j + ft(j, q) + τ + tt(q, depot)``. Either way truck k
+    stood at a stop w at a time ``A[k, p] <= T - offset[w, j]`` (:class:`CoverTables`). The
+    truck's positions are a walk; its arrival times are at least the street shortest paths
+    from its start between consecutive positions, so the DP's walk through the same stops,
+    arriving earliest, covers j too (deadlines only: being earlier never hurts). Truck k's
+    customers form a set reached by one truck's DP; the K sets cover every customer.
+    """
+    m = len(required)
+    if m == 0:
+        return True
+    full = (1 << m) - 1
+    family: np.ndarray | None = None
+    for stop, arrival, leave, drones in trucks:
+        off = tab.offset[drones > 0][:, list(required)]
+        sets = _reached(tab, off, T, stop, arrival, leave, budget)
+        if sets is None:
+            return True  # too many sets to decide: nothing proven
+        if len(sets) == 0:
+            continue
+        if np.any(sets == full):
+            return True
+        if family is None:
+            family = sets
+        else:
+            union = np.unique(np.bitwise_or.outer(family, sets).ravel())
+            if np.any(union == full):
+                return True
+            family = union
+    return False
+
+
+def cover_bound(
+    problem: FleetProblem,
+    lower: float,
+    upper: float,
+    trucks: Sequence[tuple[int, float, float, int]] | None = None,
+    required: Sequence[int] | None = None,
+    tables: CoverTables | None = None,
+    deadline: Deadline | None = None,
+    tolerance: float = 1e-7,
+) -> float:
+    """The covering-walk lower bound, by bisection between a valid bound and an upper value.
+
+    Parameters
+    ----------
+    problem : FleetProblem
+    lower : float
+        A valid lower bound on the optimum (returned when nothing better is proven).
+    upper : float
+        A value to test first (an incumbent's): when even ``upper (1 - tolerance)`` is not
+        coverable, that is returned, closing the gap within the tolerance.
+    trucks : sequence of (stop, arrival, departure, drones), optional
+        Default: every truck at the depot at time 0.
+    required : sequence of int, optional
+        The customers to cover (default: all).
+    deadline : Deadline, optional
+        Checked between trials; the best proven value is returned when it expires.
+
+    Returns
+    -------
+    float
+        ``max(lower, T)`` for the largest tested T no plan of objective ``<= T`` meets
+        (:func:`coverable`): a valid lower bound.
+    """
+    tab = tables if tables is not None else CoverTables(problem)
+    if trucks is None:
+        trucks = [(problem.depot, 0.0, 0.0, d) for d in problem.drones]
+    req = list(range(problem.n)) if required is None else list(required)
+    if not math.isfinite(upper):
+        return lower
+    top = upper * (1.0 - tolerance)
+    if top <= lower:
+        return lower
+    if not coverable(tab, top, trucks, req):
+        return top
+    lo, hi = lower, top
+    while hi - lo > tolerance * max(1.0, abs(hi)):
+        if deadline is not None and deadline.expired():
+            break
+        mid = 0.5 * (lo + hi)
+        if coverable(tab, mid, trucks, req):
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+# -- the sortie-walk relaxation: each drone with its own truck --------------------------------
+
+
+class SortieTables:
+    """Per-instance arrays of :func:`sortie_walks`: every ordered tuple of at most c distinct
+    drone-servable customers (a possible sortie), its customer bitmask, its first and last
+    customer, the flight time between its customers with the landings, and which launch and
+    recovery stops keep it within range."""
+
+    def __init__(self, problem: FleetProblem, required: Sequence[int]) -> None:
+        p = problem
+        import itertools
+
+        self.required = list(required)
+        col = {j: i for i, j in enumerate(self.required)}
+        drone_ok = [j for j in self.required if p.drone_servable(j)]
+        fs, fc = p.flight_stop, p.flight_customer
+        vd, tau, limit = p.v_drone, p.service_time, p.flight_limit
+        near = fs.min(axis=1)
+        seqs = [
+            seq
+            for size in range(1, p.capacity + 1)
+            for seq in itertools.permutations(drone_ok, size)
+        ]
+        self.count = len(seqs)
+        self.size = p.capacity
+        s = p.s
+        self.mask = np.array([sum(1 << col[j] for j in seq) for seq in seqs], dtype=np.int64)
+        self.first_leg = np.full((len(seqs), s), INF)  # ft(w, c_1) where the launch w is in range
+        self.back_leg = np.full((len(seqs), s), INF)  # ft(c_m, q) where the recovery q is in range
+        self.steps = np.full((len(seqs), p.capacity), -1, dtype=np.int64)  # columns, -1 padding
+        self.gaps = np.zeros((len(seqs), p.capacity))  # ft(c_{i-1}, c_i) + τ (0 for i = 0)
+        for i, seq in enumerate(seqs):
+            inner = sum(float(fc[a, b]) for a, b in zip(seq[:-1], seq[1:], strict=False))
+            launch_ok = fs[seq[0]] + inner + near[seq[-1]] <= limit
+            self.first_leg[i, launch_ok] = fs[seq[0], launch_ok] / vd
+            if launch_ok.any():
+                out = float(fs[seq[0], launch_ok].min()) + inner
+                back_ok = out + fs[seq[-1]] <= limit
+                self.back_leg[i, back_ok] = fs[seq[-1], back_ok] / vd
+            for pos, j in enumerate(seq):
+                self.steps[i, pos] = col[j]
+                if pos:
+                    self.gaps[i, pos] = float(fc[seq[pos - 1], j]) / vd + tau
+        self.tau = tau
+
+
+def sortie_walks(
+    tab: CoverTables,
+    stab: SortieTables,
+    T: float,
+    stop: int,
+    ready: float,
+    release: np.ndarray,
+    budget_sets: int = 1 << 16,
+    deadline: Deadline | None = None,
+) -> np.ndarray | None:
+    """The customer sets (bitmasks over ``stab.required``) one drone can serve by ``T``
+    (``"last_service"``; under ``"return"``: with every sortie recovered and its truck home by
+    T), when it is aboard its truck at ``stop`` from ``ready``, its truck free to follow it.
+
+    Relaxation of the plan's constraints on one drone's sorties σ_1, σ_2, ... (module
+    :mod:`taopt.fleet.evaluate`): the launch of σ_{i+1} at stop w is no sooner than the
+    recovery ``R_i`` at stop q plus the truck's drive ``tt(q, w)`` (the truck leaves position
+    q no sooner than ``R_i``); its customers' times follow the flight legs and τ and are no
+    earlier than their ``release`` (predecessors); its recovery at q' is
+    ``max(B, A[q']) + τ`` with ``A[q'] >= min_q R_i[q] + tt(q, q')``; a sortie is within range
+    only if its launch and recovery legs are (:class:`SortieTables`). The other drones of the
+    truck and the truck's own service are dropped, so each drone gets a truck of its own: a
+    relaxation. A DP over (served set, last recovery stop) keeping the earliest recovery.
+    None (nothing proven) when there are more than ``budget_sets`` sets or the deadline
+    expires first.
+    """
+    m = len(stab.required)
+    size = 1 << m
+    s = tab.s
+    if size > budget_sets:
+        return None
+    R = np.full((size, s), INF)
+    R[0, stop] = ready
+    alive = np.zeros(size, dtype=bool)
+    alive[0] = True
+    done = np.zeros(size, dtype=bool)
+    done[0] = True
+    tt = tab.tt
+    home = tab.home_truck
+    ret = tab.ret
+    rel_steps = np.where(stab.steps >= 0, release[np.maximum(stab.steps, 0)], -INF)
+    valid_steps = stab.steps >= 0
+    for S in range(size):
+        if not alive[S]:
+            continue
+        if deadline is not None and S & 63 == 0 and deadline.expired():
+            return None
+        launch = np.min(R[S][:, None] + tt, axis=0)  # (s,): truck and drone at w
+        free = (stab.mask & S) == 0
+        if not free.any():
+            continue
+        first = np.min(launch[None, :] + stab.first_leg[free], axis=1) + stab.tau
+        rel = rel_steps[free]
+        gaps = stab.gaps[free]
+        valid = valid_steps[free]
+        t = np.maximum(first, rel[:, 0])
+        for pos in range(1, stab.size):
+            nxt = np.maximum(t + gaps[:, pos], rel[:, pos])
+            t = np.where(valid[:, pos], nxt, t)
+        masks = stab.mask[free] | S
+        if ret:
+            back = t[:, None] + stab.back_leg[free]
+            rec = np.maximum(back, launch[None, :]) + stab.tau
+            rec[rec + home[None, :] > T] = INF
+            ok = np.isfinite(rec).any(axis=1)
+        else:
+            ok = t <= T
+            back = t[:, None] + stab.back_leg[free]
+            rec = np.maximum(back, launch[None, :]) + stab.tau
+            rec[rec > T] = INF
+        done[masks[ok]] = True
+        more = np.isfinite(rec).any(axis=1)
+        if more.any():
+            idx = masks[more]
+            np.minimum.at(R, idx, rec[more])
+            alive[idx] = True
+    return np.flatnonzero(done).astype(np.int64)
+
+
+def _combine(families: list[np.ndarray], full: int) -> bool:
+    """Whether one set from each family covers ``full`` (OR-convolution over bitmasks)."""
+    families = sorted(families, key=len)
+    acc: np.ndarray | None = None
+    for fam in families:
+        if len(fam) == 0:
+            continue
+        if np.any(fam == full):
+            return True
+        acc = fam if acc is None else np.unique(np.bitwise_or.outer(acc, fam).ravel())
+        if np.any(acc == full):
+            return True
+    return False
+
+
+def fleet_coverable(
+    tab: CoverTables,
+    stab: SortieTables,
+    T: float,
+    trucks: Sequence[tuple[int, float, float, int]],
+    release: np.ndarray,
+    budget: int = 1 << 16,
+    deadline: Deadline | None = None,
+) -> bool:
+    """Whether the trucks' walks (truck service only, :func:`coverable`'s DP) and the drones'
+    sortie walks (:func:`sortie_walks`, one per drone) can serve every customer of
+    ``stab.required`` by ``T``. A plan of objective ``<= T`` passes: each customer is served by
+    a truck (so that truck's walk covers it) or by a drone (so that drone's sorties serve it),
+    and every constraint kept is one of the plan's."""
+    req = stab.required
+    m = len(req)
+    if m == 0:
+        return True
+    if np.any(release[req] > T):
+        return False
+    full = (1 << m) - 1
+    families: list[np.ndarray] = []
+    off = tab.offset[False][:, req]
+    has_truck_customers = bool(np.isfinite(off).any())
+    memo: dict[tuple[Any, ...], np.ndarray | None] = {}  # identical starts, identical families
+    for stop, arrival, leave, drones in trucks:
+        if has_truck_customers:
+            key: tuple[Any, ...] = ("truck", stop, arrival, leave)
+            if key not in memo:
+                memo[key] = _reached(tab, off, T, stop, arrival, leave, budget)
+            sets = memo[key]
+            if sets is None:
+                return True
+            families.append(sets)
+        for _ in range(drones):
+            key = ("drone", stop, arrival)
+            if key not in memo:
+                memo[key] = sortie_walks(
+                    tab, stab, T, stop, arrival, release[req], budget, deadline
+                )
+            walks = memo[key]
+            if walks is None:
+                return True
+            families.append(walks)
+    return _combine(families, full)
+
+
+def release_times(problem: FleetProblem) -> np.ndarray:
+    """(n,) times no plan serves customer j before: :func:`taopt.fleet.bounds.earliest_service`
+    raised along the precedences (``t_j >= t_r`` for every pair (r, j))."""
+    import networkx as nx
+
+    from taopt.fleet.bounds import earliest_service
+
+    e = earliest_service(problem).astype(float)
+    for j in nx.topological_sort(problem.precedence_graph):
+        for r in problem.precedence_graph.predecessors(j):
+            e[j] = max(e[j], e[r])
+    return e
+
+
+def fleet_cover_bound(
+    problem: FleetProblem,
+    lower: float,
+    upper: float,
+    deadline: Deadline | None = None,
+    tolerance: float = 1e-7,
+    resolution: float = 1e-4,
+) -> float:
+    """The root sortie-walk bound: the largest T (bisection between the valid ``lower`` and
+    the incumbent value ``upper``, to a relative ``resolution``) for which
+    :func:`fleet_coverable` fails, at least ``lower``; ``upper (1 - tolerance)`` when even that
+    fails (the incumbent is then optimal within the tolerance). Only for n <= 14 (the DP is
+    over customer subsets); ``lower`` otherwise, or when the deadline expires first."""
+    if not math.isfinite(upper) or problem.n > 14:
+        return lower
+    tab = CoverTables(problem)
+    stab = SortieTables(problem, list(range(problem.n)))
+    release = release_times(problem)
+    trucks = [(problem.depot, 0.0, 0.0, d) for d in problem.drones]
+    # identical drones give identical families: computed once per distinct truck start
+    top = upper * (1.0 - tolerance)
+    if top <= lower:
+        return lower
+
+    def test(T: float) -> bool:
+        return fleet_coverable(tab, stab, T, trucks, release, deadline=deadline)
+
+    if not test(top):
+        return top
+    lo, hi = lower, top
+    while hi - lo > resolution * max(1.0, abs(hi)):
+        if deadline is not None and deadline.expired():
+            break
+        mid = 0.5 * (lo + hi)
+        if test(mid):
+            hi = mid
+        else:
+            lo = mid
+    return lo
+
+
+__all__ = [
+    "CoverTables",
+    "SortieTables",
+    "cover_bound",
+    "coverable",
+    "fleet_cover_bound",
+    "fleet_coverable",
+    "release_times",
+    "sortie_walks",
+]
