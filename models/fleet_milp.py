@@ -77,6 +77,11 @@ WORKER_MIN_NONZEROS = 100_000
 #: deadline for HiGHS in a worker before killing it (0.25 s for limits up to 20 s).
 KILL_GRACE = 0.25
 
+#: A big model (run in a worker) is not handed to HiGHS with fewer seconds left than this:
+#: the worker's start-up alone takes about that under load, and HiGHS's presolve of such a
+#: model longer; the run then ends at once with the incumbent and the family's bound.
+WORKER_MIN_SECONDS = 1.0
+
 _POOL_KEY = ("fleet-milp", 1)
 
 
@@ -740,7 +745,12 @@ def solve_fleet_milp(
             info=info,
         )
 
-    if deadline.limited and _estimated_nonzeros(problem) >= WORKER_MIN_NONZEROS:
+    left = deadline.remaining()
+    if (
+        left is not None
+        and left >= 2 * WORKER_MIN_SECONDS
+        and (_estimated_nonzeros(problem) >= WORKER_MIN_NONZEROS)
+    ):
         # a big model under a limit runs in a worker process: start it now, while the rows
         # are built (its start-up, about a second under load, then overlaps the build)
         shared_pool(_POOL_KEY, 1, hide_main=True).submit(os.getpid)
@@ -758,6 +768,9 @@ def solve_fleet_milp(
     if deadline.limited:  # leave out the MIP phases that ignore the clock
         options.update({name: limited for name, (limited, _) in CLOCKLESS_MIP_PHASES.items()})
     in_worker = deadline.limited and model.matrix.nnz >= WORKER_MIN_NONZEROS
+    left = deadline.remaining()
+    if in_worker and left is not None and left < WORKER_MIN_SECONDS:
+        return stopped("build")
     out = _run_highs(model, options, deadline, in_worker)
     if out is not None and out["col_value"] is not None:
         point = float(model.cost @ out["col_value"])
