@@ -92,3 +92,15 @@ def test_worker_killed_at_the_limit_keeps_the_incumbent():
     assert solution.status == "time_limit"
     assert solution.bound is not None and solution.bound <= solution.objective
     assert np.isfinite(taopt.evaluate(problem, solution.solution))
+
+
+def test_truck_precedence_rows_keep_the_optimum():
+    """Truck-served customers under precedence: the (F16') rows (a truck serves r before j at
+    an earlier position) are built, and the MILP still equals brute force."""
+    problem = tiny_instance(1, n=3, trucks=1, drones=0, capacity=1, precedence=True, stops=3)
+    labels = [f["label"] for f in build(problem).families]
+    assert any(label.startswith("(F16')") for label in labels)
+    value, _, _ = brute_force(problem)
+    solution = solve_fleet_milp(problem)
+    assert solution.status == "optimal"
+    assert solution.objective == pytest.approx(value, rel=1e-6)
