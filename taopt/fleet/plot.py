@@ -2,9 +2,10 @@
 
 :func:`plot_fleet_map` draws the street network, each truck's walk (street shortest paths
 between consecutive stops of its sequence, one colour per truck) and each sortie (dashed, in
-its drone's own shade of its truck's colour, a marker per drone); :func:`plot_fleet_gantt` draws one row per truck and
-per drone over time (truck: driving bars; drone: one bar per sortie, from launch to recovery,
-with a tick at each customer served); :func:`plot_fleet` puts both side by side (what
+its drone's own shade of its truck's colour, :func:`drone_colour`, a marker per drone);
+:func:`plot_fleet_gantt` draws one row per truck and per drone over time (truck: driving
+bars; drone: one bar per sortie, from launch to recovery, with a tick at each customer
+served); :func:`plot_fleet` puts both side by side (what
 ``taopt solve FILE --plot x.png`` writes). The times are the earliest schedule of
 :func:`taopt.fleet.evaluate.schedule`. Each works with the Agg backend.
 """
