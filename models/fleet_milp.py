@@ -889,8 +889,12 @@ def _run_highs(
     grace = KILL_GRACE * overrun_allowance(deadline.seconds or 0.0)
     arrays = model.arrays()
     if not in_worker:
-        return run_arrays(arrays, options, seconds)
-    future = shared_pool(_POOL_KEY, 1, hide_main=True).submit(run_arrays, arrays, options, seconds)
+        return run_arrays(arrays, options, seconds, stop=lambda: deadline.cancelled)
+    # the worker's limit as an instant: its start-up and the arrays' transfer count
+    until = None if seconds is None else time.time() + seconds
+    future = shared_pool(_POOL_KEY, 1, hide_main=True).submit(
+        run_arrays, arrays, options, until=until
+    )
     try:
         while not wait([future], timeout=0.05).done:
             if deadline.cancelled or deadline.expired(-grace):

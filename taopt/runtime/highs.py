@@ -237,6 +237,8 @@ def run_arrays(
     model: Mapping[str, Any],
     options: Mapping[str, Any] | None = None,
     seconds: float | None = None,
+    until: float | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> dict[str, Any]:
     """Run HiGHS on a model given as arrays; stop it at ``seconds`` through its ``time_limit``
     and its interrupt callbacks (:func:`interrupt_when`); return what it found as plain data.
@@ -256,6 +258,11 @@ def run_arrays(
         HiGHS options by name. ``threads`` defaults to ``TAOPT_SOLVER_THREADS`` when set.
     seconds : float, optional
         The run's wall-clock limit (None: none).
+    until : float, optional
+        Or its end as a ``time.time()`` instant: for a run handed to a worker process, whose
+        start-up then counts against the limit.
+    stop : callable, optional
+        Also stop once ``stop()`` is true (e.g. a cancel token's; in this process only).
 
     Returns
     -------
@@ -275,6 +282,9 @@ def run_arrays(
     ('kOptimal', 1.0)
     """
     began = time.perf_counter()
+    if until is not None:
+        left = until - time.time()
+        seconds = left if seconds is None else min(seconds, left)
     with stdout_discarded():
         highs = highspy.Highs()
         highs.setOptionValue("output_flag", False)
@@ -309,7 +319,7 @@ def run_arrays(
     if seconds is not None:
         highs.setOptionValue("time_limit", max(float(seconds), 1e-3))
         end = began + float(seconds)
-    with interrupt_when(highs, lambda: time.perf_counter() >= end):
+    with interrupt_when(highs, lambda: time.perf_counter() >= end or (stop is not None and stop())):
         run_interruptibly(highs)
     info = highs.getInfo()
     has_point = int(info.primal_solution_status) == 2
