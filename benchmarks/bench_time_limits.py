@@ -22,7 +22,9 @@ Mid-size problems (``--large``: the larger instances of the exact-method table i
 * capability: the §3.7 scenario n = 90, m = 10, |A| = 3;
 * comm: a §4.4 random scenario n = 300, m = 10, |A| = 3;
 * delivery: the residential example with 20 customers;
-* sop: ESC47 (TSPLIB).
+* sop: ESC47 (TSPLIB);
+* fleet: a residential fleet instance (:func:`taopt.fleet.instances.residential_fleet`),
+  n = 10, K = 2, D = 2, c = 2 (the teaching MILP: 253k rows; ``--large`` n = 20).
 
 Run: ``python benchmarks/bench_time_limits.py [--limits 0.5,1,5] [--load 4]
 [--families assignment,sop] [--methods GA,cpsat] [--repeat 1]``. ``--load 0`` measures on the
@@ -98,6 +100,12 @@ def sop(name: str = "ESC47"):
     return SopProblem.load(BENCHMARKS / f"{name}.sop")
 
 
+def fleet(n: int = 10, seed: int = 0):
+    from taopt.fleet.instances import residential_fleet
+
+    return residential_fleet(n, 2, 2, 2, seed=seed)
+
+
 #: family -> (mid-size builder, large builder)
 FAMILIES: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {
     "assignment": (assignment, lambda: assignment(1000, 3)),
@@ -106,6 +114,7 @@ FAMILIES: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {
     "comm": (comm, lambda: comm(1000)),
     "delivery": (delivery, delivery),
     "sop": (sop, lambda: sop("ry48p.4")),
+    "fleet": (fleet, lambda: fleet(20)),
 }
 
 

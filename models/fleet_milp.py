@@ -1,9 +1,23 @@
-"""The fleet family's teaching MILP (cvxpy + HiGHS): positions, sortie slots and big-M times.
+"""The fleet family's teaching MILP (HiGHS): positions, sortie slots and big-M times.
 
 It certifies tiny instances (n <= 5 or so; the exact method of the family reaches further) and
 reads like the timing rules of :mod:`taopt.fleet.evaluate`, one labelled family of rows per
-rule; ``print(build(problem).problem)`` shows them. The equations are in
-``docs/families/fleet.md`` ("The teaching MILP").
+rule; ``print(build(problem).problem)`` shows them (a cvxpy view of the same rows, one
+labelled constraint per family). The equations are in ``docs/families/fleet.md`` ("The
+teaching MILP").
+
+Building and solving under a wall-clock limit
+---------------------------------------------
+The rows are generated family by family with numpy into one sparse matrix and passed to
+HiGHS as arrays (no cvxpy on the solving path: at n = 10, K = 2, D = 2, c = 2, 253k rows and a
+million nonzeros, the Python row loop and cvxpy's compilation took 3.5 s + 0.6 s, the arrays
+0.2-0.5 s). The deadline is looked at before each family (:class:`BuildTimeout`). A big model
+(:data:`WORKER_MIN_NONZEROS`) under a limit is run by HiGHS in a worker process
+(:func:`~taopt.runtime.highs.run_arrays`), stopped at the limit by its ``time_limit`` and its
+interrupt callbacks and, when it is in a phase that looks at neither (its presolve, the IPX
+analytic centre its MIP solver computes at the root), killed. Whenever the limit comes first
+the incumbent is returned with the family's lower bound (:func:`taopt.fleet.bounds.fleet_lower`)
+and status ``time_limit``.
 
 Sets and sizes
 --------------
@@ -41,53 +55,265 @@ optimum (checked; a mismatch raises).
 from __future__ import annotations
 
 import math
+import os
 import time
+from concurrent.futures import wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from typing import Any
 
 import cvxpy as cp
+import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 
 from taopt.errors import InstanceError, SolverError
+from taopt.fleet.bounds import fleet_lower
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.models.highs import solve_highs
+from taopt.models.highs import _SOLVER_STATUS, CLOCKLESS_MIP_PHASES, HighsModel, HighsRun
 from taopt.registry import register_method
 from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, finish
 from taopt.runtime import MARGIN, Deadline
-from taopt.status import STOPS
+from taopt.runtime.deadline import overrun_allowance
+from taopt.runtime.highs import run_arrays
+from taopt.runtime.workers import drop_pool, shared_pool
+from taopt.status import STOPS, decide
+
+#: A model with at least this many nonzeros, solved under a time limit, is run in a worker
+#: process (:func:`~taopt.runtime.highs.run_arrays`), killed if HiGHS overruns the limit in
+#: a phase that looks at neither its clock nor its callbacks. n = 10, K = 2, D = 2, c = 2
+#: has a million nonzeros: HiGHS 1.16's presolve took 12 s for a 10 s limit, and the IPX
+#: analytic centre it computes at the root of a MIP (unconditionally, without a clock)
+#: 8.6 s, at load 10 on 2 cores. Smaller models run here (no process start-up).
+WORKER_MIN_NONZEROS = 100_000
+
+#: The share of :func:`~taopt.runtime.deadline.overrun_allowance` the owner waits past the
+#: deadline for HiGHS in a worker before killing it (0.25 s for limits up to 20 s).
+KILL_GRACE = 0.25
+
+#: A big model (run in a worker) is not handed to HiGHS with fewer seconds left than this:
+#: the worker's start-up alone takes about that under load, and HiGHS's presolve of such a
+#: model longer; the run then ends at once with the incumbent and the family's bound.
+WORKER_MIN_SECONDS = 1.0
+
+_POOL_KEY = ("fleet-milp", 1)
+
+
+class BuildTimeout(Exception):
+    """The deadline passed while the rows were generated (caught by
+    :func:`solve_fleet_milp`, which then returns its incumbent; never seen by a caller)."""
+
+
+class _Columns:
+    """The model's columns, allocated a named block at a time (one numpy array of column
+    indices per variable, -1 where an entry does not exist)."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.binary: list[np.ndarray] = []
+        self.index: dict[str, np.ndarray] = {}
+
+    def add(self, name: str, shape: tuple[int, ...], binary: bool, mask: Any = None) -> np.ndarray:
+        keep = np.ones(shape, dtype=bool) if mask is None else np.broadcast_to(mask, shape)
+        cols = np.full(shape, -1, dtype=np.int64)
+        size = int(keep.sum())
+        cols[keep] = self.count + np.arange(size)
+        if binary:
+            self.binary.append(cols[keep])
+        self.count += size
+        self.index[name] = cols
+        return cols
+
+    @staticmethod
+    def names_of(index: dict[str, np.ndarray], count: int) -> list[str]:
+        """``<variable>_<index>`` per column (``y_0_3_5`` is y[k=0, p=3, w=5])."""
+        out = [""] * count
+        for name, cols in index.items():
+            if cols.ndim == 0:
+                out[int(cols)] = name
+                continue
+            for key in zip(*np.nonzero(cols >= 0), strict=True):
+                out[int(cols[key])] = "_".join([name, *(str(int(k)) for k in key)])
+        return out
 
 
 class _Rows:
-    """Sparse rows ``a·xb + b·xc (>= | ==) rhs`` grouped in labelled families."""
+    """Sparse rows ``Σ coef·column (>= | ==) rhs`` grouped in labelled families, generated a
+    block at a time from numpy arrays (no Python loop over rows)."""
 
-    def __init__(self) -> None:
+    def __init__(self, deadline: Deadline | None = None) -> None:
         self.families: list[dict[str, Any]] = []
-        self._current: dict[str, Any] | None = None
+        self.deadline = deadline
+        self.count = 0
+        self._rows: list[np.ndarray] = []
+        self._cols: list[np.ndarray] = []
+        self._vals: list[np.ndarray] = []
+        self._lower: list[np.ndarray] = []
+        self._upper: list[np.ndarray] = []
 
     def family(self, label: str, sense: str, implements: str) -> None:
-        self._current = {"label": label, "sense": sense, "implements": implements, "rows": []}
-        self.families.append(self._current)
+        if self.deadline is not None and self.deadline.expired():
+            raise BuildTimeout(label)
+        self.families.append(
+            {"label": label, "sense": sense, "implements": implements, "start": self.count}
+        )
 
-    def row(self, terms: list[tuple[str, int, float]], rhs: float) -> None:
-        """terms: (``"b"`` or ``"c"``, column, coefficient)."""
-        assert self._current is not None
-        self._current["rows"].append((terms, float(rhs)))
+    def add(
+        self,
+        rhs: Any,
+        terms: list[tuple[Any, Any]],
+        mask: Any = None,
+    ) -> None:
+        """Rows of shape ``np.shape(rhs)``: each term is ``(columns, coefficients)``, both
+        broadcastable to that shape plus one trailing axis (the terms summed in a row);
+        ``mask`` (same shape as ``rhs``) keeps only some rows. Columns -1 are left out."""
+        rhs = np.asarray(rhs, dtype=float)
+        shape = rhs.shape
+        keep = np.ones(shape, dtype=bool) if mask is None else np.broadcast_to(mask, shape)
+        number = np.full(shape, -1, dtype=np.int64)
+        size = int(keep.sum())
+        number[keep] = self.count + np.arange(size)
+        for cols, coefs in terms:
+            cols = np.asarray(cols)
+            coefs = np.asarray(coefs, dtype=float)
+            full = np.broadcast_shapes(cols.shape, coefs.shape, (*shape, 1))
+            r = np.broadcast_to(number[..., None], full).ravel()
+            cc = np.broadcast_to(cols, full).ravel()
+            vv = np.broadcast_to(coefs, full).ravel()
+            ok = (r >= 0) & (cc >= 0) & (vv != 0.0)
+            self._rows.append(r[ok])
+            self._cols.append(cc[ok])
+            self._vals.append(vv[ok])
+        values = rhs[keep]
+        self._lower.append(values)
+        sense = self.families[-1]["sense"]
+        self._upper.append(values if sense == "==" else np.full(size, np.inf))
+        self.count += size
+
+    def arrays(self, n_columns: int) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+        """The rows as one sparse matrix (duplicate entries summed), lower and upper sides."""
+        matrix = sp.csr_matrix(
+            (np.concatenate(self._vals), (np.concatenate(self._rows), np.concatenate(self._cols))),
+            shape=(self.count, n_columns),
+        )
+        return matrix, np.concatenate(self._lower), np.concatenate(self._upper)
 
 
 @dataclass
 class FleetMilp:
-    """The built model: the cvxpy problem, its two variable vectors and the index maps."""
+    """The built model: its rows as arrays (passed straight to HiGHS), the index maps and
+    the row families.
 
-    problem: cp.Problem
-    xb: cp.Variable
-    xc: cp.Variable
-    index: dict[str, dict[tuple[int, ...], tuple[str, int]]]
+    Attributes
+    ----------
+    index : dict
+        Variable name -> numpy array of its column numbers (``index["y"][k, p, w]``), -1
+        where the entry does not exist (``x`` of a drone-only customer, ``mid[σ, 0]``).
+    matrix, lower, upper, cost, binary
+        ``min cost·x`` subject to ``lower <= matrix·x <= upper``, ``x >= 0``, the columns
+        ``binary`` in {0, 1}.
+    families : list of dict
+        Per labelled row family: ``label``, ``rows`` (how many), ``implements`` (the rule),
+        ``start`` (its first row).
+    """
+
+    index: dict[str, np.ndarray]
     positions: int
     sorties: list[tuple[int, int, int]]  # σ -> (k, d, slot)
+    matrix: sp.csr_matrix
+    lower: np.ndarray
+    upper: np.ndarray
+    cost: np.ndarray
+    binary: np.ndarray
     families: list[dict[str, Any]] = field(default_factory=list)
     big_m: float = 0.0
+
+    @property
+    def n_columns(self) -> int:
+        return int(self.matrix.shape[1])
+
+    def column_names(self) -> list[str]:
+        """``<variable>_<index>`` per column (``y_0_3_5`` is y[k=0, p=3, w=5], ``f``)."""
+        return _Columns.names_of(self.index, self.n_columns)
+
+    def row_names(self) -> list[str]:
+        """``<label stem>_<r>`` per row, r counted within its family (``eqF4_every_customer
+        _served_2``: the third row of (F4)); :func:`~taopt.orchestration.export.label_name`."""
+        from taopt.orchestration.export import label_name
+
+        names: list[str] = []
+        for fam in self.families:
+            stem = label_name(fam["label"])
+            names += [f"{stem}_{r}" for r in range(fam["rows"])]
+        return names
+
+    @property
+    def problem(self) -> cp.Problem:
+        """The same model as a cvxpy problem, one labelled constraint per row family (binary
+        columns in a boolean variable ``binary``, the others in ``time``):
+        ``print(build(problem).problem)`` reads it. Built on request (tiny instances)."""
+        binary = np.zeros(self.n_columns, dtype=bool)
+        binary[self.binary] = True
+        xb = cp.Variable(int(binary.sum()), boolean=True, name="binary")
+        xc = cp.Variable(int((~binary).sum()), nonneg=True, name="time")
+        by_column = self.matrix.tocsc()
+        parts = (by_column[:, np.flatnonzero(binary)], by_column[:, np.flatnonzero(~binary)])
+        constraints = []
+        for fam in self.families:
+            rows = slice(fam["start"], fam["start"] + fam["rows"])
+            lhs = parts[0][rows] @ xb + parts[1][rows] @ xc
+            con = lhs == self.lower[rows] if fam["sense"] == "==" else lhs >= self.lower[rows]
+            con.set_label(fam["label"])
+            constraints.append(con)
+        cost = (self.cost[binary] @ xb if self.cost[binary].any() else 0) + (
+            self.cost[~binary] @ xc
+        )
+        return cp.Problem(cp.Minimize(cost), constraints)
+
+    def arrays(self) -> dict[str, Any]:
+        """The model as :func:`~taopt.runtime.highs.run_arrays` takes it (the matrix by
+        columns)."""
+        by_column = self.matrix.tocsc()
+        by_column.sort_indices()
+        binary = _mask(self.binary, self.n_columns)
+        return {
+            "cost": self.cost,
+            "lower": self.lower,
+            "upper": self.upper,
+            "column_lower": np.zeros(self.n_columns),
+            "column_upper": np.where(binary, 1.0, np.inf),
+            "start": by_column.indptr,
+            "index": by_column.indices,
+            "value": by_column.data,
+            "integrality": binary.astype(np.int32),
+        }
+
+    def highs(self, names: bool = False, verbose: bool = False) -> HighsModel:
+        """The model in a live HiGHS object (one ``passModel`` of the arrays); with
+        ``names``, every column and row named (``y_0_3_5``, ``eqF4_every_customer_served_2``)."""
+        model = HighsModel.from_arrays(
+            self.cost,
+            self.matrix,
+            self.lower,
+            self.upper,
+            column_lower=np.zeros(self.n_columns),
+            column_upper=np.where(_mask(self.binary, self.n_columns), 1.0, np.inf),
+            integers=self.binary,
+            verbose=verbose,
+        )
+        if names:
+            for j, name in enumerate(self.column_names()):
+                model.highs.passColName(j, name)
+            for r, name in enumerate(self.row_names()):
+                model.highs.passRowName(r, name)
+        return model
+
+
+def _mask(columns: np.ndarray, size: int) -> np.ndarray:
+    out = np.zeros(size, dtype=bool)
+    out[columns] = True
+    return out
 
 
 def _horizon(problem: FleetProblem, upper: float, positions: int) -> float:
@@ -97,405 +323,380 @@ def _horizon(problem: FleetProblem, upper: float, positions: int) -> float:
     return upper + positions * tt_max + 2.0 * (fly + 2.0 * problem.service_time) + 1.0
 
 
-def build(problem: FleetProblem, upper: float) -> FleetMilp:
-    """Build the model (module docstring) with big-M from ``upper``, a feasible objective.
+def build(
+    problem: FleetProblem, upper: float | None = None, deadline: Deadline | None = None
+) -> FleetMilp:
+    """Build the model (module docstring) with big-M from ``upper``, a feasible objective
+    (default: the objective of the one-by-one plan, :func:`describe`'s).
+
+    The rows are generated family by family with numpy (no Python loop over rows: the
+    n = 10, K = 2, D = 2, c = 2 model of 253k rows takes a fraction of a second), and the
+    deadline is looked at before each family.
 
     Raises
     ------
     InstanceError
         ``upper`` is not finite.
+    BuildTimeout
+        ``deadline`` expired before the last family was generated.
     """
+    if upper is None:
+        upper = evaluate_fleet(problem, _one_by_one(problem))
     if not math.isfinite(upper):
         raise InstanceError("the fleet MILP needs a finite upper bound (a feasible plan)")
     n, s, K = problem.n, problem.s, problem.K
     c = problem.capacity
     P = 1 + 2 * n
-    tt = problem.truck_time
-    fs = problem.flight_stop
-    fc = problem.flight_customer
+    tt = np.asarray(problem.truck_time, dtype=float)
+    fs = np.asarray(problem.flight_stop, dtype=float)
+    fc = np.asarray(problem.flight_customer, dtype=float)
     vd, tau = problem.v_drone, problem.service_time
     H = _horizon(problem, upper, P)
-    drone_js = [j for j in range(n) if problem.drone_servable(j)]
-    truck_js = [j for j in range(n) if problem.truck_servable(j)]
+    drone_js = np.array([j for j in range(n) if problem.drone_servable(j)], dtype=np.int64)
+    truck_js = np.array([j for j in range(n) if problem.truck_servable(j)], dtype=np.int64)
     S = len(drone_js)
-    index: dict[str, dict[tuple[int, ...], tuple[str, int]]] = {}
-    counts = {"b": 0, "c": 0}
-
-    def var(name: str, key: tuple[int, ...], kind: str) -> tuple[str, int]:
-        block = index.setdefault(name, {})
-        block[key] = (kind, counts[kind])
-        counts[kind] += 1
-        return block[key]
-
-    for k in range(K):
-        for p in range(P):
-            var("A", (k, p), "c")
-            var("Dep", (k, p), "c")
-            if p + 1 < P:
-                var("delta", (k, p), "c")
-            for w in range(s):
-                var("y", (k, p, w), "b")
-            for j in truck_js:
-                var("x", (k, p, j), "b")
-    for j in range(n):
-        var("t", (j,), "c")
-    var("f", (), "c")
     sorties = [(k, d, q) for k in range(K) for d in range(problem.drones[k]) for q in range(S)]
-    for g, _ in enumerate(sorties):
-        var("u", (g,), "b")
-        for name in ("L", "B", "R", "out", "back"):
-            var(name, (g,), "c")
-        for p in range(P):
-            var("lp", (g, p), "b")
-            var("rp", (g, p), "b")
-        for w in range(s):
-            var("ls", (g, w), "b")
-            var("rs", (g, w), "b")
-        for i in range(c):
-            var("T", (g, i), "c")
-            if i > 0:
-                var("mid", (g, i), "c")
-            for j in drone_js:
-                var("z", (g, i, j), "b")
+    G = len(sorties)
+    sk = np.array([k for k, _, _ in sorties], dtype=np.int64)  # σ -> its truck
+    sq = np.array([q for _, _, q in sorties], dtype=np.int64)  # σ -> its slot
+    truck_ok = np.zeros(n, dtype=bool)
+    truck_ok[truck_js] = True
+    drone_ok = np.zeros(n, dtype=bool)
+    drone_ok[drone_js] = True
 
-    def v(name: str, *key: int) -> tuple[str, int]:
-        return index[name][tuple(key)]
+    # ---- variables ------------------------------------------------------------------------
+    col = _Columns()
+    y = col.add("y", (K, P, s), True)
+    x = col.add("x", (K, P, n), True, truck_ok)
+    A = col.add("A", (K, P), False)
+    Dep = col.add("Dep", (K, P), False)
+    delta = col.add("delta", (K, max(P - 1, 0)), False)
+    t = col.add("t", (n,), False)
+    f = col.add("f", (), False)
+    u = col.add("u", (G,), True)
+    L = col.add("L", (G,), False)
+    B = col.add("B", (G,), False)
+    R = col.add("R", (G,), False)
+    out = col.add("out", (G,), False)
+    back = col.add("back", (G,), False)
+    lp = col.add("lp", (G, P), True)
+    rp = col.add("rp", (G, P), True)
+    ls = col.add("ls", (G, s), True)
+    rs = col.add("rs", (G, s), True)
+    T = col.add("T", (G, c), False)
+    mid = col.add("mid", (G, c), False, np.arange(c) > 0)
+    z = col.add("z", (G, c, n), True, drone_ok)
+    zd = z[:, :, drone_js]  # (G, c, S): the drone-servable customers only
+    pos = np.arange(P, dtype=float)
+    one = np.ones(1)
 
-    def term(name: str, key: tuple[int, ...], coef: float) -> tuple[str, int, float]:
-        kind, col = index[name][key]
-        return (kind, col, coef)
-
-    rows = _Rows()
+    rows = _Rows(deadline)
     # ---- trucks ---------------------------------------------------------------------------
     rows.family("(F1) one stop per position", "==", "Σ_w y[k,p,w] = 1, y[k,0,depot] = 1")
-    for k in range(K):
-        for p in range(P):
-            rows.row([term("y", (k, p, w), 1.0) for w in range(s)], 1.0)
-        rows.row([term("y", (k, 0, problem.depot), 1.0)], 1.0)
+    rows.add(np.ones((K, P)), [(y, one)])
+    rows.add(np.ones(K), [(y[:, 0, problem.depot, None], one)])
     rows.family(
         "(F2) drive between positions", ">=", "δ[k,p] >= tt[w,w'] (y[k,p,w] + y[k,p+1,w'] − 1)"
     )
-    for k in range(K):
-        for p in range(P - 1):
-            for w in range(s):
-                for w2 in range(s):
-                    if w != w2 and tt[w, w2] > 0:
-                        rows.row(
-                            [
-                                term("delta", (k, p), 1.0),
-                                term("y", (k, p, w), -tt[w, w2]),
-                                term("y", (k, p + 1, w2), -tt[w, w2]),
-                            ],
-                            -tt[w, w2],
-                        )
+    if P > 1:
+        cost = tt[None, None, :, :, None]
+        rows.add(
+            np.broadcast_to(-tt, (K, P - 1, s, s)),
+            [
+                (delta[:, :, None, None, None], one),
+                (y[:, :-1, :, None, None], -cost),
+                (y[:, 1:, None, :, None], -cost),
+            ],
+            mask=(~np.eye(s, dtype=bool)) & (tt > 0),
+        )
     rows.family("(F3) truck times", ">=", "A[k,p+1] >= Dep[k,p] + δ[k,p], Dep >= A, A[k,0] = 0")
-    for k in range(K):
-        for p in range(P):
-            rows.row([term("Dep", (k, p), 1.0), term("A", (k, p), -1.0)], 0.0)
-            if p + 1 < P:
-                rows.row(
-                    [
-                        term("A", (k, p + 1), 1.0),
-                        term("Dep", (k, p), -1.0),
-                        term("delta", (k, p), -1.0),
-                    ],
-                    0.0,
-                )
-        rows.row([term("A", (k, 0), -1.0)], 0.0)
+    rows.add(np.zeros((K, P)), [(Dep[..., None], one), (A[..., None], -one)])
+    if P > 1:
+        rows.add(
+            np.zeros((K, P - 1)),
+            [(A[:, 1:, None], one), (Dep[:, :-1, None], -one), (delta[..., None], -one)],
+        )
+    rows.add(np.zeros(K), [(A[:, 0, None], -one)])
     # ---- every customer once ----------------------------------------------------------------
     rows.family("(F4) every customer served once", "==", "Σ x[k,p,j] + Σ z[σ,i,j] = 1")
-    for j in range(n):
-        terms = []
-        if problem.truck_servable(j):
-            terms += [term("x", (k, p, j), 1.0) for k in range(K) for p in range(P)]
-        if problem.drone_servable(j):
-            terms += [term("z", (g, i, j), 1.0) for g in range(len(sorties)) for i in range(c)]
-        rows.row(terms, 1.0)
+    rows.add(np.ones(n), [(x.reshape(K * P, n).T, one), (z.reshape(G * c, n).T, one)])
     rows.family(
         "(F5) a truck serves at the customer's stop",
         ">=",
         "x <= y[k,p,stop_j], t_j >= A[k,p] − H(1 − x), Dep[k,p] >= t_j − H(1 − x)",
     )
-    for k in range(K):
-        for p in range(P):
-            for j in truck_js:
-                w = problem.truck_stop(j)
-                rows.row([term("y", (k, p, w), 1.0), term("x", (k, p, j), -1.0)], 0.0)
-                rows.row(
-                    [term("t", (j,), 1.0), term("A", (k, p), -1.0), term("x", (k, p, j), -H)], -H
-                )
-                rows.row(
-                    [term("Dep", (k, p), 1.0), term("t", (j,), -1.0), term("x", (k, p, j), -H)],
-                    -H,
-                )
+    if len(truck_js):
+        stop_of = np.array([problem.truck_stop(int(j)) for j in truck_js], dtype=np.int64)
+        xt = x[:, :, truck_js, None]  # (K, P, m, 1)
+        shape = (K, P, len(truck_js))
+        rows.add(np.zeros(shape), [(y[:, :, stop_of, None], one), (xt, -one)])
+        rows.add(
+            np.full(shape, -H),
+            [(t[None, None, truck_js, None], one), (A[:, :, None, None], -one), (xt, -H * one)],
+        )
+        rows.add(
+            np.full(shape, -H),
+            [(Dep[:, :, None, None], one), (t[None, None, truck_js, None], -one), (xt, -H * one)],
+        )
     # ---- sorties ----------------------------------------------------------------------------
     rows.family(
         "(F6) a flown sortie has one launch and one recovery, in order",
         "==",
         "Σ_p lp = u, Σ_p rp = u",
     )
-    for g in range(len(sorties)):
-        rows.row([term("lp", (g, p), 1.0) for p in range(P)] + [term("u", (g,), -1.0)], 0.0)
-        rows.row([term("rp", (g, p), 1.0) for p in range(P)] + [term("u", (g,), -1.0)], 0.0)
+    rows.add(np.zeros(G), [(lp, one), (u[:, None], -one)])
+    rows.add(np.zeros(G), [(rp, one), (u[:, None], -one)])
     rows.family(
         "(F6') recovery not before launch; a drone's sorties in order",
         ">=",
         "Σ p rp[σ] >= Σ p lp[σ]; Σ p lp[σ+1] >= Σ p rp[σ] − P(1 − u[σ+1]); u[σ+1] <= u[σ]",
     )
-    for g, (k, d, q) in enumerate(sorties):
-        rows.row(
-            [term("rp", (g, p), float(p)) for p in range(P)]
-            + [term("lp", (g, p), -float(p)) for p in range(P)],
-            0.0,
-        )
-        if q + 1 < S:
-            h = g + 1
-            rows.row(
-                [term("lp", (h, p), float(p)) for p in range(P)]
-                + [term("rp", (g, p), -float(p)) for p in range(P)]
-                + [term("u", (h,), -float(P))],
-                -float(P),
-            )
-            rows.row([term("u", (g,), 1.0), term("u", (h,), -1.0)], 0.0)
-        if q == 0 and d + 1 < problem.drones[k]:  # drones of a truck used in order (symmetry)
-            rows.row([term("u", (g,), 1.0), term("u", (g + S,), -1.0)], 0.0)
+    rows.add(np.zeros(G), [(rp, pos), (lp, -pos)])
+    nxt = np.flatnonzero(sq + 1 < S)  # σ with a next slot σ + 1 on the same drone
+    rows.add(
+        np.full(len(nxt), -float(P)),
+        [(lp[nxt + 1], pos), (rp[nxt], -pos), (u[nxt + 1, None], -float(P) * one)],
+    )
+    rows.add(np.zeros(len(nxt)), [(u[nxt, None], one), (u[nxt + 1, None], -one)])
+    # drones of a truck used in order (symmetry): the first slot of drone d before d + 1's
+    first = np.array(
+        [g for g, (k, d, q) in enumerate(sorties) if q == 0 and d + 1 < problem.drones[k]],
+        dtype=np.int64,
+    )
+    rows.add(np.zeros(len(first)), [(u[first, None], one), (u[first + S, None], -one)])
     rows.family(
         "(F7) customer slots filled from the first",
         ">=",
         "Σ_j z[σ,0,j] = u[σ], Σ_j z[σ,i,j] >= Σ_j z[σ,i+1,j]",
     )
-    for g in range(len(sorties)):
-        rows.row([term("z", (g, 0, j), 1.0) for j in drone_js] + [term("u", (g,), -1.0)], 0.0)
-        rows.row([term("z", (g, 0, j), -1.0) for j in drone_js] + [term("u", (g,), 1.0)], 0.0)
-        for i in range(c - 1):
-            rows.row(
-                [term("z", (g, i, j), 1.0) for j in drone_js]
-                + [term("z", (g, i + 1, j), -1.0) for j in drone_js],
-                0.0,
-            )
+    rows.add(np.zeros(G), [(zd[:, 0, :], one), (u[:, None], -one)])
+    rows.add(np.zeros(G), [(zd[:, 0, :], -one), (u[:, None], one)])
+    if c > 1:
+        rows.add(np.zeros((G, c - 1)), [(zd[:, :-1, :], one), (zd[:, 1:, :], -one)])
     rows.family(
         "(F8) launch and recovery stops",
         ">=",
         "ls[σ,w] >= lp[σ,p] + y[k,p,w] − 1 (same for rs), Σ_w ls = Σ_w rs = u",
     )
-    for g, (k, _, _) in enumerate(sorties):
-        for name, pos in (("ls", "lp"), ("rs", "rp")):
-            rows.row([term(name, (g, w), -1.0) for w in range(s)] + [term("u", (g,), 1.0)], 0.0)
-            rows.row([term(name, (g, w), 1.0) for w in range(s)] + [term("u", (g,), -1.0)], 0.0)
-            for p in range(P):
-                for w in range(s):
-                    rows.row(
-                        [
-                            term(name, (g, w), 1.0),
-                            term(pos, (g, p), -1.0),
-                            term("y", (k, p, w), -1.0),
-                        ],
-                        -1.0,
-                    )
+    for at_stop, at_position in ((ls, lp), (rs, rp)):
+        rows.add(np.zeros(G), [(at_stop, -one), (u[:, None], one)])
+        rows.add(np.zeros(G), [(at_stop, one), (u[:, None], -one)])
+        rows.add(
+            np.full((G, P, s), -1.0),
+            [
+                (at_stop[:, None, :, None], one),
+                (at_position[:, :, None, None], -one),
+                (y[sk][..., None], -one),
+            ],
+        )
     rows.family(
         "(F9) launch time",
         ">=",
         "L >= A[k,p] − H(1 − lp), Dep[k,p] >= L − H(1 − lp), L[σ+1] >= R[σ] − H(1 − u[σ+1])",
     )
-    for g, (k, _, q) in enumerate(sorties):
-        for p in range(P):
-            rows.row([term("L", (g,), 1.0), term("A", (k, p), -1.0), term("lp", (g, p), -H)], -H)
-            rows.row([term("Dep", (k, p), 1.0), term("L", (g,), -1.0), term("lp", (g, p), -H)], -H)
-        if q + 1 < S:
-            rows.row([term("L", (g + 1,), 1.0), term("R", (g,), -1.0), term("u", (g + 1,), -H)], -H)
+    rows.add(
+        np.full((G, P), -H),
+        [(L[:, None, None], one), (A[sk][..., None], -one), (lp[..., None], -H * one)],
+    )
+    rows.add(
+        np.full((G, P), -H),
+        [(Dep[sk][..., None], one), (L[:, None, None], -one), (lp[..., None], -H * one)],
+    )
+    rows.add(
+        np.full(len(nxt), -H),
+        [(L[nxt + 1, None], one), (R[nxt, None], -one), (u[nxt + 1, None], -H * one)],
+    )
+    fsd = fs[drone_js]  # (S, s): drone customers to stops
+    fcd = fc[np.ix_(drone_js, drone_js)]  # (S, S)
     rows.family(
         "(F10) first customer of a sortie",
         ">=",
         "T[σ,0] >= L + fs(w,j)/v_d + τ − H(2 − z[σ,0,j] − ls[σ,w])",
     )
-    for g in range(len(sorties)):
-        for j in drone_js:
-            for w in range(s):
-                rows.row(
-                    [
-                        term("T", (g, 0), 1.0),
-                        term("L", (g,), -1.0),
-                        term("z", (g, 0, j), -H),
-                        term("ls", (g, w), -H),
-                    ],
-                    fs[j, w] / vd + tau - 2 * H,
-                )
+    rows.add(
+        np.broadcast_to(fsd / vd + tau - 2 * H, (G, S, s)),
+        [
+            (T[:, 0, None, None, None], one),
+            (L[:, None, None, None], -one),
+            (zd[:, 0, :, None, None], -H * one),
+            (ls[:, None, :, None], -H * one),
+        ],
+    )
+    different = ~np.eye(S, dtype=bool)
     rows.family(
         "(F11) next customer of a sortie",
         ">=",
         "T[σ,i] >= T[σ,i−1] + fc(j',j)/v_d + τ − H(2 − z[σ,i−1,j'] − z[σ,i,j])",
     )
-    for g in range(len(sorties)):
-        for i in range(1, c):
-            for j1 in drone_js:
-                for j2 in drone_js:
-                    if j1 == j2:
-                        continue
-                    rows.row(
-                        [
-                            term("T", (g, i), 1.0),
-                            term("T", (g, i - 1), -1.0),
-                            term("z", (g, i - 1, j1), -H),
-                            term("z", (g, i, j2), -H),
-                        ],
-                        fc[j1, j2] / vd + tau - 2 * H,
-                    )
+    if c > 1:
+        rows.add(
+            np.broadcast_to(fcd / vd + tau - 2 * H, (G, c - 1, S, S)),
+            [
+                (T[:, 1:, None, None, None], one),
+                (T[:, :-1, None, None, None], -one),
+                (zd[:, :-1, :, None, None], -H * one),
+                (zd[:, 1:, None, :, None], -H * one),
+            ],
+            mask=different,
+        )
     rows.family(
         "(F12) a drone customer's service time is its slot's",
         ">=",
         "t_j >= T[σ,i] − H(1 − z), T[σ,i] >= t_j − H(1 − z)",
     )
-    for g in range(len(sorties)):
-        for i in range(c):
-            for j in drone_js:
-                rows.row(
-                    [term("t", (j,), 1.0), term("T", (g, i), -1.0), term("z", (g, i, j), -H)], -H
-                )
-                rows.row(
-                    [term("T", (g, i), 1.0), term("t", (j,), -1.0), term("z", (g, i, j), -H)], -H
-                )
+    td = t[drone_js]
+    rows.add(
+        np.full((G, c, S), -H),
+        [(td[None, None, :, None], one), (T[:, :, None, None], -one), (zd[..., None], -H * one)],
+    )
+    rows.add(
+        np.full((G, c, S), -H),
+        [(T[:, :, None, None], one), (td[None, None, :, None], -one), (zd[..., None], -H * one)],
+    )
     rows.family(
         "(F13) back at the recovery stop",
         ">=",
         "B >= T[σ,i] + fs(j,w)/v_d − H(2 − z[σ,i,j] − rs[σ,w])",
     )
-    for g in range(len(sorties)):
-        for i in range(c):
-            for j in drone_js:
-                for w in range(s):
-                    rows.row(
-                        [
-                            term("B", (g,), 1.0),
-                            term("T", (g, i), -1.0),
-                            term("z", (g, i, j), -H),
-                            term("rs", (g, w), -H),
-                        ],
-                        fs[j, w] / vd - 2 * H,
-                    )
+    rows.add(
+        np.broadcast_to(fsd / vd - 2 * H, (G, c, S, s)),
+        [
+            (B[:, None, None, None, None], one),
+            (T[:, :, None, None, None], -one),
+            (zd[:, :, :, None, None], -H * one),
+            (rs[:, None, None, :, None], -H * one),
+        ],
+    )
     rows.family(
         "(F14) recovery",
         ">=",
         "R >= B + τ − H(1 − u), R >= A[k,p] + τ − H(1 − rp), Dep[k,p] >= R − H(1 − rp)",
     )
-    for g, (k, _, _) in enumerate(sorties):
-        rows.row([term("R", (g,), 1.0), term("B", (g,), -1.0), term("u", (g,), -H)], tau - H)
-        for p in range(P):
-            rows.row(
-                [term("R", (g,), 1.0), term("A", (k, p), -1.0), term("rp", (g, p), -H)], tau - H
-            )
-            rows.row([term("Dep", (k, p), 1.0), term("R", (g,), -1.0), term("rp", (g, p), -H)], -H)
+    rows.add(np.full(G, tau - H), [(R[:, None], one), (B[:, None], -one), (u[:, None], -H * one)])
+    rows.add(
+        np.full((G, P), tau - H),
+        [(R[:, None, None], one), (A[sk][..., None], -one), (rp[..., None], -H * one)],
+    )
+    rows.add(
+        np.full((G, P), -H),
+        [(Dep[sk][..., None], one), (R[:, None, None], -one), (rp[..., None], -H * one)],
+    )
     if math.isfinite(problem.flight_range):
-        span = float(fs.max()) + float(fc.max() if n > 1 else 0.0)
         rows.family(
             "(F15) flight range (5.6) over all legs",
             ">=",
             "out + Σ_i mid[σ,i] + back <= range; legs >= distance of the chosen pair",
         )
-        for g in range(len(sorties)):
-            for j in drone_js:
-                for w in range(s):
-                    rows.row(
-                        [
-                            term("out", (g,), 1.0),
-                            term("z", (g, 0, j), -fs[j, w]),
-                            term("ls", (g, w), -fs[j, w]),
-                        ],
-                        -fs[j, w],
-                    )
-                    for i in range(c):
-                        # the last used slot: z[σ,i,j] = 1 and slot i+1 empty
-                        nxt = (
-                            [term("z", (g, i + 1, j2), fs[j, w]) for j2 in drone_js]
-                            if i + 1 < c
-                            else []
-                        )
-                        rows.row(
-                            [
-                                term("back", (g,), 1.0),
-                                term("z", (g, i, j), -fs[j, w]),
-                                term("rs", (g, w), -fs[j, w]),
-                            ]
-                            + nxt,
-                            -fs[j, w],
-                        )
-            for i in range(1, c):
-                for j1 in drone_js:
-                    for j2 in drone_js:
-                        if j1 != j2:
-                            rows.row(
-                                [
-                                    term("mid", (g, i), 1.0),
-                                    term("z", (g, i - 1, j1), -fc[j1, j2]),
-                                    term("z", (g, i, j2), -fc[j1, j2]),
-                                ],
-                                -fc[j1, j2],
-                            )
-            rows.row(
-                [term("out", (g,), -1.0), term("back", (g,), -1.0)]
-                + [term("mid", (g, i), -1.0) for i in range(1, c)],
-                -problem.flight_limit,
+        leg = fsd[None, :, :, None]  # (1, S, s, 1)
+        rows.add(
+            np.broadcast_to(-fsd, (G, S, s)),
+            [
+                (out[:, None, None, None], one),
+                (zd[:, 0, :, None, None], -leg),
+                (ls[:, None, :, None], -leg),
+            ],
+        )
+        # the back leg from the last used slot i: z[σ,i,j] = 1 and slot i + 1 empty
+        leg = fsd[None, None, :, :, None]  # (1, 1, S, s, 1)
+        terms = [
+            (back[:, None, None, None, None], one),
+            (zd[:, :, :, None, None], -leg),
+            (rs[:, None, None, :, None], -leg),
+        ]
+        if c > 1:
+            following = np.concatenate([zd[:, 1:, :], np.full((G, 1, S), -1)], axis=1)
+            terms.append((following[:, :, None, None, :], leg))
+        rows.add(np.broadcast_to(-fsd, (G, c, S, s)), terms)
+        if c > 1:
+            leg = fcd[None, None, :, :, None]
+            rows.add(
+                np.broadcast_to(-fcd, (G, c - 1, S, S)),
+                [
+                    (mid[:, 1:, None, None, None], one),
+                    (zd[:, :-1, :, None, None], -leg),
+                    (zd[:, 1:, None, :, None], -leg),
+                ],
+                mask=different,
             )
-        del span
+        rows.add(
+            np.full(G, -problem.flight_limit),
+            [(out[:, None], -one), (back[:, None], -one), (mid, -one)],
+        )
     rows.family("(F16) precedence (5.7) across the fleet", ">=", "t_j >= t_r")
-    for r, j in problem.precedences:
-        rows.row([term("t", (j,), 1.0), term("t", (r,), -1.0)], 0.0)
+    edges = np.array(list(problem.precedences), dtype=np.int64).reshape(-1, 2)
+    rows.add(np.zeros(len(edges)), [(t[edges[:, 1], None], one), (t[edges[:, 0], None], -one)])
+    # r before j (transitively) and one truck serving both: r's position comes first. Valid
+    # for every plan the scorer accepts (the other order is a waiting cycle there); without
+    # it a point whose services share one instant (drives of length 0 between positions at
+    # one stop) would decode to such a cycle.
+    closure = nx.transitive_closure_dag(problem.precedence_graph)
+    pairs = np.array(
+        [(r, j) for r, j in closure.edges if truck_ok[r] and truck_ok[j]], dtype=np.int64
+    ).reshape(-1, 2)
+    if len(pairs) and P > 1:
+        rows.family(
+            "(F16') precedence on one truck in position order",
+            ">=",
+            "x[k,p,r] + Σ_{p'<p} x[k,p',j] <= 1",
+        )
+        earlier = -(np.arange(P)[None, :] < np.arange(P)[:, None]).astype(float)  # [p, p']
+        rows.add(
+            np.full((len(pairs), K, P), -1.0),
+            [
+                (x[:, :, pairs[:, 0]].transpose(2, 0, 1)[..., None], -one),
+                (x[:, :, pairs[:, 1]].transpose(2, 0, 1)[:, :, None, :], earlier),
+            ],
+        )
     if problem.objective == "return":
         rows.family(
             "(F17) objective: every truck back",
             ">=",
             "f >= Dep[k,P−1] + Σ_w tt[w,depot] y[k,P−1,w]",
         )
-        for k in range(K):
-            rows.row(
-                [term("f", (), 1.0), term("Dep", (k, P - 1), -1.0)]
-                + [term("y", (k, P - 1, w), -tt[w, problem.depot]) for w in range(s)],
-                0.0,
-            )
+        rows.add(
+            np.zeros(K),
+            [
+                (np.broadcast_to(f, (K, 1)), one),
+                (Dep[:, P - 1, None], -one),
+                (y[:, P - 1, :], -tt[:, problem.depot]),
+            ],
+        )
     else:
         rows.family("(F17) objective (5.1): the last service", ">=", "f >= t_j")
-        for j in range(n):
-            rows.row([term("f", (), 1.0), term("t", (j,), -1.0)], 0.0)
-    xb = cp.Variable(counts["b"], boolean=True, name="binary")
-    xc = cp.Variable(counts["c"], nonneg=True, name="time")
-    constraints: list[cp.Constraint] = []
+        rows.add(np.zeros(n), [(np.broadcast_to(f, (n, 1)), one), (t[:, None], -one)])
+    if deadline is not None and deadline.expired():
+        raise BuildTimeout("matrix")
+    matrix, lower, upper_side = rows.arrays(col.count)
     families = []
-    for fam in rows.families:
-        if not fam["rows"]:
-            continue
-        data: dict[str, tuple[list[int], list[int], list[float]]] = {
-            "b": ([], [], []),
-            "c": ([], [], []),
-        }
-        rhs = []
-        for r, (terms, value) in enumerate(fam["rows"]):
-            for kind, col, coef in terms:
-                data[kind][0].append(r)
-                data[kind][1].append(col)
-                data[kind][2].append(coef)
-            rhs.append(value)
-        m = len(rhs)
-        lhs: cp.Expression = cp.Constant(0)  # what `0 + expression` builds
-        for kind, x in (("b", xb), ("c", xc)):
-            rr, cc, vv = data[kind]
-            if rr:
-                lhs = lhs + sp.csr_matrix((vv, (rr, cc)), shape=(m, counts[kind])) @ x
-        con = lhs == np.array(rhs) if fam["sense"] == "==" else lhs >= np.array(rhs)
-        con.set_label(fam["label"])
-        constraints.append(con)
-        families.append({"label": fam["label"], "rows": m, "implements": fam["implements"]})
-    objective = cp.Minimize(xc[v("f")[1]])
+    ends = [fam["start"] for fam in rows.families[1:]] + [rows.count]
+    for fam, end in zip(rows.families, ends, strict=True):
+        if end > fam["start"]:
+            families.append({**fam, "rows": end - fam["start"]})
+    cost_vector = np.zeros(col.count)
+    cost_vector[int(f)] = 1.0
+    binary = np.sort(np.concatenate(col.binary)) if col.binary else np.zeros(0, np.int64)
     return FleetMilp(
-        cp.Problem(objective, constraints), xb, xc, index, P, sorties, families, big_m=H
+        index=col.index,
+        positions=P,
+        sorties=sorties,
+        matrix=matrix,
+        lower=lower,
+        upper=upper_side,
+        cost=cost_vector,
+        binary=binary,
+        families=families,
+        big_m=H,
     )
 
 
-def decode(model: FleetMilp, problem: FleetProblem) -> FleetPlan:
-    """The plan at the model's current point (routes with every position, truck services,
-    each drone's flown sorties in order)."""
-    xb = np.round(np.asarray(model.xb.value)).astype(int)
+def decode(model: FleetMilp, problem: FleetProblem, values: Any) -> FleetPlan:
+    """The plan at a point of the model (``values``, one per column): routes with every
+    position, truck services, each drone's flown sorties in order."""
+    point = np.round(np.asarray(values, dtype=float)).astype(int)
 
     def on(name: str, *key: int) -> bool:
-        return bool(xb[model.index[name][tuple(key)][1]])
+        column = int(model.index[name][tuple(key)])
+        return column >= 0 and bool(point[column])
 
     P = model.positions
     routes = []
@@ -547,7 +748,15 @@ def solve_fleet_milp(
     the big-M horizon and HiGHS's objective cut-off; without one, MMA's construction rule is
     not called (models never run heuristics): a plan serving each customer by its own sortie
     or truck visit in a topological order is built instead. ``info``: ``binaries``,
-    ``rows``, ``big_m``, ``model_objective``, ``nodes``, ``stopped_by``.
+    ``rows``, ``big_m``, ``model_objective``, ``nodes``, ``stopped_by``, ``family_bound``
+    (:func:`taopt.fleet.bounds.fleet_lower`, its ``"fast"`` terms under a limit: the bound
+    returned when HiGHS proves nothing better) and, when the limit came first,
+    ``stopped_in`` (``"build"``: the rows were not all generated in time, or too little time
+    was left to hand a big model to HiGHS; ``"highs"``: HiGHS's worker was stopped at the
+    limit).
+
+    Under a limit the run keeps the wall-clock contract (module docstring): it ends
+    ``time_limit`` with the incumbent and the family's bound, never with an exception.
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
@@ -562,39 +771,70 @@ def solve_fleet_milp(
             runtime=time.perf_counter() - began,
             info={"reason": f"customer {missing[0]} can be served by no vehicle"},
         )
-    known: tuple[float, FleetPlan] | None = None
-    if incumbent is not None:
-        plan = as_plan(incumbent)
-        known = (evaluate_fleet(problem, plan), plan)
-    else:
-        plan = _one_by_one(problem)
-        known = (evaluate_fleet(problem, plan), plan)
-    upper = known[0]
-    model = build(problem, upper)
-    limit = None
-    remaining = deadline.remaining()
-    if remaining is not None:  # deadline.limited
-        limit = max(remaining - MARGIN, 1e-3)
-    run = solve_highs(
-        model.problem,
-        time_limit=limit,
-        mip_rel_gap=1e-9,
-        objective_bound=upper * (1 + 1e-6) + 1e-9,
-        verbose=verbose,
-        extra={"mip_feasibility_tolerance": 1e-9, "primal_feasibility_tolerance": 1e-9},
-    )
+    plan = as_plan(incumbent) if incumbent is not None else _one_by_one(problem)
+    objective = evaluate_fleet(problem, plan)
+    # the family's bound (taopt.lower): what a run stopped before HiGHS proves more returns.
+    # Under a limit its fast terms only: chapter 5's bound of a K = D = c = 1 fleet takes
+    # seconds at n = 20-40 and is not looked at by any clock
+    lower = min(fleet_lower(problem, "fast" if deadline.limited else "auto"), objective)
+    info: dict[str, Any] = {"family_bound": lower}
+
+    def stopped(where: str) -> Solution:
+        """The incumbent, the family's bound, ``time_limit`` (``interrupted`` when cancelled):
+        the limit came first."""
+        info["stopped_in"] = where
+        return finish(
+            problem,
+            plan,
+            method="milp",
+            stop=deadline.reason,
+            bound=lower,
+            runtime=time.perf_counter() - began,
+            info=info,
+        )
+
+    left = deadline.remaining()
+    if (
+        left is not None
+        and left >= 2 * WORKER_MIN_SECONDS
+        and (_estimated_nonzeros(problem) >= WORKER_MIN_NONZEROS)
+    ):
+        # a big model under a limit runs in a worker process: start it now, while the rows
+        # are built (its start-up, about a second under load, then overlaps the build)
+        shared_pool(_POOL_KEY, 1, hide_main=True).submit(os.getpid)
+    try:
+        model = build(problem, objective, deadline)
+    except BuildTimeout:
+        return stopped("build")
+    info.update(binaries=len(model.binary), rows=int(model.matrix.shape[0]), big_m=model.big_m)
+    options: dict[str, Any] = {
+        "mip_rel_gap": 1e-9,
+        "objective_bound": objective * (1 + 1e-6) + 1e-9,
+        "mip_feasibility_tolerance": 1e-9,
+        "primal_feasibility_tolerance": 1e-9,
+    }
+    if deadline.limited:  # leave out the MIP phases that ignore the clock
+        options.update({name: limited for name, (limited, _) in CLOCKLESS_MIP_PHASES.items()})
+    in_worker = deadline.limited and model.matrix.nnz >= WORKER_MIN_NONZEROS
+    left = deadline.remaining()
+    if in_worker and left is not None and left < WORKER_MIN_SECONDS:
+        return stopped("build")
+    out = _run_highs(model, options, deadline, in_worker)
+    if out is not None and out["col_value"] is not None:
+        point = float(model.cost @ out["col_value"])
+        if abs(point - out["objective"]) > 1e-6 * max(1.0, abs(point)):
+            # HiGHS's objective is not its point's (a presolve/postsolve slip of HiGHS 1.16,
+            # see taopt.models.highs.HighsModel.solve): the same run again without presolve
+            out = _run_highs(model, {**options, "presolve": "off"}, deadline, in_worker)
+    if out is None:
+        return stopped("highs")
+    run = _as_run(out, model, deadline.limited)
     if run.solver_status == "solver_error":
         raise SolverError(f"HiGHS failed on the fleet MILP: {run.message}")
-    info: dict[str, Any] = {
-        "binaries": int(model.xb.size),
-        "rows": int(sum(f["rows"] for f in model.families)),
-        "big_m": model.big_m,
-        "nodes": run.nodes,
-    }
-    plan, objective = known[1], known[0]
+    info["nodes"] = run.nodes
     model_objective = float("nan")
     if run.has_point and run.status in (OPTIMAL, TIME_LIMIT, "feasible"):
-        decoded = decode(model, problem)
+        decoded = decode(model, problem, out["col_value"])
         value = evaluate_fleet(problem, decoded)
         assert run.objective is not None  # has_point
         model_objective = float(run.objective)
@@ -610,7 +850,7 @@ def solve_fleet_milp(
     if run.status == INFEASIBLE:
         # the cut-off pruned everything: nothing beats the incumbent by 1e-6 -> it is optimal
         bound = objective / (1 + 1e-6)
-    bound = None if bound is None else min(float(bound), objective)
+    bound = min(max(lower, -math.inf if bound is None else float(bound)), objective)
     stopped_by = "optimal" if run.status in (OPTIMAL, INFEASIBLE) else run.stopped_by
     info.update(model_objective=model_objective)
     return finish(
@@ -624,11 +864,85 @@ def solve_fleet_milp(
     )
 
 
+def _estimated_nonzeros(problem: FleetProblem) -> int:
+    """A lower estimate of the model's nonzeros, before it is built: the rows (F2) and (F8),
+    three nonzeros each."""
+    P = 1 + 2 * problem.n
+    drone_js = sum(problem.drone_servable(j) for j in range(problem.n))
+    sorties = problem.D * drone_js
+    return 3 * (problem.K * (P - 1) * problem.s**2 + 2 * sorties * P * problem.s)
+
+
+def _run_highs(
+    model: FleetMilp, options: dict[str, Any], deadline: Deadline, in_worker: bool
+) -> dict[str, Any] | None:
+    """:func:`~taopt.runtime.highs.run_arrays` on the model, here or in a worker process.
+
+    In a worker, the owner waits until the deadline plus :data:`KILL_GRACE` of the overrun
+    allowance; a worker still
+    running then (HiGHS in a phase that looks at neither its clock nor its callbacks: the
+    presolve of a big model, the IPX analytic centre at the root) is killed, and None is
+    returned; also when the run is cancelled. Ctrl-C kills it too, then propagates.
+    """
+    remaining = deadline.remaining()
+    seconds = None if remaining is None else max(remaining - MARGIN, 1e-3)
+    grace = KILL_GRACE * overrun_allowance(deadline.seconds or 0.0)
+    arrays = model.arrays()
+    if not in_worker:
+        return run_arrays(arrays, options, seconds, stop=lambda: deadline.cancelled)
+    # the worker's limit as an instant: its start-up and the arrays' transfer count
+    until = None if seconds is None else time.time() + seconds
+    future = shared_pool(_POOL_KEY, 1, hide_main=True).submit(
+        run_arrays, arrays, options, until=until
+    )
+    try:
+        while not wait([future], timeout=0.05).done:
+            if deadline.cancelled or deadline.expired(-grace):
+                drop_pool(_POOL_KEY)
+                return None
+        return dict(future.result())
+    except BrokenProcessPool as exc:
+        drop_pool(_POOL_KEY)
+        raise SolverError(f"the worker running HiGHS on the fleet MILP died: {exc}") from exc
+    except BaseException:
+        drop_pool(_POOL_KEY)
+        raise
+
+
+def _as_run(out: dict[str, Any], model: FleetMilp, time_limited: bool) -> HighsRun:
+    """What :func:`~taopt.runtime.highs.run_arrays` found, under the status rules of
+    :func:`taopt.models.highs.solve_highs`."""
+    solver_status = _SOLVER_STATUS.get(out["model_status"], "solver_error")
+    has_point = out["primal_solution_status"] == 2 and out["col_value"] is not None
+    objective = float(out["objective"]) if has_point else None
+    dual = float(out["mip_dual_bound"])
+    bound = dual if math.isfinite(dual) else None
+    status, stopped_by = decide(
+        solver_status,
+        objective,
+        bound,
+        solver="highs",
+        time_limited=time_limited,
+        has_point=has_point,
+    )
+    return HighsRun(
+        status=status,
+        stopped_by=stopped_by,
+        solver_status=solver_status,
+        has_point=has_point,
+        objective=objective,
+        bound=bound,
+        mip_gap=float(out["mip_gap"]),
+        nodes=int(out["mip_node_count"]),
+        is_mip=len(model.binary) > 0,
+        message="" if solver_status != "solver_error" else f"HiGHS status {out['model_status']}",
+    )
+
+
 def _one_by_one(problem: FleetProblem) -> FleetPlan:
     """A feasible plan for the big-M: truck 0 (with a drone if it has one, else the first truck
     with one) serves the customers in a topological order, each by itself at its stop or by a
     sortie from and back to the stop nearest the customer."""
-    import networkx as nx
 
     order = list(nx.lexicographical_topological_sort(problem.precedence_graph))
     with_drone = next((k for k in range(problem.K) if problem.drones[k] > 0), -1)
@@ -650,8 +964,7 @@ def _one_by_one(problem: FleetProblem) -> FleetPlan:
 
 def describe(problem: FleetProblem) -> list[dict[str, Any]]:
     """The model's row families: label, number of rows, the rule each implements."""
-    upper = evaluate_fleet(problem, _one_by_one(problem))
-    return build(problem, upper).families
+    return build(problem).families
 
 
-__all__ = ["FleetMilp", "build", "decode", "describe", "solve_fleet_milp"]
+__all__ = ["BuildTimeout", "FleetMilp", "build", "decode", "describe", "solve_fleet_milp"]

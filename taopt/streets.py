@@ -25,6 +25,54 @@ from taopt.instance import plain
 #: line between its stops, ``length >= dist * (1 - STREET_TOLERANCE)``.
 STREET_TOLERANCE = 1e-9
 
+#: Relative tolerance on the flight-range constraint (5.6): a sortie with
+#: ``d(i, c) + d(c, k) <= L * (1 + FLIGHT_TOLERANCE)`` is within range.
+FLIGHT_TOLERANCE = 1e-9
+
+
+class StreetData:
+    """The derived data of a problem on a street network with customers (chapter 5's
+    :class:`~taopt.delivery.instance.DeliveryInstance`, §6.2's
+    :class:`~taopt.fleet.problem.FleetProblem`), read from the caches their constructors set
+    (``_truck_distance``, ``_truck_time``, ``_precedence_graph``): one definition for both.
+    """
+
+    customers: np.ndarray
+    stops: np.ndarray
+    flight_range: float
+
+    @property
+    def n(self) -> int:
+        """Number of customers."""
+        return len(self.customers)
+
+    @property
+    def s(self) -> int:
+        """Number of stops (the depot included)."""
+        return len(self.stops)
+
+    @property
+    def flight_limit(self) -> float:
+        """The flight range L with the relative tolerance used by every check of (5.6)."""
+        return self.flight_range * (1.0 + FLIGHT_TOLERANCE)
+
+    @property
+    def truck_distance(self) -> np.ndarray:
+        """(s, s) street shortest-path lengths between stops."""
+        # ignore (here and below): the caches are set by the constructors (object.__setattr__)
+        # and are not dataclass fields, so mypy cannot see them
+        return self._truck_distance  # type: ignore[attr-defined]
+
+    @property
+    def truck_time(self) -> np.ndarray:
+        """(s, s) truck driving times ``truck_distance / v_truck``."""
+        return self._truck_time  # type: ignore[attr-defined]
+
+    @property
+    def precedence_graph(self) -> nx.DiGraph:
+        """G^p: a frozen DiGraph on customers 0..n-1 with an edge r -> j per precedence."""
+        return self._precedence_graph  # type: ignore[attr-defined]
+
 
 def as_points(value: Any, what: str) -> np.ndarray:
     """``value`` as a read-only (N, 2) float array of finite numbers (``what`` names it)."""
@@ -174,7 +222,9 @@ def precedence_dag(
 
 
 __all__ = [
+    "FLIGHT_TOLERANCE",
     "STREET_TOLERANCE",
+    "StreetData",
     "as_points",
     "positive",
     "as_index",

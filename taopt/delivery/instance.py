@@ -30,7 +30,9 @@ from taopt.io import load_json, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
 from taopt.streets import (
+    FLIGHT_TOLERANCE,
     STREET_TOLERANCE,
+    StreetData,
     as_index,
     as_points,
     positive,
@@ -38,16 +40,12 @@ from taopt.streets import (
     street_network,
 )
 
-#: Relative tolerance on the flight-range constraint (5.6): a sortie with
-#: ``d(i, c) + d(c, k) <= L * (1 + FLIGHT_TOLERANCE)`` is within range.
-FLIGHT_TOLERANCE = 1e-9
-
 # the shared checks (core): kept under their old names, which tests and other modules import
 _points, _positive, _index = as_points, positive, as_index
 
 
 @dataclass(frozen=True, eq=False)
-class DeliveryInstance:
+class DeliveryInstance(StreetData):
     """Precedence-constrained truck–drone delivery data, thesis §5.2.
 
     Parameters
@@ -172,33 +170,6 @@ class DeliveryInstance:
 
     # -- derived data ----------------------------------------------------------------------
     @property
-    def n(self) -> int:
-        """Number of customers."""
-        return len(self.customers)
-
-    @property
-    def s(self) -> int:
-        """Number of stops (the depot included)."""
-        return len(self.stops)
-
-    @property
-    def flight_limit(self) -> float:
-        """The flight range L with the relative tolerance used by every check of (5.6)."""
-        return self.flight_range * (1.0 + FLIGHT_TOLERANCE)
-
-    @property
-    def truck_distance(self) -> np.ndarray:
-        """(s, s) street shortest-path lengths between stops."""
-        # ignore (here and below): the caches are set by __post_init__ (object.__setattr__)
-        # and are not dataclass fields, so mypy cannot see them
-        return self._truck_distance  # type: ignore[attr-defined]
-
-    @property
-    def truck_time(self) -> np.ndarray:
-        """(s, s) truck driving times ``truck_distance / v_truck``."""
-        return self._truck_time  # type: ignore[attr-defined]
-
-    @property
     def flight_distance(self) -> np.ndarray:
         """(n, s) Euclidean distances d(c_j, w_i) between customers and stops."""
         return self._flight_distance  # type: ignore[attr-defined]
@@ -207,11 +178,6 @@ class DeliveryInstance:
     def flight_time(self) -> np.ndarray:
         """(n, s) drone flight times ``flight_distance / v_drone``."""
         return self._flight_time  # type: ignore[attr-defined]
-
-    @property
-    def precedence_graph(self) -> nx.DiGraph:
-        """G^p: a frozen DiGraph on customers 0..n-1 with an edge r -> j per precedence."""
-        return self._precedence_graph  # type: ignore[attr-defined]
 
     def replace(self, **changes: Any) -> DeliveryInstance:
         """A validated copy with some fields changed (e.g. ``flight_range=300``)."""

@@ -2,9 +2,10 @@
 
 :func:`plot_fleet_map` draws the street network, each truck's walk (street shortest paths
 between consecutive stops of its sequence, one colour per truck) and each sortie (dashed, in
-its truck's colour, a marker per drone); :func:`plot_fleet_gantt` draws one row per truck and
-per drone over time (truck: driving bars; drone: one bar per sortie, from launch to recovery,
-with a tick at each customer served); :func:`plot_fleet` puts both side by side (what
+its drone's own shade of its truck's colour, :func:`drone_colour`, a marker per drone);
+:func:`plot_fleet_gantt` draws one row per truck and per drone over time (truck: driving
+bars; drone: one bar per sortie, from launch to recovery, with a tick at each customer
+served); :func:`plot_fleet` puts both side by side (what
 ``taopt solve FILE --plot x.png`` writes). The times are the earliest schedule of
 :func:`taopt.fleet.evaluate.schedule`. Each works with the Agg backend.
 """
@@ -20,11 +21,38 @@ from taopt.fleet.evaluate import as_plan, schedule
 from taopt.fleet.problem import FleetProblem
 from taopt.plot import legend_outside
 
-#: One colour per truck (its drones' sorties share it).
+#: One colour per truck (its drones get shades of it: :func:`drone_colour`).
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
 #: One marker per drone of a truck.
 MARKERS = ("^", "v", "<", ">", "P", "X")
+
+
+def truck_colour(k: int) -> str:
+    """Truck k's colour."""
+    return COLOURS[k % len(COLOURS)]
+
+
+def drone_colour(k: int, d: int, drones: int) -> tuple[float, float, float]:
+    """Drone d of truck k (of ``drones`` on it): its own shade of truck k's colour, from
+    darker (d = 0) to lighter, never the truck's own.
+
+    Example
+    -------
+    >>> drone_colour(0, 0, 2) != drone_colour(0, 1, 2)
+    True
+    """
+    from matplotlib.colors import to_rgb
+
+    base = np.array(to_rgb(truck_colour(k)))
+    # shades spread over [-0.45, +0.45]: < 0 mixes with black, > 0 with white; 0 is skipped
+    # (the truck's colour), so one drone gets a darker shade
+    t = -0.45 if drones <= 1 else -0.45 + 0.9 * d / (drones - 1)
+    if abs(t) < 0.15:
+        t = 0.15 if t >= 0 else -0.15
+    mixed = base * (1 + t) if t < 0 else base + (1 - base) * t
+    r, g, b = (float(x) for x in np.clip(mixed, 0.0, 1.0))
+    return (r, g, b)
 
 
 def _street_path(problem: FleetProblem, a: int, b: int) -> list[int]:
@@ -38,9 +66,9 @@ def plot_fleet_map(problem: FleetProblem, plan: Any, ax: Any = None, method: str
 
     Streets grey, stops small grey dots, the depot a black square, customers dots labelled
     with their index (red: served by a drone, black ring: by a truck). Truck k's walk is a
-    thick line in colour k; each sortie of drone (k, d) is a dashed line in colour k from its
-    launch stop through its customers to its recovery stop, with drone marker d at the first
-    customer.
+    thick line in colour k; each sortie of drone (k, d) is a dashed line in that drone's shade
+    of colour k (:func:`drone_colour`; legend "truck k drone d") from its launch stop through
+    its customers to its recovery stop, with drone marker d at the first customer.
     """
     import matplotlib.pyplot as plt
 
@@ -54,7 +82,7 @@ def plot_fleet_map(problem: FleetProblem, plan: Any, ax: Any = None, method: str
     ax.scatter(*stops[problem.depot], s=90, marker="s", color="black", zorder=6, label="depot")
     by_truck = {j for items in plan.truck_service for _, j in items}
     for k, route in enumerate(plan.routes):
-        colour = COLOURS[k % len(COLOURS)]
+        colour = truck_colour(k)
         walk: list[int] = [route[0]]
         for a, b in zip(route[:-1], route[1:], strict=True):
             walk += _street_path(problem, a, b)[1:]
@@ -63,19 +91,20 @@ def plot_fleet_map(problem: FleetProblem, plan: Any, ax: Any = None, method: str
         ax.plot(*stops[walk].T, color=colour, lw=3.0, alpha=0.7, zorder=3, label=f"truck {k}")
         for d, flights in enumerate(plan.sorties[k]):
             marker = MARKERS[d % len(MARKERS)]
+            shade = drone_colour(k, d, problem.drones[k])
             for i, f in enumerate(flights):
                 pts = np.vstack(
                     [stops[route[f.launch]], customers[list(f.customers)], stops[route[f.recovery]]]
                 )
                 ax.plot(
                     *pts.T,
-                    color=colour,
+                    color=shade,
                     ls="--",
                     lw=1.2,
                     zorder=4,
-                    label=f"drone ({k}, {d}) sorties" if i == 0 else None,
+                    label=f"truck {k} drone {d}" if i == 0 else None,
                 )
-                ax.scatter(*customers[f.customers[0]], marker=marker, s=60, color=colour, zorder=5)
+                ax.scatter(*customers[f.customers[0]], marker=marker, s=60, color=shade, zorder=5)
     drone_served = [j for j in range(problem.n) if j not in by_truck]
     ax.scatter(*customers[drone_served].T, s=22, color="red", zorder=6, label="customer (drone)")
     if by_truck:
@@ -100,14 +129,15 @@ def plot_fleet_map(problem: FleetProblem, plan: Any, ax: Any = None, method: str
 
 
 def plot_fleet_gantt(problem: FleetProblem, plan: Any, ax: Any = None, method: str = "") -> Any:
-    """Gantt chart: one row per truck (driving bars) and per drone (one bar per sortie from
-    launch to recovery, a tick at each service); time in seconds."""
+    """Gantt chart: one row per truck (driving bars, in the truck's colour) and per drone (one
+    bar per sortie from launch to recovery in the drone's own shade, :func:`drone_colour`; a
+    tick at each service); time in seconds."""
     import matplotlib.pyplot as plt
 
     plan = as_plan(plan)
     sched = schedule(problem, plan)
     rows = [f"truck {k}" for k in range(problem.K)] + [
-        f"drone ({k}, {d})" for k, d in problem.drone_ids()
+        f"truck {k} drone {d}" for k, d in problem.drone_ids()
     ]
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 0.5 * len(rows) + 1.5))
@@ -115,7 +145,7 @@ def plot_fleet_gantt(problem: FleetProblem, plan: Any, ax: Any = None, method: s
     tt = problem.truck_time
     for k, route in enumerate(plan.routes):
         y = y_of[f"truck {k}"]
-        colour = COLOURS[k % len(COLOURS)]
+        colour = truck_colour(k)
         for p in range(len(route) - 1):
             start, end = sched.departure[k][p], sched.arrival[k][p + 1]
             if end > start:
@@ -134,15 +164,14 @@ def plot_fleet_gantt(problem: FleetProblem, plan: Any, ax: Any = None, method: s
             ax.plot([sched.service[j]] * 2, [y - 0.3, y + 0.3], color="black", lw=1.5)
             ax.annotate(str(j), (sched.service[j], y + 0.3), fontsize=7, ha="center")
     for k, d, i, launch, _back, recovery in sched.sorties:
-        y = y_of[f"drone ({k}, {d})"]
-        colour = COLOURS[k % len(COLOURS)]
+        y = y_of[f"truck {k} drone {d}"]
         ax.barh(
             y,
             recovery - launch,
             left=launch,
             height=0.5,
-            color=colour,
-            alpha=0.55,
+            color=drone_colour(k, d, problem.drones[k]),
+            alpha=0.8,
             edgecolor="black",
             lw=0.5,
         )
@@ -152,6 +181,7 @@ def plot_fleet_gantt(problem: FleetProblem, plan: Any, ax: Any = None, method: s
     ax.axvline(sched.objective, color="black", ls=":", lw=1)
     ax.set_yticks([y_of[r] for r in rows], rows)
     ax.set_xlabel("time (s)")
+    ax.set_ylabel("vehicle")
     title = f"{method}: " if method else ""
     ax.set_title(f"{title}bars: truck driving / drone sorties; ticks: services")
     return ax
@@ -193,9 +223,11 @@ def save_fleet_gantt(
 
 
 __all__ = [
+    "drone_colour",
     "plot_fleet",
     "plot_fleet_gantt",
     "plot_fleet_map",
     "save_fleet_gantt",
     "save_fleet_plot",
+    "truck_colour",
 ]

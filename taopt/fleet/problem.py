@@ -40,13 +40,10 @@ from taopt.instance import check_schema, plain
 from taopt.io import load_json, save_json
 from taopt.result import register_payload
 from taopt.schemas import naming
+from taopt.streets import StreetData, precedence_dag, street_network
 from taopt.streets import as_index as _index
 from taopt.streets import as_points as _points
 from taopt.streets import positive as _positive
-from taopt.streets import precedence_dag, street_network
-
-#: Relative tolerance of the flight-range check, as chapter 5's (5.6).
-FLIGHT_TOLERANCE = 1e-9
 
 #: Who may serve a customer.
 SERVICE_MODES = ("drone", "both", "truck")
@@ -69,7 +66,7 @@ def _count(value: Any, what: str, minimum: int) -> int:
 
 
 @dataclass(frozen=True, eq=False)
-class FleetProblem:
+class FleetProblem(StreetData):
     """K trucks with D_k drones each, multi-customer sorties, precedence across the fleet.
 
     Parameters
@@ -297,16 +294,6 @@ class FleetProblem:
 
     # -- derived data ----------------------------------------------------------------------
     @property
-    def n(self) -> int:
-        """Number of customers."""
-        return len(self.customers)
-
-    @property
-    def s(self) -> int:
-        """Number of stops (the depot included)."""
-        return len(self.stops)
-
-    @property
     def K(self) -> int:  # noqa: N802  (the thesis's symbol)
         """Number of trucks."""
         return len(self.drones)
@@ -317,21 +304,6 @@ class FleetProblem:
         return int(sum(self.drones))
 
     @property
-    def flight_limit(self) -> float:
-        """The flight range with the relative tolerance used by every range check."""
-        return self.flight_range * (1.0 + FLIGHT_TOLERANCE)
-
-    @property
-    def truck_distance(self) -> np.ndarray:
-        """(s, s) street shortest-path lengths."""
-        return self._truck_distance  # type: ignore[attr-defined]
-
-    @property
-    def truck_time(self) -> np.ndarray:
-        """(s, s) truck driving times ``truck_distance / v_truck``."""
-        return self._truck_time  # type: ignore[attr-defined]
-
-    @property
     def flight_stop(self) -> np.ndarray:
         """(n, s) straight-line distances customer j – stop w."""
         return self._flight_stop  # type: ignore[attr-defined]
@@ -340,11 +312,6 @@ class FleetProblem:
     def flight_customer(self) -> np.ndarray:
         """(n, n) straight-line distances between customers."""
         return self._flight_customer  # type: ignore[attr-defined]
-
-    @property
-    def precedence_graph(self) -> nx.DiGraph:
-        """G^p: a frozen DiGraph on customers 0..n-1, an edge r -> j per precedence."""
-        return self._precedence_graph  # type: ignore[attr-defined]
 
     def drone_ids(self) -> list[tuple[int, int]]:
         """Every drone as ``(truck, d)``."""

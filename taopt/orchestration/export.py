@@ -406,20 +406,10 @@ def _sop(problem: Any, model: str) -> highspy.Highs:
 
 
 def _fleet(problem: Any) -> highspy.Highs:
-    from taopt.fleet.evaluate import evaluate_fleet
-    from taopt.models.fleet_milp import _one_by_one, build
+    from taopt.models.fleet_milp import build
 
-    upper = evaluate_fleet(problem, _one_by_one(problem))
-    built = build(problem, upper)
-    names: dict[str, list[str]] = {"b": [], "c": []}
-    for kind in names:
-        size = built.xb.size if kind == "b" else built.xc.size
-        names[kind] = [f"{kind}_{i}" for i in range(size)]
-    for name, block in built.index.items():
-        for key, (kind, col) in block.items():
-            names[kind][col] = "_".join([_clean(name), *(str(int(k)) for k in key)])
-    columns = {built.xb.id: names["b"].__getitem__, built.xc.id: names["c"].__getitem__}
-    return highs_model(built.problem, columns)
+    # built as arrays straight into HiGHS (no cvxpy), with the model's own names
+    return build(problem).highs(names=True).highs
 
 
 # ----------------------------------------------------------------------------- chapter 6

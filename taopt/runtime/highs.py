@@ -13,7 +13,11 @@ belongs to *running* HiGHS lives here:
   looks at its own ``time_limit`` rarely inside an LP, these callbacks come every simplex /
   IPM iteration and MIP node;
 * :func:`stdout_discarded` and :func:`flush_c_stdout` — HiGHS prints its banner from C++
-  straight to file descriptor 1 before any option can be set.
+  straight to file descriptor 1 before any option can be set;
+* :func:`run_arrays` — a model given as numpy arrays run in a fresh ``Highs`` with both
+  stops, its answer returned as plain data: a task a worker process can run (HiGHS has
+  phases that look at neither its clock nor its callbacks, e.g. the analytic centre its MIP
+  solver computes with IPX at the root; only a process can be stopped there).
 
 The Ctrl-C state (a run was interrupted, a run was abandoned) is kept by
 :mod:`taopt.runtime.interrupt`.
@@ -23,13 +27,16 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 import os
 import sys
 import threading
-from collections.abc import Callable, Iterator
+import time
+from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
 import highspy
+import numpy as np
 from highspy._core import _Highs
 
 from taopt.runtime import interrupt
@@ -226,6 +233,108 @@ def cvxpy_interruptible() -> Iterator[None]:
         setattr(highspy, "Highs", original)  # noqa: B010
 
 
+def run_arrays(
+    model: Mapping[str, Any],
+    options: Mapping[str, Any] | None = None,
+    seconds: float | None = None,
+    until: float | None = None,
+    stop: Callable[[], bool] | None = None,
+) -> dict[str, Any]:
+    """Run HiGHS on a model given as arrays; stop it at ``seconds`` through its ``time_limit``
+    and its interrupt callbacks (:func:`interrupt_when`); return what it found as plain data.
+
+    Light on purpose (highspy and numpy only), so that a spawned worker process
+    (:class:`~taopt.runtime.workers.WorkerPool`) can run it after a short start-up and be
+    killed by its owner if HiGHS overruns in a phase that looks at neither its clock nor
+    its callbacks.
+
+    Parameters
+    ----------
+    model : mapping
+        ``cost``, ``lower``, ``upper`` (row sides), ``column_lower``, ``column_upper``,
+        ``start``, ``index``, ``value`` (the matrix by columns, CSC) and ``integrality``
+        (1 for an integer column), numpy arrays; ``offset`` optional.
+    options : mapping, optional
+        HiGHS options by name. ``threads`` defaults to ``TAOPT_SOLVER_THREADS`` when set.
+    seconds : float, optional
+        The run's wall-clock limit (None: none).
+    until : float, optional
+        Or its end as a ``time.time()`` instant: for a run handed to a worker process, whose
+        start-up then counts against the limit.
+    stop : callable, optional
+        Also stop once ``stop()`` is true (e.g. a cancel token's; in this process only).
+
+    Returns
+    -------
+    dict
+        ``model_status`` (the ``HighsModelStatus`` name), ``primal_solution_status``,
+        ``objective``, ``mip_dual_bound``, ``mip_gap``, ``mip_node_count``, ``col_value``
+        (a numpy array, or None without a feasible point) and ``seconds`` (of the run).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> out = run_arrays({"cost": np.array([1.0]), "lower": np.array([0.5]),
+    ...     "upper": np.array([np.inf]), "column_lower": np.array([0.0]),
+    ...     "column_upper": np.array([3.0]), "start": np.array([0, 1]),
+    ...     "index": np.array([0]), "value": np.array([1.0]), "integrality": np.array([1])})
+    >>> out["model_status"], out["objective"]
+    ('kOptimal', 1.0)
+    """
+    began = time.perf_counter()
+    if until is not None:
+        left = until - time.time()
+        seconds = left if seconds is None else min(seconds, left)
+    with stdout_discarded():
+        highs = highspy.Highs()
+        highs.setOptionValue("output_flag", False)
+    threads = os.environ.get("TAOPT_SOLVER_THREADS")
+    if threads and threads.isdigit():
+        highs.setOptionValue("threads", int(threads))
+    cost = np.ascontiguousarray(model["cost"], dtype=np.float64)
+    lower = np.ascontiguousarray(model["lower"], dtype=np.float64)
+    start = np.ascontiguousarray(model["start"], dtype=np.int32)
+    index = np.ascontiguousarray(model["index"], dtype=np.int32)
+    integrality = np.ascontiguousarray(model["integrality"], dtype=np.int32)
+    highs.passModel(
+        len(cost),
+        len(lower),
+        len(index),
+        int(highspy.MatrixFormat.kColwise),
+        int(highspy.ObjSense.kMinimize),
+        float(model.get("offset", 0.0)),
+        cost,
+        np.ascontiguousarray(model["column_lower"], dtype=np.float64),
+        np.ascontiguousarray(model["column_upper"], dtype=np.float64),
+        lower,
+        np.ascontiguousarray(model["upper"], dtype=np.float64),
+        start,
+        index,
+        np.ascontiguousarray(model["value"], dtype=np.float64),
+        integrality,
+    )
+    for name, value in (options or {}).items():
+        highs.setOptionValue(name, value)
+    end = math.inf
+    if seconds is not None:
+        highs.setOptionValue("time_limit", max(float(seconds), 1e-3))
+        end = began + float(seconds)
+    with interrupt_when(highs, lambda: time.perf_counter() >= end or (stop is not None and stop())):
+        run_interruptibly(highs)
+    info = highs.getInfo()
+    has_point = int(info.primal_solution_status) == 2
+    return {
+        "model_status": highs.getModelStatus().name,
+        "primal_solution_status": int(info.primal_solution_status),
+        "objective": float(info.objective_function_value),
+        "mip_dual_bound": float(info.mip_dual_bound),
+        "mip_gap": float(info.mip_gap),
+        "mip_node_count": int(info.mip_node_count),
+        "col_value": np.array(highs.getSolution().col_value) if has_point else None,
+        "seconds": time.perf_counter() - began,
+    }
+
+
 __all__ = [
     "INTERRUPT_GRACE",
     "INTERRUPT_CALLBACKS",
@@ -234,4 +343,5 @@ __all__ = [
     "interrupt_when",
     "run_interruptibly",
     "cvxpy_interruptible",
+    "run_arrays",
 ]
