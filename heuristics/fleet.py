@@ -61,6 +61,12 @@ WINDOW = 3
 #: Candidate stops per customer for a new launch or recovery stop (the nearest ones in range).
 NEAR_STOPS = 3
 
+#: Service modes of a customer in an encoding (:func:`decode`): any option of least marginal
+#: makespan (the thesis's rule), only the truck's own service, or only a drone (a new sortie
+#: or a merge). 3P and ILS search over the mode of a customer that both a truck and a drone
+#: may serve (TSP-D's "truck node" / "drone node").
+FREE, TRUCK, DRONE = -1, 0, 1
+
 
 @dataclass
 class _Drone:
@@ -153,6 +159,7 @@ class FleetBuilder:
         self.last_service = 0.0
         self.order: list[int] = []
         self.truck_of = np.full(problem.n, -1, dtype=np.int64)
+        self.mode_of = np.full(problem.n, FREE, dtype=np.int64)
         self.preds: list[list[int]] = [[] for _ in range(problem.n)]
         for r, j in problem.precedences:
             self.preds[j].append(int(r))
@@ -291,6 +298,7 @@ class FleetBuilder:
             self.last_service = max(self.last_service, tj)
             self.order.append(j)
             self.truck_of[j] = k
+            self.mode_of[j] = TRUCK if kind == "truck" else DRONE
 
     def _recovery(self, t: _Truck, j: int, tj: float) -> float:
         here = t.route[-1]
@@ -305,36 +313,42 @@ class FleetBuilder:
             self.last_service,
             list(self.order),
             self.truck_of.copy(),
+            self.mode_of.copy(),
         )
 
     def restore(self, state: tuple[Any, ...]) -> None:
         """Back to a :meth:`snapshot` (copied again: the snapshot stays reusable)."""
-        trucks, service, last_service, order, truck_of = state
+        trucks, service, last_service, order, truck_of, mode_of = state
         self.trucks = [t.copy() for t in trucks]
         self.service = service.copy()
         self.last_service = last_service
         self.order = list(order)
         self.truck_of = truck_of.copy()
+        self.mode_of = mode_of.copy()
 
-    def place(self, j: int, k_fixed: int = -1) -> None:
+    def place(self, j: int, k_fixed: int = -1, mode: int = FREE) -> None:
         """Place customer j by its least-marginal option among truck ``k_fixed``'s (-1: any
-        truck able to serve it).
+        truck able to serve it) of service mode ``mode`` (:data:`FREE`: any; :data:`TRUCK`:
+        the truck serves j; :data:`DRONE`: a drone does).
 
         Raises
         ------
         InstanceError
-            No option (truck ``k_fixed`` cannot serve j).
+            No option (truck ``k_fixed`` cannot serve j in that mode).
         """
         ks = servers(self.problem, j) if k_fixed < 0 else [k_fixed]
         best: Option | None = None
         best_key: tuple[float, float] | None = None
         for k in ks:
             for o in self.options(j, k):
+                if mode != FREE and (o[0] == "truck") != (mode == TRUCK):
+                    continue
                 key = self.marginal(o)
                 if best_key is None or key < best_key:
                     best, best_key = o, key
         if best is None:
-            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}")
+            how = "" if mode == FREE else (" by truck" if mode == TRUCK else " by drone")
+            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}{how}")
         self.apply(j, best)
 
     # -- keys --------------------------------------------------------------------------------
@@ -597,15 +611,23 @@ def decode(
     truck_of: Sequence[int] | np.ndarray | None = None,
     window: int = WINDOW,
     near: int = NEAR_STOPS,
+    modes: Sequence[int] | np.ndarray | None = None,
 ) -> FleetBuilder:
     """Place the customers in ``order`` (a topological order of G^p), each by its option of
-    least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any).
+    least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any)
+    and of service mode ``modes[j]`` (:data:`FREE` or None: any; :data:`TRUCK`;
+    :data:`DRONE`).
+
+    A drone customer placed after the truck customers a truck serves while the drone flies is
+    launched from the stop before them (one of the last :data:`WINDOW` positions) and
+    recovered where the truck is: the order and the modes together express TSP-D's
+    operations (launch, truck serves on, recovery), which the free rule alone never builds.
 
     Raises
     ------
     InstanceError
         ``order`` is not a permutation respecting the precedences, or ``truck_of[j]`` cannot
-        serve j.
+        serve j (in mode ``modes[j]``).
     """
     builder = FleetBuilder(problem, window, near)
     placed = np.zeros(problem.n, dtype=bool)
@@ -613,11 +635,15 @@ def decode(
         for r in builder.preds[j]:
             if not placed[r]:
                 raise InstanceError(f"order places customer {j} before its predecessor {r}")
-        builder.place(j, -1 if truck_of is None else int(truck_of[j]))
+        builder.place(
+            j,
+            -1 if truck_of is None else int(truck_of[j]),
+            FREE if modes is None else int(modes[j]),
+        )
         placed[j] = True
     if not placed.all():
         raise InstanceError(f"order misses customer {int(np.flatnonzero(~placed)[0])}")
     return builder
 
 
-__all__ = ["FleetBuilder", "construct", "decode", "servers"]
+__all__ = ["DRONE", "FREE", "TRUCK", "FleetBuilder", "construct", "decode", "servers"]
