@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -75,6 +76,10 @@ class _Search:
     def __init__(self, problem: FleetProblem, rng: np.random.Generator, deadline: Deadline):
         self.problem = problem
         self.rng = rng
+        # the mode flips and reversals draw from their own stream, so that N1-N3 draw as
+        # before they existed where they are idle
+        seeds = rng.bit_generator.seed_seq
+        self.rng_new = np.random.default_rng(seeds.spawn(1)[0])  # type: ignore[attr-defined]
         self.deadline = deadline
         self.servers = [servers(problem, j) for j in range(problem.n)]
         self.preds: list[list[int]] = [[] for _ in range(problem.n)]
@@ -87,6 +92,9 @@ class _Search:
         self.both = [
             j for j in range(problem.n) if problem.truck_servable(j) and problem.drone_servable(j)
         ]
+        # N5 reverses truck routes through customers' own stops: idle when a drone serves
+        # every customer (the order then shapes the route only through the sorties)
+        self.reversals = any(problem.truck_servable(j) for j in range(problem.n))
         self.decodes = 0
         self.builder = FleetBuilder(problem)
         self.blank = self.builder.snapshot()
@@ -215,15 +223,15 @@ class _Search:
                     passed += 1
                     out.append((rest[: q + 1] + [j] + rest[q + 1 :], trucks, new_modes))
                 q += 1
-        return [out[int(i)] for i in self.rng.permutation(len(out))]
+        return [out[int(i)] for i in self.rng_new.permutation(len(out))]
 
     def reverse(self, order: list[int]) -> list[int] | None:
         """N5: a segment of the order reversed (2-opt on the truck routes), when no
         precedence pair lies inside it."""
         n = len(order)
-        if n < 3:
+        if n < 3 or not self.reversals:
             return None
-        i, l = sorted(int(x) for x in self.rng.choice(n, 2, replace=False))
+        i, l = sorted(int(x) for x in self.rng_new.choice(n, 2, replace=False))
         segment = order[i : l + 1]
         inside = set(segment)
         for j in segment:
@@ -233,32 +241,34 @@ class _Search:
 
     def neighbours(
         self, level: int, order: list[int], trucks: np.ndarray, modes: np.ndarray, sample: int
-    ) -> list[Encoding]:
-        """The candidates the descent tries at ``level`` (N1..N5)."""
+    ) -> Iterator[Encoding]:
+        """The candidates the descent tries at ``level`` (N1..N5), drawn one at a time (the
+        descent stops drawing at its first improvement)."""
         if level == 3:
-            return self.flips(order, trucks, modes)
-        out: list[Encoding] = []
+            yield from self.flips(order, trucks, modes)
+            return
         for _ in range(sample):
             if level == 0:
                 moved = self.reassign(trucks, modes)
                 if moved is None:
                     break
-                out.append((order, moved[1], moved[2]))
+                yield order, moved[1], moved[2]
             elif level == 1:
                 shifted = self.shift(order)
                 if shifted is not None:
-                    out.append((shifted, trucks, modes))
+                    yield shifted, trucks, modes
             elif level == 2:
                 swapped = self.exchange(trucks, modes)
                 if swapped is None and self.problem.K < 2:
                     break
                 if swapped is not None:
-                    out.append((order, swapped[1], swapped[2]))
+                    yield order, swapped[1], swapped[2]
             else:
+                if not self.reversals:
+                    break
                 reversed_ = self.reverse(order)
                 if reversed_ is not None:
-                    out.append((reversed_, trucks, modes))
-        return out
+                    yield reversed_, trucks, modes
 
     def descend(
         self, order: list[int], trucks: np.ndarray, modes: np.ndarray, value: float, sample: int
@@ -320,7 +330,7 @@ class _Search:
             if shifted is not None:
                 order = shifted
             if self.both:
-                j = self.both[int(self.rng.integers(len(self.both)))]
+                j = self.both[int(self.rng_new.integers(len(self.both)))]
                 mode = TRUCK if modes[j] == DRONE else DRONE
                 if self.valid_mode(j, int(trucks[j]), mode) == mode:
                     modes = modes.copy()
