@@ -488,10 +488,14 @@ def two_opt(
 
 
 def route_first(search: _Search) -> tuple[Encoding, float, float]:
-    """3P's phases 1 and 2: truck routes over every customer (:func:`truck_routes`; a
-    customer a truck may serve is served by it, a drone-only one by its truck's drone), then
-    the greedy split into drone sorties (:meth:`_Search.split`). Returns the encoding, its
-    value, and the value after phase 1."""
+    """3P's phases 1 and 2: truck routes over every customer (:func:`truck_routes`), then the
+    split into drone sorties.
+
+    Two splits of the same routes are tried and the better kept: the greedy split
+    (:meth:`_Search.split`) from the routes with every customer a truck may serve served by
+    it (a drone-only one by its truck's drone), and the decoder's own choice (each customer by
+    its least-marginal option, the thesis's rule) followed by the same greedy split. Returns
+    the encoding, its value, and the value of the all-truck routes (phase 1)."""
     problem = search.problem
     order, trucks = truck_routes(problem)
     modes = np.array(
@@ -502,8 +506,13 @@ def route_first(search: _Search) -> tuple[Encoding, float, float]:
         dtype=np.int64,
     )
     phase1 = search.set_current(order, trucks, modes)
-    order, trucks, modes, value = search.split(order, trucks, modes, phase1)
-    return (order, trucks, modes), value, phase1
+    best = search.split(order, trucks, modes, phase1)
+    if search.both:
+        free = decode(problem, order, trucks)
+        other = search.split(order, trucks, free.mode_of.copy(), free.objective())
+        if other[3] < best[3]:
+            best = other
+    return best[:3], best[3], phase1
 
 
 def _check(iterations: int, sample: int, strength: int, accept_worse: float) -> None:
