@@ -11,8 +11,8 @@ that vehicle's plan so far (:class:`FleetBuilder`):
 * ``drone``: drone (k, d) is launched from one of the last positions of truck k where it is
   aboard (or from a new stop near the customer the truck drives to first), serves the customer
   and is recovered either where the truck is, the truck waiting, or at a new stop near the
-  customer the truck drives to meanwhile (TSP-D's truck-and-drone-in-parallel leg), also
-  after driving to a new launch stop;
+  customer (or, under ``"return"``, at the depot) the truck drives to meanwhile (TSP-D's
+  truck-and-drone-in-parallel leg), also after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
   fewer than c customers and the longer flight stays within the range.
@@ -169,6 +169,13 @@ class FleetBuilder:
             order = np.argsort(self.fs[j], kind="stable")
             ok = [int(w) for w in order if 2.0 * self.fs[j, w] <= self.limit]
             self.near.append(ok[: int(near)])
+        # candidate recovery stops: the near ones and, under "return" (every truck ends at
+        # the depot), the depot: a sortie may end where its truck's route ends (TSP-D's
+        # last operation often recovers the drone at the depot)
+        self.recover: list[list[int]] = [
+            w + [self.depot] if self.return_objective and self.depot not in w else w
+            for w in self.near
+        ]
 
     # -- reading -------------------------------------------------------------------------------
     def ready_time(self, j: int) -> float:
@@ -207,6 +214,7 @@ class FleetBuilder:
             return out
         fsj = fs[j]
         near = self.near[j]
+        recover = self.recover[j]
         for d, drone in enumerate(t.drones):
             # launch from an existing position p where the drone is aboard
             for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
@@ -221,7 +229,7 @@ class FleetBuilder:
                 if out_leg + back <= limit:  # recovered where the truck is (it waits)
                     rec = max(tj + back / vd, t.arrival[last]) + tau
                     out.append(("drone", k, d, p, -1, -1, tj, max(t.ready, rec), here, leg))
-                for b in near:  # recovered at a new stop the truck drives to
+                for b in recover:  # recovered at a new stop the truck drives to
                     if b == here or out_leg + float(fsj[b]) > limit:
                         continue
                     arrive = t.ready + float(tt[here, b])
@@ -238,7 +246,7 @@ class FleetBuilder:
                 leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
                 rec = tj + flight + tau
                 out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
-                for b in near:  # ... and drives on to another stop near j to recover it
+                for b in recover:  # ... and drives on to another stop near j to recover it
                     if b == a or float(fsj[a]) + float(fsj[b]) > limit:
                         continue
                     rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
