@@ -11,7 +11,8 @@ that vehicle's plan so far (:class:`FleetBuilder`):
 * ``drone``: drone (k, d) is launched from one of the last positions of truck k where it is
   aboard (or from a new stop near the customer the truck drives to first), serves the customer
   and is recovered either where the truck is, the truck waiting, or at a new stop near the
-  customer (or, under ``"return"``, at the depot) the truck drives to meanwhile (TSP-D's
+  customer (or, under ``"return"`` for a truck's last customer in :func:`decode`, at the
+  depot) the truck drives to meanwhile (TSP-D's
   truck-and-drone-in-parallel leg), also after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
@@ -169,9 +170,11 @@ class FleetBuilder:
             order = np.argsort(self.fs[j], kind="stable")
             ok = [int(w) for w in order if 2.0 * self.fs[j, w] <= self.limit]
             self.near.append(ok[: int(near)])
-        # candidate recovery stops: the near ones and, under "return" (every truck ends at
-        # the depot), the depot: a sortie may end where its truck's route ends (TSP-D's
-        # last operation often recovers the drone at the depot)
+        # candidate recovery stops of a truck's last customer (``final``, set by the
+        # decoder): the near ones and, under "return" (every truck ends at the depot), the
+        # depot: TSP-D's last operation often recovers the drone there. Not offered earlier:
+        # the marginal key does not see that a truck back at the depot must drive out again.
+        self.final = np.zeros(problem.n, dtype=bool)
         self.recover: list[list[int]] = [
             w + [self.depot] if self.return_objective and self.depot not in w else w
             for w in self.near
@@ -214,7 +217,7 @@ class FleetBuilder:
             return out
         fsj = fs[j]
         near = self.near[j]
-        recover = self.recover[j]
+        recover = self.recover[j] if self.final[j] else near
         for d, drone in enumerate(t.drones):
             # launch from an existing position p where the drone is aboard
             for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
@@ -626,6 +629,9 @@ def decode(
     and of service mode ``modes[j]`` (:data:`FREE` or None: any; :data:`TRUCK`;
     :data:`DRONE`).
 
+    The last customer of each truck (:func:`final_customers`) may also have its sortie
+    recovered at the depot under ``"return"``.
+
     A drone customer placed after the truck customers a truck serves while the drone flies is
     launched from the stop before them (one of the last :data:`WINDOW` positions) and
     recovered where the truck is: the order and the modes together express TSP-D's
@@ -638,6 +644,7 @@ def decode(
         serve j (in mode ``modes[j]``).
     """
     builder = FleetBuilder(problem, window, near)
+    builder.final = final_customers(problem, order, truck_of)
     placed = np.zeros(problem.n, dtype=bool)
     for j in order:
         for r in builder.preds[j]:
@@ -654,4 +661,30 @@ def decode(
     return builder
 
 
-__all__ = ["DRONE", "FREE", "TRUCK", "FleetBuilder", "construct", "decode", "servers"]
+def final_customers(
+    problem: FleetProblem,
+    order: Sequence[int],
+    truck_of: Sequence[int] | np.ndarray | None = None,
+) -> np.ndarray:
+    """Which customers are the last of their truck in ``order`` (the last of the order when
+    ``truck_of`` is None or -1 for it)."""
+    final = np.zeros(problem.n, dtype=bool)
+    seen: set[int] = set()
+    for j in reversed(list(order)):
+        k = -1 if truck_of is None else int(truck_of[j])
+        if k not in seen:
+            final[j] = True
+            seen.add(k)
+    return final
+
+
+__all__ = [
+    "DRONE",
+    "FREE",
+    "TRUCK",
+    "FleetBuilder",
+    "construct",
+    "decode",
+    "final_customers",
+    "servers",
+]

@@ -51,6 +51,7 @@ from taopt.heuristics.fleet import (
     _check_servable,
     construct,
     decode,
+    final_customers,
     infeasible_solution,
     servers,
 )
@@ -100,6 +101,7 @@ class _Search:
         self.blank = self.builder.snapshot()
         # the current encoding and snapshots of its decode every SNAPSHOT_EVERY customers
         self.current: Encoding | None = None
+        self.current_final: np.ndarray | None = None
         self.snapshots: list[tuple[Any, ...]] = []
 
     def valid_mode(self, j: int, k: int, mode: int) -> int:
@@ -117,12 +119,14 @@ class _Search:
         self.decodes += 1
         builder = self.builder
         builder.restore(self.blank)
+        builder.final = final_customers(self.problem, order, trucks)
         self.snapshots = []
         for i, j in enumerate(order):
             if i % SNAPSHOT_EVERY == 0:
                 self.snapshots.append(builder.snapshot())
             builder.place(j, int(trucks[j]), int(modes[j]))
         self.current = (list(order), trucks.copy(), modes.copy())
+        self.current_final = builder.final
         return builder.objective()
 
     def value(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> float:
@@ -132,15 +136,23 @@ class _Search:
             return self.set_current(order, trucks, modes)
         self.decodes += 1
         old_order, old_trucks, old_modes = self.current
+        old_final = self.builder.final if self.current_final is None else self.current_final
+        final = final_customers(self.problem, order, trucks)
         first = 0
         while first < len(order):
             j = order[first]
-            if j != old_order[first] or trucks[j] != old_trucks[j] or modes[j] != old_modes[j]:
+            if (
+                j != old_order[first]
+                or trucks[j] != old_trucks[j]
+                or modes[j] != old_modes[j]
+                or final[j] != old_final[j]
+            ):
                 break
             first += 1
         block = min(first // SNAPSHOT_EVERY, len(self.snapshots) - 1)
         builder = self.builder
         builder.restore(self.snapshots[block])
+        builder.final = final
         for j in order[block * SNAPSHOT_EVERY :]:
             builder.place(j, int(trucks[j]), int(modes[j]))
         return builder.objective()
@@ -199,12 +211,18 @@ class _Search:
         new_modes[j] = self.valid_mode(j, int(out[j]), int(modes[j]))
         return [], out, new_modes
 
-    def flips(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> list[Encoding]:
+    def flips(
+        self, order: list[int], trucks: np.ndarray, modes: np.ndarray, far: bool = False
+    ) -> list[Encoding]:
         """N4, every move (shuffled): a customer a truck or a drone may serve changes mode.
         One flipped to a drone is also tried moved past the next 1..:data:`FLIP_REACH`
         customers of its truck (within its precedence window), so that the truck serves them
-        while the drone flies; one flipped to the truck keeps its place."""
+        while the drone flies; one flipped to the truck keeps its place. With ``far``, after
+        those (shuffled apart), the flipped customer at every other place of its precedence
+        window: a drone customer launched elsewhere, a truck customer inserted into its
+        truck's route at a chosen position."""
         out: list[Encoding] = []
+        further: list[Encoding] = []
         for j in self.both:
             k = int(trucks[j])
             mode = TRUCK if modes[j] == DRONE else DRONE
@@ -213,17 +231,52 @@ class _Search:
             new_modes = modes.copy()
             new_modes[j] = mode
             out.append((order, trucks, new_modes))
-            if mode != DRONE:
+            if mode != DRONE and not far:
                 continue
             rest, lo, hi = self.window(order, j)
-            q = order.index(j)
-            passed = 0
-            while q < min(hi, len(rest)) and passed < FLIP_REACH:
+            here = order.index(j)
+            near: set[int] = {here}
+            q, passed = here, 0
+            while mode == DRONE and q < min(hi, len(rest)) and passed < FLIP_REACH:
                 if trucks[rest[q]] == k:
                     passed += 1
+                    near.add(q + 1)
                     out.append((rest[: q + 1] + [j] + rest[q + 1 :], trucks, new_modes))
                 q += 1
-        return [out[int(i)] for i in self.rng_new.permutation(len(out))]
+            if far:
+                for q in range(lo, min(hi, len(rest)) + 1):
+                    if q not in near:
+                        further.append((rest[:q] + [j] + rest[q:], trucks, new_modes))
+        if far:
+            further.extend(self.mode_swaps(order, trucks, modes))
+        out = [out[int(i)] for i in self.rng_new.permutation(len(out))]
+        return out + [further[int(i)] for i in self.rng_new.permutation(len(further))]
+
+    def mode_swaps(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> list[Encoding]:
+        """A truck customer and a drone customer of the same truck (both of which either may
+        serve) exchange places in the order and modes: TSP-D's "a drone node replaces a truck
+        node" (the two flips at once, which a descent of single flips may never pass)."""
+        out: list[Encoding] = []
+        position = {j: i for i, j in enumerate(order)}
+        for a in self.both:
+            if modes[a] != TRUCK:
+                continue
+            for b in self.both:
+                if modes[b] != DRONE or trucks[a] != trucks[b]:
+                    continue
+                new_order = list(order)
+                pa, pb = position[a], position[b]
+                new_order[pa], new_order[pb] = b, a
+                lo, hi = min(pa, pb), max(pa, pb)
+                between = set(order[lo : hi + 1])
+                if any(r in between for r in self.preds[order[hi]]) or any(
+                    v in between for v in self.succs[order[lo]]
+                ):
+                    continue  # the exchange would break a precedence inside the span
+                new_modes = modes.copy()
+                new_modes[a], new_modes[b] = DRONE, TRUCK
+                out.append((new_order, trucks, new_modes))
+        return out
 
     def reverse(self, order: list[int]) -> list[int] | None:
         """N5: a segment of the order reversed (2-opt on the truck routes), when no
@@ -245,7 +298,7 @@ class _Search:
         """The candidates the descent tries at ``level`` (N1..N5), drawn one at a time (the
         descent stops drawing at its first improvement)."""
         if level == 3:
-            yield from self.flips(order, trucks, modes)
+            yield from self.flips(order, trucks, modes, far=True)
             return
         for _ in range(sample):
             if level == 0:
