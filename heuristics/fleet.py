@@ -62,11 +62,16 @@ WINDOW = 3
 #: Candidate stops per customer for a new launch or recovery stop (the nearest ones in range).
 NEAR_STOPS = 3
 
-#: Service modes of a customer in an encoding (:func:`decode`): any option of least marginal
-#: makespan (the thesis's rule), only the truck's own service, or only a drone (a new sortie
-#: or a merge). 3P and ILS search over the mode of a customer that both a truck and a drone
-#: may serve (TSP-D's "truck node" / "drone node").
-FREE, TRUCK, DRONE = -1, 0, 1
+# Service modes of a customer in an encoding (:func:`decode`). 3P and ILS search over the
+# mode of a customer that both a truck and a drone may serve (TSP-D's "truck node" / "drone
+# node").
+
+#: Service mode: the option of least marginal makespan of any kind (the thesis's rule).
+FREE = -1
+#: Service mode: the truck serves the customer at its stop.
+TRUCK = 0
+#: Service mode: a drone serves the customer (a new sortie or a merge into the last one).
+DRONE = 1
 
 
 @dataclass

@@ -2,30 +2,40 @@
 search ("ILS").
 
 Both search over an *encoding* of a plan: a priority order of the customers (a topological
-order of G^p) and, per customer, the truck whose vehicles serve it. The decoder
+order of G^p) and, per customer, the truck whose vehicles serve it and its service mode
+(:data:`taopt.heuristics.fleet.TRUCK` or :data:`~taopt.heuristics.fleet.DRONE`; only a
+customer that both may serve has a choice). The decoder
 (:func:`taopt.heuristics.fleet.decode`) places the customers in that order, each by the option
-of least marginal makespan among its truck's options (the truck itself, a new sortie of one of
-its drones, or merging into a drone's open sortie when c > 1), checking the range and the
-capacity as it goes: every decoded plan is feasible, and its kept times are the earliest
-schedule (re-scored by :func:`taopt.evaluate` at the end).
+of least marginal makespan among its truck's options of its mode (the truck itself; a new
+sortie of one of its drones or merging into a drone's open sortie when c > 1), checking the
+range and the capacity as it goes: every decoded plan is feasible, and its kept times are the
+earliest schedule (re-scored by :func:`taopt.evaluate` at the end). The mode is what the
+thesis's one-step rule gets wrong under ``"return"`` (it always prefers a drone sortie from
+where the truck stands: TSP-D instances at 2-4 times the optimum); searching it, with moves
+that flip it, is what brings 3P and ILS near the optimum there.
 
 3P (Bai et al., IEEE T-RO 2025, from the published description; no code is public)
     1. precedence-feasible truck routes by an extended min-marginal-cost rule: every customer
        is visited by a truck at its *anchor* stop (its own stop when a truck may serve it,
        else the nearest stop a drone reaches it from), customers taken viable-first (the
        topological-sorting technique) and each appended to the truck and position of least
-       marginal makespan of the trucks-only schedule, waiting for predecessors;
-    2. a split of each truck route into drone sorties with the endurance check: the route's
-       customers decoded in order on their truck (truck service, a new sortie, or merging
-       into the open sortie while it stays within the range and c);
+       marginal makespan of the trucks-only schedule, waiting for predecessors; each truck's
+       route then shortened by 2-opt; every customer a truck may serve is served by it;
+    2. a split of the truck routes into drone sorties with the endurance check: greedily,
+       the customer whose move to a drone lowers the decoded objective most, while one does
+       (Agatz, Bouman & Schmidt's "TSP, then split"); the decoder's own least-marginal split
+       of the same routes is tried too and the better kept;
     3. variable neighbourhood descent over the encoding: N1 move one customer to another
        truck, N2 shift one customer within its precedence window, N3 exchange the trucks of
-       two customers; first improvement, back to N1 after each improvement, each
-       neighbourhood sampled (``sample`` moves).
+       two customers, N4 flip one customer's mode (and move it: past the truck customers
+       served while it flies, or anywhere in its precedence window) or exchange a truck and
+       a drone customer, N5 reverse a segment of the order (2-opt on the truck routes);
+       first improvement, back to N1 after each improvement, N1-N3 and N5 sampled
+       (``sample`` moves), N4 complete.
 
 ILS
-    Starts from the better of MMA's and SMMA's plans (their order and trucks), runs the same
-    descent, then perturbs (``strength`` random truck moves and shifts) and descends again,
+    Starts from the best of MMA's, SMMA's and 3P's route-first plans, runs the same descent,
+    then perturbs (``strength`` random truck moves, shifts and mode flips) and descends again,
     accepting a plan no more than ``accept_worse`` (relative) worse than the current one; the
     best plan found is returned.
 
