@@ -66,11 +66,11 @@ NEAR_STOPS = 3
 # mode of a customer that both a truck and a drone may serve (TSP-D's "truck node" / "drone
 # node").
 
-#: Service mode: the option of least marginal makespan of any kind (the thesis's rule).
+#: The free service mode, the option of least marginal makespan of any kind (the thesis's rule).
 FREE = -1
-#: Service mode: the truck serves the customer at its stop.
+#: The truck service mode, the truck serves the customer at its stop.
 TRUCK = 0
-#: Service mode: a drone serves the customer (a new sortie or a merge into the last one).
+#: The drone service mode, a drone serves the customer (a new sortie or a merge into the last).
 DRONE = 1
 
 
