@@ -11,8 +11,9 @@ that vehicle's plan so far (:class:`FleetBuilder`):
 * ``drone``: drone (k, d) is launched from one of the last positions of truck k where it is
   aboard (or from a new stop near the customer the truck drives to first), serves the customer
   and is recovered either where the truck is, the truck waiting, or at a new stop near the
-  customer the truck drives to meanwhile (TSP-D's truck-and-drone-in-parallel leg), also
-  after driving to a new launch stop;
+  customer (or, under ``"return"`` for a truck's last customer in :func:`decode`, at the
+  depot) the truck drives to meanwhile (TSP-D's
+  truck-and-drone-in-parallel leg), also after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
   fewer than c customers and the longer flight stays within the range.
@@ -60,6 +61,17 @@ WINDOW = 3
 
 #: Candidate stops per customer for a new launch or recovery stop (the nearest ones in range).
 NEAR_STOPS = 3
+
+# Service modes of a customer in an encoding (:func:`decode`). 3P and ILS search over the
+# mode of a customer that both a truck and a drone may serve (TSP-D's "truck node" / "drone
+# node").
+
+#: The free service mode, the option of least marginal makespan of any kind (the thesis's rule).
+FREE = -1
+#: The truck service mode, the truck serves the customer at its stop.
+TRUCK = 0
+#: The drone service mode, a drone serves the customer (a new sortie or a merge into the last).
+DRONE = 1
 
 
 @dataclass
@@ -153,6 +165,7 @@ class FleetBuilder:
         self.last_service = 0.0
         self.order: list[int] = []
         self.truck_of = np.full(problem.n, -1, dtype=np.int64)
+        self.mode_of = np.full(problem.n, FREE, dtype=np.int64)
         self.preds: list[list[int]] = [[] for _ in range(problem.n)]
         for r, j in problem.precedences:
             self.preds[j].append(int(r))
@@ -162,6 +175,15 @@ class FleetBuilder:
             order = np.argsort(self.fs[j], kind="stable")
             ok = [int(w) for w in order if 2.0 * self.fs[j, w] <= self.limit]
             self.near.append(ok[: int(near)])
+        # candidate recovery stops of a truck's last customer (``final``, set by the
+        # decoder): the near ones and, under "return" (every truck ends at the depot), the
+        # depot: TSP-D's last operation often recovers the drone there. Not offered earlier:
+        # the marginal key does not see that a truck back at the depot must drive out again.
+        self.final = np.zeros(problem.n, dtype=bool)
+        self.recover: list[list[int]] = [
+            w + [self.depot] if self.return_objective and self.depot not in w else w
+            for w in self.near
+        ]
 
     # -- reading -------------------------------------------------------------------------------
     def ready_time(self, j: int) -> float:
@@ -200,6 +222,7 @@ class FleetBuilder:
             return out
         fsj = fs[j]
         near = self.near[j]
+        recover = self.recover[j] if self.final[j] else near
         for d, drone in enumerate(t.drones):
             # launch from an existing position p where the drone is aboard
             for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
@@ -214,7 +237,7 @@ class FleetBuilder:
                 if out_leg + back <= limit:  # recovered where the truck is (it waits)
                     rec = max(tj + back / vd, t.arrival[last]) + tau
                     out.append(("drone", k, d, p, -1, -1, tj, max(t.ready, rec), here, leg))
-                for b in near:  # recovered at a new stop the truck drives to
+                for b in recover:  # recovered at a new stop the truck drives to
                     if b == here or out_leg + float(fsj[b]) > limit:
                         continue
                     arrive = t.ready + float(tt[here, b])
@@ -231,7 +254,7 @@ class FleetBuilder:
                 leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
                 rec = tj + flight + tau
                 out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
-                for b in near:  # ... and drives on to another stop near j to recover it
+                for b in recover:  # ... and drives on to another stop near j to recover it
                     if b == a or float(fsj[a]) + float(fsj[b]) > limit:
                         continue
                     rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
@@ -291,6 +314,7 @@ class FleetBuilder:
             self.last_service = max(self.last_service, tj)
             self.order.append(j)
             self.truck_of[j] = k
+            self.mode_of[j] = TRUCK if kind == "truck" else DRONE
 
     def _recovery(self, t: _Truck, j: int, tj: float) -> float:
         here = t.route[-1]
@@ -305,36 +329,42 @@ class FleetBuilder:
             self.last_service,
             list(self.order),
             self.truck_of.copy(),
+            self.mode_of.copy(),
         )
 
     def restore(self, state: tuple[Any, ...]) -> None:
         """Back to a :meth:`snapshot` (copied again: the snapshot stays reusable)."""
-        trucks, service, last_service, order, truck_of = state
+        trucks, service, last_service, order, truck_of, mode_of = state
         self.trucks = [t.copy() for t in trucks]
         self.service = service.copy()
         self.last_service = last_service
         self.order = list(order)
         self.truck_of = truck_of.copy()
+        self.mode_of = mode_of.copy()
 
-    def place(self, j: int, k_fixed: int = -1) -> None:
+    def place(self, j: int, k_fixed: int = -1, mode: int = FREE) -> None:
         """Place customer j by its least-marginal option among truck ``k_fixed``'s (-1: any
-        truck able to serve it).
+        truck able to serve it) of service mode ``mode`` (:data:`FREE`: any; :data:`TRUCK`:
+        the truck serves j; :data:`DRONE`: a drone does).
 
         Raises
         ------
         InstanceError
-            No option (truck ``k_fixed`` cannot serve j).
+            No option (truck ``k_fixed`` cannot serve j in that mode).
         """
         ks = servers(self.problem, j) if k_fixed < 0 else [k_fixed]
         best: Option | None = None
         best_key: tuple[float, float] | None = None
         for k in ks:
             for o in self.options(j, k):
+                if mode != FREE and (o[0] == "truck") != (mode == TRUCK):
+                    continue
                 key = self.marginal(o)
                 if best_key is None or key < best_key:
                     best, best_key = o, key
         if best is None:
-            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}")
+            how = "" if mode == FREE else (" by truck" if mode == TRUCK else " by drone")
+            raise InstanceError(f"truck {k_fixed} cannot serve customer {j}{how}")
         self.apply(j, best)
 
     # -- keys --------------------------------------------------------------------------------
@@ -597,27 +627,69 @@ def decode(
     truck_of: Sequence[int] | np.ndarray | None = None,
     window: int = WINDOW,
     near: int = NEAR_STOPS,
+    modes: Sequence[int] | np.ndarray | None = None,
 ) -> FleetBuilder:
     """Place the customers in ``order`` (a topological order of G^p), each by its option of
-    least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any).
+    least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any)
+    and of service mode ``modes[j]`` (:data:`FREE` or None: any; :data:`TRUCK`;
+    :data:`DRONE`).
+
+    The last customer of each truck (:func:`final_customers`) may also have its sortie
+    recovered at the depot under ``"return"``.
+
+    A drone customer placed after the truck customers a truck serves while the drone flies is
+    launched from the stop before them (one of the last :data:`WINDOW` positions) and
+    recovered where the truck is: the order and the modes together express TSP-D's
+    operations (launch, truck serves on, recovery), which the free rule alone never builds.
 
     Raises
     ------
     InstanceError
         ``order`` is not a permutation respecting the precedences, or ``truck_of[j]`` cannot
-        serve j.
+        serve j (in mode ``modes[j]``).
     """
     builder = FleetBuilder(problem, window, near)
+    builder.final = final_customers(problem, order, truck_of)
     placed = np.zeros(problem.n, dtype=bool)
     for j in order:
         for r in builder.preds[j]:
             if not placed[r]:
                 raise InstanceError(f"order places customer {j} before its predecessor {r}")
-        builder.place(j, -1 if truck_of is None else int(truck_of[j]))
+        builder.place(
+            j,
+            -1 if truck_of is None else int(truck_of[j]),
+            FREE if modes is None else int(modes[j]),
+        )
         placed[j] = True
     if not placed.all():
         raise InstanceError(f"order misses customer {int(np.flatnonzero(~placed)[0])}")
     return builder
 
 
-__all__ = ["FleetBuilder", "construct", "decode", "servers"]
+def final_customers(
+    problem: FleetProblem,
+    order: Sequence[int],
+    truck_of: Sequence[int] | np.ndarray | None = None,
+) -> np.ndarray:
+    """Which customers are the last of their truck in ``order`` (the last of the order when
+    ``truck_of`` is None or -1 for it)."""
+    final = np.zeros(problem.n, dtype=bool)
+    seen: set[int] = set()
+    for j in reversed(list(order)):
+        k = -1 if truck_of is None else int(truck_of[j])
+        if k not in seen:
+            final[j] = True
+            seen.add(k)
+    return final
+
+
+__all__ = [
+    "DRONE",
+    "FREE",
+    "TRUCK",
+    "FleetBuilder",
+    "construct",
+    "decode",
+    "final_customers",
+    "servers",
+]

@@ -2,30 +2,40 @@
 search ("ILS").
 
 Both search over an *encoding* of a plan: a priority order of the customers (a topological
-order of G^p) and, per customer, the truck whose vehicles serve it. The decoder
+order of G^p) and, per customer, the truck whose vehicles serve it and its service mode
+(:data:`taopt.heuristics.fleet.TRUCK` or :data:`~taopt.heuristics.fleet.DRONE`; only a
+customer that both may serve has a choice). The decoder
 (:func:`taopt.heuristics.fleet.decode`) places the customers in that order, each by the option
-of least marginal makespan among its truck's options (the truck itself, a new sortie of one of
-its drones, or merging into a drone's open sortie when c > 1), checking the range and the
-capacity as it goes: every decoded plan is feasible, and its kept times are the earliest
-schedule (re-scored by :func:`taopt.evaluate` at the end).
+of least marginal makespan among its truck's options of its mode (the truck itself; a new
+sortie of one of its drones or merging into a drone's open sortie when c > 1), checking the
+range and the capacity as it goes: every decoded plan is feasible, and its kept times are the
+earliest schedule (re-scored by :func:`taopt.evaluate` at the end). The mode is what the
+thesis's one-step rule gets wrong under ``"return"`` (it always prefers a drone sortie from
+where the truck stands: TSP-D instances at 2-4 times the optimum); searching it, with moves
+that flip it, is what brings 3P and ILS near the optimum there.
 
 3P (Bai et al., IEEE T-RO 2025, from the published description; no code is public)
     1. precedence-feasible truck routes by an extended min-marginal-cost rule: every customer
        is visited by a truck at its *anchor* stop (its own stop when a truck may serve it,
        else the nearest stop a drone reaches it from), customers taken viable-first (the
        topological-sorting technique) and each appended to the truck and position of least
-       marginal makespan of the trucks-only schedule, waiting for predecessors;
-    2. a split of each truck route into drone sorties with the endurance check: the route's
-       customers decoded in order on their truck (truck service, a new sortie, or merging
-       into the open sortie while it stays within the range and c);
+       marginal makespan of the trucks-only schedule, waiting for predecessors; each truck's
+       route then shortened by 2-opt; every customer a truck may serve is served by it;
+    2. a split of the truck routes into drone sorties with the endurance check: greedily,
+       the customer whose move to a drone lowers the decoded objective most, while one does
+       (Agatz, Bouman & Schmidt's "TSP, then split"); the decoder's own least-marginal split
+       of the same routes is tried too and the better kept;
     3. variable neighbourhood descent over the encoding: N1 move one customer to another
        truck, N2 shift one customer within its precedence window, N3 exchange the trucks of
-       two customers; first improvement, back to N1 after each improvement, each
-       neighbourhood sampled (``sample`` moves).
+       two customers, N4 flip one customer's mode (and move it: past the truck customers
+       served while it flies, or anywhere in its precedence window) or exchange a truck and
+       a drone customer, N5 reverse a segment of the order (2-opt on the truck routes);
+       first improvement, back to N1 after each improvement, N1-N3 and N5 sampled
+       (``sample`` moves), N4 complete.
 
 ILS
-    Starts from the better of MMA's and SMMA's plans (their order and trucks), runs the same
-    descent, then perturbs (``strength`` random truck moves and shifts) and descends again,
+    Starts from the best of MMA's, SMMA's and 3P's route-first plans, runs the same descent,
+    then perturbs (``strength`` random truck moves, shifts and mode flips) and descends again,
     accepting a plan no more than ``accept_worse`` (relative) worse than the current one; the
     best plan found is returned.
 
@@ -37,6 +47,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -44,10 +55,13 @@ import numpy as np
 from taopt.errors import InstanceError
 from taopt.fleet.problem import FleetProblem
 from taopt.heuristics.fleet import (
+    DRONE,
+    TRUCK,
     FleetBuilder,
     _check_servable,
     construct,
     decode,
+    final_customers,
     infeasible_solution,
     servers,
 )
@@ -58,13 +72,25 @@ from taopt.runtime import Deadline
 #: Customers between two snapshots of the current decode (:class:`_Search`).
 SNAPSHOT_EVERY = 8
 
+#: How many later customers of its truck a customer flipped to a drone may be moved past, so
+#: that the truck serves them while it flies (TSP-D's launch - truck nodes - recovery).
+FLIP_REACH = 2
+
+#: An encoding: the priority order, the truck of each customer, the mode of each customer.
+Encoding = tuple[list[int], np.ndarray, np.ndarray]
+
 
 class _Search:
-    """The encoding (order, trucks), its decoded value, and the descent's neighbourhoods."""
+    """The encoding (order, trucks, modes), its decoded value, and the descent's
+    neighbourhoods."""
 
     def __init__(self, problem: FleetProblem, rng: np.random.Generator, deadline: Deadline):
         self.problem = problem
         self.rng = rng
+        # the mode flips and reversals draw from their own stream, so that N1-N3 draw as
+        # before they existed where they are idle
+        seeds = rng.bit_generator.seed_seq
+        self.rng_new = np.random.default_rng(seeds.spawn(1)[0])  # type: ignore[attr-defined]
         self.deadline = deadline
         self.servers = [servers(problem, j) for j in range(problem.n)]
         self.preds: list[list[int]] = [[] for _ in range(problem.n)]
@@ -72,62 +98,99 @@ class _Search:
         for r, j in problem.precedences:
             self.preds[j].append(int(r))
             self.succs[r].append(int(j))
+        self.pairs = {(int(r), int(j)) for r, j in problem.precedences}
+        # customers a truck or a drone may serve: their mode is searched (N4)
+        self.both = [
+            j for j in range(problem.n) if problem.truck_servable(j) and problem.drone_servable(j)
+        ]
+        # N5 reverses truck routes through customers' own stops: idle when a drone serves
+        # every customer (the order then shapes the route only through the sorties)
+        self.reversals = any(problem.truck_servable(j) for j in range(problem.n))
         self.decodes = 0
         self.builder = FleetBuilder(problem)
         self.blank = self.builder.snapshot()
         # the current encoding and snapshots of its decode every SNAPSHOT_EVERY customers
-        self.current: tuple[list[int], np.ndarray] | None = None
+        self.current: Encoding | None = None
+        self.current_final: np.ndarray | None = None
         self.snapshots: list[tuple[Any, ...]] = []
 
-    def set_current(self, order: list[int], trucks: np.ndarray) -> float:
-        """Decode ``order`` from scratch, keeping snapshots: later values re-decode only from
-        the first customer where a candidate differs."""
+    def valid_mode(self, j: int, k: int, mode: int) -> int:
+        """``mode`` when truck k can serve j that way, else the mode it can (a drone-mode
+        customer moved to a truck without drones goes on the truck, and back)."""
+        if mode == DRONE and self.problem.drones[k] == 0:
+            return TRUCK
+        if mode == TRUCK and not self.problem.truck_servable(j):
+            return DRONE
+        return mode
+
+    def set_current(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> float:
+        """Decode an encoding from scratch, keeping snapshots: later values re-decode only
+        from the first customer where a candidate differs."""
         self.decodes += 1
         builder = self.builder
         builder.restore(self.blank)
+        builder.final = final_customers(self.problem, order, trucks)
         self.snapshots = []
         for i, j in enumerate(order):
             if i % SNAPSHOT_EVERY == 0:
                 self.snapshots.append(builder.snapshot())
-            builder.place(j, int(trucks[j]))
-        self.current = (list(order), trucks.copy())
+            builder.place(j, int(trucks[j]), int(modes[j]))
+        self.current = (list(order), trucks.copy(), modes.copy())
+        self.current_final = builder.final
         return builder.objective()
 
-    def value(self, order: list[int], trucks: np.ndarray) -> float:
+    def value(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> float:
         """The decoded objective of an encoding (= ``decode(...).objective()``), re-decoding
         from the snapshot before the first customer where it differs from the current one."""
         if self.current is None:
-            return self.set_current(order, trucks)
+            return self.set_current(order, trucks, modes)
         self.decodes += 1
-        old_order, old_trucks = self.current
+        old_order, old_trucks, old_modes = self.current
+        old_final = self.builder.final if self.current_final is None else self.current_final
+        final = final_customers(self.problem, order, trucks)
         first = 0
-        while (
-            first < len(order)
-            and order[first] == old_order[first]
-            and trucks[order[first]] == old_trucks[order[first]]
-        ):
+        while first < len(order):
+            j = order[first]
+            if (
+                j != old_order[first]
+                or trucks[j] != old_trucks[j]
+                or modes[j] != old_modes[j]
+                or final[j] != old_final[j]
+            ):
+                break
             first += 1
         block = min(first // SNAPSHOT_EVERY, len(self.snapshots) - 1)
         builder = self.builder
         builder.restore(self.snapshots[block])
+        builder.final = final
         for j in order[block * SNAPSHOT_EVERY :]:
-            builder.place(j, int(trucks[j]))
+            builder.place(j, int(trucks[j]), int(modes[j]))
         return builder.objective()
 
     def out_of_time(self) -> bool:
         return self.deadline.expired()
 
     # -- moves ------------------------------------------------------------------------------
-    def reassign(self, trucks: np.ndarray) -> np.ndarray | None:
-        """N1: one customer to another truck that can serve it."""
+    def reassign(self, trucks: np.ndarray, modes: np.ndarray) -> Encoding | None:
+        """N1: one customer to another truck that can serve it (its order kept)."""
         movable = [j for j in range(self.problem.n) if len(self.servers[j]) > 1]
         if not movable:
             return None
         j = movable[int(self.rng.integers(len(movable)))]
         choices = [k for k in self.servers[j] if k != trucks[j]]
-        out = trucks.copy()
+        out, new_modes = trucks.copy(), modes.copy()
         out[j] = choices[int(self.rng.integers(len(choices)))]
-        return out
+        new_modes[j] = self.valid_mode(j, int(out[j]), int(modes[j]))
+        return [], out, new_modes
+
+    def window(self, order: list[int], j: int) -> tuple[list[int], int, int]:
+        """The order without j and the places j may take in it (after its predecessors,
+        before its successors)."""
+        rest = [x for x in order if x != j]
+        position = {x: i for i, x in enumerate(rest)}
+        lo = max((position[r] + 1 for r in self.preds[j]), default=0)
+        hi = min((position[v] for v in self.succs[j]), default=len(rest))
+        return rest, lo, hi
 
     def shift(self, order: list[int]) -> list[int] | None:
         """N2: one customer to another place in the order, within its precedence window."""
@@ -135,17 +198,14 @@ class _Search:
         if n < 2:
             return None
         j = order[int(self.rng.integers(n))]
-        rest = [x for x in order if x != j]
-        position = {x: i for i, x in enumerate(rest)}
-        lo = max((position[r] + 1 for r in self.preds[j]), default=0)
-        hi = min((position[v] for v in self.succs[j]), default=n - 1)
+        rest, lo, hi = self.window(order, j)
         if hi <= lo:
             return None
         q = int(self.rng.integers(lo, hi + 1))
         out = rest[:q] + [j] + rest[q:]
         return None if out == order else out
 
-    def exchange(self, trucks: np.ndarray) -> np.ndarray | None:
+    def exchange(self, trucks: np.ndarray, modes: np.ndarray) -> Encoding | None:
         """N3: two customers on different trucks exchange trucks (when both can)."""
         n = self.problem.n
         if self.problem.K < 2 or n < 2:
@@ -155,61 +215,209 @@ class _Search:
             return None
         if trucks[j] not in self.servers[i] or trucks[i] not in self.servers[j]:
             return None
-        out = trucks.copy()
+        out, new_modes = trucks.copy(), modes.copy()
         out[i], out[j] = trucks[j], trucks[i]
+        new_modes[i] = self.valid_mode(i, int(out[i]), int(modes[i]))
+        new_modes[j] = self.valid_mode(j, int(out[j]), int(modes[j]))
+        return [], out, new_modes
+
+    def flips(
+        self, order: list[int], trucks: np.ndarray, modes: np.ndarray, far: bool = False
+    ) -> list[Encoding]:
+        """N4, every move (shuffled): a customer a truck or a drone may serve changes mode.
+        One flipped to a drone is also tried moved past the next 1..:data:`FLIP_REACH`
+        customers of its truck (within its precedence window), so that the truck serves them
+        while the drone flies; one flipped to the truck keeps its place. With ``far``, after
+        those (shuffled apart), the flipped customer at every other place of its precedence
+        window: a drone customer launched elsewhere, a truck customer inserted into its
+        truck's route at a chosen position."""
+        out: list[Encoding] = []
+        further: list[Encoding] = []
+        for j in self.both:
+            k = int(trucks[j])
+            mode = TRUCK if modes[j] == DRONE else DRONE
+            if self.valid_mode(j, k, mode) != mode:
+                continue
+            new_modes = modes.copy()
+            new_modes[j] = mode
+            out.append((order, trucks, new_modes))
+            if mode != DRONE and not far:
+                continue
+            rest, lo, hi = self.window(order, j)
+            here = order.index(j)
+            near: set[int] = {here}
+            q, passed = here, 0
+            while mode == DRONE and q < min(hi, len(rest)) and passed < FLIP_REACH:
+                if trucks[rest[q]] == k:
+                    passed += 1
+                    near.add(q + 1)
+                    out.append((rest[: q + 1] + [j] + rest[q + 1 :], trucks, new_modes))
+                q += 1
+            if far:
+                for q in range(lo, min(hi, len(rest)) + 1):
+                    if q not in near:
+                        further.append((rest[:q] + [j] + rest[q:], trucks, new_modes))
+        if far:
+            further.extend(self.mode_swaps(order, trucks, modes))
+        out = [out[int(i)] for i in self.rng_new.permutation(len(out))]
+        return out + [further[int(i)] for i in self.rng_new.permutation(len(further))]
+
+    def mode_swaps(self, order: list[int], trucks: np.ndarray, modes: np.ndarray) -> list[Encoding]:
+        """A truck customer and a drone customer of the same truck (both of which either may
+        serve) exchange places in the order and modes: TSP-D's "a drone node replaces a truck
+        node" (the two flips at once, which a descent of single flips may never pass)."""
+        out: list[Encoding] = []
+        position = {j: i for i, j in enumerate(order)}
+        for a in self.both:
+            if modes[a] != TRUCK:
+                continue
+            for b in self.both:
+                if modes[b] != DRONE or trucks[a] != trucks[b]:
+                    continue
+                new_order = list(order)
+                pa, pb = position[a], position[b]
+                new_order[pa], new_order[pb] = b, a
+                lo, hi = min(pa, pb), max(pa, pb)
+                between = set(order[lo : hi + 1])
+                if any(r in between for r in self.preds[order[hi]]) or any(
+                    v in between for v in self.succs[order[lo]]
+                ):
+                    continue  # the exchange would break a precedence inside the span
+                new_modes = modes.copy()
+                new_modes[a], new_modes[b] = DRONE, TRUCK
+                out.append((new_order, trucks, new_modes))
         return out
 
+    def reverse(self, order: list[int]) -> list[int] | None:
+        """N5: a segment of the order reversed (2-opt on the truck routes), when no
+        precedence pair lies inside it."""
+        n = len(order)
+        if n < 3 or not self.reversals:
+            return None
+        i, l = sorted(int(x) for x in self.rng_new.choice(n, 2, replace=False))
+        segment = order[i : l + 1]
+        inside = set(segment)
+        for j in segment:
+            if any(r in inside for r in self.preds[j]):
+                return None
+        return order[:i] + segment[::-1] + order[l + 1 :]
+
+    def neighbours(
+        self, level: int, order: list[int], trucks: np.ndarray, modes: np.ndarray, sample: int
+    ) -> Iterator[Encoding]:
+        """The candidates the descent tries at ``level`` (N1..N5), drawn one at a time (the
+        descent stops drawing at its first improvement)."""
+        if level == 3:
+            yield from self.flips(order, trucks, modes, far=True)
+            return
+        for _ in range(sample):
+            if level == 0:
+                moved = self.reassign(trucks, modes)
+                if moved is None:
+                    break
+                yield order, moved[1], moved[2]
+            elif level == 1:
+                shifted = self.shift(order)
+                if shifted is not None:
+                    yield shifted, trucks, modes
+            elif level == 2:
+                swapped = self.exchange(trucks, modes)
+                if swapped is None and self.problem.K < 2:
+                    break
+                if swapped is not None:
+                    yield order, swapped[1], swapped[2]
+            else:
+                if not self.reversals:
+                    break
+                reversed_ = self.reverse(order)
+                if reversed_ is not None:
+                    yield reversed_, trucks, modes
+
     def descend(
-        self, order: list[int], trucks: np.ndarray, value: float, sample: int
-    ) -> tuple[list[int], np.ndarray, float]:
-        """Variable neighbourhood descent (N1, N2, N3; first improvement; back to N1)."""
-        self.set_current(order, trucks)
+        self, order: list[int], trucks: np.ndarray, modes: np.ndarray, value: float, sample: int
+    ) -> tuple[list[int], np.ndarray, np.ndarray, float]:
+        """Variable neighbourhood descent (N1 truck move, N2 shift, N3 truck exchange, N4 mode
+        flip, N5 reversal; first improvement; back to N1 after each)."""
+        self.set_current(order, trucks, modes)
         level = 0
-        while level < 3 and not self.out_of_time():
+        while level < 5 and not self.out_of_time():
             improved = False
-            for _ in range(sample):
+            for new_order, new_trucks, new_modes in self.neighbours(
+                level, order, trucks, modes, sample
+            ):
                 if self.out_of_time():
                     break
-                new_order, new_trucks = order, trucks
-                if level == 0:
-                    moved = self.reassign(trucks)
-                    if moved is None:
-                        break
-                    new_trucks = moved
-                elif level == 1:
-                    shifted = self.shift(order)
-                    if shifted is None:
-                        continue
-                    new_order = shifted
-                else:
-                    swapped = self.exchange(trucks)
-                    if swapped is None:
-                        continue
-                    new_trucks = swapped
-                candidate = self.value(new_order, new_trucks)
+                candidate = self.value(new_order, new_trucks, new_modes)
                 if candidate < value - 1e-9 * max(1.0, abs(value)):
-                    order, trucks, value = new_order, new_trucks, candidate
-                    self.set_current(order, trucks)
+                    order, trucks, modes, value = new_order, new_trucks, new_modes, candidate
+                    self.set_current(order, trucks, modes)
                     improved = True
                     break
             level = 0 if improved else level + 1
-        return order, trucks, value
+        return order, trucks, modes, value
+
+    def split(
+        self, order: list[int], trucks: np.ndarray, modes: np.ndarray, value: float
+    ) -> tuple[list[int], np.ndarray, np.ndarray, float]:
+        """3P's phase 2: from truck routes, turn the customer (and place) whose move to a
+        drone (N4's moves to a drone) lowers the objective most into a drone customer, while
+        one does (best improvement; the decoder checks the range and c)."""
+        self.set_current(order, trucks, modes)
+        while not self.out_of_time():
+            best: tuple[float, Encoding] | None = None
+            for candidate in self.flips(order, trucks, modes):
+                j = next(x for x in self.both if candidate[2][x] != modes[x])
+                if candidate[2][j] != DRONE:
+                    continue
+                found = self.value(*candidate)
+                if found < value - 1e-9 * max(1.0, abs(value)) and (
+                    best is None or found < best[0]
+                ):
+                    best = (found, candidate)
+            if best is None:
+                break
+            value, (order, trucks, modes) = best[0], best[1]
+            self.set_current(order, trucks, modes)
+        return order, trucks, modes, value
 
     def perturb(
-        self, order: list[int], trucks: np.ndarray, strength: int
-    ) -> tuple[list[int], np.ndarray]:
+        self, order: list[int], trucks: np.ndarray, modes: np.ndarray, strength: int
+    ) -> Encoding:
+        """``strength`` random truck moves, shifts and (customers a truck or a drone may
+        serve) mode flips."""
         for _ in range(strength):
-            moved = self.reassign(trucks)
+            moved = self.reassign(trucks, modes)
             if moved is not None:
-                trucks = moved
+                trucks, modes = moved[1], moved[2]
             shifted = self.shift(order)
             if shifted is not None:
                 order = shifted
-        return order, trucks
+            if self.both:
+                j = self.both[int(self.rng_new.integers(len(self.both)))]
+                mode = TRUCK if modes[j] == DRONE else DRONE
+                if self.valid_mode(j, int(trucks[j]), mode) == mode:
+                    modes = modes.copy()
+                    modes[j] = mode
+        return order, trucks, modes
 
 
-def _encoding(builder: FleetBuilder) -> tuple[list[int], np.ndarray]:
-    return list(builder.order), builder.truck_of.copy()
+def _encoding(builder: FleetBuilder) -> Encoding:
+    return list(builder.order), builder.truck_of.copy(), builder.mode_of.copy()
+
+
+def _anchors(problem: FleetProblem) -> np.ndarray:
+    """Each customer's anchor stop: its own stop when a truck may serve it, else the stop
+    nearest to it that a drone reaches it from and back within the range."""
+    anchor = np.empty(problem.n, dtype=np.int64)
+    for j in range(problem.n):
+        if problem.truck_servable(j):
+            anchor[j] = problem.truck_stop(j)
+        else:
+            reach = np.where(
+                2.0 * problem.flight_stop[j] <= problem.flight_limit, problem.flight_stop[j], np.inf
+            )
+            anchor[j] = int(np.argmin(reach))
+    return anchor
 
 
 def truck_routes(problem: FleetProblem) -> tuple[list[int], np.ndarray]:
@@ -220,19 +428,11 @@ def truck_routes(problem: FleetProblem) -> tuple[list[int], np.ndarray]:
     placed) goes to the truck whose arrival there, waiting for the predecessors, raises the
     trucks' makespan least (ties: the earliest arrival, then the lowest customer index). Only
     trucks that can serve the customer (a drone-only customer needs a truck with a drone) are
-    tried.
+    tried. Each truck's route is then shortened by 2-opt (:func:`two_opt`).
     """
     n, K = problem.n, problem.K
     tt = problem.truck_time
-    anchor = np.empty(n, dtype=np.int64)
-    for j in range(n):
-        if problem.truck_servable(j):
-            anchor[j] = problem.truck_stop(j)
-        else:
-            reach = np.where(
-                2.0 * problem.flight_stop[j] <= problem.flight_limit, problem.flight_stop[j], np.inf
-            )
-            anchor[j] = int(np.argmin(reach))
+    anchor = _anchors(problem)
     at = [problem.depot] * K
     clock = [0.0] * K
     served = np.full(n, np.nan)
@@ -268,7 +468,114 @@ def truck_routes(problem: FleetProblem) -> tuple[list[int], np.ndarray]:
             waiting[v] -= 1
             if waiting[v] == 0:
                 open_.append(v)
-    return order, trucks
+    return two_opt(problem, order, trucks, anchor), trucks
+
+
+def trucks_only_value(
+    problem: FleetProblem, order: list[int], trucks: np.ndarray, anchor: np.ndarray
+) -> float:
+    """The objective of the trucks-only plan: each truck drives to its customers' anchors in
+    ``order`` (a topological order), waiting for predecessors."""
+    tt = problem.truck_time
+    at = [problem.depot] * problem.K
+    clock = [0.0] * problem.K
+    served = np.zeros(problem.n)
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in problem.precedences:
+        preds[j].append(int(r))
+    for j in order:
+        k = int(trucks[j])
+        ready = max((float(served[r]) for r in preds[j]), default=0.0)
+        clock[k] = max(clock[k] + float(tt[at[k], anchor[j]]), ready)
+        at[k] = int(anchor[j])
+        served[j] = clock[k]
+    if problem.objective == "return":
+        return max(clock[k] + float(tt[at[k], problem.depot]) for k in range(problem.K))
+    return float(served.max()) if problem.n else 0.0
+
+
+def two_opt(
+    problem: FleetProblem, order: list[int], trucks: np.ndarray, anchor: np.ndarray
+) -> list[int]:
+    """Each truck's anchor sequence shortened by 2-opt (first improvement; a reversal never
+    contains both ends of a precedence pair; the drive home counts under ``"return"``); the
+    result is kept only when it is still a topological order and its trucks-only objective
+    (:func:`trucks_only_value`) is no worse."""
+    tt = problem.truck_time
+    closed = problem.objective == "return"
+    pairs = {(int(r), int(j)) for r, j in problem.precedences}
+    new_order = list(order)
+    for k in range(problem.K):
+        slots = [i for i, j in enumerate(order) if trucks[j] == k]
+        seq = [order[i] for i in slots]
+        m = len(seq)
+        improved = True
+        while improved:
+            improved = False
+            for i in range(m - 1):
+                a = problem.depot if i == 0 else int(anchor[seq[i - 1]])
+                b = int(anchor[seq[i]])
+                inside: set[int] = set()
+                for q in range(i, m):
+                    x = seq[q]
+                    if any((y, x) in pairs for y in inside):
+                        break
+                    inside.add(x)
+                    if q == i:
+                        continue
+                    c = int(anchor[x])
+                    if q + 1 < m:
+                        d = int(anchor[seq[q + 1]])
+                    elif closed:
+                        d = problem.depot
+                    else:
+                        d = -1
+                    before = float(tt[a, b]) + (float(tt[c, d]) if d >= 0 else 0.0)
+                    after = float(tt[a, c]) + (float(tt[b, d]) if d >= 0 else 0.0)
+                    if after < before - 1e-9 * max(1.0, before):
+                        seq[i : q + 1] = seq[i : q + 1][::-1]
+                        improved = True
+                        break
+                if improved:
+                    break
+        for i, j in zip(slots, seq, strict=True):
+            new_order[i] = j
+    position = {j: i for i, j in enumerate(new_order)}
+    if any(position[r] > position[j] for r, j in pairs):
+        return order
+    if trucks_only_value(problem, new_order, trucks, anchor) > trucks_only_value(
+        problem, order, trucks, anchor
+    ):
+        return order
+    return new_order
+
+
+def route_first(search: _Search) -> tuple[Encoding, float, float]:
+    """3P's phases 1 and 2: truck routes over every customer (:func:`truck_routes`), then the
+    split into drone sorties.
+
+    Two splits of the same routes are tried and the better kept: the greedy split
+    (:meth:`_Search.split`) from the routes with every customer a truck may serve served by
+    it (a drone-only one by its truck's drone), and the decoder's own choice (each customer by
+    its least-marginal option, the thesis's rule) followed by the same greedy split. Returns
+    the encoding, its value, and the value of the all-truck routes (phase 1)."""
+    problem = search.problem
+    order, trucks = truck_routes(problem)
+    modes = np.array(
+        [
+            search.valid_mode(j, int(trucks[j]), TRUCK if problem.truck_servable(j) else DRONE)
+            for j in range(problem.n)
+        ],
+        dtype=np.int64,
+    )
+    phase1 = search.set_current(order, trucks, modes)
+    best = search.split(order, trucks, modes, phase1)
+    if search.both:
+        free = decode(problem, order, trucks)
+        other = search.split(order, trucks, free.mode_of.copy(), free.objective())
+        if other[3] < best[3]:
+            best = other
+    return best[:3], best[3], phase1
 
 
 def _check(iterations: int, sample: int, strength: int, accept_worse: float) -> None:
@@ -282,13 +589,13 @@ def _check(iterations: int, sample: int, strength: int, accept_worse: float) -> 
 def _finish(
     problem: FleetProblem,
     name: str,
-    order: list[int],
-    trucks: np.ndarray,
+    encoding: Encoding,
     began: float,
     seed: int,
     info: dict[str, Any],
 ) -> Solution:
-    builder = decode(problem, order, trucks)
+    order, trucks, modes = encoding
+    builder = decode(problem, order, trucks, modes=modes)
     return make_solution(
         problem,
         builder.plan(),
@@ -296,7 +603,12 @@ def _finish(
         status=FEASIBLE,
         runtime=time.perf_counter() - began,
         seed=seed,
-        info={"order": list(order), "trucks": [int(k) for k in trucks], **info},
+        info={
+            "order": list(order),
+            "trucks": [int(k) for k in trucks],
+            "modes": ["truck" if m == TRUCK else "drone" for m in builder.mode_of],
+            **info,
+        },
     )
 
 
@@ -310,16 +622,19 @@ def three_phase(
 ) -> Solution:
     """Bai et al. (2025)'s three phases: truck routes, a split into sorties, VND.
 
-    Phase 1 :func:`truck_routes`, phase 2 the decoder on those trucks, phase 3 the variable
-    neighbourhood descent (N1 truck move, N2 shift, N3 truck exchange; ``sample`` random moves
-    per neighbourhood, default ``2 n``), repeated from the best plan at most ``iterations``
-    times (each pass with fresh samples) or until ``time_limit`` seconds. ``info``:
-    ``phase1``, ``phase2`` (the objectives after each phase), ``decodes``, ``stopped_by``.
+    Phase 1 :func:`truck_routes` (every customer a truck may serve on its truck's route,
+    2-opt), phase 2 the greedy split into drone sorties (:func:`route_first`), phase 3 the
+    variable neighbourhood descent (N1 truck move, N2 shift, N3 truck exchange, N4 mode flip,
+    N5 reversal; ``sample`` random moves per sampled neighbourhood, default ``2 n``),
+    repeated from the best plan at most ``iterations`` times (each pass with fresh samples)
+    or until ``time_limit`` seconds. ``info``: ``phase1``, ``phase2`` (the objectives after
+    each phase), ``decodes``, ``stopped_by``.
 
     References
     ----------
     Bai, X. et al., IEEE T-RO 2025 (several trucks with drones under precedence; a three-phase
-    heuristic, from its published description); thesis §5.4, §6.2.
+    heuristic, from its published description); Agatz, Bouman & Schmidt, Transp. Sci. 2018
+    (route first, split second for TSP-D); thesis §5.4, §6.2.
     """
     began = time.perf_counter()
     why = _check_servable(problem)
@@ -328,23 +643,20 @@ def three_phase(
     sample = 2 * problem.n if sample is None else sample
     _check(iterations, sample, 0, 0.0)
     search = _Search(problem, np.random.default_rng(seed), Deadline(time_limit))
-    order, trucks = truck_routes(problem)
-    value = search.value(order, trucks)
+    (order, trucks, modes), value, phase1 = route_first(search)
     phase2 = value
     stopped_by = "iterations"
     for _ in range(int(iterations)):
         if search.out_of_time():
             stopped_by = "time_limit"
             break
-        new_order, new_trucks, new_value = search.descend(order, trucks, value, int(sample))
-        if new_value < value:
-            order, trucks, value = new_order, new_trucks, new_value
-    else:
-        stopped_by = "iterations"
+        found = search.descend(order, trucks, modes, value, int(sample))
+        if found[3] < value:
+            order, trucks, modes, value = found
     if search.out_of_time():
         stopped_by = "time_limit"
-    info = {"phase2": phase2, "decodes": search.decodes, "stopped_by": stopped_by}
-    return _finish(problem, "3P", order, trucks, began, seed, info)
+    info = {"phase1": phase1, "phase2": phase2, "decodes": search.decodes, "stopped_by": stopped_by}
+    return _finish(problem, "3P", (order, trucks, modes), began, seed, info)
 
 
 @register_method(
@@ -363,14 +675,14 @@ def ils_fleet(
     strength: int = 3,
     accept_worse: float = 0.01,
 ) -> Solution:
-    """Iterated local search over the whole fleet (order and trucks, decoded greedily).
+    """Iterated local search over the whole fleet (order, trucks and modes, decoded greedily).
 
-    Starts from the better of MMA's and SMMA's plans, descends (the VND of "3P", ``sample``
-    random moves per neighbourhood, default ``2 n``), then ``iterations`` times perturbs the
-    current encoding (``strength`` truck moves and shifts), descends, and accepts the result
-    when it is at most ``accept_worse`` (relative) worse than the current one. Never worse
-    than its start. ``info``: ``start_objective``, ``iterations`` (done), ``decodes``,
-    ``stopped_by``.
+    Starts from the best of MMA's, SMMA's and 3P's route-first split's plans
+    (:func:`route_first`), descends (the VND of "3P", ``sample`` random moves per sampled
+    neighbourhood, default ``2 n``), then ``iterations`` times perturbs the current encoding
+    (``strength`` truck moves, shifts and mode flips), descends, and accepts the result when
+    it is at most ``accept_worse`` (relative) worse than the current one. Never worse than its
+    start. ``info``: ``start_objective``, ``iterations`` (done), ``decodes``, ``stopped_by``.
     """
     began = time.perf_counter()
     why = _check_servable(problem)
@@ -380,28 +692,29 @@ def ils_fleet(
     _check(iterations, sample, strength, accept_worse)
     search = _Search(problem, np.random.default_rng(seed), Deadline(time_limit))
     starts = [_encoding(construct(problem, rule)) for rule in ("MMA", "SMMA")]
-    scored = [(search.value(o, t), i) for i, (o, t) in enumerate(starts)]
+    scored = [(search.value(*e), i) for i, e in enumerate(starts)]
+    if search.both:  # the route-first start only differs when some mode is free
+        routed, routed_value, _ = route_first(search)
+        starts.append(routed)
+        scored.append((routed_value, len(starts) - 1))
     start_value, index = min(scored)
-    order, trucks = starts[index]
-    value = start_value
-    order, trucks, value = search.descend(order, trucks, value, int(sample))
-    best = (value, order, trucks)
+    order, trucks, modes = starts[index]
+    order, trucks, modes, value = search.descend(order, trucks, modes, start_value, int(sample))
+    best = (value, (order, trucks, modes))
     done = 0
     stopped_by = "iterations"
     for _ in range(int(iterations)):
         if search.out_of_time():
             stopped_by = "time_limit"
             break
-        new_order, new_trucks = search.perturb(order, trucks, int(strength))
-        new_value = search.value(new_order, new_trucks)
-        new_order, new_trucks, new_value = search.descend(
-            new_order, new_trucks, new_value, int(sample)
-        )
+        shaken = search.perturb(order, trucks, modes, int(strength))
+        shaken_value = search.value(*shaken)
+        found = search.descend(*shaken, shaken_value, int(sample))
         done += 1
-        if new_value <= value * (1.0 + accept_worse):
-            order, trucks, value = new_order, new_trucks, new_value
-        if new_value < best[0]:
-            best = (new_value, new_order, new_trucks)
+        if found[3] <= value * (1.0 + accept_worse):
+            order, trucks, modes, value = found
+        if found[3] < best[0]:
+            best = (found[3], found[:3])
     if search.out_of_time():
         stopped_by = "time_limit"
     info = {
@@ -412,7 +725,7 @@ def ils_fleet(
     }
     if not math.isfinite(best[0]):
         raise InstanceError("ILS found no plan")  # cannot happen: the starts are feasible
-    return _finish(problem, "ILS", best[1], best[2], began, seed, info)
+    return _finish(problem, "ILS", best[1], began, seed, info)
 
 
 @register_improver(FleetProblem)
@@ -438,4 +751,12 @@ def improve_fleet(
     return found.solution if found.objective < value else plan
 
 
-__all__ = ["ils_fleet", "improve_fleet", "three_phase", "truck_routes"]
+__all__ = [
+    "ils_fleet",
+    "improve_fleet",
+    "route_first",
+    "three_phase",
+    "truck_routes",
+    "trucks_only_value",
+    "two_opt",
+]

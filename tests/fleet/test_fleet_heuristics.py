@@ -240,20 +240,29 @@ def test_plot_writes_map_and_gantt(tmp_path):
 
 
 def test_search_value_from_snapshots_equals_a_full_decode():
-    """The searches' prefix re-decode gives decode()'s objective for random moves."""
-    from taopt.heuristics.fleet_search import _Search
+    """The searches' prefix re-decode gives decode()'s objective for random moves and flips."""
+    from taopt.fleet.tspd import TSPD_FOLDER
+    from taopt.heuristics.fleet_search import _Search, route_first
     from taopt.runtime import Deadline
 
-    p = residential_fleet(30, trucks=2, drones=2, capacity=2, seed=7)
-    search = _Search(p, np.random.default_rng(0), Deadline(None))
-    order, trucks = truck_routes(p)
-    search.set_current(order, trucks)
-    for _ in range(40):
-        new_order = search.shift(order) or order
-        new_trucks = search.reassign(trucks)
-        new_trucks = trucks if new_trucks is None else new_trucks
-        full = decode(p, new_order, new_trucks).objective()
-        assert search.value(new_order, new_trucks) == pytest.approx(full, rel=1e-12)
+    problems = [
+        residential_fleet(30, trucks=2, drones=2, capacity=2, seed=7),
+        FleetProblem.from_tspd(TSPD_FOLDER / "uniform-3-n13.txt"),
+    ]
+    for p in problems:
+        search = _Search(p, np.random.default_rng(0), Deadline(None))
+        (order, trucks, modes), _, _ = route_first(search)
+        search.set_current(order, trucks, modes)
+        flips = search.flips(order, trucks, modes)
+        for step in range(40):
+            new_order = search.shift(order) or order
+            moved = search.reassign(trucks, modes)
+            new_trucks, new_modes = (trucks, modes) if moved is None else moved[1:]
+            if flips and step % 2:
+                new_order, new_trucks, new_modes = flips[step % len(flips)]
+            full = decode(p, new_order, new_trucks, modes=new_modes).objective()
+            value = search.value(new_order, new_trucks, new_modes)
+            assert value == pytest.approx(full, rel=1e-12)
 
 
 @pytest.mark.slow
