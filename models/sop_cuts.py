@@ -63,8 +63,11 @@ __all__ = [
     "CUTS_PER_ROUND",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
+    "LIFT",
+    "LIFT_TRY",
     "MIP_ROUNDS",
     "POLISH_PASSES",
+    "REDUCED_COST_FIXING",
     "ROOT_ROUNDS",
     "ROOT_STALL",
     "ROOT_STALL_ROUNDS",
@@ -84,6 +87,14 @@ FLOW_SCALE = 1_000_000
 
 #: A row is violated when the LP point's left-hand side is below ``1 - CUT_TOLERANCE``.
 CUT_TOLERANCE = 1e-4
+
+#: The path cuts are lifted by the precedences of their two sides (:meth:`SopCutModel.lifted`);
+#: False separates the plain rows only.
+LIFT = True
+
+#: With :data:`LIFT`, a pair's minimum cut is lifted when its value is below this (the
+#: lifted row can be violated where the plain one holds).
+LIFT_TRY = 2.0
 
 #: Rows added per separation round at most (the most violated first).
 CUTS_PER_ROUND = 400
@@ -154,6 +165,9 @@ class SopCutModel:
         self.tails, self.heads = usable_arcs(problem.cost, problem.closure)
         self.costs = problem.cost[self.tails, self.heads].astype(float)
         self.integral_costs = bool(np.all(self.costs == np.round(self.costs)))
+        #: Every order's cost is a multiple of this (the gcd of the usable arcs' integral
+        #: costs; 0 when a cost is not an integer): bounds are rounded up to a multiple of it.
+        self.step = _cost_step(self.costs) if self.integral_costs else 0
         n_arcs = len(self.tails)
         self.n_arcs = n_arcs
         self.arc_index = -np.ones((n, n), dtype=np.int64)
@@ -199,6 +213,8 @@ class SopCutModel:
         self.highs.passModel(lp)
         self.cut_rows: list[np.ndarray] = []
         self.is_mip = False
+        #: Arcs fixed to 0 by :meth:`fix_by_reduced_cost`.
+        self.fixed = np.zeros(n_arcs, dtype=bool)
 
     # ------------------------------------------------------------------ rows
     def add_cuts(self, cuts: list[np.ndarray]) -> int:
@@ -252,12 +268,19 @@ class SopCutModel:
     def _separate(
         self, values: np.ndarray, pairs: np.ndarray, deadline: Deadline | None = None
     ) -> list[tuple[float, np.ndarray]]:
-        """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``."""
+        """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``.
+
+        Per pair, a minimum cut of the point's support inside ``W(i, j)`` (a maximum flow)
+        gives the plain path cut; when :data:`LIFT` is set, its two liftings
+        (:meth:`lifted`) are tried as well, also when the plain row holds (a flow below
+        :data:`LIFT_TRY`), and the smallest left-hand side is kept.
+        """
         n = self.n
         support = values > 1e-9
         tails, heads = self.tails[support], self.heads[support]
         caps = np.floor(values[support] * FLOW_SCALE).astype(np.int32)
         before = self.before
+        limit = (LIFT_TRY if LIFT else 1 - CUT_TOLERANCE) * FLOW_SCALE
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
         for number, (i, j) in enumerate(pairs):
@@ -270,7 +293,7 @@ class SopCutModel:
             graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
             graph.sum_duplicates()
             result = maximum_flow(graph, int(i), int(j))
-            if result.flow_value >= (1 - CUT_TOLERANCE) * FLOW_SCALE:
+            if result.flow_value >= limit:
                 continue
             residual = graph - result.flow
             residual.data[residual.data < 0] = 0
@@ -280,10 +303,17 @@ class SopCutModel:
             )
             side = np.zeros(n, dtype=bool)
             side[reached] = True
-            arcs = np.flatnonzero(
-                side[self.tails] & ~side[self.heads] & inside[self.tails] & inside[self.heads]
-            )
-            lhs = float(values[arcs].sum())
+            candidates = [(side & inside, inside & ~side)]
+            if LIFT:
+                candidates += self.lifted(int(i), int(j), side & inside, inside & ~side)
+            best: tuple[float, np.ndarray] | None = None
+            for tail_set, head_set in candidates:
+                arcs = np.flatnonzero(tail_set[self.tails] & head_set[self.heads])
+                lhs = float(values[arcs].sum())
+                if best is None or lhs < best[0] - 1e-12:
+                    best = (lhs, arcs)
+            assert best is not None
+            lhs, arcs = best
             if lhs >= 1 - CUT_TOLERANCE:
                 continue
             key = arcs.tobytes()
@@ -292,6 +322,33 @@ class SopCutModel:
             seen.add(key)
             found.append((lhs, arcs))
         return found
+
+    def lifted(
+        self, i: int, j: int, source: np.ndarray, sink: np.ndarray
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The two liftings of the path cut of ``i ≺ j`` with sides ``S = source`` (holding
+        i) and ``T = sink`` (holding j), ``S ∪ T = W(i, j)``, as (tail set, head set).
+
+        * σ-lifting: with ``A = σ(T ∩ σ(i))`` (the successors of the nodes of T that follow
+          i), ``x(S \\ A : T \\ A) >= 1``. The first node h of T on the stretch from i to j
+          and the node u before it are not in A: a node of ``T ∩ σ(i)`` preceding either
+          would lie on the stretch before h.
+        * π-lifting: with ``B = π(S ∩ π(j))``, ``x(S \\ B : T \\ B) >= 1``, by the mirror
+          argument on the last node of S on the stretch and the node after it.
+
+        With ``i = start`` the first is the σ-inequality of Balas, Fischetti & Pulleyblank
+        (1995) on ``T``, ``x(V \\ T \\ σ(T) : T \\ σ(T)) >= 1`` (restricted to W); with
+        ``j = end`` the second is their π-inequality on S.
+        """
+        before = self.before
+        late = sink & before[i]  # T ∩ σ(i)
+        lifted_a = before[late].any(axis=0)  # σ(T ∩ σ(i))
+        early = source & before[:, j]  # S ∩ π(j)
+        lifted_b = before[:, early].any(axis=1)  # π(S ∩ π(j))
+        return [
+            (source & ~lifted_a, sink & ~lifted_a),
+            (source & ~lifted_b, sink & ~lifted_b),
+        ]
 
     # ------------------------------------------------------------------ solves
     def _run(self, deadline: Deadline | None, stop: Any = None) -> None:
@@ -309,11 +366,27 @@ class SopCutModel:
 
     def dual_bound(self) -> float:
         """A proven lower bound from the last LP's row duals (clipped to their signs):
-        ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` (columns in [0, 1]); rounded up when
-        every cost is an integer. ``-inf`` without duals."""
+        ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` over the arcs not fixed to 0 (columns
+        in [0, 1]); rounded up when every cost is an integer. ``-inf`` without duals.
+
+        With no arc fixed it bounds the SOP; after :meth:`fix_by_reduced_cost` it bounds the
+        orders avoiding the fixed arcs, so ``min(bound, incumbent)`` bounds the SOP."""
+        raw, _ = self._lagrangian()
+        return self.round_up(raw)
+
+    def round_up(self, bound: float) -> float:
+        """``bound`` raised to the next multiple of :attr:`step` (every order's cost is
+        one), with a 1e-6 tolerance; unchanged when the costs are not integers."""
+        if not self.step or not math.isfinite(bound):
+            return bound
+        return float(self.step * math.ceil((bound - 1e-6) / self.step))
+
+    def _lagrangian(self) -> tuple[float, np.ndarray]:
+        """(The unrounded bound of :meth:`dual_bound`, the arcs' reduced costs
+        ``c - A^T y``); ``(-inf, empty)`` without duals."""
         solution = self.highs.getSolution()
         if not solution.dual_valid:
-            return -math.inf
+            return -math.inf, np.zeros(0)
         duals = np.asarray(solution.row_dual, dtype=float)
         degree = duals[: self.degree_rows]  # equalities: any sign
         cuts = np.maximum(duals[self.degree_rows :], 0.0)  # >= rows: y >= 0
@@ -328,10 +401,38 @@ class SopCutModel:
         )
         y = np.concatenate([degree, cuts])
         reduced = self.costs - matrix.T @ y
-        bound = float(y.sum() + np.minimum(reduced, 0.0).sum())  # every rhs is 1
-        if self.integral_costs:
-            bound = math.ceil(bound - 1e-6)
-        return bound
+        free = ~self.fixed
+        bound = float(y.sum() + np.minimum(reduced[free], 0.0).sum())  # every rhs is 1
+        return bound, reduced
+
+    def fix_by_reduced_cost(self, incumbent: float) -> int:
+        """Fix to 0 every arc that no order better than ``incumbent`` can use, by the last
+        LP's reduced costs; returns how many arcs were newly fixed.
+
+        For duals y of the right signs and ``d = c - A^T y``, every order x with
+        ``x_a = 1`` costs at least ``L + d_a`` when ``d_a > 0`` (``L`` the bound of
+        :meth:`dual_bound` before rounding: the Lagrangian argument,
+        ``c x = y^T A x + d x >= y^T b + Σ_{b ≠ a} min(0, d_b) + d_a``). An arc with
+        ``L + d_a`` above ``incumbent - step`` (integral costs, :attr:`step` their gcd;
+        ``incumbent`` otherwise) is in
+        no better order, so the fixed model keeps every order better than ``incumbent``
+        (with integral costs the best order itself may lose an arc; the MIP rounds then run
+        with a cutoff below it, not from it).
+        """
+        raw, reduced = self._lagrangian()
+        if not math.isfinite(raw) or not math.isfinite(incumbent):
+            return 0
+        if self.step:  # a better order costs incumbent - step at most
+            limit = incumbent - self.step + 1e-6
+        else:
+            limit = incumbent + 1e-9 * max(1.0, abs(incumbent))
+        drop = ~self.fixed & (reduced > 0) & (raw + reduced > limit)
+        count = int(drop.sum())
+        if count:
+            index = np.flatnonzero(drop).astype(np.int32)
+            self.highs.changeColsBounds(count, index, np.zeros(count), np.zeros(count))
+            self.fixed |= drop
+        return count
 
     def root(self, deadline: Deadline | None = None, rounds: int = ROOT_ROUNDS) -> RootCuts:
         """The LP cut loop: solve, separate, add, until no row is violated, the value
@@ -389,6 +490,10 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
     return SopCutModel(problem).root(Deadline(time_limit))
 
 
+#: After the root and after each LP loop between MIP rounds, arcs are fixed to 0 by their
+#: reduced costs against the best order (:meth:`SopCutModel.fix_by_reduced_cost`).
+REDUCED_COST_FIXING = True
+
 #: LP rounds of the cut loop between two MIP rounds at most.
 ROUND_LP_ROUNDS = 20
 
@@ -441,18 +546,29 @@ def solve_sop_cuts(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
     bound = max(root.bound, cheap)
+    fixed = 0
+    if REDUCED_COST_FIXING and known is not None and root.values is not None:
+        fixed = model.fix_by_reduced_cost(known[0])
     info: dict[str, Any] = {
         "root_bound": root.bound,
         "root_lp": root.value,
         "root_rounds": root.rounds,
         "root_complete": root.complete,
+        "root_fixed": fixed,
     }
     stop, rounds = "time_limit", 0
     if known is None or not _closed(model, bound, known[0]):
         stop, rounds, known, bound = _mip_rounds(model, deadline, known, bound, mip_gap)
     else:
         stop = "optimal"
-    info.update({"cuts": len(model.cut_rows), "mip_rounds": rounds, "arcs": model.n_arcs})
+    info.update(
+        {
+            "cuts": len(model.cut_rows),
+            "mip_rounds": rounds,
+            "arcs": model.n_arcs,
+            "fixed": int(model.fixed.sum()),
+        }
+    )
     if stop == "infeasible":
         return finish(
             None,
@@ -474,11 +590,27 @@ def solve_sop_cuts(
     )
 
 
+def _cost_step(costs: np.ndarray) -> int:
+    """The gcd of the integral ``costs`` (1 when they are all 0 or huge)."""
+    values = np.abs(costs[np.isfinite(costs)])
+    if not len(values) or values.max() >= 2**62:
+        return 1
+    step = int(np.gcd.reduce(values.astype(np.int64)))
+    return max(step, 1)
+
+
+def _clipped(model: SopCutModel, bound: float, best: float) -> float:
+    """A bound of the model with its fixed arcs made a bound of the SOP: ``min(bound,
+    best)`` once arcs are fixed (the orders using them cost ``best`` at least), else
+    ``bound``."""
+    return min(bound, best) if model.fixed.any() else bound
+
+
 def _closed(model: SopCutModel, bound: float, value: float) -> bool:
     """The bound proves ``value`` optimal (within 1e-9 relative; integral costs: above
-    ``value - 1``)."""
-    if model.integral_costs:
-        return bound > value - 1 + 1e-6
+    ``value - step``, :attr:`SopCutModel.step` the costs' gcd)."""
+    if model.step:
+        return bound > value - model.step + 1e-6
     return bound >= value - 1e-9 * max(1.0, abs(value))
 
 
@@ -513,11 +645,16 @@ def _mip_rounds(
         while rounds < MIP_ROUNDS and not deadline.expired(MARGIN):
             if rounds:  # separate the new rows' fractional consequences on the LP first
                 model.make_integral(False)
-                model.root(deadline, ROUND_LP_ROUNDS)
+                lp = model.root(deadline, ROUND_LP_ROUNDS)
+                if known is not None:
+                    bound = max(bound, _clipped(model, lp.bound, known[0]))
+                    if REDUCED_COST_FIXING and lp.rounds:
+                        model.fix_by_reduced_cost(known[0])
                 model.make_integral()
-            # integral costs: an order better than the best costs at most best - 1, so HiGHS
-            # may cut off every node above best - 1/2; no point below it proves the best
-            cutoff = known[0] - 0.5 if known is not None and model.integral_costs else None
+            # integral costs: an order better than the best costs at most best - step (the
+            # costs' gcd), so HiGHS may cut off every node above best - step + 1/2; no point
+            # below it proves the best
+            cutoff = known[0] - model.step + 0.5 if known is not None and model.step else None
             if known is not None and cutoff is None:
                 start = np.zeros(model.n_arcs)
                 start[model.arc_index[known[1][:-1], known[1][1:]]] = 1.0
@@ -539,7 +676,8 @@ def _mip_rounds(
                 return "optimal", rounds, known, known[0]  # nothing below best - 1/2
             dual = float(mip_info.mip_dual_bound)
             if math.isfinite(dual):  # a bound of a relaxation: a bound of the SOP
-                bound = max(bound, math.ceil(dual - 1e-6) if model.integral_costs else dual)
+                dual = model.round_up(dual)
+                bound = max(bound, dual if known is None else _clipped(model, dual, known[0]))
             if status == highspy.HighsModelStatus.kInfeasible and known is None:
                 return "infeasible", rounds, None, math.inf
             points = list(bad)
