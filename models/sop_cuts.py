@@ -63,6 +63,7 @@ __all__ = [
     "CUTS_PER_ROUND",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
+    "KEEP_HIGHS_CUTS",
     "LIFT",
     "LIFT_TRY",
     "MIP_ROUNDS",
@@ -215,6 +216,13 @@ class SopCutModel:
         self.is_mip = False
         #: Arcs fixed to 0 by :meth:`fix_by_reduced_cost`.
         self.fixed = np.zeros(n_arcs, dtype=bool)
+        #: Rows of HiGHS's own cut pool kept across MIP rounds (:meth:`add_pool_rows`).
+        self.pool_rows = 0
+        #: Some row or fixing holds only for the orders cheaper than the best one known,
+        #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
+        self.conditional = False
+        #: HiGHS's model status after the last LP of :meth:`root`.
+        self.last_status: Any = None
 
     # ------------------------------------------------------------------ rows
     def add_cuts(self, cuts: list[np.ndarray]) -> int:
@@ -240,6 +248,52 @@ class SopCutModel:
         )
         self.cut_rows += fresh
         return len(fresh)
+
+    def add_pool_rows(
+        self,
+        starts: np.ndarray,
+        index: np.ndarray,
+        values: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> int:
+        """Add general rows ``lower <= a x <= upper`` (HiGHS's cut pool, CSR by row: row k
+        holds ``index[starts[k]:starts[k + 1]]``); new ones only; returns how many."""
+        count = len(lower)
+        bounds = np.append(np.asarray(starts[:count], dtype=np.int64), len(index))
+        if len(starts) > count:  # CSR with its closing entry
+            bounds[count] = int(starts[count])
+        keep, rows_index, rows_value, rows_start, at = [], [], [], [], 0
+        for k in range(count):
+            lo, hi = int(bounds[k]), int(bounds[k + 1])
+            key = (
+                b"p"
+                + np.concatenate(
+                    [index[lo:hi].astype(float), np.round(values[lo:hi], 9), [lower[k], upper[k]]]
+                ).tobytes()
+            )
+            if key in self._keys or hi <= lo:
+                continue
+            self._keys.add(key)
+            keep.append(k)
+            rows_start.append(at)
+            rows_index.append(index[lo:hi])
+            rows_value.append(values[lo:hi])
+            at += hi - lo
+        if not keep:
+            return 0
+        flat_index = np.concatenate(rows_index).astype(np.int32)
+        self.highs.addRows(
+            len(keep),
+            np.asarray(lower, dtype=float)[keep],
+            np.asarray(upper, dtype=float)[keep],
+            len(flat_index),
+            np.asarray(rows_start, dtype=np.int32),
+            flat_index,
+            np.concatenate(rows_value).astype(float),
+        )
+        self.pool_rows += len(keep)
+        return len(keep)
 
     def separate(
         self,
@@ -355,7 +409,11 @@ class SopCutModel:
         """One HiGHS run within the deadline; ``stop()`` true interrupts it too."""
         if deadline is not None and deadline.limited:
             left = deadline.remaining() or 0.0
-            self.highs.setOptionValue("time_limit", max(left - MARGIN, 0.01))
+            # HiGHS compares its time_limit with its run time summed over every run of this
+            # object (getRunTime), not with this run's: the limit is that sum plus the time left
+            # (a plain ``left`` stopped the later LP loops and MIP rounds at once)
+            spent = float(self.highs.getRunTime())
+            self.highs.setOptionValue("time_limit", spent + max(left - MARGIN, 0.01))
         expired = (lambda: False) if deadline is None else (lambda: deadline.expired(MARGIN))
         with interrupt_when(self.highs, lambda: expired() or (stop is not None and stop())):
             run_interruptibly(self.highs)
@@ -367,10 +425,12 @@ class SopCutModel:
     def dual_bound(self) -> float:
         """A proven lower bound from the last LP's row duals (clipped to their signs):
         ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` over the arcs not fixed to 0 (columns
-        in [0, 1]); rounded up when every cost is an integer. ``-inf`` without duals.
+        in [0, 1]; ``b_r`` the row's lower side for ``y_r > 0``, its upper side for
+        ``y_r < 0``); rounded up to a multiple of :attr:`step`. ``-inf`` without duals.
 
-        With no arc fixed it bounds the SOP; after :meth:`fix_by_reduced_cost` it bounds the
-        orders avoiding the fixed arcs, so ``min(bound, incumbent)`` bounds the SOP."""
+        With no arc fixed it bounds the SOP; after :meth:`fix_by_reduced_cost` (or with rows
+        of :attr:`conditional` validity) it bounds the orders better than the incumbent, so
+        ``min(bound, incumbent)`` bounds the SOP."""
         raw, _ = self._lagrangian()
         return self.round_up(raw)
 
@@ -388,9 +448,20 @@ class SopCutModel:
         if not solution.dual_valid:
             return -math.inf, np.zeros(0)
         duals = np.asarray(solution.row_dual, dtype=float)
-        degree = duals[: self.degree_rows]  # equalities: any sign
-        cuts = np.maximum(duals[self.degree_rows :], 0.0)  # >= rows: y >= 0
         lp = self.highs.getLp()
+        lower = np.asarray(lp.row_lower_, dtype=float)
+        upper = np.asarray(lp.row_upper_, dtype=float)
+        equal = lower == upper
+        # y >= 0 prices a finite lower side, y <= 0 a finite upper side; equalities: any sign
+        positive = np.where(np.isfinite(lower), np.maximum(duals, 0.0), 0.0)
+        negative = np.where(np.isfinite(upper), np.minimum(duals, 0.0), 0.0)
+        y = np.where(equal, duals, positive + negative)
+        constant = np.where(
+            equal,
+            duals * np.where(equal, lower, 0.0),
+            positive * np.where(np.isfinite(lower), lower, 0.0)
+            + negative * np.where(np.isfinite(upper), upper, 0.0),
+        )
         matrix = sp.csc_matrix(
             (
                 np.asarray(lp.a_matrix_.value_),
@@ -399,10 +470,9 @@ class SopCutModel:
             ),
             shape=(lp.num_row_, lp.num_col_),
         )
-        y = np.concatenate([degree, cuts])
         reduced = self.costs - matrix.T @ y
         free = ~self.fixed
-        bound = float(y.sum() + np.minimum(reduced[free], 0.0).sum())  # every rhs is 1
+        bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
         return bound, reduced
 
     def fix_by_reduced_cost(self, incumbent: float) -> int:
@@ -432,6 +502,7 @@ class SopCutModel:
             index = np.flatnonzero(drop).astype(np.int32)
             self.highs.changeColsBounds(count, index, np.zeros(count), np.zeros(count))
             self.fixed |= drop
+            self.conditional = True
         return count
 
     def root(self, deadline: Deadline | None = None, rounds: int = ROOT_ROUNDS) -> RootCuts:
@@ -444,7 +515,8 @@ class SopCutModel:
             if deadline is not None and deadline.expired(MARGIN):
                 break
             self._run(deadline)
-            if self.highs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            self.last_status = self.highs.getModelStatus()
+            if self.last_status != highspy.HighsModelStatus.kOptimal:
                 break
             done += 1
             new_value = float(self.highs.getInfo().objective_function_value)
@@ -494,6 +566,13 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
 #: reduced costs against the best order (:meth:`SopCutModel.fix_by_reduced_cost`).
 REDUCED_COST_FIXING = True
 
+#: The cuts HiGHS finds at the root of a MIP round (its cut pool, read by the
+#: ``kCallbackMipGetCutPool`` callback, the MIP solved without presolve so that they use the
+#: model's columns) are kept as rows for the next rounds, when HiGHS held no integral point
+#: of its own when it reported them. Such a row holds for every integral point of the rows
+#: before it below the round's cutoff, hence for every order better than the best one.
+KEEP_HIGHS_CUTS = True
+
 #: LP rounds of the cut loop between two MIP rounds at most.
 ROUND_LP_ROUNDS = 20
 
@@ -533,7 +612,8 @@ def solve_sop_cuts(
     -------
     Solution
         Status "optimal" when proven, else "time_limit" with the best order and the best
-        proven bound; ``info`` has ``root_bound``, ``root_rounds``, ``cuts``, ``mip_rounds``.
+        proven bound; ``info`` has ``root_bound``, ``root_rounds``, ``cuts``, ``mip_rounds``,
+        ``fixed`` (arcs fixed by reduced cost) and ``pool_rows`` (HiGHS's cuts kept).
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
@@ -567,6 +647,7 @@ def solve_sop_cuts(
             "mip_rounds": rounds,
             "arcs": model.n_arcs,
             "fixed": int(model.fixed.sum()),
+            "pool_rows": model.pool_rows,
         }
     )
     if stop == "infeasible":
@@ -600,10 +681,10 @@ def _cost_step(costs: np.ndarray) -> int:
 
 
 def _clipped(model: SopCutModel, bound: float, best: float) -> float:
-    """A bound of the model with its fixed arcs made a bound of the SOP: ``min(bound,
-    best)`` once arcs are fixed (the orders using them cost ``best`` at least), else
-    ``bound``."""
-    return min(bound, best) if model.fixed.any() else bound
+    """A bound of the model made a bound of the SOP: ``min(bound, best)`` once arcs are
+    fixed or rows valid only below the best are in (:attr:`SopCutModel.conditional`: the
+    orders they exclude cost ``best`` at least), else ``bound``."""
+    return min(bound, best) if model.conditional else bound
 
 
 def _closed(model: SopCutModel, bound: float, value: float) -> bool:
@@ -632,20 +713,52 @@ def _mip_rounds(
     problem = model.problem
     model.make_integral()
     model.highs.setOptionValue("mip_rel_gap", float(mip_gap))
+    if KEEP_HIGHS_CUTS:  # the pool's rows then use the model's own columns
+        model.highs.setOptionValue("presolve", "off")
     bad: list[np.ndarray] = []
+    seen = [0]  # integral points HiGHS accepted this round
+    pool: list[tuple[np.ndarray, ...]] = []
 
     def on_improving(event: Any) -> None:
+        seen[0] += 1
         values = np.asarray(event.data_out.mip_solution, dtype=float)[: model.n_arcs]
         if len(bad) < BAD_POINTS and _order_of(model, values) is None:
             bad.append(values.copy())
 
+    def on_pool(event: Any) -> None:
+        # kept only while HiGHS holds no point of its own: its cuts then rest on the rows,
+        # the bounds and the cutoff alone (none on a point that may be no order)
+        data = event.data_out
+        if seen[0] or int(data.cutpool_num_col) != model.n_arcs or not data.cutpool_num_cut:
+            return
+        pool.append(
+            tuple(
+                np.array(item, copy=True)
+                for item in (
+                    data.cutpool_start,
+                    data.cutpool_index,
+                    data.cutpool_value,
+                    data.cutpool_lower,
+                    data.cutpool_upper,
+                )
+            )
+        )
+
     model.highs.cbMipImprovingSolution.subscribe(on_improving)
+    if KEEP_HIGHS_CUTS:
+        model.highs.cbMipGetCutPool.subscribe(on_pool)
     stop, rounds = "time_limit", 0
     try:
         while rounds < MIP_ROUNDS and not deadline.expired(MARGIN):
             if rounds:  # separate the new rows' fractional consequences on the LP first
                 model.make_integral(False)
                 lp = model.root(deadline, ROUND_LP_ROUNDS)
+                if (
+                    model.last_status == highspy.HighsModelStatus.kInfeasible
+                    and known is not None
+                    and model.conditional
+                ):  # no point of the rows valid below the best: nothing better than it
+                    return "optimal", rounds, known, known[0]
                 if known is not None:
                     bound = max(bound, _clipped(model, lp.bound, known[0]))
                     if REDUCED_COST_FIXING and lp.rounds:
@@ -660,6 +773,8 @@ def _mip_rounds(
                 start[model.arc_index[known[1][:-1], known[1][1:]]] = 1.0
                 model.highs.setSolution(_solution(start))
             bad.clear()
+            pool.clear()
+            seen[0] = 0
             model.highs.setOptionValue(
                 "objective_bound", highspy.kHighsInf if cutoff is None else cutoff
             )
@@ -668,6 +783,9 @@ def _mip_rounds(
             finally:  # the LP loop must not stop at the cutoff
                 model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             rounds += 1
+            for rows in pool:  # HiGHS's root cuts: valid below the cutoff (or everywhere)
+                if model.add_pool_rows(*rows) and cutoff is not None:
+                    model.conditional = True
             status = model.highs.getModelStatus()
             mip_info = model.highs.getInfo()
             if status == highspy.HighsModelStatus.kInfeasible and known is not None:
@@ -707,6 +825,8 @@ def _mip_rounds(
             model.add_cuts(cuts)
     finally:
         model.highs.cbMipImprovingSolution.unsubscribe(on_improving)
+        if KEEP_HIGHS_CUTS:
+            model.highs.cbMipGetCutPool.unsubscribe(on_pool)
     return stop, rounds, known, bound
 
 
