@@ -120,3 +120,46 @@ def test_cost_step_is_the_gcd():
     assert model.step == 5
     assert model.round_up(12.3) == 15.0
     assert SopCutModel(_problem(1, 0.37)).round_up(12.3) == 12.3
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_pool_rows_keep_the_dual_bound_a_bound(seed):
+    """General rows (2-cycle rows ``x_uv + x_vu <= 1``, as HiGHS's pool gives them) in the
+    model: the Lagrangian bound prices their upper side, equals the LP value rounded up, and
+    stays at most the brute-force optimum."""
+    problem = _problem(seed)
+    orders = _orders(problem)
+    optimum = min(float(problem.cost[o[:-1], o[1:]].sum()) for o in orders)
+    model = SopCutModel(problem)
+    model.root()
+    pairs = [
+        (model.arc_index[u, v], model.arc_index[v, u])
+        for u in range(model.n)
+        for v in range(u + 1, model.n)
+        if model.arc_index[u, v] >= 0 and model.arc_index[v, u] >= 0
+    ]
+    index = np.array(pairs, dtype=np.int32).ravel()
+    starts = np.arange(0, len(index) + 1, 2, dtype=np.int32)
+    added = model.add_pool_rows(
+        starts, index, np.ones(len(index)), np.full(len(pairs), -np.inf), np.ones(len(pairs))
+    )
+    assert added == len(pairs)
+    assert (
+        model.add_pool_rows(
+            starts, index, np.ones(len(index)), np.full(len(pairs), -np.inf), np.ones(len(pairs))
+        )
+        == 0
+    )  # kept once
+    root = model.root()
+    assert root.bound <= optimum + 1e-6
+    assert root.bound == pytest.approx(model.round_up(root.value))
+
+
+@pytest.mark.slow
+def test_p43_1_closed():
+    """p43.1 (TSPLIB, optimum 28140) is proven optimal by the cut engine."""
+    problem = SopProblem.load("p43.1")
+    result = solve_sop_cuts(problem, time_limit=300)
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(28140)
+    assert evaluate_order(problem, result.order) == pytest.approx(28140)
