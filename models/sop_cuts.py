@@ -23,6 +23,11 @@ separated *exactly* on an LP point: for each pair one maximum flow from i to j o
 point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``); a
 flow below 1 gives a violated row (the source side of a minimum cut).
 
+Each row found is lifted by the precedences of its two sides
+(:meth:`SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti & Pulleyblank
+(1995) when i is the start or j the end, and their restrictions to the stretch from i to j
+otherwise; the lifted row may be violated where the plain one is not.
+
 :class:`SopCutModel` holds one live HiGHS model; :meth:`SopCutModel.root` runs the LP cut
 loop and :func:`solve_sop_cuts` then solves the MIP with the rows found, checks the
 integral point, adds the rows it violates and solves again (an exact method: each MIP is a
@@ -596,6 +601,13 @@ def solve_sop_cuts(
     (warm-started with the best order), checks its integral point, and adds the cuts the
     point violates. A relaxation's optimum that is an order is optimal; a round stopped by
     the clock leaves its proven bound (HiGHS's dual bound of a relaxation).
+
+    Against the best order known, arcs are fixed to 0 by their reduced costs
+    (:meth:`SopCutModel.fix_by_reduced_cost`), and the cuts HiGHS finds at the root of a
+    round are kept for the next ones (:data:`KEEP_HIGHS_CUTS`); both exclude only orders no
+    better than the best, so the bounds then reported are ``min(bound, best)``, and an LP
+    of those rows without a point proves the best optimal. Bounds are rounded up to a
+    multiple of the costs' gcd (:attr:`SopCutModel.step`).
 
     Parameters
     ----------
