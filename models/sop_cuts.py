@@ -573,9 +573,10 @@ REDUCED_COST_FIXING = True
 
 #: The cuts HiGHS finds at the root of a MIP round (its cut pool, read by the
 #: ``kCallbackMipGetCutPool`` callback, the MIP solved without presolve so that they use the
-#: model's columns) are kept as rows for the next rounds, when HiGHS held no integral point
-#: of its own when it reported them. Such a row holds for every integral point of the rows
-#: before it below the round's cutoff, hence for every order better than the best one.
+#: model's columns) are kept as rows for the next rounds, when every integral point HiGHS
+#: held when it reported them was an order. Such a row holds for every integral point of the
+#: rows before it below the round's cutoff and those orders' costs, hence for every order
+#: better than the best one.
 KEEP_HIGHS_CUTS = True
 
 #: LP rounds of the cut loop between two MIP rounds at most.
@@ -728,18 +729,25 @@ def _mip_rounds(
     if KEEP_HIGHS_CUTS:  # the pool's rows then use the model's own columns
         model.highs.setOptionValue("presolve", "off")
     bad: list[np.ndarray] = []
-    seen = [0]  # integral points HiGHS accepted this round
+    seen = [0]  # integral points HiGHS accepted this round that are no order
+    found: list[tuple[float, list[int]]] = []  # those that are orders
+
     pool: list[tuple[np.ndarray, ...]] = []
 
     def on_improving(event: Any) -> None:
-        seen[0] += 1
         values = np.asarray(event.data_out.mip_solution, dtype=float)[: model.n_arcs]
-        if len(bad) < BAD_POINTS and _order_of(model, values) is None:
+        order = _order_of(model, values)
+        if order is not None:  # kept even when a later point (no order) replaces it
+            found.append((float(problem.cost[order[:-1], order[1:]].sum()), order))
+            return
+        seen[0] += 1
+        if len(bad) < BAD_POINTS:
             bad.append(values.copy())
 
     def on_pool(event: Any) -> None:
-        # kept only while HiGHS holds no point of its own: its cuts then rest on the rows,
-        # the bounds and the cutoff alone (none on a point that may be no order)
+        # kept only while every point HiGHS holds is an order: its cuts then rest on the
+        # rows, the bounds, the cutoff and orders (whose cost the best order is at most),
+        # never on a point that is no order
         data = event.data_out
         if seen[0] or int(data.cutpool_num_col) != model.n_arcs or not data.cutpool_num_cut:
             return
@@ -786,6 +794,7 @@ def _mip_rounds(
                 model.highs.setSolution(_solution(start))
             bad.clear()
             pool.clear()
+            found.clear()
             seen[0] = 0
             model.highs.setOptionValue(
                 "objective_bound", highspy.kHighsInf if cutoff is None else cutoff
@@ -795,8 +804,11 @@ def _mip_rounds(
             finally:  # the LP loop must not stop at the cutoff
                 model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             rounds += 1
-            for rows in pool:  # HiGHS's root cuts: valid below the cutoff (or everywhere)
-                if model.add_pool_rows(*rows) and cutoff is not None:
+            for value, order in found:
+                if known is None or value < known[0]:
+                    known = (value, order)
+            for rows in pool:  # HiGHS's root cuts: valid below the cutoff and the orders seen
+                if model.add_pool_rows(*rows) and (cutoff is not None or found):
                     model.conditional = True
             status = model.highs.getModelStatus()
             mip_info = model.highs.getInfo()
