@@ -804,9 +804,9 @@ def _mip_rounds(
             finally:  # the LP loop must not stop at the cutoff
                 model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             rounds += 1
-            for value, order in found:
+            for value, seen_order in found:
                 if known is None or value < known[0]:
-                    known = (value, order)
+                    known = (value, seen_order)
             for rows in pool:  # HiGHS's root cuts: valid below the cutoff and the orders seen
                 if model.add_pool_rows(*rows) and (cutoff is not None or found):
                     model.conditional = True
