@@ -343,7 +343,7 @@ class SopCutModel:
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
         for number, (i, j) in enumerate(pairs):
-            if number % 64 == 63 and deadline is not None and deadline.expired(MARGIN):
+            if number % 64 == 0 and deadline is not None and deadline.expired(MARGIN):
                 break
             inside = ~before[:, i] & ~before[j, :]  # W(i, j)
             keep = inside[tails] & inside[heads]
@@ -824,6 +824,8 @@ def _mip_rounds(
                 return "infeasible", rounds, None, math.inf
             points = list(bad)
             for point in points:  # each point, rounded and polished, may be a better order
+                if deadline.expired(MARGIN):
+                    break
                 rounded = round_point(model, point, deadline)
                 if rounded is not None and (known is None or rounded[0] < known[0]):
                     known = rounded
@@ -841,7 +843,7 @@ def _mip_rounds(
                         return "optimal", rounds, known, max(bound, value)
             if known is not None and _closed(model, bound, known[0]):
                 return "optimal", rounds, known, bound
-            if not points:
+            if not points or deadline.expired(MARGIN):
                 break  # stopped by the clock (or a HiGHS limit) with no point to cut
             cuts = [cut for point in points for cut in model.separate(point, deadline=deadline)]
             if not cuts:
