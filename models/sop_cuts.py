@@ -70,6 +70,7 @@ __all__ = [
     "FLOW_SCALE",
     "KEEP_HIGHS_CUTS",
     "LIFT",
+    "LIFT_ALL",
     "LIFT_TRY",
     "MIP_ROUNDS",
     "POLISH_PASSES",
@@ -101,6 +102,11 @@ LIFT = True
 #: With :data:`LIFT`, a pair's minimum cut is lifted when its value is below this (the
 #: lifted row can be violated where the plain one holds).
 LIFT_TRY = 2.0
+
+#: With :data:`LIFT`, every pair's cut holding at the point is lifted too (True), or only
+#: those of the pairs ``(start, j)`` and ``(i, end)`` (False; the other pairs lift the
+#: violated cuts only).
+LIFT_ALL = False
 
 #: Rows added per separation round at most (the most violated first).
 CUTS_PER_ROUND = 400
@@ -339,7 +345,9 @@ class SopCutModel:
         tails, heads = self.tails[support], self.heads[support]
         caps = np.floor(values[support] * FLOW_SCALE).astype(np.int32)
         before = self.before
-        limit = (LIFT_TRY if LIFT else 1 - CUT_TOLERANCE) * FLOW_SCALE
+        plain = (1 - CUT_TOLERANCE) * FLOW_SCALE
+        wide = (LIFT_TRY if LIFT else 1 - CUT_TOLERANCE) * FLOW_SCALE
+        start, end = self.problem.start, self.problem.end
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
         for number, (i, j) in enumerate(pairs):
@@ -352,7 +360,10 @@ class SopCutModel:
             graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
             graph.sum_duplicates()
             result = maximum_flow(graph, int(i), int(j))
-            if result.flow_value >= limit:
+            # a cut that holds is lifted only on the pairs of the start or the end (the σ-
+            # and π-inequalities proper: 2n pairs at most, where the dense closures have
+            # thousands of pairs)
+            if result.flow_value >= (wide if LIFT_ALL or i == start or j == end else plain):
                 continue
             residual = graph - result.flow
             residual.data[residual.data < 0] = 0
