@@ -24,9 +24,9 @@ point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``
 flow below 1 gives a violated row (the source side of a minimum cut).
 
 Each row found is lifted by the precedences of its two sides
-(:meth:`SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti & Pulleyblank
-(1995) when i is the start or j the end, and their restrictions to the stretch from i to j
-otherwise; the lifted row may be violated where the plain one is not.
+(:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti &
+Pulleyblank (1995) when i is the start or j the end, and their restrictions to the stretch from i to
+j otherwise; the lifted row may be violated where the plain one is not.
 
 :class:`SopCutModel` holds one live HiGHS model; :meth:`SopCutModel.root` runs the LP cut
 loop and :func:`solve_sop_cuts` then solves the MIP with the rows found, checks the
@@ -95,8 +95,8 @@ FLOW_SCALE = 1_000_000
 #: A row is violated when the LP point's left-hand side is below ``1 - CUT_TOLERANCE``.
 CUT_TOLERANCE = 1e-4
 
-#: The path cuts are lifted by the precedences of their two sides (:meth:`SopCutModel.lifted`);
-#: False separates the plain rows only.
+#: The path cuts are lifted by the precedences of their two sides
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`); False separates the plain rows only.
 LIFT = True
 
 #: With :data:`LIFT`, a pair's minimum cut is lifted when its value is below this (the
@@ -225,14 +225,16 @@ class SopCutModel:
         self.highs.passModel(lp)
         self.cut_rows: list[np.ndarray] = []
         self.is_mip = False
-        #: Arcs fixed to 0 by :meth:`fix_by_reduced_cost`.
+        #: Arcs fixed to 0 by :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`.
         self.fixed = np.zeros(n_arcs, dtype=bool)
-        #: Rows of HiGHS's own cut pool kept across MIP rounds (:meth:`add_pool_rows`).
+        #: Rows of HiGHS's own cut pool kept across MIP rounds
+        #: (:meth:`~taopt.models.sop_cuts.SopCutModel.add_pool_rows`).
         self.pool_rows = 0
         #: Some row or fixing holds only for the orders cheaper than the best one known,
         #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
         self.conditional = False
-        #: HiGHS's model status after the last LP of :meth:`root`.
+        #: HiGHS's model status after the last LP of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.root`.
         self.last_status: Any = None
 
     # ------------------------------------------------------------------ rows
@@ -337,8 +339,8 @@ class SopCutModel:
 
         Per pair, a minimum cut of the point's support inside ``W(i, j)`` (a maximum flow)
         gives the plain path cut; when :data:`LIFT` is set, its two liftings
-        (:meth:`lifted`) are tried as well, also when the plain row holds (a flow below
-        :data:`LIFT_TRY`), and the smallest left-hand side is kept.
+        (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`) are tried as well, also when the plain
+        row holds (a flow below :data:`LIFT_TRY`), and the smallest left-hand side is kept.
         """
         n = self.n
         support = values > 1e-9
@@ -442,24 +444,25 @@ class SopCutModel:
         """A proven lower bound from the last LP's row duals (clipped to their signs):
         ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` over the arcs not fixed to 0 (columns
         in [0, 1]; ``b_r`` the row's lower side for ``y_r > 0``, its upper side for
-        ``y_r < 0``); rounded up to a multiple of :attr:`step`. ``-inf`` without duals.
+        ``y_r < 0``); rounded up to a multiple of ``step``. ``-inf`` without duals.
 
-        With no arc fixed it bounds the SOP; after :meth:`fix_by_reduced_cost` (or with rows
-        of :attr:`conditional` validity) it bounds the orders better than the incumbent, so
-        ``min(bound, incumbent)`` bounds the SOP."""
+        With no arc fixed it bounds the SOP; after
+        :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost` (or with rows of
+        ``conditional`` validity) it bounds the orders better than the incumbent, so ``min(bound,
+        incumbent)`` bounds the SOP."""
         raw, _ = self._lagrangian()
         return self.round_up(raw)
 
     def round_up(self, bound: float) -> float:
-        """``bound`` raised to the next multiple of :attr:`step` (every order's cost is
+        """``bound`` raised to the next multiple of ``step`` (every order's cost is
         one), with a 1e-6 tolerance; unchanged when the costs are not integers."""
         if not self.step or not math.isfinite(bound):
             return bound
         return float(self.step * math.ceil((bound - 1e-6) / self.step))
 
     def _lagrangian(self) -> tuple[float, np.ndarray]:
-        """(The unrounded bound of :meth:`dual_bound`, the arcs' reduced costs
-        ``c - A^T y``); ``(-inf, empty)`` without duals."""
+        """(The unrounded bound of :meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound`, the arcs'
+        reduced costs ``c - A^T y``); ``(-inf, empty)`` without duals."""
         solution = self.highs.getSolution()
         if not solution.dual_valid:
             return -math.inf, np.zeros(0)
@@ -497,9 +500,10 @@ class SopCutModel:
 
         For duals y of the right signs and ``d = c - A^T y``, every order x with
         ``x_a = 1`` costs at least ``L + d_a`` when ``d_a > 0`` (``L`` the bound of
-        :meth:`dual_bound` before rounding: the Lagrangian argument,
+        :meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound` before rounding: the Lagrangian
+        argument,
         ``c x = y^T A x + d x >= y^T b + Σ_{b ≠ a} min(0, d_b) + d_a``). An arc with
-        ``L + d_a`` above ``incumbent - step`` (integral costs, :attr:`step` their gcd;
+        ``L + d_a`` above ``incumbent - step`` (integral costs, ``step`` their gcd;
         ``incumbent`` otherwise) is in
         no better order, so the fixed model keeps every order better than ``incumbent``
         (with integral costs the best order itself may lose an arc; the MIP rounds then run
@@ -579,7 +583,8 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
 
 
 #: After the root and after each LP loop between MIP rounds, arcs are fixed to 0 by their
-#: reduced costs against the best order (:meth:`SopCutModel.fix_by_reduced_cost`).
+#: reduced costs against the best order
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`).
 REDUCED_COST_FIXING = True
 
 #: The cuts HiGHS finds at the root of a MIP round (its cut pool, read by the
@@ -615,11 +620,11 @@ def solve_sop_cuts(
     the clock leaves its proven bound (HiGHS's dual bound of a relaxation).
 
     Against the best order known, arcs are fixed to 0 by their reduced costs
-    (:meth:`SopCutModel.fix_by_reduced_cost`), and the cuts HiGHS finds at the root of a
-    round are kept for the next ones (:data:`KEEP_HIGHS_CUTS`); both exclude only orders no
-    better than the best, so the bounds then reported are ``min(bound, best)``, and an LP
-    of those rows without a point proves the best optimal. Bounds are rounded up to a
-    multiple of the costs' gcd (:attr:`SopCutModel.step`).
+    (:meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`), and the cuts HiGHS finds at
+    the root of a round are kept for the next ones (:data:`KEEP_HIGHS_CUTS`); both exclude only
+    orders no better than the best, so the bounds then reported are ``min(bound, best)``, and an LP
+    of those rows without a point proves the best optimal. Bounds are rounded up to a multiple of
+    the costs' gcd (``SopCutModel.step``).
 
     Parameters
     ----------
@@ -706,14 +711,14 @@ def _cost_step(costs: np.ndarray) -> int:
 
 def _clipped(model: SopCutModel, bound: float, best: float) -> float:
     """A bound of the model made a bound of the SOP: ``min(bound, best)`` once arcs are
-    fixed or rows valid only below the best are in (:attr:`SopCutModel.conditional`: the
+    fixed or rows valid only below the best are in (``SopCutModel.conditional``: the
     orders they exclude cost ``best`` at least), else ``bound``."""
     return min(bound, best) if model.conditional else bound
 
 
 def _closed(model: SopCutModel, bound: float, value: float) -> bool:
     """The bound proves ``value`` optimal (within 1e-9 relative; integral costs: above
-    ``value - step``, :attr:`SopCutModel.step` the costs' gcd)."""
+    ``value - step``, ``SopCutModel.step`` the costs' gcd)."""
     if model.step:
         return bound > value - model.step + 1e-6
     return bound >= value - 1e-9 * max(1.0, abs(value))
