@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -155,10 +156,22 @@ def test_pool_rows_keep_the_dual_bound_a_bound(seed):
     assert root.bound == pytest.approx(model.round_up(root.value))
 
 
+def _shared_file(name: str) -> Path | None:
+    """A TSPLIB file of ``shared/benchmarks/tsplib`` beside or above the checkout, if any."""
+    for up in Path(__file__).resolve().parents:
+        path = up / "shared" / "benchmarks" / "tsplib" / name
+        if path.is_file():
+            return path
+    return None
+
+
 @pytest.mark.slow
 def test_p43_1_closed():
     """p43.1 (TSPLIB, optimum 28140) is proven optimal by the cut engine."""
-    problem = SopProblem.load("p43.1")
+    path = _shared_file("p43.1.sop")
+    if path is None:
+        pytest.skip("p43.1.sop is not beside the checkout (shared/benchmarks/tsplib)")
+    problem = SopProblem.load(path)
     result = solve_sop_cuts(problem, time_limit=300)
     assert result.status == OPTIMAL
     assert result.objective == pytest.approx(28140)
