@@ -12,6 +12,7 @@ Run::
     python benchmarks/bench_sop.py --resources 10 --load   # wall time and peak RSS, per process
     python benchmarks/bench_sop.py --table 60 --load  # every SOP: exact beside CP-SAT
     python benchmarks/bench_sop.py --roots 120        # root bounds: flow LP vs precedence cuts
+    python benchmarks/bench_sop.py --cuts 60 p43.1    # the cut engine alone (also DERIVED)
 
 ``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
 every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints status,
@@ -213,6 +214,65 @@ print(json.dumps(dict(status=str(result.status), objective=result.objective, bou
 """
 
 
+#: SOPs derived from the shipped ATSP matrices (``taopt.sop.generate.atsp_sop``: random
+#: precedences of the density named, seed last) and small random/chain SOPs, for ``--cuts``.
+DERIVED = [
+    "ftv33-0.02-1",
+    "ftv38-0.05-1",
+    "ftv44-0.02-1",
+    "ftv47-0.05-2",
+    "p43-0.02-1",
+    "p43-0.05-1",
+    "ry48p-0.02-1",
+    "ry48p-0.05-1",
+    "ft53-0.02-1",
+    "ft53-0.05-1",
+]
+
+
+def load_derived(name: str):
+    """``BASE-DENSITY-SEED``: the ATSP file BASE of ``../shared/benchmarks/tsplib`` made an
+    SOP by :func:`taopt.sop.generate.atsp_sop`."""
+    import numpy as np
+
+    from taopt.sop.generate import atsp_sop
+    from taopt.tsplib import read_tsplib
+
+    base, density, seed = name.rsplit("-", 2)
+    header, words = read_tsplib(SHARED / f"{base}.atsp")
+    n = int(header["DIMENSION"])
+    cost = np.array([float(w) for w in (words or [])[: n * n]]).reshape(n, n)
+    np.fill_diagonal(cost, 0.0)
+    return atsp_sop(cost, float(density), int(seed))
+
+
+def cuts(names: list[str], limit: float) -> None:
+    """``--cuts T``: the cut engine alone (:func:`taopt.models.sop_cuts.solve_sop_cuts`, no
+    warm start) at T s on each instance: root bound, status, objective, bound, wall time,
+    MIP rounds, arcs fixed by reduced cost and HiGHS cuts kept."""
+    import os
+
+    from taopt.models.sop_cuts import solve_sop_cuts
+
+    print(f"cut engine at {limit:g} s, load {os.getloadavg()[0]:.1f}")
+    print(
+        "| instance | n | root | status | objective | bound | time (s) | MIP rounds | fixed | pool |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name in names:
+        problem = load_derived(name) if name in DERIVED else load_any(name)
+        began = time.perf_counter()
+        result = solve_sop_cuts(problem, limit)
+        wall = time.perf_counter() - began
+        info = result.info or {}
+        print(
+            f"| {name} | {problem.n} | {info.get('root_bound')} | {result.status} | "
+            f"{result.objective} | {result.bound} | {wall:.1f} | {info.get('mip_rounds')} | "
+            f"{info.get('fixed')} | {info.get('pool_rows')} |",
+            flush=True,
+        )
+
+
 def load_any(name: str):
     """A shipped or shared SOP file, or a generated instance of :data:`GENERATED`."""
     if name in GENERATED:
@@ -390,7 +450,13 @@ def main() -> None:
     parser.add_argument(
         "--roots", type=float, default=0.0, help="root bounds: flow LP (this limit) vs cuts"
     )
+    parser.add_argument(
+        "--cuts", type=float, default=0.0, help="the cut engine alone at this limit"
+    )
     args = parser.parse_args()
+    if args.cuts > 0:
+        cuts(args.names or RESOURCES + DERIVED, args.cuts)
+        return
     if args.table > 0:
         side_by_side(args.names or RESOURCES, args.table, args.load)
         return

@@ -23,6 +23,11 @@ separated *exactly* on an LP point: for each pair one maximum flow from i to j o
 point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``); a
 flow below 1 gives a violated row (the source side of a minimum cut).
 
+Each row found is lifted by the precedences of its two sides
+(:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti &
+Pulleyblank (1995) when i is the start or j the end, and their restrictions to the stretch from i to
+j otherwise; the lifted row may be violated where the plain one is not.
+
 :class:`SopCutModel` holds one live HiGHS model; :meth:`SopCutModel.root` runs the LP cut
 loop and :func:`solve_sop_cuts` then solves the MIP with the rows found, checks the
 integral point, adds the rows it violates and solves again (an exact method: each MIP is a
@@ -63,8 +68,15 @@ __all__ = [
     "CUTS_PER_ROUND",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
+    "KEEP_HIGHS_CUTS",
+    "LIFT",
+    "LIFT_ALL",
+    "LIFT_TRY",
+    "MIP_RESERVE",
+    "MIP_RESERVE_MAX",
     "MIP_ROUNDS",
     "POLISH_PASSES",
+    "REDUCED_COST_FIXING",
     "ROOT_ROUNDS",
     "ROOT_STALL",
     "ROOT_STALL_ROUNDS",
@@ -84,6 +96,19 @@ FLOW_SCALE = 1_000_000
 
 #: A row is violated when the LP point's left-hand side is below ``1 - CUT_TOLERANCE``.
 CUT_TOLERANCE = 1e-4
+
+#: The path cuts are lifted by the precedences of their two sides
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`); False separates the plain rows only.
+LIFT = True
+
+#: With :data:`LIFT`, a pair's minimum cut is lifted when its value is below this (the
+#: lifted row can be violated where the plain one holds).
+LIFT_TRY = 2.0
+
+#: With :data:`LIFT`, every pair's cut holding at the point is lifted too (True), or only
+#: those of the pairs ``(start, j)`` and ``(i, end)`` (False; the other pairs lift the
+#: violated cuts only).
+LIFT_ALL = False
 
 #: Rows added per separation round at most (the most violated first).
 CUTS_PER_ROUND = 400
@@ -154,6 +179,9 @@ class SopCutModel:
         self.tails, self.heads = usable_arcs(problem.cost, problem.closure)
         self.costs = problem.cost[self.tails, self.heads].astype(float)
         self.integral_costs = bool(np.all(self.costs == np.round(self.costs)))
+        #: Every order's cost is a multiple of this (the gcd of the usable arcs' integral
+        #: costs; 0 when a cost is not an integer): bounds are rounded up to a multiple of it.
+        self.step = _cost_step(self.costs) if self.integral_costs else 0
         n_arcs = len(self.tails)
         self.n_arcs = n_arcs
         self.arc_index = -np.ones((n, n), dtype=np.int64)
@@ -199,6 +227,17 @@ class SopCutModel:
         self.highs.passModel(lp)
         self.cut_rows: list[np.ndarray] = []
         self.is_mip = False
+        #: Arcs fixed to 0 by :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`.
+        self.fixed = np.zeros(n_arcs, dtype=bool)
+        #: Rows of HiGHS's own cut pool kept across MIP rounds
+        #: (:meth:`~taopt.models.sop_cuts.SopCutModel.add_pool_rows`).
+        self.pool_rows = 0
+        #: Some row or fixing holds only for the orders cheaper than the best one known,
+        #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
+        self.conditional = False
+        #: HiGHS's model status after the last LP of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.root`.
+        self.last_status: Any = None
 
     # ------------------------------------------------------------------ rows
     def add_cuts(self, cuts: list[np.ndarray]) -> int:
@@ -224,6 +263,52 @@ class SopCutModel:
         )
         self.cut_rows += fresh
         return len(fresh)
+
+    def add_pool_rows(
+        self,
+        starts: np.ndarray,
+        index: np.ndarray,
+        values: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> int:
+        """Add general rows ``lower <= a x <= upper`` (HiGHS's cut pool, CSR by row: row k
+        holds ``index[starts[k]:starts[k + 1]]``); new ones only; returns how many."""
+        count = len(lower)
+        bounds = np.append(np.asarray(starts[:count], dtype=np.int64), len(index))
+        if len(starts) > count:  # CSR with its closing entry
+            bounds[count] = int(starts[count])
+        keep, rows_index, rows_value, rows_start, at = [], [], [], [], 0
+        for k in range(count):
+            lo, hi = int(bounds[k]), int(bounds[k + 1])
+            key = (
+                b"p"
+                + np.concatenate(
+                    [index[lo:hi].astype(float), np.round(values[lo:hi], 9), [lower[k], upper[k]]]
+                ).tobytes()
+            )
+            if key in self._keys or hi <= lo:
+                continue
+            self._keys.add(key)
+            keep.append(k)
+            rows_start.append(at)
+            rows_index.append(index[lo:hi])
+            rows_value.append(values[lo:hi])
+            at += hi - lo
+        if not keep:
+            return 0
+        flat_index = np.concatenate(rows_index).astype(np.int32)
+        self.highs.addRows(
+            len(keep),
+            np.asarray(lower, dtype=float)[keep],
+            np.asarray(upper, dtype=float)[keep],
+            len(flat_index),
+            np.asarray(rows_start, dtype=np.int32),
+            flat_index,
+            np.concatenate(rows_value).astype(float),
+        )
+        self.pool_rows += len(keep)
+        return len(keep)
 
     def separate(
         self,
@@ -252,16 +337,25 @@ class SopCutModel:
     def _separate(
         self, values: np.ndarray, pairs: np.ndarray, deadline: Deadline | None = None
     ) -> list[tuple[float, np.ndarray]]:
-        """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``."""
+        """(left-hand side, arcs) of the violated rows of ``pairs`` at ``values``.
+
+        Per pair, a minimum cut of the point's support inside ``W(i, j)`` (a maximum flow)
+        gives the plain path cut; when :data:`LIFT` is set, its two liftings
+        (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`) are tried as well, also when the plain
+        row holds (a flow below :data:`LIFT_TRY`), and the smallest left-hand side is kept.
+        """
         n = self.n
         support = values > 1e-9
         tails, heads = self.tails[support], self.heads[support]
         caps = np.floor(values[support] * FLOW_SCALE).astype(np.int32)
         before = self.before
+        plain = (1 - CUT_TOLERANCE) * FLOW_SCALE
+        wide = (LIFT_TRY if LIFT else 1 - CUT_TOLERANCE) * FLOW_SCALE
+        start, end = self.problem.start, self.problem.end
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
         for number, (i, j) in enumerate(pairs):
-            if number % 64 == 63 and deadline is not None and deadline.expired(MARGIN):
+            if number % 64 == 0 and deadline is not None and deadline.expired(MARGIN):
                 break
             inside = ~before[:, i] & ~before[j, :]  # W(i, j)
             keep = inside[tails] & inside[heads]
@@ -270,7 +364,10 @@ class SopCutModel:
             graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
             graph.sum_duplicates()
             result = maximum_flow(graph, int(i), int(j))
-            if result.flow_value >= (1 - CUT_TOLERANCE) * FLOW_SCALE:
+            # a cut that holds is lifted only on the pairs of the start or the end (the σ-
+            # and π-inequalities proper: 2n pairs at most, where the dense closures have
+            # thousands of pairs)
+            if result.flow_value >= (wide if LIFT_ALL or i == start or j == end else plain):
                 continue
             residual = graph - result.flow
             residual.data[residual.data < 0] = 0
@@ -280,10 +377,17 @@ class SopCutModel:
             )
             side = np.zeros(n, dtype=bool)
             side[reached] = True
-            arcs = np.flatnonzero(
-                side[self.tails] & ~side[self.heads] & inside[self.tails] & inside[self.heads]
-            )
-            lhs = float(values[arcs].sum())
+            candidates = [(side & inside, inside & ~side)]
+            if LIFT:
+                candidates += self.lifted(int(i), int(j), side & inside, inside & ~side)
+            best: tuple[float, np.ndarray] | None = None
+            for tail_set, head_set in candidates:
+                arcs = np.flatnonzero(tail_set[self.tails] & head_set[self.heads])
+                lhs = float(values[arcs].sum())
+                if best is None or lhs < best[0] - 1e-12:
+                    best = (lhs, arcs)
+            assert best is not None
+            lhs, arcs = best
             if lhs >= 1 - CUT_TOLERANCE:
                 continue
             key = arcs.tobytes()
@@ -293,12 +397,45 @@ class SopCutModel:
             found.append((lhs, arcs))
         return found
 
+    def lifted(
+        self, i: int, j: int, source: np.ndarray, sink: np.ndarray
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The two liftings of the path cut of ``i ≺ j`` with sides ``S = source`` (holding
+        i) and ``T = sink`` (holding j), ``S ∪ T = W(i, j)``, as (tail set, head set).
+
+        * σ-lifting: with ``A = σ(T ∩ σ(i))`` (the successors of the nodes of T that follow
+          i), ``x(S \\ A : T \\ A) >= 1``. The first node h of T on the stretch from i to j
+          and the node u before it are not in A: a node of ``T ∩ σ(i)`` preceding either
+          would lie on the stretch before h.
+        * π-lifting: with ``B = π(S ∩ π(j))``, ``x(S \\ B : T \\ B) >= 1``, by the mirror
+          argument on the last node of S on the stretch and the node after it.
+
+        With ``i = start`` the first is the σ-inequality of Balas, Fischetti & Pulleyblank
+        (1995) on ``T``, ``x(V \\ T \\ σ(T) : T \\ σ(T)) >= 1`` (restricted to W); with
+        ``j = end`` the second is their π-inequality on S.
+        """
+        before = self.before
+        late = sink & before[i]  # T ∩ σ(i)
+        lifted_a = before[late].any(axis=0)  # σ(T ∩ σ(i))
+        early = source & before[:, j]  # S ∩ π(j)
+        lifted_b = before[:, early].any(axis=1)  # π(S ∩ π(j))
+        return [
+            (source & ~lifted_a, sink & ~lifted_a),
+            (source & ~lifted_b, sink & ~lifted_b),
+        ]
+
     # ------------------------------------------------------------------ solves
     def _run(self, deadline: Deadline | None, stop: Any = None) -> None:
         """One HiGHS run within the deadline; ``stop()`` true interrupts it too."""
         if deadline is not None and deadline.limited:
             left = deadline.remaining() or 0.0
-            self.highs.setOptionValue("time_limit", max(left - MARGIN, 0.01))
+            # HiGHS compares its time_limit with its run time summed over every run of this
+            # object (getRunTime), not with this run's: the limit is that sum plus the time left
+            # (a plain ``left`` stopped the later LP loops and MIP rounds at once)
+            spent = float(self.highs.getRunTime())
+            if self.is_mip:  # HiGHS looks at its clock only between phases of its root node
+                left -= min(MIP_RESERVE * left, MIP_RESERVE_MAX)
+            self.highs.setOptionValue("time_limit", spent + max(left - MARGIN, 0.01))
         expired = (lambda: False) if deadline is None else (lambda: deadline.expired(MARGIN))
         with interrupt_when(self.highs, lambda: expired() or (stop is not None and stop())):
             run_interruptibly(self.highs)
@@ -309,15 +446,45 @@ class SopCutModel:
 
     def dual_bound(self) -> float:
         """A proven lower bound from the last LP's row duals (clipped to their signs):
-        ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` (columns in [0, 1]); rounded up when
-        every cost is an integer. ``-inf`` without duals."""
+        ``Σ_rows y_r b_r + Σ_a min(0, c_a - A_a^T y)`` over the arcs not fixed to 0 (columns
+        in [0, 1]; ``b_r`` the row's lower side for ``y_r > 0``, its upper side for
+        ``y_r < 0``); rounded up to a multiple of ``step``. ``-inf`` without duals.
+
+        With no arc fixed it bounds the SOP; after
+        :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost` (or with rows of
+        ``conditional`` validity) it bounds the orders better than the incumbent, so ``min(bound,
+        incumbent)`` bounds the SOP."""
+        raw, _ = self._lagrangian()
+        return self.round_up(raw)
+
+    def round_up(self, bound: float) -> float:
+        """``bound`` raised to the next multiple of ``step`` (every order's cost is
+        one), with a 1e-6 tolerance; unchanged when the costs are not integers."""
+        if not self.step or not math.isfinite(bound):
+            return bound
+        return float(self.step * math.ceil((bound - 1e-6) / self.step))
+
+    def _lagrangian(self) -> tuple[float, np.ndarray]:
+        """(The unrounded bound of :meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound`, the arcs'
+        reduced costs ``c - A^T y``); ``(-inf, empty)`` without duals."""
         solution = self.highs.getSolution()
         if not solution.dual_valid:
-            return -math.inf
+            return -math.inf, np.zeros(0)
         duals = np.asarray(solution.row_dual, dtype=float)
-        degree = duals[: self.degree_rows]  # equalities: any sign
-        cuts = np.maximum(duals[self.degree_rows :], 0.0)  # >= rows: y >= 0
         lp = self.highs.getLp()
+        lower = np.asarray(lp.row_lower_, dtype=float)
+        upper = np.asarray(lp.row_upper_, dtype=float)
+        equal = lower == upper
+        # y >= 0 prices a finite lower side, y <= 0 a finite upper side; equalities: any sign
+        positive = np.where(np.isfinite(lower), np.maximum(duals, 0.0), 0.0)
+        negative = np.where(np.isfinite(upper), np.minimum(duals, 0.0), 0.0)
+        y = np.where(equal, duals, positive + negative)
+        constant = np.where(
+            equal,
+            duals * np.where(equal, lower, 0.0),
+            positive * np.where(np.isfinite(lower), lower, 0.0)
+            + negative * np.where(np.isfinite(upper), upper, 0.0),
+        )
         matrix = sp.csc_matrix(
             (
                 np.asarray(lp.a_matrix_.value_),
@@ -326,12 +493,41 @@ class SopCutModel:
             ),
             shape=(lp.num_row_, lp.num_col_),
         )
-        y = np.concatenate([degree, cuts])
         reduced = self.costs - matrix.T @ y
-        bound = float(y.sum() + np.minimum(reduced, 0.0).sum())  # every rhs is 1
-        if self.integral_costs:
-            bound = math.ceil(bound - 1e-6)
-        return bound
+        free = ~self.fixed
+        bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
+        return bound, reduced
+
+    def fix_by_reduced_cost(self, incumbent: float) -> int:
+        """Fix to 0 every arc that no order better than ``incumbent`` can use, by the last
+        LP's reduced costs; returns how many arcs were newly fixed.
+
+        For duals y of the right signs and ``d = c - A^T y``, every order x with
+        ``x_a = 1`` costs at least ``L + d_a`` when ``d_a > 0`` (``L`` the bound of
+        :meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound` before rounding: the Lagrangian
+        argument,
+        ``c x = y^T A x + d x >= y^T b + Σ_{b ≠ a} min(0, d_b) + d_a``). An arc with
+        ``L + d_a`` above ``incumbent - step`` (integral costs, ``step`` their gcd;
+        ``incumbent`` otherwise) is in
+        no better order, so the fixed model keeps every order better than ``incumbent``
+        (with integral costs the best order itself may lose an arc; the MIP rounds then run
+        with a cutoff below it, not from it).
+        """
+        raw, reduced = self._lagrangian()
+        if not math.isfinite(raw) or not math.isfinite(incumbent):
+            return 0
+        if self.step:  # a better order costs incumbent - step at most
+            limit = incumbent - self.step + 1e-6
+        else:
+            limit = incumbent + 1e-9 * max(1.0, abs(incumbent))
+        drop = ~self.fixed & (reduced > 0) & (raw + reduced > limit)
+        count = int(drop.sum())
+        if count:
+            index = np.flatnonzero(drop).astype(np.int32)
+            self.highs.changeColsBounds(count, index, np.zeros(count), np.zeros(count))
+            self.fixed |= drop
+            self.conditional = True
+        return count
 
     def root(self, deadline: Deadline | None = None, rounds: int = ROOT_ROUNDS) -> RootCuts:
         """The LP cut loop: solve, separate, add, until no row is violated, the value
@@ -343,7 +539,8 @@ class SopCutModel:
             if deadline is not None and deadline.expired(MARGIN):
                 break
             self._run(deadline)
-            if self.highs.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            self.last_status = self.highs.getModelStatus()
+            if self.last_status != highspy.HighsModelStatus.kOptimal:
                 break
             done += 1
             new_value = float(self.highs.getInfo().objective_function_value)
@@ -389,6 +586,27 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
     return SopCutModel(problem).root(Deadline(time_limit))
 
 
+#: A MIP round gets the time left less this share of it (at most :data:`MIP_RESERVE_MAX`
+#: seconds): HiGHS looks at its clock and its interrupt callback only between the phases of
+#: its root node, and MIP rounds ended 1-7 s after the deadline at load 3-12 without it.
+MIP_RESERVE = 0.1
+
+#: See :data:`MIP_RESERVE`.
+MIP_RESERVE_MAX = 3.0
+
+#: After the root and after each LP loop between MIP rounds, arcs are fixed to 0 by their
+#: reduced costs against the best order
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`).
+REDUCED_COST_FIXING = True
+
+#: The cuts HiGHS finds at the root of a MIP round (its cut pool, read by the
+#: ``kCallbackMipGetCutPool`` callback, the MIP solved without presolve so that they use the
+#: model's columns) are kept as rows for the next rounds, when every integral point HiGHS
+#: held when it reported them was an order. Such a row holds for every integral point of the
+#: rows before it below the round's cutoff and those orders' costs, hence for every order
+#: better than the best one.
+KEEP_HIGHS_CUTS = True
+
 #: LP rounds of the cut loop between two MIP rounds at most.
 ROUND_LP_ROUNDS = 20
 
@@ -413,6 +631,13 @@ def solve_sop_cuts(
     point violates. A relaxation's optimum that is an order is optimal; a round stopped by
     the clock leaves its proven bound (HiGHS's dual bound of a relaxation).
 
+    Against the best order known, arcs are fixed to 0 by their reduced costs
+    (:meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`), and the cuts HiGHS finds at
+    the root of a round are kept for the next ones (:data:`KEEP_HIGHS_CUTS`); both exclude only
+    orders no better than the best, so the bounds then reported are ``min(bound, best)``, and an LP
+    of those rows without a point proves the best optimal. Bounds are rounded up to a multiple of
+    the costs' gcd (``SopCutModel.step``).
+
     Parameters
     ----------
     problem : SopProblem
@@ -428,7 +653,8 @@ def solve_sop_cuts(
     -------
     Solution
         Status "optimal" when proven, else "time_limit" with the best order and the best
-        proven bound; ``info`` has ``root_bound``, ``root_rounds``, ``cuts``, ``mip_rounds``.
+        proven bound; ``info`` has ``root_bound``, ``root_rounds``, ``cuts``, ``mip_rounds``,
+        ``fixed`` (arcs fixed by reduced cost) and ``pool_rows`` (HiGHS's cuts kept).
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
@@ -441,18 +667,30 @@ def solve_sop_cuts(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
     bound = max(root.bound, cheap)
+    fixed = 0
+    if REDUCED_COST_FIXING and known is not None and root.values is not None:
+        fixed = model.fix_by_reduced_cost(known[0])
     info: dict[str, Any] = {
         "root_bound": root.bound,
         "root_lp": root.value,
         "root_rounds": root.rounds,
         "root_complete": root.complete,
+        "root_fixed": fixed,
     }
     stop, rounds = "time_limit", 0
     if known is None or not _closed(model, bound, known[0]):
         stop, rounds, known, bound = _mip_rounds(model, deadline, known, bound, mip_gap)
     else:
         stop = "optimal"
-    info.update({"cuts": len(model.cut_rows), "mip_rounds": rounds, "arcs": model.n_arcs})
+    info.update(
+        {
+            "cuts": len(model.cut_rows),
+            "mip_rounds": rounds,
+            "arcs": model.n_arcs,
+            "fixed": int(model.fixed.sum()),
+            "pool_rows": model.pool_rows,
+        }
+    )
     if stop == "infeasible":
         return finish(
             None,
@@ -474,11 +712,27 @@ def solve_sop_cuts(
     )
 
 
+def _cost_step(costs: np.ndarray) -> int:
+    """The gcd of the integral ``costs`` (1 when they are all 0 or huge)."""
+    values = np.abs(costs[np.isfinite(costs)])
+    if not len(values) or values.max() >= 2**62:
+        return 1
+    step = int(np.gcd.reduce(values.astype(np.int64)))
+    return max(step, 1)
+
+
+def _clipped(model: SopCutModel, bound: float, best: float) -> float:
+    """A bound of the model made a bound of the SOP: ``min(bound, best)`` once arcs are
+    fixed or rows valid only below the best are in (``SopCutModel.conditional``: the
+    orders they exclude cost ``best`` at least), else ``bound``."""
+    return min(bound, best) if model.conditional else bound
+
+
 def _closed(model: SopCutModel, bound: float, value: float) -> bool:
     """The bound proves ``value`` optimal (within 1e-9 relative; integral costs: above
-    ``value - 1``)."""
-    if model.integral_costs:
-        return bound > value - 1 + 1e-6
+    ``value - step``, ``SopCutModel.step`` the costs' gcd)."""
+    if model.step:
+        return bound > value - model.step + 1e-6
     return bound >= value - 1e-9 * max(1.0, abs(value))
 
 
@@ -500,29 +754,76 @@ def _mip_rounds(
     problem = model.problem
     model.make_integral()
     model.highs.setOptionValue("mip_rel_gap", float(mip_gap))
+    if KEEP_HIGHS_CUTS:  # the pool's rows then use the model's own columns
+        model.highs.setOptionValue("presolve", "off")
     bad: list[np.ndarray] = []
+    seen = [0]  # integral points HiGHS accepted this round that are no order
+    found: list[tuple[float, list[int]]] = []  # those that are orders
+
+    pool: list[tuple[np.ndarray, ...]] = []
 
     def on_improving(event: Any) -> None:
         values = np.asarray(event.data_out.mip_solution, dtype=float)[: model.n_arcs]
-        if len(bad) < BAD_POINTS and _order_of(model, values) is None:
+        order = _order_of(model, values)
+        if order is not None:  # kept even when a later point (no order) replaces it
+            found.append((float(problem.cost[order[:-1], order[1:]].sum()), order))
+            return
+        seen[0] += 1
+        if len(bad) < BAD_POINTS:
             bad.append(values.copy())
 
+    def on_pool(event: Any) -> None:
+        # kept only while every point HiGHS holds is an order: its cuts then rest on the
+        # rows, the bounds, the cutoff and orders (whose cost the best order is at most),
+        # never on a point that is no order
+        data = event.data_out
+        if seen[0] or int(data.cutpool_num_col) != model.n_arcs or not data.cutpool_num_cut:
+            return
+        pool.append(
+            tuple(
+                np.array(item, copy=True)
+                for item in (
+                    data.cutpool_start,
+                    data.cutpool_index,
+                    data.cutpool_value,
+                    data.cutpool_lower,
+                    data.cutpool_upper,
+                )
+            )
+        )
+
     model.highs.cbMipImprovingSolution.subscribe(on_improving)
+    if KEEP_HIGHS_CUTS:
+        model.highs.cbMipGetCutPool.subscribe(on_pool)
     stop, rounds = "time_limit", 0
     try:
         while rounds < MIP_ROUNDS and not deadline.expired(MARGIN):
             if rounds:  # separate the new rows' fractional consequences on the LP first
                 model.make_integral(False)
-                model.root(deadline, ROUND_LP_ROUNDS)
+                lp = model.root(deadline, ROUND_LP_ROUNDS)
+                if (
+                    model.last_status == highspy.HighsModelStatus.kInfeasible
+                    and known is not None
+                    and model.conditional
+                ):  # no point of the rows valid below the best: nothing better than it
+                    return "optimal", rounds, known, known[0]
+                if known is not None:
+                    bound = max(bound, _clipped(model, lp.bound, known[0]))
+                    if REDUCED_COST_FIXING and lp.rounds:
+                        model.fix_by_reduced_cost(known[0])
                 model.make_integral()
-            # integral costs: an order better than the best costs at most best - 1, so HiGHS
-            # may cut off every node above best - 1/2; no point below it proves the best
-            cutoff = known[0] - 0.5 if known is not None and model.integral_costs else None
+            # integral costs: an order better than the best costs at most best - step (the
+            # costs' gcd), so HiGHS may cut off every node above best - step + 1/2; no point
+            # below it proves the best
+            cutoff = known[0] - model.step + 0.5 if known is not None and model.step else None
             if known is not None and cutoff is None:
                 start = np.zeros(model.n_arcs)
                 start[model.arc_index[known[1][:-1], known[1][1:]]] = 1.0
                 model.highs.setSolution(_solution(start))
             bad.clear()
+            pool.clear()
+            found.clear()
+            seen[0] = 0
             model.highs.setOptionValue(
                 "objective_bound", highspy.kHighsInf if cutoff is None else cutoff
             )
@@ -531,6 +832,12 @@ def _mip_rounds(
             finally:  # the LP loop must not stop at the cutoff
                 model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             rounds += 1
+            for value, seen_order in found:
+                if known is None or value < known[0]:
+                    known = (value, seen_order)
+            for rows in pool:  # HiGHS's root cuts: valid below the cutoff and the orders seen
+                if model.add_pool_rows(*rows) and (cutoff is not None or found):
+                    model.conditional = True
             status = model.highs.getModelStatus()
             mip_info = model.highs.getInfo()
             if status == highspy.HighsModelStatus.kInfeasible and known is not None:
@@ -539,11 +846,14 @@ def _mip_rounds(
                 return "optimal", rounds, known, known[0]  # nothing below best - 1/2
             dual = float(mip_info.mip_dual_bound)
             if math.isfinite(dual):  # a bound of a relaxation: a bound of the SOP
-                bound = max(bound, math.ceil(dual - 1e-6) if model.integral_costs else dual)
+                dual = model.round_up(dual)
+                bound = max(bound, dual if known is None else _clipped(model, dual, known[0]))
             if status == highspy.HighsModelStatus.kInfeasible and known is None:
                 return "infeasible", rounds, None, math.inf
             points = list(bad)
             for point in points:  # each point, rounded and polished, may be a better order
+                if deadline.expired(MARGIN):
+                    break
                 rounded = round_point(model, point, deadline)
                 if rounded is not None and (known is None or rounded[0] < known[0]):
                     known = rounded
@@ -561,7 +871,7 @@ def _mip_rounds(
                         return "optimal", rounds, known, max(bound, value)
             if known is not None and _closed(model, bound, known[0]):
                 return "optimal", rounds, known, bound
-            if not points:
+            if not points or deadline.expired(MARGIN):
                 break  # stopped by the clock (or a HiGHS limit) with no point to cut
             cuts = [cut for point in points for cut in model.separate(point, deadline=deadline)]
             if not cuts:
@@ -569,6 +879,8 @@ def _mip_rounds(
             model.add_cuts(cuts)
     finally:
         model.highs.cbMipImprovingSolution.unsubscribe(on_improving)
+        if KEEP_HIGHS_CUTS:
+            model.highs.cbMipGetCutPool.unsubscribe(on_pool)
     return stop, rounds, known, bound
 
 
