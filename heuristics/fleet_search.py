@@ -84,8 +84,15 @@ class _Search:
     """The encoding (order, trucks, modes), its decoded value, and the descent's
     neighbourhoods."""
 
-    def __init__(self, problem: FleetProblem, rng: np.random.Generator, deadline: Deadline):
+    def __init__(
+        self,
+        problem: FleetProblem,
+        rng: np.random.Generator,
+        deadline: Deadline,
+        open_sorties: bool = False,
+    ):
         self.problem = problem
+        self.open_sorties = bool(open_sorties)
         self.rng = rng
         # the mode flips and reversals draw from their own stream, so that N1-N3 draw as
         # before they existed where they are idle
@@ -107,7 +114,7 @@ class _Search:
         # every customer (the order then shapes the route only through the sorties)
         self.reversals = any(problem.truck_servable(j) for j in range(problem.n))
         self.decodes = 0
-        self.builder = FleetBuilder(problem)
+        self.builder = FleetBuilder(problem, open_sorties=self.open_sorties)
         self.blank = self.builder.snapshot()
         # the current encoding and snapshots of its decode every SNAPSHOT_EVERY customers
         self.current: Encoding | None = None
@@ -135,6 +142,7 @@ class _Search:
             if i % SNAPSHOT_EVERY == 0:
                 self.snapshots.append(builder.snapshot())
             builder.place(j, int(trucks[j]), int(modes[j]))
+        builder.close_all()
         self.current = (list(order), trucks.copy(), modes.copy())
         self.current_final = builder.final
         return builder.objective()
@@ -165,6 +173,7 @@ class _Search:
         builder.final = final
         for j in order[block * SNAPSHOT_EVERY :]:
             builder.place(j, int(trucks[j]), int(modes[j]))
+        builder.close_all()
         return builder.objective()
 
     def out_of_time(self) -> bool:
@@ -571,7 +580,7 @@ def route_first(search: _Search) -> tuple[Encoding, float, float]:
     phase1 = search.set_current(order, trucks, modes)
     best = search.split(order, trucks, modes, phase1)
     if search.both:
-        free = decode(problem, order, trucks)
+        free = decode(problem, order, trucks, open_sorties=search.open_sorties)
         other = search.split(order, trucks, free.mode_of.copy(), free.objective())
         if other[3] < best[3]:
             best = other
@@ -593,9 +602,10 @@ def _finish(
     began: float,
     seed: int,
     info: dict[str, Any],
+    open_sorties: bool = False,
 ) -> Solution:
     order, trucks, modes = encoding
-    builder = decode(problem, order, trucks, modes=modes)
+    builder = decode(problem, order, trucks, modes=modes, open_sorties=open_sorties)
     return make_solution(
         problem,
         builder.plan(),
@@ -674,6 +684,7 @@ def ils_fleet(
     sample: int | None = None,
     strength: int = 3,
     accept_worse: float = 0.01,
+    open_sorties: bool = True,
 ) -> Solution:
     """Iterated local search over the whole fleet (order, trucks and modes, decoded greedily).
 
@@ -690,7 +701,9 @@ def ils_fleet(
         return infeasible_solution(problem, "ILS", why, began)
     sample = 2 * problem.n if sample is None else sample
     _check(iterations, sample, strength, accept_worse)
-    search = _Search(problem, np.random.default_rng(seed), Deadline(time_limit))
+    search = _Search(
+        problem, np.random.default_rng(seed), Deadline(time_limit), open_sorties=open_sorties
+    )
     starts = [_encoding(construct(problem, rule)) for rule in ("MMA", "SMMA")]
     scored = [(search.value(*e), i) for i, e in enumerate(starts)]
     if search.both:  # the route-first start only differs when some mode is free
@@ -725,7 +738,7 @@ def ils_fleet(
     }
     if not math.isfinite(best[0]):
         raise InstanceError("ILS found no plan")  # cannot happen: the starts are feasible
-    return _finish(problem, "ILS", best[1], began, seed, info)
+    return _finish(problem, "ILS", best[1], began, seed, info, open_sorties)
 
 
 @register_improver(FleetProblem)
