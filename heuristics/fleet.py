@@ -16,7 +16,17 @@ that vehicle's plan so far (:class:`FleetBuilder`):
   truck-and-drone-in-parallel leg), also after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
-  fewer than c customers and the longer flight stays within the range.
+  fewer than c customers and the longer flight stays within the range;
+* ``open`` and ``join`` (only when the builder is made with ``open_sorties``, as the ILS's
+  decoder under ``"last_service"``): drone (k, d) is launched as for ``drone`` but its
+  recovery is left *open*, the truck driving on at once; later customers may ``join`` the
+  open sortie (up to c, the flight able to reach a stop near the new last customer within the
+  range) while the truck serves elsewhere, and the recovery is placed when the drone is needed
+  for a new sortie or at the end (:meth:`FleetBuilder.close`): at the truck's position then
+  (the truck waiting) or, out of range, at the stop nearest the sortie's last customer. Without
+  it, a sortie's recovery is fixed when its first customer is placed (where the truck is, or
+  one new stop near that customer), so a drone cannot serve two customers while its truck
+  drives through several stops (the shipped example's better plans need that).
 
 Every option is checked against the range and the capacity when it is generated, so every plan
 built is feasible, and the times the builder keeps are exactly the earliest schedule of
@@ -252,7 +262,7 @@ class FleetBuilder:
         self, j: int, k: int, d: int, t: _Truck, rj: float, out: list[Option]
     ) -> None:
         """The options of drone d of truck k (its state ``t``) for customer j: new sorties
-        (open ones too with :attr:`open_sorties`) and merging into its last closed one."""
+        (open ones too with ``open_sorties``) and merging into its last closed one."""
         tt, fs, vd, tau, limit = self.tt, self.fs, self.vd, self.tau, self.limit
         last = len(t.route) - 1
         here = t.route[last]
@@ -754,6 +764,9 @@ def decode(
     launched from the stop before them (one of the last :data:`WINDOW` positions) and
     recovered where the truck is: the order and the modes together express TSP-D's
     operations (launch, truck serves on, recovery), which the free rule alone never builds.
+
+    With ``open_sorties`` the builder also offers open sorties (see the module docstring and
+    :meth:`FleetBuilder.close`); every one still open at the end is closed before returning.
 
     Raises
     ------
