@@ -695,7 +695,7 @@ def ils_fleet(
     neighbourhood, default ``2 n``), then ``iterations`` times perturbs the current encoding
     (``strength`` truck moves, shifts and mode flips), descends, and accepts the result when
     it is at most ``accept_worse`` (relative) worse than the current one. Never worse than its
-    start. ``info``: ``start_objective``, ``iterations`` (done), ``decodes``, ``stopped_by``.
+    start (MMA's and SMMA's own plans included when the search decodes with open sorties). ``info``: ``start_objective``, ``iterations`` (done), ``decodes``, ``stopped_by``.
 
     ``open_sorties``: decode with open sorties (:class:`~taopt.heuristics.fleet.FleetBuilder`;
     a drone launched without fixing its recovery, later customers joining its sortie while
@@ -715,8 +715,11 @@ def ils_fleet(
     search = _Search(
         problem, np.random.default_rng(seed), Deadline(time_limit), open_sorties=open_sorties
     )
-    starts = [_encoding(construct(problem, rule)) for rule in ("MMA", "SMMA")]
+    built = [construct(problem, rule) for rule in ("MMA", "SMMA")]
+    starts = [_encoding(b) for b in built]
     scored = [(search.value(*e), i) for i, e in enumerate(starts)]
+    # the rules' own plans (closed sorties): returned if the open search ends above them
+    kept, kept_index = min((b.objective(), i) for i, b in enumerate(built))
     if search.both:  # the route-first start only differs when some mode is free
         routed, routed_value, _ = route_first(search)
         starts.append(routed)
@@ -741,15 +744,18 @@ def ils_fleet(
             best = (found[3], found[:3])
     if search.out_of_time():
         stopped_by = "time_limit"
+    decoder_open = open_sorties
+    if open_sorties and kept < best[0]:
+        best, decoder_open = (kept, starts[kept_index]), False
     info = {
-        "start_objective": start_value,
+        "start_objective": min(start_value, kept),
         "iterations": done,
         "decodes": search.decodes,
         "stopped_by": stopped_by,
     }
     if not math.isfinite(best[0]):
         raise InstanceError("ILS found no plan")  # cannot happen: the starts are feasible
-    return _finish(problem, "ILS", best[1], began, seed, info, open_sorties)
+    return _finish(problem, "ILS", best[1], began, seed, info, decoder_open)
 
 
 @register_improver(FleetProblem)
