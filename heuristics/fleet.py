@@ -22,8 +22,9 @@ that vehicle's plan so far (:class:`FleetBuilder`):
   recovery is left *open*, the truck driving on at once; later customers may ``join`` the
   open sortie (up to c, the flight able to reach a stop near the new last customer within the
   range) while the truck serves elsewhere, and the recovery is placed when the drone is needed
-  for a new sortie or at the end (:meth:`FleetBuilder.close`): at the truck's position then
-  (the truck waiting) or, out of range, at the stop nearest the sortie's last customer. Without
+  for a new sortie or at the end (:meth:`~taopt.heuristics.fleet.FleetBuilder.close`): at
+  the truck's position then (the truck waiting) or, out of range, at the stop nearest the
+  sortie's last customer. Without
   it, a sortie's recovery is fixed when its first customer is placed (where the truck is, or
   one new stop near that customer), so a drone cannot serve two customers while its truck
   drives through several stops (the shipped example's better plans need that).
@@ -144,11 +145,12 @@ class FleetBuilder:
     window, near : int
         :data:`WINDOW` and :data:`NEAR_STOPS`.
     open_sorties : bool
-        Also offer *open* sorties (:data:`OPEN_SORTIES`): a drone launched without fixing its
-        recovery, so that later customers may join the sortie (up to c) while its truck
-        drives on and serves; the recovery is placed only when the drone is needed again or
-        at the end (:meth:`close_all`), at the truck's position then (the truck waiting) or,
-        out of range, at the stop nearest the sortie's last customer.
+        Also offer *open* sorties: a drone launched without fixing its recovery, so that
+        later customers may join the sortie (up to c) while its truck drives on and serves;
+        the recovery is placed only when the drone is needed again or at the end
+        (:meth:`~taopt.heuristics.fleet.FleetBuilder.close_all`), at the truck's position
+        then (the truck waiting) or, out of range, at the stop nearest the sortie's last
+        customer.
 
     Notes
     -----
@@ -766,7 +768,8 @@ def decode(
     operations (launch, truck serves on, recovery), which the free rule alone never builds.
 
     With ``open_sorties`` the builder also offers open sorties (see the module docstring and
-    :meth:`FleetBuilder.close`); every one still open at the end is closed before returning.
+    :meth:`~taopt.heuristics.fleet.FleetBuilder.close`); every one still open at the end is
+    closed before returning.
 
     Raises
     ------

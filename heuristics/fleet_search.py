@@ -695,7 +695,8 @@ def ils_fleet(
     neighbourhood, default ``2 n``), then ``iterations`` times perturbs the current encoding
     (``strength`` truck moves, shifts and mode flips), descends, and accepts the result when
     it is at most ``accept_worse`` (relative) worse than the current one. Never worse than its
-    start (MMA's and SMMA's own plans included when the search decodes with open sorties). ``info``: ``start_objective``, ``iterations`` (done), ``decodes``, ``stopped_by``.
+    start (MMA's and SMMA's own plans included when the search decodes with open sorties).
+    ``info``: ``start_objective``, ``iterations`` (done), ``decodes``, ``stopped_by``.
 
     ``open_sorties``: decode with open sorties (:class:`~taopt.heuristics.fleet.FleetBuilder`;
     a drone launched without fixing its recovery, later customers joining its sortie while
