@@ -16,7 +16,18 @@ that vehicle's plan so far (:class:`FleetBuilder`):
   truck-and-drone-in-parallel leg), also after driving to a new launch stop;
 * ``merge`` (c > 1, the thesis's "sortie merging"): the customer is added to the end of the
   drone's last sortie, when that sortie is recovered at the truck's current position and has
-  fewer than c customers and the longer flight stays within the range.
+  fewer than c customers and the longer flight stays within the range;
+* ``open`` and ``join`` (only when the builder is made with ``open_sorties``, as the ILS's
+  decoder under ``"last_service"``): drone (k, d) is launched as for ``drone`` but its
+  recovery is left *open*, the truck driving on at once; later customers may ``join`` the
+  open sortie (up to c, the flight able to reach a stop near the new last customer within the
+  range) while the truck serves elsewhere, and the recovery is placed when the drone is needed
+  for a new sortie or at the end (:meth:`~taopt.heuristics.fleet.FleetBuilder.close`): at
+  the truck's position then (the truck waiting) or, out of range, at the stop nearest the
+  sortie's last customer. Without
+  it, a sortie's recovery is fixed when its first customer is placed (where the truck is, or
+  one new stop near that customer), so a drone cannot serve two customers while its truck
+  drives through several stops (the shipped example's better plans need that).
 
 Every option is checked against the range and the capacity when it is generated, so every plan
 built is feasible, and the times the builder keeps are exactly the earliest schedule of
@@ -85,6 +96,8 @@ class _Drone:
     # customer's service time
     flown: float = 0.0
     last_time: float = 0.0
+    # the last sortie's recovery is not placed yet (an *open* sortie, see FleetBuilder)
+    open: bool = False
 
 
 @dataclass
@@ -111,6 +124,7 @@ class _Truck:
                     [[s[0], list(s[1]), s[2]] for s in d.sorties],
                     d.flown,
                     d.last_time,
+                    d.open,
                 )
                 for d in self.drones
             ],
@@ -130,6 +144,13 @@ class FleetBuilder:
     problem : FleetProblem
     window, near : int
         :data:`WINDOW` and :data:`NEAR_STOPS`.
+    open_sorties : bool
+        Also offer *open* sorties: a drone launched without fixing its recovery, so that
+        later customers may join the sortie (up to c) while its truck drives on and serves;
+        the recovery is placed only when the drone is needed again or at the end
+        (:meth:`~taopt.heuristics.fleet.FleetBuilder.close_all`), at the truck's position
+        then (the truck waiting) or, out of range, at the stop nearest the sortie's last
+        customer.
 
     Notes
     -----
@@ -141,13 +162,22 @@ class FleetBuilder:
     ``max(A[k, p], R_prev)`` is already at most ``Dep[k, p]`` (the previous recovery at p is
     part of ``Dep[k, p]``; one before p is before ``A[k, p]``). A merge replaces a sortie's
     recovery at the last position by a later one (the triangle inequality: going on to j
-    before returning never returns sooner). Precedences point from customers placed before
+    before returning never returns sooner). An open sortie's recovery is placed at the truck's
+    *last* position when it is closed, so it too only raises that position's departure.
+    Precedences point from customers placed before
     (the customers are placed in a topological order), so no cycle can form either.
     """
 
-    def __init__(self, problem: FleetProblem, window: int = WINDOW, near: int = NEAR_STOPS):
+    def __init__(
+        self,
+        problem: FleetProblem,
+        window: int = WINDOW,
+        near: int = NEAR_STOPS,
+        open_sorties: bool = False,
+    ):
         self.problem = problem
         self.window = int(window)
+        self.open_sorties = bool(open_sorties)
         self.tt = problem.truck_time
         self.fs = problem.flight_stop  # (n, s) distances
         self.fc = problem.flight_customer
@@ -208,7 +238,7 @@ class FleetBuilder:
         out: list[Option] = []
         last = len(t.route) - 1
         here = t.route[last]
-        tt, fs, vd, tau, limit = self.tt, self.fs, self.vd, self.tau, self.limit
+        tt = self.tt
         if problem.truck_servable(j):
             w = problem.truck_stop(j)
             if w == here:
@@ -220,57 +250,131 @@ class FleetBuilder:
                 out.append(("truck", k, -1, -1, w, -1, tj, tj, w, drive))
         if not problem.drone_servable(j) or not t.drones:
             return out
+        for d, drone in enumerate(t.drones):
+            if drone.open:
+                self._open_options(j, k, d, t, rj, out)
+                closed = t.copy()
+                self.close(closed, d)
+                self._drone_options(j, k, d, closed, rj, out)
+            else:
+                self._drone_options(j, k, d, t, rj, out)
+        return out
+
+    def _drone_options(
+        self, j: int, k: int, d: int, t: _Truck, rj: float, out: list[Option]
+    ) -> None:
+        """The options of drone d of truck k (its state ``t``) for customer j: new sorties
+        (open ones too with ``open_sorties``) and merging into its last closed one."""
+        tt, fs, vd, tau, limit = self.tt, self.fs, self.vd, self.tau, self.limit
+        last = len(t.route) - 1
+        here = t.route[last]
         fsj = fs[j]
         near = self.near[j]
         recover = self.recover[j] if self.final[j] else near
-        for d, drone in enumerate(t.drones):
-            # launch from an existing position p where the drone is aboard
-            for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
-                a = t.route[p]
-                out_leg = float(fsj[a])
-                if 2.0 * out_leg > limit and out_leg + float(fsj[here]) > limit:
+        # the shortest way back from j to a stop (an open sortie must stay closable)
+        home = min((float(fsj[w]) for w in near), default=math.inf)
+        drone = t.drones[d]
+        # launch from an existing position p where the drone is aboard
+        for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
+            a = t.route[p]
+            out_leg = float(fsj[a])
+            if 2.0 * out_leg > limit and out_leg + float(fsj[here]) > limit:
+                continue
+            launch = max(t.arrival[p], drone.aboard_time)
+            leg = out_leg / vd + tau
+            tj = max(launch + leg, rj)
+            back = float(fsj[here])
+            if out_leg + back <= limit:  # recovered where the truck is (it waits)
+                rec = max(tj + back / vd, t.arrival[last]) + tau
+                out.append(("drone", k, d, p, -1, -1, tj, max(t.ready, rec), here, leg))
+            if self.open_sorties and out_leg + home <= limit:  # flies on, open
+                out.append(("open", k, d, p, -1, -1, tj, t.ready, here, leg))
+            for b in recover:  # recovered at a new stop the truck drives to
+                if b == here or out_leg + float(fsj[b]) > limit:
                     continue
-                launch = max(t.arrival[p], drone.aboard_time)
-                leg = out_leg / vd + tau
-                tj = max(launch + leg, rj)
-                back = float(fsj[here])
-                if out_leg + back <= limit:  # recovered where the truck is (it waits)
-                    rec = max(tj + back / vd, t.arrival[last]) + tau
-                    out.append(("drone", k, d, p, -1, -1, tj, max(t.ready, rec), here, leg))
-                for b in recover:  # recovered at a new stop the truck drives to
-                    if b == here or out_leg + float(fsj[b]) > limit:
-                        continue
-                    arrive = t.ready + float(tt[here, b])
-                    rec = max(tj + float(fsj[b]) / vd, arrive) + tau
-                    out.append(("drone", k, d, p, -1, b, tj, rec, b, leg))
-            # the truck drives to a new stop near j, launches and waits
-            for a in near:
-                if a == here:
+                arrive = t.ready + float(tt[here, b])
+                rec = max(tj + float(fsj[b]) / vd, arrive) + tau
+                out.append(("drone", k, d, p, -1, b, tj, rec, b, leg))
+        # the truck drives to a new stop near j, launches and waits
+        for a in near:
+            if a == here:
+                continue
+            arrive = t.ready + float(tt[here, a])
+            flight = float(fsj[a]) / vd
+            leg = flight + tau
+            tj = max(arrive + leg, rj)
+            leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
+            rec = tj + flight + tau
+            out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
+            if self.open_sorties and float(fsj[a]) + home <= limit:  # launch, drive on
+                out.append(("open", k, d, -1, a, -1, tj, arrive, a, leg))
+            for b in recover:  # ... and drives on to another stop near j to recover it
+                if b == a or float(fsj[a]) + float(fsj[b]) > limit:
                     continue
-                arrive = t.ready + float(tt[here, a])
-                flight = float(fsj[a]) / vd
-                leg = flight + tau
-                tj = max(arrive + leg, rj)
-                leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
-                rec = tj + flight + tau
-                out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
-                for b in recover:  # ... and drives on to another stop near j to recover it
-                    if b == a or float(fsj[a]) + float(fsj[b]) > limit:
-                        continue
-                    rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
-                    out.append(("drone", k, d, -1, a, b, tj, rec, b, leg))
-            # sortie merging (c > 1): j appended to the drone's last sortie
-            if drone.sorties and self.c > 1:
-                sortie = drone.sorties[-1]
-                if sortie[2] == last and len(sortie[1]) < self.c:
-                    u = sortie[1][-1]
-                    hop = float(self.fc[u, j])
-                    if drone.flown + hop + float(fsj[here]) <= limit:
-                        leg = hop / vd + tau
-                        tj = max(drone.last_time + leg, rj)
-                        rec = max(tj + float(fsj[here]) / vd, t.arrival[last]) + tau
-                        out.append(("merge", k, d, last, -1, -1, tj, max(t.ready, rec), here, leg))
-        return out
+                rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
+                out.append(("drone", k, d, -1, a, b, tj, rec, b, leg))
+        # sortie merging (c > 1): j appended to the drone's last sortie
+        if drone.sorties and self.c > 1:
+            sortie = drone.sorties[-1]
+            if sortie[2] == last and len(sortie[1]) < self.c:
+                u = sortie[1][-1]
+                hop = float(self.fc[u, j])
+                if drone.flown + hop + float(fsj[here]) <= limit:
+                    leg = hop / vd + tau
+                    tj = max(drone.last_time + leg, rj)
+                    rec = max(tj + float(fsj[here]) / vd, t.arrival[last]) + tau
+                    out.append(("merge", k, d, last, -1, -1, tj, max(t.ready, rec), here, leg))
+
+    def _open_options(
+        self, j: int, k: int, d: int, t: _Truck, rj: float, out: list[Option]
+    ) -> None:
+        """Customer j joins drone d's open sortie (fewer than c customers, and the longer
+        flight can still reach a stop near j within the range); the truck is not delayed."""
+        drone = t.drones[d]
+        sortie = drone.sorties[-1]
+        if len(sortie[1]) >= self.c:
+            return
+        hop = float(self.fc[sortie[1][-1], j])
+        home = min((float(self.fs[j, w]) for w in self.near[j]), default=math.inf)
+        if drone.flown + hop + home > self.limit:
+            return
+        leg = hop / self.vd + self.tau
+        tj = max(drone.last_time + leg, rj)
+        out.append(("join", k, d, -1, -1, -1, tj, t.ready, t.route[-1], leg))
+
+    def close(self, t: _Truck, d: int) -> None:
+        """Place the recovery of drone d's open sortie: at truck ``t``'s last position when
+        the rest of the flight is within range (the truck waits), else at the stop nearest the
+        sortie's last customer that is (the truck drives there)."""
+        drone = t.drones[d]
+        if not drone.open:
+            return
+        sortie = drone.sorties[-1]
+        u = sortie[1][-1]
+        here = t.route[-1]
+        spare = self.limit - drone.flown
+        if float(self.fs[u, here]) > spare:
+            reach = [w for w in self.near[u] if float(self.fs[u, w]) <= spare]
+            if not reach:  # cannot happen: every open sortie is checked to stay closable
+                raise InstanceError(f"drone {d} cannot be recovered after customer {u}")
+            b = min(reach, key=lambda w: (t.ready + float(self.tt[here, w]), w))
+            t.route.append(b)
+            t.arrival.append(t.ready + float(self.tt[here, b]))
+            t.ready = t.arrival[-1]
+            here = b
+        last = len(t.route) - 1
+        rec = max(drone.last_time + float(self.fs[u, here]) / self.vd, t.arrival[last]) + self.tau
+        sortie[2] = last
+        drone.aboard_pos = last
+        drone.aboard_time = rec
+        drone.open = False
+        t.ready = max(t.ready, rec)
+
+    def close_all(self) -> None:
+        """Close every open sortie (:meth:`close`): the plan is then complete."""
+        for t in self.trucks:
+            for d in range(len(t.drones)):
+                self.close(t, d)
 
     # -- applying ----------------------------------------------------------------------------
     def apply(self, j: int, option: Option, truck: _Truck | None = None) -> None:
@@ -278,11 +382,19 @@ class FleetBuilder:
         changes, for a look-ahead; the builder's own state is untouched)."""
         kind, k, d, p, a, b, tj, ready, _, _ = option
         t = self.trucks[k] if truck is None else truck
+        if kind not in ("truck", "join") and d >= 0 and t.drones[d].open:
+            self.close(t, d)  # the options of an open drone were built after this closure
         if kind == "truck":
             if a >= 0:
                 t.route.append(a)
                 t.arrival.append(t.ready + float(self.tt[t.route[-2], a]))
             t.served.append((len(t.route) - 1, j))
+        elif kind == "join":
+            drone = t.drones[d]
+            sortie = drone.sorties[-1]
+            drone.flown += float(self.fc[sortie[1][-1], j])
+            sortie[1].append(j)
+            drone.last_time = tj
         elif kind == "merge":
             drone = t.drones[d]
             sortie = drone.sorties[-1]
@@ -298,6 +410,15 @@ class FleetBuilder:
                 t.arrival.append(t.ready + float(self.tt[t.route[-2], a]))
                 p = len(t.route) - 1
             launch_stop = t.route[p]
+            if kind == "open":
+                drone.sorties.append([p, [j], -1])
+                drone.flown = float(self.fs[j, launch_stop])
+                drone.last_time = tj
+                drone.open = True
+                t.ready = ready
+                if truck is None:
+                    self._record(j, tj, k, DRONE)
+                return
             if b >= 0:  # the truck leaves its last stop (the new launch stop: at once)
                 depart = t.arrival[-1] if a >= 0 else t.ready
                 t.route.append(b)
@@ -310,11 +431,14 @@ class FleetBuilder:
             drone.aboard_time = self._recovery(t, j, tj)
         t.ready = ready
         if truck is None:
-            self.service[j] = tj
-            self.last_service = max(self.last_service, tj)
-            self.order.append(j)
-            self.truck_of[j] = k
-            self.mode_of[j] = TRUCK if kind == "truck" else DRONE
+            self._record(j, tj, k, TRUCK if kind == "truck" else DRONE)
+
+    def _record(self, j: int, tj: float, k: int, mode: int) -> None:
+        self.service[j] = tj
+        self.last_service = max(self.last_service, tj)
+        self.order.append(j)
+        self.truck_of[j] = k
+        self.mode_of[j] = mode
 
     def _recovery(self, t: _Truck, j: int, tj: float) -> float:
         here = t.route[-1]
@@ -628,6 +752,7 @@ def decode(
     window: int = WINDOW,
     near: int = NEAR_STOPS,
     modes: Sequence[int] | np.ndarray | None = None,
+    open_sorties: bool = False,
 ) -> FleetBuilder:
     """Place the customers in ``order`` (a topological order of G^p), each by its option of
     least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any)
@@ -642,13 +767,17 @@ def decode(
     recovered where the truck is: the order and the modes together express TSP-D's
     operations (launch, truck serves on, recovery), which the free rule alone never builds.
 
+    With ``open_sorties`` the builder also offers open sorties (see the module docstring and
+    :meth:`~taopt.heuristics.fleet.FleetBuilder.close`); every one still open at the end is
+    closed before returning.
+
     Raises
     ------
     InstanceError
         ``order`` is not a permutation respecting the precedences, or ``truck_of[j]`` cannot
         serve j (in mode ``modes[j]``).
     """
-    builder = FleetBuilder(problem, window, near)
+    builder = FleetBuilder(problem, window, near, open_sorties)
     builder.final = final_customers(problem, order, truck_of)
     placed = np.zeros(problem.n, dtype=bool)
     for j in order:
@@ -663,6 +792,7 @@ def decode(
         placed[j] = True
     if not placed.all():
         raise InstanceError(f"order misses customer {int(np.flatnonzero(~placed)[0])}")
+    builder.close_all()
     return builder
 
 

@@ -137,7 +137,8 @@ def test_ils_never_worse_than_its_start():
     start = min(taopt.solve(p, m).objective for m in ("MMA", "SMMA"))
     s = taopt.solve(p, "ILS", iterations=3, sample=10)
     assert s.objective <= start * (1 + 1e-12)
-    assert s.info["start_objective"] == pytest.approx(start)
+    # <=: under last_service ILS decodes the rules' encodings with open sorties too
+    assert s.info["start_objective"] <= start * (1 + 1e-12)
 
 
 def test_truck_routes_respect_precedence_and_servers():
