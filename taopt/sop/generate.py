@@ -158,11 +158,11 @@ def rbg_like_sop(
 def esc_like_sop(n: int, seed: int, closure: float = 0.15, high: int = 1000) -> SopProblem:
     """A stand-in for TSPLIB's ESC family (60-80 nodes in ESC63, ESC78): random precedences
     (pairs of a random order, added until the closure holds ``closure`` of the inner pairs;
-    ESC25 and ESC47: 0.11-0.18) and integer costs in ``[0, high]`` with a fifth of them 0
+    ESC25 and ESC47: 0.11-0.18) and integer costs in ``[0, high]`` with one in twenty 0
     (ESC's zero-cost arcs make many orders tie)."""
     rng = np.random.default_rng([37, n, seed])
     cost = rng.integers(0, high + 1, size=(n, n)).astype(float)
-    cost[rng.random((n, n)) < 0.2] = 0.0
+    cost[rng.random((n, n)) < 0.05] = 0.0
     np.fill_diagonal(cost, 0.0)
     inner = rng.permutation(np.arange(1, n - 1))
     m = len(inner)
