@@ -107,8 +107,12 @@ __all__ = [
 #: :mod:`taopt.ideals`); kept for callers that compared against it.
 MAX_NODES = 1 << 30
 
-#: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
-IDEAL_CAP = 20_000
+#: Default cap of :func:`count_ideals`: below it the portfolio runs the DP alone for the
+#: whole limit. CPU seconds to count the ideals of the .4 files: p43.4 37,921 in 0.02,
+#: ry48p.4 68,657 in 0.03, ft53.4 154,689 in 0.05 (at 20,000 they were "too many": the DP
+#: got half of a 60 s limit and did not close ry48p.4 and ft53.4 at load 9-11; alone it
+#: closes them); a count past the cap stops early (every layer checks it).
+IDEAL_CAP = 200_000
 
 #: Share of the time limit the beam passes may use.
 BEAM_SHARE = 0.25
@@ -149,10 +153,10 @@ _DIRECT = 1 << 18
 #: Entries (states x nodes) of the dense per-state arrays of the completion bound at a time.
 DENSE_BLOCK = 1 << 20
 
-#: Up to this many nodes, and with at least :data:`DENSE_ARC_SHARE` of the pairs usable
-#: arcs, the per-ideal sums of the completion bound are dense ``n x n`` minima (3,000 states:
-#: esc-like-65 0.16 s against 0.22 s by binary search; rbg048a, 0.44 arc share, 0.12 against
-#: 0.07 s).
+#: Masks of two words (65 to this many nodes) with at least :data:`DENSE_ARC_SHARE` of the
+#: pairs usable arcs get the per-ideal sums of the completion bound as dense ``n x n``
+#: minima (CPU seconds for 3,000 states of esc-like-65: 0.040 against 0.052 by binary
+#: search); one-word masks are faster by binary search (ESC47: 0.023 against 0.028).
 DENSE_NODES = 100
 DENSE_ARC_SHARE = 0.75
 
@@ -344,7 +348,7 @@ class _Bound:
         a node not in ``U`` or entered from ``v`` only), the available nodes, the count of
         nodes entered from ``v`` only, and ``U`` less ``start`` (bool ``(k, n)`` arrays)."""
         n, bits, pred = self.n, self.bits, self.pred
-        if n <= DENSE_NODES and self.arc_share >= DENSE_ARC_SHARE:
+        if self.wide and n <= DENSE_NODES and self.arc_share >= DENSE_ARC_SHARE:
             return self._per_ideal_dense(mask)
         unvisited = ~mask & ideals.full(n)
         count = len(mask)
