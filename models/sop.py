@@ -572,6 +572,15 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
 #: (:func:`dp_state_cap`) is what keeps a DP stage within the memory.
 DP_STATES_PER_SECOND = 8_000
 
+
+def dp_states_per_second(n: int) -> float:
+    """States a DP stage keeps per second on ``n`` nodes: :data:`DP_STATES_PER_SECOND` up to
+    64 nodes, then in proportion to ``64 / n`` (a state's bound and extensions cost about
+    ``n`` node steps: the rbg-like stand-ins of 110-175 nodes kept 1,200-2,700 a second at
+    load 11, and a flat rate put the estimate 2.3-2.8x above their peaks)."""
+    return DP_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1))
+
+
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
 MILP_TIME_SHARE = 0.1
@@ -647,7 +656,7 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
         # those using the time left share the other half)
         share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(DP_STATES_PER_SECOND * seconds * share)
+        wanted = int(dp_states_per_second(problem.n) * seconds * share)
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
@@ -1134,10 +1143,10 @@ def solve_sop_problem(
     ) -> None:
         """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
         largest over the stages run): a DP stage keeps at most its cap, the states the ideals
-        allow and :data:`DP_STATES_PER_SECOND` a second (after its beam pass); a MILP its
+        allow and :func:`dp_states_per_second` a second (after its beam pass); a MILP its
         nonzeros, compiled or only built."""
         if seconds is not None:
-            states = min(states, DP_STATES_PER_SECOND * seconds)
+            states = min(states, dp_states_per_second(problem.n) * seconds)
         if not capped:
             states = min(states, every_state)
         dp = max(dp_bytes(problem.n, states), beam_bytes(problem.n, 1024)) if states else 0.0

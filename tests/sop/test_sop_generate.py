@@ -86,3 +86,21 @@ def test_portfolio_certifies_a_wide_rbg_like_instance():
     assert evaluate_order(problem, result.order) == result.objective
     again = sop_dp.solve_sop_dp(problem, beam_width=0, both=False)
     assert again.status == OPTIMAL and again.objective == result.objective
+
+
+def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
+    """The states a DP stage is expected to keep per second halve at 128 nodes, so the
+    estimate at 60 s of a 150-node rbg-like instance counts at most that many states."""
+    from taopt.models.sop import (
+        BASE_BYTES,
+        DP_STATES_PER_SECOND,
+        _footprint,
+        dp_bytes,
+        dp_states_per_second,
+    )
+
+    assert dp_states_per_second(40) == dp_states_per_second(64) == DP_STATES_PER_SECOND
+    assert dp_states_per_second(128) == DP_STATES_PER_SECOND / 2
+    problem = rbg_like_sop(150, 1, 0.8)
+    estimate, _ = _footprint(problem, {"time_limit": 60.0})
+    assert estimate <= BASE_BYTES + dp_bytes(150, 60 * dp_states_per_second(150)) + 1
