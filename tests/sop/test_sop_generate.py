@@ -110,6 +110,7 @@ def test_dp_state_share_of_the_estimate_falls_with_denser_precedence():
     """A state's estimated bytes fall with the closure's share, within [0.2, 1]."""
     from taopt.models.sop import dp_state_share
 
-    shares = [dp_state_share(rbg_like_sop(60, 1, c)) for c in (0.1, 0.5, 0.9)]
+    shares = [dp_state_share(esc_like_sop(60, 1, 0.1))]
+    shares += [dp_state_share(rbg_like_sop(60, 1, c)) for c in (0.5, 0.9)]
     assert shares[0] >= shares[1] >= shares[2]
     assert all(0.2 <= s <= 1.0 for s in shares) and shares[0] == 1.0
