@@ -665,7 +665,8 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         # already, so it is not refused (the answer is the cheap bounds and the warm start)
         total = min(total, limit_gb(limit) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
-    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
+    counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
+    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
     if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
         # stage frees its states when it ends, so the peak is the longest stage's: the whole
@@ -1012,6 +1013,12 @@ SECOND_STAGE_SHARE = 0.75
 
 PORTFOLIO_ENGINES = ("auto", "dp", "milp")
 
+#: Share of the time limit the portfolio (and its memory estimate) may spend counting ideals
+#: up to :data:`taopt.models.sop_dp.IDEAL_CAP`; a count cut short is "too many ideals" (the
+#: DP gets :data:`DP_SHARE`). ESC47 under load at a 1 s limit spent the whole limit counting
+#: to 200,000 without it.
+COUNT_SHARE = 0.1
+
 #: The portfolio's MILP stage: ``"cuts"``, the arc model with precedence path cuts
 #: (:func:`taopt.models.sop_cuts.solve_sop_cuts`; root bound 28,098 on p43.1 against the flow
 #: model's 2,720, optimum 28,140), or ``"flow"``/``"mtz"`` (:func:`solve_sop`). With
@@ -1135,7 +1142,11 @@ def solve_sop_problem(
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
     counting = time.perf_counter()
-    ideals, capped = count_ideals(problem, cap, deadline if deadline.limited else None)
+    # the count gets COUNT_SHARE of the limit: past it the ideals are taken as too many
+    counting_deadline = (
+        Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
+    )
+    ideals, capped = count_ideals(problem, cap, counting_deadline)
     counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
