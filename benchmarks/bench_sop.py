@@ -12,6 +12,9 @@ Run::
     python benchmarks/bench_sop.py --resources 10 --load   # wall time and peak RSS, per process
     python benchmarks/bench_sop.py --table 60 --load  # every SOP: exact beside CP-SAT
     python benchmarks/bench_sop.py --roots 120        # root bounds: flow LP vs precedence cuts
+    python benchmarks/bench_sop.py --table 60 --unseen --load   # the stand-ins (UNSEEN)
+    python benchmarks/bench_sop.py --resources 60 --unseen --load
+    python benchmarks/bench_sop.py --table 60 --methods exact ESC25   # one method only
 
 ``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
 every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints status,

@@ -11,7 +11,11 @@ the tests and ``benchmarks/bench_sop.py`` draw from (seeded, deterministic).
   between chains: few ideals (at most the product of the chain lengths plus one), many
   nodes.
 * :func:`atsp_sop`: an ATSP cost matrix (a TSPLIB ``.atsp`` file) made a path from node 0
-  to a copy of node 0, with :func:`random_sop`'s precedences.
+  to a copy of node 0, with :func:`random_sop`'s precedences or random pairs up to a
+  closure share (``closure=``, TSPLIB's .1-.4 densities).
+* :func:`rbg_like_sop` and :func:`esc_like_sop`: stand-ins for TSPLIB's rbg and ESC families
+  (chains with cross links to a closure share, small integer costs; sparse random
+  precedences, costs up to 1000), the unseen instances of issue 33.
 
 Example
 -------
