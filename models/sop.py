@@ -1074,7 +1074,8 @@ def solve_sop_problem(
     MILP for sparse precedence.
 
     Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
-    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a fraction of a second).
+    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
+    :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
     states are at most n times the ideals. Otherwise the DP runs first with at most
     ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
