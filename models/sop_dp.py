@@ -158,6 +158,9 @@ DENSE_BLOCK = 1 << 20
 #: minima (CPU seconds for 3,000 states of esc-like-65: 0.040 against 0.052 by binary
 #: search); one-word masks are faster by binary search (ESC47: 0.023 against 0.028).
 DENSE_NODES = 100
+
+#: The least share of usable arcs (among the ordered pairs) for the dense minima of
+#: :data:`DENSE_NODES`.
 DENSE_ARC_SHARE = 0.75
 
 
