@@ -572,6 +572,15 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
 #: (:func:`dp_state_cap`) is what keeps a DP stage within the memory.
 DP_STATES_PER_SECOND = 8_000
 
+
+def dp_states_per_second(n: int) -> float:
+    """States a DP stage keeps per second on ``n`` nodes: :data:`DP_STATES_PER_SECOND` up to
+    64 nodes, then in proportion to ``64 / n`` (a state's bound and extensions cost about
+    ``n`` node steps: the rbg-like stand-ins of 110-175 nodes kept 1,200-2,700 a second at
+    load 11, and a flat rate put the estimate 2.3-2.8x above their peaks)."""
+    return DP_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1))
+
+
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
 MILP_TIME_SHARE = 0.1
@@ -584,6 +593,22 @@ def dp_bytes(n: int, states: float) -> float:
 
     extra = 8.0 * (words(n) - 1) if is_wide(n) else 0.0
     return (DP_BYTES_PER_STATE + extra) * float(states)
+
+
+def dp_state_share(problem: SopProblem) -> float:
+    """The share of :data:`DP_BYTES_PER_STATE` a kept state costs on ``problem``'s precedence:
+    ``(1 - c) / 0.89`` for a closure holding a share ``c`` of the inner pairs, in
+    ``[0.2, 1]``. A state's work arrays follow its extensions, fewer under dense precedence:
+    per state the measured peaks spread from 94 B (p43.4, c = 0.58) to 1.5 KB (ESC47,
+    c = 0.11), and with the DP alone for a whole 60 s limit the flat constant put p43.4's
+    estimate at 2.4x its peak. Used for the estimate only; the state caps keep the full
+    constant."""
+    m = problem.n - 2
+    if m < 2:
+        return 1.0
+    ends = 2 * m + 1  # start before and end after every node
+    share = max(0.0, problem.closure.number_of_edges() - ends) / (m * (m - 1) / 2)
+    return float(min(1.0, max(0.2, (1.0 - share) / 0.89)))
 
 
 #: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
@@ -640,18 +665,19 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         # already, so it is not refused (the answer is the cheap bounds and the warm start)
         total = min(total, limit_gb(limit) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
-    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP)
+    counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
+    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
     wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
     if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
         # stage frees its states when it ends, so the peak is the longest stage's: the whole
         # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
         # those using the time left share the other half)
         share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(DP_STATES_PER_SECOND * seconds * share)
+        wanted = int(dp_states_per_second(problem.n) * seconds * share)
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
-    total = BASE_BYTES + dp_bytes(problem.n, states)
+    total = BASE_BYTES + dp_bytes(problem.n, states) * dp_state_share(problem)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
     # the MILP runs only after capped DP stages, and takes its memory when it is compiled for
@@ -987,6 +1013,12 @@ SECOND_STAGE_SHARE = 0.75
 
 PORTFOLIO_ENGINES = ("auto", "dp", "milp")
 
+#: Share of the time limit the portfolio (and its memory estimate) may spend counting ideals
+#: up to :data:`taopt.models.sop_dp.IDEAL_CAP`; a count cut short is "too many ideals" (the
+#: DP gets :data:`DP_SHARE`). ESC47 under load at a 1 s limit spent the whole limit counting
+#: to 200,000 without it.
+COUNT_SHARE = 0.1
+
 #: The portfolio's MILP stage: ``"cuts"``, the arc model with precedence path cuts
 #: (:func:`taopt.models.sop_cuts.solve_sop_cuts`; root bound 28,098 on p43.1 against the flow
 #: model's 2,720, optimum 28,140), or ``"flow"``/``"mtz"`` (:func:`solve_sop`). With
@@ -1042,7 +1074,8 @@ def solve_sop_problem(
     MILP for sparse precedence.
 
     Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
-    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a fraction of a second).
+    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
+    :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
     states are at most n times the ideals. Otherwise the DP runs first with at most
     ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
@@ -1110,7 +1143,11 @@ def solve_sop_problem(
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
     counting = time.perf_counter()
-    ideals, capped = count_ideals(problem, cap, deadline if deadline.limited else None)
+    # the count gets COUNT_SHARE of the limit: past it the ideals are taken as too many
+    counting_deadline = (
+        Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
+    )
+    ideals, capped = count_ideals(problem, cap, counting_deadline)
     counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
@@ -1125,6 +1162,7 @@ def solve_sop_problem(
     if not milp_ok:
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
+    state_share = dp_state_share(problem)
 
     def expect(
         states: float = 0.0,
@@ -1134,13 +1172,14 @@ def solve_sop_problem(
     ) -> None:
         """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
         largest over the stages run): a DP stage keeps at most its cap, the states the ideals
-        allow and :data:`DP_STATES_PER_SECOND` a second (after its beam pass); a MILP its
+        allow and :func:`dp_states_per_second` a second (after its beam pass); a MILP its
         nonzeros, compiled or only built."""
         if seconds is not None:
-            states = min(states, DP_STATES_PER_SECOND * seconds)
+            states = min(states, dp_states_per_second(problem.n) * seconds)
         if not capped:
             states = min(states, every_state)
-        dp = max(dp_bytes(problem.n, states), beam_bytes(problem.n, 1024)) if states else 0.0
+        dp_part = dp_bytes(problem.n, states) * state_share
+        dp = max(dp_part, beam_bytes(problem.n, 1024)) if states else 0.0
         stage(BASE_BYTES + dp + sop_milp_bytes(nonzeros, compiled))
 
     def stage(need: float) -> None:

@@ -107,8 +107,12 @@ __all__ = [
 #: :mod:`taopt.ideals`); kept for callers that compared against it.
 MAX_NODES = 1 << 30
 
-#: Default cap of :func:`count_ideals` (well under a second of numpy on 2 shared cores).
-IDEAL_CAP = 20_000
+#: Default cap of :func:`count_ideals`: below it the portfolio runs the DP alone for the
+#: whole limit. CPU seconds to count the ideals of the .4 files: p43.4 37,921 in 0.02,
+#: ry48p.4 68,657 in 0.03, ft53.4 154,689 in 0.05 (at 20,000 they were "too many": the DP
+#: got half of a 60 s limit and did not close ry48p.4 and ft53.4 at load 9-11; alone it
+#: closes them); a count past the cap stops early (every layer checks it).
+IDEAL_CAP = 200_000
 
 #: Share of the time limit the beam passes may use.
 BEAM_SHARE = 0.25
@@ -145,6 +149,19 @@ _ONE = np.uint64(1)
 #: Below this many (state, arc) pairs the cheapest open arc is found by one 2-D test
 #: instead of a binary search (numpy call overhead dominates small layers).
 _DIRECT = 1 << 18
+
+#: Entries (states x nodes) of the dense per-state arrays of the completion bound at a time.
+DENSE_BLOCK = 1 << 20
+
+#: Masks of two words (65 to this many nodes) with at least :data:`DENSE_ARC_SHARE` of the
+#: pairs usable arcs get the per-ideal sums of the completion bound as dense ``n x n``
+#: minima (CPU seconds for 3,000 states of esc-like-65: 0.040 against 0.052 by binary
+#: search); one-word masks are faster by binary search (ESC47: 0.023 against 0.028).
+DENSE_NODES = 100
+
+#: The least share of usable arcs (among the ordered pairs) for the dense minima of
+#: :data:`DENSE_NODES`.
+DENSE_ARC_SHARE = 0.75
 
 
 def _predecessor_masks(problem: SopProblem) -> np.ndarray:
@@ -221,6 +238,10 @@ class _Bound:
         self.pred = np.zeros_like(bits) if pred is None else pred
         self.bits = bits
         self.wide = bits.ndim == 2
+        #: Share of the ordered pairs that are usable arcs (sparse: short binary searches).
+        self.arc_share = float(np.isfinite(usable).sum()) / max(n * (n - 1), 1)
+        self._no_loops = usable.copy()
+        np.fill_diagonal(self._no_loops, np.inf)
         self.into = [self._sorted(usable[:, w], bits) for w in range(n)]
         self.out = [self._sorted(usable[u, :], bits) for u in range(n)]
 
@@ -266,7 +287,13 @@ class _Bound:
     def potential(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
         """``P(I, v)``: alpha of ``v`` and of every node still to be left, beta of every node
         still to be entered. With reduced costs >= 0 it is a valid bound by itself."""
-        constant = self.alpha[last].astype(float)
+        group, unique = _groups(mask)
+        return self.alpha[last] + self._open_prices(unique)[group]
+
+    def _open_prices(self, mask: np.ndarray) -> np.ndarray:
+        """Per mask, the prices of the nodes still to be left and entered (``P`` less
+        ``alpha_v``)."""
+        constant = np.zeros(len(mask))
         for w in range(self.n):
             if w != self.start:
                 todo = ~has(mask, w)
@@ -285,52 +312,118 @@ class _Bound:
         cheapest arc from ``U``, plus the least ``c'[v, w] - (that arc)`` over available
         ``w`` (one node swaps its in-arc for the arc from ``v``); ``out'`` leaves ``v``
         towards an available node.
+
+        The sums over ``U`` depend on the ideal alone: they are computed once per distinct
+        mask among consecutive states (a layer is sorted by mask, and several last nodes
+        share an ideal: 4.7 states per mask on ry48p.4), the terms of ``v`` as dense
+        ``states x n`` arrays in blocks of :data:`DENSE_BLOCK` entries.
         """
+        n = self.n
+        group, unique = _groups(mask)
+        in_sum, out_sum, entry, ready, forced, todo_all = self._per_ideal(unique)
+        result = np.empty(len(mask))
+        step = max(1, DENSE_BLOCK // n)
+        for lo in range(0, len(mask), step):
+            g = group[lo : lo + step]
+            arc = self.usable[last[lo : lo + step]]  # c'[v, .] per state
+            avail = ready[g]
+            from_last = np.where(avail, arc, np.inf)
+            out_last = from_last.min(axis=1)
+            out_last[~avail.any(axis=1)] = 0.0
+            one = entry[g]
+            with np.errstate(invalid="ignore"):
+                swap = np.where(avail & np.isfinite(one), from_last - one, np.inf).min(axis=1)
+            forced_here = forced[g]
+            forced_cost = np.where(todo_all[g] & ~np.isfinite(one), from_last, 0.0).sum(axis=1)
+            total_in = in_sum[g] + np.where(
+                forced_here == 0, swap, np.where(forced_here == 1, forced_cost, np.inf)
+            )
+            total_out = out_sum[g] + out_last
+            done = ~todo_all[g].any(axis=1)
+            total_in[done] = 0.0
+            total_out[done] = 0.0
+            result[lo : lo + step] = np.maximum(total_in, total_out)
+        return result
+
+    def _per_ideal(self, mask: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Per ideal: the sums over ``U`` of the cheapest arc into (``in``) and out of
+        (``out``) each node from/to ``U``, that arc into each node (``entry``, ``inf`` for
+        a node not in ``U`` or entered from ``v`` only), the available nodes, the count of
+        nodes entered from ``v`` only, and ``U`` less ``start`` (bool ``(k, n)`` arrays)."""
         n, bits, pred = self.n, self.bits, self.pred
+        if self.wide and n <= DENSE_NODES and self.arc_share >= DENSE_ARC_SHARE:
+            return self._per_ideal_dense(mask)
         unvisited = ~mask & ideals.full(n)
         count = len(mask)
-        total_in = np.zeros(count)
-        total_out = np.zeros(count)
-        swap = np.full(count, np.inf)  # least c'[v, w] - in_U(w) over available w
-        forced = np.zeros(count, dtype=np.int64)  # nodes of U enterable from v only
-        forced_cost = np.zeros(count)
-        available = np.zeros_like(mask)
+        in_sum = np.zeros(count)
+        out_sum = np.zeros(count)
+        entry = np.full((count, n), np.inf)
+        ready = np.zeros((count, n), dtype=bool)
+        todo_all = np.zeros((count, n), dtype=bool)
+        forced = np.zeros(count, dtype=np.int64)
         for w in range(n):
             if w == self.start:
                 continue
             todo = ~has(mask, w)
             if not todo.any():
                 continue
+            rows = np.flatnonzero(todo)
+            todo_all[rows, w] = True
             others = unvisited[todo] & ~bits[w]
             from_open = self._cheapest(others, self.into[w])
-            ready = holds(mask[todo], pred[w])
-            from_last = np.where(ready, self.usable[last[todo], w], np.inf)
-            available[np.flatnonzero(todo)[ready]] |= bits[w]
+            ready[rows, w] = holds(mask[todo], pred[w])
             finite = np.isfinite(from_open)
-            add = np.where(finite, from_open, 0.0)
-            total_in[todo] += add
-            with np.errstate(invalid="ignore"):
-                delta = np.where(finite, from_last - add, np.inf)
-            swap[todo] = np.minimum(swap[todo], delta)
-            only = ~finite
-            forced[todo] += only
-            forced_cost[todo] += np.where(only, from_last, 0.0)
+            entry[rows, w] = from_open
+            in_sum[todo] += np.where(finite, from_open, 0.0)
+            forced[todo] += ~finite
             if w != self.end:
-                total_out[todo] += self._cheapest(others, self.out[w])
-        # no forced node: one swap; one: it is the node entered from v; more: infeasible
-        total_in += np.where(forced == 0, swap, np.where(forced == 1, forced_cost, np.inf))
-        done = ~nonzero(unvisited, self.wide)
-        total_in[done] = 0.0
-        total_out += self._cheapest_from_last(available, last)
-        total_out[done] = 0.0
-        return np.maximum(total_in, total_out)
+                out_sum[todo] += self._cheapest(others, self.out[w])
+        return in_sum, out_sum, entry, ready, forced, todo_all
 
-    def _cheapest_from_last(self, unvisited: np.ndarray, last: np.ndarray) -> np.ndarray:
-        result = np.full(len(last), np.inf)
-        for v in np.unique(last):
-            here = last == v
-            result[here] = self._cheapest(unvisited[here], self.out[v])
-        return np.where(nonzero(unvisited, self.wide), result, 0.0)
+    def _per_ideal_dense(self, mask: np.ndarray) -> tuple[np.ndarray, ...]:
+        """:meth:`_per_ideal` as ``ideals x n x n`` minima in blocks (no loop over nodes):
+        faster up to :data:`DENSE_NODES` nodes, where ``n`` binary searches per ideal cost
+        more in numpy calls than ``n ** 2`` comparisons."""
+        n = self.n
+        count = len(mask)
+        node = np.arange(n)
+        if mask.ndim == 1:
+            member = ((mask[:, None] >> node.astype(np.uint64)[None, :]) & _ONE) != 0
+            ready = (mask[:, None] & self.pred[None, :]) == self.pred[None, :]
+        else:
+            member = ((mask[:, node // 64] >> (node % 64).astype(np.uint64)[None, :]) & _ONE) != 0
+            ready = np.ones((count, n), dtype=bool)
+            for i in range(mask.shape[1]):
+                ready &= (self.pred[None, :, i] & ~mask[:, None, i]) == 0
+        todo_all = ~member
+        todo_all[:, self.start] = False
+        ready &= todo_all
+        arcs = self._no_loops
+        entry = np.empty((count, n))
+        leave = np.empty((count, n))
+        step = max(1, DENSE_BLOCK // (n * n))
+        for lo in range(0, count, step):
+            open_ = ~member[lo : lo + step]
+            entry[lo : lo + step] = np.where(open_[:, :, None], arcs[None], np.inf).min(axis=1)
+            leave[lo : lo + step] = np.where(open_[:, None, :], arcs[None], np.inf).min(axis=2)
+        entry[~todo_all] = np.inf
+        finite = np.isfinite(entry)
+        in_sum = np.where(finite, entry, 0.0).sum(axis=1)
+        forced = (todo_all & ~finite).sum(axis=1)
+        leaving = todo_all.copy()
+        leaving[:, self.end] = False
+        out_sum = np.where(leaving, leave, 0.0).sum(axis=1)
+        return in_sum, out_sum, entry, ready, forced, todo_all
+
+
+def _groups(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Runs of equal consecutive masks: each state's run index and one mask per run (equal
+    masks that are not consecutive stay apart: correct, only less shared)."""
+    if len(mask) <= 1:
+        return np.zeros(len(mask), dtype=np.int64), mask
+    new = np.ones(len(mask), dtype=bool)
+    new[1:] = differs(mask)
+    return np.cumsum(new) - 1, mask[new]
 
 
 def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | None = None) -> _Bound:

@@ -191,10 +191,10 @@ def use_the_rest(
     peak before it runs."""
     from taopt.models.sop import (
         BASE_BYTES,
-        DP_STATES_PER_SECOND,
         _combine,
         dp_bytes,
         dp_state_cap,
+        dp_states_per_second,
     )
     from taopt.models.sop_dp import NARROW_BEAM, solve_sop_dp
 
@@ -207,7 +207,7 @@ def use_the_rest(
             break
         cap = min(2 * cap, memory_cap)
         if stage is not None:  # the states it can keep in its time, at most its cap
-            made = cap if left is None else min(cap, DP_STATES_PER_SECOND * left)
+            made = cap if left is None else min(cap, dp_states_per_second(problem.n) * left)
             stage(BASE_BYTES + dp_bytes(problem.n, made))
         again = solve_sop_dp(
             problem,

@@ -219,8 +219,7 @@ def ideal_layers(
         cur = layers[-1]
         parts = []
         size = 0
-        for j in range(n):
-            part = cur[~has(cur, j) & holds(cur, need[j])] | node[j]
+        for part in _extensions(cur, need, node, n):
             parts.append(part)
             size += len(part)
             if limited and deadline.expired():
@@ -240,6 +239,35 @@ def ideal_layers(
         if total > cap or (limited and deadline.expired()):
             return None
     return layers
+
+
+#: Entries (ideals x nodes) of one block of :func:`_extensions` on wide masks.
+EXTENSION_BLOCK = 1 << 20
+
+
+def _extensions(cur: np.ndarray, need: np.ndarray, node: np.ndarray, n: int) -> Any:
+    """The ideals of ``cur`` grown by one node each, in parts (duplicates kept).
+
+    One part per node (a vectorised test over the layer), except for a narrow layer of wide
+    masks (``ideals x n`` at most :data:`EXTENSION_BLOCK`): one part, every node tested at
+    once (W numpy calls instead of ``n * W``). CPU seconds to count the 117,302 ideals of
+    rbg-like-380 (380 nodes, about 300 a layer): 3.75 node by node, 1.15 at once; a wide
+    layer is faster node by node (a million ideals of ftv70-0.3: 1.3 s against 2.2 s).
+    """
+    if cur.ndim == 1 or len(cur) * n > EXTENSION_BLOCK:
+        for j in range(n):
+            yield cur[~has(cur, j) & holds(cur, need[j])] | node[j]
+        return
+    step = max(1, EXTENSION_BLOCK // n)
+    word = np.arange(n) // 64
+    shift = (np.arange(n) % 64).astype(np.uint64)
+    for lo in range(0, len(cur), step):
+        block = cur[lo : lo + step]
+        addable = ((block[:, word] >> shift[None, :]) & _ONE) == 0  # j not in the ideal
+        for i in range(block.shape[1]):
+            addable &= (need[None, :, i] & ~block[:, None, i]) == 0  # j's predecessors in it
+        rows, cols = np.nonzero(addable)
+        yield block[rows] | node[cols]
 
 
 def count_ideals(
