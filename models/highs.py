@@ -613,9 +613,9 @@ class HighsModel:
         """
         highs = self.highs
         limit = math.inf if time_limit is None else max(float(time_limit), 1e-3)
-        highs.setOptionValue("time_limit", limit)
-        highs.setOptionValue("mip_rel_gap", 1e-4 if mip_rel_gap is None else float(mip_rel_gap))
         is_mip = self.is_mip and not self._relaxed
+        highs.setOptionValue("time_limit", self._clock_limit(limit, is_mip))
+        highs.setOptionValue("mip_rel_gap", 1e-4 if mip_rel_gap is None else float(mip_rel_gap))
         if is_mip:  # a limited MIP run leaves out the phases that ignore the clock
             for name, (limited, free) in CLOCKLESS_MIP_PHASES.items():
                 if name not in (options or {}):
@@ -678,7 +678,7 @@ class HighsModel:
                         self.point_objective(),
                     )
                 left = limit - (time.perf_counter() - began)
-                highs.setOptionValue("time_limit", max(left, 1e-3))
+                highs.setOptionValue("time_limit", self._clock_limit(max(left, 1e-3), is_mip))
                 highs.setOptionValue("presolve", "off")
                 try:
                     if start is not None:
@@ -702,6 +702,18 @@ class HighsModel:
             hooks.close()
             self._interrupted = highs.getModelStatus() == highspy.HighsModelStatus.kInterrupt
         return run
+
+    def _clock_limit(self, seconds: float, is_mip: bool) -> float:
+        """HiGHS's ``time_limit`` value that gives this run ``seconds``.
+
+        HiGHS 1.16 compares an LP's ``time_limit`` with its run clock summed over every run of
+        the same object (a MIP run is timed on its own): a cut loop that re-solved its LP with
+        "the time left" was stopped at once after a few rounds, saying ``time_limit`` long
+        before its deadline. So an LP run is given the run time so far plus its seconds.
+        """
+        if is_mip or math.isinf(seconds):
+            return seconds
+        return float(self.highs.getRunTime()) + seconds
 
     def point_objective(self, solution: Any = None) -> float:
         """``c·x + offset`` of the last solution (or of ``solution``), computed here."""

@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
@@ -313,3 +314,27 @@ def test_alarm_after_stops_pure_python_and_restores_the_handler():
     assert stopped
     assert signal.getsignal(signal.SIGALRM) is before
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+
+
+def test_highs_model_lp_limit_is_per_run():
+    """An LP re-solved after a cut gets its own time limit: HiGHS sums an LP's run clock over
+    every run of one object, so before the fix a re-solve given half the first solve's time
+    stopped at once with ``time_limit`` although it needed a few milliseconds."""
+    import scipy.sparse as sp
+
+    from taopt.models.highs import HighsModel
+
+    rng = np.random.default_rng(1)
+    n, m = 1000, 700
+    matrix = sp.random(m, n, density=0.02, random_state=1, format="csr")
+    model = HighsModel.from_arrays(
+        -rng.random(n), matrix, np.full(m, -np.inf), np.ones(m), np.zeros(n), np.ones(n)
+    )
+    began = time.perf_counter()
+    assert model.solve().status == "optimal"
+    first = time.perf_counter() - began
+    cut = sp.csr_matrix(rng.random((1, n)))
+    point = np.asarray(model.highs.getSolution().col_value)
+    model.add_rows(cut, None, np.array([0.999 * float((cut @ point)[0])]))
+    again = model.solve(time_limit=first / 2)
+    assert again.status == "optimal", again.solver_status
