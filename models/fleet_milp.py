@@ -71,14 +71,14 @@ from taopt.errors import InstanceError, SolverError
 from taopt.fleet.bounds import fleet_lower
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.models.highs import _SOLVER_STATUS, CLOCKLESS_MIP_PHASES, HighsModel, HighsRun
+from taopt.models.highs import CLOCKLESS_MIP_PHASES, HighsModel, HighsRun, highs_outcome
 from taopt.registry import register_method
 from taopt.result import INFEASIBLE, OPTIMAL, TIME_LIMIT, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.deadline import overrun_allowance
 from taopt.runtime.highs import run_arrays
 from taopt.runtime.workers import drop_pool, shared_pool
-from taopt.status import STOPS, decide
+from taopt.status import STOPS
 
 #: A model with at least this many nonzeros, solved under a time limit, is run in a worker
 #: process (:func:`~taopt.runtime.highs.run_arrays`), killed if HiGHS overruns the limit in
@@ -912,30 +912,15 @@ def _run_highs(
 def _as_run(out: dict[str, Any], model: FleetMilp, time_limited: bool) -> HighsRun:
     """What :func:`~taopt.runtime.highs.run_arrays` found, under the status rules of
     :func:`taopt.models.highs.solve_highs`."""
-    solver_status = _SOLVER_STATUS.get(out["model_status"], "solver_error")
-    has_point = out["primal_solution_status"] == 2 and out["col_value"] is not None
-    objective = float(out["objective"]) if has_point else None
-    dual = float(out["mip_dual_bound"])
-    bound = dual if math.isfinite(dual) else None
-    status, stopped_by = decide(
-        solver_status,
-        objective,
-        bound,
-        solver="highs",
-        time_limited=time_limited,
-        has_point=has_point,
-    )
-    return HighsRun(
-        status=status,
-        stopped_by=stopped_by,
-        solver_status=solver_status,
-        has_point=has_point,
-        objective=objective,
-        bound=bound,
-        mip_gap=float(out["mip_gap"]),
-        nodes=int(out["mip_node_count"]),
+    return highs_outcome(
+        out["model_status"],
+        out["primal_solution_status"] == 2 and out["col_value"] is not None,
+        out["objective"],
+        out["mip_dual_bound"],
+        out["mip_gap"],
+        out["mip_node_count"],
         is_mip=len(model.binary) > 0,
-        message="" if solver_status != "solver_error" else f"HiGHS status {out['model_status']}",
+        time_limited=time_limited,
     )
 
 

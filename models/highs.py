@@ -276,23 +276,49 @@ _SOLVER_STATUS = {
 
 def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> HighsRun:
     """:class:`HighsRun` of the last ``highs.run()``: the rules of :func:`solve_highs`."""
-    model_status = highs.getModelStatus()
-    solver_status = _SOLVER_STATUS.get(model_status.name, "solver_error")
     info = highs.getInfo()
-    has_point = int(info.primal_solution_status) == 2
-    objective = float(info.objective_function_value) if has_point else None
+    return highs_outcome(
+        highs.getModelStatus().name,
+        int(info.primal_solution_status) == 2,
+        float(info.objective_function_value),
+        float(info.mip_dual_bound),
+        float(info.mip_gap),
+        int(info.mip_node_count),
+        is_mip=is_mip,
+        time_limited=time_limit is not None,
+        info=info,
+    )
+
+
+def highs_outcome(
+    model_status: str,
+    has_point: bool,
+    objective: float,
+    mip_dual_bound: float,
+    mip_gap: float,
+    nodes: int,
+    *,
+    is_mip: bool,
+    time_limited: bool,
+    info: Any = None,
+) -> HighsRun:
+    """:class:`HighsRun` of one HiGHS run read as plain values (``model_status`` is the
+    ``HighsModelStatus`` name), under the status rules of
+    :func:`~taopt.models.highs.solve_highs`: from a live ``Highs`` (``_highs_run``) or from what
+    :func:`~taopt.runtime.highs.run_arrays` returned in a worker process."""
+    solver_status = _SOLVER_STATUS.get(model_status, "solver_error")
+    value = float(objective) if has_point else None
     bound = None
     if is_mip:
-        dual_bound = float(info.mip_dual_bound)
-        bound = dual_bound if math.isfinite(dual_bound) else None
+        bound = mip_dual_bound if math.isfinite(mip_dual_bound) else None
     elif solver_status == "optimal" and has_point:
-        bound = objective  # an LP at its optimum
+        bound = value  # an LP at its optimum
     status, stopped_by = decide(
         solver_status,
-        objective,
+        value,
         bound,
         solver="highs",
-        time_limited=time_limit is not None,
+        time_limited=time_limited,
         has_point=has_point,
     )
     return HighsRun(
@@ -300,12 +326,12 @@ def _highs_run(highs: highspy.Highs, is_mip: bool, time_limit: float | None) -> 
         stopped_by=stopped_by,
         solver_status=solver_status,
         has_point=has_point,
-        objective=objective,
+        objective=value,
         bound=bound,
-        mip_gap=float(info.mip_gap) if is_mip else math.nan,
-        nodes=int(info.mip_node_count) if is_mip else -1,
+        mip_gap=float(mip_gap) if is_mip else math.nan,
+        nodes=int(nodes) if is_mip else -1,
         is_mip=is_mip,
-        message="" if solver_status != "solver_error" else f"HiGHS status {model_status.name}",
+        message="" if solver_status != "solver_error" else f"HiGHS status {model_status}",
         info=info,
     )
 
