@@ -491,13 +491,145 @@ def fleet_cover_bound(
     return lo
 
 
+# -- the truck-walk table of the label search -------------------------------------------------
+
+#: Largest number of customers for which :func:`walk_table` builds its (2^n, s) table.
+WALK_MAX_CUSTOMERS = 14
+
+
+class WalkTable:
+    """The least covering walk of one truck, per set of customers and per stop.
+
+    Attributes
+    ----------
+    cover : list of int
+        ``cover[w]``: bitmask of the customers a truck standing at stop w can serve or launch a
+        drone toward (its own stop for a truck-servable customer; for a drone-servable one,
+        when the truck carries drones, every stop w with ``d(w, j) + min_q d(j, q) <= range``).
+    value : (2^n, s) float array
+        ``value[R, w]`` (:func:`walk_table`): a lower bound on the time from a truck's departure
+        from stop w until the objective's clock, when the customers of R are not coverable at
+        w and must be covered by its later stops; ``value[0, w]`` is 0 (``"last_service"``)
+        or ``tt(w, depot)`` (``"return"``).
+    """
+
+    def __init__(self, cover: list[int], value: np.ndarray) -> None:
+        self.cover = cover
+        self.value = value
+
+
+def walk_table(
+    problem: FleetProblem, drones: int, tables: CoverTables | None = None
+) -> WalkTable | None:
+    """The truck-walk table of :func:`taopt.fleet.search._bound` (None above
+    :data:`WALK_MAX_CUSTOMERS` customers).
+
+    A backward DP over (R, w): R the customers not yet coverable, w the truck's stop::
+
+        value[∅, w] = 0   (tt(w, depot) under "return")
+        value[R, w] = min over q with R ∩ cover[q] ≠ ∅ of
+                      tt(w, q) + max(end(R, q), value[R \\ cover[q], q])
+        end(R, q)   = max(max_{j ∈ R} o[q, j], (W(R) + max(0, ceil(m(R) / c) - D) ρ) / D)
+                      (and tt(q, depot) under "return")
+
+    where ``o[q, j] = min_w tt(q, w) + offset[w, j]`` (:class:`CoverTables`: offset is the
+    least time from a truck standing at w to the objective's clock for j served from there;
+    o adds the drive from q to such a stop w), D the truck's drones (the second term only
+    when D >= 1), m(R) the drone-only customers of R, W(R) the sum of their works (the
+    shortest flight into j from a stop or, when c > 1, another customer, plus the landing
+    τ) and ρ the least recovery (the shortest flight from a customer to a stop, plus τ).
+
+    Proof that a truck leaving w at T, whose later positions serve (by itself or by a
+    sortie launched there) every customer of R, ends the objective's clock no sooner than
+    ``T + value[R, w]``. Let its positions after w be ``w_1, w_2, ...`` with arrivals
+    ``A_1 >= T + tt(w, w_1)`` and ``A_{i+1} >= A_i + tt(w_i, w_{i+1})`` (street shortest
+    paths; waiting only delays). A customer j is served from a position i whose stop is in
+    its cover set, no sooner than ``A_i + offset[w_i, j]`` (a sortie's later customers are
+    still within ``d(w, j) + min_q d(j, q)`` of its launch: straight lines). Let R_i be the
+    customers of R not coverable by ``w_1..w_{i-1}``. Each is served from a position
+    ``i' >= i``, no sooner than ``A_i + tt(w_i, w_i') + offset[w_i', j] >= A_i + o[w_i, j]``;
+    the drone-only ones by sorties launched at positions ``>= i``, so after ``A_i``: each
+    costs its drone an in-leg and τ, at least ``ceil(m(R_i) / c)`` such sorties are flown,
+    and a drone flying ``n_d >= 1`` of them is recovered ``n_d - 1`` times between them;
+    these intervals are disjoint on a drone's timeline, so the D drones end their last
+    service no sooner than ``A_i + (W(R_i) + max(0, q - D) ρ) / D``. So the clock (at least
+    the last service under both objectives; under ``"return"`` also at least the truck's
+    return, ``A_i + tt(w_i, depot)``) is at least ``A_i + end(R_i, w_i)`` for every i with
+    R_i ≠ ∅. Keep the positions that cover something new, ``q_1 = w_{i_1}, q_2, ...``: by
+    the triangle inequality of tt, ``A_{i_l} >= T +`` the drives of the DP's path through
+    them, whose value is the max over l of those drives plus ``end(R_{i_l}, q_l)`` (and,
+    after the last, the way home under ``"return"``); the DP's minimum is no larger.
+    Precedences and the drones' sharing between trucks are relaxed.
+
+    Notes
+    -----
+    Time and memory ``O(2^n s^2)``, vectorised over the sets of one size (chunked).
+    """
+    if problem.n > WALK_MAX_CUSTOMERS:
+        return None
+    tab = tables if tables is not None else CoverTables(problem)
+    n, s = problem.n, problem.s
+    off = tab.offset[drones > 0]  # (s, n)
+    weights = 1 << np.arange(n, dtype=np.int64)
+    cover = (np.isfinite(off) @ weights).astype(np.int64)  # (s,)
+    # o[q, j]: from the truck's arrival at q to j's clock, served from q or a later stop
+    reach = np.min(tab.tt[:, :, None] + off[None, :, :], axis=1)  # (s, n)
+    size = 1 << n
+    # worst[R, q] = max_{j in R} o[q, j] (0 for the empty set), built bit by bit
+    worst = np.zeros((size, s))
+    for j in range(n):
+        worst[1 << j : 2 << j] = np.maximum(worst[: 1 << j], reach[None, :, j])
+    if drones > 0 and n:
+        p = problem
+        only = np.array([not p.truck_servable(j) for j in range(n)], dtype=bool)
+        into = p.flight_stop.min(axis=1)
+        if p.capacity > 1 and n > 1:
+            into = np.minimum(
+                into, np.where(np.eye(n, dtype=bool), INF, p.flight_customer).min(axis=1)
+            )
+        work = np.where(only, into / p.v_drone + p.service_time, 0.0)
+        rho = float(p.flight_stop.min() / p.v_drone + p.service_time)
+        total = np.zeros(size)
+        many = np.zeros(size, dtype=np.int64)
+        for j in range(n):
+            total[1 << j : 2 << j] = total[: 1 << j] + work[j]
+            many[1 << j : 2 << j] = many[: 1 << j] + int(only[j])
+        sorties = -(-many // p.capacity)
+        drone_work = (total + np.maximum(0, sorties - drones) * rho) / drones
+        worst = np.maximum(worst, drone_work[:, None])
+    home = tab.home_truck if tab.ret else np.zeros(s)
+    value = np.full((size, s), INF)
+    value[0] = home
+    tt = tab.tt
+    masks = np.arange(size, dtype=np.int64)
+    count = np.zeros(size, dtype=np.int64)
+    for j in range(n):
+        count += (masks >> j) & 1
+    stops = np.arange(s)
+    chunk = max(1, (1 << 21) // max(1, s * s))
+    for k in range(1, n + 1):
+        layer = masks[count == k]
+        for lo in range(0, len(layer), chunk):
+            R = layer[lo : lo + chunk]
+            rest = R[:, None] & ~cover[None, :]  # (L, s)
+            val = value[rest, stops[None, :]]
+            end = np.maximum(worst[R], home[None, :])
+            val = np.where(rest == 0, end, val)
+            val[rest == R[:, None]] = INF  # q covers nothing of R
+            value[R] = np.min(tt[None, :, :] + val[:, None, :], axis=2)
+    return WalkTable([int(x) for x in cover], value)
+
+
 __all__ = [
+    "WALK_MAX_CUSTOMERS",
     "CoverTables",
     "SortieTables",
+    "WalkTable",
     "cover_bound",
     "coverable",
     "fleet_cover_bound",
     "fleet_coverable",
     "release_times",
     "sortie_walks",
+    "walk_table",
 ]

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import FeasibilityError, SolverError
+from taopt.fleet.cover import CoverTables, WalkTable, walk_table
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
@@ -66,7 +67,7 @@ INF = math.inf
 class _Tables:
     """Per-instance arrays (plain Python lists, read in the inner loops)."""
 
-    def __init__(self, p: FleetProblem) -> None:
+    def __init__(self, p: FleetProblem, walk: bool = True) -> None:
         n, s = p.n, p.s
         self.n, self.s, self.K = n, s, p.K
         self.depot = p.depot
@@ -143,6 +144,19 @@ class _Tables:
         for k, d in enumerate(p.drones):
             groups.setdefault(d, []).append(k)
         self.groups = list(groups.values())
+        # the truck-walk term (:func:`_walk_bound`): per number of drones carried, the
+        # covering-walk table
+        self.walk: dict[int, WalkTable] = {}
+        if walk:
+            ctab = CoverTables(p)
+            for count in sorted(set(p.drones)):
+                table = walk_table(p, count, ctab)
+                if table is not None:
+                    self.walk[count] = table
+        self.masks = np.arange(1 << n, dtype=np.int64) if self.walk else np.zeros(0, np.int64)
+        self.popcount = np.zeros(len(self.masks), dtype=np.int64)
+        for j in range(n if self.walk else 0):
+            self.popcount += (self.masks >> j) & 1
 
 
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
@@ -253,6 +267,48 @@ def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
     return out
 
 
+def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
+    """The trucks' covering walks: a lower bound on the objective of every completion in which
+    the customers of ``U`` are served from the trucks' stops (each by the truck itself at its
+    stop, or by a sortie launched from there).
+
+    A truck k at stop w, leaving no sooner than T, that serves (or launches toward) the
+    customers of a set ``U_k`` ends the objective's clock no sooner than
+    ``T + value[U_k \\ cover[w], w]`` (:func:`taopt.fleet.cover.walk_table`: those coverable at w
+    itself are relaxed out, the others need its later stops, reached after it leaves).
+    Every customer of U is served from some truck's stop, so the objective is at least
+    ``min`` over partitions (U_1, ..., U_K) of U among the unfinished trucks of
+    ``max_k (T_k + value_k[U_k \\ cover_k[w_k], w_k])``: exact for one and two trucks (the
+    partitions are the submasks of U). With three or more, some part holds at least
+    ``ceil(|U| / K)`` customers, so the objective is at least the least
+    ``T_k + value_k[X \\ cover_k[w_k], w_k]`` over trucks k and submasks X of U of that size
+    or more. ``inf`` when no unfinished truck is left for a nonempty U; 0 when U is empty or
+    there is no table."""
+    if not U or not tab.walk:
+        return 0.0
+    active: list[tuple[int, float, WalkTable]] = []
+    for w, _A, T, _ev, fin, _F, drones in trucks:
+        if not fin:
+            table = tab.walk.get(len(drones))
+            if table is None:
+                return 0.0
+            active.append((w, T, table))
+    if not active:
+        return INF
+    if len(active) == 1:
+        w, T, table = active[0]
+        return T + float(table.value[U & ~table.cover[w], w])
+    subs = tab.masks[(tab.masks & ~U) == 0]
+    if len(active) == 2:
+        (w1, T1, t1), (w2, T2, t2) = active
+        one = T1 + t1.value[subs & ~t1.cover[w1], w1]
+        two = T2 + t2.value[(U ^ subs) & ~t2.cover[w2], w2]
+        return float(np.min(np.maximum(one, two)))
+    size = -(-int(tab.popcount[U]) // len(active))
+    big = subs[tab.popcount[subs] >= size]
+    return float(min(T + np.min(table.value[big & ~table.cover[w], w]) for w, T, table in active))
+
+
 def _bound(tab: _Tables, label: tuple) -> float:
     """A lower bound on the objective of every completion of ``label`` (module docstring)."""
     S, M, svc, trucks = label
@@ -260,6 +316,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
     tau = tab.tau
     est = [0.0] * n
     full = (1 << n) - 1
+    relaxed = 0  # customers an airborne drone with room can still reach
     if S != full:
         fresh = _fresh_sorties(tab, trucks)
         tt, fct, fst, fcd, fsd, near = (
@@ -297,6 +354,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
                             else:
                                 dist, fly = fsd[j][-o - 1], fst[j][-o - 1]
                             if dr[4] + dist + near[j] <= limit:
+                                relaxed |= 1 << j
                                 v = dr[3] + fly + tau
                                 if v < e:
                                     e = v
@@ -305,6 +363,9 @@ def _bound(tab: _Tables, label: tuple) -> float:
                     e = est[r]
             est[j] = e
     fill = _water_fill(tab, S, trucks)
+    walk = _walk_bound(tab, full & ~S & ~relaxed, trucks)
+    if walk > fill:
+        fill = walk
     if not tab.ret:
         b = M if M > fill else fill
         for j in range(n):
@@ -694,6 +755,7 @@ def label_search(
     max_labels: int | None = None,
     metric: bool = True,
     beam: int = 64,
+    walk: bool = True,
 ) -> dict[str, Any]:
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
     ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters."""
@@ -708,7 +770,7 @@ def label_search(
             "labels": 0,
             "expanded": 0,
         }
-    tab = _Tables(problem)
+    tab = _Tables(problem, walk=walk)
     best_plan: FleetPlan | None = None
     best = INF
     for candidate in (incumbent, _simple_plan(problem)):
@@ -768,6 +830,8 @@ def label_search(
         expanded += 1
         for child, act in _children(tab, label):
             b = _bound(tab, child)
+            if b < lb:
+                b = lb  # the parent's bound holds for the child's completions too
             if b >= best * (1 - slack):
                 pruned += 1
                 continue
