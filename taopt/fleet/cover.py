@@ -620,6 +620,65 @@ def walk_table(
     return WalkTable([int(x) for x in cover], value)
 
 
+# -- the one-drone sortie-time table of the label search --------------------------------------
+
+#: Largest work (sets x starts x sorties x stops) :func:`sortie_time_table` takes on.
+SORTIE_TIME_MAX_WORK = 400_000_000
+
+
+def sortie_time_table(problem: FleetProblem, deadline: Deadline | None = None) -> np.ndarray | None:
+    """``F[w, X]``: a lower bound on the time, after a drone aboard a truck at stop w is ready,
+    until the drone has served exactly the drone-servable customers of X (bitmask over all
+    customers; ``inf`` where X holds another customer or cannot be served).
+
+    The relaxation of :func:`sortie_walks` with the precedences dropped and the truck given to
+    the drone alone: a DP over (served set, stop) keeping the earliest recovery, from
+    (∅, w) at 0; a sortie launched at stop v leaves no sooner than the truck can be at v
+    (recovery at q plus ``tt(q, v)``), serves its customers after the flight legs and τ, and
+    is recovered at a stop in range after the back leg and τ, no sooner than the truck can be
+    there. Without release times the DP is shift-invariant, so a drone ready at time a ends
+    no sooner than ``a + F[w, X]``. None when the table would take more than
+    :data:`SORTIE_TIME_MAX_WORK` steps or the deadline expires."""
+    n, s = problem.n, problem.s
+    stab = SortieTables(problem, list(range(n)))
+    size = 1 << n
+    if size * s * s * max(1, stab.count) > SORTIE_TIME_MAX_WORK:
+        return None
+    tab = CoverTables(problem)
+    tt = tab.tt
+    R = np.full((size, s, s), INF)  # R[S, start, q]
+    R[0, np.arange(s), np.arange(s)] = 0.0
+    F = np.full((size, s), INF)  # F[S, start]
+    F[0] = 0.0
+    alive = np.zeros(size, dtype=bool)
+    alive[0] = True
+    gaps, valid = stab.gaps, stab.steps >= 0
+    for S in range(size):
+        if not alive[S]:
+            continue
+        if deadline is not None and S & 15 == 0 and deadline.expired():
+            return None
+        free = (stab.mask & S) == 0
+        if not free.any():
+            continue
+        launch = np.min(R[S][:, :, None] + tt[None, :, :], axis=1)  # (start, v)
+        first = np.min(launch[:, None, :] + stab.first_leg[free][None, :, :], axis=2)  # (st, i)
+        t = first + stab.tau
+        g, ok = gaps[free], valid[free]
+        for pos in range(1, stab.size):
+            t = np.where(ok[None, :, pos], t + g[None, :, pos], t)
+        masks = stab.mask[free] | S
+        np.minimum.at(F, masks, t.T)  # F[mask_i, st] <- t[st, i]
+        back = t[:, :, None] + stab.back_leg[free][None, :, :]  # (st, i, q)
+        rec = np.maximum(back, launch[:, None, :]) + stab.tau
+        more = np.isfinite(rec).any(axis=(0, 2))
+        if more.any():
+            idx = masks[more]
+            np.minimum.at(R, idx, rec[:, more, :].transpose(1, 0, 2))
+            alive[idx] = True
+    return np.ascontiguousarray(F.T)
+
+
 __all__ = [
     "WALK_MAX_CUSTOMERS",
     "CoverTables",
@@ -630,6 +689,7 @@ __all__ = [
     "fleet_cover_bound",
     "fleet_coverable",
     "release_times",
+    "sortie_time_table",
     "sortie_walks",
     "walk_table",
 ]

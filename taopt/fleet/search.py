@@ -50,7 +50,13 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import FeasibilityError, SolverError
-from taopt.fleet.cover import CoverTables, WalkTable, walk_table
+from taopt.fleet.cover import (
+    WALK_MAX_CUSTOMERS,
+    CoverTables,
+    WalkTable,
+    sortie_time_table,
+    walk_table,
+)
 from taopt.fleet.evaluate import as_plan, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
@@ -67,7 +73,9 @@ INF = math.inf
 class _Tables:
     """Per-instance arrays (plain Python lists, read in the inner loops)."""
 
-    def __init__(self, p: FleetProblem, walk: bool = True) -> None:
+    def __init__(
+        self, p: FleetProblem, walk: bool = True, deadline: Deadline | None = None
+    ) -> None:
         n, s = p.n, p.s
         self.n, self.s, self.K = n, s, p.K
         self.depot = p.depot
@@ -153,10 +161,29 @@ class _Tables:
                 table = walk_table(p, count, ctab)
                 if table is not None:
                     self.walk[count] = table
+        # the drones' sortie-time term (:func:`_sortie_time_bound`): one drone's least time per
+        # start stop and served set
+        self.sortie_time: np.ndarray | None = None
+        self.drone_only = sum(1 << j for j in range(n) if not self.truck_ok[j] and self.drone_ok[j])
+        import os
+
+        if walk and n <= WALK_MAX_CUSTOMERS and self.drone_only and not os.environ.get("A32_NOST"):
+            self.sortie_time = sortie_time_table(p, deadline)
         self.masks = np.arange(1 << n, dtype=np.int64) if self.walk else np.zeros(0, np.int64)
+        self._subs: dict[int, np.ndarray] = {}
         self.popcount = np.zeros(len(self.masks), dtype=np.int64)
         for j in range(n if self.walk else 0):
             self.popcount += (self.masks >> j) & 1
+
+
+def _submasks(tab: _Tables, U: int) -> np.ndarray:
+    """The submasks of U in ascending order (cached per U)."""
+    subs = tab._subs.get(U)
+    if subs is None:
+        if len(tab._subs) > 1 << 16:
+            tab._subs.clear()
+        subs = tab._subs[U] = tab.masks[(tab.masks & ~U) == 0]
+    return subs
 
 
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
@@ -298,7 +325,7 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     if len(active) == 1:
         w, T, table = active[0]
         return T + float(table.value[U & ~table.cover[w], w])
-    subs = tab.masks[(tab.masks & ~U) == 0]
+    subs = _submasks(tab, U)
     if len(active) == 2:
         (w1, T1, t1), (w2, T2, t2) = active
         one = T1 + t1.value[subs & ~t1.cover[w1], w1]
@@ -307,6 +334,58 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     size = -(-int(tab.popcount[U]) // len(active))
     big = subs[tab.popcount[subs] >= size]
     return float(min(T + np.min(table.value[big & ~table.cover[w], w]) for w, T, table in active))
+
+
+def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
+    """The drones' sorties: a lower bound on the last service of every completion in which
+    the drone-only customers of ``U`` are served by sorties not yet launched.
+
+    Each such customer is served by one drone of an unfinished truck. A drone aboard its
+    truck at stop w, ready at ``a = max(A, ρ)``, serving exactly the set X ends no sooner
+    than ``a + F[w, X]`` (:func:`taopt.fleet.cover.sortie_time_table`: its truck given to it
+    alone, precedences dropped). An airborne one is first recovered at some stop q within
+    its range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
+    :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the last
+    service is at least the least, over the partitions of U among the drones, of the
+    largest drone's end (a drone given no customer ends nothing): exact over the submasks of U for one or two drones; with more,
+    some drone serves at least ``ceil(|U| / N)`` of them, so the least end over drones and
+    subsets of that size or more. 0 without a table or customers; ``inf`` without a drone."""
+    F = tab.sortie_time
+    if F is None or not U:
+        return 0.0
+    subs = _submasks(tab, U)
+    ends: list[np.ndarray] = []
+    for w, A, T, _ev, fin, _F, drones in trucks:
+        if fin:
+            continue
+        arrive = None
+        for dr in drones:
+            if dr[0] == 0:
+                ends.append((dr[1] if dr[1] > A else A) + F[w, subs])
+                continue
+            if arrive is None:
+                arrive = T + tab.tt_np[w]
+                arrive[w] = A
+            o = dr[1]
+            if o >= 0:
+                back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tab.tau
+                back[dr[4] + tab.fsd_np[o] > tab.limit] = INF
+            else:
+                back = np.maximum(dr[3], arrive) + tab.tau
+            near = np.flatnonzero(back < INF)
+            ends.append(np.min(back[near, None] + F[near][:, subs], axis=0))
+    if not ends:
+        return INF
+    for e in ends:
+        e[0] = 0.0  # subs[0] is the empty set: a drone that serves no one more ends nothing
+    last = len(subs) - 1  # subs ascend: U itself is last, the empty set first
+    if len(ends) == 1:
+        return float(ends[0][last])
+    if len(ends) == 2:
+        return float(np.min(np.maximum(ends[0], ends[1][::-1])))
+    size = -(-int(tab.popcount[U]) // len(ends))
+    big = tab.popcount[subs] >= size
+    return float(min(np.min(e[big]) for e in ends))
 
 
 def _bound(tab: _Tables, label: tuple) -> float:
@@ -364,6 +443,9 @@ def _bound(tab: _Tables, label: tuple) -> float:
             est[j] = e
     fill = _water_fill(tab, S, trucks)
     walk = _walk_bound(tab, full & ~S & ~relaxed, trucks)
+    if walk > fill:
+        fill = walk
+    walk = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
     if walk > fill:
         fill = walk
     if not tab.ret:
@@ -770,7 +852,9 @@ def label_search(
             "labels": 0,
             "expanded": 0,
         }
-    tab = _Tables(problem, walk=walk)
+    tab = _Tables(
+        problem, walk=walk, deadline=Deadline(None if time_limit is None else 0.25 * time_limit)
+    )
     best_plan: FleetPlan | None = None
     best = INF
     for candidate in (incumbent, _simple_plan(problem)):

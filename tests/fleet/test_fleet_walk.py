@@ -1,5 +1,5 @@
-"""The truck-walk term of the fleet label search's bound (:func:`taopt.fleet.cover.walk_table`,
-:func:`taopt.fleet.search._walk_bound`)."""
+"""The truck-walk and sortie-time terms of the fleet label search's bound
+(:func:`taopt.fleet.cover.walk_table`, :func:`taopt.fleet.cover.sortie_time_table`)."""
 
 from __future__ import annotations
 
@@ -180,3 +180,24 @@ def test_walk_term_raises_the_root_bound_on_a_residential_instance():
     problem = residential_fleet(5, 1, 2, 2, seed=1)
     root = _root(problem)
     assert _bound(_Tables(problem), root) > _bound(_Tables(problem, walk=False), root) + 1.0
+
+
+def test_sortie_time_table_single_customers_match_the_direct_flight():
+    """One drone serving one customer from stop w ends after the least drive to a launch stop
+    in range plus the flight and τ (the sortie-time table's one-customer entries)."""
+    from taopt.fleet.cover import sortie_time_table
+
+    problem = tiny_instance(7, 4, 1, 1, 2, True, "last_service", stops=4)
+    F = sortie_time_table(problem)
+    assert F is not None
+    fs, tt = problem.flight_stop, problem.truck_time
+    for w, j in itertools.product(range(problem.s), range(problem.n)):
+        if not problem.drone_servable(j):
+            assert math.isinf(F[w, 1 << j])
+            continue
+        legal = [v for v in range(problem.s) if fs[j, v] + fs[j].min() <= problem.flight_limit]
+        want = min(
+            (tt[w, v] + fs[j, v] / problem.v_drone + problem.service_time for v in legal),
+            default=math.inf,
+        )
+        assert F[w, 1 << j] == pytest.approx(want)
