@@ -521,8 +521,8 @@ class WalkTable:
 def walk_table(
     problem: FleetProblem, drones: int, tables: CoverTables | None = None
 ) -> WalkTable | None:
-    """The truck-walk table of :func:`taopt.fleet.search._bound` (None above
-    :data:`WALK_MAX_CUSTOMERS` customers).
+    """The truck-walk table of :func:`taopt.fleet.search._walk_bound` (None above
+    :data:`~taopt.fleet.cover.WALK_MAX_CUSTOMERS` customers).
 
     A backward DP over (R, w): R the customers not yet coverable, w the truck's stop::
 
@@ -638,7 +638,7 @@ def sortie_time_table(problem: FleetProblem, deadline: Deadline | None = None) -
     is recovered at a stop in range after the back leg and τ, no sooner than the truck can be
     there. Without release times the DP is shift-invariant, so a drone ready at time a ends
     no sooner than ``a + F[w, X]``. None when the table would take more than
-    :data:`SORTIE_TIME_MAX_WORK` steps or the deadline expires."""
+    :data:`~taopt.fleet.cover.SORTIE_TIME_MAX_WORK` steps or the deadline expires."""
     n, s = problem.n, problem.s
     stab = SortieTables(problem, list(range(n)))
     size = 1 << n

@@ -30,9 +30,12 @@ every feasible plan is reached this way (a plan's events can be committed in an 
 each customer follows its predecessors — the order of the acyclic constraint graph).
 
 *Search.* Labels are expanded best-first by a valid lower bound on the final objective (the
-least time each unserved customer can be served from the label, over the fleet, raised along
-precedences; under ``"return"`` plus the least way home), so the first complete label popped
-is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
+largest of: the least time each unserved customer can be served from the label, over the
+fleet, raised along precedences, under ``"return"`` plus the least way home; the drones'
+shared work (:func:`_water_fill`); the trucks' covering walks (:func:`_walk_bound`, a truck
+must bring its drones within reach of every customer no airborne drone can still take); the
+drones' sortie times (:func:`_sortie_time_bound`, each drone with a truck of its own); and
+the parent's bound), so the first complete label popped is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
 flags, each drone's ℓ or launch stop and m, identical drones and identical trucks taken as
 interchangeable) where one's times and distances are all <= the other's: the other is
 dropped. An incumbent (the caller's, or a simple sequential plan) prunes labels whose bound
