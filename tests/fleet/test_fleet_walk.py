@@ -201,3 +201,13 @@ def test_sortie_time_table_single_customers_match_the_direct_flight():
             default=math.inf,
         )
         assert F[w, 1 << j] == pytest.approx(want)
+
+
+@pytest.mark.slow
+def test_search_with_walk_term_three_trucks():
+    """Three trucks (the walk term's and the sortie term's size arguments): the search with
+    both terms, no beam and no incumbent, equals the brute force under both objectives."""
+    for seed, objective in itertools.product((61, 62), ("last_service", "return")):
+        problem = tiny_instance(seed, 3, 3, 1, 2, True, objective, stops=3)
+        value, _, _ = brute_force(problem)
+        assert label_search(problem, beam=0)["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
