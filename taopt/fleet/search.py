@@ -624,8 +624,7 @@ def _simple_plan(problem: FleetProblem, truck_of: Sequence[int] | None = None) -
     if problem.unservable():
         return None
     if truck_of is not None and any(
-        not problem.truck_servable(j) and problem.drones[truck_of[j]] == 0
-        for j in range(problem.n)
+        not problem.truck_servable(j) and problem.drones[truck_of[j]] == 0 for j in range(problem.n)
     ):
         return None
     import networkx as nx

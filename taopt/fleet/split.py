@@ -96,11 +96,7 @@ def count_splits(problem: FleetProblem) -> int:
 def split_applies(problem: FleetProblem) -> bool:
     """Several trucks, at most :data:`SPLIT_MAX_N` customers and about
     :data:`SPLIT_MAX_SPLITS` splits (:func:`count_splits`)."""
-    return (
-        problem.K >= 2
-        and problem.n <= SPLIT_MAX_N
-        and count_splits(problem) <= SPLIT_MAX_SPLITS
-    )
+    return problem.K >= 2 and problem.n <= SPLIT_MAX_N and count_splits(problem) <= SPLIT_MAX_SPLITS
 
 
 def _closure(problem: FleetProblem) -> list[tuple[int, int]]:
@@ -155,7 +151,12 @@ def _set_bounds(problem: FleetProblem, drones: int) -> np.ndarray:
     if drones > 0:
         e = np.minimum(e, drone_e)
     fs, fc = problem.flight_stop, problem.flight_customer
-    limit, vd, tau, c = problem.flight_limit, problem.v_drone, problem.service_time, problem.capacity
+    limit, vd, tau, c = (
+        problem.flight_limit,
+        problem.v_drone,
+        problem.service_time,
+        problem.capacity,
+    )
     a = np.zeros(n)
     for j in range(n):
         if not only_drone[j]:
@@ -261,7 +262,6 @@ def split_search(
     from taopt.fleet.search import _simple_plan, label_search
 
     deadline = Deadline(time_limit)
-    K = problem.K
     closure = _closure(problem)
     best, best_plan = INF, None
     for candidate in (incumbent, _simple_plan(problem)):
