@@ -100,7 +100,7 @@ def solve_fleet(
     improve : callable, optional
         ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
         :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
-        before the label search only (the DPs need no incumbent), with
+        before the label search and the split search only (the DPs need no incumbent), with
         :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit.
 
     Returns
@@ -186,6 +186,9 @@ def solve_fleet(
                     key=lambda plan: _score_or_inf(problem, plan),
                 )
     elif choice == "split":
+        if improve is not None:
+            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            incumbent = improve(problem, incumbent, share)
         floor, incumbent = _root_cover(problem, incumbent, time_limit)
         left = None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0)
         result = split_search(

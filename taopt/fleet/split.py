@@ -75,6 +75,9 @@ SPLIT_MAX_N = 16
 #: Most splits listed (after identical trucks are merged).
 SPLIT_MAX_SPLITS = 400_000
 
+#: Share of the time left that a part's first exact solve may take (doubled at each retry).
+SLICE = 0.1
+
 #: Relative tolerance of the stop rule (best <= bound (1 + CERTIFY)), as the fleet's exact
 #: method uses for its root bound.
 CERTIFY = 1e-6
@@ -215,13 +218,13 @@ def _splits(problem: FleetProblem) -> list[tuple[int, ...]]:
 class _Part:
     """One truck's part (mask, drone count): its bound, level and, when exact, its plan."""
 
-    __slots__ = ("bound", "level", "plan", "seconds")
+    __slots__ = ("attempts", "bound", "level", "plan")
 
     def __init__(self, bound: float) -> None:
         self.bound = bound
         self.level = 0
         self.plan: FleetPlan | None = None
-        self.seconds = 0.0
+        self.attempts = 0  # exact solves stopped by their time slice
 
 
 def _members(mask: int) -> list[int]:
@@ -236,6 +239,21 @@ def _lift(plan: FleetPlan, members: list[int]) -> tuple[list[int], list[tuple[in
         for drone in plan.sorties[0]
     ]
     return list(plan.routes[0]), served, sorties
+
+
+def _no_gc(function: Any, *args: Any, **kwargs: Any) -> Any:
+    """``function(*args, **kwargs)`` with the cyclic garbage collector paused: the label
+    search's millions of acyclic tuples would make each full collection a pause of seconds,
+    taken past the wall-clock limit (the search checks its clock between labels)."""
+    import gc
+
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return function(*args, **kwargs)
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def split_search(
@@ -335,9 +353,13 @@ def split_search(
                 item.level = 1 if not deadline.expired() else 0
             else:
                 started = time.perf_counter()
-                found = label_search(
+                left = deadline.remaining()
+                if left is not None:  # a slice, doubled at each retry, so other splits get a turn
+                    left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
+                found = _no_gc(
+                    label_search,
                     sub,
-                    time_limit=deadline.remaining(),
+                    time_limit=left,
                     max_labels=max_labels,
                     floor=item.bound,
                     cutoff=best,
@@ -360,7 +382,8 @@ def split_search(
                     heapq.heappush(heap, (key_of(split), i))
                     least = heap[0][0]
                     break
-                # else stopped by the clock: the bound it proved is kept
+                else:  # stopped by its slice or the clock: the bound it proved is kept
+                    item.attempts += 1
             heapq.heappush(heap, (key_of(split), i))
             continue
         # every part exact: combine and score
@@ -388,7 +411,8 @@ def split_search(
             for j in _members(m):
                 owner[j] = k
         coupled += 1
-        found = label_search(
+        found = _no_gc(
+            label_search,
             problem,
             time_limit=deadline.remaining(),
             incumbent=plan if value < INF else None,
@@ -431,6 +455,7 @@ __all__ = [
     "CERTIFY",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
+    "SLICE",
     "count_splits",
     "split_applies",
     "split_search",
