@@ -241,6 +241,40 @@ def _lift(plan: FleetPlan, members: list[int]) -> tuple[list[int], list[tuple[in
     return list(plan.routes[0]), served, sorties
 
 
+def _restrict(
+    problem: FleetProblem, plan: FleetPlan | None, mask: int, drones: int
+) -> FleetPlan | None:
+    """The part of ``plan`` flown by a truck with ``drones`` drones serving exactly the
+    customers of ``mask``, as a plan of that part's sub-problem (an incumbent for its
+    search: feasible there, the sub-problem having only fewer constraints), or None."""
+    if plan is None:
+        return None
+    members = _members(mask)
+    index = {j: i for i, j in enumerate(members)}
+    for k in range(problem.K):
+        if problem.drones[k] != drones:
+            continue
+        mine = {j for _, j in plan.truck_service[k]} | {
+            j for drone in plan.sorties[k] for sortie in drone for j in sortie.customers
+        }
+        if mine != set(members):
+            continue
+        return FleetPlan(
+            [plan.routes[k]],
+            [[(p, index[j]) for p, j in plan.truck_service[k]]],
+            [
+                [
+                    [
+                        Sortie(s.launch, tuple(index[j] for j in s.customers), s.recovery)
+                        for s in drone
+                    ]
+                    for drone in plan.sorties[k]
+                ]
+            ],
+        )
+    return None
+
+
 def _no_gc(function: Any, *args: Any, **kwargs: Any) -> Any:
     """``function(*args, **kwargs)`` with the cyclic garbage collector paused: the label
     search's millions of acyclic tuples would make each full collection a pause of seconds,
@@ -359,6 +393,7 @@ def split_search(
                 found = _no_gc(
                     label_search,
                     sub,
+                    incumbent=_restrict(problem, best_plan, mask, d),
                     time_limit=left,
                     max_labels=max_labels,
                     floor=item.bound,
