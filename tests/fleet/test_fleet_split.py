@@ -127,3 +127,17 @@ def test_exact_dispatches_two_trucks_to_the_split_search():
     assert solution.info["algorithm"] == "split"
     assert solution.info["of_splits"] == 4
     assert solution.objective == pytest.approx(brute_force(problem)[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("drones", [0, 1, 2])
+def test_set_bounds_never_exceed_the_part_optimum(drones):
+    """The level-0 bound of every customer set <= its one-truck sub-problem's optimum."""
+    from taopt.fleet.split import _members, _set_bounds
+
+    problem = tiny_instance(5, 3, 2, 1, 2, True, "last_service", stops=2)
+    bounds = _set_bounds(problem, drones)
+    for mask in range(1, 8):
+        members = _members(mask)
+        sub = sub_problem(problem, members, drones)
+        value = brute_force(sub)[0]
+        assert bounds[mask] <= value + 1e-9, members
