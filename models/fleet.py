@@ -16,7 +16,13 @@
    the trucks, each truck by the sortie DP, a bound over the splits
    (:func:`taopt.fleet.sorties.split_dp`; certified when the cross-truck precedences do not
    make the best split's plan wait);
-6. anything else: the best-first label search with dominance (:mod:`taopt.fleet.search`).
+6. any other fleet of K >= 2 trucks with at most 16 customers and 400,000 splits
+   (:func:`taopt.fleet.split.split_applies`): the split search
+   (:func:`taopt.fleet.split.split_search`: splits in increasing bound, each truck's part by
+   the label search on its one-truck sub-problem, the coupled search where cross-truck
+   precedences bind), from the root sortie-walk bound;
+7. anything else (one truck): the best-first label search with dominance
+   (:mod:`taopt.fleet.search`).
 """
 
 from __future__ import annotations
@@ -30,6 +36,8 @@ from taopt.fleet.problem import FleetPlan, FleetProblem
 from taopt.fleet.search import label_search
 from taopt.fleet.sorties import applies as sorties_applies
 from taopt.fleet.sorties import sortie_dp, split_applies, split_dp
+from taopt.fleet.split import split_applies as search_split_applies
+from taopt.fleet.split import split_search
 from taopt.registry import register_method
 from taopt.result import Solution, finish
 
@@ -86,12 +94,13 @@ def solve_fleet(
     max_labels : int, optional
         Memory guard of the label search (:data:`taopt.fleet.search.DEFAULT_MAX_LABELS`): the
         run stops like a time limit (``info["stopped_by"] == "size"``).
-    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp", "split_dp"}
-        Force one algorithm (``"auto"``: the fastest that applies; for measurements).
+    algorithm : {"auto", "search", "operations", "ideal_dp", "sortie_dp", "split_dp", "split"}
+        Force one algorithm (``"auto"``: the fastest that applies; for measurements;
+        ``"split"`` needs K >= 2).
     improve : callable, optional
         ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
         :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
-        before the label search only (the DPs need no incumbent), with
+        before the label search and the split search only (the DPs need no incumbent), with
         :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit.
 
     Returns
@@ -130,6 +139,8 @@ def solve_fleet(
             choice = "operations"
         elif split_applies(problem):
             choice = "split_dp"
+        elif search_split_applies(problem):
+            choice = "split"
         else:
             choice = "search"
     if choice == "ideal_dp":
@@ -174,6 +185,16 @@ def solve_fleet(
                     (result["plan"], as_plan(incumbent)),
                     key=lambda plan: _score_or_inf(problem, plan),
                 )
+    elif choice == "split":
+        if improve is not None:
+            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            incumbent = improve(problem, incumbent, share)
+        floor, incumbent = _root_cover(problem, incumbent, time_limit)
+        left = None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0)
+        result = split_search(
+            problem, time_limit=left, incumbent=incumbent, max_labels=max_labels, floor=floor
+        )
+        result["root_cover_bound"] = floor
     elif choice == "split_dp":
         from taopt.fleet.search import _simple_plan
 
@@ -242,7 +263,7 @@ def solve_fleet(
     }
     stopped = result["stopped_by"]
     # the label search / operations DP stop: "optimal" (proven), "time_limit" or "size"
-    stop = stopped if stopped in ("optimal", "time_limit", "size") else "solver_limit"
+    stop = stopped if stopped in ("optimal", "time_limit", "size", "infeasible") else "solver_limit"
     return finish(
         problem,
         result["plan"],

@@ -21,7 +21,7 @@ respects each drone's order (launch <= recovery <= next launch), all such plans.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 from taopt.errors import FeasibilityError
@@ -111,11 +111,13 @@ def _truck_layouts(
     )
 
 
-def _canonical(problem: FleetProblem, choice: tuple[tuple[Any, ...], ...]) -> bool:
+def _canonical(
+    problem: FleetProblem, choice: tuple[tuple[Any, ...], ...], trucks: bool = True
+) -> bool:
     """Symmetry: the drones of one truck are interchangeable, and so are trucks carrying as
-    many drones (all start at the depot); relabelling them maps plans to plans of the same
-    value. Keep only the labelling where, among interchangeable ones, the smallest customer
-    served increases with the label (unused ones last)."""
+    many drones (all start at the depot; not with ``trucks=False``); relabelling them maps
+    plans to plans of the same value. Keep only the labelling where, among interchangeable
+    ones, the smallest customer served increases with the label (unused ones last)."""
     first: dict[tuple[Any, ...], int] = {}
     for j, who in enumerate(choice):
         first.setdefault(who, j)
@@ -130,7 +132,7 @@ def _canonical(problem: FleetProblem, choice: tuple[tuple[Any, ...], ...]) -> bo
         for d in range(problem.drones[k] - 1):
             if smallest(("drone", k, d)) > smallest(("drone", k, d + 1)):
                 return False
-    for k in range(problem.K - 1):
+    for k in range(problem.K - 1 if trucks else 0):
         if problem.drones[k] == problem.drones[k + 1]:
             if smallest(("truck", k)) > smallest(("truck", k + 1)):
                 return False
@@ -138,9 +140,10 @@ def _canonical(problem: FleetProblem, choice: tuple[tuple[Any, ...], ...]) -> bo
 
 
 def brute_force(
-    problem: FleetProblem, limit: int = 5_000_000
+    problem: FleetProblem, limit: int = 5_000_000, truck_of: Sequence[int] | None = None
 ) -> tuple[float, FleetPlan | None, int]:
-    """The optimum of a tiny instance by enumeration.
+    """The optimum of a tiny instance by enumeration (with ``truck_of``: over the plans where
+    customer j is served by truck ``truck_of[j]`` or its drones only).
 
     Returns
     -------
@@ -161,10 +164,12 @@ def brute_force(
             opts += [("truck", k) for k in range(problem.K)]
         if problem.drone_servable(j):
             opts += [("drone", k, d) for k, d in problem.drone_ids()]
+        if truck_of is not None:
+            opts = [o for o in opts if o[1] == truck_of[j]]
         options.append(opts)
     best, best_plan, count = float("inf"), None, 0
     for choice in itertools.product(*options):
-        if not _canonical(problem, choice):
+        if not _canonical(problem, choice, trucks=truck_of is None):
             continue
         truck_sets = [
             tuple(j for j in range(n) if choice[j] == ("truck", k)) for k in range(problem.K)

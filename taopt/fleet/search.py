@@ -48,6 +48,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -177,6 +178,8 @@ class _Tables:
         self.popcount = np.zeros(len(self.masks), dtype=np.int64)
         for j in range(n if self.walk else 0):
             self.popcount += (self.masks >> j) & 1
+        # owner[j]: the only truck that (or whose drones) may serve j (``truck_of``), or None
+        self.owner: list[int] | None = None
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -417,8 +420,8 @@ def _bound(tab: _Tables, label: tuple) -> float:
             e = INF
             tok, dok = tab.truck_ok[j], tab.drone_ok[j]
             for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
-                if fin:
-                    continue
+                if fin or (tab.owner is not None and tab.owner[j] != k):
+                    continue  # (truck_of: only j's own truck may serve it)
                 if tok:
                     js = tab.cstop[j]
                     v = A if js == w else T + tt[w][js]
@@ -558,6 +561,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
     n, c, tau = tab.n, tab.c, tab.tau
     out: list[tuple[tuple, Any]] = []
     lazy = tab.lazy
+    owner = tab.owner
     # without precedences, a drone being filled (open) takes appends or is closed by any
     # other action; one with no customer yet must be filled first
     filling = None
@@ -597,7 +601,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 continue
             o = dr[1]
             for j in range(n):
-                if S >> j & 1 or not tab.drone_ok[j]:
+                if S >> j & 1 or not tab.drone_ok[j] or (owner is not None and owner[j] != k):
                     continue
                 wait = ready(j)
                 if wait is None:
@@ -647,7 +651,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
 
         # serve j at its stop
         for j in range(n):
-            if S >> j & 1 or not tab.truck_ok[j]:
+            if S >> j & 1 or not tab.truck_ok[j] or (owner is not None and owner[j] != k):
                 continue
             wait = ready(j)
             if wait is None:
@@ -756,13 +760,18 @@ def _rebuild(problem: FleetProblem, tab: _Tables, actions: list[Any], final: tup
     return FleetPlan(routes, served, flights)
 
 
-def _simple_plan(problem: FleetProblem) -> FleetPlan | None:
+def _simple_plan(problem: FleetProblem, truck_of: Sequence[int] | None = None) -> FleetPlan | None:
     """A feasible plan when one exists: the customers, in a topological order, dealt to the
-    trucks in turn (a drone-only one to a truck carrying a drone); each truck serves its own
+    trucks in turn (a drone-only one to a truck carrying a drone; with ``truck_of``, customer
+    j to truck ``truck_of[j]``, None when that truck cannot serve it); each truck serves its own
     one by one, by itself at the customer's stop when it may, else by a single-customer sortie
     of its first drone launched and recovered at the customer's nearest stop. Every wait
     points to a customer earlier in the order, so no deadlock."""
     if problem.unservable():
+        return None
+    if truck_of is not None and any(
+        not problem.truck_servable(j) and problem.drones[truck_of[j]] == 0 for j in range(problem.n)
+    ):
         return None
     import networkx as nx
 
@@ -774,6 +783,8 @@ def _simple_plan(problem: FleetProblem) -> FleetPlan | None:
     for i, j in enumerate(nx.topological_sort(problem.precedence_graph)):
         by_truck = problem.truck_servable(j)
         k = i % K if by_truck or problem.drones[i % K] > 0 else carriers[i % len(carriers)]
+        if truck_of is not None:
+            k = truck_of[j]
         stop = problem.customer_stop[j] if by_truck else int(np.argmin(problem.flight_stop[j]))
         if routes[k][-1] != stop:
             routes[k].append(stop)
@@ -841,9 +852,21 @@ def label_search(
     metric: bool = True,
     beam: int = 64,
     walk: bool = True,
+    truck_of: Sequence[int] | None = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
 ) -> dict[str, Any]:
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
-    ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters."""
+    ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters.
+
+    ``truck_of`` restricts the plans: customer j is served by truck ``truck_of[j]`` or one of
+    its drones (the trucks are then not interchangeable); the search then proves the optimum
+    over those plans (an ``incumbent`` outside the restriction may still be returned when it
+    is better). ``floor``: a known lower bound on that optimum (every label is priced at least
+    that, so a plan reaching it stops the search). ``cutoff``: only plans below it are
+    sought; when none exists the run ends "optimal" with ``bound`` = min(cutoff, the best
+    plan's value) and ``plan`` the best plan given (or None).
+    """
     deadline = Deadline(time_limit)
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
     if problem.unservable():
@@ -858,9 +881,12 @@ def label_search(
     tab = _Tables(
         problem, walk=walk, deadline=Deadline(None if time_limit is None else 0.25 * time_limit)
     )
+    if truck_of is not None:
+        tab.owner = [int(k) for k in truck_of]
+        tab.groups = [[k] for k in range(problem.K)]
     best_plan: FleetPlan | None = None
     best = INF
-    for candidate in (incumbent, _simple_plan(problem)):
+    for candidate in (incumbent, _simple_plan(problem, truck_of)):
         if candidate is None:
             continue
         try:
@@ -874,10 +900,12 @@ def label_search(
         sub = Deadline(0.2 * time_limit)
     else:
         sub = deadline
-    if beam:
+    if beam and best > floor:
         value, beamed = _beam(problem, tab, beam, sub, best)
         if beamed is not None and value < best:
             best, best_plan = value, beamed
+    planned = best  # the best plan's value; best may drop to the cutoff (no plan there)
+    best = min(best, cutoff)
     n = problem.n
     root_trucks = tuple(
         (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
@@ -893,7 +921,7 @@ def label_search(
     tt = tab.tt
     key, vec = _signature(tab, root)
     store[key] = [(vec, 0)]
-    heap: list[tuple[float, int, int]] = [(_bound(tab, root), 0, 0)]
+    heap: list[tuple[float, int, int]] = [(max(_bound(tab, root), floor), 0, 0)]
     expanded = dominated = pruned = 0
     stopped_by = "optimal"
     found = -1
@@ -919,6 +947,8 @@ def label_search(
             b = _bound(tab, child)
             if b < lb:
                 b = lb  # the parent's bound holds for the child's completions too
+            if b < floor:
+                b = floor
             if b >= best * (1 - slack):
                 pruned += 1
                 continue
@@ -1003,6 +1033,8 @@ def label_search(
             )
         best_plan, best = plan, value
         bound = min(bound, value)
+    else:
+        best = planned
     result.update(plan=best_plan, value=best, bound=bound)
     return result
 

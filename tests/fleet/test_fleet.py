@@ -322,7 +322,7 @@ def test_all_80_tspd_instances_reach_the_published_optimum():
         assert solution.objective == pytest.approx(published_optimum(path), rel=1e-6), path.name
 
 
-@pytest.mark.parametrize("which", ["operations", "search", "ideal_dp"])
+@pytest.mark.parametrize("which", ["operations", "search", "split", "ideal_dp"])
 def test_every_exact_algorithm_stops_on_a_tiny_limit_with_a_plan_and_a_bound(which):
     """time_limit = 0.01 s: status time_limit (never a raise), a feasible plan, bound <= f."""
     from taopt.delivery import example_instance
@@ -331,7 +331,8 @@ def test_every_exact_algorithm_stops_on_a_tiny_limit_with_a_plan_and_a_bound(whi
 
     problem = {
         "operations": lambda: FleetProblem.from_tspd(TSPD_FOLDER / "uniform-1-n13.txt"),
-        "search": lambda: residential_fleet(8, 2, 2, 2),
+        "search": lambda: residential_fleet(8, 1, 2, 2),
+        "split": lambda: residential_fleet(8, 2, 2, 2),
         "ideal_dp": lambda: FleetProblem.from_delivery(example_instance(250.0)),
     }[which]()
     solution = taopt.solve(problem, "exact", time_limit=0.01)

@@ -77,7 +77,7 @@ def test_root_sortie_walk_bound_certifies_without_search():
     from taopt.models.fleet import solve_fleet
 
     problem = tiny_instance(38, 3, 2, 2, 2, False, "last_service", stops=3)
-    solution = solve_fleet(problem)
+    solution = solve_fleet(problem, algorithm="search")
     assert solution.status == "optimal"
     assert solution.info["algorithm"] == "search" and "labels" not in solution.info
     assert solution.objective == pytest.approx(33.85597515507222, rel=1e-9)

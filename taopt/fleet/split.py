@@ -1,0 +1,498 @@
+"""Several trucks, any drones per truck: exact by splitting the customers over the trucks.
+
+:func:`split_search` generalises :func:`taopt.fleet.sorties.split_dp` (one drone per truck,
+drone-only customers) to any fleet with K >= 2: any D_k, any service modes, either objective.
+
+*Split.* A plan assigns every customer to one truck k (served by the truck itself or by one of
+its drones); the sets (X_1, ..., X_K) are its *split*. The optimum is the least, over the
+splits, of the optimum restricted to that split.
+
+*Bound of a split.* Drop, from the plans with split X, every precedence pair (r, j) with r
+and j on different trucks, and keep, for each truck, the pairs of the transitive closure of
+G^p inside X_k. What is left is K independent one-truck problems: truck k with its own D_k
+drones serving exactly X_k (:func:`sub_problem`). Every pair kept still holds in each plan
+of split X: a closure pair r ->* j is a chain r -> m_1 -> ... -> j of G^p's pairs, each with
+``t <= t'``, so ``t_r <= t_j`` whichever trucks serve the m_i. Restricted to truck k, a plan's
+event times satisfy every constraint of truck k's sub-problem (the same travel, flight,
+range, capacity and service rules, and only pairs the plan satisfies), and the sub-problem's
+earliest schedule has the least times satisfying them (a system of ``t >= t' + const``
+and ``t >= max(...)`` constraints), so truck k's part of the objective is at least
+``opt_k(X_k)`` — the last service among X_k (``"last_service"``) or truck k back home with
+its drones (``"return"``). The plan's objective is the maximum over the trucks, so
+
+``f(plan) >= max_k opt_k(X_k)`` for every plan of split X,
+
+and the least such bound over the splits left is a bound on the optimum. Any valid lower
+bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapest first:
+
+0. ``max_{j in X} e_j`` (:func:`taopt.fleet.bounds.earliest_service`, the fastest any of truck
+   k's vehicles can serve j; a truck without drones only by itself) and the drone work
+   ``(Σ_{j in X drone-only} a_j + max(0, ceil(m / c) - D_k) ρ) / D_k``: a drone-only customer j
+   costs the drone serving it at least ``a_j`` (its shortest in-leg, from a stop or, when
+   c > 1, another customer, and τ), m such customers need at least ``ceil(m / c)`` sorties,
+   hence at least ``ceil(m / c) - D_k`` recoveries before the drones' last services, each at
+   least ρ (the shortest flight customer -> stop and τ); these intervals are disjoint on each
+   drone's timeline from 0, so some drone's last service is at least the mean (the proof of
+   :func:`taopt.fleet.bounds.work_bound`). Computed for every X at once;
+1. :func:`taopt.fleet.bounds.fleet_lower` and the sortie-walk bound
+   :func:`taopt.fleet.cover.fleet_cover_bound` of the sub-problem (bisected up to the best
+   plan's value: a part that cannot beat it is priced at it);
+2. ``opt_k(X_k)`` itself, by the label search (:func:`taopt.fleet.search.label_search`) of the
+   sub-problem, cut off at the best plan's value; cached per (X_k, D_k).
+
+*Search.* The splits are kept in a heap by their current bound (the maximum of their parts'
+current bounds); identical trucks (same drone count) make splits that differ by a
+permutation of those trucks the same, so each is listed once. The least split is refined:
+its cheapest unrefined part moves one level up, and the split is pushed back with its new
+bound. When every part is exact, the parts' plans are combined into one fleet plan and
+scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck precedences may make a
+vehicle wait, or deadlock). If its value equals the split's bound, the split is solved;
+otherwise the coupled problem restricted to the split is solved by the label search with
+``truck_of`` (each customer only on its truck), the split's bound as a floor and the best
+value as a cutoff. The run stops when the best plan is no worse than the least bound of the
+splits left (certified), or at the wall-clock limit with the best plan and that least bound
+(proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from taopt.errors import FeasibilityError
+from taopt.fleet.evaluate import as_plan, evaluate_fleet
+from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.runtime import Deadline
+
+#: Most customers (the per-set bounds are arrays over the 2^n customer sets).
+SPLIT_MAX_N = 16
+
+#: Most splits listed (after identical trucks are merged).
+SPLIT_MAX_SPLITS = 400_000
+
+#: Share of the time left that a part's first exact solve may take (doubled at each retry).
+SLICE = 0.1
+
+#: Relative tolerance of the stop rule (best <= bound (1 + CERTIFY)), as the fleet's exact
+#: method uses for its root bound.
+CERTIFY = 1e-6
+
+INF = math.inf
+
+
+def count_splits(problem: FleetProblem) -> int:
+    """The number of splits :func:`split_search` lists: customer assignments to the trucks,
+    those differing by a permutation of trucks with equal drone counts taken once (an upper
+    estimate, ``K^n / Π g!`` over the groups g, rounded up)."""
+    groups: dict[int, int] = {}
+    for d in problem.drones:
+        groups[d] = groups.get(d, 0) + 1
+    denominator = math.prod(math.factorial(g) for g in groups.values())
+    return -(-(problem.K**problem.n) // denominator)
+
+
+def split_applies(problem: FleetProblem) -> bool:
+    """Several trucks, at most :data:`SPLIT_MAX_N` customers and about
+    :data:`SPLIT_MAX_SPLITS` splits (:func:`count_splits`)."""
+    return problem.K >= 2 and problem.n <= SPLIT_MAX_N and count_splits(problem) <= SPLIT_MAX_SPLITS
+
+
+def _closure(problem: FleetProblem) -> list[tuple[int, int]]:
+    import networkx as nx
+
+    return sorted(
+        (int(r), int(j)) for r, j in nx.transitive_closure_dag(problem.precedence_graph).edges
+    )
+
+
+def sub_problem(
+    problem: FleetProblem,
+    members: list[int],
+    drones: int,
+    closure: list[tuple[int, int]] | None = None,
+) -> FleetProblem:
+    """One truck with ``drones`` drones serving exactly the customers ``members`` (their
+    order gives the sub-problem's indices), under the pairs of the transitive closure of
+    G^p inside ``members`` (module docstring: why that is valid); everything else as in
+    ``problem``."""
+    pairs = _closure(problem) if closure is None else closure
+    index = {j: i for i, j in enumerate(members)}
+    return FleetProblem(
+        customers=problem.customers[members],
+        stops=problem.stops,
+        graph=problem.graph,
+        depot=problem.depot,
+        drones=[drones],
+        capacity=problem.capacity,
+        flight_range=problem.flight_range,
+        v_truck=problem.v_truck,
+        v_drone=problem.v_drone,
+        service=[problem.service[j] for j in members],
+        customer_stop=[problem.customer_stop[j] for j in members],
+        precedences=[(index[r], index[j]) for r, j in pairs if r in index and j in index],
+        service_time=problem.service_time,
+        objective=problem.objective,
+        name=f"{problem.name} part {members}",
+    )
+
+
+def _set_bounds(problem: FleetProblem, drones: int) -> np.ndarray:
+    """Level 0 (module docstring): for every customer set X (bit mask), a lower bound on the
+    optimum of one truck with ``drones`` drones serving exactly X (inf when it cannot)."""
+    from taopt.fleet.bounds import _earliest_by_mode
+
+    n = problem.n
+    truck_e, drone_e = _earliest_by_mode(problem)
+    e = truck_e.copy()
+    drone_ok = [problem.drone_servable(j) for j in range(n)]
+    only_drone = [drone_ok[j] and not problem.truck_servable(j) for j in range(n)]
+    if drones > 0:
+        e = np.minimum(e, drone_e)
+    fs, fc = problem.flight_stop, problem.flight_customer
+    limit, vd, tau, c = (
+        problem.flight_limit,
+        problem.v_drone,
+        problem.service_time,
+        problem.capacity,
+    )
+    a = np.zeros(n)
+    for j in range(n):
+        if not only_drone[j]:
+            continue
+        legs = fs[j][fs[j] <= limit]
+        shortest = float(legs.min()) if legs.size else INF
+        if c > 1:
+            others = [float(fc[i, j]) for i in range(n) if i != j and drone_ok[i]]
+            shortest = min([shortest, *others])
+        a[j] = shortest / vd + tau
+    rho = float(fs.min() / vd + tau)
+    size = 1 << n
+    reach = np.zeros(size)
+    work = np.zeros(size)
+    count = np.zeros(size, dtype=np.int64)
+    for j in range(n):
+        bit = 1 << j
+        lo = np.arange(bit)
+        for start in range(bit, size, 2 * bit):
+            idx = start + lo
+            reach[idx] = np.maximum(reach[idx - bit], e[j])
+            work[idx] = work[idx - bit] + a[j]
+            count[idx] = count[idx - bit] + int(only_drone[j])
+    if drones == 0:
+        return np.where(count > 0, INF, reach)
+    sorties = -(-count // c)
+    work = work + np.maximum(0, sorties - drones) * rho
+    return np.maximum(reach, work / drones)
+
+
+def _splits(problem: FleetProblem) -> list[tuple[int, ...]]:
+    """Every split (one mask per truck), identical trucks' permutations once."""
+    n, K = problem.n, problem.K
+    seen: set[tuple[int, ...]] = set()
+    out: list[tuple[int, ...]] = []
+    groups: dict[int, list[int]] = {}
+    for k, d in enumerate(problem.drones):
+        groups.setdefault(d, []).append(k)
+    for assign in itertools.product(range(K), repeat=n):
+        masks = [0] * K
+        for j, k in enumerate(assign):
+            masks[k] |= 1 << j
+        for ks in groups.values():
+            if len(ks) > 1:
+                ordered = sorted((masks[k] for k in ks), reverse=True)
+                for k, m in zip(ks, ordered, strict=True):
+                    masks[k] = m
+        key = tuple(masks)
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append(key)
+    return out
+
+
+class _Part:
+    """One truck's part (mask, drone count): its bound, level and, when exact, its plan."""
+
+    __slots__ = ("attempts", "bound", "level", "plan")
+
+    def __init__(self, bound: float) -> None:
+        self.bound = bound
+        self.level = 0
+        self.plan: FleetPlan | None = None
+        self.attempts = 0  # exact solves stopped by their time slice
+
+
+def _members(mask: int) -> list[int]:
+    return [j for j in range(mask.bit_length()) if mask >> j & 1]
+
+
+def _lift(plan: FleetPlan, members: list[int]) -> tuple[list[int], list[tuple[int, int]], Any]:
+    """A one-truck sub-plan's route, truck services and sorties in the full indices."""
+    served = [(p, members[j]) for p, j in plan.truck_service[0]]
+    sorties = [
+        [Sortie(s.launch, tuple(members[j] for j in s.customers), s.recovery) for s in drone]
+        for drone in plan.sorties[0]
+    ]
+    return list(plan.routes[0]), served, sorties
+
+
+def _restrict(
+    problem: FleetProblem, plan: FleetPlan | None, mask: int, drones: int
+) -> FleetPlan | None:
+    """The part of ``plan`` flown by a truck with ``drones`` drones serving exactly the
+    customers of ``mask``, as a plan of that part's sub-problem (an incumbent for its
+    search: feasible there, the sub-problem having only fewer constraints), or None."""
+    if plan is None:
+        return None
+    members = _members(mask)
+    index = {j: i for i, j in enumerate(members)}
+    for k in range(problem.K):
+        if problem.drones[k] != drones:
+            continue
+        mine = {j for _, j in plan.truck_service[k]} | {
+            j for drone in plan.sorties[k] for sortie in drone for j in sortie.customers
+        }
+        if mine != set(members):
+            continue
+        return FleetPlan(
+            [plan.routes[k]],
+            [[(p, index[j]) for p, j in plan.truck_service[k]]],
+            [
+                [
+                    [
+                        Sortie(s.launch, tuple(index[j] for j in s.customers), s.recovery)
+                        for s in drone
+                    ]
+                    for drone in plan.sorties[k]
+                ]
+            ],
+        )
+    return None
+
+
+def _no_gc(function: Any, *args: Any, **kwargs: Any) -> Any:
+    """``function(*args, **kwargs)`` with the cyclic garbage collector paused: the label
+    search's millions of acyclic tuples would make each full collection a pause of seconds,
+    taken past the wall-clock limit (the search checks its clock between labels)."""
+    import gc
+
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return function(*args, **kwargs)
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def split_search(
+    problem: FleetProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    max_labels: int | None = None,
+    floor: float = 0.0,
+) -> dict[str, Any]:
+    """Exact by splitting (module docstring); K >= 2 (:func:`split_applies`).
+
+    ``floor``: a known lower bound on the optimum (e.g. the root sortie-walk bound): the run
+    also stops when the best plan reaches it, and the bound returned is at least it.
+
+    Returns a dict like :func:`taopt.fleet.search.label_search`'s: ``plan``, ``value``,
+    ``bound`` (proven), ``stopped_by`` ("optimal", "time_limit", "infeasible"), and the
+    counters ``splits`` (examined: popped at least once), ``of_splits`` (listed),
+    ``solved_splits`` (closed by their parts' plans), ``coupled`` (coupled searches run),
+    ``parts`` (exact part solves) and ``part_seconds`` (the slowest part solves, as
+    ``(customers, drones, seconds)``).
+    """
+    from taopt.fleet.bounds import fleet_lower
+    from taopt.fleet.cover import fleet_cover_bound
+    from taopt.fleet.search import _simple_plan, label_search
+
+    deadline = Deadline(time_limit)
+    closure = _closure(problem)
+    best, best_plan = INF, None
+    for candidate in (incumbent, _simple_plan(problem)):
+        if candidate is None:
+            continue
+        try:
+            plan = as_plan(candidate)
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            continue
+        if value < best:
+            best, best_plan = value, plan
+    level0 = {d: _set_bounds(problem, d) for d in set(problem.drones)}
+    splits = _splits(problem)
+    parts: dict[tuple[int, int], _Part] = {}
+
+    def part(mask: int, d: int) -> _Part:
+        got = parts.get((mask, d))
+        if got is None:
+            got = parts[(mask, d)] = _Part(float(level0[d][mask]))
+            if mask == 0:
+                got.level, got.bound = 3, 0.0
+                got.plan = FleetPlan([[problem.depot]], [[]], [[[] for _ in range(d)]])
+        return got
+
+    def key_of(split: tuple[int, ...]) -> float:
+        return max(part(m, problem.drones[k]).bound for k, m in enumerate(split))
+
+    heap = [(key_of(sp), i) for i, sp in enumerate(splits)]
+    heapq.heapify(heap)
+    popped: set[int] = set()
+    solved = coupled = solves = 0
+    timings: list[tuple[int, int, float]] = []
+    stopped_by = "optimal"
+    least = INF
+    while heap:
+        key, i = heap[0]
+        least = key
+        if best <= max(key, floor) * (1 + CERTIFY):
+            break
+        if key == INF:
+            break
+        if deadline.expired():
+            stopped_by = "time_limit"
+            break
+        heapq.heappop(heap)
+        split = splits[i]
+        now = key_of(split)
+        if now > key:
+            heapq.heappush(heap, (now, i))
+            continue
+        popped.add(i)
+        pending = [
+            (part(m, problem.drones[k]).level, -part(m, problem.drones[k]).bound, m, k)
+            for k, m in enumerate(split)
+            if part(m, problem.drones[k]).level < 3
+        ]
+        if pending:
+            level, _, mask, k = min(pending)
+            d = problem.drones[k]
+            item = part(mask, d)
+            members = _members(mask)
+            sub = sub_problem(problem, members, d, closure)
+            if level == 0:
+                lower = max(item.bound, fleet_lower(sub, "fast"))
+                if lower < best and math.isfinite(best):
+                    left = deadline.remaining()
+                    sub_deadline = Deadline(None if left is None else min(left, 0.1 * left + 0.5))
+                    lower = max(lower, fleet_cover_bound(sub, lower, best, sub_deadline))
+                item.bound = max(item.bound, lower)
+                item.level = 1 if not deadline.expired() else 0
+            else:
+                started = time.perf_counter()
+                left = deadline.remaining()
+                if left is not None:  # a slice, doubled at each retry, so other splits get a turn
+                    left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
+                found = _no_gc(
+                    label_search,
+                    sub,
+                    incumbent=_restrict(problem, best_plan, mask, d),
+                    time_limit=left,
+                    max_labels=max_labels,
+                    floor=item.bound,
+                    cutoff=best,
+                )
+                solves += 1
+                timings.append((len(members), d, time.perf_counter() - started))
+                item.bound = max(item.bound, float(found["bound"]))
+                if found["stopped_by"] == "infeasible":
+                    item.bound, item.level = INF, 3
+                elif found["stopped_by"] == "optimal":
+                    if found["plan"] is not None and found["value"] < best:
+                        item.plan = found["plan"]
+                        item.bound = float(found["value"])
+                        item.level = 3
+                    else:
+                        item.bound = max(item.bound, best)  # cannot beat the best plan
+                        item.level = 2
+                elif found["stopped_by"] == "size":
+                    stopped_by = "size"  # the label cap: stop with the bound it proved
+                    heapq.heappush(heap, (key_of(split), i))
+                    least = heap[0][0]
+                    break
+                else:  # stopped by its slice or the clock: the bound it proved is kept
+                    item.attempts += 1
+            heapq.heappush(heap, (key_of(split), i))
+            continue
+        # every part exact: combine and score
+        routes, served, flights = [], [], []
+        for k, m in enumerate(split):
+            sub_plan = part(m, problem.drones[k]).plan
+            assert sub_plan is not None
+            route, truck_served, sorties = _lift(sub_plan, _members(m))
+            routes.append(route)
+            served.append(truck_served)
+            flights.append(sorties)
+        plan = FleetPlan(routes, served, flights)
+        try:
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            value = INF
+        if value < best:
+            best, best_plan = value, plan
+        if value <= key * (1 + CERTIFY):
+            solved += 1
+            continue
+        # cross-truck precedences bind: the coupled problem restricted to this split
+        owner = [0] * problem.n
+        for k, m in enumerate(split):
+            for j in _members(m):
+                owner[j] = k
+        coupled += 1
+        found = _no_gc(
+            label_search,
+            problem,
+            time_limit=deadline.remaining(),
+            incumbent=plan if value < INF else None,
+            max_labels=max_labels,
+            truck_of=owner,
+            floor=key * (1 - 1e-9),
+            cutoff=best,
+        )
+        if found["plan"] is not None and found["value"] < best:
+            best, best_plan = float(found["value"]), found["plan"]
+        if found["stopped_by"] != "optimal":
+            heapq.heappush(heap, (max(key, float(found["bound"])), i))
+            if found["stopped_by"] == "size":
+                stopped_by = "size"
+                least = heap[0][0]
+                break
+    else:
+        least = INF
+    if not heap:
+        least = INF
+    bound = min(best, max(least, floor))
+    if best == INF and least == INF and stopped_by == "optimal":
+        stopped_by = "infeasible"
+    timings.sort(key=lambda x: -x[2])
+    return {
+        "plan": best_plan,
+        "value": best,
+        "bound": bound,
+        "stopped_by": stopped_by,
+        "splits": len(popped),
+        "of_splits": len(splits),
+        "solved_splits": solved,
+        "coupled": coupled,
+        "parts": solves,
+        "part_seconds": [(m, d, round(s, 3)) for m, d, s in timings[:5]],
+    }
+
+
+__all__ = [
+    "CERTIFY",
+    "SPLIT_MAX_N",
+    "SPLIT_MAX_SPLITS",
+    "SLICE",
+    "count_splits",
+    "split_applies",
+    "split_search",
+    "sub_problem",
+]
