@@ -119,6 +119,23 @@ class _Truck:
     served: list[tuple[int, int]] = field(default_factory=list)
     drones: list[_Drone] = field(default_factory=list)
 
+    def for_closing(self, d: int) -> _Truck:
+        """A view for :meth:`FleetBuilder.close` of drone d: the route, arrivals, services
+        and other drones shared (``close`` rebinds, never mutates, the route and arrivals),
+        drone d and its last sortie copied. O(drone d's sorties), not O(route)."""
+        x = self.drones[d]
+        drones = list(self.drones)
+        last = x.sorties[-1]
+        drones[d] = _Drone(
+            x.aboard_pos,
+            x.aboard_time,
+            [*x.sorties[:-1], [last[0], last[1], last[2]]],
+            x.flown,
+            x.last_time,
+            x.open,
+        )
+        return _Truck(self.route, self.arrival, self.ready, self.served, drones)
+
     def copy(self) -> _Truck:
         return _Truck(
             list(self.route),
@@ -284,7 +301,7 @@ class FleetBuilder:
                 continue
             if drone.open:
                 self._open_options(j, k, d, t, rj, out)
-                closed = t.copy()
+                closed = t.for_closing(d)
                 self.close(closed, d)
                 self._drone_options(j, k, d, closed, rj, out)
             else:
@@ -399,8 +416,9 @@ class FleetBuilder:
             if not reach:  # cannot happen: every open sortie is checked to stay closable
                 raise InstanceError(f"drone {d} cannot be recovered after customer {u}")
             b = min(reach, key=lambda w: (t.ready + float(self.tt[here, w]), w))
-            t.route.append(b)
-            t.arrival.append(t.ready + float(self.tt[here, b]))
+            # rebound, not appended: a truck from _Truck.for_closing shares these lists
+            t.route = [*t.route, b]
+            t.arrival = [*t.arrival, t.ready + float(self.tt[here, b])]
             t.ready = t.arrival[-1]
             here = b
         last = len(t.route) - 1
