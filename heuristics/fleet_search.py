@@ -97,6 +97,17 @@ FAR_SAMPLES = 8
 REPAIR_SAMPLES = 2
 REPAIR_MIN = 100
 
+#: The default moves per sampled neighbourhood are ``min(2 n, SAMPLE_CAP)``: a descent pass
+#: (O(n) improvements, each after up to ``sample`` candidates of O(n) placements) is then
+#: O(n^2) placements at large n rather than O(n^3); unchanged up to n = 32.
+SAMPLE_CAP = 64
+
+
+def default_sample(n: int) -> int:
+    """The default ``sample`` of 3P and ILS: ``min(2 n, SAMPLE_CAP)``."""
+    return min(2 * int(n), SAMPLE_CAP)
+
+
 #: An encoding: the priority order, the truck of each customer, the mode of each customer.
 Encoding = tuple[list[int], np.ndarray, np.ndarray]
 
@@ -777,8 +788,9 @@ def three_phase(
     2-opt), phase 2 the greedy split into drone sorties (:func:`route_first`), phase 3 the
     variable neighbourhood descent (N1 truck move, N2 shift, N3 truck exchange, N4 mode flip,
     N5 reversal, N6 re-pairing; ``sample`` random moves per sampled neighbourhood, default
-    ``2 n``), repeated from the best plan at most ``iterations`` times (each pass with fresh
-    samples) or until ``time_limit`` seconds. ``info``: ``phase1``, ``phase2`` (the
+    ``min(2 n,`` :data:`~taopt.heuristics.fleet_search.SAMPLE_CAP` ``)``), repeated from the
+    best plan at most ``iterations`` times (each pass with fresh samples) or until
+    ``time_limit`` seconds. ``info``: ``phase1``, ``phase2`` (the
     objectives after each phase), ``decodes``, ``stopped_by``.
 
     ``open_sorties``: decode with open sorties (as :func:`ils_fleet`); default (None): under
@@ -796,7 +808,7 @@ def three_phase(
     why = _check_servable(problem)
     if why:
         return infeasible_solution(problem, "3P", why, began)
-    sample = 2 * problem.n if sample is None else sample
+    sample = default_sample(problem.n) if sample is None else sample
     _check(iterations, sample, 0, 0.0)
     if open_sorties is None:
         open_sorties = problem.objective == "last_service"
@@ -844,7 +856,8 @@ def ils_fleet(
 
     Starts from the best of MMA's, SMMA's and 3P's route-first split's plans
     (:func:`route_first`), descends (the VND of "3P", ``sample`` random moves per sampled
-    neighbourhood, default ``2 n``), then ``iterations`` times perturbs the current encoding
+    neighbourhood, default ``min(2 n,`` :data:`~taopt.heuristics.fleet_search.SAMPLE_CAP`
+    ``)``), then ``iterations`` times perturbs the current encoding
     (``strength`` truck moves, shifts, mode flips and drone pins), descends, and accepts the
     result when
     it is at most ``accept_worse`` (relative) worse than the current one. Never worse than its
@@ -862,7 +875,7 @@ def ils_fleet(
     why = _check_servable(problem)
     if why:
         return infeasible_solution(problem, "ILS", why, began)
-    sample = 2 * problem.n if sample is None else sample
+    sample = default_sample(problem.n) if sample is None else sample
     _check(iterations, sample, strength, accept_worse)
     if open_sorties is None:
         open_sorties = problem.objective == "last_service"
@@ -936,6 +949,7 @@ def improve_fleet(
 
 
 __all__ = [
+    "default_sample",
     "ils_fleet",
     "improve_fleet",
     "route_first",
