@@ -161,3 +161,12 @@ def test_searches_never_below_the_optimum_with_two_drones(seed):
         assert a.solution == b.solution
         assert evaluate_fleet(p, a.solution) == pytest.approx(a.objective, rel=1e-9)
         assert a.objective >= optimum * (1 - 1e-9)
+
+
+def test_default_sample_is_capped():
+    """The default sample is 2 n up to n = 32 and SAMPLE_CAP past it (a pass stays O(n^2))."""
+    from taopt.heuristics.fleet_search import SAMPLE_CAP, default_sample
+
+    assert default_sample(10) == 20
+    assert default_sample(32) == 64 == SAMPLE_CAP
+    assert default_sample(120) == SAMPLE_CAP
