@@ -33,9 +33,11 @@ that flip it, is what brings 3P and ILS near the optimum there.
        re-pair the drones' customers (pin a customer to another drone of its truck, exchange
        two customers' drones, or put a customer right after another and on its drone, so
        that they share a sortie); first improvement, back to N1 after each improvement,
-       N1-N3 and N5 sampled (``sample`` moves), N4 complete up to :data:`~taopt.heuristics.fleet_search.FAR_SAMPLES`
-       ``* sample`` moves and sampled past that (a pass stays O(n^2) decodes' work), N6
-       complete up to ``max(``:data:`~taopt.heuristics.fleet_search.REPAIR_SAMPLES` ``* sample,`` :data:`~taopt.heuristics.fleet_search.REPAIR_MIN` ``)``.
+       N1-N3 and N5 sampled (``sample`` moves), N4 complete up to
+       :data:`~taopt.heuristics.fleet_search.FAR_SAMPLES` ``* sample`` moves and sampled
+       past that (a pass stays O(n^2) decodes' work), N6 complete up to
+       ``max(``:data:`~taopt.heuristics.fleet_search.REPAIR_SAMPLES` ``* sample,``
+       :data:`~taopt.heuristics.fleet_search.REPAIR_MIN` ``)``.
 
     Under ``"last_service"`` the decoder offers open sorties in all three phases (as ILS's
     does), and the closed decode of the final encoding is kept when it is better.
