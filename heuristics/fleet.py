@@ -83,6 +83,14 @@ FREE = -1
 TRUCK = 0
 #: The drone service mode, a drone serves the customer (a new sortie or a merge into the last).
 DRONE = 1
+#: ``PINNED + d``: drone d of the customer's truck serves it (the searches' "re-pair" moves
+#: choose which drone, and so which customers share a sortie; :data:`DRONE` lets the key choose).
+PINNED = 2
+
+
+def pinned(mode: int) -> int:
+    """The drone a service mode pins (-1 when it pins none)."""
+    return mode - PINNED if mode >= PINNED else -1
 
 
 @dataclass
@@ -110,6 +118,23 @@ class _Truck:
     ready: float = 0.0
     served: list[tuple[int, int]] = field(default_factory=list)
     drones: list[_Drone] = field(default_factory=list)
+
+    def for_closing(self, d: int) -> _Truck:
+        """A view for :meth:`FleetBuilder.close` of drone d: the route, arrivals, services
+        and other drones shared (``close`` rebinds, never mutates, the route and arrivals),
+        drone d and its last sortie copied. O(drone d's sorties), not O(route)."""
+        x = self.drones[d]
+        drones = list(self.drones)
+        last = x.sorties[-1]
+        drones[d] = _Drone(
+            x.aboard_pos,
+            x.aboard_time,
+            [*x.sorties[:-1], [last[0], last[1], last[2]]],
+            x.flown,
+            x.last_time,
+            x.open,
+        )
+        return _Truck(self.route, self.arrival, self.ready, self.served, drones)
 
     def copy(self) -> _Truck:
         return _Truck(
@@ -196,6 +221,7 @@ class FleetBuilder:
         self.order: list[int] = []
         self.truck_of = np.full(problem.n, -1, dtype=np.int64)
         self.mode_of = np.full(problem.n, FREE, dtype=np.int64)
+        self.drone_of = np.full(problem.n, -1, dtype=np.int64)  # -1: the truck serves it
         self.preds: list[list[int]] = [[] for _ in range(problem.n)]
         for r, j in problem.precedences:
             self.preds[j].append(int(r))
@@ -205,6 +231,14 @@ class FleetBuilder:
             order = np.argsort(self.fs[j], kind="stable")
             ok = [int(w) for w in order if 2.0 * self.fs[j, w] <= self.limit]
             self.near.append(ok[: int(near)])
+        # the same distances as Python floats (indexing lists is the options' inner loop) and
+        # each customer's shortest flight back to a near stop (an open sortie stays closable)
+        self.fs_rows: list[list[float]] = self.fs.tolist()
+        self.tt_rows: list[list[float]] = np.asarray(self.tt, dtype=float).tolist()
+        self.home = [
+            min((self.fs_rows[j][w] for w in self.near[j]), default=math.inf)
+            for j in range(problem.n)
+        ]
         # candidate recovery stops of a truck's last customer (``final``, set by the
         # decoder): the near ones and, under "return" (every truck ends at the depot), the
         # depot: TSP-D's last operation often recovers the drone there. Not offered earlier:
@@ -230,8 +264,18 @@ class FleetBuilder:
         return self.last_service
 
     # -- options -----------------------------------------------------------------------------
-    def options(self, j: int, k: int, truck: _Truck | None = None) -> list[Option]:
-        """Every option of truck k (itself or one of its drones) for customer j."""
+    def options(
+        self,
+        j: int,
+        k: int,
+        truck: _Truck | None = None,
+        mode: int = FREE,
+        distinct: bool = False,
+    ) -> list[Option]:
+        """Every option of truck k (itself or one of its drones) for customer j (only those of
+        service ``mode`` unless :data:`FREE`). With ``distinct``, a drone's sorties from a new
+        stop are left out when an earlier drone of the truck, also aboard, offers the same
+        ones (they depend on the truck only; the earlier drone's come first and win a tie)."""
         problem = self.problem
         t = self.trucks[k] if truck is None else truck
         rj = self.ready_time(j)
@@ -239,7 +283,7 @@ class FleetBuilder:
         last = len(t.route) - 1
         here = t.route[last]
         tt = self.tt
-        if problem.truck_servable(j):
+        if mode < DRONE and problem.truck_servable(j):
             w = problem.truck_stop(j)
             if w == here:
                 tj = max(t.arrival[last], rj)
@@ -248,70 +292,85 @@ class FleetBuilder:
                 drive = float(tt[here, w])
                 tj = max(t.ready + drive, rj)
                 out.append(("truck", k, -1, -1, w, -1, tj, tj, w, drive))
-        if not problem.drone_servable(j) or not t.drones:
+        if mode == TRUCK or not problem.drone_servable(j) or not t.drones:
             return out
+        aboard_before = False
+        only = pinned(mode)
         for d, drone in enumerate(t.drones):
+            if only >= 0 and d != only:
+                continue
             if drone.open:
                 self._open_options(j, k, d, t, rj, out)
-                closed = t.copy()
+                closed = t.for_closing(d)
                 self.close(closed, d)
                 self._drone_options(j, k, d, closed, rj, out)
             else:
-                self._drone_options(j, k, d, t, rj, out)
+                self._drone_options(j, k, d, t, rj, out, not (distinct and aboard_before))
+                aboard_before = True
         return out
 
     def _drone_options(
-        self, j: int, k: int, d: int, t: _Truck, rj: float, out: list[Option]
+        self,
+        j: int,
+        k: int,
+        d: int,
+        t: _Truck,
+        rj: float,
+        out: list[Option],
+        new_stops: bool = True,
     ) -> None:
         """The options of drone d of truck k (its state ``t``) for customer j: new sorties
-        (open ones too with ``open_sorties``) and merging into its last closed one."""
-        tt, fs, vd, tau, limit = self.tt, self.fs, self.vd, self.tau, self.limit
+        (open ones too with ``open_sorties``; from a new stop only with ``new_stops``) and
+        merging into its last closed one."""
+        vd, tau, limit = self.vd, self.tau, self.limit
         last = len(t.route) - 1
         here = t.route[last]
-        fsj = fs[j]
+        fsj = self.fs_rows[j]
+        tt_here = self.tt_rows[here]
         near = self.near[j]
         recover = self.recover[j] if self.final[j] else near
         # the shortest way back from j to a stop (an open sortie must stay closable)
-        home = min((float(fsj[w]) for w in near), default=math.inf)
+        home = self.home[j]
+        tt_rows = self.tt_rows
         drone = t.drones[d]
         # launch from an existing position p where the drone is aboard
         for p in range(max(drone.aboard_pos, last - self.window + 1), last + 1):
             a = t.route[p]
-            out_leg = float(fsj[a])
-            if 2.0 * out_leg > limit and out_leg + float(fsj[here]) > limit:
+            out_leg = fsj[a]
+            if 2.0 * out_leg > limit and out_leg + fsj[here] > limit:
                 continue
             launch = max(t.arrival[p], drone.aboard_time)
             leg = out_leg / vd + tau
             tj = max(launch + leg, rj)
-            back = float(fsj[here])
+            back = fsj[here]
             if out_leg + back <= limit:  # recovered where the truck is (it waits)
                 rec = max(tj + back / vd, t.arrival[last]) + tau
                 out.append(("drone", k, d, p, -1, -1, tj, max(t.ready, rec), here, leg))
             if self.open_sorties and out_leg + home <= limit:  # flies on, open
                 out.append(("open", k, d, p, -1, -1, tj, t.ready, here, leg))
             for b in recover:  # recovered at a new stop the truck drives to
-                if b == here or out_leg + float(fsj[b]) > limit:
+                if b == here or out_leg + fsj[b] > limit:
                     continue
-                arrive = t.ready + float(tt[here, b])
-                rec = max(tj + float(fsj[b]) / vd, arrive) + tau
+                arrive = t.ready + tt_here[b]
+                rec = max(tj + fsj[b] / vd, arrive) + tau
                 out.append(("drone", k, d, p, -1, b, tj, rec, b, leg))
         # the truck drives to a new stop near j, launches and waits
-        for a in near:
+        for a in near if new_stops else ():
             if a == here:
                 continue
-            arrive = t.ready + float(tt[here, a])
-            flight = float(fsj[a]) / vd
+            arrive = t.ready + tt_here[a]
+            flight = fsj[a] / vd
             leg = flight + tau
             tj = max(arrive + leg, rj)
             leg += arrive - t.ready  # NIA's leg includes the drive (t* of (5.11) does)
             rec = tj + flight + tau
             out.append(("drone", k, d, -1, a, -1, tj, rec, a, leg))
-            if self.open_sorties and float(fsj[a]) + home <= limit:  # launch, drive on
+            if self.open_sorties and fsj[a] + home <= limit:  # launch, drive on
                 out.append(("open", k, d, -1, a, -1, tj, arrive, a, leg))
             for b in recover:  # ... and drives on to another stop near j to recover it
-                if b == a or float(fsj[a]) + float(fsj[b]) > limit:
+                if b == a or fsj[a] + fsj[b] > limit:
                     continue
-                rec = max(tj + float(fsj[b]) / vd, arrive + float(tt[a, b])) + tau
+                rec = max(tj + fsj[b] / vd, arrive + tt_rows[a][b]) + tau
                 out.append(("drone", k, d, -1, a, b, tj, rec, b, leg))
         # sortie merging (c > 1): j appended to the drone's last sortie
         if drone.sorties and self.c > 1:
@@ -319,10 +378,10 @@ class FleetBuilder:
             if sortie[2] == last and len(sortie[1]) < self.c:
                 u = sortie[1][-1]
                 hop = float(self.fc[u, j])
-                if drone.flown + hop + float(fsj[here]) <= limit:
+                if drone.flown + hop + fsj[here] <= limit:
                     leg = hop / vd + tau
                     tj = max(drone.last_time + leg, rj)
-                    rec = max(tj + float(fsj[here]) / vd, t.arrival[last]) + tau
+                    rec = max(tj + fsj[here] / vd, t.arrival[last]) + tau
                     out.append(("merge", k, d, last, -1, -1, tj, max(t.ready, rec), here, leg))
 
     def _open_options(
@@ -335,8 +394,7 @@ class FleetBuilder:
         if len(sortie[1]) >= self.c:
             return
         hop = float(self.fc[sortie[1][-1], j])
-        home = min((float(self.fs[j, w]) for w in self.near[j]), default=math.inf)
-        if drone.flown + hop + home > self.limit:
+        if drone.flown + hop + self.home[j] > self.limit:
             return
         leg = hop / self.vd + self.tau
         tj = max(drone.last_time + leg, rj)
@@ -358,8 +416,9 @@ class FleetBuilder:
             if not reach:  # cannot happen: every open sortie is checked to stay closable
                 raise InstanceError(f"drone {d} cannot be recovered after customer {u}")
             b = min(reach, key=lambda w: (t.ready + float(self.tt[here, w]), w))
-            t.route.append(b)
-            t.arrival.append(t.ready + float(self.tt[here, b]))
+            # rebound, not appended: a truck from _Truck.for_closing shares these lists
+            t.route = [*t.route, b]
+            t.arrival = [*t.arrival, t.ready + float(self.tt[here, b])]
             t.ready = t.arrival[-1]
             here = b
         last = len(t.route) - 1
@@ -417,7 +476,7 @@ class FleetBuilder:
                 drone.open = True
                 t.ready = ready
                 if truck is None:
-                    self._record(j, tj, k, DRONE)
+                    self._record(j, tj, k, DRONE, d)
                 return
             if b >= 0:  # the truck leaves its last stop (the new launch stop: at once)
                 depart = t.arrival[-1] if a >= 0 else t.ready
@@ -431,14 +490,15 @@ class FleetBuilder:
             drone.aboard_time = self._recovery(t, j, tj)
         t.ready = ready
         if truck is None:
-            self._record(j, tj, k, TRUCK if kind == "truck" else DRONE)
+            self._record(j, tj, k, TRUCK if kind == "truck" else DRONE, d)
 
-    def _record(self, j: int, tj: float, k: int, mode: int) -> None:
+    def _record(self, j: int, tj: float, k: int, mode: int, d: int) -> None:
         self.service[j] = tj
         self.last_service = max(self.last_service, tj)
         self.order.append(j)
         self.truck_of[j] = k
         self.mode_of[j] = mode
+        self.drone_of[j] = d if mode == DRONE else -1
 
     def _recovery(self, t: _Truck, j: int, tj: float) -> float:
         here = t.route[-1]
@@ -454,22 +514,24 @@ class FleetBuilder:
             list(self.order),
             self.truck_of.copy(),
             self.mode_of.copy(),
+            self.drone_of.copy(),
         )
 
     def restore(self, state: tuple[Any, ...]) -> None:
         """Back to a :meth:`snapshot` (copied again: the snapshot stays reusable)."""
-        trucks, service, last_service, order, truck_of, mode_of = state
+        trucks, service, last_service, order, truck_of, mode_of, drone_of = state
         self.trucks = [t.copy() for t in trucks]
         self.service = service.copy()
         self.last_service = last_service
         self.order = list(order)
         self.truck_of = truck_of.copy()
         self.mode_of = mode_of.copy()
+        self.drone_of = drone_of.copy()
 
     def place(self, j: int, k_fixed: int = -1, mode: int = FREE) -> None:
         """Place customer j by its least-marginal option among truck ``k_fixed``'s (-1: any
         truck able to serve it) of service mode ``mode`` (:data:`FREE`: any; :data:`TRUCK`:
-        the truck serves j; :data:`DRONE`: a drone does).
+        the truck serves j; :data:`DRONE`: a drone does; ``PINNED + d``: drone d does).
 
         Raises
         ------
@@ -479,15 +541,25 @@ class FleetBuilder:
         ks = servers(self.problem, j) if k_fixed < 0 else [k_fixed]
         best: Option | None = None
         best_key: tuple[float, float] | None = None
+        # MMA's key (:meth:`marginal`), inlined: this loop is the searches' inner loop
+        before = self.objective()
+        returning = self.return_objective
+        tt, depot = self.tt, self.depot
         for k in ks:
-            for o in self.options(j, k):
-                if mode != FREE and (o[0] == "truck") != (mode == TRUCK):
-                    continue
-                key = self.marginal(o)
+            t_ready = self.trucks[k].ready
+            for o in self.options(j, k, mode=mode, distinct=mode < PINNED):
+                tj, ready = o[6], o[7]
+                if returning:
+                    after = max(before, ready + float(tt[o[8], depot]))
+                else:
+                    after = max(before, tj)
+                key = (after - before, tj + (ready - t_ready))
                 if best_key is None or key < best_key:
                     best, best_key = o, key
         if best is None:
             how = "" if mode == FREE else (" by truck" if mode == TRUCK else " by drone")
+            if mode >= PINNED:
+                how = f" by drone {pinned(mode)}"
             raise InstanceError(f"truck {k_fixed} cannot serve customer {j}{how}")
         self.apply(j, best)
 
@@ -757,7 +829,7 @@ def decode(
     """Place the customers in ``order`` (a topological order of G^p), each by its option of
     least marginal makespan (MMA's key) among the trucks ``truck_of[j]`` (-1 or None: any)
     and of service mode ``modes[j]`` (:data:`FREE` or None: any; :data:`TRUCK`;
-    :data:`DRONE`).
+    :data:`DRONE`; ``PINNED + d``: drone d of the truck).
 
     The last customer of each truck (:func:`final_customers`) may also have its sortie
     recovered at the depot under ``"return"``.
@@ -816,10 +888,12 @@ def final_customers(
 __all__ = [
     "DRONE",
     "FREE",
+    "PINNED",
     "TRUCK",
     "FleetBuilder",
     "construct",
     "decode",
     "final_customers",
+    "pinned",
     "servers",
 ]
