@@ -169,9 +169,7 @@ class _Tables:
         # start stop and served set
         self.sortie_time: np.ndarray | None = None
         self.drone_only = sum(1 << j for j in range(n) if not self.truck_ok[j] and self.drone_ok[j])
-        import os
-
-        if walk and n <= WALK_MAX_CUSTOMERS and self.drone_only and not os.environ.get("A32_NOST"):
+        if walk and n <= WALK_MAX_CUSTOMERS and self.drone_only:
             self.sortie_time = sortie_time_table(p, deadline)
         self.masks = np.arange(1 << n, dtype=np.int64) if self.walk else np.zeros(0, np.int64)
         self._subs: dict[int, np.ndarray] = {}
