@@ -166,3 +166,18 @@ def test_default_rule_skips_small_instances_and_short_limits():
     assert runner is None and why.startswith("off: engine")
     runner, _ = sop_model._cpsat_peer(SopProblem.load("ESC47"), None, "auto", 60.0)
     assert runner is not None
+
+
+def test_dp_started_under_a_cancelled_token_stops_cleanly():
+    """The DP set up while the run's token is already cancelled (CP-SAT proved first) ends
+    with status time_limit and a valid bound, not an error."""
+    from taopt.models.sop_dp import solve_sop_dp
+    from taopt.runtime import CancelToken, cancel_scope
+
+    problem = random_sop(9, 0.2, 5)
+    token = CancelToken()
+    token.cancel()
+    with cancel_scope(token):
+        result = solve_sop_dp(problem, None)
+    assert result.status in (TIME_LIMIT, OPTIMAL)
+    assert result.bound is None or result.bound <= _brute(problem) + 1e-9
