@@ -1183,7 +1183,7 @@ def solve_sop_problem(
     when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
     :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
     :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``. The wall time stays within the limit
-    plus :func:`taopt.runtime.overrun_allowance`: the worker's start, reply and stop are on
+    plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop are on
     the clock.
 
     The portfolio's own stages. Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
