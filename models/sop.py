@@ -1183,11 +1183,11 @@ def solve_sop_problem(
     when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
     :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
     :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``. The wall time stays within the limit
-    plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop are on
-    the clock.
+    plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop
+    are on the clock.
 
-    The portfolio's own stages. Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
-    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
+    The portfolio's own stages. Rule (``engine="auto"``): count the order ideals up to
+    ``ideal_cap`` (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
     :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
     states are at most n times the ideals. Otherwise the DP runs first with at most
