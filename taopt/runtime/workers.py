@@ -58,7 +58,7 @@ from taopt.errors import SolverError
 from taopt.runtime.deadline import CancelToken, cancel_scope
 from taopt.runtime.interrupt import ignore_sigint
 
-T = TypeVar("T")
+_T = TypeVar("_T")
 
 #: Environment of worker processes: one solver / BLAS thread each.
 ONE_THREAD_ENV = {
@@ -407,11 +407,11 @@ class ScriptWorker:
             self.process.wait()
 
 
-class Background(Generic[T]):
+class Background(Generic[_T]):
     """A call run in a daemon thread beside the caller: submitted at once, collected later.
 
     The call runs inside :func:`~taopt.runtime.deadline.cancel_scope` of its own
-    :attr:`token`, so a :class:`~taopt.runtime.deadline.Deadline` it makes carries the token
+    ``token``, so a :class:`~taopt.runtime.deadline.Deadline` it makes carries the token
     and :meth:`cancel` stops it at its next loop head (a peer call also stops its worker
     process: ``ScriptWorker.next_frame``'s ``stop``). The caller never blocks except in
     :meth:`wait` / :meth:`result`, with a timeout of its choosing. Used by the SOP portfolio
@@ -433,13 +433,15 @@ class Background(Generic[T]):
     42
     """
 
-    def __init__(self, call: Callable[[], T], name: str, parent: CancelToken | None = None) -> None:
+    def __init__(
+        self, call: Callable[[], _T], name: str, parent: CancelToken | None = None
+    ) -> None:
         self.token = CancelToken(parent)
         self.began = time.perf_counter()
         self.seconds = float("nan")  # how long the call ran, once done
         self._call = call
         self._finished = threading.Event()
-        self._value: T | None = None
+        self._value: _T | None = None
         self._error: BaseException | None = None
         self.thread = threading.Thread(target=self._run, name=name, daemon=True)
         self.thread.start()
@@ -466,7 +468,7 @@ class Background(Generic[T]):
         """Cancel the call's token (it stops at its next look; idempotent, never blocks)."""
         self.token.cancel()
 
-    def result(self, timeout: float | None = None) -> T:
+    def result(self, timeout: float | None = None) -> _T:
         """The call's return value, waiting at most ``timeout`` seconds.
 
         Raises
