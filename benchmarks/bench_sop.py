@@ -15,6 +15,7 @@ Run::
     python benchmarks/bench_sop.py --cuts 60 p43.1    # the cut engine alone (also DERIVED)
     python benchmarks/bench_sop.py --table 60 --unseen --load   # the stand-ins (UNSEEN)
     python benchmarks/bench_sop.py --resources 60 --unseen --load
+    python benchmarks/bench_sop.py --resources 60 --cpsat both   # portfolio without/with CP-SAT
     python benchmarks/bench_sop.py --table 60 --methods exact ESC25   # one method only
 
 ``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
@@ -223,12 +224,22 @@ sys.path.insert(0, {bench!r})
 from bench_sop import load_any
 problem = load_any({name!r})
 from taopt.models.sop import BASE_BYTES, dp_bytes, nonzero_count, sop_milp_bytes
+import taopt.models.sop
+if {nice!r} is not None:
+    taopt.models.sop.CPSAT_NICE = {nice!r}
 estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
 t0 = time.perf_counter()
-result = taopt.solve(problem, "exact", time_limit={limit!r})
+result = taopt.solve(problem, "exact", time_limit={limit!r}, cpsat={cpsat!r})
 wall = time.perf_counter() - t0
+from taopt.heuristics import peers
+peers.shutdown()  # CP-SAT's worker reaped: its peak is the children's
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+worker_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
 info = result.info
+side = info.get("cpsat")
+if isinstance(side, dict):
+    side = "{{}} {{:g}} [{{}}] {{:.1f}} s".format(side.get("status"), side.get("objective", float("inf")),
+        side.get("bound"), side.get("seconds") or 0.0)
 states = max(info.get("states") or 0, info.get("dp_states") or 0)
 staged = info.get("memory_estimate") or estimate
 nonzeros = nonzero_count(problem.cost, problem.closure, problem.start) if info.get("variables") else 0
@@ -236,7 +247,7 @@ model = BASE_BYTES + dp_bytes(problem.n, states) + sop_milp_bytes(nonzeros)
 print(json.dumps(dict(status=str(result.status), objective=result.objective, bound=result.bound,
     wall=wall, peak=peak, estimate=estimate, n=problem.n, engine=info.get("engine"),
     states=states, columns=info.get("variables") or 0, model=model, staged=staged,
-    rest=info.get("rest"))))
+    rest=info.get("rest"), cpsat=side, worker_peak=worker_peak)))
 """
 
 
@@ -315,8 +326,15 @@ def load_any(name: str):
     return load_problem(name)
 
 
-def resources(names: list[str], limit: float, load: bool) -> None:
-    """The wall-time and peak-memory table of ``--resources`` (module docstring)."""
+def resources(
+    names: list[str],
+    limit: float,
+    load: bool,
+    cpsat: tuple[bool | None, ...] = (None,),
+    nice: int | None = None,
+) -> None:
+    """The wall-time and peak-memory table of ``--resources`` (module docstring); one row per
+    instance and ``cpsat`` setting of the portfolio (``--cpsat both``: off, then on)."""
     import json
     import os
     import subprocess
@@ -329,14 +347,16 @@ def resources(names: list[str], limit: float, load: bool) -> None:
     env = dict(os.environ)
     print(f"time limit {limit:g} s per run, each in its own process; load: {load}")
     print(
-        "| instance | n | status | objective | bound | wall (s) | over | peak RSS (MB) |"
+        "| instance | n | cpsat | status | objective | bound | wall (s) | over | peak RSS (MB) |"
         " estimate (MB) | peak / estimate | states kept | MILP columns | model (MB) |"
         " peak / model | engine | stages' estimate (MB) | peak / it | after the stages |"
+        " CP-SAT beside | worker peak (MB) |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    runs = [(name, side) for name in names for side in cpsat]
     try:
-        for name in names:
-            code = _CHILD.format(bench=here, name=name, limit=limit)
+        for name, side in runs:
+            code = _CHILD.format(bench=here, name=name, limit=limit, cpsat=side, nice=nice)
             run = subprocess.run(
                 [sys.executable, "-c", code], capture_output=True, text=True, env=env
             )
@@ -351,12 +371,15 @@ def resources(names: list[str], limit: float, load: bool) -> None:
             allowed = limit + max(1.0, 0.05 * limit)
             over = "yes" if r["wall"] > allowed else "no"
             ratio = r["peak"] / r["estimate"] if r["estimate"] else float("nan")
+            flag = {None: "auto", True: "on", False: "off"}[side]
             print(
-                f"| {name} | {r['n']} | {r['status']} | {r['objective']:g} | {r['bound']:g} | "
+                f"| {name} | {r['n']} | {flag} | {r['status']} | {r['objective']:g} | "
+                f"{r['bound']:g} | "
                 f"{r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
                 f"{ratio:.2f} | {r['states']:,} | {r['columns']:,} | {r['model'] / 1e6:.0f} | "
                 f"{r['peak'] / r['model']:.2f} | {r['engine']} | {r['staged'] / 1e6:.0f} | "
-                f"{r['peak'] / r['staged']:.2f} | {', '.join(r['rest'] or [])} |",
+                f"{r['peak'] / r['staged']:.2f} | {', '.join(r['rest'] or [])} | "
+                f"{r['cpsat']} | {r['worker_peak'] / 1e6:.0f} |",
                 flush=True,
             )
     finally:
@@ -491,6 +514,15 @@ def main() -> None:
     parser.add_argument(
         "--methods", default="exact,cpsat", help="--table: the methods, comma-separated"
     )
+    parser.add_argument(
+        "--cpsat",
+        choices=("auto", "on", "off", "both"),
+        default="auto",
+        help="--resources: the portfolio's cpsat= (both: off, then on, in the same run)",
+    )
+    parser.add_argument(
+        "--nice", type=int, default=None, help="--resources: niceness of CP-SAT's worker"
+    )
     args = parser.parse_args()
     if args.unseen and not args.names:
         args.names = list(UNSEEN)
@@ -506,7 +538,8 @@ def main() -> None:
         return
     if args.resources > 0:
         names = args.names or RESOURCES + (list(GENERATED) if args.generated else [])
-        resources(names, args.resources, args.load)
+        sides = {"auto": (None,), "on": (True,), "off": (False,), "both": (False, True)}
+        resources(names, args.resources, args.load, sides[args.cpsat], args.nice)
         return
     if args.compare > 0:
         compare(args.names or COMPARE, args.compare)

@@ -89,6 +89,7 @@ import importlib.util
 import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -175,18 +176,19 @@ class _Worker(ScriptWorker):
     its "ready" frame (:meth:`wait_ready`) as long as its time limit allows.
     """
 
-    def __init__(self, peer: str) -> None:
-        super().__init__(WORKER_SCRIPT, [peer], name=peer)
+    def __init__(self, peer: str, nice: int = 0) -> None:
+        super().__init__(WORKER_SCRIPT, [peer], name=peer, nice=nice)
         self.peer = peer
         self.lock = threading.Lock()
         self.ready = False
         self.version: str | None = None
         self.startup = math.nan
 
-    def wait_ready(self, until: float | None) -> bool:
+    def wait_ready(self, until: float | None, stop: Callable[[], bool] | None = None) -> bool:
         """Wait (holding :attr:`lock`) for the worker's "ready" frame until ``until``
-        (``time.monotonic()``; None: up to :data:`STARTUP_TIMEOUT`). False when ``until``
-        came first: the worker goes on starting and a later call finds it ready.
+        (``time.monotonic()``; None: up to :data:`STARTUP_TIMEOUT`) or ``stop()``. False
+        when ``until`` or ``stop`` came first: the worker goes on starting and a later call
+        finds it ready.
 
         Raises
         ------
@@ -198,12 +200,12 @@ class _Worker(ScriptWorker):
             return True
         hung = self.started + STARTUP_TIMEOUT
         try:
-            frame = self.next_frame(hung if until is None else min(until, hung), "start")
+            frame = self.next_frame(hung if until is None else min(until, hung), "start", stop)
         except BaseException:  # Ctrl-C while it starts, or it died: do not leave it behind
             self.stop(wait=0.0)
             raise
         if frame is None:
-            if time.monotonic() < hung:
+            if time.monotonic() < hung or (stop is not None and stop()):
                 return False
             self.stop(wait=0.0)
             raise SolverError(
@@ -221,19 +223,23 @@ class _Worker(ScriptWorker):
         return True
 
     def call(
-        self, request: dict[str, Any], until: float | None
+        self,
+        request: dict[str, Any],
+        until: float | None,
+        stop: Callable[[], bool] | None = None,
     ) -> tuple[dict[str, Any] | None, bool]:
         """Send one request (holding :attr:`lock`, the worker ready) and wait for its reply.
 
-        Returns ``(reply, True)``; or, when ``time.monotonic()`` passes ``until`` first, the
-        worker is stopped and ``(the last "best" frame it sent or None, False)``. Any
-        interruption (Ctrl-C) stops the worker and is re-raised.
+        Returns ``(reply, True)``; or, when ``time.monotonic()`` passes ``until`` or
+        ``stop()`` is true first, the worker is stopped (killed and reaped) and ``(the last
+        "best" frame it sent or None, False)``. Any interruption (Ctrl-C) stops the worker
+        and is re-raised.
         """
         best = None
         try:
             self.send(request)
             while True:
-                frame = self.next_frame(until, "a solve")
+                frame = self.next_frame(until, "a solve", stop)
                 if frame is None:  # past the deadline: stop it, answer with what it sent
                     self.stop(wait=0.0)
                     return best, False
@@ -263,14 +269,16 @@ def _find_spec(name: str) -> Any:
     return importlib.util.find_spec(name)
 
 
-def _worker(peer: str) -> _Worker:
-    """The live worker of ``peer``, started (not waited for) if there is none."""
+def _worker(peer: str, nice: int = 0) -> _Worker:
+    """The live worker of ``peer`` at niceness ``nice`` (one kept per pair: a niced process
+    cannot be given its priority back), started (not waited for) if there is none."""
     if _find_spec(PEERS[peer]) is None:
         raise SolverError(f"{peer} is not installed; install the peers with {INSTALL_HINT}")
+    key = peer if not nice else f"{peer}+nice{int(nice)}"
     with _WORKERS_LOCK:
-        worker = _WORKERS.get(peer)
+        worker = _WORKERS.get(key)
         if worker is None or not worker.alive():
-            worker = _WORKERS[peer] = _Worker(peer)
+            worker = _WORKERS[key] = _Worker(peer, nice)
         return worker
 
 
@@ -422,7 +430,7 @@ class _Answer:
     stopped: str = ""
 
 
-def _call(peer: str, request: dict[str, Any], deadline: Deadline) -> _Answer:
+def _call(peer: str, request: dict[str, Any], deadline: Deadline, nice: int = 0) -> _Answer:
     """Send ``request`` to ``peer``'s worker within ``deadline`` (everything counts: the
     worker's start-up, the request's time in the worker, the reply).
 
@@ -430,12 +438,16 @@ def _call(peer: str, request: dict[str, Any], deadline: Deadline) -> _Answer:
     worker still starting when the deadline passes keeps starting (for the next call) and
     the answer has no reply; a worker that has not replied :func:`grace` seconds after the
     deadline is stopped and the answer is the last solution it sent ("best" frame), if any.
+    A cancelled deadline (its token: e.g. the SOP portfolio proved the optimum first) stops
+    the worker at once in the same way (a starting worker keeps starting). ``nice``: the
+    worker's niceness (:func:`_worker`).
     """
     began = time.monotonic()
     left = deadline.remaining()  # None without a limit
     end = None if left is None else began + left
+    stop = (lambda: deadline.cancelled) if deadline.token is not None else None
     for _attempt in range(3):
-        worker = _worker(peer)
+        worker = _worker(peer, nice)
         wait = -1.0 if end is None else max(0.0, end - time.monotonic())
         if not worker.lock.acquire(timeout=wait):  # another thread's call holds it
             why = "its worker was busy with another call until the time limit"
@@ -444,10 +456,12 @@ def _call(peer: str, request: dict[str, Any], deadline: Deadline) -> _Answer:
             if not worker.alive():  # stopped by another thread's failed call: take a fresh one
                 continue
             was_ready = worker.ready
-            ready = worker.wait_ready(end)
+            ready = worker.wait_ready(end, stop)
             startup = 0.0 if was_ready else time.monotonic() - began
             if not ready:
                 why = "its worker was still starting (importing its package) at the time limit"
+                if deadline.cancelled:
+                    why = "cancelled while its worker was starting"
                 return _Answer(None, None, startup, why)
             options = dict(request["options"])
             if end is not None:
@@ -457,9 +471,11 @@ def _call(peer: str, request: dict[str, Any], deadline: Deadline) -> _Answer:
                     return _Answer(None, worker.version, startup, why)
                 options["time_limit"] = left
             until = None if end is None else end + grace(deadline.seconds or 0.0)
-            reply, answered = worker.call({**request, "options": options}, until)
+            reply, answered = worker.call({**request, "options": options}, until, stop)
             if answered:
                 return _Answer(reply, worker.version, startup)
+            if deadline.cancelled:
+                return _Answer(reply, worker.version, startup, "cancelled; stopped its worker")
             assert until is not None and end is not None  # only a limited call is cut off
             why = (
                 f"its worker had not answered {until - end:.2f} s after the time limit; stopped it"
@@ -718,6 +734,7 @@ def _cpsat_run(
     payload_type: type[Order] | type[Routes],
     payload_key: str,
     deadline: Deadline,
+    nice: int = 0,
 ) -> Solution:
     """Send one CP-SAT request to the worker and turn its reply into a Solution.
 
@@ -726,7 +743,7 @@ def _cpsat_run(
     """
     options = request["options"]
     time_limit = options["time_limit"]
-    answer = _call("cpsat", request, deadline)
+    answer = _call("cpsat", request, deadline, nice)
     reply = answer.reply or {
         "cpsat_status": "UNKNOWN",
         "objective": None,
@@ -783,6 +800,7 @@ def cpsat_sop(
     *,
     num_workers: int = 2,
     scale: float | None = None,
+    nice: int = 0,
 ) -> Solution:
     """OR-Tools CP-SAT on a sequential ordering problem, in its worker process.
 
@@ -802,6 +820,10 @@ def cpsat_sop(
     scale : float, optional
         Integer units per unit of cost. Default: 1 when the costs are whole numbers
         (exact), else the largest entry becomes :data:`LARGEST_ENTRY`.
+    nice : int
+        Niceness added to the worker process (a lower CPU priority; a worker is kept per
+        niceness). The SOP portfolio runs CP-SAT beside its own stages this way
+        (:func:`taopt.models.sop.solve_sop_problem`).
 
     Returns
     -------
@@ -837,6 +859,8 @@ def cpsat_sop(
     """
     deadline = Deadline(time_limit)
     options = _cpsat_options(problem, SopProblem, time_limit, seed, num_workers)
+    if isinstance(nice, bool) or int(nice) != nice or not 0 <= nice <= 19:
+        raise InstanceError(f"nice must be an integer in [0, 19], got {nice!r}")
     cost, forbidden, scale, exact = _sop_integer_costs(problem, scale)
     options.update(
         kind="sop",
@@ -849,7 +873,7 @@ def cpsat_sop(
     slack = 0.0 if exact else 0.5 * (problem.n - 1)
     return _cpsat_run(
         problem, request, scale=scale, exact=exact, slack=slack,
-        payload_type=Order, payload_key="order", deadline=deadline,
+        payload_type=Order, payload_key="order", deadline=deadline, nice=int(nice),
     )  # fmt: skip
 
 

@@ -63,6 +63,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -83,7 +84,8 @@ from taopt.result import (
     Solution,
     finish,
 )
-from taopt.runtime import MARGIN, Deadline, register_footprint
+from taopt.runtime import MARGIN, CancelToken, Deadline, cancel_scope, register_footprint
+from taopt.runtime.workers import Background
 from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
 from taopt.status import decide
 
@@ -1058,6 +1060,102 @@ def _far(result: Solution) -> bool:
     return (value - bound) / value > CUTS_SECOND_STAGE_GAP
 
 
+#: Nodes from which the portfolio starts CP-SAT beside its own stages when ``cpsat=None``
+#: (below, the DP closes in well under a second: ESC25 0.7 s; starting CP-SAT's worker would
+#: only take a core's second from it).
+CPSAT_MIN_NODES = 30
+
+#: The least time limit with which the portfolio starts CP-SAT when ``cpsat=None`` (its
+#: worker needs about a second to start and import OR-Tools).
+CPSAT_MIN_LIMIT = 2.0
+
+#: Seconds before the portfolio's deadline at which CP-SAT's run is told to end (the worker
+#: starting, replying and being reaped are on the portfolio's clock).
+CPSAT_MARGIN = 0.5
+
+#: Seconds the portfolio waits for CP-SAT's reply past its own deadline before it stops the
+#: worker and keeps the last order the worker sent.
+CPSAT_WAIT = 0.3
+
+#: Seconds the portfolio waits for CP-SAT's worker to be stopped and reaped once cancelled.
+CPSAT_STOP_WAIT = 2.0
+
+#: Niceness of CP-SAT's worker process beside the portfolio (0: the same CPU priority as
+#: the portfolio). Chosen by the figures in ``docs/benchmarks.md`` (SOP section).
+CPSAT_NICE = 0
+
+
+def _cpsat_peer(
+    problem: SopProblem, cpsat: bool | None, engine: str, time_limit: float | None
+) -> tuple[Callable[..., Solution] | None, str]:
+    """The registered CP-SAT peer of the SOP to run beside the portfolio, or None and why.
+
+    Looked up in the registry (an exact model never imports the heuristics package): the
+    peer is there once ``taopt.heuristics`` is imported, as :func:`taopt.solve` does, and
+    available when ``ortools`` is installed (found, not imported).
+
+    Raises
+    ------
+    SolverError
+        ``cpsat=True`` and the peer is not registered or ``ortools`` is not installed.
+    """
+    from taopt.registry import methods
+
+    if cpsat is False:
+        return None, "off"
+    if engine != "auto":
+        return None, f"off: engine={engine!r}"
+    spec = methods(problem).get("cpsat")
+    if spec is None or not spec.available:
+        if cpsat:
+            raise SolverError(
+                "cpsat=True needs OR-Tools (pip install ortools) and the peer registered "
+                "(import taopt.heuristics; taopt.solve does)"
+            )
+        return None, "not available (ortools not installed or taopt.heuristics not imported)"
+    if cpsat is None and problem.n < CPSAT_MIN_NODES:
+        return None, f"off: {problem.n} nodes < {CPSAT_MIN_NODES}"
+    if cpsat is None and time_limit is not None and time_limit < CPSAT_MIN_LIMIT:
+        return None, f"off: time_limit {time_limit:g} s < {CPSAT_MIN_LIMIT:g} s"
+    return spec.func, ""
+
+
+def _bounds_max(*bounds: float | None) -> float | None:
+    """The largest of the proven bounds given (None when there is none)."""
+    known = [float(b) for b in bounds if b is not None and not np.isnan(b)]
+    return max(known) if known else None
+
+
+def _beside(
+    problem: SopProblem, ours: Solution, other: Solution | None, stop: str
+) -> tuple[Solution, dict[str, Any]]:
+    """The portfolio's result and CP-SAT's (None: no answer) as one: the better order, the
+    larger proven bound, the status by the one rule (:func:`taopt.status.decide`) with
+    ``stop`` for an open gap; and who found and who proved what."""
+    credit: dict[str, Any] = {"order_from": "portfolio", "bound_from": "portfolio"}
+    if ours.status == INFEASIBLE or other is None:
+        if ours.status == OPTIMAL:
+            credit["proved_by"] = "portfolio"
+        return ours, credit
+    usable_bound = None if other.status == INFEASIBLE else other.bound
+    best = ours
+    if other.solution is not None and other.objective < ours.objective:
+        best = other
+        credit["order_from"] = "cpsat"
+    bound = _bounds_max(ours.bound, usable_bound)
+    if usable_bound is not None and (ours.bound is None or usable_bound > ours.bound):
+        credit["bound_from"] = "cpsat"
+    status = best.status
+    if np.isfinite(best.objective):
+        bound = None if bound is None else min(bound, best.objective)
+        status, credit["stopped_by"] = decide(stop, best.objective, bound)
+    if status == OPTIMAL:  # who closed it: an engine whose own gap is closed, else the pair
+        own = [name for name, run in (("portfolio", ours), ("cpsat", other))
+               if run.status == OPTIMAL]  # fmt: skip
+        credit["proved_by"] = "+".join(own) if own else "portfolio+cpsat"
+    return best.replace(bound=bound, status=status), credit
+
+
 def solve_sop_problem(
     problem: SopProblem,
     time_limit: float | None = None,
@@ -1069,12 +1167,27 @@ def solve_sop_problem(
     ideal_cap: int | None = None,
     max_states: int = PORTFOLIO_MAX_STATES,
     max_memory_gb: float | None = None,
+    cpsat: bool | None = None,
 ) -> Solution:
     """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
-    MILP for sparse precedence.
+    MILP for sparse precedence, and CP-SAT beside them.
 
-    Rule (``engine="auto"``): count the order ideals up to ``ideal_cap``
-    (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
+    CP-SAT (the model of :func:`taopt.heuristics.peers.cpsat_sop`, one search worker) is
+    started at once in its worker process, with the portfolio's deadline less
+    :data:`CPSAT_MARGIN`, and runs while this process runs the stages below
+    (:class:`taopt.runtime.workers.Background`). The first side to prove the optimum stops
+    the other (CP-SAT's "optimal" counts only after taopt's scorer re-scored its order and
+    its bound, rounded down to the problem's units, closes the gap); otherwise the result is
+    the better of the two orders with the larger of the two proven bounds, its status by
+    the one rule (:func:`taopt.status.decide`). By default (``cpsat=None``) CP-SAT runs
+    when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
+    :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
+    :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``. The wall time stays within the limit
+    plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop
+    are on the clock.
+
+    The portfolio's own stages. Rule (``engine="auto"``): count the order ideals up to
+    ``ideal_cap`` (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
     :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
     states are at most n times the ideals. Otherwise the DP runs first with at most
@@ -1118,25 +1231,113 @@ def solve_sop_problem(
         size alone. A run whose stages end before its limit without a proof goes on with
         larger DP caps while they fit, then wider beams
         (:func:`taopt.models.sop_stages.use_the_rest`), so it uses its whole limit.
+    cpsat : bool, optional
+        Run CP-SAT beside the stages: True (a :class:`~taopt.errors.SolverError` when it is
+        not available), False (never), None (default: the rule above).
 
     Returns
     -------
     Solution
         As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
         ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", or the degraded
-        "beam" / "bound"), ``ideals`` and ``ideals_capped``, the DP's ``states``/``pruned``
-        when it ran, ``memory_plan``, ``memory_estimate`` (the estimated peak bytes of the
-        stages run, each estimated before it started) and ``rest`` (what ran after the
-        stages, if anything).
+        "beam" / "bound"; "+cpsat" appended when CP-SAT found the order kept, the larger
+        bound or the proof), ``cpsat`` (why it did not run, or its ``status``,
+        ``cpsat_status``, ``objective``, ``bound``, ``seconds``, ``startup``, ``nice`` and
+        ``worker``: why its worker was stopped), ``order_from`` / ``bound_from``
+        ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
+        ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
+        ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
+        before it started) and ``rest`` (what ran after the stages, if anything).
     """
-    from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
-    from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
-
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
         raise InstanceError(f"engine must be one of {PORTFOLIO_ENGINES}, got {engine!r}")
     if time_limit is not None and time_limit <= 0:
         raise InstanceError(f"time_limit must be positive, got {time_limit}")
+    options = dict(
+        formulation=formulation, mip_gap=mip_gap, verbose=verbose, incumbent=incumbent,
+        engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
+    )  # fmt: skip
+    peer, why = _cpsat_peer(problem, cpsat, engine, time_limit)
+    if peer is None:
+        result = _stages(problem, time_limit, **options)
+        return result.replace(info={**result.info, "cpsat": why})
+    outer = Deadline(time_limit)  # the caller's token, if any, stops both sides
+    race = CancelToken(parent=outer.token)  # cancelled when CP-SAT proves the optimum
+    seconds = None if time_limit is None else max(time_limit - CPSAT_MARGIN, MARGIN)
+
+    def run_cpsat() -> Solution:
+        found = peer(problem, time_limit=seconds, num_workers=1, nice=CPSAT_NICE)
+        if found.status == OPTIMAL:  # re-scored by taopt's scorer, its bound closes the gap
+            race.cancel()
+        return found
+
+    task = Background(run_cpsat, "cpsat-beside-portfolio", parent=outer.token)
+    try:
+        with cancel_scope(race):
+            ours = _stages(problem, time_limit, **options)
+    except BaseException:  # Ctrl-C or an error: stop CP-SAT's worker too, then re-raise
+        task.cancel()
+        task.wait(CPSAT_STOP_WAIT)
+        raise
+    if ours.status in (OPTIMAL, INFEASIBLE) or outer.cancelled:
+        task.cancel()  # proved (or cancelled): CP-SAT's worker is stopped now
+    left = outer.remaining()
+    if not task.wait(None if left is None else left + CPSAT_WAIT):
+        task.cancel()  # past the deadline: stopped; its last order is kept
+    other: Solution | None = None
+    cpsat_info: dict[str, Any] = {"nice": CPSAT_NICE}
+    if task.wait(CPSAT_STOP_WAIT):
+        try:
+            other = task.result(0)
+        except Exception as exc:  # CP-SAT's failure never costs the portfolio its answer
+            cpsat_info["error"] = f"{type(exc).__name__}: {exc}"
+    else:
+        cpsat_info["error"] = f"its worker did not stop within {CPSAT_STOP_WAIT} s"
+    cpsat_info["seconds"] = task.seconds
+    if other is not None:
+        cpsat_info.update(
+            status=str(other.status),
+            cpsat_status=other.info.get("cpsat_status"),
+            objective=other.objective,
+            bound=other.bound,
+            startup=other.info.get("startup"),
+        )
+        if other.info.get("worker"):
+            cpsat_info["worker"] = other.info["worker"]
+    stop = "interrupted" if outer.cancelled else (ours.info.get("stopped_by") or "time_limit")
+    if race.cancelled and not outer.cancelled:
+        stop = "time_limit"  # our stages were stopped by CP-SAT's proof
+    result, credit = _beside(problem, ours, other, stop)
+    used = ours.info.get("engine", "")
+    if "cpsat" in (credit["order_from"], credit["bound_from"]) or "cpsat" in credit.get(
+        "proved_by", ""
+    ):
+        used += "+cpsat"
+    return result.replace(
+        runtime=time.perf_counter() - began,
+        method="exact-sop",
+        info={**ours.info, **credit, "engine": used, "cpsat": cpsat_info},
+    )
+
+
+def _stages(
+    problem: SopProblem,
+    time_limit: float | None,
+    formulation: str,
+    mip_gap: float,
+    verbose: bool,
+    incumbent: Any,
+    engine: str,
+    ideal_cap: int | None,
+    max_states: int,
+    max_memory_gb: float | None,
+) -> Solution:
+    """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process."""
+    from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
+    from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
+
+    began = time.perf_counter()
     deadline = Deadline(time_limit)
     unreachable = _unreachable(problem.cost, problem.closure, problem.start, problem.end)
     if unreachable is not None:

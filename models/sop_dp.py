@@ -91,7 +91,7 @@ from taopt.errors import InstanceError
 from taopt.ideals import bits as node_bits
 from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
 from taopt.result import Order, Solution, finish
-from taopt.runtime import MARGIN, Deadline
+from taopt.runtime import MARGIN, CancelToken, Deadline
 from taopt.sop.problem import SopProblem, path_cost
 
 __all__ = [
@@ -792,8 +792,11 @@ class _Run:
         self.layers: list[tuple[np.ndarray, ...]] = [
             (mask, last, value, parent)
         ]  # layer k: (mask, last, value, parent)
-        total = self.search.totals(mask, last, value, Deadline(None))
-        assert total is not None  # no deadline: never stopped
+        # one layer of one state: never stopped (a token of its own, not the run's: a run
+        # cancelled meanwhile, e.g. by CP-SAT's proof beside the portfolio, stops at the
+        # DP's next loop head instead)
+        total = self.search.totals(mask, last, value, Deadline(None, cancel=CancelToken()))
+        assert total is not None
         self.layer_total = total
         self.pruned_min = np.inf
         self.pruned = 0

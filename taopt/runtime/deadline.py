@@ -68,28 +68,47 @@ def overrun_allowance(seconds: float) -> float:
 class CancelToken:
     """A flag one party sets and the running method reads at its loop heads (thread-safe).
 
+    Parameters
+    ----------
+    parent : CancelToken, optional
+        A token this one follows: cancelling the parent cancels this one, not the reverse.
+
     Example
     -------
     >>> token = CancelToken()
     >>> token.cancelled, token.cancel(), token.cancelled
     (False, None, True)
+    >>> run = CancelToken()
+    >>> part = CancelToken(parent=run)
+    >>> run.cancel(); part.cancelled
+    True
     """
 
-    def __init__(self) -> None:
+    def __init__(self, parent: CancelToken | None = None) -> None:
         self._event = threading.Event()
+        self.parent = parent
 
     def cancel(self) -> None:
-        """Ask the run to stop (idempotent)."""
+        """Ask the run to stop (idempotent); the parent, if any, is not touched."""
         self._event.set()
 
     @property
     def cancelled(self) -> bool:
-        """Whether :meth:`cancel` was called."""
-        return self._event.is_set()
+        """Whether :meth:`cancel` was called on this token or on its parent (a child token
+        stops a part of a run, e.g. one side of a race, and also stops with the whole run)."""
+        return self._event.is_set() or (self.parent is not None and self.parent.cancelled)
 
     def wait(self, timeout: float | None = None) -> bool:
         """Block until cancelled or ``timeout`` seconds passed; whether it was cancelled."""
-        return self._event.wait(timeout)
+        if self.parent is None:
+            return self._event.wait(timeout)
+        end = None if timeout is None else time.monotonic() + timeout
+        while not self.cancelled:  # the parent's event is not ours: look at it now and then
+            left = 0.05 if end is None else min(0.05, end - time.monotonic())
+            if left <= 0:
+                return False
+            self._event.wait(left)
+        return True
 
     def __repr__(self) -> str:
         return f"CancelToken(cancelled={self.cancelled})"

@@ -52,10 +52,13 @@ import time
 from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from taopt.errors import SolverError
+from taopt.runtime.deadline import CancelToken, cancel_scope
 from taopt.runtime.interrupt import ignore_sigint
+
+_T = TypeVar("_T")
 
 #: Environment of worker processes: one solver / BLAS thread each.
 ONE_THREAD_ENV = {
@@ -67,6 +70,9 @@ ONE_THREAD_ENV = {
 
 #: Seconds between two looks of a worker's watch thread at its parent.
 WATCH_PERIOD = 0.5
+
+#: Seconds between two looks at a ``stop`` predicate while waiting for a script worker.
+STOP_POLL = 0.02
 
 _START_LOCK = threading.Lock()  # one pool starts processes at a time: the new children are its
 _POOLS: dict[Hashable, WorkerPool] = {}
@@ -309,9 +315,15 @@ class ScriptWorker:
         The script's own arguments.
     name : str
         Names the worker in errors ("pyvrp worker process died ...").
+    nice : int
+        Added to the worker's niceness (lower CPU priority) right after it is started,
+        before its interpreter starts a thread, so every thread it starts inherits it
+        (POSIX; ignored elsewhere). 0: this process's priority.
     """
 
-    def __init__(self, script: str | os.PathLike[str], args: Sequence[str], name: str) -> None:
+    def __init__(
+        self, script: str | os.PathLike[str], args: Sequence[str], name: str, nice: int = 0
+    ) -> None:
         self.name = name
         self.owner = os.getpid()
         self.started = time.monotonic()
@@ -322,6 +334,11 @@ class ScriptWorker:
             stdout=subprocess.PIPE,
             start_new_session=os.name == "posix",
         )
+        self.nice = int(nice)
+        if self.nice and hasattr(os, "setpriority"):
+            with contextlib.suppress(OSError):  # a priority that cannot be set: it runs as is
+                own = os.getpriority(os.PRIO_PROCESS, 0)
+                os.setpriority(os.PRIO_PROCESS, self.process.pid, min(19, own + self.nice))
         self.frames: queue.Queue[Any] = queue.Queue()
         threading.Thread(target=self._read, name=f"{name}-reader", daemon=True).start()
 
@@ -342,8 +359,11 @@ class ScriptWorker:
         pickle.dump(message, stdin, protocol=pickle.HIGHEST_PROTOCOL)
         stdin.flush()
 
-    def next_frame(self, until: float | None, what: str) -> Any:
-        """The next frame, or None once ``time.monotonic()`` passes ``until`` (None: wait).
+    def next_frame(
+        self, until: float | None, what: str, stop: Callable[[], bool] | None = None
+    ) -> Any:
+        """The next frame, or None once ``time.monotonic()`` passes ``until`` (None: wait)
+        or once ``stop()`` is true (looked at every :data:`STOP_POLL` seconds).
 
         Raises
         ------
@@ -351,8 +371,11 @@ class ScriptWorker:
             The worker ended (its output closed) during ``what``; the message names the
             worker, how it ended (exit status or signal) and ``what``.
         """
+        poll = 1.0 if stop is None else STOP_POLL
         while True:
-            left = 1.0 if until is None else min(1.0, until - time.monotonic())
+            if stop is not None and stop():
+                return None
+            left = poll if until is None else min(poll, until - time.monotonic())
             if left <= 0:
                 return None
             try:
@@ -384,6 +407,87 @@ class ScriptWorker:
             self.process.wait()
 
 
+class Background(Generic[_T]):
+    """A call run in a daemon thread beside the caller: submitted at once, collected later.
+
+    The call runs inside :func:`~taopt.runtime.deadline.cancel_scope` of its own
+    ``token``, so a :class:`~taopt.runtime.deadline.Deadline` it makes carries the token
+    and :meth:`cancel` stops it at its next loop head (a peer call also stops its worker
+    process: ``ScriptWorker.next_frame``'s ``stop``). The caller never blocks except in
+    :meth:`wait` / :meth:`result`, with a timeout of its choosing. Used by the SOP portfolio
+    to run CP-SAT's worker beside its own stages.
+
+    Parameters
+    ----------
+    call : callable
+        Takes no argument; its return value is the result.
+    name : str
+        The thread's name.
+    parent : CancelToken, optional
+        The run this call belongs to: cancelling it cancels the call too.
+
+    Example
+    -------
+    >>> task = Background(lambda: 6 * 7, "answer")
+    >>> task.result(timeout=10)
+    42
+    """
+
+    def __init__(
+        self, call: Callable[[], _T], name: str, parent: CancelToken | None = None
+    ) -> None:
+        self.token = CancelToken(parent)
+        self.began = time.perf_counter()
+        self.seconds = float("nan")  # how long the call ran, once done
+        self._call = call
+        self._finished = threading.Event()
+        self._value: _T | None = None
+        self._error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        try:
+            with cancel_scope(self.token):
+                self._value = self._call()
+        except BaseException as exc:  # handed to the caller by result()
+            self._error = exc
+        finally:
+            self.seconds = time.perf_counter() - self.began
+            self._finished.set()
+
+    def done(self) -> bool:
+        """Whether the call has returned or raised."""
+        return self._finished.is_set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Block until the call is done or ``timeout`` seconds passed; whether it is done."""
+        return self._finished.wait(timeout)
+
+    def cancel(self) -> None:
+        """Cancel the call's token (it stops at its next look; idempotent, never blocks)."""
+        self.token.cancel()
+
+    def result(self, timeout: float | None = None) -> _T:
+        """The call's return value, waiting at most ``timeout`` seconds.
+
+        Raises
+        ------
+        TimeoutError
+            The call is not done after ``timeout`` seconds.
+        BaseException
+            What the call raised, re-raised here.
+        """
+        if not self._finished.wait(timeout):
+            raise TimeoutError(f"{self.thread.name} not done after {timeout} s")
+        if self._error is not None:
+            raise self._error
+        return self._value  # type: ignore[return-value]
+
+    def __repr__(self) -> str:
+        return f"Background({self.thread.name!r}, done={self.done()})"
+
+
 def kill_processes(pids: list[int]) -> None:
     """SIGKILL each of ``pids`` that still exists (processes that are not this pool's
     children, e.g. a local Dask cluster's workers)."""
@@ -394,6 +498,8 @@ def kill_processes(pids: list[int]) -> None:
 
 __all__ = [
     "ONE_THREAD_ENV",
+    "STOP_POLL",
+    "Background",
     "ScriptWorker",
     "WorkerPool",
     "become_worker",

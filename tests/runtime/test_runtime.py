@@ -338,3 +338,68 @@ def test_highs_model_lp_limit_is_per_run():
     model.add_rows(cut, None, np.array([0.999 * float((cut @ point)[0])]))
     again = model.solve(time_limit=first / 2)
     assert again.status == "optimal", again.solver_status
+
+
+def test_child_token_follows_its_parent_only():
+    """A child token is cancelled with its parent; cancelling the child leaves the parent."""
+    from taopt.runtime import CancelToken
+
+    run = CancelToken()
+    part = CancelToken(parent=run)
+    part.cancel()
+    assert part.cancelled and not run.cancelled
+    other = CancelToken(parent=run)
+    assert not other.wait(0.01)
+    run.cancel()
+    assert other.cancelled and other.wait(0.0)
+
+
+def test_background_returns_raises_and_is_cancelled():
+    """A Background call returns its value, re-raises its error, and stops on cancel()."""
+    from taopt.runtime import Deadline
+    from taopt.runtime.workers import Background
+
+    assert Background(lambda: 6 * 7, "value").result(timeout=30) == 42
+    failing = Background(lambda: 1 / 0, "error")
+    with pytest.raises(ZeroDivisionError):
+        failing.result(timeout=30)
+
+    def loop() -> int:
+        deadline = Deadline(None)  # carries the task's token (its cancel scope)
+        rounds = 0
+        while not (deadline.limited and deadline.expired()):
+            rounds += 1
+            time.sleep(0.001)
+        return rounds
+
+    task = Background(loop, "loop")
+    assert not task.wait(0.05)
+    task.cancel()
+    assert task.result(timeout=30) >= 1 and task.done()
+
+
+def test_background_follows_the_parent_token():
+    """Cancelling the run's token (the parent) stops a Background call too."""
+    from taopt.runtime import CancelToken, current_token
+    from taopt.runtime.workers import Background
+
+    run = CancelToken()
+    task = Background(lambda: current_token().wait(30), "child", parent=run)  # type: ignore[union-attr]
+    run.cancel()
+    assert task.result(timeout=30) is True
+
+
+def test_script_worker_is_niced(tmp_path):
+    """ScriptWorker(nice=k) runs its process k steps nicer than this one, and stops it."""
+    from taopt.runtime.workers import ScriptWorker
+
+    script = tmp_path / "idle.py"
+    script.write_text("import sys\nsys.stdin.buffer.read()\n")
+    worker = ScriptWorker(script, [], name="idle", nice=5)
+    try:
+        own = os.getpriority(os.PRIO_PROCESS, 0)
+        assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == min(19, own + 5)
+        assert worker.next_frame(None, "idle", stop=lambda: True) is None  # stop: at once
+    finally:
+        worker.stop()
+    assert worker.process.poll() is not None

@@ -183,7 +183,7 @@ def test_portfolio_picks_the_dp_beyond_64_nodes_by_the_ideal_count():
     base = random_sop(10, 0.2, 5)
     problem, extra = padded(base, 70, 5)
     expected = _brute_force(base) + extra
-    portfolio = solve_sop_problem(problem)
+    portfolio = solve_sop_problem(problem, cpsat=False)  # the rule's own choice, CP-SAT aside
     assert portfolio.status == OPTIMAL and portfolio.objective == expected
     assert portfolio.info["engine"] == "dp" and not portfolio.info["ideals_capped"]
 
