@@ -23,6 +23,7 @@ precedence that can only be met by waiting for itself) makes the plan infeasible
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
@@ -389,9 +390,28 @@ def evaluate_fleet(problem: FleetProblem, plan: Any) -> float:
     return schedule(problem, plan, check=True).objective
 
 
+def best_of(problem: FleetProblem, candidates: Any) -> tuple[float, FleetPlan | None]:
+    """The best feasible plan among ``candidates`` (plans, Solutions or dicts; None and
+    infeasible ones skipped) and its value by :func:`evaluate_fleet`; ``(inf, None)`` when
+    none is feasible."""
+    best, best_plan = math.inf, None
+    for candidate in candidates:
+        if candidate is None:
+            continue
+        try:
+            plan = as_plan(candidate)
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            continue
+        if value < best:
+            best, best_plan = value, plan
+    return best, best_plan
+
+
 __all__ = [
     "FleetSchedule",
     "as_plan",
+    "best_of",
     "check_structure",
     "evaluate_fleet",
     "schedule",

@@ -61,7 +61,7 @@ from taopt.fleet.cover import (
     sortie_time_table,
     walk_table,
 )
-from taopt.fleet.evaluate import as_plan, evaluate_fleet
+from taopt.fleet.evaluate import best_of, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
 
@@ -254,6 +254,23 @@ def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
     return INF  # not reached
 
 
+def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any) -> tuple:
+    """Per stop q, the earliest an airborne drone ``dr`` of a truck at stop w (arrival A,
+    departure bound T) can be recovered there and its τ done (``inf`` beyond its range; one
+    that has served nobody yet is charged no flight), and the truck's arrival times per stop
+    (``arrive``, computed once per truck: pass None first)."""
+    if arrive is None:
+        arrive = T + tab.tt_np[w]
+        arrive[w] = A
+    o = dr[1]
+    if o >= 0:
+        back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tab.tau
+        back[dr[4] + tab.fsd_np[o] > tab.limit] = INF
+    else:
+        back = np.maximum(dr[3], arrive) + tab.tau
+    return back, arrive
+
+
 def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
     """Per truck, per customer j: the least time a sortie of that truck not yet launched
     serves j (``inf`` where none can).
@@ -284,15 +301,7 @@ def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
         for dr in drones:
             if dr[0] != 1:
                 continue
-            if arrive is None:
-                arrive = T + tab.tt_np[w]
-                arrive[w] = A
-            o = dr[1]
-            if o >= 0:
-                back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tau
-                back[dr[4] + tab.fsd_np[o] > tab.limit] = INF
-            else:
-                back = np.maximum(dr[3], arrive) + tau
+            back, arrive = _recoveries(tab, w, A, T, dr, arrive)
             best = np.minimum(best, np.min(back[:, None] + tab.Gnp, axis=0))
         out.append((best + tau).tolist())
     return out
@@ -367,15 +376,7 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
             if dr[0] == 0:
                 ends.append((dr[1] if dr[1] > A else A) + F[w, subs])
                 continue
-            if arrive is None:
-                arrive = T + tab.tt_np[w]
-                arrive[w] = A
-            o = dr[1]
-            if o >= 0:
-                back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tab.tau
-                back[dr[4] + tab.fsd_np[o] > tab.limit] = INF
-            else:
-                back = np.maximum(dr[3], arrive) + tab.tau
+            back, arrive = _recoveries(tab, w, A, T, dr, arrive)
             near = np.flatnonzero(back < INF)
             ends.append(np.min(back[near, None] + F[near][:, subs], axis=0))
     if not ends:
@@ -882,18 +883,8 @@ def label_search(
     if truck_of is not None:
         tab.owner = [int(k) for k in truck_of]
         tab.groups = [[k] for k in range(problem.K)]
-    best_plan: FleetPlan | None = None
-    best = INF
-    for candidate in (incumbent, _simple_plan(problem, truck_of)):
-        if candidate is None:
-            continue
-        try:
-            plan = as_plan(candidate)
-            value = evaluate_fleet(problem, plan)
-        except FeasibilityError:
-            continue
-        if value < best:
-            best, best_plan = value, plan
+    best_plan: FleetPlan | None
+    best, best_plan = best_of(problem, (incumbent, _simple_plan(problem, truck_of)))
     if beam and time_limit is not None:
         sub = Deadline(0.2 * time_limit)
     else:

@@ -65,7 +65,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import FeasibilityError
-from taopt.fleet.evaluate import as_plan, evaluate_fleet
+from taopt.fleet.evaluate import best_of, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
 
@@ -315,17 +315,7 @@ def split_search(
 
     deadline = Deadline(time_limit)
     closure = _closure(problem)
-    best, best_plan = INF, None
-    for candidate in (incumbent, _simple_plan(problem)):
-        if candidate is None:
-            continue
-        try:
-            plan = as_plan(candidate)
-            value = evaluate_fleet(problem, plan)
-        except FeasibilityError:
-            continue
-        if value < best:
-            best, best_plan = value, plan
+    best, best_plan = best_of(problem, (incumbent, _simple_plan(problem)))
     level0 = {d: _set_bounds(problem, d) for d in set(problem.drones)}
     splits = _splits(problem)
     parts: dict[tuple[int, int], _Part] = {}
