@@ -97,6 +97,8 @@ FAR_SAMPLES = 8
 #: N6's re-pairing moves per pass: at most ``max(REPAIR_SAMPLES * sample, REPAIR_MIN)`` (drawn
 #: at random past that; complete at n <= 10 with two drones).
 REPAIR_SAMPLES = 2
+
+#: The least number of N6 moves a pass may try (see :data:`REPAIR_SAMPLES`).
 REPAIR_MIN = 100
 
 #: The default moves per sampled neighbourhood are ``min(2 n, SAMPLE_CAP)``: a descent pass
