@@ -178,6 +178,8 @@ class _Tables:
             self.popcount += (self.masks >> j) & 1
         # owner[j]: the only truck that (or whose drones) may serve j (``truck_of``), or None
         self.owner: list[int] | None = None
+        # release[j]: a time before which j is not served (``release``), 0 by default
+        self.release = [0.0] * n
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -445,6 +447,8 @@ def _bound(tab: _Tables, label: tuple) -> float:
             for r in tab.preds[j]:
                 if est[r] > e:
                     e = est[r]
+            if tab.release[j] > e:
+                e = tab.release[j]
             est[j] = e
     fill = _water_fill(tab, S, trucks)
     walk = _walk_bound(tab, full & ~S & ~relaxed, trucks)
@@ -586,7 +590,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
         """max t_r over j's predecessors, or None when one is unserved."""
         if tab.pred_mask[j] & ~S:
             return None
-        t = 0.0
+        t = tab.release[j]
         for r in tab.preds[j]:
             if svc[r] > t:
                 t = svc[r]
@@ -854,6 +858,7 @@ def label_search(
     truck_of: Sequence[int] | None = None,
     floor: float = 0.0,
     cutoff: float = INF,
+    release: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
     ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters.
@@ -865,6 +870,14 @@ def label_search(
     that, so a plan reaching it stops the search). ``cutoff``: only plans below it are
     sought; when none exists the run ends "optimal" with ``bound`` = min(cutoff, the best
     plan's value) and ``plan`` the best plan given (or None).
+
+    ``release``: per customer j a time before which it may not be served (0 by default; the
+    split search's cross-truck predecessors, :func:`taopt.fleet.split.split_search`). The plans
+    are then those of ``problem`` with t_j >= release[j] added, and ``value`` is the objective
+    of the plan under those releases; incumbents and beam plans are priced by
+    :func:`~taopt.fleet.evaluate.evaluate_fleet`, without them, which is no more: a run that
+    ends on such a plan returns its release-free value, still a lower bound on the optimum
+    with releases (no plan below it was found).
     """
     deadline = Deadline(time_limit)
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
@@ -883,6 +896,8 @@ def label_search(
     if truck_of is not None:
         tab.owner = [int(k) for k in truck_of]
         tab.groups = [[k] for k in range(problem.K)]
+    if release is not None:
+        tab.release = [float(r) for r in release]
     best_plan: FleetPlan | None
     best, best_plan = best_of(problem, (incumbent, _simple_plan(problem, truck_of)))
     if beam and time_limit is not None:
@@ -1016,11 +1031,13 @@ def label_search(
         acts.reverse()
         plan = _rebuild(problem, tab, acts, labels[found])
         value = evaluate_fleet(problem, plan)
-        if abs(value - best) > MATCH_TOLERANCE * max(1.0, abs(value)):
+        # with releases the scorer (which has none) may only say less
+        released = release is not None and value <= best * (1 + MATCH_TOLERANCE)
+        if not released and abs(value - best) > MATCH_TOLERANCE * max(1.0, abs(value)):
             raise SolverError(
                 f"fleet label search: the plan found scores {value!r} but the search says {best!r}"
             )
-        best_plan, best = plan, value
+        best_plan, best = plan, best if released else value
         bound = min(bound, value)
     else:
         best = planned
