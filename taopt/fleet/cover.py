@@ -234,14 +234,24 @@ def cover_bound(
     top = upper * (1.0 - tolerance)
     if top <= lower:
         return lower
-    if not coverable(tab, top, trucks, req):
+    return _bisect(lambda T: coverable(tab, T, trucks, req), lower, top, tolerance, deadline)
+
+
+def _bisect(
+    test: Any, lower: float, top: float, tolerance: float, deadline: Deadline | None
+) -> float:
+    """The least trial value that passes ``test``, from below: ``top`` when it fails there
+    (no plan is that fast, so ``top`` is a bound), else bisected over (lower, top] until the
+    interval is within ``tolerance`` (relative) or the deadline passes; the last failing value
+    is returned (a proven bound: ``test`` is monotone, a relaxation's feasibility)."""
+    if not test(top):
         return top
     lo, hi = lower, top
     while hi - lo > tolerance * max(1.0, abs(hi)):
         if deadline is not None and deadline.expired():
             break
         mid = 0.5 * (lo + hi)
-        if coverable(tab, mid, trucks, req):
+        if test(mid):
             hi = mid
         else:
             lo = mid
@@ -477,18 +487,7 @@ def fleet_cover_bound(
     def test(T: float) -> bool:
         return fleet_coverable(tab, stab, T, trucks, release, deadline=deadline)
 
-    if not test(top):
-        return top
-    lo, hi = lower, top
-    while hi - lo > resolution * max(1.0, abs(hi)):
-        if deadline is not None and deadline.expired():
-            break
-        mid = 0.5 * (lo + hi)
-        if test(mid):
-            hi = mid
-        else:
-            lo = mid
-    return lo
+    return _bisect(test, lower, top, resolution, deadline)
 
 
 # -- the truck-walk table of the label search -------------------------------------------------
