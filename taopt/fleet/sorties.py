@@ -509,6 +509,7 @@ def split_dp(
                 out[j] = max(out[j], float(found["value"]))
         return out
 
+    done: list[list[Any]] = []  # [bound, split, releases] per split examined
     stop_at = len(splits)  # the first split not examined
     for at, (lower, key) in enumerate(splits):
         stop_at = at
@@ -529,6 +530,7 @@ def split_dp(
             break
         examined += 1
         bound_done = min(bound_done, max(part["value"] for part in parts))
+        done.append([max(part["value"] for part in parts), key, release])
         routes: list[list[int]] = []
         sorties: list[list[list[Sortie]]] = []
         for part in parts:
@@ -550,6 +552,23 @@ def split_dp(
     else:
         stop_at = len(splits)
     left = min((lo for lo, _ in splits[stop_at:]), default=math.inf)
+    # the splits whose parts' plans do not combine into a plan meeting their bound: the
+    # coupled problem of each, by the joint DP (exact, or the best of its relaxations)
+    coupled = 0
+    for entry in sorted(done, key=lambda e: e[0]):
+        if best <= min(entry[0], left) * (1 + MATCH_TOLERANCE) or deadline.expired():
+            break
+        coupled += 1
+        closed, plans = _couple(problem, entry[1], entry[2], pre, closure, deadline, best)
+        entry[0] = max(entry[0], closed)
+        for plan in plans:
+            try:
+                value = evaluate_fleet(problem, plan)
+            except FeasibilityError:
+                continue
+            if value < best:
+                best, best_plan = value, plan
+    bound_done = min((e[0] for e in done), default=math.inf)
     bound = min(best, bound_done, left)
     if stopped_by == "optimal" and best > bound * (1 + MATCH_TOLERANCE):
         stopped_by = "gap"  # every split examined, cross-truck waits keep a gap
@@ -560,7 +579,53 @@ def split_dp(
         "stopped_by": stopped_by,
         "splits": examined,
         "of_splits": len(seen),
+        "coupled": coupled,
     }
+
+
+def _couple(
+    problem: FleetProblem,
+    split: tuple[int, ...],
+    release: list[float],
+    pre: Any,
+    closure: Any,
+    deadline: Deadline,
+    cutoff: float,
+) -> tuple[float, list[FleetPlan]]:
+    """A lower bound on the optimum restricted to ``split`` (at least ``cutoff`` when no plan of
+    the split is below it) and the plans found: :func:`taopt.fleet.coupled.coupled_dp`, exact
+    where :func:`~taopt.fleet.coupled.coupled_applies`, else the largest bound of its
+    relaxations over the truck orders (each keeps the cross pairs going forward)."""
+    import itertools
+
+    from taopt.fleet.coupled import coupled_applies, coupled_dp
+
+    orders: list[Any] = (
+        [None]
+        if coupled_applies(problem, split)
+        else list(itertools.permutations(range(problem.K)))
+    )
+    bound = 0.0
+    plans: list[FleetPlan] = []
+    for order in orders:
+        if deadline.expired():
+            break
+        got = coupled_dp(
+            problem,
+            split,
+            pre,
+            closure,
+            time_limit=deadline.remaining(),
+            cutoff=cutoff,
+            order=order,
+            release=release,
+        )
+        bound = max(bound, float(got["bound"]))
+        if got["plan"] is not None:
+            plans.append(got["plan"])
+        if bound >= cutoff:
+            break
+    return bound, plans
 
 
 __all__ = [

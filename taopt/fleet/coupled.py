@@ -1,0 +1,416 @@
+"""The coupled problem of one split, several trucks with one drone each: exact by a joint DP.
+
+:func:`taopt.fleet.sorties.split_dp` bounds each split (X_1, ..., X_K) by its trucks' parts
+solved apart; where cross-truck precedences make the combined plan wait, the optimum restricted
+to the split lies between that bound and the combined plan. :func:`coupled_dp` computes it.
+
+*Shape.* One drone per truck, every customer drone-only (the split DP's shape): truck k's plan
+is a sequence of sorties over X_k, each a sequence σ = (j_1, ..., j_m), m <= c, launched at a
+stop w_1 and recovered at w_2 (module docstring of :mod:`taopt.fleet.sorties`). With waits,
+``t_{j_1} = max(L + ft(w_1, j_1) + τ, W_{j_1})``, ``t_{j_{i+1}} = max(t_{j_i} + ft(j_i,
+j_{i+1}) + τ, W_{j_{i+1}})`` and ``R' = max(t_{j_m} + ft(j_m, w_2), L + tt(w_1, w_2)) + τ``,
+``L = R + tt(w, w_1)``, ``W_j`` the latest service of j's predecessors on other trucks (its own
+truck's are served before, by the same drone).
+
+*Joint states.* A label is (S, w_k, R_k per truck, the last service M, the service times of
+the customers served so far that have a successor on another truck); a transition adds one
+sortie of one truck whose customers' predecessors are all served (S, or earlier in σ). This
+enumerates every plan of the split whose sorties can be ordered so that each comes after the
+sorties serving its customers' other-truck predecessors — every plan when c = 1 and τ > 0
+(order the sorties by their customer's service time: a cross pair has ``t_r <= t_j`` and a
+truck's next customer is served strictly later), or when the trucks' cross pairs form no
+cycle between trucks (their sorties' order relation then has none) — :func:`coupled_applies`.
+Every time is non-decreasing in every other, so a label whose vector is no smaller
+componentwise than another's of the same (S, stops) is dropped, and so is a recovery at w_2'
+when the same launch recovers at w_2 with ``R'(w_2) + tt(w_2, w_2') <= R'(w_2')`` (the truck
+could drive on; tt is a shortest-path metric).
+
+*Bound.* ``max(M, max_k R_k + g_k(S ∩ X_k, w_k))`` with g_k the least time truck k needs from
+stop w with its drone aboard to finish X_k with no waits (a backward sortie DP over the ideals
+of X_k; waits only delay): a valid bound of every completion. Labels are expanded best-first;
+the run stops at the first complete label (its value is the optimum), when every label is at
+least ``cutoff`` (no plan below it: the bound returned is ``cutoff``), or at the limit with the
+least open label's bound (proven).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from typing import Any
+
+import numpy as np
+
+from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.runtime import Deadline
+
+INF = math.inf
+
+
+def _owner(problem: FleetProblem, split: tuple[int, ...]) -> list[int]:
+    owner = [0] * problem.n
+    for k, mask in enumerate(split):
+        for j in range(problem.n):
+            if mask >> j & 1:
+                owner[j] = k
+    return owner
+
+
+def coupled_applies(problem: FleetProblem, split: tuple[int, ...]) -> bool:
+    """The joint DP enumerates every plan of the split (module docstring): one drone per truck,
+    drone-only customers, and c = 1 with τ > 0 or no cycle among the trucks' cross pairs."""
+    import networkx as nx
+
+    if any(d != 1 for d in problem.drones) or any(m != "drone" for m in problem.service):
+        return False
+    if problem.capacity == 1 and problem.service_time > 0:
+        return True
+    owner = _owner(problem, split)
+    trucks = nx.DiGraph()
+    trucks.add_nodes_from(range(problem.K))
+    trucks.add_edges_from(
+        (owner[r], owner[j]) for r, j in problem.precedences if owner[r] != owner[j]
+    )
+    return bool(nx.is_directed_acyclic_graph(trucks))
+
+
+def coupled_dp(
+    problem: FleetProblem,
+    split: tuple[int, ...],
+    pre: tuple[list[tuple[int, ...]], list[tuple[int, np.ndarray, np.ndarray]]],
+    closure: Any,
+    time_limit: float | None = None,
+    cutoff: float = INF,
+    order: Any = None,
+    release: Any = None,
+) -> dict[str, Any]:
+    """Optimum of ``problem`` restricted to ``split`` (one mask per truck; module docstring),
+    ``pre`` the split DP's sequences and cost tables (:func:`taopt.fleet.sorties._table`),
+    ``closure`` G^p's transitive closure pairs. ``order`` (a permutation of the trucks): only
+    the cross pairs from an earlier to a later truck of it are kept (a relaxation of the
+    split, whose trucks then form no cycle, so the DP is exact for it: its optimum is a lower
+    bound on the split's, and its plan may violate a dropped pair). ``release``: per customer
+    a time no plan of the split serves it before (added as a wait; valid, so the optimum is
+    unchanged and the relaxation only tighter). Returns ``plan`` (None when none below
+    ``cutoff`` was found), ``value`` (the DP's), ``bound`` (proven; ``cutoff`` when no plan
+    below it exists) and ``stopped_by`` ("optimal", "time_limit")."""
+    deadline = Deadline(time_limit)
+    n, s, K = problem.n, problem.s, problem.K
+    ret = problem.objective == "return"
+    tau, v, limit, depot = (
+        problem.service_time,
+        problem.v_drone,
+        problem.flight_limit,
+        problem.depot,
+    )
+    tt = np.asarray(problem.truck_time, dtype=float)
+    fst = problem.flight_stop / v
+    fsd = problem.flight_stop
+    fct = problem.flight_customer / v
+    fcd = problem.flight_customer
+    owner = _owner(problem, split)
+    seqs, table = pre
+    rank = list(range(K)) if order is None else [list(order).index(k) for k in range(K)]
+    preds = [0] * n  # closure predecessors enforced (any truck)
+    cross: list[list[int]] = [[] for _ in range(n)]
+    within = [0] * n  # closure predecessors on the same truck
+    for r, j in closure:
+        if owner[r] == owner[j]:
+            within[j] |= 1 << r
+            preds[j] |= 1 << r
+        elif order is None or rank[owner[r]] < rank[owner[j]]:
+            preds[j] |= 1 << r
+            cross[j].append(r)
+    floor = [0.0] * n if release is None else [float(x) for x in release]
+    needed = sorted({r for j in range(n) for r in cross[j]})
+    pos = {r: i for i, r in enumerate(needed)}
+    mine: list[list[int]] = [[] for _ in range(K)]
+    for q, (mask, _, _) in enumerate(table):
+        k = owner[seqs[q][0]]
+        if mask & ~split[k] == 0:
+            mine[k].append(q)
+    geo: dict[int, tuple[np.ndarray, np.ndarray, float]] = {}
+
+    def geometry(q: int) -> tuple[np.ndarray, np.ndarray, float]:
+        got = geo.get(q)
+        if got is None:
+            seq = seqs[q]
+            inner = sum(float(fcd[seq[i], seq[i + 1]]) for i in range(len(seq) - 1))
+            ok = (fsd[seq[0]] + inner)[:, None] + fsd[seq[-1]][None, :] <= limit
+            got = geo[q] = (ok, ok.any(axis=1), inner)
+        return got
+
+    # g_k(S, w): least time from w (drone aboard) to finish X_k without waits
+    memo: list[dict[int, np.ndarray]] = [{} for _ in range(K)]
+
+    def g(k: int, S: int) -> np.ndarray:
+        got = memo[k].get(S)
+        if got is not None:
+            return got
+        full = split[k]
+        if S == full:
+            out = tt[:, depot].copy() if ret else np.zeros(s)
+        else:
+            out = np.full(s, INF)
+            for q in mine[k]:
+                mask, cost, final_cost = table[q]
+                if mask & S or any(within[j] & ~(S | mask) for j in seqs[q]):
+                    continue
+                if S | mask == full and not ret:
+                    out = np.minimum(out, final_cost)
+                else:
+                    out = np.minimum(out, np.min(cost + g(k, S | mask)[None, :], axis=1))
+        memo[k][S] = out
+        return out
+
+    def lower(S: int, ws: tuple, Rs: tuple, M: float) -> float:
+        b = M
+        for k in range(K):
+            if ws[k] < 0:
+                continue
+            x = Rs[k] + float(g(k, S & split[k])[ws[k]])
+            if x > b:
+                b = x
+        return b
+
+    start_ws = tuple(-1 if (not ret and split[k] == 0) else depot for k in range(K))
+    root = (0, start_ws, (0.0,) * K, 0.0, (0.0,) * len(needed))
+    labels: list[tuple] = [root]
+    parent = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {
+        (0, start_ws): [((0.0,) * (K + 1 + len(needed)), 0)]
+    }
+    best = cutoff
+    heap = [(lower(0, start_ws, root[2], 0.0), 0, 0)]
+    full_mask = sum(split)
+    stopped_by = "optimal"
+    found = -1
+    expanded = 0
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= best * (1 - 1e-12):
+            heap.clear()
+            break
+        if deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        S, ws, Rs, M, tvec = labels[i]
+        if S == full_mask:
+            found, best = i, lb
+            break
+        expanded += 1
+        for k in range(K):
+            if ws[k] < 0 or (ret and S & split[k] == split[k]):
+                continue
+            w, R = ws[k], Rs[k]
+            L = R + tt[w]
+            others = M
+            for k2 in range(K):
+                if k2 != k and ws[k2] >= 0:
+                    x = Rs[k2] + float(g(k2, S & split[k2])[ws[k2]])
+                    if x > others:
+                        others = x
+            for q in mine[k]:
+                mask = table[q][0]
+                if mask & S:
+                    continue
+                seq = seqs[q]
+                if any(preds[j] & ~(S | mask) or within[j] & ~(S | mask) for j in seq):
+                    continue
+                ok, ok_any, _ = geometry(q)
+                t: np.ndarray = L + fst[seq[0]] + tau
+                crit: list[np.ndarray] = []
+                prev = -1
+                for j in seq:
+                    wait = max((tvec[pos[r]] for r in cross[j]), default=floor[j])
+                    if floor[j] > wait:
+                        wait = floor[j]
+                    if prev >= 0:
+                        t = t + float(fct[prev, j]) + tau
+                    if wait > 0:
+                        t = np.maximum(t, wait)
+                    if j in pos:
+                        crit.append(t)
+                    prev = j
+                last = seq[-1]
+                Mp = np.maximum(t, M)
+                done = (S | mask) & split[k] == split[k]
+                S2 = S | mask
+                if done and not ret:
+                    keep = ok_any & (np.maximum(Mp, others) < best * (1 - 1e-12))
+                    cols = np.flatnonzero(keep)
+                    if cols.size == 0:
+                        continue
+                    vecs = np.stack([Mp[cols], *[c[cols] for c in crit]], axis=1)
+                    for a in _pareto(vecs):
+                        w1 = int(cols[a])
+                        nws = ws[:k] + (-1,) + ws[k + 1 :]
+                        nRs = Rs[:k] + (0.0,) + Rs[k + 1 :]
+                        ntv = list(tvec)
+                        for j, c in zip([j for j in seq if j in pos], crit, strict=True):
+                            ntv[pos[j]] = float(c[w1])
+                        child = (S2, nws, nRs, float(Mp[w1]), tuple(ntv))
+                        _push(
+                            child,
+                            (k, q, w1, -1),
+                            i,
+                            labels,
+                            parent,
+                            action,
+                            dead,
+                            store,
+                            heap,
+                            lower,
+                            best,
+                        )
+                    continue
+                Rp = np.maximum(t[:, None] + fst[last][None, :], L[:, None] + tt) + tau
+                Rp = np.where(ok, Rp, INF)
+                gnext = g(k, S2 & split[k])
+                lbm = np.maximum(Rp + gnext[None, :], np.maximum(Mp, others)[:, None])
+                live = lbm < best * (1 - 1e-12)
+                if not live.any():
+                    continue
+                rows = np.flatnonzero(live.any(axis=1))
+                cols = np.flatnonzero(live.any(axis=0))
+                sub = Rp[np.ix_(rows, cols)]
+                sub = np.where(live[np.ix_(rows, cols)], sub, INF)
+                # metric dominance across recovery stops, per launch stop
+                via = sub[:, :, None] + tt[np.ix_(cols, cols)][None, :, :]  # (w1, w2, w2')
+                idx = np.arange(len(cols))
+                better = (via < sub[:, None, :]) | (
+                    (via == sub[:, None, :]) & (idx[:, None] < idx[None, :])[None, :, :]
+                )
+                better &= ~np.eye(len(cols), dtype=bool)[None, :, :]
+                metric_dead = better.any(axis=1)  # (w1, w2')
+                extra = np.stack([Mp[rows], *[c[rows] for c in crit]], axis=1)
+                for b, w2 in enumerate(cols):
+                    col = sub[:, b]
+                    alive = np.flatnonzero(np.isfinite(col) & ~metric_dead[:, b])
+                    if alive.size == 0:
+                        continue
+                    vecs = np.concatenate([col[alive][:, None], extra[alive]], axis=1)
+                    for a in _pareto(vecs):
+                        r_i = int(alive[a])
+                        w1 = int(rows[r_i])
+                        nws = ws[:k] + (int(w2),) + ws[k + 1 :]
+                        nRs = Rs[:k] + (float(col[r_i]),) + Rs[k + 1 :]
+                        ntv = list(tvec)
+                        for j, c in zip([j for j in seq if j in pos], crit, strict=True):
+                            ntv[pos[j]] = float(c[w1])
+                        child = (S2, nws, nRs, float(Mp[w1]) if not ret else 0.0, tuple(ntv))
+                        _push(
+                            child,
+                            (k, q, w1, int(w2)),
+                            i,
+                            labels,
+                            parent,
+                            action,
+                            dead,
+                            store,
+                            heap,
+                            lower,
+                            best,
+                        )
+    bound = best
+    if stopped_by != "optimal":
+        bound = min([b for b, _, j in heap if not dead[j]] + [best])
+    result: dict[str, Any] = {
+        "plan": None,
+        "value": INF,
+        "bound": bound,
+        "stopped_by": stopped_by,
+        "labels": len(labels),
+        "expanded": expanded,
+    }
+    if found >= 0:
+        acts = []
+        j = found
+        while j > 0:
+            acts.append(action[j])
+            j = parent[j]
+        acts.reverse()
+        result["plan"] = _rebuild(problem, seqs, acts, geometry)
+        result["value"] = best
+    return result
+
+
+def _pareto(vecs: np.ndarray) -> list[int]:
+    """Rows of ``vecs`` no other row is <= in every column (ties: the first kept)."""
+    order = np.lexsort(vecs.T[::-1])
+    kept: list[int] = []
+    for a in order:
+        row = vecs[a]
+        if any(bool(np.all(vecs[b] <= row)) for b in kept):
+            continue
+        kept.append(int(a))
+    return kept
+
+
+def _push(
+    child: tuple,
+    act: Any,
+    i: int,
+    labels: list,
+    parent: list,
+    action: list,
+    dead: bytearray,
+    store: dict,
+    heap: list,
+    lower: Any,
+    best: float,
+) -> None:
+    S, ws, Rs, M, tvec = child
+    b = lower(S, ws, Rs, M)
+    if b >= best * (1 - 1e-12):
+        return
+    key = (S, ws)
+    vec = Rs + (M,) + tvec
+    bucket = store.get(key)
+    if bucket is None:
+        bucket = store[key] = []
+    for other, _ in bucket:
+        if all(x <= y for x, y in zip(other, vec, strict=True)):
+            return
+    keep = []
+    for other, oid in bucket:
+        if all(x <= y for x, y in zip(vec, other, strict=True)):
+            dead[oid] = 1
+        else:
+            keep.append((other, oid))
+    cid = len(labels)
+    keep.append((vec, cid))
+    bucket[:] = keep
+    labels.append(child)
+    parent.append(i)
+    action.append(act)
+    dead.append(0)
+    heapq.heappush(heap, (b, -S.bit_count(), cid))
+
+
+def _rebuild(
+    problem: FleetProblem, seqs: list[tuple[int, ...]], acts: list[Any], geometry: Any
+) -> FleetPlan:
+    """The plan of the actions (truck, sequence, launch stop, recovery stop or -1)."""
+    routes = [[problem.depot] for _ in range(problem.K)]
+    sorties: list[list[Sortie]] = [[] for _ in range(problem.K)]
+    for k, q, w1, w2 in acts:
+        route = routes[k]
+        if route[-1] != w1:
+            route.append(w1)
+        launch = len(route) - 1
+        if w2 < 0:  # the last sortie under last_service: any recovery in range
+            ok = geometry(q)[0]
+            w2 = w1 if ok[w1, w1] else int(np.flatnonzero(ok[w1])[0])
+        if route[-1] != w2:
+            route.append(w2)
+        sorties[k].append(Sortie(launch, seqs[q], len(route) - 1))
+    return FleetPlan(routes, [[] for _ in range(problem.K)], [[sorts] for sorts in sorties])
+
+
+__all__ = ["coupled_applies", "coupled_dp"]
