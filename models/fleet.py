@@ -14,8 +14,9 @@
    operations DP over customer subsets (:func:`taopt.fleet.operations.operations_dp`);
 5. several trucks with one drone each, every customer drone-only: the customers split over
    the trucks, each truck by the sortie DP, a bound over the splits
-   (:func:`taopt.fleet.sorties.split_dp`; certified when the cross-truck precedences do not
-   make the best split's plan wait);
+   (:func:`taopt.fleet.sorties.split_dp`: each part with split-dependent releases, then the
+   joint DP of each split whose combined plan misses its bound,
+   :func:`taopt.fleet.coupled.coupled_dp`);
 6. any other fleet of K >= 2 trucks with at most 16 customers and 400,000 splits
    (:func:`taopt.fleet.split.split_applies`): the split search
    (:func:`taopt.fleet.split.split_search`: splits in increasing bound, each truck's part by

@@ -46,6 +46,10 @@ from taopt.runtime import Deadline
 
 INF = math.inf
 
+#: Most labels the joint DP keeps (memory guard): it then stops like a time limit, with the
+#: least open label's bound.
+MAX_LABELS = 500_000
+
 
 def _owner(problem: FleetProblem, split: tuple[int, ...]) -> list[int]:
     owner = [0] * problem.n
@@ -93,7 +97,7 @@ def coupled_dp(
     a time no plan of the split serves it before (added as a wait; valid, so the optimum is
     unchanged and the relaxation only tighter). Returns ``plan`` (None when none below
     ``cutoff`` was found), ``value`` (the DP's), ``bound`` (proven; ``cutoff`` when no plan
-    below it exists) and ``stopped_by`` ("optimal", "time_limit")."""
+    below it exists) and ``stopped_by`` ("optimal", "time_limit", "size": :data:`MAX_LABELS`)."""
     deadline = Deadline(time_limit)
     n, s, K = problem.n, problem.s, problem.K
     ret = problem.objective == "return"
@@ -202,6 +206,10 @@ def coupled_dp(
         S, ws, Rs, M, tvec = labels[i]
         if S == full_mask:
             found, best = i, lb
+            break
+        if len(labels) > MAX_LABELS:
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "size"
             break
         expanded += 1
         for k in range(K):
@@ -413,4 +421,4 @@ def _rebuild(
     return FleetPlan(routes, [[] for _ in range(problem.K)], [[sorts] for sorts in sorties])
 
 
-__all__ = ["coupled_applies", "coupled_dp"]
+__all__ = ["MAX_LABELS", "coupled_applies", "coupled_dp"]
