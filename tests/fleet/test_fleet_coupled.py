@@ -84,3 +84,26 @@ def test_split_dp_certifies_the_brute_force_optimum(trucks, objective):
         assert solution.status == "optimal"
         assert solution.objective == pytest.approx(value, rel=1e-9, abs=1e-9)
         assert taopt.evaluate(p, solution.solution) == pytest.approx(value, rel=1e-9, abs=1e-9)
+
+
+def _one_drone_check(n: int, seeds: range, objective: str) -> None:
+    from taopt.models.fleet import _one_drone_floor
+
+    for seed in seeds:
+        p = tiny_instance(990 + seed, n, 1, 2, 1 + seed % 2, True, objective, stops=3)
+        p = p.replace(service=["drone"] * p.n, customer_stop=[None] * p.n)
+        value = brute_force(p)[0]
+        assert 0.0 < _one_drone_floor(p, None) <= value + 1e-9
+
+
+@pytest.mark.parametrize("objective", ["last_service", "return"])
+def test_one_drone_relaxation_never_above_the_brute_force_optimum(objective):
+    """One truck with two drones (n = 2): two trucks with one drone each bound the optimum."""
+    _one_drone_check(2, range(3), objective)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("objective", ["last_service", "return"])
+def test_one_drone_relaxation_never_above_the_optimum_at_three_customers(objective):
+    """One truck with two drones (n = 3): the one-drone relaxation bounds the optimum."""
+    _one_drone_check(3, range(3), objective)
