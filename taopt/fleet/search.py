@@ -27,7 +27,12 @@ precedences a sortie's customers are all chosen right after its launch (a drone 
 until another action is taken); with precedences a customer may be appended to an airborne
 sortie at any later action, so a predecessor served meanwhile by any vehicle is waited for:
 every feasible plan is reached this way (a plan's events can be committed in an order where
-each customer follows its predecessors — the order of the acyclic constraint graph).
+each customer follows its predecessors — the order of the acyclic constraint graph). Such a
+late append is only taken when it could not have come earlier: while the drone is *fresh*
+(no other action since its last launch or append) or when one of the customer's
+predecessors was served since then (:func:`_appendable`, with the proof that every plan's
+times are still reached); a drone launched with no customer that can take none any more ends
+its label (bound ``inf``).
 
 *Search.* Labels are expanded best-first by a valid lower bound on the final objective (the
 largest of: the least time each unserved customer can be served from the label, over the
@@ -195,8 +200,9 @@ def _submasks(tab: _Tables, U: int) -> np.ndarray:
 
 
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
-# drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open) with origin = ℓ >= 0, or
-# -(w_L + 1) before its first customer
+# drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open, fresh, seen) with
+# origin = ℓ >= 0, or -(w_L + 1) before its first customer; fresh: no action other than an
+# append since its last launch or append, seen: the served set at that event (_appendable)
 
 
 def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
@@ -404,6 +410,18 @@ def _bound(tab: _Tables, label: tuple) -> float:
     tau = tab.tau
     est = [0.0] * n
     full = (1 << n) - 1
+    if tab.lazy:
+        # a stale drone launched with no customer yet takes one only after a predecessor
+        # served since its launch (:func:`_appendable`); with none left it cannot be
+        # completed
+        for _w, _A, _T, _ev, _fin, _F, drones in trucks:
+            for dr in drones:
+                if dr[0] == 1 and dr[2] == 0 and not dr[6]:
+                    if not any(
+                        not S >> j & 1 and tab.drone_ok[j] and tab.pred_mask[j] & ~dr[7]
+                        for j in range(n)
+                    ):
+                        return INF
     relaxed = 0  # customers an airborne drone with room can still reach
     if S != full:
         fresh = _fresh_sorties(tab, trucks)
@@ -416,6 +434,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
             tab.near,
         )
         limit, c = tab.limit, tab.c
+        lazy, pred_mask = tab.lazy, tab.pred_mask
         for j in tab.topo:
             if S >> j & 1:
                 est[j] = svc[j]
@@ -435,7 +454,12 @@ def _bound(tab: _Tables, label: tuple) -> float:
                     if v < e:
                         e = v
                     for dr in drones:
-                        if dr[0] == 1 and dr[5] and dr[2] < c:
+                        if (
+                            dr[0] == 1
+                            and dr[5]
+                            and dr[2] < c
+                            and (not lazy or dr[6] or pred_mask[j] & ~dr[7])
+                        ):  # (a stale drone takes j only after a predecessor: _appendable)
                             o = dr[1]
                             if o >= 0:
                                 dist, fly = fcd[o][j], fct[o][j]
@@ -487,11 +511,45 @@ def _bound(tab: _Tables, label: tuple) -> float:
     return b
 
 
+def _needed(tab: _Tables, S: int) -> int:
+    """The customers some unserved customer of ``S``'s complement must wait for."""
+    if not tab.lazy:
+        return 0
+    need = 0
+    for j in range(tab.n):
+        if not S >> j & 1:
+            need |= tab.pred_mask[j]
+    return need
+
+
+def _appendable(tab: _Tables, dr: tuple, need: int) -> tuple[bool, int]:
+    """The part of an airborne drone's state that says which customers it may still take
+    (the key of :func:`_signature`): whether it is fresh and, under precedences, which of
+    the customers in ``need`` had been served at its last event.
+
+    *Canonical appends* (precedences only, :func:`_children`): customer j is appended to an
+    airborne drone d only while d is *fresh* (no action other than an append since d's last
+    launch or append) or when a predecessor of j was served after that event (not in the
+    drone's ``seen`` set). This loses no plan's times: in any sequence of actions, move an
+    append of j to d that breaks the rule to just before the first non-append action after
+    d's last event. There d is fresh; j's time ``max(t + ft(ℓ, j) + τ, t_r)`` is unchanged
+    (d's state and every predecessor's time were already final); the actions passed over
+    do not involve d or j's successors, so theirs are unchanged too. Each such move puts an
+    append where a non-append action was, so the sequence of action kinds decreases
+    lexicographically and the moves end, in a sequence that keeps the rule and every time.
+    Two labels compare (dominance) only when these parts are equal, so the one kept may
+    take every append the other may."""
+    if not tab.lazy or not dr[5] or dr[2] >= tab.c:
+        return (False, 0)
+    return (dr[6], dr[7] & need)
+
+
 def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
     """(key, vector): labels with equal keys compare by their vectors (all smaller = better)."""
     S, M, svc, trucks = label
     vec: list[float] = [M] if not tab.ret else []
     succ = tab.succ_mask
+    need = _needed(tab, S)
     for r in range(tab.n):
         if S >> r & 1 and succ[r] & ~S:
             vec.append(svc[r])
@@ -502,7 +560,9 @@ def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,)))
             else:
-                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4])))
+                parts.append(
+                    ((1, dr[1], dr[2], dr[5], *_appendable(tab, dr, need)), (dr[3], dr[4]))
+                )
         parts.sort()
         disc = (w, ev, fin, tuple(p[0] for p in parts))
         cont = (A, T, F, *itertools.chain.from_iterable(p[1] for p in parts))
@@ -526,6 +586,7 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
     S, M, svc, trucks = label
     head: list[float] = [M] if not tab.ret else []
     succ = tab.succ_mask
+    need = _needed(tab, S)
     for r in range(tab.n):
         if S >> r & 1 and succ[r] & ~S:
             head.append(svc[r])
@@ -537,7 +598,13 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,), ()))
             else:
-                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4]), (dr[3], dr[4])))
+                parts.append(
+                    (
+                        (1, dr[1], dr[2], dr[5], *_appendable(tab, dr, need)),
+                        (dr[3], dr[4]),
+                        (dr[3], dr[4]),
+                    )
+                )
         parts.sort()
         discs.append((w, fin, tuple(p[0] for p in parts)))
         conts.append(
@@ -576,7 +643,19 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 if dr[0] == 1 and dr[5]:
                     filling = (k, d)
 
-    def closed(trs: list) -> tuple:
+    # with precedences, an airborne drone is *fresh* until an action other than an append
+    # is taken (:func:`_appendable`)
+    stale = lazy and any(dr[0] == 1 and dr[6] for tr in trucks for dr in tr[6])
+
+    def closed(trs: list, keep: tuple[int, int] | None = None) -> tuple:
+        if stale:
+            for k2, tr in enumerate(trs):
+                if any(dr[0] == 1 and dr[6] for dr in tr[6]):
+                    staled = tuple(
+                        dr[:6] + (False, dr[7]) if dr[0] == 1 and dr[6] and (k2, d2) != keep else dr
+                        for d2, dr in enumerate(tr[6])
+                    )
+                    trs[k2] = tr[:6] + (staled,)
         if filling is None:
             return tuple(trs)
         k, d = filling
@@ -584,7 +663,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
         dr = tr[6][d]
         if dr[0] == 1 and dr[5]:
             drones = list(tr[6])
-            drones[d] = dr[:5] + (False,)
+            drones[d] = dr[:5] + (False,) + dr[6:]
             trs[k] = tr[:6] + (tuple(drones),)
         return tuple(trs)
 
@@ -611,6 +690,8 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 wait = ready(j)
                 if wait is None:
                     continue
+                if lazy and not dr[6] and not tab.pred_mask[j] & ~dr[7]:
+                    continue  # j could have been appended at the drone's last event
                 if o >= 0:
                     dist, fly = tab.fcd[o][j], tab.fct[o][j]
                 else:
@@ -622,7 +703,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 if wait > t:
                     t = wait
                 nd = list(drones)
-                nd[d] = (1, j, dr[2] + 1, t, delta, True)
+                nd[d] = (1, j, dr[2] + 1, t, delta, True, True, S | 1 << j)
                 trs = list(trucks)
                 trs[k] = (w, A, T, ev, fin, F, tuple(nd))
                 nsvc = svc[:j] + (t,) + svc[j + 1 :]
@@ -710,10 +791,10 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                         continue
                     seen_here.add(rho)
                     nd = list(dr2)
-                    nd[d] = (1, -(w2 + 1), 0, rho, 0.0, True)
+                    nd[d] = (1, -(w2 + 1), 0, rho, 0.0, True, True, S)
                     trs = list(trucks)
                     trs[k] = (w2, A2, T2 if T2 > rho else rho, True, fin, F, tuple(nd))
-                    out.append(((S, M, svc, closed(trs)), ("launch", k, d, w2)))
+                    out.append(((S, M, svc, closed(trs, (k, d))), ("launch", k, d, w2)))
         # finish (only "return" needs it: under last_service a truck may just stop)
         if tab.ret and not airborne:
             trs = list(trucks)
