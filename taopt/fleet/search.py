@@ -50,6 +50,7 @@ least open bound, proven.
 
 from __future__ import annotations
 
+import functools
 import gc
 import heapq
 import itertools
@@ -79,6 +80,10 @@ DEFAULT_MAX_LABELS = 3_000_000
 #: Share of the time limit the synchronised-operations incumbent (:mod:`taopt.fleet.synced`)
 #: may take.
 SYNCED_SHARE = 0.1
+
+#: Up to this many customers the sortie-time term splits them exactly over three or more
+#: drones (3^m pairs per drone, :func:`_least_largest`).
+PARTITION_MAX_CUSTOMERS = 9
 
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
@@ -375,9 +380,11 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     its range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
     :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the last
     service is at least the least, over the partitions of U among the drones, of the
-    largest drone's end (a drone given no customer ends nothing): exact over the submasks of U for one or two drones; with more,
-    some drone serves at least ``ceil(|U| / N)`` of them, so the least end over drones and
-    subsets of that size or more. 0 without a table or customers; ``inf`` without a drone."""
+    largest drone's end (a drone given no customer ends nothing): exact over the submasks of
+    U for one or two drones, and for more up to :data:`PARTITION_MAX_CUSTOMERS` customers
+    (:func:`_least_largest`); above, some drone serves at least ``ceil(|U| / N)`` of them, so
+    the least end over drones and subsets of that size or more. 0 without a table or
+    customers; ``inf`` without a drone."""
     F = tab.sortie_time
     if F is None or not U:
         return 0.0
@@ -403,9 +410,36 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
         return float(ends[0][last])
     if len(ends) == 2:
         return float(np.min(np.maximum(ends[0], ends[1][::-1])))
-    size = -(-int(tab.popcount[U]) // len(ends))
+    m = int(tab.popcount[U])
+    if m <= PARTITION_MAX_CUSTOMERS:
+        return float(_least_largest(ends, m)[last])
+    size = -(-m // len(ends))
     big = tab.popcount[subs] >= size
     return float(min(np.min(e[big]) for e in ends))
+
+
+@functools.cache
+def _subset_pairs(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair (Z, Y) of masks over m bits with Y ⊆ Z, sorted by Z: (Y, Z ^ Y, the index
+    where each Z's pairs start)."""
+    full = np.arange(1 << m, dtype=np.int64)
+    Z, Y = np.nonzero((full[None, :] & ~full[:, None]) == 0)
+    counts = np.bincount(Z, minlength=1 << m)
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    return Y.astype(np.int64), (Z ^ Y).astype(np.int64), starts.astype(np.int64)
+
+
+def _least_largest(ends: list[np.ndarray], m: int) -> np.ndarray:
+    """Per subset Z of m customers (local masks, ascending as the submasks of U), the least
+    over the partitions of Z among the drones of the largest ``ends[i][part]``: the
+    min-max subset convolution ``g_i[Z] = min_{Y ⊆ Z} max(ends[i][Y], g_{i-1}[Z \\ Y])``,
+    3^m pairs per drone (exact, where the size argument of :func:`_sortie_time_bound` is
+    not)."""
+    Y, rest, starts = _subset_pairs(m)
+    g = ends[0]
+    for e in ends[1:]:
+        g = np.minimum.reduceat(np.maximum(e[Y], g[rest]), starts)
+    return g
 
 
 def _bound(tab: _Tables, label: tuple) -> float:

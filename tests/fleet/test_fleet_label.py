@@ -146,3 +146,67 @@ def test_synced_plan_on_a_residential_instance():
     assert value >= N5_SEED1 * (1 - 1e-9)
     served = sorted(j for flights in plan.sorties[0] for s in flights for j in s.customers)
     assert served == list(range(problem.n))
+
+
+@pytest.mark.parametrize("drones", [3, 4])
+def test_least_largest_equals_every_assignment(drones):
+    """The min-max subset convolution over three or four drones equals the least, over every
+    assignment of m customers to drones, of the largest drone's end."""
+    import itertools
+
+    import numpy as np
+
+    from taopt.fleet.search import _least_largest
+
+    rng = np.random.default_rng(drones)
+    for m in range(5):
+        ends = [rng.uniform(0, 10, 1 << m) for _ in range(drones)]
+        for e in ends:
+            e[0] = 0.0
+        expected = min(
+            max(ends[i][sum(1 << b for b in range(m) if a[b] == i)] for i in range(drones))
+            for a in itertools.product(range(drones), repeat=m)
+        )
+        assert _least_largest(ends, m)[-1] == pytest.approx(expected, abs=1e-12)
+
+
+def test_three_drone_sortie_term_is_exact_and_below_the_optimum():
+    """With three drones the sortie-time term splits the customers exactly (never below the
+    size argument it replaces) and stays <= the brute-force optimum on the D = 3 cases."""
+    import taopt.fleet.search as search
+
+    for case in CASES:
+        if case[1] != 3:
+            continue
+        problem = _instance(case)
+        tab = _Tables(problem)
+        trucks = _root(problem)[3]
+        exact = _sortie_time_bound(tab, tab.drone_only, trucks)
+        saved = search.PARTITION_MAX_CUSTOMERS
+        search.PARTITION_MAX_CUSTOMERS = -1
+        try:
+            sized = _sortie_time_bound(tab, tab.drone_only, trucks)
+        finally:
+            search.PARTITION_MAX_CUSTOMERS = saved
+        assert sized <= exact + 1e-9
+        assert exact <= case[5] * (1 + 1e-9) + 1e-9
+
+
+def test_three_drone_sortie_term_lifts_the_residential_root():
+    """On residential n = 6 with three drones the exact split lifts the root sortie term
+    above the size argument, and stays below a feasible plan's value."""
+    import taopt.fleet.search as search
+
+    problem = residential_fleet(6, 1, 3, 2, seed=0)
+    tab = _Tables(problem)
+    trucks = _root(problem)[3]
+    exact = _sortie_time_bound(tab, tab.drone_only, trucks)
+    saved = search.PARTITION_MAX_CUSTOMERS
+    search.PARTITION_MAX_CUSTOMERS = -1
+    try:
+        sized = _sortie_time_bound(tab, tab.drone_only, trucks)
+    finally:
+        search.PARTITION_MAX_CUSTOMERS = saved
+    value, plan = synced_plan(problem)
+    assert plan is not None
+    assert sized < exact <= value
