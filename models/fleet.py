@@ -45,6 +45,11 @@ from taopt.result import Solution, finish
 #: Share of the time limit the label search gives the improver (the ILS) before searching.
 IMPROVE_SHARE = 0.2
 
+#: Cap on the improver's time per customer (seconds): at n <= 8 the ILS settles within a
+#: second or two, and a fifth of a 60 s limit (12 s) was most of a run the search certifies
+#: in seconds (one truck, two drones, n = 5).
+IMPROVE_SECONDS_PER_CUSTOMER = 0.5
+
 #: Share of the time limit the root sortie-walk bound may take (its bisection stops there).
 COVER_SHARE = 0.2
 
@@ -105,7 +110,8 @@ def solve_fleet(
         ``improve(problem, plan, time_limit) -> plan``, never worse (:func:`taopt.solve` passes
         :func:`taopt.heuristics.fleet_search.improve_fleet`, an ILS): called on the incumbent
         before the label search and the split search only (the DPs need no incumbent), with
-        :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit.
+        :data:`~taopt.models.fleet.IMPROVE_SHARE` of the time limit, at most
+        :data:`~taopt.models.fleet.IMPROVE_SECONDS_PER_CUSTOMER` per customer.
 
     Returns
     -------
@@ -191,7 +197,7 @@ def solve_fleet(
                 )
     elif choice == "split":
         if improve is not None:
-            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            share = _improve_share(problem, time_limit)
             incumbent = improve(problem, incumbent, share)
         # (the one-drone relaxation is left out here: on fleet8's K2D2 rows it gave the split
         # search's own bound, 197.06 / 190.43 / 184.97, for 1-2 s of its limit)
@@ -239,7 +245,7 @@ def solve_fleet(
     else:
         left = time_limit
         if improve is not None:
-            share = None if time_limit is None else IMPROVE_SHARE * time_limit
+            share = _improve_share(problem, time_limit)
             incumbent = improve(problem, incumbent, share)
             if time_limit is not None:
                 left = max(time_limit - (time.perf_counter() - start), 0.0)
@@ -313,6 +319,14 @@ def _one_drone_floor(problem: FleetProblem, time_limit: float | None) -> float:
     return float(found["bound"])
 
 
+def _improve_share(problem: FleetProblem, time_limit: float | None) -> float | None:
+    """The improver's time: :data:`IMPROVE_SHARE` of the limit, at most
+    :data:`IMPROVE_SECONDS_PER_CUSTOMER` per customer (None without a limit)."""
+    if time_limit is None:
+        return None
+    return min(IMPROVE_SHARE * time_limit, IMPROVE_SECONDS_PER_CUSTOMER * max(problem.n, 1))
+
+
 def _root_cover(
     problem: FleetProblem, incumbent: Any, time_limit: float | None
 ) -> tuple[float, Any]:
@@ -360,4 +374,10 @@ register_method(
     style=("-", "*"),
 )(solve_fleet)
 
-__all__ = ["COVER_SHARE", "IMPROVE_SHARE", "RELAX_SHARE", "solve_fleet"]
+__all__ = [
+    "COVER_SHARE",
+    "IMPROVE_SECONDS_PER_CUSTOMER",
+    "IMPROVE_SHARE",
+    "RELAX_SHARE",
+    "solve_fleet",
+]

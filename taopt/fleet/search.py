@@ -27,7 +27,12 @@ precedences a sortie's customers are all chosen right after its launch (a drone 
 until another action is taken); with precedences a customer may be appended to an airborne
 sortie at any later action, so a predecessor served meanwhile by any vehicle is waited for:
 every feasible plan is reached this way (a plan's events can be committed in an order where
-each customer follows its predecessors — the order of the acyclic constraint graph).
+each customer follows its predecessors — the order of the acyclic constraint graph). Such a
+late append is only taken when it could not have come earlier: while the drone is *fresh*
+(no other action since its last launch or append) or when one of the customer's
+predecessors was served since then (:func:`_appendable`, with the proof that every plan's
+times are still reached); a drone launched with no customer that can take none any more ends
+its label (bound ``inf``).
 
 *Search.* Labels are expanded best-first by a valid lower bound on the final objective (the
 largest of: the least time each unserved customer can be served from the label, over the
@@ -45,9 +50,12 @@ least open bound, proven.
 
 from __future__ import annotations
 
+import functools
+import gc
 import heapq
 import itertools
 import math
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -63,10 +71,19 @@ from taopt.fleet.cover import (
 )
 from taopt.fleet.evaluate import best_of, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.fleet.synced import synced_applies, synced_plan
 from taopt.runtime import Deadline
 
 #: Default cap on the labels kept (about 1 KB each with their bookkeeping).
 DEFAULT_MAX_LABELS = 3_000_000
+
+#: Share of the time limit the synchronised-operations incumbent (:mod:`taopt.fleet.synced`)
+#: may take.
+SYNCED_SHARE = 0.1
+
+#: Up to this many customers the sortie-time term splits them exactly over three or more
+#: drones (3^m pairs per drone, :func:`_least_largest`).
+PARTITION_MAX_CUSTOMERS = 9
 
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
@@ -193,8 +210,9 @@ def _submasks(tab: _Tables, U: int) -> np.ndarray:
 
 
 # label: (S, M, svc, trucks); truck: (w, A, T, ev, fin, F, drones)
-# drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open) with origin = ℓ >= 0, or
-# -(w_L + 1) before its first customer
+# drone aboard: (0, rho); airborne: (1, origin, m, t, delta, open, fresh, seen) with
+# origin = ℓ >= 0, or -(w_L + 1) before its first customer; fresh: no action other than an
+# append since its last launch or append, seen: the served set at that event (_appendable)
 
 
 def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
@@ -362,9 +380,11 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     its range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
     :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the last
     service is at least the least, over the partitions of U among the drones, of the
-    largest drone's end (a drone given no customer ends nothing): exact over the submasks of U for one or two drones; with more,
-    some drone serves at least ``ceil(|U| / N)`` of them, so the least end over drones and
-    subsets of that size or more. 0 without a table or customers; ``inf`` without a drone."""
+    largest drone's end (a drone given no customer ends nothing): exact over the submasks of
+    U for one or two drones, and for more up to :data:`PARTITION_MAX_CUSTOMERS` customers
+    (:func:`_least_largest`); above, some drone serves at least ``ceil(|U| / N)`` of them, so
+    the least end over drones and subsets of that size or more. 0 without a table or
+    customers; ``inf`` without a drone."""
     F = tab.sortie_time
     if F is None or not U:
         return 0.0
@@ -390,9 +410,36 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
         return float(ends[0][last])
     if len(ends) == 2:
         return float(np.min(np.maximum(ends[0], ends[1][::-1])))
-    size = -(-int(tab.popcount[U]) // len(ends))
+    m = int(tab.popcount[U])
+    if m <= PARTITION_MAX_CUSTOMERS:
+        return float(_least_largest(ends, m)[last])
+    size = -(-m // len(ends))
     big = tab.popcount[subs] >= size
     return float(min(np.min(e[big]) for e in ends))
+
+
+@functools.cache
+def _subset_pairs(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair (Z, Y) of masks over m bits with Y ⊆ Z, sorted by Z: (Y, Z ^ Y, the index
+    where each Z's pairs start)."""
+    full = np.arange(1 << m, dtype=np.int64)
+    Z, Y = np.nonzero((full[None, :] & ~full[:, None]) == 0)
+    counts = np.bincount(Z, minlength=1 << m)
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    return Y.astype(np.int64), (Z ^ Y).astype(np.int64), starts.astype(np.int64)
+
+
+def _least_largest(ends: list[np.ndarray], m: int) -> np.ndarray:
+    """Per subset Z of m customers (local masks, ascending as the submasks of U), the least
+    over the partitions of Z among the drones of the largest ``ends[i][part]``: the
+    min-max subset convolution ``g_i[Z] = min_{Y ⊆ Z} max(ends[i][Y], g_{i-1}[Z \\ Y])``,
+    3^m pairs per drone (exact, where the size argument of :func:`_sortie_time_bound` is
+    not)."""
+    Y, rest, starts = _subset_pairs(m)
+    g = ends[0]
+    for e in ends[1:]:
+        g = np.minimum.reduceat(np.maximum(e[Y], g[rest]), starts)
+    return g
 
 
 def _bound(tab: _Tables, label: tuple) -> float:
@@ -402,6 +449,18 @@ def _bound(tab: _Tables, label: tuple) -> float:
     tau = tab.tau
     est = [0.0] * n
     full = (1 << n) - 1
+    if tab.lazy:
+        # a stale drone launched with no customer yet takes one only after a predecessor
+        # served since its launch (:func:`_appendable`); with none left it cannot be
+        # completed
+        for _w, _A, _T, _ev, _fin, _F, drones in trucks:
+            for dr in drones:
+                if dr[0] == 1 and dr[2] == 0 and not dr[6]:
+                    if not any(
+                        not S >> j & 1 and tab.drone_ok[j] and tab.pred_mask[j] & ~dr[7]
+                        for j in range(n)
+                    ):
+                        return INF
     relaxed = 0  # customers an airborne drone with room can still reach
     if S != full:
         fresh = _fresh_sorties(tab, trucks)
@@ -414,6 +473,7 @@ def _bound(tab: _Tables, label: tuple) -> float:
             tab.near,
         )
         limit, c = tab.limit, tab.c
+        lazy, pred_mask = tab.lazy, tab.pred_mask
         for j in tab.topo:
             if S >> j & 1:
                 est[j] = svc[j]
@@ -433,7 +493,12 @@ def _bound(tab: _Tables, label: tuple) -> float:
                     if v < e:
                         e = v
                     for dr in drones:
-                        if dr[0] == 1 and dr[5] and dr[2] < c:
+                        if (
+                            dr[0] == 1
+                            and dr[5]
+                            and dr[2] < c
+                            and (not lazy or dr[6] or pred_mask[j] & ~dr[7])
+                        ):  # (a stale drone takes j only after a predecessor: _appendable)
                             o = dr[1]
                             if o >= 0:
                                 dist, fly = fcd[o][j], fct[o][j]
@@ -485,11 +550,45 @@ def _bound(tab: _Tables, label: tuple) -> float:
     return b
 
 
+def _needed(tab: _Tables, S: int) -> int:
+    """The customers some unserved customer of ``S``'s complement must wait for."""
+    if not tab.lazy:
+        return 0
+    need = 0
+    for j in range(tab.n):
+        if not S >> j & 1:
+            need |= tab.pred_mask[j]
+    return need
+
+
+def _appendable(tab: _Tables, dr: tuple, need: int) -> tuple[bool, int]:
+    """The part of an airborne drone's state that says which customers it may still take
+    (the key of :func:`_signature`): whether it is fresh and, under precedences, which of
+    the customers in ``need`` had been served at its last event.
+
+    *Canonical appends* (precedences only, :func:`_children`): customer j is appended to an
+    airborne drone d only while d is *fresh* (no action other than an append since d's last
+    launch or append) or when a predecessor of j was served after that event (not in the
+    drone's ``seen`` set). This loses no plan's times: in any sequence of actions, move an
+    append of j to d that breaks the rule to just before the first non-append action after
+    d's last event. There d is fresh; j's time ``max(t + ft(ℓ, j) + τ, t_r)`` is unchanged
+    (d's state and every predecessor's time were already final); the actions passed over
+    do not involve d or j's successors, so theirs are unchanged too. Each such move puts an
+    append where a non-append action was, so the sequence of action kinds decreases
+    lexicographically and the moves end, in a sequence that keeps the rule and every time.
+    Two labels compare (dominance) only when these parts are equal, so the one kept may
+    take every append the other may."""
+    if not tab.lazy or not dr[5] or dr[2] >= tab.c:
+        return (False, 0)
+    return (dr[6], dr[7] & need)
+
+
 def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
     """(key, vector): labels with equal keys compare by their vectors (all smaller = better)."""
     S, M, svc, trucks = label
     vec: list[float] = [M] if not tab.ret else []
     succ = tab.succ_mask
+    need = _needed(tab, S)
     for r in range(tab.n):
         if S >> r & 1 and succ[r] & ~S:
             vec.append(svc[r])
@@ -500,7 +599,9 @@ def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,)))
             else:
-                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4])))
+                parts.append(
+                    ((1, dr[1], dr[2], dr[5], *_appendable(tab, dr, need)), (dr[3], dr[4]))
+                )
         parts.sort()
         disc = (w, ev, fin, tuple(p[0] for p in parts))
         cont = (A, T, F, *itertools.chain.from_iterable(p[1] for p in parts))
@@ -524,6 +625,7 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
     S, M, svc, trucks = label
     head: list[float] = [M] if not tab.ret else []
     succ = tab.succ_mask
+    need = _needed(tab, S)
     for r in range(tab.n):
         if S >> r & 1 and succ[r] & ~S:
             head.append(svc[r])
@@ -535,7 +637,13 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,), ()))
             else:
-                parts.append(((1, dr[1], dr[2], dr[5]), (dr[3], dr[4]), (dr[3], dr[4])))
+                parts.append(
+                    (
+                        (1, dr[1], dr[2], dr[5], *_appendable(tab, dr, need)),
+                        (dr[3], dr[4]),
+                        (dr[3], dr[4]),
+                    )
+                )
         parts.sort()
         discs.append((w, fin, tuple(p[0] for p in parts)))
         conts.append(
@@ -574,7 +682,19 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 if dr[0] == 1 and dr[5]:
                     filling = (k, d)
 
-    def closed(trs: list) -> tuple:
+    # with precedences, an airborne drone is *fresh* until an action other than an append
+    # is taken (:func:`_appendable`)
+    stale = lazy and any(dr[0] == 1 and dr[6] for tr in trucks for dr in tr[6])
+
+    def closed(trs: list, keep: tuple[int, int] | None = None) -> tuple:
+        if stale:
+            for k2, tr in enumerate(trs):
+                if any(dr[0] == 1 and dr[6] for dr in tr[6]):
+                    staled = tuple(
+                        dr[:6] + (False, dr[7]) if dr[0] == 1 and dr[6] and (k2, d2) != keep else dr
+                        for d2, dr in enumerate(tr[6])
+                    )
+                    trs[k2] = tr[:6] + (staled,)
         if filling is None:
             return tuple(trs)
         k, d = filling
@@ -582,7 +702,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
         dr = tr[6][d]
         if dr[0] == 1 and dr[5]:
             drones = list(tr[6])
-            drones[d] = dr[:5] + (False,)
+            drones[d] = dr[:5] + (False,) + dr[6:]
             trs[k] = tr[:6] + (tuple(drones),)
         return tuple(trs)
 
@@ -609,6 +729,8 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 wait = ready(j)
                 if wait is None:
                     continue
+                if lazy and not dr[6] and not tab.pred_mask[j] & ~dr[7]:
+                    continue  # j could have been appended at the drone's last event
                 if o >= 0:
                     dist, fly = tab.fcd[o][j], tab.fct[o][j]
                 else:
@@ -620,7 +742,7 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                 if wait > t:
                     t = wait
                 nd = list(drones)
-                nd[d] = (1, j, dr[2] + 1, t, delta, True)
+                nd[d] = (1, j, dr[2] + 1, t, delta, True, True, S | 1 << j)
                 trs = list(trucks)
                 trs[k] = (w, A, T, ev, fin, F, tuple(nd))
                 nsvc = svc[:j] + (t,) + svc[j + 1 :]
@@ -708,10 +830,10 @@ def _children(tab: _Tables, label: tuple) -> list[tuple[tuple, Any]]:
                         continue
                     seen_here.add(rho)
                     nd = list(dr2)
-                    nd[d] = (1, -(w2 + 1), 0, rho, 0.0, True)
+                    nd[d] = (1, -(w2 + 1), 0, rho, 0.0, True, True, S)
                     trs = list(trucks)
                     trs[k] = (w2, A2, T2 if T2 > rho else rho, True, fin, F, tuple(nd))
-                    out.append(((S, M, svc, closed(trs)), ("launch", k, d, w2)))
+                    out.append(((S, M, svc, closed(trs, (k, d))), ("launch", k, d, w2)))
         # finish (only "return" needs it: under last_service a truck may just stop)
         if tab.ret and not airborne:
             trs = list(trucks)
@@ -863,6 +985,9 @@ def label_search(
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
     ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters.
 
+    ``beam``: the width of the beam pass (:func:`_beam`) run for an incumbent, with a fifth of
+    the limit, when no ``incumbent`` is given (0: none).
+
     ``truck_of`` restricts the plans: customer j is served by truck ``truck_of[j]`` or one of
     its drones (the trucks are then not interchangeable); the search then proves the optimum
     over those plans (an ``incumbent`` outside the restriction may still be returned when it
@@ -879,7 +1004,44 @@ def label_search(
     ends on such a plan returns its release-free value, still a lower bound on the optimum
     with releases (no plan below it was found).
     """
+    enabled = gc.isenabled()
+    gc.disable()  # labels hold no reference cycles; a full collection over millions of them
+    # pauses for seconds under load, past the deadline (measured: 9 % of a run at n = 8)
+    try:
+        return _label_search(
+            problem,
+            time_limit=time_limit,
+            incumbent=incumbent,
+            max_labels=max_labels,
+            metric=metric,
+            beam=beam,
+            walk=walk,
+            truck_of=truck_of,
+            floor=floor,
+            cutoff=cutoff,
+            release=release,
+        )
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _label_search(
+    problem: FleetProblem,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    max_labels: int | None = None,
+    metric: bool = True,
+    beam: int = 64,
+    walk: bool = True,
+    truck_of: Sequence[int] | None = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    release: Sequence[float] | None = None,
+) -> dict[str, Any]:
+    """:func:`label_search`'s body (the garbage collector off)."""
     deadline = Deadline(time_limit)
+    clock = [time.perf_counter()]  # phase ends: start, tables, beam, search
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
     if problem.unservable():
         return {
@@ -898,16 +1060,26 @@ def label_search(
         tab.groups = [[k] for k in range(problem.K)]
     if release is not None:
         tab.release = [float(r) for r in release]
+    clock.append(time.perf_counter())
     best_plan: FleetPlan | None
-    best, best_plan = best_of(problem, (incumbent, _simple_plan(problem, truck_of)))
+    candidates = [incumbent, _simple_plan(problem, truck_of)]
+    if truck_of is None and synced_applies(problem):
+        # one truck, several drones: the best synchronised plan (milliseconds at n = 8)
+        share = None if time_limit is None else SYNCED_SHARE * time_limit
+        candidates.append(synced_plan(problem, share)[1])
+    best, best_plan = best_of(problem, candidates)
     if beam and time_limit is not None:
         sub = Deadline(0.2 * time_limit)
     else:
         sub = deadline
-    if beam and best > floor:
+    if beam and best > floor and incumbent is None:
+        # only without the caller's incumbent: at n = 6-8 with one truck and two or three
+        # drones the beam found no plan better than the ILS's in 2 s on any of 18 instances
+        # (most found none), while taking a fifth of the limit
         value, beamed = _beam(problem, tab, beam, sub, best)
         if beamed is not None and value < best:
             best, best_plan = value, beamed
+    clock.append(time.perf_counter())
     planned = best  # the best plan's value; best may drop to the cutoff (no plan there)
     best = min(best, cutoff)
     n = problem.n
@@ -948,14 +1120,7 @@ def label_search(
             break
         expanded += 1
         for child, act in _children(tab, label):
-            b = _bound(tab, child)
-            if b < lb:
-                b = lb  # the parent's bound holds for the child's completions too
-            if b < floor:
-                b = floor
-            if b >= best * (1 - slack):
-                pruned += 1
-                continue
+            # dominance first (a dominated child needs no bound), then the bound
             key, vec = _signature(tab, child)
             bucket = store.get(key)
             if bucket is not None:
@@ -967,15 +1132,6 @@ def label_search(
                 if skip:
                     dominated += 1
                     continue
-                keep = []
-                for other, oid in bucket:
-                    if all(x <= y for x, y in zip(vec, other, strict=True)):
-                        dead[oid] = 1
-                    else:
-                        keep.append((other, oid))
-                bucket[:] = keep
-            else:
-                bucket = store[key] = []
             entries = _metric_entries(tab, child) if metric else []
             hit = False
             for mkey, w, A, _T, mvec in entries:
@@ -990,6 +1146,24 @@ def label_search(
             if hit:
                 dominated += 1
                 continue
+            b = _bound(tab, child)
+            if b < lb:
+                b = lb  # the parent's bound holds for the child's completions too
+            if b < floor:
+                b = floor
+            if b >= best * (1 - slack):
+                pruned += 1
+                continue
+            if bucket is not None:
+                keep = []
+                for other, oid in bucket:
+                    if all(x <= y for x, y in zip(vec, other, strict=True)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
             cid = len(labels)
             for mkey, w, A, T, mvec in entries:
                 bucket2 = mindex.setdefault(mkey, [])
@@ -1011,6 +1185,7 @@ def label_search(
         if len(labels) > cap:
             stopped_by = "size"
             break
+    clock.append(time.perf_counter())
     bound = best
     if stopped_by != "optimal":
         live = [b for b, _, j in heap if not dead[j]]
@@ -1021,6 +1196,10 @@ def label_search(
         "dominated": dominated,
         "pruned": pruned,
         "stopped_by": stopped_by,
+        "seconds": {
+            name: round(b - a, 4)
+            for name, a, b in zip(("tables", "beam", "search"), clock, clock[1:], strict=False)
+        },
     }
     if found >= 0:
         acts = []

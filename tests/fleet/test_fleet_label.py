@@ -1,0 +1,212 @@
+"""The fleet label search on one truck with several drones (:mod:`taopt.fleet.search`):
+canonical appends, bound terms, time limits, and the synchronised incumbent
+(:mod:`taopt.fleet.synced`)."""
+
+from __future__ import annotations
+
+import pytest
+
+import taopt
+from taopt.fleet.brute import brute_force, tiny_instance
+from taopt.fleet.evaluate import evaluate_fleet
+from taopt.fleet.instances import residential_fleet
+from taopt.fleet.search import (
+    _bound,
+    _sortie_time_bound,
+    _Tables,
+    _walk_bound,
+    _water_fill,
+    label_search,
+)
+from taopt.fleet.synced import synced_plan
+
+# (seed, D, c, precedence, objective, optimum): K = 1, n = 3, 2 stops; every D in {2, 3},
+# c in {1, 2}, both objectives, with and without precedence. The optimum is
+# taopt.fleet.brute.brute_force's (recomputed by the slow test below).
+CASES = [
+    (200, 2, 1, False, "last_service", 110.23968857594866),
+    (213, 2, 1, False, "return", 95.550935661564),
+    (227, 2, 1, True, "last_service", 61.81482960343733),
+    (246, 2, 1, True, "return", 163.6866672714507),
+    (254, 2, 2, False, "last_service", 26.243723058239976),
+    (265, 2, 2, False, "return", 281.8561218175563),
+    (291, 2, 2, True, "last_service", 30.258336907779736),
+    (291, 2, 2, True, "return", 60.51667381555947),
+    (304, 3, 1, False, "last_service", 67.76612778271655),
+    (317, 3, 1, False, "return", 189.32493196028483),
+    (330, 3, 1, True, "last_service", 121.00794726695304),
+    (348, 3, 1, True, "return", 68.77390949136627),
+    (357, 3, 2, False, "last_service", 12.540286209055406),
+    (369, 3, 2, False, "return", 174.0142666625715),
+    (398, 3, 2, True, "last_service", 43.24917207608939),
+    (398, 3, 2, True, "return", 88.49834415217877),
+]
+
+#: The certified optimum of residential_fleet(5, 1, 2, 2, seed=1) (label search, 3-16 s).
+N5_SEED1 = 400.3773994471987
+
+
+def _instance(case: tuple):
+    seed, D, c, prec, objective, _ = case
+    return tiny_instance(seed, 3, 1, D, c, prec, objective, stops=2)
+
+
+def _root(problem) -> tuple:
+    trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    return (0, 0.0, (-1.0,) * problem.n, trucks)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_search_equals_brute_force_one_truck_several_drones(case):
+    """The label search (no beam, no incumbent) proves the brute-force optimum."""
+    result = label_search(_instance(case), beam=0)
+    assert result["stopped_by"] == "optimal"
+    assert result["value"] == pytest.approx(case[5], rel=1e-9, abs=1e-9)
+    assert result["bound"] == pytest.approx(case[5], rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_every_root_bound_term_is_below_the_optimum(case):
+    """Each term of the root label bound is <= the brute-force optimum."""
+    problem = _instance(case)
+    tab = _Tables(problem)
+    root = _root(problem)
+    trucks = root[3]
+    top = case[5] * (1 + 1e-9) + 1e-9
+    assert _walk_bound(tab, tab.full, trucks) <= top
+    assert _sortie_time_bound(tab, tab.drone_only, trucks) <= top
+    assert _water_fill(tab, 0, trucks) <= top
+    assert _bound(tab, root) <= top
+
+
+@pytest.mark.slow
+def test_cases_are_the_brute_force_optima():
+    """CASES' optima are brute_force's (a few seconds)."""
+    for case in CASES:
+        value, plan, _ = brute_force(_instance(case))
+        assert plan is not None
+        assert value == pytest.approx(case[5], rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_canonical_appends_keep_the_optimum_with_precedences():
+    """With precedences (lazy appends, canonical rule) the search on residential n = 5,
+    seed 1, proves the certified optimum, and no complete plan is below it."""
+    problem = residential_fleet(5, 1, 2, 2, seed=1)
+    assert problem.precedences
+    result = label_search(problem, beam=0)
+    assert result["stopped_by"] == "optimal"
+    assert result["value"] == pytest.approx(N5_SEED1, rel=1e-9)
+    assert evaluate_fleet(problem, result["plan"]) == pytest.approx(N5_SEED1, rel=1e-9)
+
+
+def test_zero_time_limit_returns_a_proven_bound():
+    """A zero time limit stops the search at once with status time_limit and a bound
+    between the root bound's validity and the incumbent: bound <= optimum <= value."""
+    case = CASES[6]
+    result = label_search(_instance(case), time_limit=0.0)
+    assert result["stopped_by"] in ("time_limit", "optimal")
+    assert result["bound"] <= case[5] * (1 + 1e-9) + 1e-9
+    assert result["value"] >= case[5] * (1 - 1e-9)
+
+
+def test_tiny_time_limit_through_solve_is_time_limit_with_a_valid_bound():
+    """taopt.solve on n = 5 (optimum 400.38 needs seconds) with a 0.05 s limit returns
+    status time_limit, a feasible plan and a bound <= the optimum <= the plan's value."""
+    problem = residential_fleet(5, 1, 2, 2, seed=1)
+    solution = taopt.solve(problem, "exact", time_limit=0.05)
+    assert solution.status == "time_limit"
+    assert solution.bound <= N5_SEED1 * (1 + 1e-9)
+    assert solution.objective >= N5_SEED1 * (1 - 1e-9)
+    assert evaluate_fleet(problem, solution.solution) == pytest.approx(solution.objective)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_synced_plan_is_feasible_and_never_below_the_optimum(case):
+    """The synchronised-operations incumbent is scored by evaluate and >= the optimum."""
+    problem = _instance(case)
+    value, plan = synced_plan(problem)
+    if plan is None:  # a truck-only customer: the DP does not apply
+        assert any(not problem.drone_servable(j) for j in range(problem.n))
+        return
+    assert evaluate_fleet(problem, plan) == pytest.approx(value)
+    assert value >= case[5] * (1 - 1e-9)
+
+
+def test_synced_plan_on_a_residential_instance():
+    """On residential n = 5 (two drones, c = 2, precedences) the synchronised plan is
+    feasible, >= the certified optimum, and its operations launch every drone."""
+    problem = residential_fleet(5, 1, 2, 2, seed=1)
+    value, plan = synced_plan(problem)
+    assert plan is not None
+    assert evaluate_fleet(problem, plan) == pytest.approx(value)
+    assert value >= N5_SEED1 * (1 - 1e-9)
+    served = sorted(j for flights in plan.sorties[0] for s in flights for j in s.customers)
+    assert served == list(range(problem.n))
+
+
+@pytest.mark.parametrize("drones", [3, 4])
+def test_least_largest_equals_every_assignment(drones):
+    """The min-max subset convolution over three or four drones equals the least, over every
+    assignment of m customers to drones, of the largest drone's end."""
+    import itertools
+
+    import numpy as np
+
+    from taopt.fleet.search import _least_largest
+
+    rng = np.random.default_rng(drones)
+    for m in range(5):
+        ends = [rng.uniform(0, 10, 1 << m) for _ in range(drones)]
+        for e in ends:
+            e[0] = 0.0
+        expected = min(
+            max(ends[i][sum(1 << b for b in range(m) if a[b] == i)] for i in range(drones))
+            for a in itertools.product(range(drones), repeat=m)
+        )
+        assert _least_largest(ends, m)[-1] == pytest.approx(expected, abs=1e-12)
+
+
+def test_three_drone_sortie_term_is_exact_and_below_the_optimum():
+    """With three drones the sortie-time term splits the customers exactly (never below the
+    size argument it replaces) and stays <= the brute-force optimum on the D = 3 cases."""
+    import taopt.fleet.search as search
+
+    for case in CASES:
+        if case[1] != 3:
+            continue
+        problem = _instance(case)
+        tab = _Tables(problem)
+        trucks = _root(problem)[3]
+        exact = _sortie_time_bound(tab, tab.drone_only, trucks)
+        saved = search.PARTITION_MAX_CUSTOMERS
+        search.PARTITION_MAX_CUSTOMERS = -1
+        try:
+            sized = _sortie_time_bound(tab, tab.drone_only, trucks)
+        finally:
+            search.PARTITION_MAX_CUSTOMERS = saved
+        assert sized <= exact + 1e-9
+        assert exact <= case[5] * (1 + 1e-9) + 1e-9
+
+
+def test_three_drone_sortie_term_lifts_the_residential_root():
+    """On residential n = 6 with three drones the exact split lifts the root sortie term
+    above the size argument, and stays below a feasible plan's value."""
+    import taopt.fleet.search as search
+
+    problem = residential_fleet(6, 1, 3, 2, seed=0)
+    tab = _Tables(problem)
+    trucks = _root(problem)[3]
+    exact = _sortie_time_bound(tab, tab.drone_only, trucks)
+    saved = search.PARTITION_MAX_CUSTOMERS
+    search.PARTITION_MAX_CUSTOMERS = -1
+    try:
+        sized = _sortie_time_bound(tab, tab.drone_only, trucks)
+    finally:
+        search.PARTITION_MAX_CUSTOMERS = saved
+    value, plan = synced_plan(problem)
+    assert plan is not None
+    assert sized < exact <= value
