@@ -536,10 +536,13 @@ BASE_BYTES = 155e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
 #: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
-#: Fitted: 590 keeps every one of 22 measured DP runs (2 to 186,000 states) within 1.44x;
-#: per state alone the peaks spread from 94 B (p43.4, dense precedence: few extensions per
-#: state) to 1.5 KB (ESC47, sparse: many), which the base absorbs at these sizes.
-DP_BYTES_PER_STATE = 590.0
+#: The state caps count a state at this (:func:`dp_state_cap`), so it is the largest measured
+#: per state of a stage that filled many states: prob.42, 1.11 million states at 927 MB
+#: (695 B a state; p43.1 1.78 million at 949 MB, 446 B; 2026-11, ``bench_sop.py --resources
+#: 60``). Per state alone the peaks of short runs spread from 94 B (p43.4, dense precedence:
+#: few extensions per state) to 1.5 KB (ESC47, ft53.1: a setup of 50-100 MB the base
+#: absorbs); the estimate scales it by :func:`dp_state_share`.
+DP_BYTES_PER_STATE = 700.0
 
 
 #: Peak bytes per nonzero (:func:`nonzero_count`) of the flow MILP built with cvxpy,
@@ -570,13 +573,16 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
 
 #: States a DP stage is expected to keep per second (the memory estimate's rate, below the
 #: stage's state cap and the states the ideals allow). A stage that cannot close keeps
-#: 30,000-60,000 a second on this machine quiet (p43.1: 1.78 million in its 30 s stage) and
-#: fills its cap; one that closes keeps what it needs and stops (ESC47: 26,000 states in
-#: 4 s; ft53.4: 494,000). Nothing known before the run tells the two apart (same size, same
-#: uncountable ideals), so the rate is the one that keeps both kinds within 2x where that
-#: is possible (fitted on ``bench_sop.py --resources`` at 10 s and 60 s: docs/benchmarks.md,
-#: SOP memory). Not a limit: the cap (:func:`dp_state_cap`) keeps a DP stage within memory.
-DP_STATES_PER_SECOND = 8_000
+#: 20,000-60,000 a second on this machine (p43.1: 1.78 million in its 30 s stage quiet,
+#: 454,000 in 20 s at load 5) and fills its cap; one that closes keeps what it needs and
+#: stops (ESC47: 26,000 states in 4 s; ft53.4: 494,000 in 7 s). Nothing known before the run
+#: tells the two apart (same size, ideals past the count's cap), so the rate is the one that
+#: kept the most runs within 2x of their peaks (``bench_sop.py --resources`` at 10 s and
+#: 60 s, CP-SAT on and off: 8,000 left p43.1, prob.42 and ry48p.1 at 2.2-3.2x; 16,000 with
+#: 700 B a state none of the 10 s runs and of the 60 s runs of the hard ones; the closing
+#: ones at 60 s without CP-SAT are then estimated 2-3x above their peaks, the safe side).
+#: Not a limit: the cap (:func:`dp_state_cap`) keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 16_000
 
 
 def dp_states_per_second(n: int) -> float:
