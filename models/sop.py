@@ -571,26 +571,47 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
-#: States a DP stage is expected to keep per second (the memory estimate's rate, below the
-#: stage's state cap and the states the ideals allow). A stage that cannot close keeps
-#: 20,000-60,000 a second on this machine (p43.1: 1.78 million in its 30 s stage quiet,
-#: 454,000 in 20 s at load 5) and fills its cap; one that closes keeps what it needs and
-#: stops (ESC47: 26,000 states in 4 s; ft53.4: 494,000 in 7 s). Nothing known before the run
-#: tells the two apart (same size, ideals past the count's cap), so the rate is the one that
-#: kept the most runs within 2x of their peaks (``bench_sop.py --resources`` at 10 s and
-#: 60 s, CP-SAT on and off: 8,000 left p43.1, prob.42 and ry48p.1 at 2.2-3.2x; 16,000 with
-#: 700 B a state none of the 10 s runs and of the 60 s runs of the hard ones; the closing
-#: ones at 60 s without CP-SAT are then estimated 2-3x above their peaks, the safe side).
-#: Not a limit: the cap (:func:`dp_state_cap`) keeps a DP stage within the memory.
-DP_STATES_PER_SECOND = 16_000
+#: States a DP stage is expected to keep per second over a stage of
+#: :data:`DP_RATE_SECONDS` (the memory estimate's rate, below the stage's state cap and the
+#: states the ideals allow; :func:`dp_states_in`). A stage that cannot close fills its cap at
+#: 20,000-80,000 a second on this machine (prob.42: 385,000 states in its 5 s stage, p43.1:
+#: 1.78 million in 30 s, quiet; 454,000 in 20 s at load 5); one that closes keeps what it
+#: needs and stops (ESC47: 30,000 states in 4 s; ft53.4: 494,000 in 7 s). Nothing known
+#: before the run tells the two apart (same size, ideals past the count's cap), so the rate
+#: is fitted to keep the most runs within 2x of their peaks (``bench_sop.py --resources``
+#: at 10 s and 60 s, CP-SAT on and off; docs/benchmarks.md, SOP memory). Not a limit: the
+#: cap (:func:`dp_state_cap`) keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 24_000
+
+#: The stage length (seconds) at which a DP stage is expected to keep
+#: :data:`DP_STATES_PER_SECOND` a second.
+DP_RATE_SECONDS = 5.0
+
+#: Exponent of a DP stage's expected states in its length (:func:`dp_states_in`): below 1,
+#: as a flat rate cannot hold both the 10 s runs that fill their states (prob.42, ry48p.1:
+#: 2.0-2.2x above a flat 16,000 a second) and the 60 s runs that close early (ESC47 with
+#: CP-SAT beside: 0.46x below a flat 20,000).
+DP_RATE_EXPONENT = 0.8
 
 
 def dp_states_per_second(n: int) -> float:
-    """States a DP stage keeps per second on ``n`` nodes: :data:`DP_STATES_PER_SECOND` up to
-    64 nodes, then in proportion to ``64 / n`` (a state's bound and extensions cost about
-    ``n`` node steps: the rbg-like stand-ins of 110-175 nodes kept 1,200-2,700 a second at
-    load 11, and a flat rate put the estimate 2.3-2.8x above their peaks)."""
+    """States a DP stage keeps per second on ``n`` nodes over :data:`DP_RATE_SECONDS`:
+    :data:`DP_STATES_PER_SECOND` up to 64 nodes, then in proportion to ``64 / n`` (a state's
+    bound and extensions cost about ``n`` node steps: the rbg-like stand-ins of 110-175 nodes
+    kept 1,200-2,700 a second at load 11, and a flat rate put the estimate 2.3-2.8x above
+    their peaks)."""
     return DP_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1))
+
+
+def dp_states_in(n: int, seconds: float) -> float:
+    """States a DP stage of ``seconds`` on ``n`` nodes is expected to keep (the memory
+    estimate's count, before its cap): :func:`dp_states_per_second` times
+    :data:`DP_RATE_SECONDS` times ``(seconds / DP_RATE_SECONDS) ** DP_RATE_EXPONENT``;
+    increasing in ``seconds``, 0 for none."""
+    if seconds <= 0:
+        return 0.0
+    span = DP_RATE_SECONDS * (seconds / DP_RATE_SECONDS) ** DP_RATE_EXPONENT
+    return dp_states_per_second(n) * span
 
 
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
@@ -718,7 +739,7 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
         # those using the time left share the other half)
         share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(dp_states_per_second(problem.n) * seconds * share)
+        wanted = int(dp_states_in(problem.n, seconds * share))
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
@@ -1462,10 +1483,10 @@ def _stages(
     ) -> None:
         """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
         largest over the stages run): a DP stage keeps at most its cap, the states the ideals
-        allow and :func:`dp_states_per_second` a second (after its beam pass); a MILP its
+        allow and :func:`dp_states_in` its time (after its beam pass); a MILP its
         nonzeros, compiled or only built."""
         if seconds is not None:
-            states = min(states, dp_states_per_second(problem.n) * seconds)
+            states = min(states, dp_states_in(problem.n, seconds))
         if not capped:
             states = min(states, every_state)
         dp_part = dp_bytes(problem.n, states) * state_share

@@ -195,7 +195,7 @@ def use_the_rest(
         _combine,
         dp_bytes,
         dp_state_cap,
-        dp_states_per_second,
+        dp_states_in,
     )
     from taopt.models.sop_dp import NARROW_BEAM, solve_sop_dp
 
@@ -208,7 +208,7 @@ def use_the_rest(
             break
         cap = min(2 * cap, memory_cap)
         if stage is not None:  # the states it can keep in its time, at most its cap
-            made = cap if left is None else min(cap, dp_states_per_second(problem.n) * left)
+            made = cap if left is None else min(cap, dp_states_in(problem.n, left))
             stage(BASE_BYTES + dp_bytes(problem.n, made))
         again = solve_sop_dp(
             problem,
