@@ -69,6 +69,17 @@ def test_estimate_is_monotone_in_the_state_cap(esc25):
         assert estimate <= BASE_BYTES + dp_bytes(esc25.n, cap) + 1
 
 
+def test_expected_states_grow_with_the_stage_and_fall_with_the_nodes():
+    """A DP stage's expected states grow with its length (the rate at DP_RATE_SECONDS, less
+    per second beyond), are none for no time, and fall beyond 64 nodes."""
+    at = [sop_model.dp_states_in(50, t) for t in (0.0, 1.0, 5.0, 30.0, 60.0)]
+    assert at[0] == 0.0 and at == sorted(at)
+    rate = sop_model.DP_STATES_PER_SECOND
+    assert at[2] == pytest.approx(rate * sop_model.DP_RATE_SECONDS)
+    assert at[4] <= rate * 60.0
+    assert sop_model.dp_states_in(128, 30.0) == pytest.approx(at[3] / 2)
+
+
 def test_state_cap_is_monotone_in_the_memory_limit():
     """A larger memory limit never gives fewer states, and less room beside (a reserve for
     CP-SAT's worker) never gives more."""
