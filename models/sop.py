@@ -677,9 +677,12 @@ def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int, reserve: floa
 CPSAT_WORKER_BYTES = 150e6
 
 #: Peak bytes of CP-SAT's worker per node pair (n^2) above :data:`CPSAT_WORKER_BYTES`
-#: (fitted on the rbg-like stand-ins of 110-380 nodes: 157, 159, 167, 231, 330 and 367 MB,
-#: the model within 1.17x of each; per usable arc or per precedence pair the same runs do
-#: not line up: 380 nodes have fewer usable arcs than 340).
+#: (fitted on the rbg-like stand-ins of 110-380 nodes beside the portfolio for 60 s: 157,
+#: 159, 167, 231, 330 and 367 MB, the model within 1.17x of each; per usable arc or per
+#: precedence pair the same runs do not line up: 380 nodes have fewer usable arcs than 340).
+#: The worker grows with its search: 5 s runs alone (``bench_sop_memory.py --stages cpsat``,
+#: polled) peaked at 102-161 MB on 9-380 nodes, the model within 1.17x of the SOP files'
+#: and 2.3x above a 380-node chain's.
 CPSAT_BYTES_PER_NODE_PAIR = 1_500.0
 
 
