@@ -21,9 +21,12 @@ Run::
 ``--resources T`` runs ``taopt.solve(problem, "exact", time_limit=T)`` on each instance (default:
 every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints status,
 objective, bound, wall time (``time.perf_counter`` around the call), the overrun over
-``T + max(1 s, 5 %)``, the peak resident memory of that process (``resource.getrusage``,
-``ru_maxrss``) and the memory guard's estimate (:func:`taopt.runtime.footprint`, with the
-ratio measured / estimated). ``--load`` starts a second process spinning on one core for the
+``T + max(1 s, 5 %)``, the peak resident memory of the run: that process's
+(``resource.getrusage``, ``ru_maxrss``) plus CP-SAT's worker's beside it (the reaped
+children's ``ru_maxrss``), against the memory guard's estimate made before the run
+(:func:`taopt.runtime.footprint`, CP-SAT's worker counted when it runs) and the engine's own
+(``info["memory_estimate"]``, each stage estimated before it started), with the ratios
+peak / estimate; a ratio outside [0.5, 2] is marked ``**out**`` and listed at the end. ``--load`` starts a second process spinning on one core for the
 duration (the shared-machine condition of issue 33). ``--generated`` adds the generated
 instances of :data:`GENERATED` (``taopt.sop.generate``).
 
@@ -227,7 +230,7 @@ from taopt.models.sop import BASE_BYTES, dp_bytes, nonzero_count, sop_milp_bytes
 import taopt.models.sop
 if {nice!r} is not None:
     taopt.models.sop.CPSAT_NICE = {nice!r}
-estimate = footprint(problem, "exact", {{"time_limit": {limit!r}}})[0]
+estimate = footprint(problem, "exact", {{"time_limit": {limit!r}, "cpsat": {cpsat!r}}})[0]
 t0 = time.perf_counter()
 result = taopt.solve(problem, "exact", time_limit={limit!r}, cpsat={cpsat!r})
 wall = time.perf_counter() - t0
@@ -345,15 +348,18 @@ def resources(
         spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
     here = str(Path(__file__).resolve().parent)
     env = dict(os.environ)
-    print(f"time limit {limit:g} s per run, each in its own process; load: {load}")
     print(
-        "| instance | n | cpsat | status | objective | bound | wall (s) | over | peak RSS (MB) |"
-        " estimate (MB) | peak / estimate | states kept | MILP columns | model (MB) |"
-        " peak / model | engine | stages' estimate (MB) | peak / it | after the stages |"
-        " CP-SAT beside | worker peak (MB) |"
+        f"time limit {limit:g} s per run, each in its own process; load: {load}; "
+        f"load average {os.getloadavg()[0]:.1f}"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| instance | n | cpsat | status | objective | bound | wall (s) | over | parent peak (MB) |"
+        " worker peak (MB) | peak (MB) | estimate (MB) | peak / estimate | stages' estimate (MB) |"
+        " peak / it | states kept | engine | after the stages | CP-SAT beside |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     runs = [(name, side) for name in names for side in cpsat]
+    outside = []
     try:
         for name, side in runs:
             code = _CHILD.format(bench=here, name=name, limit=limit, cpsat=side, nice=nice)
@@ -370,18 +376,28 @@ def resources(
             r = json.loads(run.stdout.strip().splitlines()[-1])
             allowed = limit + max(1.0, 0.05 * limit)
             over = "yes" if r["wall"] > allowed else "no"
-            ratio = r["peak"] / r["estimate"] if r["estimate"] else float("nan")
+            # the run's cost to the machine: this process and CP-SAT's worker beside it
+            peak = r["peak"] + r["worker_peak"]
             flag = {None: "auto", True: "on", False: "off"}[side]
+            ratios = []
+            for what, estimate in (("estimate", r["estimate"]), ("stages'", r["staged"])):
+                ratio = peak / estimate if estimate else float("nan")
+                mark = "" if 0.5 <= ratio <= 2.0 else " **out**"
+                if mark:
+                    outside.append(f"{name} ({flag}, {what}: {ratio:.2f})")
+                ratios.append(f"{ratio:.2f}{mark}")
             print(
                 f"| {name} | {r['n']} | {flag} | {r['status']} | {r['objective']:g} | "
-                f"{r['bound']:g} | "
-                f"{r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
-                f"{ratio:.2f} | {r['states']:,} | {r['columns']:,} | {r['model'] / 1e6:.0f} | "
-                f"{r['peak'] / r['model']:.2f} | {r['engine']} | {r['staged'] / 1e6:.0f} | "
-                f"{r['peak'] / r['staged']:.2f} | {', '.join(r['rest'] or [])} | "
-                f"{r['cpsat']} | {r['worker_peak'] / 1e6:.0f} |",
+                f"{r['bound']:g} | {r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | "
+                f"{r['worker_peak'] / 1e6:.0f} | {peak / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
+                f"{ratios[0]} | {r['staged'] / 1e6:.0f} | {ratios[1]} | {r['states']:,} | "
+                f"{r['engine']} | {', '.join(r['rest'] or [])} | {r['cpsat']} |",
                 flush=True,
             )
+        print(
+            f"peak / estimate outside [0.5, 2]: {', '.join(outside) or 'none'}; "
+            f"load average {os.getloadavg()[0]:.1f}"
+        )
     finally:
         if spinner is not None:
             spinner.kill()

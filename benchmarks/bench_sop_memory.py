@@ -28,14 +28,16 @@ polling that process's RSS with ``psutil`` every 50 ms. Stages:
     compiled is fitted apart, ``milp-build``). Skipped when the model would have more than ``--max-columns`` columns
     (the machine is shared).
 ``cpsat``
-    ``taopt.solve(problem, "cpsat", time_limit=T)``: the worker's peak (feature: usable arcs).
+    ``taopt.solve(problem, "cpsat", time_limit=T)``: the worker's peak (feature: node pairs,
+    n^2; fitted as ``CPSAT_WORKER_BYTES`` + ``CPSAT_BYTES_PER_NODE_PAIR`` x n^2).
 
 ``--fit`` reads the saved runs and prints, per stage, the constant ``bytes per unit of
 feature`` that keeps ``base + constant x feature`` within the smallest factor of every
 measured peak (minimax of ``|log(estimate / peak)|``), the factor reached and the median
 base. These are the constants of :mod:`taopt.models.sop` (``BASE_BYTES``,
 ``DP_BYTES_PER_STATE``, ``BEAM_BYTES_PER_SLOT``, ``SOP_MILP_BYTES`` and
-``SOP_MILP_BYTES_PER_NONZERO``, ``SOP_BUILD_BYTES_PER_NONZERO``) and re-running
+``SOP_MILP_BYTES_PER_NONZERO``, ``SOP_BUILD_BYTES_PER_NONZERO``, ``CPSAT_WORKER_BYTES`` and
+``CPSAT_BYTES_PER_NODE_PAIR``) and re-running
 the fit after the flow model changes refits the last one.
 """
 
@@ -198,7 +200,7 @@ def feature(r: dict) -> float | None:
     if stage == "milp-build":  # a model built but not compiled
         return nonzeros(r) if r.get("model") == "built, not compiled" else 0.0
     if stage == "cpsat":
-        return float(r["n"] * r["arcs"])
+        return float(r["n"] * r["n"])
     return None
 
 
@@ -216,7 +218,7 @@ def fit(runs: list[dict]) -> None:
     ]
     for stage in ("dp", "beam", "milp", "milp-build", "cpsat"):
         rows = [r for r in runs if r.get("stage") == stage and "peak" in r]
-        if stage == "cpsat":
+        if stage == "cpsat":  # the worker's own peak: a fixed part and a part per node pair
             pairs = [(feature(r), r["worker"], 0.0) for r in rows if r["worker"]]
         else:
             pairs = [(feature(r), r["peak"], base) for r in rows]
@@ -224,7 +226,7 @@ def fit(runs: list[dict]) -> None:
         if not pairs:
             continue
         best = (math.inf, 0.0, 0.0)
-        fixed = [0.0] if stage in ("dp", "beam") else [m * 5e6 for m in range(0, 21)]
+        fixed = [0.0] if stage in ("dp", "beam") else [m * 5e6 for m in range(0, 41)]
         for start in fixed:  # the MILP has a fixed part (HiGHS and cvxpy's work space)
             for step in range(0, 2001):
                 k = 10 ** (-2 + step * 8 / 2000)  # 0.01 to 1e6 bytes per unit
@@ -261,8 +263,8 @@ def table(runs: list[dict], header: bool = True) -> None:
             what = f"a priori {r['estimate'] / 1e6:.0f}"
             peak = r["peak"]
         elif r["stage"] == "cpsat":
-            estimate = float("nan")
-            what = f"{unit:,.0f}"
+            estimate = sop.cpsat_worker_bytes(r["n"])
+            what = f"{unit:,.0f} node pairs"
             peak = r["worker"]
         elif r["stage"] == "milp":
             compiled = r.get("model") != "built, not compiled"

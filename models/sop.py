@@ -536,10 +536,13 @@ BASE_BYTES = 155e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
 #: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
-#: Fitted: 590 keeps every one of 22 measured DP runs (2 to 186,000 states) within 1.44x;
-#: per state alone the peaks spread from 94 B (p43.4, dense precedence: few extensions per
-#: state) to 1.5 KB (ESC47, sparse: many), which the base absorbs at these sizes.
-DP_BYTES_PER_STATE = 590.0
+#: The state caps count a state at this (:func:`dp_state_cap`), so it is the largest measured
+#: per state of a stage that filled many states: prob.42, 1.11 million states at 927 MB
+#: (695 B a state; p43.1 1.78 million at 949 MB, 446 B; 2026-11, ``bench_sop.py --resources
+#: 60``). Per state alone the peaks of short runs spread from 94 B (p43.4, dense precedence:
+#: few extensions per state) to 1.5 KB (ESC47, ft53.1: a setup of 50-100 MB the base
+#: absorbs); the estimate scales it by :func:`dp_state_share`.
+DP_BYTES_PER_STATE = 700.0
 
 
 #: Peak bytes per nonzero (:func:`nonzero_count`) of the flow MILP built with cvxpy,
@@ -568,19 +571,47 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
-#: States a DP stage keeps per second, typically (measured under load: 1,600-37,000 a second
-#: over the 5 s DP runs of the memory fit, median 7,500; prob.42 the fastest): what the
-#: estimate of a DP stage counts, below its state cap. Not a limit: the cap
-#: (:func:`dp_state_cap`) is what keeps a DP stage within the memory.
-DP_STATES_PER_SECOND = 8_000
+#: States a DP stage is expected to keep per second over a stage of
+#: :data:`DP_RATE_SECONDS` (the memory estimate's rate, below the stage's state cap and the
+#: states the ideals allow; :func:`dp_states_in`). A stage that cannot close fills its cap at
+#: 20,000-80,000 a second on this machine (prob.42: 385,000 states in its 5 s stage, p43.1:
+#: 1.78 million in 30 s, quiet; 454,000 in 20 s at load 5); one that closes keeps what it
+#: needs and stops (ESC47: 30,000 states in 4 s; ft53.4: 494,000 in 7 s). Nothing known
+#: before the run tells the two apart (same size, ideals past the count's cap), so the rate
+#: is fitted to keep the most runs within 2x of their peaks (``bench_sop.py --resources``
+#: at 10 s and 60 s, CP-SAT on and off; docs/benchmarks.md, SOP memory). Not a limit: the
+#: cap (:func:`dp_state_cap`) keeps a DP stage within the memory.
+DP_STATES_PER_SECOND = 24_000
+
+#: The stage length (seconds) at which a DP stage is expected to keep
+#: :data:`DP_STATES_PER_SECOND` a second.
+DP_RATE_SECONDS = 5.0
+
+#: Exponent of a DP stage's expected states in its length (:func:`dp_states_in`): below 1,
+#: as a flat rate cannot hold both the 10 s runs that fill their states (prob.42, ry48p.1:
+#: 2.0-2.2x above a flat 16,000 a second) and the 60 s runs that close early (ESC47 with
+#: CP-SAT beside: 0.46x below a flat 20,000).
+DP_RATE_EXPONENT = 0.8
 
 
 def dp_states_per_second(n: int) -> float:
-    """States a DP stage keeps per second on ``n`` nodes: :data:`DP_STATES_PER_SECOND` up to
-    64 nodes, then in proportion to ``64 / n`` (a state's bound and extensions cost about
-    ``n`` node steps: the rbg-like stand-ins of 110-175 nodes kept 1,200-2,700 a second at
-    load 11, and a flat rate put the estimate 2.3-2.8x above their peaks)."""
+    """States a DP stage keeps per second on ``n`` nodes over :data:`DP_RATE_SECONDS`:
+    :data:`DP_STATES_PER_SECOND` up to 64 nodes, then in proportion to ``64 / n`` (a state's
+    bound and extensions cost about ``n`` node steps: the rbg-like stand-ins of 110-175 nodes
+    kept 1,200-2,700 a second at load 11, and a flat rate put the estimate 2.3-2.8x above
+    their peaks)."""
     return DP_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1))
+
+
+def dp_states_in(n: int, seconds: float) -> float:
+    """States a DP stage of ``seconds`` on ``n`` nodes is expected to keep (the memory
+    estimate's count, before its cap): :func:`dp_states_per_second` times
+    :data:`DP_RATE_SECONDS` times ``(seconds / DP_RATE_SECONDS) ** DP_RATE_EXPONENT``;
+    increasing in ``seconds``, 0 for none."""
+    if seconds <= 0:
+        return 0.0
+    span = DP_RATE_SECONDS * (seconds / DP_RATE_SECONDS) ** DP_RATE_EXPONENT
+    return dp_states_per_second(n) * span
 
 
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
@@ -628,12 +659,37 @@ def beam_bytes(n: int, width: int) -> float:
     return (BEAM_BYTES_PER_SLOT + extra) * float(width) * float(n)
 
 
-def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int) -> int:
-    """The most states (at most ``wanted``) the DP may keep within the memory limit."""
+def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int, reserve: float = 0.0) -> int:
+    """The most states (at most ``wanted``) the DP may keep within the memory limit, less
+    ``reserve`` bytes spent elsewhere (CP-SAT's worker beside the portfolio,
+    :func:`cpsat_worker_bytes`). Counted at the full :data:`DP_BYTES_PER_STATE` (the
+    largest measured bytes per state), so a stage that fills its cap stays within the
+    limit."""
     from taopt.runtime import max_memory_gb as limit_gb
 
-    room = limit_gb(max_memory_gb) * 1e9 - BASE_BYTES
+    room = limit_gb(max_memory_gb) * 1e9 - BASE_BYTES - reserve
     return int(max(1_000, min(wanted, room / dp_bytes(n, 1))))
+
+
+#: Peak resident bytes of CP-SAT's worker process beside the portfolio (a Python with
+#: OR-Tools imported; measured 157-165 MB from 9 to 80 nodes, ``ru_maxrss`` of the reaped
+#: worker).
+CPSAT_WORKER_BYTES = 150e6
+
+#: Peak bytes of CP-SAT's worker per node pair (n^2) above :data:`CPSAT_WORKER_BYTES`
+#: (fitted on the rbg-like stand-ins of 110-380 nodes beside the portfolio for 60 s: 157,
+#: 159, 167, 231, 330 and 367 MB, the model within 1.17x of each; per usable arc or per
+#: precedence pair the same runs do not line up: 380 nodes have fewer usable arcs than 340).
+#: The worker grows with its search: 5 s runs alone (``bench_sop_memory.py --stages cpsat``,
+#: polled) peaked at 102-161 MB on 9-380 nodes, the model within 1.17x of the SOP files'
+#: and 2.3x above a 380-node chain's.
+CPSAT_BYTES_PER_NODE_PAIR = 1_500.0
+
+
+def cpsat_worker_bytes(n: int) -> float:
+    """Estimated peak bytes of CP-SAT's worker process on ``n`` nodes (a process of its own:
+    :data:`CPSAT_WORKER_BYTES` plus :data:`CPSAT_BYTES_PER_NODE_PAIR` per node pair)."""
+    return CPSAT_WORKER_BYTES + CPSAT_BYTES_PER_NODE_PAIR * float(n) * float(n)
 
 
 def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
@@ -650,32 +706,43 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     ideals allow, the states it can make in its time) and the MILP when it fits the limit;
     above the limit the stage that fits (:func:`taopt.models.sop_stages.memory_plan`: the
     DP with a smaller cap, the beam, the bounds alone), so the estimate fits too (never a
-    refusal for size alone)."""
+    refusal for size alone). CP-SAT's worker (:func:`cpsat_worker_bytes`) is counted when it
+    will run beside (the rule of :func:`solve_sop_problem`), and the stages' room is the limit less it."""
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals
     from taopt.models.sop_stages import beam_width_cap, memory_plan
     from taopt.runtime import max_memory_gb as limit_gb
 
     formulation = options.get("formulation", PORTFOLIO_FORMULATION)
-    limit = options.get("max_memory_gb")
+    given = options.get("max_memory_gb")
     seconds = options.get("time_limit")
     name = f" {problem.name}" if problem.name else ""
+    try:  # CP-SAT's worker beside the stages: its own process, counted, the stages' room less
+        peer, _ = _cpsat_peer(
+            problem, options.get("cpsat"), options.get("engine", "auto"), seconds, given
+        )
+    except SolverError:  # cpsat=True without OR-Tools: the call itself will say so
+        peer = None
+    reserve = 0.0 if peer is None else cpsat_worker_bytes(problem.n)
+    limit = _stage_limit(given, reserve)
     plan = memory_plan(problem.n, limit)
     if plan != "dp" and options.get("engine") != "milp":
         width = beam_width_cap(problem.n, limit) if plan == "beam" else 0
         total = BASE_BYTES + beam_bytes(problem.n, width)
         # a limit below the process's own base: the stage adds nothing above what is spent
         # already, so it is not refused (the answer is the cheap bounds and the warm start)
-        total = min(total, limit_gb(limit) * 1e9)
+        total = min(total + reserve, limit_gb(given) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
-    wanted = max(options.get("max_states", PORTFOLIO_MAX_STATES), SECOND_STAGE_MAX_STATES)
+    wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
+    if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
+        wanted = max(wanted, SECOND_STAGE_MAX_STATES)
     if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
         # stage frees its states when it ends, so the peak is the longest stage's: the whole
         # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
         # those using the time left share the other half)
         share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(dp_states_per_second(problem.n) * seconds * share)
+        wanted = int(dp_states_in(problem.n, seconds * share))
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
@@ -698,7 +765,9 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
         total = max(total, BASE_BYTES + sop_milp_bytes(nonzeros, compiled))
         what += f", {formulation} model of {columns:,} columns"
-    return min(total, limit_gb(limit) * 1e9), what + ")"
+    if reserve:
+        what += f", CP-SAT's worker {reserve / 1e6:,.0f} MB"
+    return min(total + reserve, limit_gb(given) * 1e9), what + ")"
 
 
 def assignment_bound(cost: np.ndarray, closure: nx.DiGraph, start: int, end: int) -> float:
@@ -1086,7 +1155,11 @@ CPSAT_NICE = 0
 
 
 def _cpsat_peer(
-    problem: SopProblem, cpsat: bool | None, engine: str, time_limit: float | None
+    problem: SopProblem,
+    cpsat: bool | None,
+    engine: str,
+    time_limit: float | None,
+    max_memory_gb: float | None = None,
 ) -> tuple[Callable[..., Solution] | None, str]:
     """The registered CP-SAT peer of the SOP to run beside the portfolio, or None and why.
 
@@ -1117,7 +1190,34 @@ def _cpsat_peer(
         return None, f"off: {problem.n} nodes < {CPSAT_MIN_NODES}"
     if cpsat is None and time_limit is not None and time_limit < CPSAT_MIN_LIMIT:
         return None, f"off: time_limit {time_limit:g} s < {CPSAT_MIN_LIMIT:g} s"
+    if cpsat is None and not _cpsat_fits(problem.n, max_memory_gb):
+        from taopt.runtime import max_memory_gb as limit_gb
+
+        worker = cpsat_worker_bytes(problem.n) / 1e6
+        return None, (
+            f"off: its worker ({worker:,.0f} MB) and the DP do not fit the memory limit of "
+            f"{limit_gb(max_memory_gb):g} GB"
+        )
     return spec.func, ""
+
+
+def _cpsat_fits(n: int, max_memory_gb: float | None) -> bool:
+    """Whether CP-SAT's worker (:func:`cpsat_worker_bytes`) leaves the stages the room of
+    the DP (:func:`taopt.models.sop_stages.memory_plan` still "dp" in the limit less it)."""
+    from taopt.models.sop_stages import memory_plan
+
+    return memory_plan(n, _stage_limit(max_memory_gb, cpsat_worker_bytes(n))) == "dp"
+
+
+def _stage_limit(max_memory_gb: float | None, reserve: float) -> float | None:
+    """The memory limit (GB) left to the portfolio's stages when ``reserve`` bytes are spent
+    beside them (CP-SAT's worker); ``max_memory_gb`` itself when nothing is. Never below a
+    megabyte (a limit the stages then degrade to, :func:`taopt.models.sop_stages.memory_plan`)."""
+    if not reserve:
+        return max_memory_gb
+    from taopt.runtime import max_memory_gb as limit_gb
+
+    return max(limit_gb(max_memory_gb) - reserve / 1e9, 1e-3)
 
 
 def _bounds_max(*bounds: float | None) -> float | None:
@@ -1228,7 +1328,9 @@ def solve_sop_problem(
         what the DP needs, the beam or the cheap bounds alone run
         (:func:`taopt.models.sop_stages.memory_plan`): the run degrades to what fits and
         returns ``time_limit`` with its best order and a proven bound, never a refusal for
-        size alone. A run whose stages end before its limit without a proof goes on with
+        size alone. CP-SAT's worker beside takes its estimated share of the limit first
+        (:func:`cpsat_worker_bytes`; with ``cpsat=None`` it is not started when the DP would
+        no longer fit beside it). A run whose stages end before its limit without a proof goes on with
         larger DP caps while they fit, then wider beams
         (:func:`taopt.models.sop_stages.use_the_rest`), so it uses its whole limit.
     cpsat : bool, optional
@@ -1247,7 +1349,8 @@ def solve_sop_problem(
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
         ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
-        before it started) and ``rest`` (what ran after the stages, if anything).
+        before it started, plus CP-SAT's worker when it ran beside,
+        :func:`cpsat_worker_bytes`; ``info["cpsat"]["memory_estimate"]`` is the worker's) and ``rest`` (what ran after the stages, if anything).
     """
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -1258,10 +1361,13 @@ def solve_sop_problem(
         formulation=formulation, mip_gap=mip_gap, verbose=verbose, incumbent=incumbent,
         engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
     )  # fmt: skip
-    peer, why = _cpsat_peer(problem, cpsat, engine, time_limit)
+    peer, why = _cpsat_peer(problem, cpsat, engine, time_limit, max_memory_gb)
     if peer is None:
         result = _stages(problem, time_limit, **options)
         return result.replace(info={**result.info, "cpsat": why})
+    # CP-SAT's worker is a process of its own: its memory is counted, the stages get the rest
+    reserve = cpsat_worker_bytes(problem.n)
+    options["max_memory_gb"] = _stage_limit(max_memory_gb, reserve)
     outer = Deadline(time_limit)  # the caller's token, if any, stops both sides
     race = CancelToken(parent=outer.token)  # cancelled when CP-SAT proves the optimum
     seconds = None if time_limit is None else max(time_limit - CPSAT_MARGIN, MARGIN)
@@ -1286,7 +1392,7 @@ def solve_sop_problem(
     if not task.wait(None if left is None else left + CPSAT_WAIT):
         task.cancel()  # past the deadline: stopped; its last order is kept
     other: Solution | None = None
-    cpsat_info: dict[str, Any] = {"nice": CPSAT_NICE}
+    cpsat_info: dict[str, Any] = {"nice": CPSAT_NICE, "memory_estimate": reserve}
     if task.wait(CPSAT_STOP_WAIT):
         try:
             other = task.result(0)
@@ -1314,10 +1420,17 @@ def solve_sop_problem(
         "proved_by", ""
     ):
         used += "+cpsat"
+    estimate = ours.info.get("memory_estimate", BASE_BYTES) + reserve  # the two processes
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",
-        info={**ours.info, **credit, "engine": used, "cpsat": cpsat_info},
+        info={
+            **ours.info,
+            **credit,
+            "engine": used,
+            "cpsat": cpsat_info,
+            "memory_estimate": estimate,
+        },
     )
 
 
@@ -1373,10 +1486,10 @@ def _stages(
     ) -> None:
         """Record the estimated peak of a stage about to run (``info["memory_estimate"]``: the
         largest over the stages run): a DP stage keeps at most its cap, the states the ideals
-        allow and :func:`dp_states_per_second` a second (after its beam pass); a MILP its
+        allow and :func:`dp_states_in` its time (after its beam pass); a MILP its
         nonzeros, compiled or only built."""
         if seconds is not None:
-            states = min(states, dp_states_per_second(problem.n) * seconds)
+            states = min(states, dp_states_in(problem.n, seconds))
         if not capped:
             states = min(states, every_state)
         dp_part = dp_bytes(problem.n, states) * state_share

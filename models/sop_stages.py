@@ -5,10 +5,11 @@ size and never stops early while its limit lasts (issue 33, item 3):
 
 **Memory ladder.** Each stage's peak is estimated with the measured model of
 :mod:`taopt.models.sop` (``BASE_BYTES`` plus ``DP_BYTES_PER_STATE`` per DP state kept,
-``BEAM_BYTES_PER_SLOT`` per beam slot (width x nodes), ``SOP_MILP_BYTES_PER_COLUMN`` per flow
-column; ``benchmarks/bench_sop_memory.py`` measures and fits them) and compared with the limit
-(:func:`taopt.runtime.max_memory_gb`: ``max_memory_gb=`` or ``TAOPT_MAX_MEMORY_GB``). From the
-strongest stage down (:func:`memory_plan`):
+``BEAM_BYTES_PER_SLOT`` per beam slot (width x nodes), ``SOP_MILP_BYTES_PER_NONZERO`` per flow
+nonzero; ``benchmarks/bench_sop_memory.py`` measures and fits them) and compared with the limit
+(:func:`taopt.runtime.max_memory_gb`: ``max_memory_gb=`` or ``TAOPT_MAX_MEMORY_GB``), less
+CP-SAT's worker when it runs beside the stages (``cpsat_worker_bytes``: a process of its own,
+its memory spent first). From the strongest stage down (:func:`memory_plan`):
 
 1. ``"dp"``: the DP over order ideals with a state cap that fits (at least
    :data:`MIN_DP_STATES` states), and the flow MILP when its columns fit too;
@@ -194,7 +195,7 @@ def use_the_rest(
         _combine,
         dp_bytes,
         dp_state_cap,
-        dp_states_per_second,
+        dp_states_in,
     )
     from taopt.models.sop_dp import NARROW_BEAM, solve_sop_dp
 
@@ -207,7 +208,7 @@ def use_the_rest(
             break
         cap = min(2 * cap, memory_cap)
         if stage is not None:  # the states it can keep in its time, at most its cap
-            made = cap if left is None else min(cap, dp_states_per_second(problem.n) * left)
+            made = cap if left is None else min(cap, dp_states_in(problem.n, left))
             stage(BASE_BYTES + dp_bytes(problem.n, made))
         again = solve_sop_dp(
             problem,

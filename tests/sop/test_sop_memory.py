@@ -1,0 +1,163 @@
+"""The SOP portfolio's memory estimate (issue 33): monotone in the limit and the state cap,
+never above the memory limit it guards, CP-SAT's worker counted exactly when it runs, and a
+small limit degrading the run instead of refusing it."""
+
+from __future__ import annotations
+
+import pytest
+
+import taopt
+import taopt.heuristics  # noqa: F401  (registers the CP-SAT peer the portfolio looks up)
+from taopt.heuristics import peers
+from taopt.models import sop as sop_model
+from taopt.models.sop import (
+    BASE_BYTES,
+    _cpsat_peer,
+    _footprint,
+    _stage_limit,
+    cpsat_worker_bytes,
+    dp_bytes,
+    dp_state_cap,
+    solve_sop_problem,
+)
+from taopt.models.sop_stages import MIN_DP_STATES, memory_plan
+from taopt.result import OPTIMAL, TIME_LIMIT
+from taopt.sop.generate import random_sop
+from taopt.sop.problem import SopProblem, evaluate_order
+
+pytest.importorskip("ortools")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def stop_workers():
+    """Stop the peer workers after this module, so no test leaves processes behind."""
+    yield
+    peers.shutdown()
+
+
+@pytest.fixture(scope="module")
+def esc25() -> SopProblem:
+    """ESC25 (shipped): 27 nodes, order ideals past the count's cap (the DP's states are
+    estimated by the rate and the caps, not by the ideals)."""
+    return SopProblem.load("ESC25")
+
+
+@pytest.fixture(scope="module")
+def esc47() -> SopProblem:
+    """ESC47 (shipped): 49 nodes, where CP-SAT runs beside by default."""
+    return SopProblem.load("ESC47")
+
+
+def test_estimate_is_monotone_in_the_time_limit(esc25):
+    """A longer limit never lowers the guard's estimate (a DP stage keeps more states)."""
+    estimates = [
+        _footprint(esc25, {"time_limit": t, "cpsat": False})[0] for t in (1, 5, 10, 60, 600)
+    ]
+    assert estimates == sorted(estimates)
+    assert estimates[-1] > estimates[0]
+
+
+def test_estimate_is_monotone_in_the_state_cap(esc25):
+    """A larger state cap never lowers the estimate of the DP alone (no time limit: the cap
+    is what bounds it), and the DP part is at most the cap's bytes."""
+    caps = (1_000, 10_000, 100_000, 1_000_000)
+    options = {"engine": "dp", "cpsat": False}
+    estimates = [_footprint(esc25, {**options, "max_states": c})[0] for c in caps]
+    assert estimates == sorted(estimates)
+    assert estimates[-1] > estimates[0]
+    for cap, estimate in zip(caps, estimates, strict=True):
+        assert estimate <= BASE_BYTES + dp_bytes(esc25.n, cap) + 1
+
+
+def test_expected_states_grow_with_the_stage_and_fall_with_the_nodes():
+    """A DP stage's expected states grow with its length (the rate at DP_RATE_SECONDS, less
+    per second beyond), are none for no time, and fall beyond 64 nodes."""
+    at = [sop_model.dp_states_in(50, t) for t in (0.0, 1.0, 5.0, 30.0, 60.0)]
+    assert at[0] == 0.0 and at == sorted(at)
+    rate = sop_model.DP_STATES_PER_SECOND
+    assert at[2] == pytest.approx(rate * sop_model.DP_RATE_SECONDS)
+    assert at[4] <= rate * 60.0
+    assert sop_model.dp_states_in(128, 30.0) == pytest.approx(at[3] / 2)
+
+
+def test_state_cap_is_monotone_in_the_memory_limit():
+    """A larger memory limit never gives fewer states, and less room beside (a reserve for
+    CP-SAT's worker) never gives more."""
+    caps = [dp_state_cap(50, gb, 1 << 40) for gb in (0.3, 0.5, 1.0, 4.0, 16.0)]
+    assert caps == sorted(caps)
+    assert dp_state_cap(50, 1.0, 1 << 40, reserve=200e6) < dp_state_cap(50, 1.0, 1 << 40)
+
+
+@pytest.mark.parametrize("gb", [0.05, 0.2, 0.4, 1.0, 4.0])
+@pytest.mark.parametrize("cpsat", [False, True])
+def test_guard_never_passes_a_plan_above_the_limit(esc25, gb, cpsat):
+    """The guard's estimate is at most the limit, and when the DP runs its state cap (with
+    CP-SAT's worker beside, if it runs) keeps the stage within the limit too."""
+    options = {"time_limit": 60.0, "max_memory_gb": gb, "cpsat": cpsat}
+    estimate, what = _footprint(esc25, options)
+    assert estimate <= gb * 1e9
+    peer, _ = _cpsat_peer(esc25, cpsat, "auto", 60.0, gb)
+    reserve = 0.0 if peer is None else cpsat_worker_bytes(esc25.n)
+    limit = _stage_limit(gb, reserve)
+    if memory_plan(esc25.n, limit) == "dp":
+        cap = dp_state_cap(esc25.n, limit, 1 << 40)
+        assert cap >= MIN_DP_STATES
+        assert BASE_BYTES + reserve + dp_bytes(esc25.n, cap) <= gb * 1e9
+    else:
+        assert "degraded" in what
+
+
+def test_cpsat_worker_is_counted_only_when_it_runs(esc25):
+    """With room to spare the estimate with CP-SAT beside is the estimate without it plus
+    the worker's, and the guard's description names it."""
+    on, what_on = _footprint(esc25, {"time_limit": 10.0, "cpsat": True, "max_memory_gb": 64})
+    off, what_off = _footprint(esc25, {"time_limit": 10.0, "cpsat": False, "max_memory_gb": 64})
+    assert on == pytest.approx(off + cpsat_worker_bytes(esc25.n))
+    assert "CP-SAT" in what_on and "CP-SAT" not in what_off
+
+
+def test_cpsat_worker_grows_with_the_nodes():
+    """The worker's estimate is its base on a few nodes and grows with n."""
+    assert cpsat_worker_bytes(10) < cpsat_worker_bytes(100) < cpsat_worker_bytes(400)
+    assert cpsat_worker_bytes(10) >= sop_model.CPSAT_WORKER_BYTES
+
+
+def test_cpsat_stays_off_when_its_worker_leaves_no_room_for_the_dp(esc47):
+    """By default CP-SAT is not started when the limit less its worker would push the DP
+    down the memory ladder; the reason names the memory. cpsat=True still starts it."""
+    tight = (BASE_BYTES + dp_bytes(esc47.n, 2 * MIN_DP_STATES)) / 1e9
+    assert memory_plan(esc47.n, tight) == "dp"
+    peer, why = _cpsat_peer(esc47, None, "auto", 60.0, tight)
+    assert peer is None and "memory limit" in why
+    peer, _ = _cpsat_peer(esc47, None, "auto", 60.0, 64.0)
+    assert peer is not None
+    peer, _ = _cpsat_peer(esc47, True, "auto", 60.0, tight)
+    assert peer is not None
+
+
+def test_run_with_cpsat_records_the_worker_in_its_estimate():
+    """A run with CP-SAT beside counts the worker in ``info["memory_estimate"]`` (and says
+    how much in ``info["cpsat"]``); without CP-SAT it does not."""
+    problem = random_sop(10, 0.2, 3)
+    on = solve_sop_problem(problem, time_limit=20.0, cpsat=True)
+    off = solve_sop_problem(problem, time_limit=20.0, cpsat=False)
+    worker = cpsat_worker_bytes(problem.n)
+    assert on.info["cpsat"]["memory_estimate"] == pytest.approx(worker)
+    assert on.info["memory_estimate"] >= BASE_BYTES + worker
+    assert off.info["cpsat"] == "off"
+    assert off.info["memory_estimate"] < BASE_BYTES + worker
+    assert on.status == off.status == OPTIMAL and on.objective == off.objective
+
+
+def test_small_limit_degrades_instead_of_refusing(esc47):
+    """With a memory limit below the DP's the portfolio (CP-SAT off by the memory rule)
+    returns a feasible order and a bound, status time_limit or optimal, no InstanceError,
+    and its recorded estimate stays within the limit."""
+    gb = (BASE_BYTES + dp_bytes(esc47.n, MIN_DP_STATES // 4)) / 1e9
+    result = taopt.solve(esc47, "exact", time_limit=1.0, max_memory_gb=gb)
+    assert result.info["memory_plan"] != "dp"
+    assert str(result.info["cpsat"]).startswith("off")
+    assert result.status in (TIME_LIMIT, OPTIMAL)
+    assert evaluate_order(esc47, result.order) == result.objective
+    assert result.bound is not None and result.bound <= result.objective
+    assert result.info["memory_estimate"] <= gb * 1e9
