@@ -1215,8 +1215,17 @@ def solve_sop_problem(
     ``ideal_cap`` (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
     :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
-    states are at most n times the ideals. Otherwise the DP runs first with at most
-    ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
+    states are at most n times the ideals. Otherwise, with the cut engine as the MILP stage
+    (``formulation="cuts"``) and its model within the memory limit, a root stage runs the
+    cut engine's root cut loop first, in :data:`ROOT_SHARE` of the limit
+    (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
+    give the DP stages a Lagrangian bound that drops states
+    (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``), and the cut engine later goes
+    on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
+    between the DP's root bound and the best order (p43.1), the cut engine runs next with
+    all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
+    limit has passed (its last order and bound kept). Otherwise the DP runs first with at
+    most ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
     often close the instance anyway: ESC25), then, if it has not proved the optimum, a
     second DP stage with the bound on both price sets (``both_prices``) and
     :data:`SECOND_STAGE_MAX_STATES` states in :data:`SECOND_STAGE_SHARE` of the time left
@@ -1272,7 +1281,9 @@ def solve_sop_problem(
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
         ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
-        before it started) and ``rest`` (what ran after the stages, if anything).
+        before it started), ``rest`` (what ran after the stages, if anything) and
+        ``root_stage`` when it ran (its bound, seconds, LP rounds, the share of the gap it
+        closed, ``cuts_first``); ``cpsat["stopped"]`` when the rule stopped CP-SAT.
     """
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:

@@ -1050,11 +1050,12 @@ def solve_sop_dp(
         time on ESC47, ry48p.4 and ft53.4, so it is off by default.
     lagrange : (float, ndarray), optional
         ``(L, d)`` of an LP relaxation's duals (the module docstring's LP bound; ``d`` the
-        ``n x n`` reduced costs of the usable arcs, :meth:`taopt.models.sop_cuts.SopCutModel.\
-lagrangian_prices`): a state whose kept prefix has ``L + Σ max(d_a, 0) >= UB`` is dropped
-        before its completion bound is computed, and ``L`` is a proven bound of a stopped
+        ``n x n`` reduced costs of the usable arcs,
+        :meth:`~taopt.models.sop_cuts.SopCutModel.lagrangian_prices`): a state whose kept
+        prefix has ``L + Σ max(d_a, 0) >= UB`` is dropped before its completion bound is
+        computed, and ``L`` (rounded up to the costs' gcd) is a proven bound of a stopped
         run. Valid for the orders cheaper than ``UB``, as long as the LP's rows hold for
-        them.
+        them. ``info["lagrange_pruned"]``: the states it dropped.
 
     Returns
     -------
