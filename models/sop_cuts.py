@@ -605,11 +605,12 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
 
 
 #: Whether HiGHS runs its sub-MIP and jump heuristics (RINS, RENS, root reduced cost,
-#: feasibility jump: :data:`SUB_HEURISTIC_OPTIONS`) in the MIP rounds. Off: p43.1's rounds
-#: took 2.4 s instead of 6.5 s (the heuristics found points that are no order, which the
-#: rounds' own rounding and the cuts handle), and the proof came after 15 rounds in 49 s where
-#: 9 rounds in 60 s did not end (load 4-5, optimal order given).
-MIP_SUB_HEURISTICS = False
+#: feasibility jump: :data:`SUB_HEURISTIC_OPTIONS`) in the MIP rounds. Off, p43.1's rounds
+#: took 2.4 s instead of 6.5 s and the proof came in 49-55 s from the warm start (load 4-5),
+#: but on prob.42 a round without them ran 16.4 s from 14.5 s before the deadline (ended
+#: 4.2 s past it; 10 s past it in another run): HiGHS then looks at its clock and interrupt
+#: callback too seldom. On (HiGHS's default) until that is bounded.
+MIP_SUB_HEURISTICS = True
 
 #: The HiGHS options switched off when :data:`MIP_SUB_HEURISTICS` is False.
 SUB_HEURISTIC_OPTIONS = (
