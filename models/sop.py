@@ -1069,6 +1069,12 @@ ROOT_SHARE = 0.1
 #: ft53.1 0.49, ESC47 0.15) the DP goes first as before.
 CUTS_FIRST_SHARE = 0.9
 
+#: Seconds that must be left after the root stage for the cut engine to go first: its MIP
+#: rounds overran a 10 s limit on p43.1 by 3.5 s at load 6 (HiGHS looks at its clock
+#: between the phases of a round's root node, seconds apart there); with less time the DP
+#: goes first as before.
+CUTS_FIRST_MIN_LEFT = 20.0
+
 #: Share of the time limit CP-SAT keeps running beside the portfolio after the portfolio's
 #: root stage chose the cut engine first (:data:`CUTS_FIRST_SHARE`): then stopped, keeping
 #: its best order and the bound it sent with it. Its circuit model's bound is far below
@@ -1417,7 +1423,8 @@ def _root_stage(
     closed = 0.0
     if known is not None and known[0] > cheap and np.isfinite(root.bound):
         closed = (root.bound - cheap) / (known[0] - cheap)
-    cuts_first = bool(closed >= CUTS_FIRST_SHARE)
+    left = deadline.remaining()
+    cuts_first = bool(closed >= CUTS_FIRST_SHARE) and (left is None or left >= CUTS_FIRST_MIN_LEFT)
     info["root_stage"] = {
         "bound": root.bound,
         "seconds": time.perf_counter() - began,
