@@ -62,6 +62,7 @@ Example
 from __future__ import annotations
 
 import logging
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -1121,6 +1122,36 @@ def _combine(first: Solution, second: Solution) -> Solution:
 CUTS_SECOND_STAGE_GAP = 0.05
 
 
+#: Share of the time limit the portfolio's root stage may spend on the cut engine's root cut
+#: loop (:meth:`taopt.models.sop_cuts.SopCutModel.root`) before the DP when the ideals are
+#: too many to count: its LP duals prune the DP (``lagrange=`` of
+#: :func:`taopt.models.sop_dp.solve_sop_dp`), its rounded point may improve the warm start,
+#: and the cut engine goes on from its rows later. Root loops measured 1.0-3.0 s on prob.42,
+#: p43.1, ry48p.1, ft53.1 and ESC47 at load 5, 11 s on rbg050c.
+ROOT_SHARE = 0.1
+
+#: The cut engine runs first, with the whole limit, when its root bound closes at least this
+#: share of the gap between the DP's root bound (the assignment/arborescence bound) and the
+#: best order: the DP's completion bound then prunes almost nothing the cut engine needs
+#: (p43.1: 0.99, root 28,100 against 2,720 and an order of 28,335; the DP's first stage
+#: spent 23 s for a bound of 2,720). Below it (prob.42 0.36, rbg050c 0.41, ry48p.1 0.48,
+#: ft53.1 0.49, ESC47 0.15) the DP goes first as before.
+CUTS_FIRST_SHARE = 0.9
+
+#: Seconds that must be left after the root stage for the cut engine to go first: its MIP
+#: rounds overran a 10 s limit on p43.1 by 3.5 s at load 6 (HiGHS looks at its clock
+#: between the phases of a round's root node, seconds apart there); with less time the DP
+#: goes first as before.
+CUTS_FIRST_MIN_LEFT = 20.0
+
+#: Share of the time limit CP-SAT keeps running beside the portfolio after the portfolio's
+#: root stage chose the cut engine first (:data:`CUTS_FIRST_SHARE`): then stopped, keeping
+#: its best order and the bound it sent with it. Its circuit model's bound is far below
+#: the root's there (p43.1: 910 against 28,100) and the cut engine's HiGHS runs use both
+#: cores. Proofs by CP-SAT came within 3-6 s (rbg050c, rbg048a) where the rule does not fire.
+CPSAT_PROBE_SHARE = 0.15
+
+
 def _far(result: Solution) -> bool:
     """The run's relative gap is above :data:`CUTS_SECOND_STAGE_GAP` (or unknown)."""
     bound, value = result.bound, result.objective
@@ -1290,8 +1321,17 @@ def solve_sop_problem(
     ``ideal_cap`` (:func:`taopt.models.sop_dp.count_ideals`, milliseconds to a second; at most
     :data:`COUNT_SHARE` of the limit, a count cut short meaning too many).
     When they are fewer, the DP (:func:`taopt.models.sop_dp.solve_sop_dp`) runs alone: its
-    states are at most n times the ideals. Otherwise the DP runs first with at most
-    ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
+    states are at most n times the ideals. Otherwise, with the cut engine as the MILP stage
+    (``formulation="cuts"``) and its model within the memory limit, a root stage runs the
+    cut engine's root cut loop first, in :data:`ROOT_SHARE` of the limit
+    (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
+    give the DP stages a Lagrangian bound that drops states
+    (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``), and the cut engine later goes
+    on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
+    between the DP's root bound and the best order (p43.1), the cut engine runs next with
+    all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
+    limit has passed (its last order and bound kept). Otherwise the DP runs first with at
+    most ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
     often close the instance anyway: ESC25), then, if it has not proved the optimum, a
     second DP stage with the bound on both price sets (``both_prices``) and
     :data:`SECOND_STAGE_MAX_STATES` states in :data:`SECOND_STAGE_SHARE` of the time left
@@ -1350,7 +1390,10 @@ def solve_sop_problem(
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
         ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
         before it started, plus CP-SAT's worker when it ran beside,
-        :func:`cpsat_worker_bytes`; ``info["cpsat"]["memory_estimate"]`` is the worker's) and ``rest`` (what ran after the stages, if anything).
+        :func:`cpsat_worker_bytes`; ``info["cpsat"]["memory_estimate"]`` is the worker's),
+        ``rest`` (what ran after the stages, if anything) and ``root_stage`` when it ran (its
+        bound, seconds, LP rounds, the share of the gap it closed, ``cuts_first``);
+        ``cpsat["stopped"]`` when the rule stopped CP-SAT.
     """
     began = time.perf_counter()
     if engine not in PORTFOLIO_ENGINES:
@@ -1379,13 +1422,37 @@ def solve_sop_problem(
         return found
 
     task = Background(run_cpsat, "cpsat-beside-portfolio", parent=outer.token)
+    probe: list[threading.Timer] = []
+    rule: dict[str, str] = {}
+
+    def stop_cpsat() -> None:
+        if not task.done():
+            rule["stopped"] = (
+                f"by the rule after {time.perf_counter() - began:.1f} s: the cut engine "
+                "went first (CPSAT_PROBE_SHARE)"
+            )
+            task.cancel()  # its worker answers with the last order (and bound) it sent
+
+    def on_root(cuts_first: bool) -> None:
+        # the root closed most of the gap: CP-SAT's circuit bound will not help, and the cut
+        # engine wants the cores; CP-SAT keeps CPSAT_PROBE_SHARE of the limit for its orders
+        if cuts_first and time_limit is not None:
+            wait = CPSAT_PROBE_SHARE * time_limit - (time.perf_counter() - began)
+            timer = threading.Timer(max(wait, 0.0), stop_cpsat)
+            timer.daemon = True
+            probe.append(timer)
+            timer.start()
+
     try:
         with cancel_scope(race):
-            ours = _stages(problem, time_limit, **options)
+            ours = _stages(problem, time_limit, **options, on_root=on_root)
     except BaseException:  # Ctrl-C or an error: stop CP-SAT's worker too, then re-raise
         task.cancel()
         task.wait(CPSAT_STOP_WAIT)
         raise
+    finally:
+        for timer in probe:
+            timer.cancel()
     if ours.status in (OPTIMAL, INFEASIBLE) or outer.cancelled:
         task.cancel()  # proved (or cancelled): CP-SAT's worker is stopped now
     left = outer.remaining()
@@ -1401,6 +1468,7 @@ def solve_sop_problem(
     else:
         cpsat_info["error"] = f"its worker did not stop within {CPSAT_STOP_WAIT} s"
     cpsat_info["seconds"] = task.seconds
+    cpsat_info.update(rule)
     if other is not None:
         cpsat_info.update(
             status=str(other.status),
@@ -1434,6 +1502,53 @@ def solve_sop_problem(
     )
 
 
+def _root_stage(
+    problem: SopProblem,
+    deadline: Deadline,
+    incumbent: Any,
+    info: dict[str, Any],
+    verbose: bool,
+) -> tuple[Any, tuple[float, np.ndarray] | None, Any, bool]:
+    """The portfolio's root stage: the cut engine's root cut loop within :data:`ROOT_SHARE`
+    of the limit, before the DP.
+
+    Returns ``(model, lagrange, incumbent, cuts_first)``: the cut model (its rows kept for the
+    cut engine), its LP's Lagrangian bound for the DP
+    (:meth:`taopt.models.sop_cuts.SopCutModel.lagrangian_prices`, None without duals), the
+    better of ``incumbent`` and the LP point's rounded order, and whether the cut engine goes
+    first (:data:`CUTS_FIRST_SHARE`). The root's rows are precedence path cuts valid for every
+    order, and no arc is fixed here, so the Lagrangian bound holds for every order
+    (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``). ``info`` gains
+    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed).
+    """
+    from taopt.models.sop_cuts import SopCutModel, round_point
+
+    began = time.perf_counter()
+    model = SopCutModel(problem, verbose)
+    root = model.root(Deadline(deadline.share(ROOT_SHARE), cancel=deadline.token))
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    if root.values is not None and not deadline.expired(MARGIN):
+        rounded = round_point(model, root.values, deadline)
+        if rounded is not None and (known is None or rounded[0] < known[0]):
+            known = rounded
+            incumbent = Order(rounded[1])
+    lagrange = model.lagrangian_prices()
+    cheap = _cheap_bound(problem)
+    closed = 0.0
+    if known is not None and known[0] > cheap and np.isfinite(root.bound):
+        closed = (root.bound - cheap) / (known[0] - cheap)
+    left = deadline.remaining()
+    cuts_first = bool(closed >= CUTS_FIRST_SHARE) and (left is None or left >= CUTS_FIRST_MIN_LEFT)
+    info["root_stage"] = {
+        "bound": root.bound,
+        "seconds": time.perf_counter() - began,
+        "rounds": root.rounds,
+        "closed": closed,
+        "cuts_first": cuts_first,
+    }
+    return model, lagrange, incumbent, cuts_first
+
+
 def _stages(
     problem: SopProblem,
     time_limit: float | None,
@@ -1445,8 +1560,11 @@ def _stages(
     ideal_cap: int | None,
     max_states: int,
     max_memory_gb: float | None,
+    on_root: Callable[[bool], None] | None = None,
 ) -> Solution:
-    """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process."""
+    """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
+
+    ``on_root(cuts_first)`` is called after the root stage (when it ran)."""
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
@@ -1499,13 +1617,18 @@ def _stages(
     def stage(need: float) -> None:
         info["memory_estimate"] = max(info.get("memory_estimate", BASE_BYTES), need)
 
+    root_model: Any = None  # the root stage's cut model, handed to the cut engine
+    lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
+
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
         if formulation == "cuts":  # array-built and interruptible: no compile to fear
             from taopt.models.sop_cuts import solve_sop_cuts
 
-            result = solve_sop_cuts(problem, time_left, known, verbose=verbose, mip_gap=mip_gap)
+            result = solve_sop_cuts(
+                problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
+            )
             expect(nonzeros=nonzero_count(problem.cost, problem.closure, problem.start, "cuts"))
         else:
             if dp_result is not None and time_left is not None:
@@ -1565,6 +1688,7 @@ def _stages(
             max_states=second_states,
             both_prices=True,
             beam_width=0 if before is not None else 1024,
+            lagrange=lagrange,
         )
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
@@ -1596,41 +1720,57 @@ def _stages(
         result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
-        share = deadline.share(DP_SHARE)
-        expect(max_states, share)
-        result = solve_sop_dp(problem, share, incumbent=incumbent, max_states=max_states)
-        used = "dp"
-        # a second stage sets up as the first did (its bounds, its first layers; seconds under
-        # load, outside the DP's clock): started only when its share covers twice that
-        setup = result.info.get("setup_seconds", 0.0)
-        setups.append(setup)
-        # without the MILP (above the memory limit) the second stage gets all the time left
-        second_share = deadline.share(SECOND_STAGE_SHARE if milp_ok else 1.0)
-        short = second_share is not None and second_share < 2 * setup + MARGIN
-        if result.status == TIME_LIMIT and short:
-            info["second_stage"] = f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
-        elif result.status == TIME_LIMIT and formulation == "cuts" and _far(result):
-            info["second_stage"] = "skipped: the DP's gap is wide, the cut engine gets the time"
-        elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
-            # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
-            # state, so not the first choice) with more states, from the best order so far
-            first = result
-            known = first.solution if first.solution is not None else incumbent
-            expect(second_states, second_share)
-            second = solve_sop_dp(
-                problem,
-                second_share,
-                incumbent=known,
-                max_states=second_states,
-                both_prices=True,
+        cuts_first = False
+        if formulation == "cuts" and milp_ok:
+            root_model, lagrange, incumbent, cuts_first = _root_stage(
+                problem, deadline, incumbent, info, verbose
             )
-            used = "dp+dp"
-            result = _combine(first, second)
-        if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
-            info.update({f"dp_{k}": v for k, v in result.info.items()})
-            known = result.solution if result.solution is not None else incumbent
-            result = milp(known, deadline.remaining(), dp_result=result)
-            used += "+milp"
+            if on_root is not None:
+                on_root(cuts_first)
+        if cuts_first:  # the root closed most of the gap: the cut engine gets the time
+            result = milp(incumbent, deadline.remaining())
+            used = "milp"
+        else:
+            share = deadline.share(DP_SHARE)
+            expect(max_states, share)
+            result = solve_sop_dp(
+                problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
+            )
+            used = "dp"
+            # a second stage sets up as the first did (its bounds, its first layers; seconds under
+            # load, outside the DP's clock): started only when its share covers twice that
+            setup = result.info.get("setup_seconds", 0.0)
+            setups.append(setup)
+            # without the MILP (above the memory limit) the second stage gets all the time left
+            second_share = deadline.share(SECOND_STAGE_SHARE if milp_ok else 1.0)
+            short = second_share is not None and second_share < 2 * setup + MARGIN
+            if result.status == TIME_LIMIT and short:
+                info["second_stage"] = (
+                    f"skipped: {second_share:.2f} s left for a {setup:.2f} s setup"
+                )
+            elif result.status == TIME_LIMIT and formulation == "cuts" and _far(result):
+                info["second_stage"] = "skipped: the DP's gap is wide, the cut engine gets the time"
+            elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+                # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
+                # state, so not the first choice) with more states, from the best order so far
+                first = result
+                known = first.solution if first.solution is not None else incumbent
+                expect(second_states, second_share)
+                second = solve_sop_dp(
+                    problem,
+                    second_share,
+                    incumbent=known,
+                    max_states=second_states,
+                    both_prices=True,
+                    lagrange=lagrange,
+                )
+                used = "dp+dp"
+                result = _combine(first, second)
+            if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+                info.update({f"dp_{k}": v for k, v in result.info.items()})
+                known = result.solution if result.solution is not None else incumbent
+                result = milp(known, deadline.remaining(), dp_result=result)
+                used += "+milp"
     # a degraded stage has used the limit already; "none": too little time for a stage
     full = (plan == "dp" or engine == "milp") and used != "none"
     if full and result.status == TIME_LIMIT and deadline.limited and not deadline.expired(MARGIN):

@@ -75,12 +75,14 @@ __all__ = [
     "MIP_RESERVE",
     "MIP_RESERVE_MAX",
     "MIP_ROUNDS",
+    "MIP_SUB_HEURISTICS",
     "POLISH_PASSES",
     "REDUCED_COST_FIXING",
     "ROOT_ROUNDS",
     "ROOT_STALL",
     "ROOT_STALL_ROUNDS",
     "ROUND_LP_ROUNDS",
+    "SUB_HEURISTIC_OPTIONS",
     "RootCuts",
     "SopCutModel",
     "cut_bound",
@@ -498,6 +500,22 @@ class SopCutModel:
         bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
         return bound, reduced
 
+    def lagrangian_prices(self) -> tuple[float, np.ndarray] | None:
+        """The last LP's Lagrangian bound for the DP (:func:`taopt.models.sop_dp.solve_sop_dp`'s
+        ``lagrange``): ``(L, d)`` with ``d = c - A^T y`` on the usable arcs as an ``n x n``
+        matrix (``inf`` elsewhere) and ``L = y^T b + Σ_a min(0, d_a)`` over every arc (fixed or
+        not), so that every order ``x`` satisfying the rows costs at least
+        ``L + Σ_{a ∈ x} max(d_a, 0)`` (:meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound`'s
+        argument). With ``conditional`` rows it holds for the orders better than the
+        incumbent. None without duals."""
+        raw, reduced = self._lagrangian()
+        if not math.isfinite(raw):
+            return None
+        constant = raw - float(np.minimum(reduced[~self.fixed], 0.0).sum())  # y^T b
+        matrix = np.full((self.n, self.n), np.inf)
+        matrix[self.tails, self.heads] = reduced
+        return constant + float(np.minimum(reduced, 0.0).sum()), matrix
+
     def fix_by_reduced_cost(self, incumbent: float) -> int:
         """Fix to 0 every arc that no order better than ``incumbent`` can use, by the last
         LP's reduced costs; returns how many arcs were newly fixed.
@@ -586,6 +604,22 @@ def cut_bound(problem: SopProblem, time_limit: float | None = None) -> RootCuts:
     return SopCutModel(problem).root(Deadline(time_limit))
 
 
+#: Whether HiGHS runs its sub-MIP and jump heuristics (RINS, RENS, root reduced cost,
+#: feasibility jump: :data:`SUB_HEURISTIC_OPTIONS`) in the MIP rounds. Off, p43.1's rounds
+#: took 2.4 s instead of 6.5 s and the proof came in 49-55 s from the warm start (load 4-5),
+#: but on prob.42 a round without them ran 16.4 s from 14.5 s before the deadline (ended
+#: 4.2 s past it; 10 s past it in another run): HiGHS then looks at its clock and interrupt
+#: callback too seldom. On (HiGHS's default) until that is bounded.
+MIP_SUB_HEURISTICS = True
+
+#: The HiGHS options switched off when :data:`MIP_SUB_HEURISTICS` is False.
+SUB_HEURISTIC_OPTIONS = (
+    "mip_heuristic_run_rins",
+    "mip_heuristic_run_rens",
+    "mip_heuristic_run_root_reduced_cost",
+    "mip_heuristic_run_feasibility_jump",
+)
+
 #: A MIP round gets the time left less this share of it (at most :data:`MIP_RESERVE_MAX`
 #: seconds): HiGHS looks at its clock and its interrupt callback only between the phases of
 #: its root node, and MIP rounds ended 1-7 s after the deadline at load 3-12 without it.
@@ -623,6 +657,7 @@ def solve_sop_cuts(
     incumbent: Any = None,
     verbose: bool = False,
     mip_gap: float = 1e-9,
+    model: SopCutModel | None = None,
 ) -> Solution:
     """Exact SOP by the precedence path cuts: the root cut loop, then MIP rounds.
 
@@ -648,6 +683,11 @@ def solve_sop_cuts(
     verbose : bool
     mip_gap : float
         HiGHS's relative gap.
+    model : SopCutModel, optional
+        A model of ``problem`` whose root cut loop has run already (the SOP portfolio's
+        root stage): its rows are kept and the loop goes on from them. It must not have been
+        fixed against an order worse than ``incumbent`` (its rows then still hold for every
+        order better than the incumbent).
 
     Returns
     -------
@@ -659,7 +699,8 @@ def solve_sop_cuts(
     began = time.perf_counter()
     deadline = Deadline(time_limit)
     known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
-    model = SopCutModel(problem, verbose)
+    if model is None:
+        model = SopCutModel(problem, verbose)
     cheap = _cheap_bound(problem)
     root = model.root(deadline)
     if root.values is not None:
@@ -754,6 +795,8 @@ def _mip_rounds(
     problem = model.problem
     model.make_integral()
     model.highs.setOptionValue("mip_rel_gap", float(mip_gap))
+    for option in () if MIP_SUB_HEURISTICS else SUB_HEURISTIC_OPTIONS:
+        model.highs.setOptionValue(option, False)
     if KEEP_HIGHS_CUTS:  # the pool's rows then use the model's own columns
         model.highs.setOptionValue("presolve", "off")
     bad: list[np.ndarray] = []
@@ -835,11 +878,13 @@ def _mip_rounds(
             for value, seen_order in found:
                 if known is None or value < known[0]:
                     known = (value, seen_order)
+            # read before the pool's rows go in: changing the model resets HiGHS's status, and
+            # a round proved infeasible below the cutoff was then taken for an open one
+            status = model.highs.getModelStatus()
+            mip_info = model.highs.getInfo()
             for rows in pool:  # HiGHS's root cuts: valid below the cutoff and the orders seen
                 if model.add_pool_rows(*rows) and (cutoff is not None or found):
                     model.conditional = True
-            status = model.highs.getModelStatus()
-            mip_info = model.highs.getInfo()
             if status == highspy.HighsModelStatus.kInfeasible and known is not None:
                 if cutoff is None:  # a relaxation without the best order: cannot happen
                     break

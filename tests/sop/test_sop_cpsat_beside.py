@@ -181,3 +181,41 @@ def test_dp_started_under_a_cancelled_token_stops_cleanly():
         result = solve_sop_dp(problem, None)
     assert result.status in (TIME_LIMIT, OPTIMAL)
     assert result.bound is None or result.bound <= _brute(problem) + 1e-9
+
+
+def _root_then_slow(problem: SopProblem, time_limit: float | None, **options: object):
+    """Stand-in stages whose root stage chose the cut engine first (``on_root(True)``), then
+    nothing better than :func:`_slow_stages` until the deadline."""
+    on_root = options.get("on_root")
+    assert callable(on_root)
+    on_root(True)
+    return _slow_stages(problem, time_limit)
+
+
+def test_cpsat_stopped_by_the_probe_rule_keeps_its_order(monkeypatch):
+    """After the root chose the cut engine first, CP-SAT is stopped by the rule once its
+    share of the limit passed; its order is kept (feasible), the bound stays valid."""
+    monkeypatch.setattr(sop_model, "_stages", _root_then_slow)
+    monkeypatch.setattr(sop_model, "CPSAT_PROBE_SHARE", 0.3)
+    peers._worker("cpsat").wait_ready(None)  # started: its share goes to the search
+    problem = SopProblem.load("ESC47")
+    result = solve_sop_problem(problem, time_limit=1.2, cpsat=True)
+    assert "by the rule" in result.info["cpsat"]["stopped"]
+    assert result.bound is None or result.bound <= 1288.0
+    if result.solution is not None:
+        assert evaluate_order(problem, result.order) == pytest.approx(result.objective)
+        assert result.objective >= 1288.0
+
+
+def test_probe_rule_on_and_off_give_the_same_optimum(monkeypatch):
+    """The real stages with the cut engine first and CP-SAT stopped at once (shares 0), and
+    with neither rule, give the brute-force optimum with a feasible order."""
+    problem = random_sop(8, 0.2, 3)
+    optimum = _brute(problem)
+    for share in (0.0, 2.0):
+        monkeypatch.setattr(sop_model, "CUTS_FIRST_SHARE", share)
+        monkeypatch.setattr(sop_model, "CPSAT_PROBE_SHARE", share)
+        result = solve_sop_problem(problem, time_limit=5.0, ideal_cap=1, cpsat=True)
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
