@@ -764,7 +764,12 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         and milp_fits(problem, formulation, limit)
     ):
         nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
-        total = max(total, BASE_BYTES + sop_milp_bytes(nonzeros, compiled))
+        model = sop_milp_bytes(nonzeros, compiled)
+        if formulation == "cuts" and options.get("engine", "auto") == "auto":
+            # the root stage's cut model stays in memory beside the DP stages
+            total += model
+        else:
+            total = max(total, BASE_BYTES + model)
         what += f", {formulation} model of {columns:,} columns"
     if reserve:
         what += f", CP-SAT's worker {reserve / 1e6:,.0f} MB"
@@ -1618,6 +1623,13 @@ def _stages(
         info["memory_estimate"] = max(info.get("memory_estimate", BASE_BYTES), need)
 
     root_model: Any = None  # the root stage's cut model, handed to the cut engine
+
+    def held() -> float:
+        """Nonzeros of the root stage's cut model, kept in memory beside the DP stages."""
+        if root_model is None:
+            return 0.0
+        return nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
+
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
@@ -1680,7 +1692,7 @@ def _stages(
                     info["more_dp"] = f"skipped: {time_left:.2f} s left for a {setup:.2f} s setup"
                 return before
         known = incumbent if before is None or before.solution is None else before.solution
-        expect(second_states, time_left)
+        expect(second_states, time_left, nonzeros=held())
         again = solve_sop_dp(
             problem,
             None if time_left is None else max(time_left - MARGIN, MARGIN),
@@ -1732,7 +1744,7 @@ def _stages(
             used = "milp"
         else:
             share = deadline.share(DP_SHARE)
-            expect(max_states, share)
+            expect(max_states, share, nonzeros=held())
             result = solve_sop_dp(
                 problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
             )
@@ -1755,7 +1767,7 @@ def _stages(
                 # state, so not the first choice) with more states, from the best order so far
                 first = result
                 known = first.solution if first.solution is not None else incumbent
-                expect(second_states, second_share)
+                expect(second_states, second_share, nonzeros=held())
                 second = solve_sop_dp(
                     problem,
                     second_share,
