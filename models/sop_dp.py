@@ -849,6 +849,20 @@ class _Run:
         self.best_cost = np.inf
         self.best_path: list[int] | None = None
 
+    def _drop_priced(
+        self, grown: tuple[np.ndarray, ...], reduced: np.ndarray, low: np.ndarray, below: float
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
+        """Keep the grown states whose LP bound ``low`` is below ``below`` (counted as pruned,
+        by the LP bound, otherwise)."""
+        fits = low < below
+        if fits.all():
+            return grown, reduced, low
+        dropped = int((~fits).sum())
+        self.pruned += dropped
+        self.lagrange_pruned += dropped
+        self.pruned_min = min(self.pruned_min, float(low[~fits].min()))
+        return tuple(a[fits] for a in grown), reduced[fits], low[fits]
+
     def step(
         self, upper: float, tolerance: float, deadline: Deadline, limit: float, room: int | None
     ) -> str | None:
@@ -864,14 +878,7 @@ class _Run:
             parent = grown[3]
             reduced = self.reduced[-1][parent] + matrix[self.layers[-1][1][parent], grown[1]]
             low = _rounded_up(constant + reduced, unit)
-            fits = low < upper - tolerance
-            if not fits.all():
-                dropped = int((~fits).sum())
-                self.pruned += dropped
-                self.lagrange_pruned += dropped
-                self.pruned_min = min(self.pruned_min, float(low[~fits].min()))
-                grown = tuple(a[fits] for a in grown)
-                reduced, low = reduced[fits], low[fits]
+            grown, reduced, low = self._drop_priced(grown, reduced, low, upper - tolerance)
             if self.lagrange_rest is not None and len(low):
                 rest = np.empty(len(low))
                 for lo in range(0, len(low), LAGRANGE_CHUNK):  # the deadline between chunks
@@ -880,14 +887,7 @@ class _Run:
                     part = slice(lo, lo + LAGRANGE_CHUNK)
                     rest[part] = self.lagrange_rest(grown[0][part], grown[1][part])
                 low = np.maximum(low, _rounded_up(constant + reduced + rest, unit))
-                fits = low < upper - tolerance
-                if not fits.all():
-                    dropped = int((~fits).sum())
-                    self.pruned += dropped
-                    self.lagrange_pruned += dropped
-                    self.pruned_min = min(self.pruned_min, float(low[~fits].min()))
-                    grown = tuple(a[fits] for a in grown)
-                    reduced, low = reduced[fits], low[fits]
+                grown, reduced, low = self._drop_priced(grown, reduced, low, upper - tolerance)
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
         total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
+from taopt.fleet.search import trace
 from taopt.runtime import Deadline
 
 INF = math.inf
@@ -337,12 +338,7 @@ def coupled_dp(
         "expanded": expanded,
     }
     if found >= 0:
-        acts = []
-        j = found
-        while j > 0:
-            acts.append(action[j])
-            j = parent[j]
-        acts.reverse()
+        acts = trace(parent, action, found)
         result["plan"] = _rebuild(problem, seqs, acts, geometry)
         result["value"] = best
     return result

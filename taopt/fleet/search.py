@@ -56,8 +56,8 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
@@ -89,6 +89,8 @@ PARTITION_MAX_CUSTOMERS = 9
 MATCH_TOLERANCE = 1e-9
 
 INF = math.inf
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 class _Tables:
@@ -969,6 +971,38 @@ def _beam(
         return INF, None
 
 
+def trace(parent: Sequence[int], action: Sequence[Any], found: int) -> list[Any]:
+    """The actions from the root label (index 0) to label ``found``, in order, read back along
+    the ``parent`` indices (the label searches' plan reconstruction)."""
+    acts = []
+    j = found
+    while j > 0:
+        acts.append(action[j])
+        j = parent[j]
+    acts.reverse()
+    return acts
+
+
+def paused_gc(function: _F) -> _F:
+    """``function`` with the cyclic garbage collector paused while it runs: the label
+    search's millions of acyclic tuples would make each full collection a pause of seconds
+    under load, taken past the wall-clock limit (measured: 9 % of a run at n = 8; the search
+    checks its clock between labels)."""
+
+    @functools.wraps(function)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            if enabled:
+                gc.enable()
+
+    return cast(_F, run)
+
+
+@paused_gc
 def label_search(
     problem: FleetProblem,
     time_limit: float | None = None,
@@ -1004,42 +1038,6 @@ def label_search(
     ends on such a plan returns its release-free value, still a lower bound on the optimum
     with releases (no plan below it was found).
     """
-    enabled = gc.isenabled()
-    gc.disable()  # labels hold no reference cycles; a full collection over millions of them
-    # pauses for seconds under load, past the deadline (measured: 9 % of a run at n = 8)
-    try:
-        return _label_search(
-            problem,
-            time_limit=time_limit,
-            incumbent=incumbent,
-            max_labels=max_labels,
-            metric=metric,
-            beam=beam,
-            walk=walk,
-            truck_of=truck_of,
-            floor=floor,
-            cutoff=cutoff,
-            release=release,
-        )
-    finally:
-        if enabled:
-            gc.enable()
-
-
-def _label_search(
-    problem: FleetProblem,
-    time_limit: float | None = None,
-    incumbent: Any = None,
-    max_labels: int | None = None,
-    metric: bool = True,
-    beam: int = 64,
-    walk: bool = True,
-    truck_of: Sequence[int] | None = None,
-    floor: float = 0.0,
-    cutoff: float = INF,
-    release: Sequence[float] | None = None,
-) -> dict[str, Any]:
-    """:func:`label_search`'s body (the garbage collector off)."""
     deadline = Deadline(time_limit)
     clock = [time.perf_counter()]  # phase ends: start, tables, beam, search
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
@@ -1202,12 +1200,7 @@ def _label_search(
         },
     }
     if found >= 0:
-        acts = []
-        j = found
-        while j > 0:
-            acts.append(action[j])
-            j = parent[j]
-        acts.reverse()
+        acts = trace(parent, action, found)
         plan = _rebuild(problem, tab, acts, labels[found])
         value = evaluate_fleet(problem, plan)
         # with releases the scorer (which has none) may only say less

@@ -282,21 +282,6 @@ def _restrict(
     return None
 
 
-def _no_gc(function: Any, *args: Any, **kwargs: Any) -> Any:
-    """``function(*args, **kwargs)`` with the cyclic garbage collector paused: the label
-    search's millions of acyclic tuples would make each full collection a pause of seconds,
-    taken past the wall-clock limit (the search checks its clock between labels)."""
-    import gc
-
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        return function(*args, **kwargs)
-    finally:
-        if enabled:
-            gc.enable()
-
-
 def _earliest(problem: FleetProblem) -> np.ndarray:
     """A time before which no plan serves customer j:
     :func:`~taopt.fleet.bounds.earliest_service`, raised along the precedences (t_j >= t_r
@@ -421,8 +406,7 @@ def split_search(
                 left = deadline.remaining()
                 if left is not None:  # a slice, doubled at each retry, so other splits get a turn
                     left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
-                found = _no_gc(
-                    label_search,
+                found = label_search(
                     sub,
                     incumbent=_restrict(problem, best_plan, mask, d),
                     time_limit=left,
@@ -478,8 +462,7 @@ def split_search(
             for j in _members(m):
                 owner[j] = k
         coupled += 1
-        found = _no_gc(
-            label_search,
+        found = label_search(
             problem,
             time_limit=deadline.remaining(),
             incumbent=plan if value < INF else None,
