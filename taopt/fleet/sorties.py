@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from taopt.errors import SolverError
-from taopt.fleet.evaluate import evaluate_fleet
+from taopt.fleet.evaluate import best_of, evaluate_fleet
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
 
@@ -561,13 +561,9 @@ def split_dp(
         coupled += 1
         closed, plans = _couple(problem, entry[1], entry[2], pre, closure, deadline, best)
         entry[0] = max(entry[0], closed)
-        for plan in plans:
-            try:
-                value = evaluate_fleet(problem, plan)
-            except FeasibilityError:
-                continue
-            if value < best:
-                best, best_plan = value, plan
+        value, joint = best_of(problem, plans)
+        if joint is not None and value < best:
+            best, best_plan = value, joint
     bound_done = min((e[0] for e in done), default=math.inf)
     bound = min(best, bound_done, left)
     if stopped_by == "optimal" and best > bound * (1 + MATCH_TOLERANCE):
