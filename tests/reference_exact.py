@@ -103,6 +103,18 @@ def sop_instance(seed: int) -> taopt.SopProblem:
     return taopt.SopProblem(cost, pairs, 0, n - 1, name=f"sop-{seed}")
 
 
+def sop_orders(problem):
+    """Every feasible order of a small SOP (start and end fixed): each inner permutation
+    that keeps the precedence closure and uses finite arcs only."""
+    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
+    for inner_order in itertools.permutations(inner):
+        order = [problem.start, *inner_order, problem.end]
+        where = {v: i for i, v in enumerate(order)}
+        if all(where[a] < where[b] for a, b in problem.closure.edges()):
+            if np.isfinite(problem.cost[order[:-1], order[1:]]).all():
+                yield order
+
+
 def sop_brute_force(problem: taopt.SopProblem) -> float:
     """Cheapest precedence-respecting path from start to end over every order of the rest."""
     inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]

@@ -4,7 +4,6 @@ optimum claimed only when it is the brute-force one."""
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
@@ -14,18 +13,7 @@ from taopt.models.sop import solve_sop_problem
 from taopt.models.sop_cuts import SopCutModel, cut_bound, polish, round_point, solve_sop_cuts
 from taopt.result import OPTIMAL, TIME_LIMIT
 from taopt.sop.problem import SopProblem, evaluate_order, load_sop
-from tests.reference_exact import sop_brute_force, sop_instance
-
-
-def _orders(problem: SopProblem):
-    """Every feasible order of a small problem (start and end fixed)."""
-    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
-    for inner_order in itertools.permutations(inner):
-        order = [problem.start, *inner_order, problem.end]
-        where = {v: i for i, v in enumerate(order)}
-        if all(where[a] < where[b] for a, b in problem.closure.edges()):
-            if np.isfinite(problem.cost[order[:-1], order[1:]]).all():
-                yield order
+from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
 
 
 @pytest.mark.parametrize("seed", range(30))
@@ -61,7 +49,7 @@ def test_every_row_holds_on_every_feasible_order(seed):
     for _ in range(5):  # rows separated at random points too, not only LP optima
         point = rng.random(model.n_arcs)
         model.add_cuts(model.separate(point))
-    for order in _orders(problem):
+    for order in sop_orders(problem):
         used = np.zeros(model.n_arcs)
         used[model.arc_index[order[:-1], order[1:]]] = 1.0
         for row in model.cut_rows:

@@ -4,7 +4,6 @@ and CP-SAT stopped by the rule keeps a feasible order."""
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
@@ -17,18 +16,7 @@ from taopt.models.sop_cuts import SopCutModel, solve_sop_cuts
 from taopt.models.sop_dp import solve_sop_dp
 from taopt.result import OPTIMAL
 from taopt.sop.problem import SopProblem, evaluate_order
-from tests.reference_exact import sop_brute_force, sop_instance
-
-
-def _orders(problem: SopProblem):
-    """Every feasible order of a small problem (start and end fixed)."""
-    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
-    for inner_order in itertools.permutations(inner):
-        order = [problem.start, *inner_order, problem.end]
-        where = {v: i for i, v in enumerate(order)}
-        if all(where[a] < where[b] for a, b in problem.closure.edges()):
-            if np.isfinite(problem.cost[order[:-1], order[1:]]).all():
-                yield order
+from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
 
 
 def _lagrange(problem: SopProblem) -> tuple[float, np.ndarray]:
@@ -45,7 +33,7 @@ def test_lagrangian_bound_holds_on_every_order(seed):
     """``L + sum of max(d, 0)`` over an order's arcs is at most its cost, for every order."""
     problem = sop_instance(seed)
     constant, reduced = _lagrange(problem)
-    for order in _orders(problem):
+    for order in sop_orders(problem):
         arcs = reduced[order[:-1], order[1:]]
         assert np.isfinite(arcs).all()
         low = constant + np.maximum(arcs, 0.0).sum()
@@ -61,7 +49,7 @@ def test_dp_with_lagrange_matches_brute_force(seed):
     lagrange = start = None
     if math.isfinite(optimum):
         lagrange = _lagrange(problem)
-        orders = sorted(_orders(problem), key=lambda o: evaluate_order(problem, o))
+        orders = sorted(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
         start = orders[len(orders) // 2]
     with_it = solve_sop_dp(problem, incumbent=start, lagrange=lagrange, beam_width=0)
     without = solve_sop_dp(problem, incumbent=start, beam_width=0)
@@ -81,7 +69,7 @@ def test_dp_with_lagrange_from_an_optimal_order(seed):
     optimum = sop_brute_force(problem)
     if not math.isfinite(optimum):
         return
-    best = min(_orders(problem), key=lambda o: evaluate_order(problem, o))
+    best = min(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
     result = solve_sop_dp(problem, incumbent=best, lagrange=_lagrange(problem), beam_width=0)
     assert result.status == OPTIMAL
     assert result.objective == pytest.approx(optimum)
@@ -152,7 +140,7 @@ def test_lagrangian_pruning_fires():
         problem = sop_instance(seed)
         if not math.isfinite(sop_brute_force(problem)):
             continue
-        best = min(_orders(problem), key=lambda o: evaluate_order(problem, o))
+        best = min(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
         result = solve_sop_dp(problem, incumbent=best, lagrange=_lagrange(problem), beam_width=0)
         dropped += result.info["lagrange_pruned"]
     assert dropped > 0
