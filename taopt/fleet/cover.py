@@ -678,6 +678,118 @@ def sortie_time_table(problem: FleetProblem, deadline: Deadline | None = None) -
     return np.ascontiguousarray(F.T)
 
 
+#: Largest work (sets x sorties x launch stops x recovery stops) :func:`one_drone_table` takes
+#: on.
+ONE_DRONE_MAX_WORK = 600_000_000
+
+
+def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> np.ndarray | None:
+    r"""``V[u, X]``: a lower bound on the objective's clock, counted from the moment a truck at
+    stop u and one drone aboard it are both ready, for that truck and that drone alone to serve
+    exactly the drone-only customers of X by sorties, the precedence pairs inside X kept (``inf``
+    where X holds another customer, or no such plan exists): the time of X's last service
+    (``"last_service"``), or of the truck and the drone back at the depot (``"return"``).
+
+    A backward DP over (X, u), exact for the relaxed problem below::
+
+        V[∅, u] = 0   (tt(u, depot) under "return")
+        V[X, u] = min_v tt(u, v) + H[X, v]
+        H[X, v] = min over the first sortie Q = (q_1, ..., q_m) ⊆ X (m <= c, launched at v,
+                  every predecessor of q_i inside X among q_1, ..., q_{i-1}) and its recovery
+                  stop q (d(v, q_1) + the legs + d(q_m, q) <= range) of
+                  f(Q, v)                                       (Q = X, "last_service")
+                  max(f(Q, v) + ft(q_m, q), tt(v, q)) + τ + V[X \ Q, q]   (otherwise)
+
+    with ``f(Q, v) = ft(v, q_1) + τ + Σ_i (ft(q_{i-1}, q_i) + τ)`` the last service after the
+    launch. Every time is a max-plus expression of the start with no release, so the DP is
+    shift-invariant: a drone ready at a (its truck at u, leaving no sooner than a) ends no
+    sooner than ``a + V[X, u]``.
+
+    *Why the precedences inside X hold* (Chapter 6's multi-drone reading of the one-drone
+    relaxation of :func:`taopt.models.fleet._one_drone_floor`): in any plan, one drone's
+    services are strictly ordered in time (two of them are at least τ apart; with τ = 0 ties
+    are reordered freely, changing no time), so a pair r -> j with both served by the same
+    drone has r before j in that drone's sequence. Giving that drone its own copy of the truck
+    (same stops in the same order, waiting only for this drone) makes no service and no return
+    later. So the drone's copy is a one-truck, one-drone plan of X whose sequence respects the
+    pairs inside X, and the DP over all such plans (with the truck's wait for a recovery only
+    relaxed to ``tt(v, q)`` after the launch) is at most its objective. Pairs with one end
+    outside X are dropped (a relaxation).
+
+    None when the table would take more than :data:`ONE_DRONE_MAX_WORK` steps or the deadline
+    expires (checked every 16 sets)."""
+    import itertools
+
+    p = problem
+    n, s = p.n, p.s
+    only = [j for j in range(n) if p.drone_servable(j) and not p.truck_servable(j)]
+    seqs = [q for m in range(1, p.capacity + 1) for q in itertools.permutations(only, m)]
+    size = 1 << n
+    count = len(seqs)
+    allowed = sum(1 << j for j in only)
+    # Σ over sets X ⊆ allowed of the sorties inside X, times s^2
+    work = sum((1 << (len(only) - len(q))) for q in seqs) * s * s
+    if work > ONE_DRONE_MAX_WORK:
+        return None
+    tt = np.asarray(p.truck_time, dtype=float)
+    fs, fc = p.flight_stop, p.flight_customer
+    vd, tau, limit = p.v_drone, p.service_time, p.flight_limit
+    pred = [0] * n
+    for r, j in p.precedences:
+        pred[j] |= 1 << r
+    V = np.full((size, s), INF)
+    V[0] = tt[:, p.depot] if p.objective == "return" else 0.0
+    if not seqs:
+        return np.ascontiguousarray(V.T)
+    mask = np.zeros(count, dtype=np.int64)
+    bad = np.zeros(count, dtype=np.int64)
+    f = np.full((count, s), INF)  # launch -> last service
+    rec = np.full((count, s, s), INF)  # launch -> recovery done, per (launch v, recovery q)
+    for i, q in enumerate(seqs):
+        prefix = 0
+        inner = 0.0
+        t = tau
+        for pos, j in enumerate(q):
+            bad[i] |= pred[j] & ~prefix
+            prefix |= 1 << j
+            if pos:
+                inner += float(fc[q[pos - 1], j])
+                t += float(fc[q[pos - 1], j]) / vd + tau
+        mask[i] = prefix
+        dist = fs[q[0]][:, None] + inner + fs[q[-1]][None, :]  # (v, q)
+        ok = dist <= limit
+        last = fs[q[0]] / vd + t  # (v,)
+        f[i] = np.where(ok.any(axis=1), last, INF)
+        back = np.maximum(last[:, None] + fs[q[-1]][None, :] / vd, tt) + tau
+        rec[i] = np.where(ok, back, INF)
+    last_service = p.objective != "return"
+    home = tt[:, p.depot]
+    for X in range(1, size):
+        if X & ~allowed:
+            continue
+        if deadline is not None and X & 15 == 0 and deadline.expired():
+            return None
+        idx = np.flatnonzero(((mask & ~X) == 0) & ((bad & X) == 0))
+        if not len(idx):
+            continue
+        rest = X ^ mask[idx]
+        final = rest == 0
+        H = np.full(s, INF)
+        if final.any():
+            fi = idx[final]
+            if last_service:
+                H = np.min(f[fi], axis=0)
+            else:
+                H = np.min(rec[fi] + home[None, None, :], axis=(0, 2))
+        more = ~final
+        if more.any():
+            mi = idx[more]
+            cand = np.min(rec[mi] + V[rest[more]][:, None, :], axis=(0, 2))
+            H = np.minimum(H, cand)
+        V[X] = np.min(tt + H[None, :], axis=1)
+    return np.ascontiguousarray(V.T)
+
+
 __all__ = [
     "WALK_MAX_CUSTOMERS",
     "CoverTables",
@@ -686,6 +798,8 @@ __all__ = [
     "cover_bound",
     "coverable",
     "fleet_cover_bound",
+    "one_drone_table",
+    "ONE_DRONE_MAX_WORK",
     "fleet_coverable",
     "release_times",
     "sortie_time_table",

@@ -66,6 +66,7 @@ from taopt.fleet.cover import (
     WALK_MAX_CUSTOMERS,
     CoverTables,
     WalkTable,
+    one_drone_table,
     sortie_time_table,
     walk_table,
 )
@@ -187,9 +188,16 @@ class _Tables:
         # the drones' sortie-time term (:func:`_sortie_time_bound`): one drone's least time per
         # start stop and served set
         self.sortie_time: np.ndarray | None = None
+        self.one_drone = False  # sortie_time is one_drone_table's (the objective's clock)
         self.drone_only = sum(1 << j for j in range(n) if not self.truck_ok[j] and self.drone_ok[j])
         if walk and n <= WALK_MAX_CUSTOMERS and self.drone_only:
-            self.sortie_time = sortie_time_table(p, deadline)
+            # the one-drone table (precedences inside the set, the objective's own clock) where
+            # it fits, else the weaker precedence-free sortie-time table
+            self.sortie_time = one_drone_table(p, deadline)
+            if self.sortie_time is None:
+                self.sortie_time = sortie_time_table(p, deadline)
+            else:
+                self.one_drone = True
         self.masks = np.arange(1 << n, dtype=np.int64) if self.walk else np.zeros(0, np.int64)
         self._subs: dict[int, np.ndarray] = {}
         self.popcount = np.zeros(len(self.masks), dtype=np.int64)
@@ -345,7 +353,9 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     ``ceil(|U| / K)`` customers, so the objective is at least the least
     ``T_k + value_k[X \\ cover_k[w_k], w_k]`` over trucks k and submasks X of U of that size
     or more. ``inf`` when no unfinished truck is left for a nonempty U; 0 when U is empty or
-    there is no table."""
+    there is no table. Under ``"last_service"`` a truck whose part is all coverable at its
+    own stop need not leave it, so that part ends nothing (T bounds only a departure: the
+    recoveries that set it may come after the last service)."""
     if not U or not tab.walk:
         return 0.0
     active: list[tuple[int, float, WalkTable]] = []
@@ -357,18 +367,26 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
             active.append((w, T, table))
     if not active:
         return INF
+    ret = tab.ret
     if len(active) == 1:
         w, T, table = active[0]
-        return T + float(table.value[U & ~table.cover[w], w])
+        R = U & ~table.cover[w]
+        return T + float(table.value[R, w]) if R or ret else 0.0
     subs = _submasks(tab, U)
+
+    def ends(X: np.ndarray, w: int, T: float, table: WalkTable) -> np.ndarray:
+        R = X & ~table.cover[w]
+        e = T + table.value[R, w]
+        return e if ret else np.where(R == 0, 0.0, e)
+
     if len(active) == 2:
         (w1, T1, t1), (w2, T2, t2) = active
-        one = T1 + t1.value[subs & ~t1.cover[w1], w1]
-        two = T2 + t2.value[(U ^ subs) & ~t2.cover[w2], w2]
+        one = ends(subs, w1, T1, t1)
+        two = ends(U ^ subs, w2, T2, t2)
         return float(np.min(np.maximum(one, two)))
     size = -(-int(tab.popcount[U]) // len(active))
     big = subs[tab.popcount[subs] >= size]
-    return float(min(T + np.min(table.value[big & ~table.cover[w], w]) for w, T, table in active))
+    return float(min(np.min(ends(big, w, T, table)) for w, T, table in active))
 
 
 def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
@@ -405,8 +423,9 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
             ends.append(np.min(back[near, None] + F[near][:, subs], axis=0))
     if not ends:
         return INF
-    for e in ends:
-        e[0] = 0.0  # subs[0] is the empty set: a drone that serves no one more ends nothing
+    if not tab.one_drone or not tab.ret:
+        for e in ends:
+            e[0] = 0.0  # subs[0] is the empty set: a drone that serves no one more ends nothing
     last = len(subs) - 1  # subs ascend: U itself is last, the empty set first
     if len(ends) == 1:
         return float(ends[0][last])
