@@ -72,7 +72,7 @@ def _best_below(tab: _Tables, label: tuple, memo: dict, check: list) -> float:
 
 
 @pytest.mark.parametrize("objective", ["last_service", "return"])
-@pytest.mark.parametrize("drones,c", [(2, 1), (2, 2), (3, 1)])
+@pytest.mark.parametrize("drones,c", [(2, 1), (2, 2), pytest.param(3, 1, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("prec", [False, True])
 def test_bound_is_below_every_labels_best_completion(objective, drones, c, prec):
     """At every label of a tiny one-truck instance (n = 3, several drones) the label bound
