@@ -390,21 +390,28 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
 
 
 def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
-    """The drones' sorties: a lower bound on the last service of every completion in which
-    the drone-only customers of ``U`` are served by sorties not yet launched.
+    """The drones' sorties, the one-drone relaxation at a label: a lower bound on the
+    objective of every completion in which the drone-only customers of ``U`` are served by
+    sorties not yet launched.
 
     Each such customer is served by one drone of an unfinished truck. A drone aboard its
-    truck at stop w, ready at ``a = max(A, ρ)``, serving exactly the set X ends no sooner
-    than ``a + F[w, X]`` (:func:`taopt.fleet.cover.sortie_time_table`: its truck given to it
-    alone, precedences dropped). An airborne one is first recovered at some stop q within
-    its range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
-    :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the last
-    service is at least the least, over the partitions of U among the drones, of the
-    largest drone's end (a drone given no customer ends nothing): exact over the submasks of
-    U for one or two drones, and for more up to :data:`PARTITION_MAX_CUSTOMERS` customers
-    (:func:`_least_largest`); above, some drone serves at least ``ceil(|U| / N)`` of them, so
-    the least end over drones and subsets of that size or more. 0 without a table or
-    customers; ``inf`` without a drone."""
+    truck at stop w, ready at ``a = max(A, ρ)`` (its truck leaves w no sooner), serving
+    exactly the set X ends no sooner than ``a + F[w, X]``: :func:`taopt.fleet.cover.one_drone_table`
+    (``tab.one_drone``; the drone with a copy of its truck of its own, the precedence pairs
+    inside X kept, the objective's clock: the last service, or the drone and its truck home
+    under ``"return"``), else :func:`taopt.fleet.cover.sortie_time_table` (precedences
+    dropped, last service). An airborne one is first recovered at some stop q within its
+    range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
+    :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the
+    objective is at least the least, over the partitions of U among the drones, of the
+    largest drone's end (a drone given no customer ends nothing under ``"last_service"``;
+    under ``"return"`` with the one-drone table it still gets home, ``F[w, ∅] = tt(w,
+    depot)``): exact over the submasks of U for one or two drones, and for more up to
+    :data:`PARTITION_MAX_CUSTOMERS` customers (:func:`_least_largest`); above, some drone
+    serves at least ``ceil(|U| / N)`` of them, so the least end over drones and subsets of
+    that size or more. The pairs between different drones' parts are dropped, so at the root
+    this is at most :func:`taopt.models.fleet._one_drone_floor` (which keeps them, and is the
+    search's ``floor``). 0 without a table or customers; ``inf`` without a drone."""
     F = tab.sortie_time
     if F is None or not U:
         return 0.0
