@@ -723,14 +723,16 @@ def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> 
     p = problem
     n, s = p.n, p.s
     only = [j for j in range(n) if p.drone_servable(j) and not p.truck_servable(j)]
+    N = len(only)
+    # Σ over sets X ⊆ only of the sorties inside X (N!/(N-m)! of m customers, each in
+    # 2^(N-m) sets), times s^2, counted before any sortie is listed
+    work = sum(math.perm(N, m) << (N - m) for m in range(1, min(p.capacity, N) + 1)) * s * s
+    if work > ONE_DRONE_MAX_WORK:
+        return None
     seqs = [q for m in range(1, p.capacity + 1) for q in itertools.permutations(only, m)]
     size = 1 << n
     count = len(seqs)
     allowed = sum(1 << j for j in only)
-    # Σ over sets X ⊆ allowed of the sorties inside X, times s^2
-    work = sum((1 << (len(only) - len(q))) for q in seqs) * s * s
-    if work > ONE_DRONE_MAX_WORK:
-        return None
     tt = np.asarray(p.truck_time, dtype=float)
     fs, fc = p.flight_stop, p.flight_customer
     vd, tau, limit = p.v_drone, p.service_time, p.flight_limit

@@ -91,3 +91,23 @@ def test_bound_is_below_every_labels_best_completion(objective, drones, c, prec)
         assert term <= best * (1 + 1e-9) + 1e-9
         if bound < math.inf:
             assert bound <= best * (1 + 1e-9) + 1e-9
+
+
+def test_one_drone_table_stops_on_its_cap_and_deadline(monkeypatch):
+    """Over its work cap or past its deadline the table is None, and the search falls back to
+    the precedence-free table and still proves the brute-force optimum."""
+    from taopt.fleet import cover
+    from taopt.fleet.instances import residential_fleet
+    from taopt.fleet.search import label_search
+    from taopt.runtime import Deadline
+
+    assert one_drone_table(residential_fleet(5, 1, 2, 2, seed=1), Deadline(0.0)) is None
+    p = _drone_only(5, 3, 2, 2, True, "last_service")
+    monkeypatch.setattr(cover, "ONE_DRONE_MAX_WORK", 0)
+    assert one_drone_table(p) is None
+    tab = _Tables(p)
+    assert not tab.one_drone and tab.sortie_time is not None
+    value, _, _ = brute_force(p)
+    result = label_search(p, beam=0)
+    assert result["stopped_by"] == "optimal"
+    assert result["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
