@@ -347,6 +347,22 @@ def split_applies(problem: FleetProblem) -> bool:
     )
 
 
+def _set_values(problem: FleetProblem, deadline: Deadline) -> list[float] | None:
+    """A lower bound per customer set X on one truck with one drone serving exactly X from
+    the depot: :func:`taopt.fleet.cover.one_drone_table`'s (the precedence pairs inside X
+    kept, so at least :func:`_free_values`'s, and exact for one truck and one drone), checked
+    against the deadline (None once it passes); :func:`_free_values` when that table is over
+    its work cap."""
+    from taopt.fleet.cover import one_drone_table
+
+    table = one_drone_table(problem, deadline)
+    if table is not None:
+        return [float(v) for v in table[problem.depot]]
+    if deadline.expired():
+        return None
+    return _free_values(problem)
+
+
 def _free_values(problem: FleetProblem) -> list[float]:
     """``opt_free(X)`` for every customer set X (bit mask): the optimum of one truck with one
     drone serving exactly X with no precedence at all — the sortie DP over all subsets."""
@@ -389,8 +405,9 @@ def split_dp(
     the customers over the trucks the optimum with that split is at least ``max_k
     opt(X_k)``, ``opt`` the sortie DP's optimum of X_k with the precedence closure's pairs
     inside X_k (each still holds: t_r <= t_m <= t_j through any chain), and at least ``max_k
-    opt_free(X_k)`` (no precedence at all: one DP over every subset). The optimum is the least
-    over the splits, hence at least the least of these bounds.
+    opt_set(X_k)`` (one DP over every subset with only the direct pairs inside each set,
+    :func:`_set_values`; stopped by the deadline, the run returns at once with bound 0). The
+    optimum is the least over the splits, hence at least the least of these bounds.
 
     *Releases* (split-dependent, valid in every plan of the split): let ``anc(j)`` be j's
     ancestors in the closure and ``L_j`` a time before which no plan of the split serves j,
@@ -408,7 +425,7 @@ def split_dp(
     then solved with the releases ``L`` of its members, still a relaxation of every plan of
     the split. On fleet8's K2D1c1 row the least split bound rises from 348.9 to 391.2.
 
-    *Search.* Splits in increasing ``max_k opt_free`` (identical trucks: each split once);
+    *Search.* Splits in increasing ``max_k opt_set`` (identical trucks: each split once);
     for each, the sortie DP per truck gives the split's bound and plans, combined into one
     plan and scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck
     precedences may make a drone wait, or deadlock: then no plan from that split). The run
@@ -427,7 +444,17 @@ def split_dp(
 
     deadline = Deadline(time_limit)
     n, K = problem.n, problem.K
-    free = _free_values(problem)
+    free = _set_values(problem, deadline)
+    if free is None:  # the deadline passed while tabling the sets: nothing examined
+        return {
+            "plan": None,
+            "value": math.inf,
+            "bound": 0.0,
+            "stopped_by": "time_limit",
+            "splits": 0,
+            "of_splits": 0,
+            "coupled": 0,
+        }
     closure = {
         (int(r), int(j)) for r, j in nx.transitive_closure_dag(problem.precedence_graph).edges
     }

@@ -111,3 +111,32 @@ def test_one_drone_table_stops_on_its_cap_and_deadline(monkeypatch):
     result = label_search(p, beam=0)
     assert result["stopped_by"] == "optimal"
     assert result["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("objective", ["last_service", "return"])
+def test_split_set_values_match_the_free_dp_without_precedences(objective):
+    """Without precedences the split DP's set values (the one-drone table) equal its
+    precedence-free sortie DP over every subset; with them they are no lower."""
+    from taopt.fleet.instances import residential_fleet
+    from taopt.fleet.sorties import _free_values, _set_values
+    from taopt.runtime import Deadline
+
+    p = residential_fleet(5, 2, 1, 2, seed=2, objective=objective)
+    assert p.precedences
+    q = p.replace(precedences=())
+    assert _set_values(q, Deadline(None)) == pytest.approx(_free_values(q), rel=1e-9)
+    free = _free_values(p)
+    got = _set_values(p, Deadline(None))
+    assert got is not None
+    assert all(a >= b * (1 - 1e-9) for a, b in zip(got, free, strict=True))
+
+
+def test_split_dp_with_no_time_returns_a_proven_bound():
+    """split_dp with a zero limit stops at once: time_limit with bound 0 (never above the
+    optimum), no exception."""
+    from taopt.fleet.instances import residential_fleet
+    from taopt.fleet.sorties import split_dp
+
+    result = split_dp(residential_fleet(6, 2, 1, 2, seed=0), time_limit=0.0)
+    assert result["stopped_by"] == "time_limit"
+    assert result["bound"] == 0.0
