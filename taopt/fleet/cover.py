@@ -716,8 +716,8 @@ def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> 
     relaxed to ``tt(v, q)`` after the launch) is at most its objective. Pairs with one end
     outside X are dropped (a relaxation).
 
-    None when the table would take more than :data:`ONE_DRONE_MAX_WORK` steps or the deadline
-    expires (checked every 16 sets)."""
+    None when the table would take more than :data:`~taopt.fleet.cover.ONE_DRONE_MAX_WORK`
+    steps or the deadline expires (checked every 16 sets)."""
     import itertools
 
     p = problem
