@@ -141,7 +141,7 @@ class _Decoder:
         at T, per drone None (aboard) or (last customer, time there, distance flown), the last
         service so far, the service times (dict), the events added by its transition."""
         fs, fc, tt, vd, tau, limit = self.fs, self.fc, self.tt, self.vd, self.tau, self.limit
-        root = (None, start, (None,) * self.D, self.depot, 0.0, {}, ())
+        root: tuple[Any, ...] = (None, start, (None,) * self.D, self.depot, 0.0, {}, ())
         beam: list[tuple[Any, ...]] = [root]
         for d, cs in sorties:
             first, lastc = cs[0], cs[-1]
@@ -180,11 +180,14 @@ class _Decoder:
                             new_times[j] = t
                             prev = j
                         used = float(fs[first, a]) + inner
-                        new_drones = list(drones)
+                        new_drones: list[Any] = list(drones)
                         new_drones[d] = (lastc, t, used)
-                        variants = [(L, tuple(new_drones), ())]
+                        variants: list[tuple[float, tuple[Any, ...], tuple[Any, ...]]] = [
+                            (L, tuple(new_drones), ())
+                        ]
                         # the variant that also recovers the other airborne drones here
-                        T2, more, extra = L, list(new_drones), []
+                        T2, more = L, list(new_drones)
+                        extra: list[tuple[Any, ...]] = []
                         for e, x in enumerate(drones):
                             if e == d or x is None or x[2] + fs[x[0], a] > limit + 1e-9:
                                 continue
@@ -193,17 +196,17 @@ class _Decoder:
                             extra.append(("rec", e, a))
                         if extra:
                             variants.append((T2, tuple(more), tuple(extra)))
-                        for T3, state, tail in variants:
+                        for T3, held_drones, tail in variants:
                             child = (
                                 label,
                                 T3,
-                                state,
+                                held_drones,
                                 a,
                                 max(last, t),
                                 new_times,
                                 (*events, ("launch", d, a, cs), *tail),
                             )
-                            sig = (a, tuple(None if x is None else x[0] for x in state))
+                            sig = (a, tuple(None if x is None else x[0] for x in held_drones))
                             score = _key(child)
                             held = children.get(sig)
                             if held is None or score < held[0]:
@@ -340,6 +343,27 @@ def sortie_list(problem: FleetProblem, plan: FleetPlan, k: int) -> SortieList:
             rows.append((launch_time[(k, d, i)], f.launch, d, i, f.customers))
     rows.sort()
     return [(d, tuple(cs)) for _, _, d, _, cs in rows]
+
+
+def _reorder(sorties: SortieList, decoder: _Decoder) -> SortieList:
+    """The sorties in a launch order where each comes after the sorties serving its
+    customers' predecessors (the least original index first among the ready ones): a plan's
+    drone may wait at a customer for a predecessor launched later, which the decoder does not
+    model. Unchanged when the sorties' precedences form a cycle."""
+    where = {j: i for i, (_, cs) in enumerate(sorties) for j in cs}
+    needs = [
+        {where[r] for j in cs for r in decoder.preds[j] if r in where and where[r] != i}
+        for i, (_, cs) in enumerate(sorties)
+    ]
+    out: list[int] = []
+    done: set[int] = set()
+    while len(out) < len(sorties):
+        ready = [i for i in range(len(sorties)) if i not in done and needs[i] <= done]
+        if not ready:
+            return sorties
+        out.append(ready[0])
+        done.add(ready[0])
+    return [sorties[i] for i in out]
 
 
 def _singletons(problem: FleetProblem, plan: FleetPlan, k: int) -> SortieList:
@@ -522,7 +546,7 @@ def interleave_plan(
                     if j in mine and r not in mine:
                         release[j] = max(release[j], float(times[r]))
             decoder = _Decoder(problem, k, release)
-            start = sortie_list(problem, best, k)
+            start = _reorder(sortie_list(problem, best, k), decoder)
             if not decoder.valid(start):
                 start = _singletons(problem, best, k)
             left = deadline.remaining()
