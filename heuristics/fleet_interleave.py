@@ -70,6 +70,9 @@ FINAL_WIDTH = 12
 #: Moves without improvement before the search restarts from the best list, perturbed.
 STALL = 60
 
+#: A move is kept when its decoded value is at most this much (relative) above the current.
+ACCEPT_WORSE = 0.0
+
 INF = math.inf
 
 #: A sortie list: per sortie ``(drone, customers)`` in launch order.
@@ -444,7 +447,7 @@ def search_truck(
         if moved is None or not decoder.valid(moved):
             continue
         found, _ = decoder.decode(moved, SEARCH_WIDTH)
-        if found <= value:
+        if found <= value * (1.0 + ACCEPT_WORSE):
             stall = 0 if found < value - 1e-9 else stall + 1
             current, value = moved, found
             if found < best_value - 1e-9:
