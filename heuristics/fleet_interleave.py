@@ -84,7 +84,7 @@ def _key(label: tuple[Any, ...]) -> float:
     the latest (on the n = 5 optima's sortie lists this kept the decoded value nearest the
     optimum among five such keys)."""
     T, drones = label[1], label[2]
-    clocks = [T] + [x[1] for x in drones if x is not None]
+    clocks = [T] + [x[4] if x[1] is None else x[1] for x in drones if x is not None]
     return sum(clocks) / len(clocks) + 0.5 * max(clocks)
 
 
@@ -119,18 +119,23 @@ class _Decoder:
         for r, j in p.precedences:
             self.preds[int(j)].append(int(r))
         self.release = np.zeros(p.n) if release is None else np.asarray(release, dtype=float)
+        self.mine: set[int] = set()
 
     def valid(self, sorties: SortieList) -> bool:
-        """Sizes 1..c, drones in range, and every same-truck predecessor served earlier (its
-        own sortie before, or an earlier launch)."""
+        """Sizes 1..c, drones in range, and every same-truck predecessor of a customer served
+        earlier on its sortie, on an earlier sortie, or on a later sortie of another drone
+        (the drone then waits at the customer; the decoder finds any deadlock)."""
+        where = {j: (i, d) for i, (d, cs) in enumerate(sorties) for j in cs}
         seen: set[int] = set()
-        mine = {j for _, cs in sorties for j in cs}
-        for d, cs in sorties:
+        for i, (d, cs) in enumerate(sorties):
             if not 1 <= len(cs) <= self.c or not 0 <= d < self.D:
                 return False
             for j in cs:
-                if any(r in mine and r not in seen for r in self.preds[j]):
-                    return False
+                for r in self.preds[j]:
+                    if r in seen or r not in where:
+                        continue
+                    if where[r][0] <= i or where[r][1] == d:
+                        return False
                 seen.add(j)
         return True
 
@@ -144,6 +149,7 @@ class _Decoder:
         at T, per drone None (aboard) or (last customer, time there, distance flown), the last
         service so far, the service times (dict), the events added by its transition."""
         fs, fc, tt, vd, tau, limit = self.fs, self.fc, self.tt, self.vd, self.tau, self.limit
+        self.mine = {j for _, cs in sorties for j in cs}
         root: tuple[Any, ...] = (None, start, (None,) * self.D, self.depot, 0.0, {}, ())
         beam: list[tuple[Any, ...]] = [root]
         for d, cs in sorties:
@@ -169,30 +175,25 @@ class _Decoder:
                     for a in self._launches(b, T1, first, back):
                         L = T1 + tt[b, a]
                         new_times = dict(times)
-                        t = L
-                        prev = -1
-                        for j in cs:
-                            t += (fs[j, a] if prev < 0 else fc[prev, j]) / vd + tau
-                            ready = self.release[j]
-                            for r in self.preds[j]:
-                                tr = new_times.get(r)
-                                if tr is not None and tr > ready:
-                                    ready = tr
-                            if ready > t:
-                                t = ready
-                            new_times[j] = t
-                            prev = j
                         used = float(fs[first, a]) + inner
                         new_drones: list[Any] = list(drones)
-                        new_drones[d] = (lastc, t, used)
+                        t = self._chain(a, L, cs, new_times)
+                        if t is None:  # a predecessor on a later sortie: times pending
+                            new_drones[d] = (lastc, None, used, a, L, cs)
+                            t = last
+                        else:
+                            new_drones[d] = (lastc, t, used)
+                        t = max(t, self._resolve(new_drones, new_times))
                         variants: list[tuple[float, tuple[Any, ...], tuple[Any, ...]]] = [
                             (L, tuple(new_drones), ())
                         ]
                         # the variant that also recovers the other airborne drones here
                         T2, more = L, list(new_drones)
                         extra: list[tuple[Any, ...]] = []
-                        for e, x in enumerate(drones):
-                            if e == d or x is None or x[2] + fs[x[0], a] > limit + 1e-9:
+                        for e, x in enumerate(new_drones):
+                            if e == d or x is None or x[1] is None:
+                                continue
+                            if x[2] + fs[x[0], a] > limit + 1e-9:
                                 continue
                             T2 = max(T2, x[1] + fs[x[0], a] / vd) + tau
                             more[e] = None
@@ -225,11 +226,60 @@ class _Decoder:
                 best_value, best_events = value, self._trace(label) + closing
         return best_value, best_events
 
+    def _chain(
+        self, a: int, L: float, cs: tuple[int, ...], times: dict[int, float]
+    ) -> float | None:
+        """Service times of a sortie launched from stop a at L (written into ``times``; a
+        drone waits at a customer for its predecessors and its release): the last one, or
+        None (``times`` untouched) when a predecessor on this truck is not served yet."""
+        fs, fc, vd, tau = self.fs, self.fc, self.vd, self.tau
+        t = L
+        prev = -1
+        found: list[tuple[int, float]] = []
+        for j in cs:
+            t += (fs[j, a] if prev < 0 else fc[prev, j]) / vd + tau
+            ready = self.release[j]
+            for r in self.preds[j]:
+                tr = times.get(r)
+                if tr is None:
+                    tr = next((x for y, x in found if y == r), None)
+                if tr is None:
+                    if r in self.mine:
+                        return None
+                    continue
+                if tr > ready:
+                    ready = tr
+            if ready > t:
+                t = ready
+            found.append((j, t))
+            prev = j
+        times.update(found)
+        return t
+
+    def _resolve(self, drones: list[Any], times: dict[int, float]) -> float:
+        """Settle the pending sorties whose predecessors are now served (in place); the
+        latest service time settled (0 when none)."""
+        latest = 0.0
+        changed = True
+        while changed:
+            changed = False
+            for e, x in enumerate(drones):
+                if x is None or x[1] is not None:
+                    continue
+                t = self._chain(x[3], x[4], x[5], times)
+                if t is not None:
+                    drones[e] = (x[0], t, x[2])
+                    latest = max(latest, t)
+                    changed = True
+        return latest
+
     def _close(self, label: tuple[Any, ...]) -> tuple[float, list[tuple[Any, ...]]]:
         """Recover every airborne drone (earliest first, each at its least-recovery stop) and
         the objective: the last service, or the truck's return home."""
         fs, tt, vd, tau = self.fs, self.tt, self.vd, self.tau
         _, T, drones, w, last, _, _ = label
+        if any(x is not None and x[1] is None for x in drones):
+            return INF, []  # a sortie still waits for a predecessor: a deadlock
         events: list[tuple[Any, ...]] = []
         airborne = sorted((x[1], d, x) for d, x in enumerate(drones) if x is not None)
         for _, d, (ac, aF, aused) in airborne:
@@ -257,7 +307,9 @@ class _Decoder:
         (``own`` True, its candidate stops) when it comes last: ``(stop, time, drones,
         events, own)``."""
         _, T, drones, w, _, _, _ = label
-        others = [e for e, x in enumerate(drones) if x is not None and e != d]
+        if drones[d] is not None and drones[d][1] is None:
+            return []  # drone d waits for a predecessor not launched yet: no recovery
+        others = [e for e, x in enumerate(drones) if x is not None and x[1] is not None and e != d]
         need = drones[d] is not None
         out: list[tuple[int, float, tuple[Any, ...], list[tuple[Any, ...]], bool]] = []
         fs, tt, vd, tau = self.fs, self.tt, self.vd, self.tau
@@ -549,9 +601,10 @@ def interleave_plan(
                     if j in mine and r not in mine:
                         release[j] = max(release[j], float(times[r]))
             decoder = _Decoder(problem, k, release)
-            start = _reorder(sortie_list(problem, best, k), decoder)
-            if not decoder.valid(start):
-                start = _singletons(problem, best, k)
+            listed = sortie_list(problem, best, k)
+            starts = [x for x in (listed, _reorder(listed, decoder)) if decoder.valid(x)]
+            starts.append(_singletons(problem, best, k))
+            start = min(starts, key=lambda x: decoder.decode(x, SEARCH_WIDTH)[0])
             left = deadline.remaining()
             share = None if left is None else left / (len(trucks) - index) / passes
             _, found = search_truck(decoder, start, rng, Deadline(share), iterations)
