@@ -11,17 +11,22 @@ both stayed 10-40 % above the certified optimum.
 Encoding (one truck k)
     A *sortie list*: the truck's sorties in launch order, each ``(drone, customers)`` with
     1..c customers in flying order. A list is *valid* when every precedence predecessor of a
-    customer on the same truck is served earlier on its own sortie or on a sortie launched
-    before (the decoder computes each sortie's service times at its launch).
+    customer on the same truck is served earlier on its own sortie, on a sortie launched
+    before, or on a later sortie of another drone: the drone then waits at the customer, its
+    sortie's times stay pending until the predecessor is served, and the truck cannot
+    recover it before (a list whose waits close a cycle decodes to ``inf``).
 
-Decoder (:meth:`_Decoder.decode`, a beam over the truck's stop sequence)
+Decoder (``_Decoder.decode``, a beam over the truck's stop sequence)
     The sorties are launched in list order. Before launching a sortie of drone d, the truck
-    recovers d's previous sortie if it is airborne, at one of :data:`NEAR_STOPS` stops nearest
-    its last customer (or where the truck stands), then drives to one of the stops nearest the
-    sortie's first customer (or stays) and launches it. A label holds the truck's stop and
+    recovers, in any order, a set of airborne drones that holds d when d is airborne: each at
+    the stop where its recovery is earliest, d's own (when it comes last) at one of the
+    :data:`NEAR_STOPS` stops of earliest recovery, the truck's stop or the stops nearest the
+    sortie's first customer. It then drives to one of the :data:`NEAR_STOPS` stops from which
+    the drone reaches the first customer earliest (or stays) and launches; a variant also
+    recovers there every other airborne drone in range. A label holds the truck's stop and
     time, each airborne drone's last customer, time there and distance flown, and every service
-    time so far; each launch expands every label into its (recovery stop, launch stop)
-    children and keeps the ``width`` best by :func:`_key`. After the last launch the airborne
+    time so far; each launch expands every label into these
+    children and keeps the ``width`` best by ``_key``. After the last launch the airborne
     drones are recovered greedily (least recovery time) and, under ``"return"``, the truck
     drives home. Times follow :mod:`taopt.fleet.evaluate`'s rules (a drone waits at a customer
     for a predecessor or a release; a recovery is ``max(truck there, drone there) + τ``), so
@@ -30,10 +35,11 @@ Decoder (:meth:`_Decoder.decode`, a beam over the truck's stop sequence)
     checked per sortie, each drone's sorties in order, every precedence satisfied by the times).
 
 Search (:func:`interleave_plan`)
-    Starts from the given plan's sorties (per truck, in launch order of its earliest schedule),
-    then repeats random moves (relocate a customer to another sortie or to a new one, swap two
-    customers, give a sortie to another drone, move a sortie in the launch order), keeping a
-    move when the decoded value does not grow; after :data:`STALL` moves without improvement
+    Starts from the best decoded of the given plan's sorties (per truck, in launch order of its
+    earliest schedule), the same reordered so that predecessors' sorties launch first, and one
+    sortie per customer; then repeats random moves (relocate a customer to another sortie or
+    to a new one, swap two customers, give a sortie to another drone, move a sortie in the
+    launch order), keeping a move when the decoded value does not grow; after :data:`STALL` moves without improvement
     it restarts from the best list with ``strength`` random moves. Seeded (``numpy``
     generator), stopped by ``iterations`` (tests) or ``time_limit`` (wall-clock). With several
     trucks each truck's sortie list is searched in turn, the other trucks' plans fixed and the
@@ -46,7 +52,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import time
 from typing import Any
 
 import numpy as np
@@ -621,15 +626,8 @@ def interleave_plan(
     return best
 
 
-def interleave_time(problem: FleetProblem) -> float:
-    """Seconds of a decode at :data:`SEARCH_WIDTH` (a rough measure, for budgets)."""
-    began = time.perf_counter()
-    decoder = _Decoder(problem, 0)
-    decoder.decode([(0, (j,)) for j in range(problem.n)], SEARCH_WIDTH)
-    return time.perf_counter() - began
-
-
 __all__ = [
+    "ACCEPT_WORSE",
     "FINAL_WIDTH",
     "NEAR_STOPS",
     "SEARCH_WIDTH",
