@@ -407,9 +407,9 @@ def sortie_list(problem: FleetProblem, plan: FleetPlan, k: int) -> SortieList:
 
 def _reorder(sorties: SortieList, decoder: _Decoder) -> SortieList:
     """The sorties in a launch order where each comes after the sorties serving its
-    customers' predecessors (the least original index first among the ready ones): a plan's
-    drone may wait at a customer for a predecessor launched later, which the decoder does not
-    model. Unchanged when the sorties' precedences form a cycle."""
+    customers' predecessors (the least original index first among the ready ones), so that
+    no drone waits at a customer for a later launch (one more start for the search).
+    Unchanged when the sorties' precedences form a cycle."""
     where = {j: i for i, (_, cs) in enumerate(sorties) for j in cs}
     needs = [
         {where[r] for j in cs for r in decoder.preds[j] if r in where and where[r] != i}
@@ -591,7 +591,7 @@ def interleave_plan(
     rng = np.random.default_rng(seed)
     trucks = [k for k in range(problem.K) if problem.drones[k] >= 1]
     passes = 1 if problem.K == 1 else max(int(rounds), 1)
-    for _ in range(passes):
+    for round_ in range(passes):
         improved = False
         for index, k in enumerate(trucks):
             if deadline.expired():
@@ -611,7 +611,8 @@ def interleave_plan(
             starts.append(_singletons(problem, best, k))
             start = min(starts, key=lambda x: decoder.decode(x, SEARCH_WIDTH)[0])
             left = deadline.remaining()
-            share = None if left is None else left / (len(trucks) - index) / passes
+            turns = len(trucks) - index + (passes - round_ - 1) * len(trucks)
+            share = None if left is None else left / turns
             _, found = search_truck(decoder, start, rng, Deadline(share), iterations)
             value, events = decoder.decode(found, FINAL_WIDTH)
             if events is None:
