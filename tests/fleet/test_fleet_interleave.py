@@ -61,8 +61,8 @@ def test_seeded():
     """The same seed gives the same plan."""
     problem = residential_fleet(6, 1, 2, 2, seed=1)
     start = ils_fleet(problem, seed=0, iterations=1).solution
-    a = interleave_plan(problem, start, seed=3, iterations=80)
-    b = interleave_plan(problem, start, seed=3, iterations=80)
+    a = interleave_plan(problem, start, seed=3, iterations=40)
+    b = interleave_plan(problem, start, seed=3, iterations=40)
     assert a.to_dict() == b.to_dict()
 
 
@@ -94,9 +94,9 @@ def test_decoded_value_bounds_the_earliest_schedule():
 def test_two_trucks_with_cross_precedence():
     """With two trucks (releases from the other truck's schedule) the plan stays feasible and
     no worse than its start."""
-    problem = residential_fleet(7, 2, 2, 1, seed=0)
+    problem = residential_fleet(6, 2, 2, 1, seed=0)
     start = ils_fleet(problem, seed=0, iterations=1).solution
-    plan = interleave_plan(problem, start, seed=0, iterations=40)
+    plan = interleave_plan(problem, start, seed=0, iterations=30)
     assert evaluate_fleet(problem, plan) <= evaluate_fleet(problem, start) + 1e-9
 
 
@@ -112,7 +112,7 @@ def test_not_applied_with_truck_only_customers():
 
 def test_improver_never_worse_than_plan():
     """improve_fleet (ILS, then the interleaved search) never returns a worse plan."""
-    problem = residential_fleet(5, 1, 2, 1, seed=1)
+    problem = _instance(CASES[1])
     start = ils_fleet(problem, seed=0, iterations=0).solution
     found = improve_fleet(problem, start, time_limit=None)
     assert evaluate_fleet(problem, found) <= evaluate_fleet(problem, start) + 1e-9
