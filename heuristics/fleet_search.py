@@ -855,6 +855,7 @@ def ils_fleet(
     strength: int = 3,
     accept_worse: float = 0.01,
     open_sorties: bool | None = None,
+    interleave: bool | None = None,
 ) -> Solution:
     """Iterated local search over the whole fleet (order, trucks and modes, decoded greedily).
 
@@ -874,7 +875,17 @@ def ils_fleet(
     the marginal key does not see the recovery a truck still owes before driving home, and
     open sorties made the TSP-D plans worse (1.00 -> 1.01-1.18 times the optimum on the
     5-node instances), so they are off there.
+
+    ``interleave``: end with the interleaved-sortie search
+    (:func:`taopt.heuristics.fleet_interleave.interleave_plan`, the plans whose drones
+    interleave around a truck that drives ahead), given the last
+    ``1 -`` :data:`IMPROVE_ILS_SHARE` of ``time_limit``. Default (None): when some truck
+    carries two or more drones, every customer may be served by a drone, and a time limit is
+    given (iteration-limited runs are unchanged). At n = 120, K = 3, D = 2, c = 2, seed 0,
+    30 s: 2554.0 (ILS alone) -> 2433.8. ``info["ils_objective"]``: the ILS's own value then.
     """
+    from taopt.heuristics.fleet_interleave import interleave_applies, interleave_plan
+
     began = time.perf_counter()
     why = _check_servable(problem)
     if why:
@@ -883,9 +894,13 @@ def ils_fleet(
     _check(iterations, sample, strength, accept_worse)
     if open_sorties is None:
         open_sorties = problem.objective == "last_service"
-    search = _Search(
-        problem, np.random.default_rng(seed), Deadline(time_limit), open_sorties=open_sorties
-    )
+    several = max(problem.drones, default=0) >= 2 and interleave_applies(problem)
+    if interleave is None:
+        interleave = several and time_limit is not None
+    interleave = bool(interleave) and several
+    whole = Deadline(time_limit)
+    own = time_limit if time_limit is None or not interleave else IMPROVE_ILS_SHARE * time_limit
+    search = _Search(problem, np.random.default_rng(seed), Deadline(own), open_sorties=open_sorties)
     built = [construct(problem, rule) for rule in ("MMA", "SMMA")]
     starts = [_encoding(b) for b in built]
     scored = [(search.value(*e), i) for i, e in enumerate(starts)]
@@ -926,7 +941,24 @@ def ils_fleet(
     }
     if not math.isfinite(best[0]):
         raise InstanceError("ILS found no plan")  # cannot happen: the starts are feasible
-    return _finish(problem, "ILS", best[1], began, seed, info, decoder_open)
+    result = _finish(problem, "ILS", best[1], began, seed, info, decoder_open)
+    if not interleave:
+        return result
+    moves = None if time_limit is not None else INTERLEAVE_MOVES_PER_CUSTOMER * problem.n
+    plan = interleave_plan(
+        problem, result.solution, seed=seed, time_limit=whole.remaining(), iterations=moves
+    )
+    if plan is result.solution:
+        return result
+    return make_solution(
+        problem,
+        plan,
+        method="ILS",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+        info={**result.info, "ils_objective": result.objective},
+    )
 
 
 #: Share of the improver's time (:func:`improve_fleet`) the ILS gets when some truck carries
@@ -975,10 +1007,13 @@ def improve_fleet(
         # ILS's time) keeps the c run no worse than what the c - 1 run would start from
         half = None if share is None else share / 2
         lesser = ils_fleet(
-            problem.replace(capacity=problem.capacity - 1), seed=seed, time_limit=half
+            problem.replace(capacity=problem.capacity - 1),
+            seed=seed,
+            time_limit=half,
+            interleave=False,
         )
         share = half
-    found = ils_fleet(problem, seed=seed, time_limit=share)
+    found = ils_fleet(problem, seed=seed, time_limit=share, interleave=False)
     best: Any = found.solution
     best_value = found.objective
     if lesser is not None:
