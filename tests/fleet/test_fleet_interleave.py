@@ -124,3 +124,15 @@ def test_cases_are_the_brute_force_optima():
     for case in CASES:
         value, _, _ = brute_force(_instance(case))
         assert value == pytest.approx(case[-1], rel=1e-9)
+
+
+def test_ils_interleaved_phase_never_worse():
+    """The ILS with its interleaved phase is no worse than without it (same seed and
+    iterations), and ``ils_objective`` records the ILS's own value when it improved."""
+    problem = residential_fleet(6, 1, 2, 1, seed=0)
+    plain = ils_fleet(problem, seed=2, iterations=1, interleave=False)
+    full = ils_fleet(problem, seed=2, iterations=1)
+    assert full.objective <= plain.objective + 1e-9
+    assert evaluate_fleet(problem, full.solution) == pytest.approx(full.objective, rel=1e-12)
+    if full.objective < plain.objective - 1e-9:
+        assert full.info["ils_objective"] == pytest.approx(plain.objective, rel=1e-12)
