@@ -855,6 +855,7 @@ def ils_fleet(
     strength: int = 3,
     accept_worse: float = 0.01,
     open_sorties: bool | None = None,
+    interleave: bool | None = None,
 ) -> Solution:
     """Iterated local search over the whole fleet (order, trucks and modes, decoded greedily).
 
@@ -874,7 +875,19 @@ def ils_fleet(
     the marginal key does not see the recovery a truck still owes before driving home, and
     open sorties made the TSP-D plans worse (1.00 -> 1.01-1.18 times the optimum on the
     5-node instances), so they are off there.
+
+    ``interleave``: end with the interleaved-sortie search
+    (:func:`taopt.heuristics.fleet_interleave.interleave_plan`, the plans whose drones
+    interleave around a truck that drives ahead):
+    :data:`ILS_INTERLEAVE_MOVES_PER_CUSTOMER` moves per customer, truck and round, within
+    the time left (the ILS itself stops at :data:`IMPROVE_ILS_SHARE` of ``time_limit``).
+    Default (None): with open sorties, when some truck carries two or more drones and every
+    customer may be served by a drone. At n = 120, K = 3, D = 2, c = 2, seed 0, 30 s:
+    2554.0 (ILS alone) -> 2433.8 (ILS 20 s, then the search 10 s).
+    ``info["ils_objective"]``: the ILS's own value when the search improved on it.
     """
+    from taopt.heuristics.fleet_interleave import interleave_applies, interleave_plan
+
     began = time.perf_counter()
     why = _check_servable(problem)
     if why:
@@ -883,9 +896,13 @@ def ils_fleet(
     _check(iterations, sample, strength, accept_worse)
     if open_sorties is None:
         open_sorties = problem.objective == "last_service"
-    search = _Search(
-        problem, np.random.default_rng(seed), Deadline(time_limit), open_sorties=open_sorties
-    )
+    several = max(problem.drones, default=0) >= 2 and interleave_applies(problem)
+    if interleave is None:
+        interleave = several and open_sorties
+    interleave = bool(interleave) and several
+    whole = Deadline(time_limit)
+    own = time_limit if time_limit is None or not interleave else IMPROVE_ILS_SHARE * time_limit
+    search = _Search(problem, np.random.default_rng(seed), Deadline(own), open_sorties=open_sorties)
     built = [construct(problem, rule) for rule in ("MMA", "SMMA")]
     starts = [_encoding(b) for b in built]
     scored = [(search.value(*e), i) for i, e in enumerate(starts)]
@@ -926,7 +943,48 @@ def ils_fleet(
     }
     if not math.isfinite(best[0]):
         raise InstanceError("ILS found no plan")  # cannot happen: the starts are feasible
-    return _finish(problem, "ILS", best[1], began, seed, info, decoder_open)
+    result = _finish(problem, "ILS", best[1], began, seed, info, decoder_open)
+    if not interleave:
+        return result
+    left = whole.remaining()
+    if left is not None and time_limit is not None:
+        left = max(left - ILS_CLOSING_SHARE * time_limit, 0.0)  # its closing decodes
+    plan = interleave_plan(
+        problem,
+        result.solution,
+        seed=seed,
+        time_limit=left,
+        iterations=ILS_INTERLEAVE_MOVES_PER_CUSTOMER * max(problem.n, 1),
+    )
+    if plan is result.solution:
+        return result
+    return make_solution(
+        problem,
+        plan,
+        method="ILS",
+        status=FEASIBLE,
+        runtime=time.perf_counter() - began,
+        seed=seed,
+        info={**result.info, "ils_objective": result.objective},
+    )
+
+
+#: Share of the improver's time (:func:`improve_fleet`) the ILS gets when some truck carries
+#: two or more drones; the rest goes to the interleaved-sortie search
+#: (:func:`taopt.heuristics.fleet_interleave.interleave_plan`).
+IMPROVE_ILS_SHARE = 2 / 3
+
+#: Moves per truck of the interleaved-sortie search per customer when the improver has no
+#: time limit (an exact run without a limit).
+INTERLEAVE_MOVES_PER_CUSTOMER = 40
+
+#: Moves per customer, truck and round of the interleaved-sortie search that ends
+#: :func:`ils_fleet` (capped by its time limit).
+ILS_INTERLEAVE_MOVES_PER_CUSTOMER = 5
+
+#: Share of :func:`ils_fleet`'s time limit kept for the interleaved phase's closing decodes
+#: and scoring (at n = 120 they took about 0.1 s past a 30 s limit).
+ILS_CLOSING_SHARE = 0.02
 
 
 @register_improver(FleetProblem)
@@ -935,24 +993,69 @@ def improve_fleet(
 ) -> Any:
     """The better of ``plan`` and :func:`ils_fleet`'s (within ``time_limit``): never worse.
 
+    When some truck carries two or more drones, the ILS gets :data:`IMPROVE_ILS_SHARE` of the
+    time (:func:`taopt.models.fleet.solve_fleet` gives such fleets half as much time again)
+    and its plan (or ``plan``, the better) is then improved by the interleaved-sortie
+    search (:func:`taopt.heuristics.fleet_interleave.interleave_plan`, the rest of the time,
+    skipped when the plan meets :func:`taopt.fleet.bounds.fleet_lower`'s fast bound;
+    without a limit :data:`INTERLEAVE_MOVES_PER_CUSTOMER` moves per customer and truck): the
+    plans whose drones interleave around a truck that drives ahead, which the ILS's decoder
+    cannot build. With c >= 3, half the ILS's time goes to the ILS at capacity c - 1 (its plan
+    is feasible at c; on fleet8 the c = 3 ILS had ended above the c = 2 one). On the n = 5
+    one-truck instances (D = 2, 3; c = 1, 2, 3; 18 instances) this
+    took the incumbent from 4-44 % above the certified optimum to 0-7 %.
+
     The improver of the fleet's label search (:func:`taopt.models.fleet.solve_fleet` takes it
     as ``improve`` and calls it before searching, so pruning starts at a good plan;
     :func:`taopt.solve` passes it, the model imports no heuristic).
     """
     from taopt.errors import FeasibilityError
+    from taopt.fleet.bounds import fleet_lower
     from taopt.fleet.evaluate import as_plan, evaluate_fleet
+    from taopt.heuristics.fleet_interleave import interleave_applies, interleave_plan
 
-    found = ils_fleet(problem, seed=seed, time_limit=time_limit)
-    if plan is None:
-        return found.solution
-    try:
-        value = evaluate_fleet(problem, as_plan(plan))
-    except FeasibilityError:
-        return found.solution
-    return found.solution if found.objective < value else plan
+    deadline = Deadline(time_limit)
+    several = max(problem.drones, default=0) >= 2 and interleave_applies(problem)
+    share = time_limit if time_limit is None or not several else IMPROVE_ILS_SHARE * time_limit
+    lesser = None
+    if several and problem.capacity >= 3:
+        # a plan for capacity c - 1 is one for c: the ILS of the smaller capacity (half the
+        # ILS's time) keeps the c run no worse than what the c - 1 run would start from
+        half = None if share is None else share / 2
+        lesser = ils_fleet(
+            problem.replace(capacity=problem.capacity - 1),
+            seed=seed,
+            time_limit=half,
+            interleave=False,
+        )
+        share = half
+    found = ils_fleet(problem, seed=seed, time_limit=share, interleave=False)
+    best: Any = found.solution
+    best_value = found.objective
+    if lesser is not None:
+        value = evaluate_fleet(problem, lesser.solution)
+        if value < best_value:
+            best, best_value = lesser.solution, value
+    if plan is not None:
+        try:
+            value = evaluate_fleet(problem, as_plan(plan))
+        except FeasibilityError:
+            value = math.inf
+        if value <= found.objective:
+            best, best_value = plan, value
+    if not several or best_value <= fleet_lower(problem, "fast") * (1 + 1e-9):
+        return best  # (a plan at the cheap bound is optimal: nothing to search)
+    moves = None if time_limit is not None else INTERLEAVE_MOVES_PER_CUSTOMER * problem.n
+    return interleave_plan(
+        problem, best, seed=seed, time_limit=deadline.remaining(), iterations=moves
+    )
 
 
 __all__ = [
+    "ILS_CLOSING_SHARE",
+    "ILS_INTERLEAVE_MOVES_PER_CUSTOMER",
+    "IMPROVE_ILS_SHARE",
+    "INTERLEAVE_MOVES_PER_CUSTOMER",
     "default_sample",
     "ils_fleet",
     "improve_fleet",

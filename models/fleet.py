@@ -321,10 +321,16 @@ def _one_drone_floor(problem: FleetProblem, time_limit: float | None) -> float:
 
 def _improve_share(problem: FleetProblem, time_limit: float | None) -> float | None:
     """The improver's time: :data:`IMPROVE_SHARE` of the limit, at most
-    :data:`IMPROVE_SECONDS_PER_CUSTOMER` per customer (None without a limit)."""
+    :data:`IMPROVE_SECONDS_PER_CUSTOMER` per customer (None without a limit); when some truck
+    carries two or more drones, half as much again for the interleaved-sortie search that
+    follows the ILS (:func:`taopt.heuristics.fleet_search.improve_fleet` gives the ILS
+    two thirds of it, the time it had alone)."""
     if time_limit is None:
         return None
-    return min(IMPROVE_SHARE * time_limit, IMPROVE_SECONDS_PER_CUSTOMER * max(problem.n, 1))
+    share = min(IMPROVE_SHARE * time_limit, IMPROVE_SECONDS_PER_CUSTOMER * max(problem.n, 1))
+    if max(problem.drones, default=0) >= 2:
+        share *= 1.5
+    return share
 
 
 def _root_cover(
