@@ -572,6 +572,12 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
+#: The guard's factor on :func:`dp_states_in` over the whole limit (:func:`_footprint`; the
+#: state caps, counted at the full :data:`DP_BYTES_PER_STATE`, bound a stage anyway): the
+#: most a DP stage was measured to keep over the expected, 1.4 (ry48p.1 at 60 s, 1.25
+#: million states, 2026-11-27).
+GUARD_STATE_FACTOR = 1.5
+
 #: States a DP stage is expected to keep per second over a stage of
 #: :data:`DP_RATE_SECONDS` (the memory estimate's rate, below the stage's state cap and the
 #: states the ideals allow; :func:`dp_states_in`). A stage that cannot close fills its cap at
@@ -693,12 +699,117 @@ def cpsat_worker_bytes(n: int) -> float:
     return CPSAT_WORKER_BYTES + CPSAT_BYTES_PER_NODE_PAIR * float(n) * float(n)
 
 
-def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
-    """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
+def milp_fits(
+    problem: SopProblem,
+    formulation: str,
+    max_memory_gb: float | None,
+    seconds: float | None = None,
+) -> bool:
+    """Whether the MILP's estimated memory is within the limit: the flow model's
+    (:func:`sop_milp_bytes`), or the cut engine's over ``seconds`` (None: no limit) at the
+    guard's :data:`CUT_GUARD_FACTOR` (:func:`cut_engine_bytes`)."""
     from taopt.runtime import max_memory_gb as limit_gb
 
     nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
-    return BASE_BYTES + sop_milp_bytes(nonzeros) <= limit_gb(max_memory_gb) * 1e9
+    if formulation == "cuts":
+        need = CUT_GUARD_FACTOR * cut_engine_bytes(nonzeros, seconds)
+    else:
+        need = sop_milp_bytes(nonzeros)
+    return BASE_BYTES + need <= limit_gb(max_memory_gb) * 1e9
+
+
+#: Peak bytes per usable arc of the cut engine's model, LP and cut rows
+#: (:func:`taopt.models.sop_cuts.solve_sop_cuts` before its MIP rounds), above
+#: :data:`SOP_MILP_BYTES` (:func:`cut_engine_bytes`; measured alone, 10 s, no MIP round:
+#: 2.7 KB an arc on a 300-node random SOP of 73,600 arcs, 2.3 KB on a 340-node rbg-like of
+#: 17,400, 3.7 KB on chains-120-3, 6 KB on esc-like-65; 2026-11-27,
+#: ``/work/scratch/m34-mem/cutmem.py``, load 5).
+CUT_LP_BYTES_PER_ARC = 2_500.0
+
+#: Peak bytes of the cut engine's MIP rounds (HiGHS's search trees and cut pools) over a run
+#: of :data:`CUT_RATE_SECONDS`, on :data:`CUT_MIP_ARCS` arcs or more (in proportion below):
+#: measured alone on p43.1, prob.42, ry48p.1 and ft53.1 (1,600-2,700 arcs, 2-10 rounds):
+#: 75-154 MB above the base at 10 s, 78-291 MB at 60 s (45-53 s used), 2026-11-27, load 1-3.
+CUT_MIP_BYTES = 80e6
+
+#: Arcs from which the cut engine's MIP rounds keep :data:`CUT_MIP_BYTES`.
+CUT_MIP_ARCS = 1_500.0
+
+#: The run length (seconds) at which the MIP rounds keep :data:`CUT_MIP_BYTES`.
+CUT_RATE_SECONDS = 10.0
+
+#: Exponent of the MIP rounds' peak in the run length (ry48p.1: 122 MB at 10 s, 210 MB at
+#: 45 s; ft53.1: 149 and 291 MB).
+CUT_EXPONENT = 0.4
+
+#: The run length the cut engine's peak is estimated at without a time limit.
+CUT_HORIZON = 600.0
+
+#: The guard's factor on :func:`cut_engine_bytes` (the largest measured peak over the
+#: estimate: ft53.1 at 60 s, 1.5).
+CUT_GUARD_FACTOR = 1.6
+
+
+def cut_engine_bytes(nonzeros: float, seconds: float | None) -> float:
+    """Estimated peak bytes of the cut engine (beyond the base) on the arc model of
+    ``nonzeros`` nonzeros (:func:`nonzero_count` with ``formulation="cuts"``, three per usable
+    arc) run for ``seconds`` (None: :data:`CUT_HORIZON`): :data:`SOP_MILP_BYTES`, plus
+    :data:`CUT_LP_BYTES_PER_ARC` an arc, plus the MIP rounds' :data:`CUT_MIP_BYTES` (times
+    ``min(1, arcs / CUT_MIP_ARCS)``) grown as ``(seconds / CUT_RATE_SECONDS) **
+    CUT_EXPONENT``; 0 for no model. Increasing in both."""
+    if not nonzeros:
+        return 0.0
+    arcs = float(nonzeros) / 3.0
+    span = CUT_HORIZON if seconds is None else max(float(seconds), 0.0)
+    grown = (span / CUT_RATE_SECONDS) ** CUT_EXPONENT
+    mip = CUT_MIP_BYTES * min(1.0, arcs / CUT_MIP_ARCS) * grown
+    return SOP_MILP_BYTES + CUT_LP_BYTES_PER_ARC * arcs + mip
+
+
+def root_gap(upper: float | None, lower: float) -> float:
+    """The root gap ``(upper - lower) / upper`` of the best order known before the stages
+    against the best bound then (1 without an order; 0 when closed)."""
+    if upper is None or not np.isfinite(upper) or upper <= 0:
+        return 1.0
+    return float(min(1.0, max(0.0, (upper - lower) / upper)))
+
+
+#: Root gap at and above which a DP stage is expected to keep the states of
+#: :func:`dp_states_in` (below it, in proportion: an instance whose root gap is small closes
+#: early and keeps few states) (:func:`predicted_peak`).
+GAP_FULL = 0.05
+
+#: Share of the states its ideals allow (``2 n`` times the ideals) a DP stage is expected to
+#: keep when they were counted (:func:`predicted_peak`).
+ALLOWED_SHARE = 0.1
+
+
+def predicted_peak(
+    problem: SopProblem,
+    path: str,
+    gap: float,
+    seconds: float | None,
+    cap: float,
+    allowed: float | None,
+    nonzeros: float,
+    cut_seconds: float | None = 0.0,
+) -> tuple[float, dict[str, Any]]:
+    """The reported memory estimate (``info["memory_estimate"]``) before the stages run."""
+    states = 0.0
+    if path != "cuts":
+        states = float(cap)
+        if seconds is not None:
+            states = min(states, dp_states_in(problem.n, seconds) * min(1.0, gap / GAP_FULL))
+        if allowed is not None:
+            states = min(states, ALLOWED_SHARE * allowed)
+    dp = dp_bytes(problem.n, states) * dp_state_share(problem)
+    held = cut_engine_bytes(nonzeros, 0.0)
+    cut = cut_engine_bytes(nonzeros, cut_seconds) if nonzeros and cut_seconds != 0 else 0.0
+    peak = BASE_BYTES + max(dp + held, cut)
+    features = {"path": path, "gap": gap, "seconds": seconds, "cap": cap, "allowed": allowed,
+                "nonzeros": nonzeros, "states": states, "cut_seconds": cut_seconds,
+                "n": problem.n, "share": dp_state_share(problem), "dp": dp, "cut": cut}
+    return peak, features
 
 
 @register_footprint(SopProblem, "exact")
@@ -738,12 +849,10 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
-    if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
-        # stage frees its states when it ends, so the peak is the longest stage's: the whole
-        # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
-        # those using the time left share the other half)
-        share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(dp_states_in(problem.n, seconds * share))
+    if seconds is not None:  # a DP stage keeps at most about the states it can make in its
+        # time (GUARD_STATE_FACTOR times the expected, the whole limit: the stages after the
+        # first, use_the_rest's included, may run up to the limit); the caps bound it anyway
+        wanted = int(GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds))
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
@@ -757,19 +866,23 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         seconds is None or MILP_SAFETY * compile_seconds(columns) <= MILP_TIME_SHARE * seconds
     )
     built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
+    if formulation == "cuts":  # array-built, interruptible: it runs whenever it fits
+        built = compiled = True
     if options.get("engine") == "milp" or (
         capped
         and built
         and options.get("engine") != "dp"
-        and milp_fits(problem, formulation, limit)
+        and milp_fits(problem, formulation, limit, seconds)
     ):
         nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
-        model = sop_milp_bytes(nonzeros, compiled)
-        if formulation == "cuts" and options.get("engine", "auto") == "auto":
-            # the root stage's cut model stays in memory beside the DP stages
-            total += model
+        if formulation == "cuts":  # its MIP rounds grow with their time (the whole limit)
+            model = CUT_GUARD_FACTOR * cut_engine_bytes(nonzeros, seconds)
+            if options.get("engine", "auto") == "auto":
+                # the root stage's model (no MIP round yet) stays beside the DP stages
+                total += cut_engine_bytes(nonzeros, 0.0)
         else:
-            total = max(total, BASE_BYTES + model)
+            model = sop_milp_bytes(nonzeros, compiled)
+        total = max(total, BASE_BYTES + model)
         what += f", {formulation} model of {columns:,} columns"
     if reserve:
         what += f", CP-SAT's worker {reserve / 1e6:,.0f} MB"
@@ -1595,11 +1708,28 @@ def _stages(
     alone_states = dp_state_cap(problem.n, max_memory_gb, every_state)
     plan = memory_plan(problem.n, max_memory_gb)  # "dp", or a degraded stage that fits
     info["memory_plan"] = plan
-    milp_ok = milp_fits(problem, formulation, max_memory_gb)
+    milp_ok = milp_fits(problem, formulation, max_memory_gb, time_limit)
     if not milp_ok:
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
     state_share = dp_state_share(problem)
+    cheap = _cheap_bound(problem)
+
+    def predict(path: str, known: Any, lower: float, seconds: float | None, cap: float) -> None:
+        """Record the reported estimate (``info["memory_estimate"]``), once, before the
+        stages: :func:`predicted_peak` from what is known now (``path``: "dp" alone, "dp"
+        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``)."""
+        value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
+        gap = root_gap(None if value is None else value[0], max(lower, cheap))
+        nonzeros = held() if path != "dp" or root_model is not None else 0.0
+        peak, features = predicted_peak(
+            problem, path, gap, seconds, cap, None if capped else every_state, nonzeros,
+            deadline.remaining() if milp_ok and formulation == "cuts" and path != "dp" else 0.0,
+        )
+        info["memory_prediction"] = features
+        predicted.append(peak)
+
+    predicted: list[float] = []
 
     def expect(
         states: float = 0.0,
@@ -1641,7 +1771,8 @@ def _stages(
             result = solve_sop_cuts(
                 problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
             )
-            expect(nonzeros=nonzero_count(problem.cost, problem.closure, problem.start, "cuts"))
+            nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
+            stage(BASE_BYTES + cut_engine_bytes(nonzeros, time_left))
         else:
             if dp_result is not None and time_left is not None:
                 # cvxpy's compile cannot be interrupted: after the DP stages the model is built
@@ -1729,6 +1860,7 @@ def _stages(
         alone = None if alone_states >= every_state else alone_states  # None: no cap
         dp_cap = max_states if capped else alone
         expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
+        predict("dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap)
         result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
@@ -1739,6 +1871,10 @@ def _stages(
             )
             if on_root is not None:
                 on_root(cuts_first)
+            root_bound = info["root_stage"]["bound"]
+            lower = float(root_bound) if np.isfinite(root_bound) else cheap
+            path = "cuts" if cuts_first else "root+dp"
+            predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if cuts_first:  # the root closed most of the gap: the cut engine gets the time
             result = milp(incumbent, deadline.remaining())
             used = "milp"
@@ -1793,6 +1929,11 @@ def _stages(
         setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
     stage(BASE_BYTES)  # the process itself, whatever ran
+    # the stages' upper estimate (each stage's, before it ran); the reported one is the
+    # prediction made before the stages, where the rule's paths made one
+    info["memory_stages"] = info["memory_estimate"]
+    if predicted:
+        info["memory_estimate"] = predicted[0]
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",
