@@ -470,11 +470,6 @@ def side_by_side(
                     cells.append(f"failed ({run.returncode}) | | | |")
                     continue
                 r = json.loads(run.stdout.strip().splitlines()[-1])
-            if record:  # every run's row, for fitting the estimate (predicted_peak)
-                with open(record, "a") as out:
-                    row = dict(r, name=name, limit=limit, side=side, load=load)
-                    row["loadavg"] = os.getloadavg()[0]
-                    out.write(json.dumps(row, default=str) + "\n")
                 bound = "" if r["bound"] is None else f"{r['bound']:g}"
                 cells.append(
                     f"{r['status']} | {r['objective']:g} | {bound} | {r['wall']:.1f} | "

@@ -806,9 +806,20 @@ def predicted_peak(
     held = cut_engine_bytes(nonzeros, 0.0)
     cut = cut_engine_bytes(nonzeros, cut_seconds) if nonzeros and cut_seconds != 0 else 0.0
     peak = BASE_BYTES + max(dp + held, cut)
-    features = {"path": path, "gap": gap, "seconds": seconds, "cap": cap, "allowed": allowed,
-                "nonzeros": nonzeros, "states": states, "cut_seconds": cut_seconds,
-                "n": problem.n, "share": dp_state_share(problem), "dp": dp, "cut": cut}
+    features = {
+        "path": path,
+        "gap": gap,
+        "seconds": seconds,
+        "cap": cap,
+        "allowed": allowed,
+        "nonzeros": nonzeros,
+        "states": states,
+        "cut_seconds": cut_seconds,
+        "n": problem.n,
+        "share": dp_state_share(problem),
+        "dp": dp,
+        "cut": cut,
+    }
     return peak, features
 
 
@@ -1723,7 +1734,13 @@ def _stages(
         gap = root_gap(None if value is None else value[0], max(lower, cheap))
         nonzeros = held() if path != "dp" or root_model is not None else 0.0
         peak, features = predicted_peak(
-            problem, path, gap, seconds, cap, None if capped else every_state, nonzeros,
+            problem,
+            path,
+            gap,
+            seconds,
+            cap,
+            None if capped else every_state,
+            nonzeros,
             deadline.remaining() if milp_ok and formulation == "cuts" and path != "dp" else 0.0,
         )
         info["memory_prediction"] = features
@@ -1860,7 +1877,9 @@ def _stages(
         alone = None if alone_states >= every_state else alone_states  # None: no cap
         dp_cap = max_states if capped else alone
         expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
-        predict("dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap)
+        predict(
+            "dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap
+        )
         result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
