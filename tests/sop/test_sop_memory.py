@@ -167,15 +167,15 @@ def test_small_limit_degrades_instead_of_refusing(esc47):
 @pytest.mark.parametrize("path", ["dp", "root+dp", "cuts"])
 def test_guard_is_never_below_the_reported_estimate(esc47, limit, path):
     """The guard made before the run is at least the estimate predicted before the stages,
-    whatever the root gap, the path the rule takes and the time the stages get."""
+    whatever path the rule takes and the time the stages get within the limit."""
     from taopt.models.sop import PORTFOLIO_MAX_STATES, nonzero_count, predicted_peak
 
     guard, _ = _footprint(esc47, {"time_limit": limit, "cpsat": False})
     nonzeros = 0 if path == "dp" else nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
-    for gap in (0.0, 0.01, 0.1, 0.5, 1.0):
-        for seconds in (0.0, 0.5 * limit, limit):
+    for seconds in (0.0, 0.01 * limit, 0.5 * limit, limit):
+        for cut_seconds in (0.0, seconds, limit):
             estimate, _ = predicted_peak(
-                esc47, path, gap, seconds, PORTFOLIO_MAX_STATES, None, nonzeros, limit
+                esc47, path, seconds, PORTFOLIO_MAX_STATES, None, nonzeros, cut_seconds
             )
             assert estimate <= guard
 
@@ -190,21 +190,19 @@ def test_run_reports_an_estimate_within_its_guard(esc25):
 
 
 def test_estimate_is_monotone_in_its_inputs(esc47):
-    """The reported estimate never falls as the root gap, the DP's time, its cap, the
-    states the ideals allow or the cut engine's time grow."""
-    from taopt.models.sop import nonzero_count, predicted_peak
+    """The reported estimate never falls as the DP's time, its cap, the states the ideals
+    allow or the cut engine's time grow, and the DP's states never pass its cap."""
+    from taopt.models.sop import nonzero_count, predicted_peak, predicted_states
 
     nz = nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
 
     def at(**change):
-        args = dict(gap=0.1, seconds=30.0, cap=2_000_000, allowed=None, cut=60.0) | change
+        args = dict(seconds=30.0, cap=2_000_000, allowed=None, cut=60.0) | change
         return predicted_peak(
-            esc47, "root+dp", args["gap"], args["seconds"], args["cap"], args["allowed"], nz,
-            args["cut"],
-        )[0]  # fmt: skip
+            esc47, "root+dp", args["seconds"], args["cap"], args["allowed"], nz, args["cut"]
+        )[0]
 
     for key, values in (
-        ("gap", (0.0, 0.01, 0.05, 0.2, 1.0)),
         ("seconds", (0.0, 1.0, 10.0, 60.0, 600.0)),
         ("cap", (1_000, 100_000, 2_000_000)),
         ("allowed", (1e3, 1e5, 1e7)),
@@ -212,6 +210,8 @@ def test_estimate_is_monotone_in_its_inputs(esc47):
     ):
         estimates = [at(**{key: v}) for v in values]
         assert estimates == sorted(estimates), key
+    assert predicted_states(esc47.n, 600.0, 5_000, None) == 5_000
+    assert predicted_states(esc47.n, None, 5_000, 1e3) <= 1e3
 
 
 def test_cut_engine_estimate_grows_with_its_arcs_and_time():
