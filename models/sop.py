@@ -645,12 +645,17 @@ def dp_state_share(problem: SopProblem) -> float:
     c = 0.11), and with the DP alone for a whole 60 s limit the flat constant put p43.4's
     estimate at 2.4x its peak. Used for the estimate only; the state caps keep the full
     constant."""
+    return float(min(1.0, max(0.2, (1.0 - closure_share(problem)) / 0.89)))
+
+
+def closure_share(problem: SopProblem) -> float:
+    """The share ``c`` of the inner node pairs (start and end left out) that the precedence
+    closure orders (0 for none, 1 for a chain)."""
     m = problem.n - 2
     if m < 2:
-        return 1.0
+        return 0.0
     ends = 2 * m + 1  # start before and end after every node
-    share = max(0.0, problem.closure.number_of_edges() - ends) / (m * (m - 1) / 2)
-    return float(min(1.0, max(0.2, (1.0 - share) / 0.89)))
+    return float(max(0.0, problem.closure.number_of_edges() - ends) / (m * (m - 1) / 2))
 
 
 #: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
@@ -851,6 +856,7 @@ def predicted_peak(
         "cut_seconds": cut_seconds,
         "n": problem.n,
         "share": dp_state_share(problem),
+        "closure": closure_share(problem),
         "states": states,
         "dp": dp,
         "cut": cut,
