@@ -23,12 +23,15 @@ every shipped SOP file, :data:`RESOURCES`) in its own fresh process and prints s
 objective, bound, wall time (``time.perf_counter`` around the call), the overrun over
 ``T + max(1 s, 5 %)``, the peak resident memory of the run: that process's
 (``resource.getrusage``, ``ru_maxrss``) plus CP-SAT's worker's beside it (the reaped
-children's ``ru_maxrss``), against the memory guard's estimate made before the run
-(:func:`taopt.runtime.footprint`, CP-SAT's worker counted when it runs) and the engine's own
-(``info["memory_estimate"]``, each stage estimated before it started), with the ratios
-peak / estimate; a ratio outside [0.5, 2] is marked ``**out**`` and listed at the end. ``--load`` starts a second process spinning on one core for the
-duration (the shared-machine condition of issue 33). ``--generated`` adds the generated
-instances of :data:`GENERATED` (``taopt.sop.generate``).
+children's ``ru_maxrss``), against the memory guard's upper estimate made before the run
+(:func:`taopt.runtime.footprint`, CP-SAT's worker counted when it runs; a ratio above 2 is
+marked) and the reported estimate (``info["memory_estimate"]``, predicted once before the
+stages by :func:`taopt.models.sop.predicted_peak`; a ratio outside [0.5, 2] is marked
+``**out**``), listed at the end. ``--load`` starts a second process spinning on one core for
+the duration (the shared-machine condition of issue 33). ``--generated`` adds the generated
+instances of :data:`GENERATED` (``taopt.sop.generate``). ``--record FILE`` appends each run's
+row (the prediction's inputs, the states kept, the peaks) as JSON, the data
+:func:`~taopt.models.sop.predicted_peak` is fitted on.
 
 ``--compare T`` runs, on each instance (default: :data:`COMPARE`, read from the shipped
 files or from ``../shared/benchmarks/tsplib``), ``taopt.solve(problem, "exact")`` (the
