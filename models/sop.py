@@ -866,8 +866,12 @@ def predicted_peak(
 
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
-    """The portfolio's peak: the larger of its DP stages (their state caps, the states the
-    ideals allow, the states it can make in its time) and the MILP when it fits the limit;
+    """The guard: a safe upper estimate of the portfolio's peak before the run (the reported
+    estimate, :func:`predicted_peak`, is never above it): the larger of its DP stages (their
+    state caps, the states the ideals allow, :data:`GUARD_STATE_FACTOR` times the states it
+    can make in the whole limit) beside the root stage's cut model, and the MILP when it fits
+    the limit (the cut engine's MIP rounds over the whole limit, :func:`cut_engine_bytes`
+    at :data:`CUT_GUARD_FACTOR`);
     above the limit the stage that fits (:func:`taopt.models.sop_stages.memory_plan`: the
     DP with a smaller cap, the beam, the bounds alone), so the estimate fits too (never a
     refusal for size alone). CP-SAT's worker (:func:`cpsat_worker_bytes`) is counted when it
@@ -1558,9 +1562,12 @@ def solve_sop_problem(
         ``worker``: why its worker was stopped), ``order_from`` / ``bound_from``
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
-        ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
-        before it started, plus CP-SAT's worker when it ran beside,
-        :func:`cpsat_worker_bytes`; ``info["cpsat"]["memory_estimate"]`` is the worker's),
+        ``memory_estimate`` (the peak bytes predicted once before the stages,
+        :func:`predicted_peak`, with its inputs in ``memory_prediction``; where the rule made
+        no prediction, a degraded or forced engine, the largest of the stages' estimates;
+        plus CP-SAT's worker when it ran beside, :func:`cpsat_worker_bytes`;
+        ``info["cpsat"]["memory_estimate"]`` is the worker's), ``memory_stages`` (the
+        largest of the stages' upper estimates, each made before the stage started),
         ``rest`` (what ran after the stages, if anything) and ``root_stage`` when it ran (its
         bound, seconds, LP rounds, the share of the gap it closed, ``cuts_first``);
         ``cpsat["stopped"]`` when the rule stopped CP-SAT.
