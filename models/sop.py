@@ -623,6 +623,12 @@ def dp_states_in(n: int, seconds: float) -> float:
     return dp_states_per_second(n) * span
 
 
+#: A DP stage's setup (outside its clock) over the cheap bounds' time (:func:`_cheap_bound`,
+#: measured in the portfolio): chains-380-8-x0.01 set up in 3.8-4.2 s after 0.5-0.8 s of
+#: cheap bounds at load 7-8 (2026-11-27; its two directions' bounds on both price sets). A
+#: first DP stage after the root stage starts only when its share covers this guess.
+DP_SETUP_PER_BOUND = 5.0
+
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
 MILP_TIME_SHARE = 0.1
@@ -864,6 +870,12 @@ def predicted_peak(
     return peak, features
 
 
+#: The ideal count the guard (:func:`_footprint`) just made, by problem identity: ``(problem,
+#: cap, (count, capped), seconds)``, taken (once) by the portfolio run that follows it, so a
+#: ``taopt.solve`` call counts once (up to :data:`COUNT_SHARE` of its limit, on its clock).
+_COUNTED: dict[int, tuple[SopProblem, int, tuple[int, bool], float]] = {}
+
+
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     """The guard: a safe upper estimate of the portfolio's peak before the run (the reported
@@ -901,7 +913,12 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         total = min(total + reserve, limit_gb(given) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
-    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
+    cap = options.get("ideal_cap") or IDEAL_CAP
+    began = time.perf_counter()
+    count, capped = count_ideals(problem, cap, counting)
+    # handed to the run that follows this guard (taopt.solve's), which would count again
+    _COUNTED.clear()
+    _COUNTED[id(problem)] = (problem, int(cap), (count, capped), time.perf_counter() - began)
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
@@ -1756,10 +1773,18 @@ def _stages(
     counting_deadline = (
         Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
     )
-    ideals, capped = count_ideals(problem, cap, counting_deadline)
-    counted_in = time.perf_counter() - counting
+    handed = _COUNTED.pop(id(problem), None)
+    if handed is not None and handed[0] is problem and handed[1] == cap:
+        (ideals, capped), counted_in = handed[2], handed[3]  # the guard's count, just made
+    else:
+        ideals, capped = count_ideals(problem, cap, counting_deadline)
+        counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    bounding = time.perf_counter()
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
+    # a DP stage's setup (its bounds, its first layers) runs outside its clock: about
+    # DP_SETUP_PER_BOUND times the cheap bounds just computed, at least the count's time
+    setup_guess = max(counted_in, DP_SETUP_PER_BOUND * (time.perf_counter() - bounding))
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
     second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
     # all the states the ideals allow (both directions), unless the memory caps them
@@ -1954,11 +1979,23 @@ def _stages(
             used = "milp"
         else:
             share = deadline.share(DP_SHARE)
-            expect(max_states, share, nonzeros=held())
-            result = solve_sop_dp(
-                problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
-            )
             used = "dp"
+            if share is not None and share < setup_guess + MARGIN:
+                # the root stage left too little for the DP's setup (chains-380-8-x0.01 at
+                # 10 s, load 7: 0.7 s left, a 3.8 s setup, ended at 13-15 s): not started
+                info["dp"] = f"skipped: {share:.2f} s for a {setup_guess:.2f} s setup"
+                known = _known_order(
+                    problem.cost, problem.closure, problem.start, problem.end, incumbent
+                )
+                bound = info["root_stage"]["bound"]
+                stop_info = {"model": "not run", "setup_seconds": setup_guess}
+                result = _stopped(problem, known, bound, began, "portfolio", stop_info)
+                used = "root"
+            else:
+                expect(max_states, share, nonzeros=held())
+                result = solve_sop_dp(
+                    problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
+                )
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
