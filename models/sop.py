@@ -544,7 +544,8 @@ BASE_BYTES = 160e6
 #: (695 B a state; p43.1 1.78 million at 949 MB, 446 B; 2026-11, ``bench_sop.py --resources
 #: 60``). Per state alone the peaks of short runs spread from 94 B (p43.4, dense precedence:
 #: few extensions per state) to 1.5 KB (ESC47, ft53.1: a setup of 50-100 MB the base
-#: absorbs); the estimate scales it by :func:`dp_state_share`.
+#: absorbs); the reported estimate (:func:`predicted_peak`) scales it by
+#: :func:`dp_state_share`, the guard does not.
 DP_BYTES_PER_STATE = 700.0
 
 
@@ -574,7 +575,7 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
 
-#: The guard's factor on :func:`dp_states_in` over the whole limit (:func:`_footprint`; the
+#: The guard's factor on :func:`dp_states_in` over the whole limit (the registered footprint; the
 #: state caps, counted at the full :data:`DP_BYTES_PER_STATE`, bound a stage anyway): the
 #: most a DP stage was measured to keep over the expected, 1.4 (ry48p.1 at 60 s, 1.25
 #: million states, 2026-11-27).
@@ -623,7 +624,7 @@ def dp_states_in(n: int, seconds: float) -> float:
     return dp_states_per_second(n) * span
 
 
-#: A DP stage's setup (outside its clock) over the cheap bounds' time (:func:`_cheap_bound`,
+#: A DP stage's setup (outside its clock) over the cheap bounds' time (assignment and arborescence,
 #: measured in the portfolio): chains-380-8-x0.01 set up in 3.8-4.2 s after 0.5-0.8 s of
 #: cheap bounds at load 7-8 (2026-11-27; its two directions' bounds on both price sets). A
 #: first DP stage after the root stage starts only when its share covers this guess.
@@ -846,7 +847,10 @@ def predicted_peak(
     known before the stages does not tell the instances that close early from those that
     fill their states: ESC47 (root gap 0.17, 23,000 states, 181 MB) and ry48p.1 (root gap
     0.11, 1.25 million states, 845 MB) look alike at 60 s without CP-SAT, so one of the two is
-    outside 2x; the estimate keeps the shipped ones in (docs/benchmarks.md, SOP memory).
+    outside 2x; the estimate keeps the early closers in (docs/benchmarks.md, SOP memory:
+    without CP-SAT at 60 s prob.42, ry48p.1 and rbg050c, which fill their DP stages, were
+    2.4-2.9x above it; with CP-SAT beside, and at 10 s, every shipped file was within 2x,
+    and every generated instance at 10 s).
     """
     states = 0.0 if path == "cuts" else predicted_states(problem.n, seconds, cap, allowed)
     dp = dp_bytes(problem.n, states) * dp_state_share(problem)
@@ -870,7 +874,7 @@ def predicted_peak(
     return peak, features
 
 
-#: The ideal count the guard (:func:`_footprint`) just made, by problem identity: ``(problem,
+#: The ideal count the guard (``_footprint``) just made, by problem identity: ``(problem,
 #: cap, (count, capped), seconds)``, taken (once) by the portfolio run that follows it, so a
 #: ``taopt.solve`` call counts once (up to :data:`COUNT_SHARE` of its limit, on its clock).
 _COUNTED: dict[int, tuple[SopProblem, int, tuple[int, bool], float]] = {}
