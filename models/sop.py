@@ -532,8 +532,10 @@ def nonzero_count(
 # peak). Re-run both after the flow model changes.
 
 #: Peak resident bytes of a process that has imported taopt, numpy, scipy, cvxpy and highspy
-#: and loaded an instance (measured: 154-155 MB over 67 runs, 2026-11).
-BASE_BYTES = 155e6
+#: and loaded an instance (measured: 154-155 MB over 67 runs, 2026-11; 159-162 MB for the
+#: shipped files of 9-18 nodes, closed in under a second, 2026-11-27, ``bench_sop.py
+#: --resources 60``).
+BASE_BYTES = 160e6
 
 #: Bytes per DP state kept, one-word masks (the state arrays, 32 bytes, and the work arrays
 #: of the largest layer's extensions, merge and completion bound); 8 more per extra word.
@@ -542,7 +544,8 @@ BASE_BYTES = 155e6
 #: (695 B a state; p43.1 1.78 million at 949 MB, 446 B; 2026-11, ``bench_sop.py --resources
 #: 60``). Per state alone the peaks of short runs spread from 94 B (p43.4, dense precedence:
 #: few extensions per state) to 1.5 KB (ESC47, ft53.1: a setup of 50-100 MB the base
-#: absorbs); the estimate scales it by :func:`dp_state_share`.
+#: absorbs); the reported estimate (:func:`predicted_peak`) scales it by
+#: :func:`dp_state_share`, the guard does not.
 DP_BYTES_PER_STATE = 700.0
 
 
@@ -571,6 +574,12 @@ def sop_milp_bytes(nonzeros: float, compiled: bool = True) -> float:
         return SOP_BUILD_BYTES_PER_NONZERO * float(nonzeros)
     return SOP_MILP_BYTES + SOP_MILP_BYTES_PER_NONZERO * float(nonzeros)
 
+
+#: The guard's factor on :func:`dp_states_in` over the whole limit (the registered footprint; the
+#: state caps, counted at the full :data:`DP_BYTES_PER_STATE`, bound a stage anyway): the
+#: most a DP stage was measured to keep over the expected, 1.4 (ry48p.1 at 60 s, 1.25
+#: million states, 2026-11-27).
+GUARD_STATE_FACTOR = 1.5
 
 #: States a DP stage is expected to keep per second over a stage of
 #: :data:`DP_RATE_SECONDS` (the memory estimate's rate, below the stage's state cap and the
@@ -615,6 +624,12 @@ def dp_states_in(n: int, seconds: float) -> float:
     return dp_states_per_second(n) * span
 
 
+#: A DP stage's setup (outside its clock) over the cheap bounds' time (assignment and arborescence,
+#: measured in the portfolio): chains-380-8-x0.01 set up in 3.8-4.2 s after 0.5-0.8 s of
+#: cheap bounds at load 7-8 (2026-11-27; its two directions' bounds on both price sets). A
+#: first DP stage after the root stage starts only when its share covers this guess.
+DP_SETUP_PER_BOUND = 5.0
+
 #: The share of a time limit the MILP stage gets after the warm start and the two DP
 #: stages ((1 - WARM_START_SHARE) (1 - DP_SHARE) (1 - SECOND_STAGE_SHARE), about 0.1).
 MILP_TIME_SHARE = 0.1
@@ -637,12 +652,17 @@ def dp_state_share(problem: SopProblem) -> float:
     c = 0.11), and with the DP alone for a whole 60 s limit the flat constant put p43.4's
     estimate at 2.4x its peak. Used for the estimate only; the state caps keep the full
     constant."""
+    return float(min(1.0, max(0.2, (1.0 - closure_share(problem)) / 0.89)))
+
+
+def closure_share(problem: SopProblem) -> float:
+    """The share ``c`` of the inner node pairs (start and end left out) that the precedence
+    closure orders (0 for none, 1 for a chain)."""
     m = problem.n - 2
     if m < 2:
-        return 1.0
+        return 0.0
     ends = 2 * m + 1  # start before and end after every node
-    share = max(0.0, problem.closure.number_of_edges() - ends) / (m * (m - 1) / 2)
-    return float(min(1.0, max(0.2, (1.0 - share) / 0.89)))
+    return float(max(0.0, problem.closure.number_of_edges() - ends) / (m * (m - 1) / 2))
 
 
 #: Peak bytes per beam slot (width x nodes) of ``taopt.models.sop_dp.beam_order``: its
@@ -674,8 +694,8 @@ def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int, reserve: floa
 
 #: Peak resident bytes of CP-SAT's worker process beside the portfolio (a Python with
 #: OR-Tools imported; measured 157-165 MB from 9 to 80 nodes, ``ru_maxrss`` of the reaped
-#: worker).
-CPSAT_WORKER_BYTES = 150e6
+#: worker; 157-159 MB on the shipped files of 9-18 nodes, 165 MB on 27-49, 2026-11-27).
+CPSAT_WORKER_BYTES = 157e6
 
 #: Peak bytes of CP-SAT's worker per node pair (n^2) above :data:`CPSAT_WORKER_BYTES`
 #: (fitted on the rbg-like stand-ins of 110-380 nodes beside the portfolio for 60 s: 157,
@@ -693,18 +713,181 @@ def cpsat_worker_bytes(n: int) -> float:
     return CPSAT_WORKER_BYTES + CPSAT_BYTES_PER_NODE_PAIR * float(n) * float(n)
 
 
-def milp_fits(problem: SopProblem, formulation: str, max_memory_gb: float | None) -> bool:
-    """Whether the MILP's estimated memory (:func:`sop_milp_bytes`) is within the limit."""
+def milp_fits(
+    problem: SopProblem,
+    formulation: str,
+    max_memory_gb: float | None,
+    seconds: float | None = None,
+) -> bool:
+    """Whether the MILP's estimated memory is within the limit: the flow model's
+    (:func:`sop_milp_bytes`), or the cut engine's over ``seconds`` (None: no limit) at the
+    guard's :data:`CUT_GUARD_FACTOR` (:func:`cut_engine_bytes`)."""
     from taopt.runtime import max_memory_gb as limit_gb
 
     nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
-    return BASE_BYTES + sop_milp_bytes(nonzeros) <= limit_gb(max_memory_gb) * 1e9
+    if formulation == "cuts":
+        need = CUT_GUARD_FACTOR * cut_engine_bytes(nonzeros, seconds)
+    else:
+        need = sop_milp_bytes(nonzeros)
+    return BASE_BYTES + need <= limit_gb(max_memory_gb) * 1e9
+
+
+#: Peak bytes per usable arc of the cut engine's model, LP and cut rows
+#: (:func:`taopt.models.sop_cuts.solve_sop_cuts` before its MIP rounds), above
+#: :data:`SOP_MILP_BYTES` (:func:`cut_engine_bytes`; measured alone, 10 s, no MIP round:
+#: 2.7 KB an arc on a 300-node random SOP of 73,600 arcs, 2.3 KB on a 340-node rbg-like of
+#: 17,400, 3.7 KB on chains-120-3, 6 KB on esc-like-65; 2026-11-27,
+#: ``/work/scratch/m34-mem/cutmem.py``, load 5).
+CUT_LP_BYTES_PER_ARC = 2_500.0
+
+#: Peak bytes of the cut engine's MIP rounds (HiGHS's search trees and cut pools) over a run
+#: of :data:`CUT_RATE_SECONDS`, on :data:`CUT_MIP_ARCS` arcs or more (in proportion below):
+#: measured alone on p43.1, prob.42, ry48p.1 and ft53.1 (1,600-2,700 arcs, 2-10 rounds):
+#: 75-154 MB above the base at 10 s, 78-291 MB at 60 s (45-53 s used), 2026-11-27, load 1-3.
+CUT_MIP_BYTES = 80e6
+
+#: Arcs from which the cut engine's MIP rounds keep :data:`CUT_MIP_BYTES`.
+CUT_MIP_ARCS = 1_500.0
+
+#: The run length (seconds) at which the MIP rounds keep :data:`CUT_MIP_BYTES`.
+CUT_RATE_SECONDS = 10.0
+
+#: Exponent of the MIP rounds' peak in the run length (ry48p.1: 122 MB at 10 s, 210 MB at
+#: 45 s; ft53.1: 149 and 291 MB).
+CUT_EXPONENT = 0.4
+
+#: The run length the cut engine's peak is estimated at without a time limit.
+CUT_HORIZON = 600.0
+
+#: The guard's factor on :func:`cut_engine_bytes` (the largest measured peak over the
+#: estimate: ft53.1 at 60 s, 1.5).
+CUT_GUARD_FACTOR = 1.6
+
+
+def cut_engine_bytes(nonzeros: float, seconds: float | None) -> float:
+    """Estimated peak bytes of the cut engine (beyond the base) on the arc model of
+    ``nonzeros`` nonzeros (:func:`nonzero_count` with ``formulation="cuts"``, three per usable
+    arc) run for ``seconds`` (None: :data:`CUT_HORIZON`): :data:`SOP_MILP_BYTES`, plus
+    :data:`CUT_LP_BYTES_PER_ARC` an arc, plus the MIP rounds' :data:`CUT_MIP_BYTES` (times
+    ``min(1, arcs / CUT_MIP_ARCS)``) grown as ``(seconds / CUT_RATE_SECONDS) **
+    CUT_EXPONENT``; 0 for no model. Increasing in both."""
+    if not nonzeros:
+        return 0.0
+    arcs = float(nonzeros) / 3.0
+    span = CUT_HORIZON if seconds is None else max(float(seconds), 0.0)
+    grown = (span / CUT_RATE_SECONDS) ** CUT_EXPONENT
+    mip = CUT_MIP_BYTES * min(1.0, arcs / CUT_MIP_ARCS) * grown
+    return SOP_MILP_BYTES + CUT_LP_BYTES_PER_ARC * arcs + mip
+
+
+def root_gap(upper: float | None, lower: float) -> float:
+    """The root gap ``(upper - lower) / upper`` of the best order known before the stages
+    against the best bound then (1 without an order; 0 when closed)."""
+    if upper is None or not np.isfinite(upper) or upper <= 0:
+        return 1.0
+    return float(min(1.0, max(0.0, (upper - lower) / upper)))
+
+
+#: The reported estimate's DP states (:func:`predicted_states`) as a share of
+#: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted, :func:`predicted_peak`).
+PREDICTED_RATE_SHARE = 0.5
+
+#: Exponent of the reported estimate's DP states in the stage's length (fitted; below
+#: :data:`DP_RATE_EXPONENT`: the longer runs include the instances that close early).
+PREDICTED_EXPONENT = 0.6
+
+#: Share of the states its ideals allow (``2 n`` times the ideals) a DP stage is expected to
+#: keep when they were counted (fitted: p43.4, ry48p.4, ft53.4 kept 3-8 % of them).
+ALLOWED_SHARE = 0.1
+
+
+def predicted_states(n: int, seconds: float | None, cap: float, allowed: float | None) -> float:
+    """The DP states the reported estimate expects of a stage of ``seconds`` (None: no
+    limit) on ``n`` nodes: :data:`PREDICTED_RATE_SHARE` of :func:`dp_states_per_second`
+    over :data:`DP_RATE_SECONDS`, grown as ``(seconds / DP_RATE_SECONDS) **
+    PREDICTED_EXPONENT``, at most the guard's (:data:`GUARD_STATE_FACTOR` times
+    :func:`dp_states_in`), the stage's ``cap`` and :data:`ALLOWED_SHARE` of the states the
+    ideals allow (``allowed``, None when the count was cut short); increasing in each."""
+    states = float(cap)
+    if seconds is not None:
+        span = max(float(seconds), 0.0) / DP_RATE_SECONDS
+        rate = PREDICTED_RATE_SHARE * dp_states_per_second(n) * DP_RATE_SECONDS
+        states = min(states, rate * span**PREDICTED_EXPONENT)
+        states = min(states, GUARD_STATE_FACTOR * dp_states_in(n, float(seconds)))
+    if allowed is not None:
+        states = min(states, ALLOWED_SHARE * float(allowed))
+    return states
+
+
+def predicted_peak(
+    problem: SopProblem,
+    path: str,
+    seconds: float | None,
+    cap: float,
+    allowed: float | None,
+    nonzeros: float,
+    cut_seconds: float | None = 0.0,
+) -> tuple[float, dict[str, Any]]:
+    """The reported memory estimate (``info["memory_estimate"]``), predicted once before the
+    portfolio's stages run, and its parts.
+
+    ``path`` is the rule's choice: "dp" (the DP alone on counted ideals), "root+dp" (the
+    root stage, then the DP stages, then the cut engine) or "cuts" (the cut engine first);
+    ``seconds`` the first DP stage's time, ``cap`` its state cap, ``allowed`` the states the
+    ideals allow (None: too many to count), ``nonzeros`` the root stage's cut model
+    (:func:`nonzero_count`, 0 for none) and ``cut_seconds`` the time the cut engine may get
+    (0: it does not run). The peak is the base plus the larger of the DP phase (the
+    :func:`predicted_states`, at :func:`dp_bytes` scaled by :func:`dp_state_share`, beside
+    the root stage's model) and the cut engine's phase (:func:`cut_engine_bytes`).
+
+    Fitted (``python benchmarks/bench_sop.py --resources T --cpsat both --record runs.jsonl``
+    at 10 and 60 s on the shipped files, p43.1, prob.42, ry48p.1, ft53.1 and the generated
+    instances of ``GENERATED`` at 10 s; 2026-11-27, this 2-core machine, load 4-8 from other
+    sessions) to keep the ratio peak / estimate within [0.5, 2] on the most runs. What is
+    known before the stages does not tell the instances that close early from those that
+    fill their states: ESC47 (root gap 0.17, 23,000 states, 181 MB) and ry48p.1 (root gap
+    0.11, 1.25 million states, 845 MB) look alike at 60 s without CP-SAT, so one of the two is
+    outside 2x; the estimate keeps the early closers in (docs/benchmarks.md, SOP memory:
+    without CP-SAT at 60 s prob.42, ry48p.1 and rbg050c, which fill their DP stages, were
+    2.4-2.9x above it; with CP-SAT beside, and at 10 s, every shipped file was within 2x,
+    and every generated instance at 10 s).
+    """
+    states = 0.0 if path == "cuts" else predicted_states(problem.n, seconds, cap, allowed)
+    dp = dp_bytes(problem.n, states) * dp_state_share(problem)
+    held = cut_engine_bytes(nonzeros, 0.0)
+    cut = cut_engine_bytes(nonzeros, cut_seconds) if cut_seconds != 0 else 0.0
+    peak = BASE_BYTES + max(dp + held, cut)
+    features = {
+        "path": path,
+        "seconds": seconds,
+        "cap": cap,
+        "allowed": allowed,
+        "nonzeros": nonzeros,
+        "cut_seconds": cut_seconds,
+        "n": problem.n,
+        "share": dp_state_share(problem),
+        "closure": closure_share(problem),
+        "states": states,
+        "dp": dp,
+        "cut": cut,
+    }
+    return peak, features
+
+
+#: The ideal count the guard (``_footprint``) just made, by problem identity: ``(problem,
+#: cap, (count, capped), seconds)``, taken (once) by the portfolio run that follows it, so a
+#: ``taopt.solve`` call counts once (up to :data:`COUNT_SHARE` of its limit, on its clock).
+_COUNTED: dict[int, tuple[SopProblem, int, tuple[int, bool], float]] = {}
 
 
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
-    """The portfolio's peak: the larger of its DP stages (their state caps, the states the
-    ideals allow, the states it can make in its time) and the MILP when it fits the limit;
+    """The guard: a safe upper estimate of the portfolio's peak before the run (the reported
+    estimate, :func:`predicted_peak`, is never above it): the larger of its DP stages (their
+    state caps, the states the ideals allow, :data:`GUARD_STATE_FACTOR` times the states it
+    can make in the whole limit) beside the root stage's cut model, and the MILP when it fits
+    the limit (the cut engine's MIP rounds over the whole limit, :func:`cut_engine_bytes`
+    at :data:`CUT_GUARD_FACTOR`);
     above the limit the stage that fits (:func:`taopt.models.sop_stages.memory_plan`: the
     DP with a smaller cap, the beam, the bounds alone), so the estimate fits too (never a
     refusal for size alone). CP-SAT's worker (:func:`cpsat_worker_bytes`) is counted when it
@@ -734,20 +917,25 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         total = min(total + reserve, limit_gb(given) * 1e9)
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
-    count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
+    cap = options.get("ideal_cap") or IDEAL_CAP
+    began = time.perf_counter()
+    count, capped = count_ideals(problem, cap, counting)
+    # handed to the run that follows this guard (taopt.solve's), which would count again
+    _COUNTED.clear()
+    _COUNTED[id(problem)] = (problem, int(cap), (count, capped), time.perf_counter() - began)
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
-    if seconds is not None:  # a DP stage keeps about the states it can make in its time; each
-        # stage frees its states when it ends, so the peak is the longest stage's: the whole
-        # limit for the DP alone, else DP_SHARE of it (the first stage; the later stages and
-        # those using the time left share the other half)
-        share = DP_SHARE if capped and options.get("engine") != "dp" else 1.0
-        wanted = int(dp_states_in(problem.n, seconds * share))
+    if seconds is not None:  # a DP stage keeps at most about the states it can make in its
+        # time (GUARD_STATE_FACTOR times the expected, the whole limit: the stages after the
+        # first, use_the_rest's included, may run up to the limit); the caps bound it anyway
+        wanted = int(GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds))
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
-    total = BASE_BYTES + dp_bytes(problem.n, states) * dp_state_share(problem)
+    # at the full bytes a state (not dp_state_share's): rbg050c's second DP stage peaked at
+    # 915 MB at 60 s without CP-SAT, above a guard scaled by its share (804 MB)
+    total = BASE_BYTES + dp_bytes(problem.n, states)
     what = f"the SOP portfolio on{name} ({problem.n} nodes, DP up to {states:,} states"
     columns = column_count(problem.cost, problem.closure, problem.start, formulation)
     # the MILP runs only after capped DP stages, and takes its memory when it is compiled for
@@ -757,19 +945,23 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         seconds is None or MILP_SAFETY * compile_seconds(columns) <= MILP_TIME_SHARE * seconds
     )
     built = seconds is None or columns * SECONDS_PER_COLUMN <= MILP_TIME_SHARE * seconds
+    if formulation == "cuts":  # array-built, interruptible: it runs whenever it fits
+        built = compiled = True
     if options.get("engine") == "milp" or (
         capped
         and built
         and options.get("engine") != "dp"
-        and milp_fits(problem, formulation, limit)
+        and milp_fits(problem, formulation, limit, seconds)
     ):
         nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, formulation)
-        model = sop_milp_bytes(nonzeros, compiled)
-        if formulation == "cuts" and options.get("engine", "auto") == "auto":
-            # the root stage's cut model stays in memory beside the DP stages
-            total += model
+        if formulation == "cuts":  # its MIP rounds grow with their time (the whole limit)
+            model = CUT_GUARD_FACTOR * cut_engine_bytes(nonzeros, seconds)
+            if options.get("engine", "auto") == "auto":
+                # the root stage's model (no MIP round yet) stays beside the DP stages
+                total += cut_engine_bytes(nonzeros, 0.0)
         else:
-            total = max(total, BASE_BYTES + model)
+            model = sop_milp_bytes(nonzeros, compiled)
+        total = max(total, BASE_BYTES + model)
         what += f", {formulation} model of {columns:,} columns"
     if reserve:
         what += f", CP-SAT's worker {reserve / 1e6:,.0f} MB"
@@ -1393,9 +1585,12 @@ def solve_sop_problem(
         ``worker``: why its worker was stopped), ``order_from`` / ``bound_from``
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
-        ``memory_estimate`` (the estimated peak bytes of the stages run, each estimated
-        before it started, plus CP-SAT's worker when it ran beside,
-        :func:`cpsat_worker_bytes`; ``info["cpsat"]["memory_estimate"]`` is the worker's),
+        ``memory_estimate`` (the peak bytes predicted once before the stages,
+        :func:`predicted_peak`, with its inputs in ``memory_prediction``; where the rule made
+        no prediction, a degraded or forced engine, the largest of the stages' estimates;
+        plus CP-SAT's worker when it ran beside, :func:`cpsat_worker_bytes`;
+        ``info["cpsat"]["memory_estimate"]`` is the worker's), ``memory_stages`` (the
+        largest of the stages' upper estimates, each made before the stage started),
         ``rest`` (what ran after the stages, if anything) and ``root_stage`` when it ran (its
         bound, seconds, LP rounds, the share of the gap it closed, ``cuts_first``);
         ``cpsat["stopped"]`` when the rule stopped CP-SAT.
@@ -1584,10 +1779,18 @@ def _stages(
     counting_deadline = (
         Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
     )
-    ideals, capped = count_ideals(problem, cap, counting_deadline)
-    counted_in = time.perf_counter() - counting
+    handed = _COUNTED.pop(id(problem), None)
+    if handed is not None and handed[0] is problem and handed[1] == cap:
+        (ideals, capped), counted_in = handed[2], handed[3]  # the guard's count, just made
+    else:
+        ideals, capped = count_ideals(problem, cap, counting_deadline)
+        counted_in = time.perf_counter() - counting
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    bounding = time.perf_counter()
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
+    # a DP stage's setup (its bounds, its first layers) runs outside its clock: about
+    # DP_SETUP_PER_BOUND times the cheap bounds just computed, at least the count's time
+    setup_guess = max(counted_in, DP_SETUP_PER_BOUND * (time.perf_counter() - bounding))
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
     second_states = dp_state_cap(problem.n, max_memory_gb, max(max_states, SECOND_STAGE_MAX_STATES))
     # all the states the ideals allow (both directions), unless the memory caps them
@@ -1595,11 +1798,41 @@ def _stages(
     alone_states = dp_state_cap(problem.n, max_memory_gb, every_state)
     plan = memory_plan(problem.n, max_memory_gb)  # "dp", or a degraded stage that fits
     info["memory_plan"] = plan
-    milp_ok = milp_fits(problem, formulation, max_memory_gb)
+    milp_ok = milp_fits(problem, formulation, max_memory_gb, time_limit)
     if not milp_ok:
         info["milp"] = "skipped: its memory estimate is above the limit"
     setups: list[float] = []  # the measured setup of each DP stage run (outside its clock)
     state_share = dp_state_share(problem)
+    cheap = _cheap_bound(problem)
+
+    def predict(path: str, known: Any, lower: float, seconds: float | None, cap: float) -> None:
+        """Record the reported estimate (``info["memory_estimate"]``), once, before the
+        stages: :func:`predicted_peak` from what is known now (``path``: "dp" alone, "dp"
+        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``)."""
+        value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
+        gap = root_gap(None if value is None else value[0], max(lower, cheap))
+        nonzeros = held() if path != "dp" or root_model is not None else 0.0
+        peak, features = predicted_peak(
+            problem,
+            path,
+            seconds,
+            cap,
+            None if capped else every_state,
+            nonzeros,
+            cut_time(path),
+        )
+        info["memory_prediction"] = {**features, "gap": gap}
+        predicted.append(peak)
+
+    predicted: list[float] = []
+
+    def cut_time(path: str) -> float | None:
+        """The most time the cut engine gets on ``path`` (0: it does not run): all the time
+        left when it goes first, else what the first DP stage leaves (``1 - DP_SHARE``)."""
+        if path == "dp" or not milp_ok or formulation != "cuts":
+            return 0.0
+        left = deadline.remaining()
+        return left if left is None or path == "cuts" else left * (1.0 - DP_SHARE)
 
     def expect(
         states: float = 0.0,
@@ -1641,7 +1874,8 @@ def _stages(
             result = solve_sop_cuts(
                 problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
             )
-            expect(nonzeros=nonzero_count(problem.cost, problem.closure, problem.start, "cuts"))
+            nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
+            stage(BASE_BYTES + cut_engine_bytes(nonzeros, time_left))
         else:
             if dp_result is not None and time_left is not None:
                 # cvxpy's compile cannot be interrupted: after the DP stages the model is built
@@ -1729,6 +1963,9 @@ def _stages(
         alone = None if alone_states >= every_state else alone_states  # None: no cap
         dp_cap = max_states if capped else alone
         expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
+        predict(
+            "dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap
+        )
         result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
         used = "dp"
     else:
@@ -1739,16 +1976,32 @@ def _stages(
             )
             if on_root is not None:
                 on_root(cuts_first)
+            root_bound = info["root_stage"]["bound"]
+            lower = float(root_bound) if np.isfinite(root_bound) else cheap
+            path = "cuts" if cuts_first else "root+dp"
+            predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if cuts_first:  # the root closed most of the gap: the cut engine gets the time
             result = milp(incumbent, deadline.remaining())
             used = "milp"
         else:
             share = deadline.share(DP_SHARE)
-            expect(max_states, share, nonzeros=held())
-            result = solve_sop_dp(
-                problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
-            )
             used = "dp"
+            if share is not None and share < setup_guess + MARGIN:
+                # the root stage left too little for the DP's setup (chains-380-8-x0.01 at
+                # 10 s, load 7: 0.7 s left, a 3.8 s setup, ended at 13-15 s): not started
+                info["dp"] = f"skipped: {share:.2f} s for a {setup_guess:.2f} s setup"
+                known = _known_order(
+                    problem.cost, problem.closure, problem.start, problem.end, incumbent
+                )
+                bound = info["root_stage"]["bound"]
+                stop_info = {"model": "not run", "setup_seconds": setup_guess}
+                result = _stopped(problem, known, bound, began, "portfolio", stop_info)
+                used = "root"
+            else:
+                expect(max_states, share, nonzeros=held())
+                result = solve_sop_dp(
+                    problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
+                )
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
@@ -1793,6 +2046,11 @@ def _stages(
         setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
     stage(BASE_BYTES)  # the process itself, whatever ran
+    # the stages' upper estimate (each stage's, before it ran); the reported one is the
+    # prediction made before the stages, where the rule's paths made one
+    info["memory_stages"] = info["memory_estimate"]
+    if predicted:
+        info["memory_estimate"] = predicted[0]
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",

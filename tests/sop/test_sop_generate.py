@@ -102,7 +102,7 @@ def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
     assert dp_states_per_second(40) == dp_states_per_second(64) == DP_STATES_PER_SECOND
     assert dp_states_per_second(128) == DP_STATES_PER_SECOND / 2
     problem = rbg_like_sop(150, 1, 0.8)
-    estimate, _ = _footprint(problem, {"time_limit": 60.0})
+    estimate, _ = _footprint(problem, {"time_limit": 60.0, "engine": "dp", "cpsat": False})
     assert estimate <= BASE_BYTES + dp_bytes(150, 60 * dp_states_per_second(150)) + 1
 
 

@@ -161,3 +161,104 @@ def test_small_limit_degrades_instead_of_refusing(esc47):
     assert evaluate_order(esc47, result.order) == result.objective
     assert result.bound is not None and result.bound <= result.objective
     assert result.info["memory_estimate"] <= gb * 1e9
+
+
+@pytest.mark.parametrize("limit", [1.0, 10.0, 60.0])
+@pytest.mark.parametrize("path", ["dp", "root+dp", "cuts"])
+def test_guard_is_never_below_the_reported_estimate(esc47, limit, path):
+    """The guard made before the run is at least the estimate predicted before the stages,
+    whatever path the rule takes and the time the stages get within the limit."""
+    from taopt.models.sop import PORTFOLIO_MAX_STATES, nonzero_count, predicted_peak
+
+    guard, _ = _footprint(esc47, {"time_limit": limit, "cpsat": False})
+    nonzeros = 0 if path == "dp" else nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
+    for seconds in (0.0, 0.01 * limit, 0.5 * limit, limit):
+        for cut_seconds in (0.0, seconds, limit):
+            estimate, _ = predicted_peak(
+                esc47, path, seconds, PORTFOLIO_MAX_STATES, None, nonzeros, cut_seconds
+            )
+            assert estimate <= guard
+
+
+def test_run_reports_an_estimate_within_its_guard(esc25):
+    """A portfolio run's reported estimate (predicted before its stages) is at most the
+    guard's for the same call, and above the process's base."""
+    guard, _ = _footprint(esc25, {"time_limit": 1.0, "cpsat": False})
+    result = solve_sop_problem(esc25, time_limit=1.0, cpsat=False)
+    assert BASE_BYTES <= result.info["memory_estimate"] <= guard
+    if result.info["engine"] != "none":  # a stage ran: the rule predicted before it
+        assert result.info["memory_prediction"]["path"] in ("dp", "root+dp", "cuts")
+
+
+def test_estimate_is_monotone_in_its_inputs(esc47):
+    """The reported estimate never falls as the DP's time, its cap, the states the ideals
+    allow or the cut engine's time grow, and the DP's states never pass its cap."""
+    from taopt.models.sop import nonzero_count, predicted_peak, predicted_states
+
+    nz = nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
+
+    def at(**change):
+        args = dict(seconds=30.0, cap=2_000_000, allowed=None, cut=60.0) | change
+        return predicted_peak(
+            esc47, "root+dp", args["seconds"], args["cap"], args["allowed"], nz, args["cut"]
+        )[0]
+
+    for key, values in (
+        ("seconds", (0.0, 1.0, 10.0, 60.0, 600.0)),
+        ("cap", (1_000, 100_000, 2_000_000)),
+        ("allowed", (1e3, 1e5, 1e7)),
+        ("cut", (1.0, 10.0, 60.0, 600.0)),
+    ):
+        estimates = [at(**{key: v}) for v in values]
+        assert estimates == sorted(estimates), key
+    assert predicted_states(esc47.n, 600.0, 5_000, None) == 5_000
+    assert predicted_states(esc47.n, None, 5_000, 1e3) <= 1e3
+
+
+def test_cut_engine_estimate_grows_with_its_arcs_and_time():
+    """The cut engine's estimate is 0 without a model, then grows with the arcs and the
+    seconds, its MIP rounds counted in full from CUT_MIP_ARCS arcs on."""
+    from taopt.models.sop import CUT_MIP_ARCS, SOP_MILP_BYTES, cut_engine_bytes
+
+    assert cut_engine_bytes(0, 60.0) == 0.0
+    assert cut_engine_bytes(3 * 100, 0.0) > SOP_MILP_BYTES
+    by_arcs = [cut_engine_bytes(3 * a, 10.0) for a in (100, 1_000, CUT_MIP_ARCS, 20_000)]
+    by_time = [cut_engine_bytes(3 * 2_000, t) for t in (0.0, 1.0, 10.0, 60.0, None)]
+    assert by_arcs == sorted(by_arcs) and by_time == sorted(by_time)
+
+
+def test_guard_counts_the_cut_engine_and_skips_it_when_it_does_not_fit(esc47):
+    """With room the guard counts the cut engine's MIP rounds over the limit (at the
+    guard's factor); under a limit that fits the DP but not those, the cut engine is
+    skipped (milp_fits), the run degrades to the DP instead of refusing."""
+    from taopt.models.sop import CUT_GUARD_FACTOR, cut_engine_bytes, milp_fits, nonzero_count
+
+    nz = nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
+    roomy, what = _footprint(esc47, {"time_limit": 60.0, "cpsat": False, "max_memory_gb": 64})
+    assert roomy >= BASE_BYTES + CUT_GUARD_FACTOR * cut_engine_bytes(nz, 60.0)
+    assert "cuts model" in what
+    tight = (BASE_BYTES + cut_engine_bytes(nz, 0.0) + dp_bytes(esc47.n, 20_000)) / 1e9
+    assert not milp_fits(esc47, "cuts", tight, 60.0)
+    assert memory_plan(esc47.n, tight) == "dp"
+    estimate, what = _footprint(esc47, {"time_limit": 60.0, "cpsat": False, "max_memory_gb": tight})
+    assert estimate <= tight * 1e9 and "cuts model" not in what
+
+
+def test_solve_counts_the_ideals_once(monkeypatch):
+    """taopt.solve's guard counts the ideals and the run that follows takes its count (one
+    count per call, on the call's clock); a direct portfolio call counts for itself."""
+    from taopt.models import sop_dp
+
+    problem = random_sop(12, 0.2, 5)
+    calls = []
+    real = sop_dp.count_ideals
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sop_dp, "count_ideals", counted)
+    result = taopt.solve(problem, "exact", time_limit=5.0, cpsat=False)
+    assert len(calls) == 1 and result.status == OPTIMAL
+    again = solve_sop_problem(problem, time_limit=5.0, cpsat=False)
+    assert len(calls) == 2 and again.objective == result.objective
