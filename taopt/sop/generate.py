@@ -13,9 +13,13 @@ the tests and ``benchmarks/bench_sop.py`` draw from (seeded, deterministic).
 * :func:`atsp_sop`: an ATSP cost matrix (a TSPLIB ``.atsp`` file) made a path from node 0
   to a copy of node 0, with :func:`random_sop`'s precedences or random pairs up to a
   closure share (``closure=``, TSPLIB's .1-.4 densities).
-* :func:`rbg_like_sop` and :func:`esc_like_sop`: stand-ins for TSPLIB's rbg and ESC families
-  (chains with cross links to a closure share, small integer costs; sparse random
-  precedences, costs up to 1000), the unseen instances of issue 33.
+* :func:`rbg_from_atsp`: a stand-in for TSPLIB's rbg SOP family built from the same
+  stacker-crane application's ATSP moves (``rbg403``/``rbg443``) with precedences from the
+  jobs' time windows (an interval order, as rbg048a and rbg050c are), the unseen rbg
+  instances of issue 33.
+* :func:`rbg_like_sop` and :func:`esc_like_sop`: the first stand-ins for TSPLIB's rbg and ESC
+  families (chains with cross links to a closure share, uniform costs 0-33, unlike the real
+  rbg files: CP-SAT finds no order on them; sparse random precedences, costs up to 1000).
 
 Example
 -------
@@ -252,7 +256,7 @@ def rbg_from_atsp(
     -------
     >>> import numpy as np
     >>> rng = np.random.default_rng(0)
-    >>> p = rbg_from_atsp(rng.integers(0, 34, size=(60, 60)).astype(float), 40, seed=1)
+    >>> p = rbg_from_atsp(rng.integers(0, 34, size=(60, 60)).astype(float), 40, 1, closure=0.5)
     >>> p.n, p.start, p.end
     (40, 0, 39)
     """
