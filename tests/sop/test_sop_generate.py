@@ -172,3 +172,16 @@ def test_portfolio_equals_brute_force_on_small_rbg_from_atsp(seed):
     result = solve_sop_problem(problem, time_limit=30)
     assert result.status == OPTIMAL and result.objective == expected
     assert evaluate_order(problem, result.order) == expected
+
+
+@pytest.mark.slow
+def test_portfolio_equals_cpsat_proof_on_a_crane_instance():
+    """On a 24-node crane instance the portfolio's own stages (CP-SAT off) prove the optimum
+    that CP-SAT, run alone, proves too."""
+    from taopt.heuristics.peers import cpsat_sop
+
+    problem = rbg_from_atsp(_crane_moves(), 24, 2, 0.4, batch=3.0)
+    ours = solve_sop_problem(problem, time_limit=30, cpsat=False)
+    theirs = cpsat_sop(problem, time_limit=30)
+    assert ours.status == OPTIMAL and theirs.status == OPTIMAL
+    assert ours.objective == theirs.objective == evaluate_order(problem, ours.order)
