@@ -735,6 +735,9 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
+    if reserve and options.get("cpsat") is None and CPSAT_SKIP_COUNTED:
+        if _dp_alone_exact(problem.n, count, capped, given):  # CP-SAT will not run
+            reserve, limit = 0.0, given
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
@@ -1189,6 +1192,24 @@ CPSAT_STOP_WAIT = 2.0
 #: the portfolio). Chosen by the figures in ``docs/benchmarks.md`` (SOP section).
 CPSAT_NICE = 0
 
+#: With ``cpsat=None``, CP-SAT is not started when the order ideals were counted (at most
+#: :data:`taopt.models.sop_dp.IDEAL_CAP`) and every state they allow fits the memory: the DP
+#: then runs alone and uncapped (an exact search), where CP-SAT's circuit model has not
+#: helped on any instance measured (the dense-precedence .4 files, the crane stand-ins
+#: of ``rbg_from_atsp`` at closure 0.84-0.89: no order in 60 s) and its worker takes a core
+#: from the DP (a 110-node crane stand-in, 58,930 ideals: 10.2 s alone, 13.6 s beside).
+CPSAT_SKIP_COUNTED = True
+
+
+def _dp_alone_exact(n: int, ideals: int, capped: bool, max_memory_gb: float | None) -> bool:
+    """Whether the portfolio's DP runs alone and uncapped: the ideals were counted and the
+    states they allow (both directions, ``2 n`` a ideal) fit the memory
+    (:func:`dp_state_cap`)."""
+    if capped:
+        return False
+    every_state = 2 * n * ideals
+    return dp_state_cap(n, max_memory_gb, every_state) >= every_state
+
 
 def _cpsat_peer(
     problem: SopProblem,
@@ -1318,7 +1339,9 @@ def solve_sop_problem(
     the one rule (:func:`taopt.status.decide`). By default (``cpsat=None``) CP-SAT runs
     when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
     :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
-    :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``. The wall time stays within the limit
+    :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``, unless the order ideals, counted first
+    (on the clock), are few enough for the DP to run alone and uncapped within the memory
+    (:data:`CPSAT_SKIP_COUNTED`). The wall time stays within the limit
     plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop
     are on the clock.
 
@@ -1410,15 +1433,29 @@ def solve_sop_problem(
         engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
     )  # fmt: skip
     peer, why = _cpsat_peer(problem, cpsat, engine, time_limit, max_memory_gb)
+    counted: tuple[int, bool, float] | None = None
+    if peer is not None and cpsat is None and CPSAT_SKIP_COUNTED:
+        # the count the stages need, made now (on the clock) to decide whether CP-SAT runs
+        from taopt.models.sop_dp import IDEAL_CAP, count_ideals
+
+        cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
+        counting = None if time_limit is None else Deadline(COUNT_SHARE * time_limit)
+        ideals, capped = count_ideals(problem, cap, counting)
+        counted = (ideals, capped, time.perf_counter() - began)
+        if _dp_alone_exact(problem.n, ideals, capped, max_memory_gb):
+            peer = None
+            why = f"off: {ideals:,} ideals, the DP runs alone and uncapped (CPSAT_SKIP_COUNTED)"
     if peer is None:
-        result = _stages(problem, time_limit, **options)
-        return result.replace(info={**result.info, "cpsat": why})
+        result = _stages(problem, _left(time_limit, began), **options, counted=counted)
+        runtime = time.perf_counter() - began
+        return result.replace(runtime=runtime, info={**result.info, "cpsat": why})
     # CP-SAT's worker is a process of its own: its memory is counted, the stages get the rest
     reserve = cpsat_worker_bytes(problem.n)
     options["max_memory_gb"] = _stage_limit(max_memory_gb, reserve)
-    outer = Deadline(time_limit)  # the caller's token, if any, stops both sides
+    left = _left(time_limit, began)  # less the count, when it was made above
+    outer = Deadline(left)  # the caller's token, if any, stops both sides
     race = CancelToken(parent=outer.token)  # cancelled when CP-SAT proves the optimum
-    seconds = None if time_limit is None else max(time_limit - CPSAT_MARGIN, MARGIN)
+    seconds = None if left is None else max(left - CPSAT_MARGIN, MARGIN)
 
     def run_cpsat() -> Solution:
         found = peer(problem, time_limit=seconds, num_workers=1, nice=CPSAT_NICE)
@@ -1450,7 +1487,7 @@ def solve_sop_problem(
 
     try:
         with cancel_scope(race):
-            ours = _stages(problem, time_limit, **options, on_root=on_root)
+            ours = _stages(problem, left, **options, on_root=on_root, counted=counted)
     except BaseException:  # Ctrl-C or an error: stop CP-SAT's worker too, then re-raise
         task.cancel()
         task.wait(CPSAT_STOP_WAIT)
@@ -1505,6 +1542,13 @@ def solve_sop_problem(
             "memory_estimate": estimate,
         },
     )
+
+
+def _left(time_limit: float | None, began: float) -> float | None:
+    """The part of ``time_limit`` left since ``began`` (never below :data:`MARGIN`)."""
+    if time_limit is None:
+        return None
+    return max(time_limit - (time.perf_counter() - began), MARGIN)
 
 
 def _root_stage(
@@ -1566,10 +1610,12 @@ def _stages(
     max_states: int,
     max_memory_gb: float | None,
     on_root: Callable[[bool], None] | None = None,
+    counted: tuple[int, bool, float] | None = None,
 ) -> Solution:
     """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
 
-    ``on_root(cuts_first)`` is called after the root stage (when it ran)."""
+    ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
+    ``(ideals, capped, seconds)`` of a count already made (not made again)."""
     from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
@@ -1584,8 +1630,11 @@ def _stages(
     counting_deadline = (
         Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
     )
-    ideals, capped = count_ideals(problem, cap, counting_deadline)
-    counted_in = time.perf_counter() - counting
+    if counted is None:
+        ideals, capped = count_ideals(problem, cap, counting_deadline)
+        counted_in = time.perf_counter() - counting
+    else:
+        ideals, capped, counted_in = counted
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
     max_states = dp_state_cap(problem.n, max_memory_gb, max_states)
