@@ -735,9 +735,8 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         return total, f"the SOP portfolio on{name} ({problem.n} nodes, degraded to the {plan})"
     counting = None if seconds is None else Deadline(COUNT_SHARE * seconds)
     count, capped = count_ideals(problem, options.get("ideal_cap") or IDEAL_CAP, counting)
-    if reserve and options.get("cpsat") is None and CPSAT_SKIP_COUNTED:
-        if _dp_alone_exact(problem.n, count, capped, given):  # CP-SAT will not run
-            reserve, limit = 0.0, given
+    if reserve and options.get("cpsat") is None and _dp_alone(capped):  # CP-SAT will not run
+        reserve, limit = 0.0, given
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
@@ -1193,22 +1192,19 @@ CPSAT_STOP_WAIT = 2.0
 CPSAT_NICE = 0
 
 #: With ``cpsat=None``, CP-SAT is not started when the order ideals were counted (at most
-#: :data:`taopt.models.sop_dp.IDEAL_CAP`) and every state they allow fits the memory: the DP
-#: then runs alone and uncapped (an exact search), where CP-SAT's circuit model has not
-#: helped on any instance measured (the dense-precedence .4 files, the crane stand-ins
-#: of ``rbg_from_atsp`` at closure 0.84-0.89: no order in 60 s) and its worker takes a core
-#: from the DP (a 110-node crane stand-in, 58,930 ideals: 10.2 s alone, 13.6 s beside).
+#: :data:`taopt.models.sop_dp.IDEAL_CAP`): the DP then runs alone over them, where CP-SAT's
+#: circuit model has not helped on any instance measured (the dense-precedence .4 files:
+#: at 10 s, load 4-6, ry48p.4 36,111 [21,390] against our optimum, ft53.4 16,189 [10,995]
+#: against our 15,340 [12,814]; the crane stand-ins of ``rbg_from_atsp`` at closure
+#: 0.84-0.89: no order in 60 s) and its worker takes a core from the DP (a 110-node crane
+#: stand-in, 58,930 ideals: closed in 10.2 s alone, 13.6 s beside).
 CPSAT_SKIP_COUNTED = True
 
 
-def _dp_alone_exact(n: int, ideals: int, capped: bool, max_memory_gb: float | None) -> bool:
-    """Whether the portfolio's DP runs alone and uncapped: the ideals were counted and the
-    states they allow (both directions, ``2 n`` a ideal) fit the memory
-    (:func:`dp_state_cap`)."""
-    if capped:
-        return False
-    every_state = 2 * n * ideals
-    return dp_state_cap(n, max_memory_gb, every_state) >= every_state
+def _dp_alone(capped: bool) -> bool:
+    """Whether the portfolio's DP runs alone (the ideals were counted, not capped):
+    CP-SAT is then not started by default (:data:`CPSAT_SKIP_COUNTED`)."""
+    return CPSAT_SKIP_COUNTED and not capped
 
 
 def _cpsat_peer(
@@ -1340,8 +1336,7 @@ def solve_sop_problem(
     when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
     :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
     :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``, unless the order ideals, counted first
-    (on the clock), are few enough for the DP to run alone and uncapped within the memory
-    (:data:`CPSAT_SKIP_COUNTED`). The wall time stays within the limit
+    (on the clock), are few enough for the DP to run alone (:data:`CPSAT_SKIP_COUNTED`). The wall time stays within the limit
     plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop
     are on the clock.
 
@@ -1442,9 +1437,9 @@ def solve_sop_problem(
         counting = None if time_limit is None else Deadline(COUNT_SHARE * time_limit)
         ideals, capped = count_ideals(problem, cap, counting)
         counted = (ideals, capped, time.perf_counter() - began)
-        if _dp_alone_exact(problem.n, ideals, capped, max_memory_gb):
+        if _dp_alone(capped):
             peer = None
-            why = f"off: {ideals:,} ideals, the DP runs alone and uncapped (CPSAT_SKIP_COUNTED)"
+            why = f"off: {ideals:,} ideals counted, the DP runs alone (CPSAT_SKIP_COUNTED)"
     if peer is None:
         result = _stages(problem, _left(time_limit, began), **options, counted=counted)
         runtime = time.perf_counter() - began

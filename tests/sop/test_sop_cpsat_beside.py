@@ -222,7 +222,7 @@ def test_probe_rule_on_and_off_give_the_same_optimum(monkeypatch):
 
 
 def test_cpsat_stays_off_when_the_dp_runs_alone_on_counted_ideals():
-    """With cpsat=None, a 40-node SOP of few ideals (one chain but for a few pairs) is solved
+    """With cpsat=None, a 40-node SOP of few ideals (dense random precedence) is solved
     by the DP alone: CP-SAT is not started, the reason names the ideals, the memory guard
     does not count its worker, and the order is optimal (the forward-only DP agrees)."""
     from taopt.models import sop_dp
