@@ -880,6 +880,24 @@ def predicted_peak(
 _COUNTED: dict[int, tuple[SopProblem, int, tuple[int, bool], float]] = {}
 
 
+def _ideal_count(
+    problem: SopProblem, cap: int, deadline: Deadline | None
+) -> tuple[int, bool, float]:
+    """``(ideals, capped, seconds)``: the order ideals of ``problem`` counted up to ``cap``
+    (:func:`taopt.models.sop_dp.count_ideals`) and the seconds the count took. The guard's
+    count (:func:`_footprint`, run by :func:`taopt.solve` just before) is taken when it was
+    made for this problem and cap, so a call counts once; else the count is made now under
+    ``deadline``."""
+    from taopt.models.sop_dp import count_ideals
+
+    handed = _COUNTED.pop(id(problem), None)
+    if handed is not None and handed[0] is problem and handed[1] == cap:
+        return handed[2][0], handed[2][1], handed[3]
+    began = time.perf_counter()
+    ideals, capped = count_ideals(problem, cap, deadline)
+    return ideals, capped, time.perf_counter() - began
+
+
 @register_footprint(SopProblem, "exact")
 def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     """The guard: a safe upper estimate of the portfolio's peak before the run (the reported
@@ -923,6 +941,8 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     # handed to the run that follows this guard (taopt.solve's), which would count again
     _COUNTED.clear()
     _COUNTED[id(problem)] = (problem, int(cap), (count, capped), time.perf_counter() - began)
+    if reserve and options.get("cpsat") is None and _dp_alone(capped):  # CP-SAT will not run
+        reserve, limit = 0.0, given
     wanted = options.get("max_states", PORTFOLIO_MAX_STATES)
     if options.get("engine") != "dp":  # engine="dp" runs one stage of max_states
         wanted = max(wanted, SECOND_STAGE_MAX_STATES)
@@ -1381,6 +1401,21 @@ CPSAT_STOP_WAIT = 2.0
 #: the portfolio). Chosen by the figures in ``docs/benchmarks.md`` (SOP section).
 CPSAT_NICE = 0
 
+#: With ``cpsat=None``, CP-SAT is not started when the order ideals were counted (at most
+#: :data:`taopt.models.sop_dp.IDEAL_CAP`): the DP then runs alone over them, where CP-SAT's
+#: circuit model has not helped on any instance measured (the dense-precedence .4 files:
+#: at 10 s, load 4-6, ry48p.4 36,111 [21,390] against our optimum, ft53.4 16,189 [10,995]
+#: against our 15,340 [12,814]; the crane stand-ins of ``rbg_from_atsp`` at closure
+#: 0.84-0.89: no order in 60 s) and its worker takes a core from the DP (a 110-node crane
+#: stand-in, 58,930 ideals: closed in 10.2 s alone, 13.6 s beside).
+CPSAT_SKIP_COUNTED = True
+
+
+def _dp_alone(capped: bool) -> bool:
+    """Whether the portfolio's DP runs alone (the ideals were counted, not capped):
+    CP-SAT is then not started by default (:data:`CPSAT_SKIP_COUNTED`)."""
+    return CPSAT_SKIP_COUNTED and not capped
+
 
 def _cpsat_peer(
     problem: SopProblem,
@@ -1510,7 +1545,8 @@ def solve_sop_problem(
     the one rule (:func:`taopt.status.decide`). By default (``cpsat=None``) CP-SAT runs
     when OR-Tools is installed and the peer registered (:func:`taopt.solve` imports it), on
     :data:`CPSAT_MIN_NODES` nodes or more, with no limit or one of at least
-    :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``. The wall time stays within the limit
+    :data:`CPSAT_MIN_LIMIT` s, and ``engine="auto"``, unless the order ideals, counted first
+    (on the clock), are few enough for the DP to run alone (:data:`CPSAT_SKIP_COUNTED`). The wall time stays within the limit
     plus :func:`~taopt.runtime.deadline.overrun_allowance`: the worker's start, reply and stop
     are on the clock.
 
@@ -1605,15 +1641,29 @@ def solve_sop_problem(
         engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
     )  # fmt: skip
     peer, why = _cpsat_peer(problem, cpsat, engine, time_limit, max_memory_gb)
+    counted: tuple[int, bool, float] | None = None
+    if peer is not None and cpsat is None and CPSAT_SKIP_COUNTED:
+        # the count the stages need, made now (on the clock) to decide whether CP-SAT runs
+        from taopt.models.sop_dp import IDEAL_CAP
+
+        cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
+        counting = None if time_limit is None else Deadline(COUNT_SHARE * time_limit)
+        counted = _ideal_count(problem, cap, counting)
+        ideals, capped = counted[0], counted[1]
+        if _dp_alone(capped):
+            peer = None
+            why = f"off: {ideals:,} ideals counted, the DP runs alone (CPSAT_SKIP_COUNTED)"
     if peer is None:
-        result = _stages(problem, time_limit, **options)
-        return result.replace(info={**result.info, "cpsat": why})
+        result = _stages(problem, _left(time_limit, began), **options, counted=counted)
+        runtime = time.perf_counter() - began
+        return result.replace(runtime=runtime, info={**result.info, "cpsat": why})
     # CP-SAT's worker is a process of its own: its memory is counted, the stages get the rest
     reserve = cpsat_worker_bytes(problem.n)
     options["max_memory_gb"] = _stage_limit(max_memory_gb, reserve)
-    outer = Deadline(time_limit)  # the caller's token, if any, stops both sides
+    left = _left(time_limit, began)  # less the count, when it was made above
+    outer = Deadline(left)  # the caller's token, if any, stops both sides
     race = CancelToken(parent=outer.token)  # cancelled when CP-SAT proves the optimum
-    seconds = None if time_limit is None else max(time_limit - CPSAT_MARGIN, MARGIN)
+    seconds = None if left is None else max(left - CPSAT_MARGIN, MARGIN)
 
     def run_cpsat() -> Solution:
         found = peer(problem, time_limit=seconds, num_workers=1, nice=CPSAT_NICE)
@@ -1645,7 +1695,7 @@ def solve_sop_problem(
 
     try:
         with cancel_scope(race):
-            ours = _stages(problem, time_limit, **options, on_root=on_root)
+            ours = _stages(problem, left, **options, on_root=on_root, counted=counted)
     except BaseException:  # Ctrl-C or an error: stop CP-SAT's worker too, then re-raise
         task.cancel()
         task.wait(CPSAT_STOP_WAIT)
@@ -1700,6 +1750,13 @@ def solve_sop_problem(
             "memory_estimate": estimate,
         },
     )
+
+
+def _left(time_limit: float | None, began: float) -> float | None:
+    """The part of ``time_limit`` left since ``began`` (never below :data:`MARGIN`)."""
+    if time_limit is None:
+        return None
+    return max(time_limit - (time.perf_counter() - began), MARGIN)
 
 
 def _root_stage(
@@ -1761,11 +1818,13 @@ def _stages(
     max_states: int,
     max_memory_gb: float | None,
     on_root: Callable[[bool], None] | None = None,
+    counted: tuple[int, bool, float] | None = None,
 ) -> Solution:
     """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
 
-    ``on_root(cuts_first)`` is called after the root stage (when it ran)."""
-    from taopt.models.sop_dp import IDEAL_CAP, count_ideals, solve_sop_dp
+    ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
+    ``(ideals, capped, seconds)`` of a count already made (not made again)."""
+    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
@@ -1774,17 +1833,14 @@ def _stages(
     if unreachable is not None:
         return _infeasible(began, "portfolio", unreachable)
     cap = IDEAL_CAP if ideal_cap is None else int(ideal_cap)
-    counting = time.perf_counter()
     # the count gets COUNT_SHARE of the limit: past it the ideals are taken as too many
     counting_deadline = (
         Deadline(deadline.share(COUNT_SHARE), cancel=deadline.token) if deadline.limited else None
     )
-    handed = _COUNTED.pop(id(problem), None)
-    if handed is not None and handed[0] is problem and handed[1] == cap:
-        (ideals, capped), counted_in = handed[2], handed[3]  # the guard's count, just made
+    if counted is None:
+        ideals, capped, counted_in = _ideal_count(problem, cap, counting_deadline)
     else:
-        ideals, capped = count_ideals(problem, cap, counting_deadline)
-        counted_in = time.perf_counter() - counting
+        ideals, capped, counted_in = counted
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
     bounding = time.perf_counter()
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it

@@ -13,9 +13,13 @@ the tests and ``benchmarks/bench_sop.py`` draw from (seeded, deterministic).
 * :func:`atsp_sop`: an ATSP cost matrix (a TSPLIB ``.atsp`` file) made a path from node 0
   to a copy of node 0, with :func:`random_sop`'s precedences or random pairs up to a
   closure share (``closure=``, TSPLIB's .1-.4 densities).
-* :func:`rbg_like_sop` and :func:`esc_like_sop`: stand-ins for TSPLIB's rbg and ESC families
-  (chains with cross links to a closure share, small integer costs; sparse random
-  precedences, costs up to 1000), the unseen instances of issue 33.
+* :func:`rbg_from_atsp`: a stand-in for TSPLIB's rbg SOP family built from the same
+  stacker-crane application's ATSP moves (``rbg403``/``rbg443``) with precedences from the
+  jobs' time windows (an interval order, as rbg048a and rbg050c are), the unseen rbg
+  instances of issue 33.
+* :func:`rbg_like_sop` and :func:`esc_like_sop`: the first stand-ins for TSPLIB's rbg and ESC
+  families (chains with cross links to a closure share, uniform costs 0-33, unlike the real
+  rbg files: CP-SAT finds no order on them; sparse random precedences, costs up to 1000).
 
 Example
 -------
@@ -177,4 +181,107 @@ def esc_like_sop(n: int, seed: int, closure: float = 0.15, high: int = 1000) -> 
     return SopProblem(cost, tuple(pairs), 0, n - 1, f"esc-like-{n}-{closure:g}-{seed}")
 
 
-__all__ = ["random_sop", "chain_sop", "atsp_sop", "rbg_like_sop", "esc_like_sop"]
+def _window_pairs(release: np.ndarray, width: np.ndarray, share: float) -> np.ndarray:
+    """The pairs ``i -> j`` with ``release[i] + s * width[i] < release[j]`` for the largest
+    scale ``s`` whose pairs hold at least ``share`` of all pairs (bisection: the pairs only
+    shrink as ``s`` grows); an interval order, transitively closed by construction."""
+    m = len(release)
+    wanted = share * m * (m - 1) / 2
+
+    def pairs(scale: float) -> np.ndarray:
+        return (release + scale * width)[:, None] < release[None, :]
+
+    low, high = 0.0, float(release.max() - release.min() + 1) / max(float(width.min()), 1e-9)
+    if pairs(low).sum() < wanted:  # the jobs of one batch are never ordered
+        raise ValueError(
+            f"closure {share:g} is beyond the {pairs(low).sum() / (m * (m - 1) / 2):.3f} the "
+            "batches allow: ask smaller batches"
+        )
+    for _ in range(60):
+        mid = (low + high) / 2
+        if pairs(mid).sum() >= wanted:
+            low = mid
+        else:
+            high = mid
+    return pairs(low)
+
+
+def rbg_from_atsp(
+    cost: np.ndarray,
+    n: int,
+    seed: int,
+    closure: float = 0.85,
+    batch: float = 6.0,
+    contiguous: bool = True,
+) -> SopProblem:
+    """A stand-in for TSPLIB's rbg SOP family from a stacker-crane ATSP matrix.
+
+    TSPLIB's rbg SOP files and its rbg ATSP files (``rbg403``, ``rbg443``) come from the
+    same stacker-crane application (Ascheuer; "Stacker crane application (Norbert
+    Ascheuer)" in the files' COMMENT, see ``shared/benchmarks/tsplib/README.md``): the
+    costs are the crane's moves between jobs, the precedences come from the jobs' time
+    windows (a job whose window closes before another's opens goes first).
+
+    Parameters
+    ----------
+    cost : numpy.ndarray
+        The ATSP matrix (``rbg403``/``rbg443``: integer moves 0-33, 7 % zeros); ``n - 2``
+        of its nodes become the jobs.
+    n : int
+        Nodes of the SOP: a start (cost 0 to every job), the jobs, an end (cost 0 from every
+        job), as in the rbg files.
+    seed : int
+    closure : float
+        Share of the job pairs that are ordered (the precedences are their own transitive
+        closure). The larger rbg files hold 5,000-64,000 precedence pairs on 111-380 nodes,
+        about 0.8-0.89 of the pairs; rbg048a and rbg050c 0.40-0.42.
+    batch : float
+        Mean number of jobs released together: each job gets the release time of its batch
+        and a window of exponential length (one scale for all, set by bisection to reach
+        ``closure``); ``i`` precedes ``j`` when ``i``'s window closes before ``j``'s
+        release. The precedences then form an interval order with at most one distinct
+        predecessor set per batch, as in rbg048a and rbg050c (8 and 14 distinct
+        predecessor sets on 48 and 50 jobs; both interval orders).
+    contiguous : bool
+        The jobs are ``n - 2`` consecutive nodes of the matrix from a random first one (a
+        stretch of the crane's work, its jobs at neighbouring places: the ATSP files list
+        jobs of the same place next to each other); False: drawn at random from all.
+
+    Returns
+    -------
+    SopProblem
+        Start 0, end ``n - 1``, the jobs numbered by release (the rbg files list them so).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> p = rbg_from_atsp(rng.integers(0, 34, size=(60, 60)).astype(float), 40, 1, closure=0.5)
+    >>> p.n, p.start, p.end
+    (40, 0, 39)
+    """
+    source = np.asarray(cost, dtype=float)
+    m = n - 2
+    if m < 1 or m > source.shape[0]:
+        raise ValueError(f"rbg_from_atsp: n={n} needs 1..{source.shape[0]} jobs, not {m}")
+    rng = np.random.default_rng([38, n, seed])
+    if contiguous:
+        first = int(rng.integers(0, source.shape[0] - m + 1))
+        jobs = np.arange(first, first + m)
+    else:
+        jobs = np.sort(rng.choice(source.shape[0], size=m, replace=False))
+    batches = max(2, round(m / batch))
+    release = np.sort(rng.integers(0, batches, size=m)).astype(float)
+    width = rng.exponential(1.0, size=m)
+    ordered = _window_pairs(release, width, closure)
+    data = np.full((n, n), np.inf)
+    data[1:-1, 1:-1] = source[np.ix_(jobs, jobs)]
+    data[0, 1:-1] = 0.0  # the start: no move yet
+    data[1:-1, -1] = 0.0  # the end: nothing after the last job
+    np.fill_diagonal(data, 0.0)
+    a, b = np.nonzero(ordered)
+    pairs = tuple((int(i) + 1, int(j) + 1) for i, j in zip(a, b, strict=True))
+    return SopProblem(data, pairs, 0, n - 1, f"rbg-atsp-{n}-{closure:g}-{seed}")
+
+
+__all__ = ["random_sop", "chain_sop", "atsp_sop", "rbg_like_sop", "esc_like_sop", "rbg_from_atsp"]

@@ -219,3 +219,24 @@ def test_probe_rule_on_and_off_give_the_same_optimum(monkeypatch):
         assert result.status == OPTIMAL
         assert result.objective == pytest.approx(optimum)
         assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+def test_cpsat_stays_off_when_the_dp_runs_alone_on_counted_ideals():
+    """With cpsat=None, a 40-node SOP of few ideals (dense random precedence) is solved
+    by the DP alone: CP-SAT is not started, the reason names the ideals, the memory guard
+    does not count its worker, and the order is optimal (the forward-only DP agrees)."""
+    from taopt.models import sop_dp
+
+    problem = random_sop(40, 0.9, 3)
+    ideals, capped = sop_dp.count_ideals(problem)
+    assert not capped and ideals < 10_000
+    result = solve_sop_problem(problem, time_limit=20)
+    assert "ideals" in result.info["cpsat"] and result.info["cpsat"].startswith("off")
+    assert result.status == OPTIMAL
+    assert evaluate_order(problem, result.order) == result.objective
+    again = sop_dp.solve_sop_dp(problem, beam_width=0, both=False)
+    assert again.status == OPTIMAL and again.objective == result.objective
+    off = sop_model._footprint(problem, {"time_limit": 20.0, "cpsat": False})[0]
+    assert sop_model._footprint(problem, {"time_limit": 20.0, "cpsat": None})[0] == off
+    forced = solve_sop_problem(problem, time_limit=20, cpsat=True)  # cpsat=True still runs it
+    assert isinstance(forced.info["cpsat"], dict) and forced.objective == result.objective

@@ -10,7 +10,7 @@ from reference_exact import sop_brute_force
 from taopt.models import sop_dp
 from taopt.models.sop import solve_sop_problem
 from taopt.result import OPTIMAL
-from taopt.sop.generate import atsp_sop, esc_like_sop, rbg_like_sop
+from taopt.sop.generate import atsp_sop, esc_like_sop, rbg_from_atsp, rbg_like_sop
 from taopt.sop.problem import evaluate_order
 
 
@@ -114,3 +114,74 @@ def test_dp_state_share_of_the_estimate_falls_with_denser_precedence():
     shares += [dp_state_share(rbg_like_sop(60, 1, c)) for c in (0.5, 0.9)]
     assert shares[0] >= shares[1] >= shares[2]
     assert all(0.2 <= s <= 1.0 for s in shares) and shares[0] == 1.0
+
+
+def _crane_moves() -> np.ndarray:
+    """The inner moves of the shipped rbg048a (the stacker-crane application of rbg403 and
+    rbg443): a small ATSP matrix for :func:`rbg_from_atsp`."""
+    from taopt.sop.problem import SopProblem
+
+    cost = SopProblem.load("rbg048a").cost[1:-1, 1:-1].copy()
+    cost[~np.isfinite(cost)] = 33.0  # the ordered pairs' arcs: any move of the range
+    return cost
+
+
+@pytest.mark.parametrize(("n", "share", "batch"), [(30, 0.4, 6.0), (40, 0.85, 3.0)])
+def test_rbg_from_atsp_is_valid_at_the_closure_asked(n, share, batch):
+    """rbg_from_atsp gives an acyclic SOP (start 0, end n - 1) whose closed precedences hold
+    at least the asked share of job pairs, an interval order (the jobs' predecessor sets
+    nested), with the source's costs between jobs and free start and end moves."""
+    problem = rbg_from_atsp(_crane_moves(), n, 3, share, batch)  # SopProblem refuses a cycle
+    assert (problem.n, problem.start, problem.end) == (n, 0, n - 1)
+    assert share <= _inner_share(problem) < share + 0.1
+    assert len(problem.precedences) == problem.closure.number_of_edges() - 2 * (n - 2) - 1
+    ends = {0, n - 1}
+    preds = [
+        frozenset(a for a in problem.closure.predecessors(v) if a not in ends)
+        for v in range(1, n - 1)
+    ]
+    assert all(a <= b or b <= a for a in preds for b in preds)
+    assert np.all(problem.cost[0, 1:-1] == 0) and np.all(problem.cost[1:-1, -1] == 0)
+    inner = problem.cost[1:-1, 1:-1][~np.eye(n - 2, dtype=bool)]
+    assert inner.min() >= 0 and inner.max() <= 33
+
+
+def test_rbg_from_atsp_is_deterministic_per_seed():
+    """Same arguments, same instance; another seed, another instance."""
+    moves = _crane_moves()
+    a, b = rbg_from_atsp(moves, 36, 5, 0.6), rbg_from_atsp(moves, 36, 5, 0.6)
+    assert np.array_equal(a.cost, b.cost) and a.precedences == b.precedences
+    c = rbg_from_atsp(moves, 36, 6, 0.6)
+    assert not (np.array_equal(a.cost, c.cost) and a.precedences == c.precedences)
+
+
+def test_rbg_from_atsp_names_what_it_cannot_build():
+    """More jobs than the matrix has, or a closure the batches cannot reach, is an error
+    naming the size or the closure."""
+    with pytest.raises(ValueError, match="n=60"):
+        rbg_from_atsp(np.zeros((40, 40)), 60, 1)
+    with pytest.raises(ValueError, match="closure 0.95"):
+        rbg_from_atsp(np.zeros((40, 40)), 30, 1, 0.95, batch=10.0)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_portfolio_equals_brute_force_on_small_rbg_from_atsp(seed):
+    """The portfolio proves the brute-force optimum of a 10-node crane instance."""
+    problem = rbg_from_atsp(_crane_moves(), 10, seed, 0.4, batch=2.0, contiguous=False)
+    expected = sop_brute_force(problem)
+    result = solve_sop_problem(problem, time_limit=30)
+    assert result.status == OPTIMAL and result.objective == expected
+    assert evaluate_order(problem, result.order) == expected
+
+
+@pytest.mark.slow
+def test_portfolio_equals_cpsat_proof_on_a_crane_instance():
+    """On a 24-node crane instance the portfolio's own stages (CP-SAT off) prove the optimum
+    that CP-SAT, run alone, proves too."""
+    from taopt.heuristics.peers import cpsat_sop
+
+    problem = rbg_from_atsp(_crane_moves(), 24, 2, 0.4, batch=3.0)
+    ours = solve_sop_problem(problem, time_limit=30, cpsat=False)
+    theirs = cpsat_sop(problem, time_limit=30)
+    assert ours.status == OPTIMAL and theirs.status == OPTIMAL
+    assert ours.objective == theirs.objective == evaluate_order(problem, ours.order)
