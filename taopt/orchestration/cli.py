@@ -227,8 +227,10 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
 def cmd_kinds(args: argparse.Namespace) -> int:
     """Body of ``taopt kinds``: every problem family's file kind, from its spec."""
-    from taopt.orchestration.pipeline import available_methods
+    from taopt.orchestration.pipeline import available_methods, register_methods
     from taopt.registry import families
+
+    register_methods()
 
     for family in sorted(families(), key=lambda f: f.kind):
         bounds = ", ".join(
@@ -277,8 +279,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from taopt.comm import CommProblem
     from taopt.comm.plot import animate_run, check_frames, plot_run
     from taopt.examples import resolve
-    from taopt.orchestration.pipeline import solve
+    from taopt.orchestration.pipeline import register_methods, solve
     from taopt.registry import get_method
+
+    register_methods()
 
     if args.animate:
         check_frames(args.frames)  # before the run: nothing printed or written on bad input

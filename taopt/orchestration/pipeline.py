@@ -8,7 +8,8 @@ a Solution built by :func:`taopt.result.make_solution` for this problem was scor
 once; any other (hand-built) one is re-scored here.
 
 This module is the orchestration layer: it imports the method packages (which register
-their methods on import).
+their methods on import) when one of its functions is first called
+(:func:`register_methods`), so a first :func:`solve`'s imports run on its own clock.
 
 Example
 -------
@@ -24,8 +25,6 @@ import logging
 import math
 from typing import Any
 
-import taopt.heuristics  # noqa: F401  (registers the heuristics)
-import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import InstanceError, SolverError, TaoptError
 from taopt.registry import (
@@ -55,6 +54,18 @@ SCORE_TOLERANCE = 1e-6
 MIN_SECONDS = 1e-3
 
 logger = logging.getLogger("taopt")
+
+
+def register_methods() -> None:
+    """Import :mod:`taopt.models` and :mod:`taopt.heuristics`, which register every method.
+
+    Called first by each function here, not when this module is imported: a first
+    :func:`solve` in a fresh process spends 1-2 s importing them (cvxpy, OR-Tools' bindings,
+    ...), and that is inside its ``time_limit`` (the deadline starts before). Later calls
+    find them in ``sys.modules``.
+    """
+    import taopt.heuristics  # noqa: F401  (registers the heuristics)
+    import taopt.models  # noqa: F401  (registers the exact models)
 
 
 def _warm_start(
@@ -171,6 +182,7 @@ def solve(
         if time_limit <= 0:
             raise InstanceError(f"time_limit must be positive, got {time_limit}")
         deadline = Deadline(time_limit)  # the clock starts now: everything below counts
+    register_methods()  # (a first call's imports: on the clock)
     spec = get_method(problem, method)
     method = spec.name  # the registered spelling ("mc" -> "MC")
     kwargs = dict(options)
@@ -228,6 +240,7 @@ def certifying_method(problem: Any) -> str | None:
     """The exact method that certifies ``problem`` fastest, among every registered one
     (:func:`taopt.registry.certifying_method` after this module has imported
     ``taopt.models``): what ``taopt verify --exact`` re-solves with."""
+    register_methods()
     return _certifying_method(problem)
 
 
@@ -256,6 +269,7 @@ def available_methods(problem: Any, category: str | None = None) -> list[str]:
     >>> taopt.available_methods(p, "exact")
     ['exact']
     """
+    register_methods()
     found = [spec for spec in methods(problem, category).values() if spec.available]
     found.sort(key=lambda spec: CATEGORIES.index(spec.category))  # stable: exact first
     return [spec.name for spec in found]
@@ -267,6 +281,7 @@ def default_methods(problem: Any) -> list[str]:
     Peers (optional extras) and relaxations are left out; a method registered with a
     ``default`` predicate (e.g. a DP only for small instances) is included when it holds.
     """
+    register_methods()
     found = methods(problem)
     order = ("exact", "heuristic", "simulation")
     return [
@@ -283,6 +298,7 @@ def no_optimum_note(problem: Any) -> str:
     One line naming the exact method left out and why (e.g. the delivery DP beyond 12
     customers); ``taopt solve`` prints it under its table.
     """
+    register_methods()
     exact = methods(problem, "exact")
     if not exact or any(spec.is_default_for(problem) for spec in exact.values()):
         return ""
@@ -300,6 +316,7 @@ def lower(problem: Any, strength: str = "auto") -> float:
     >>> taopt.lower(p, "strong") <= taopt.solve(p, "exact").objective
     True
     """
+    register_methods()
     from taopt.bounds import lower as core_lower
 
     return core_lower(problem, strength)
@@ -307,6 +324,7 @@ def lower(problem: Any, strength: str = "auto") -> float:
 
 def load_problem(data: Any) -> Any:
     """Build the problem of a JSON document by its ``kind`` (the registry's loaders)."""
+    register_methods()
     ensure_families()
     if not isinstance(data, dict):
         raise InstanceError("a problem file must hold a JSON object")
@@ -317,6 +335,7 @@ def load_problem(data: Any) -> Any:
 
 __all__ = [
     "solve",
+    "register_methods",
     "certifying_method",
     "available_methods",
     "default_methods",

@@ -30,6 +30,8 @@ from typing import IO, Any
 
 import pandas as pd
 
+import taopt.heuristics  # noqa: F401  (registers the heuristics: get_method below)
+import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.bounds import lower
 from taopt.defaults import SEED, TIME_LIMIT
 from taopt.errors import FeasibilityError, InstanceError, OutputError, TaoptError

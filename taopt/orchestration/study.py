@@ -53,6 +53,8 @@ from typing import Any, Literal, overload
 import numpy as np
 import pandas as pd
 
+import taopt.heuristics  # noqa: F401  (registers the heuristics: get_method below)
+import taopt.models  # noqa: F401  (registers the exact models)
 from taopt.errors import InstanceError, TaoptError
 from taopt.orchestration.pipeline import solve
 from taopt.orchestration.studyio import ResultsStore, StudyLocked, folder_lock, normalize_key

@@ -279,8 +279,10 @@ def budgeted_study(
     for level in levels:
         parse_level(level)
     methods = default_methods() if methods is None else _items(methods, "methods")
+    from taopt.orchestration.pipeline import register_methods
     from taopt.registry import get_method
 
+    register_methods()
     methods = list(dict.fromkeys(get_method(BudgetedProblem, m).name for m in methods))
     scenarios = check_integer("scenarios", scenarios, 1)
     seed = check_integer("seed", seed, 0)
