@@ -57,6 +57,7 @@ import itertools
 import math
 import time
 from collections.abc import Callable, Sequence
+from operator import le
 from typing import Any, TypeVar, cast
 
 import numpy as np
@@ -207,6 +208,13 @@ class _Tables:
         self.owner: list[int] | None = None
         # release[j]: a time before which j is not served (``release``), 0 by default
         self.release = [0.0] * n
+        # per-label work, memoised on what it depends on (the inner loops' plain lists and
+        # caches; each cache is cleared when it grows past its cap)
+        self.Flist: list[list[float]] = self.Fnp.tolist()
+        self._watch: dict[int, tuple[int, tuple[int, ...]]] = {}  # _watched
+        self._cols: dict[int, np.ndarray] = {}  # _columns
+        self._cols_size = 0
+        self._cands: dict[tuple[int, int], list[list[tuple[float, float, float, float]]]] = {}
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -301,9 +309,61 @@ def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any
     return back, arrive
 
 
-def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
-    """Per truck, per customer j: the least time a sortie of that truck not yet launched
-    serves j (``inf`` where none can).
+def _stop_candidates(tab: _Tables, w: int, o: int) -> list[list[tuple[float, float, float, float]]]:
+    """Per customer j, the stops q != w where an airborne drone of a truck at stop w, whose
+    last customer is ``o`` (or, ``o < 0``, launched at stop ``-o - 1`` with none yet), may be
+    recovered before a new sortie toward j (:func:`_fresh_sorties`), as tuples ``(ft(o, q),
+    tt(w, q), d(o, q), G[q, j])`` (no flight and distance when ``o < 0``); cached per (w, o).
+
+    Only the stops no other stop *dominates* are listed: q' dominates q when its flight
+    time, drive, distance (so its range test) and ``G[q', j]`` are all <= q's (ties broken
+    by index). For every drone time t, departure bound T and distance flown δ, the term
+    ``max(t + ft(o, q), T + tt(w, q)) + τ + G[q, j]`` is nondecreasing in each of those, and
+    q' is within range whenever q is, so the least over the listed stops equals the least
+    over all stops (dominance is a strict order on a finite set: every stop is dominated by
+    an undominated one). Stops that cannot reach j (``G = inf``) or are out of range even
+    with δ = 0 are left out; the truck's own stop w (arrival A, not T) is priced apart."""
+    key = (w, o)
+    got = tab._cands.get(key)
+    if got is not None:
+        return got
+    if len(tab._cands) > 1 << 14:
+        tab._cands.clear()
+    s = tab.s
+    if o >= 0:
+        a = tab.fst_np[o]
+        d = tab.fsd_np[o]
+        ok = d <= tab.limit
+    else:
+        a = np.zeros(s)
+        d = np.zeros(s)
+        ok = np.ones(s, dtype=bool)
+    b = tab.tt_np[w]
+    ok = ok.copy()
+    ok[w] = False
+    G = tab.Gnp  # (s, n)
+    le = (a[:, None] <= a[None, :]) & (b[:, None] <= b[None, :]) & (d[:, None] <= d[None, :])
+    lt = (a[:, None] < a[None, :]) | (b[:, None] < b[None, :]) | (d[:, None] < d[None, :])
+    idx = np.arange(s)
+    lt |= idx[:, None] < idx[None, :]
+    le &= ok[:, None]  # (q', q): only a usable stop dominates
+    dom = le[:, :, None] & (G[:, None, :] <= G[None, :, :])
+    dom &= lt[:, :, None] | (G[:, None, :] < G[None, :, :])
+    keep = ~dom.any(axis=0) & ok[:, None] & (G < INF)  # (q, n)
+    got = [
+        [
+            (float(a[q]), float(b[q]), float(d[q]), float(G[q, j]))
+            for q in np.flatnonzero(keep[:, j])
+        ]
+        for j in range(tab.n)
+    ]
+    tab._cands[key] = got
+    return got
+
+
+def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
+    """Per truck, per customer j of ``U`` (default all): the least time a sortie of that truck
+    not yet launched serves j (``inf`` where none can, and for the customers outside U).
 
     An aboard drone launches here no sooner than ``max(A, ρ)`` (only toward customers a sortie
     from this stop can reach and still land: ``F``), or at another stop after the truck leaves
@@ -311,29 +371,59 @@ def _fresh_sorties(tab: _Tables, trucks: tuple) -> list[Any]:
     drive-and-fly time). An airborne drone must first be recovered at some stop q within its
     range: no sooner than ``max(t + ft(ℓ, q), arrival at q) + τ`` (the truck is at q at A if q is
     its stop, else no sooner than ``T + tt(w, q)``; a drone that has served nobody yet is
-    charged no flight to q), then ``G[q, j]``. Then τ at j. Each is a relaxation of the
+    charged no flight to q), then ``G[q, j]`` (the least over q taken over the stops of
+    :func:`_stop_candidates`, the same value). Then τ at j. Each is a relaxation of the
     actions of :func:`_children`, which only add constraints."""
     out: list[Any] = []
-    tau = tab.tau
+    tau, limit = tab.tau, tab.limit
+    n = tab.n
+    drone_ok = tab.drone_ok
+    js = [j for j in range(n) if U >> j & 1 and drone_ok[j]]
     for w, A, T, _ev, fin, _F, drones in trucks:
         if fin or not drones:
             out.append(None)
             continue
+        best = [INF] * n
         rho = INF
         for dr in drones:
             if dr[0] == 0 and dr[1] < rho:
                 rho = dr[1]
+        Gw = tab.G[w]
         if rho < INF:
-            best = np.minimum((rho if rho > A else A) + tab.Fnp[w], T + tab.Gnp[w])
-        else:
-            best = np.full(tab.n, INF)
-        arrive = None
+            a = rho if rho > A else A
+            Fw = tab.Flist[w]
+            for j in js:
+                v = a + Fw[j]
+                u = T + Gw[j]
+                best[j] = v if v < u else u
         for dr in drones:
             if dr[0] != 1:
                 continue
-            back, arrive = _recoveries(tab, w, A, T, dr, arrive)
-            best = np.minimum(best, np.min(back[:, None] + tab.Gnp, axis=0))
-        out.append((best + tau).tolist())
+            o, t, delta = dr[1], dr[3], dr[4]
+            if o >= 0:
+                if delta + tab.fsd[o][w] <= limit:
+                    x = t + tab.fst[o][w]
+                    here = (x if x > A else A) + tau
+                else:
+                    here = INF
+            else:
+                here = (t if t > A else A) + tau
+            cands = _stop_candidates(tab, w, o)
+            for j in js:
+                e = best[j]
+                v = here + Gw[j]
+                if v < e:
+                    e = v
+                for fq, tq, dq, g in cands[j]:
+                    if delta + dq > limit:
+                        continue
+                    x = t + fq
+                    y = T + tq
+                    v = (x if x > y else y) + tau + g
+                    if v < e:
+                        e = v
+                best[j] = e
+        out.append([v + tau for v in best])
     return out
 
 
@@ -415,35 +505,56 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     F = tab.sortie_time
     if F is None or not U:
         return 0.0
-    subs = _submasks(tab, U)
-    ends: list[np.ndarray] = []
-    for w, A, T, _ev, fin, _F, drones in trucks:
-        if fin:
-            continue
-        arrive = None
-        for dr in drones:
-            if dr[0] == 0:
-                ends.append((dr[1] if dr[1] > A else A) + F[w, subs])
-                continue
-            back, arrive = _recoveries(tab, w, A, T, dr, arrive)
-            near = np.flatnonzero(back < INF)
-            ends.append(np.min(back[near, None] + F[near][:, subs], axis=0))
-    if not ends:
+    drones_left = [
+        (w, A, T, dr) for w, A, T, _ev, fin, _F, drones in trucks if not fin for dr in drones
+    ]
+    if not drones_left:
         return INF
+    if len(drones_left) == 1:  # one drone serves all of U: one column
+        w, A, T, dr = drones_left[0]
+        if dr[0] == 0:
+            return (dr[1] if dr[1] > A else A) + float(F[w, U])
+        return float((_recoveries(tab, w, A, T, dr, None)[0] + F[:, U]).min())
+    cols = _columns(tab, U)
+    ends: list[np.ndarray] = []
+    arrive = None
+    last_truck: tuple[int, float, float] | None = None
+    for w, A, T, dr in drones_left:
+        if dr[0] == 0:
+            ends.append(cols[w] + (dr[1] if dr[1] > A else A))
+            continue
+        if (w, A, T) != last_truck:
+            arrive = None
+            last_truck = (w, A, T)
+        back, arrive = _recoveries(tab, w, A, T, dr, arrive)
+        ends.append((back[:, None] + cols).min(axis=0))
     if not tab.one_drone or not tab.ret:
         for e in ends:
-            e[0] = 0.0  # subs[0] is the empty set: a drone that serves no one more ends nothing
-    last = len(subs) - 1  # subs ascend: U itself is last, the empty set first
-    if len(ends) == 1:
-        return float(ends[0][last])
-    if len(ends) == 2:
-        return float(np.min(np.maximum(ends[0], ends[1][::-1])))
+            e[0] = 0.0  # column 0 is the empty set: a drone that serves no one more ends nothing
+    if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
+        return float(np.maximum(ends[0], ends[1][::-1]).min())
+    last = len(cols[0]) - 1
     m = int(tab.popcount[U])
     if m <= PARTITION_MAX_CUSTOMERS:
         return float(_least_largest(ends, m)[last])
     size = -(-m // len(ends))
-    big = tab.popcount[subs] >= size
+    big = tab.popcount[_submasks(tab, U)] >= size
     return float(min(np.min(e[big]) for e in ends))
+
+
+def _columns(tab: _Tables, U: int) -> np.ndarray:
+    """The sortie-time table's columns of the submasks of U, ascending (cached per U, the
+    cache cleared past 2^23 entries)."""
+    got = tab._cols.get(U)
+    if got is None:
+        assert tab.sortie_time is not None
+        got = np.ascontiguousarray(tab.sortie_time[:, _submasks(tab, U)])
+        if tab._cols_size + got.size > 1 << 23:
+            tab._cols.clear()
+            tab._cols_size = 0
+        tab._cols[U] = got
+        tab._cols_size += got.size
+    return got
 
 
 @functools.cache
@@ -470,14 +581,23 @@ def _least_largest(ends: list[np.ndarray], m: int) -> np.ndarray:
     return g
 
 
-def _bound(tab: _Tables, label: tuple) -> float:
-    """A lower bound on the objective of every completion of ``label`` (module docstring)."""
+def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
+    """A lower bound on the objective of every completion of ``label`` (module docstring):
+    the largest of its terms.
+
+    The terms are taken cheapest first (the last service so far, or the way home; the
+    trucks' covering walks; the drones' shared work; each unserved customer's earliest
+    service; the drones' sortie times), and once their maximum reaches ``cutoff`` it is
+    returned without the rest: still a valid bound (a maximum of valid terms), and at least
+    ``cutoff``, so a caller that prunes at ``cutoff`` prunes the same labels."""
     S, M, svc, trucks = label
     n = tab.n
     tau = tab.tau
-    est = [0.0] * n
-    full = (1 << n) - 1
-    if tab.lazy:
+    full = tab.full
+    lazy = tab.lazy
+    drone_ok, pred_mask, owner = tab.drone_ok, tab.pred_mask, tab.owner
+    unserved = full & ~S
+    if lazy:
         # a stale drone launched with no customer yet takes one only after a predecessor
         # served since its launch (:func:`_appendable`); with none left it cannot be
         # completed
@@ -485,97 +605,105 @@ def _bound(tab: _Tables, label: tuple) -> float:
             for dr in drones:
                 if dr[0] == 1 and dr[2] == 0 and not dr[6]:
                     if not any(
-                        not S >> j & 1 and tab.drone_ok[j] and tab.pred_mask[j] & ~dr[7]
+                        unserved >> j & 1 and drone_ok[j] and pred_mask[j] & ~dr[7]
                         for j in range(n)
                     ):
                         return INF
-    relaxed = 0  # customers an airborne drone with room can still reach
-    if S != full:
-        fresh = _fresh_sorties(tab, trucks)
-        tt, fct, fst, fcd, fsd, near = (
-            tab.tt,
-            tab.fct,
-            tab.fst,
-            tab.fcd,
-            tab.fsd,
-            tab.near,
-        )
-        limit, c = tab.limit, tab.c
-        lazy, pred_mask = tab.lazy, tab.pred_mask
-        for j in tab.topo:
-            if S >> j & 1:
-                est[j] = svc[j]
-                continue
-            e = INF
-            tok, dok = tab.truck_ok[j], tab.drone_ok[j]
-            for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
-                if fin or (tab.owner is not None and tab.owner[j] != k):
-                    continue  # (truck_of: only j's own truck may serve it)
-                if tok:
-                    js = tab.cstop[j]
-                    v = A if js == w else T + tt[w][js]
-                    if v < e:
-                        e = v
-                if dok and drones:
-                    v = fresh[k][j]
-                    if v < e:
-                        e = v
-                    for dr in drones:
-                        if (
-                            dr[0] == 1
-                            and dr[5]
-                            and dr[2] < c
-                            and (not lazy or dr[6] or pred_mask[j] & ~dr[7])
-                        ):  # (a stale drone takes j only after a predecessor: _appendable)
-                            o = dr[1]
-                            if o >= 0:
-                                dist, fly = fcd[o][j], fct[o][j]
-                            else:
-                                dist, fly = fsd[j][-o - 1], fst[j][-o - 1]
-                            if dr[4] + dist + near[j] <= limit:
-                                relaxed |= 1 << j
-                                v = dr[3] + fly + tau
-                                if v < e:
-                                    e = v
-            for r in tab.preds[j]:
-                if est[r] > e:
-                    e = est[r]
-            if tab.release[j] > e:
-                e = tab.release[j]
-            est[j] = e
-    fill = _water_fill(tab, S, trucks)
-    walk = _walk_bound(tab, full & ~S & ~relaxed, trucks)
-    if walk > fill:
-        fill = walk
-    walk = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
-    if walk > fill:
-        fill = walk
-    if not tab.ret:
-        b = M if M > fill else fill
-        for j in range(n):
-            if not S >> j & 1 and est[j] > b:
-                b = est[j]
-        return b
-    b = fill
-    depot = tab.depot
-    for w, _A, T, _ev, fin, F, drones in trucks:
-        if fin:
-            v = F
-        else:
-            v = T + tab.tt[w][depot]
-            for dr in drones:
-                if dr[0] == 1 and dr[1] >= 0:
-                    u = dr[3] + tab.home[dr[1]]
-                    if u > v:
-                        v = u
-        if v > b:
-            b = v
-    for j in range(n):
-        if not S >> j & 1:
-            v = est[j] + tab.back[j]
+    ret = tab.ret
+    if not ret:
+        b = M
+    else:  # every truck home, an airborne drone recovered and driven home
+        b = 0.0
+        depot = tab.depot
+        for w, _A, T, _ev, fin, F, drones in trucks:
+            if fin:
+                v = F
+            else:
+                v = T + tab.tt[w][depot]
+                for dr in drones:
+                    if dr[0] == 1 and dr[1] >= 0:
+                        u = dr[3] + tab.home[dr[1]]
+                        if u > v:
+                            v = u
             if v > b:
                 b = v
-    return b
+    if b >= cutoff or not unserved:
+        return b
+    # customers an airborne drone with room can still take, and its earliest such service
+    relaxed = 0
+    air: list[float] | None = None
+    c = tab.c
+    for k, (_w, _A, _T, _ev, fin, _F, drones) in enumerate(trucks):
+        if fin:
+            continue
+        for dr in drones:
+            if not (dr[0] == 1 and dr[5] and dr[2] < c):
+                continue
+            if air is None:
+                air = [INF] * n
+            o = dr[1]
+            fresh_drone = not lazy or dr[6]
+            for j in range(n):
+                if not (unserved >> j & 1 and drone_ok[j]) or (owner is not None and owner[j] != k):
+                    continue  # (truck_of: only j's own truck may serve it)
+                if not fresh_drone and not pred_mask[j] & ~dr[7]:
+                    continue  # (a stale drone takes j only after a predecessor: _appendable)
+                if o >= 0:
+                    dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                else:
+                    dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                if dr[4] + dist + tab.near[j] <= tab.limit:
+                    relaxed |= 1 << j
+                    v = dr[3] + fly + tau
+                    if v < air[j]:
+                        air[j] = v
+    v = _walk_bound(tab, unserved & ~relaxed, trucks)
+    if v > b:
+        b = v
+        if b >= cutoff:
+            return b
+    v = _water_fill(tab, S, trucks)
+    if v > b:
+        b = v
+        if b >= cutoff:
+            return b
+    # each unserved customer's earliest service, raised along the precedences
+    fresh = _fresh_sorties(tab, trucks, unserved)
+    tt = tab.tt
+    est = [0.0] * n
+    back = tab.back
+    for j in tab.topo:
+        if not unserved >> j & 1:
+            est[j] = svc[j]
+            continue
+        e = INF if air is None else air[j]
+        tok, dok = tab.truck_ok[j], drone_ok[j]
+        for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
+            if fin or (owner is not None and owner[j] != k):
+                continue
+            if tok:
+                js = tab.cstop[j]
+                v = A if js == w else T + tt[w][js]
+                if v < e:
+                    e = v
+            if dok and drones:
+                v = fresh[k][j]
+                if v < e:
+                    e = v
+        for r in tab.preds[j]:
+            if est[r] > e:
+                e = est[r]
+        if tab.release[j] > e:
+            e = tab.release[j]
+        est[j] = e
+        if ret:
+            e += back[j]
+        if e > b:
+            b = e
+    if b >= cutoff:
+        return b
+    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
+    return v if v > b else b
 
 
 def _needed(tab: _Tables, S: int) -> int:
@@ -611,18 +739,45 @@ def _appendable(tab: _Tables, dr: tuple, need: int) -> tuple[bool, int]:
     return (dr[6], dr[7] & need)
 
 
+def _watched(tab: _Tables, S: int) -> tuple[int, tuple[int, ...]]:
+    """(:func:`_needed` of S, the served customers of S with an unserved successor, whose
+    service times the dominance compares); cached per S."""
+    got = tab._watch.get(S)
+    if got is None:
+        if len(tab._watch) > 1 << 16:
+            tab._watch.clear()
+        succ = tab.succ_mask
+        watch = tuple(r for r in range(tab.n) if S >> r & 1 and succ[r] & ~S)
+        got = tab._watch[S] = (_needed(tab, S), watch)
+    return got
+
+
 def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
     """(key, vector): labels with equal keys compare by their vectors (all smaller = better)."""
     S, M, svc, trucks = label
+    need, watch = _watched(tab, S)
     vec: list[float] = [M] if not tab.ret else []
-    succ = tab.succ_mask
-    need = _needed(tab, S)
-    for r in range(tab.n):
-        if S >> r & 1 and succ[r] & ~S:
-            vec.append(svc[r])
+    for r in watch:
+        vec.append(svc[r])
+    lazy, c = tab.lazy, tab.c
+    if len(trucks) == 1:
+        w, A, T, ev, fin, F, drones = trucks[0]
+        parts: list[tuple[tuple[Any, ...], tuple[float, ...]]] = []
+        for dr in drones:
+            if dr[0] == 0:
+                parts.append(((0,), (dr[1] if dr[1] > A else A,)))
+            elif not lazy or not dr[5] or dr[2] >= c:
+                parts.append(((1, dr[1], dr[2], dr[5], False, 0), (dr[3], dr[4])))
+            else:
+                parts.append(((1, dr[1], dr[2], dr[5], dr[6], dr[7] & need), (dr[3], dr[4])))
+        parts.sort()
+        vec += (A, T, F)
+        for p in parts:
+            vec += p[1]
+        return (S, ((w, ev, fin, tuple(p[0] for p in parts)),)), tuple(vec)
     per_truck = []
     for w, A, T, ev, fin, F, drones in trucks:
-        parts: list[tuple[tuple[Any, ...], tuple[float, ...]]] = []
+        parts = []
         for dr in drones:
             if dr[0] == 0:
                 parts.append(((0,), (dr[1] if dr[1] > A else A,)))
@@ -651,12 +806,29 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
     are all <= Y's: X can drive there and do all Y can, no later (tt is a metric), and its
     aboard drones are ready on arrival."""
     S, M, svc, trucks = label
+    need, watch = _watched(tab, S)
     head: list[float] = [M] if not tab.ret else []
-    succ = tab.succ_mask
-    need = _needed(tab, S)
-    for r in range(tab.n):
-        if S >> r & 1 and succ[r] & ~S:
-            head.append(svc[r])
+    for r in watch:
+        head.append(svc[r])
+    if len(trucks) == 1:
+        w, A, T, _ev, fin, F, drones = trucks[0]
+        if fin:
+            return []
+        lazy, c = tab.lazy, tab.c
+        air: list[tuple[tuple[Any, ...], tuple[float, ...]]] = []
+        aboard = 0
+        for dr in drones:
+            if dr[0] == 0:
+                aboard += 1
+            elif not lazy or not dr[5] or dr[2] >= c:
+                air.append(((1, dr[1], dr[2], dr[5], False, 0), (dr[3], dr[4])))
+            else:
+                air.append(((1, dr[1], dr[2], dr[5], dr[6], dr[7] & need), (dr[3], dr[4])))
+        air.sort()
+        for p in air:
+            head += p[1]
+        disc = ((0,),) * aboard + tuple(p[0] for p in air)  # (0,) sorts before (1, ...)
+        return [((S, 0, (fin, disc), ()), w, A, T, tuple(head))]
     discs: list[tuple[Any, ...]] = []
     conts: list[tuple[tuple[float, ...], tuple[float, ...]]] = []
     for w, A, T, _ev, fin, F, drones in trucks:
@@ -971,7 +1143,7 @@ def _beam(
             if deadline.expired():
                 break
             for child, act in _children(tab, label):
-                b = _bound(tab, child)
+                b = _bound(tab, child, best)
                 if b >= best or b == INF:
                     continue
                 key, vec = _signature(tab, child)
@@ -1126,6 +1298,7 @@ def label_search(
     stopped_by = "optimal"
     found = -1
     slack = 1e-12
+    cut = best * (1 - slack)  # a label whose bound reaches it is pruned
     while heap:
         lb, _, i = heapq.heappop(heap)
         if dead[i]:
@@ -1150,7 +1323,7 @@ def label_search(
             if bucket is not None:
                 skip = False
                 for other, _ in bucket:
-                    if all(x <= y for x, y in zip(other, vec, strict=True)):
+                    if all(map(le, other, vec)):
                         skip = True
                         break
                 if skip:
@@ -1162,7 +1335,7 @@ def label_search(
                 for ow, _oA, oT, ovec, oid in mindex.get(mkey, ()):
                     if dead[oid] or ow == w:
                         continue
-                    if oT + tt[ow][w] <= A and all(x <= y for x, y in zip(ovec, mvec, strict=True)):
+                    if oT + tt[ow][w] <= A and all(map(le, ovec, mvec)):
                         hit = True
                         break
                 if hit:
@@ -1170,18 +1343,18 @@ def label_search(
             if hit:
                 dominated += 1
                 continue
-            b = _bound(tab, child)
+            b = _bound(tab, child, cut)
             if b < lb:
                 b = lb  # the parent's bound holds for the child's completions too
             if b < floor:
                 b = floor
-            if b >= best * (1 - slack):
+            if b >= cut:
                 pruned += 1
                 continue
             if bucket is not None:
                 keep = []
                 for other, oid in bucket:
-                    if all(x <= y for x, y in zip(vec, other, strict=True)):
+                    if all(map(le, vec, other)):
                         dead[oid] = 1
                     else:
                         keep.append((other, oid))
@@ -1196,7 +1369,7 @@ def label_search(
                         not dead[oid]
                         and ow != w
                         and T + tt[w][ow] <= oA
-                        and all(x <= y for x, y in zip(mvec, ovec, strict=True))
+                        and all(map(le, mvec, ovec))
                     ):
                         dead[oid] = 1
                 bucket2.append((w, A, T, mvec, cid))
