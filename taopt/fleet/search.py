@@ -210,11 +210,9 @@ class _Tables:
         self.release = [0.0] * n
         # per-label work, memoised on what it depends on (the inner loops' plain lists and
         # caches; each cache is cleared when it grows past its cap)
-        self.Flist: list[list[float]] = self.Fnp.tolist()
         self._watch: dict[int, tuple[int, tuple[int, ...]]] = {}  # _watched
         self._cols: dict[int, np.ndarray] = {}  # _columns
         self._cols_size = 0
-        self._cands: dict[tuple[int, int], list[list[tuple[float, float, float, float]]]] = {}
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -309,61 +307,9 @@ def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any
     return back, arrive
 
 
-def _stop_candidates(tab: _Tables, w: int, o: int) -> list[list[tuple[float, float, float, float]]]:
-    """Per customer j, the stops q != w where an airborne drone of a truck at stop w, whose
-    last customer is ``o`` (or, ``o < 0``, launched at stop ``-o - 1`` with none yet), may be
-    recovered before a new sortie toward j (:func:`_fresh_sorties`), as tuples ``(ft(o, q),
-    tt(w, q), d(o, q), G[q, j])`` (no flight and distance when ``o < 0``); cached per (w, o).
-
-    Only the stops no other stop *dominates* are listed: q' dominates q when its flight
-    time, drive, distance (so its range test) and ``G[q', j]`` are all <= q's (ties broken
-    by index). For every drone time t, departure bound T and distance flown δ, the term
-    ``max(t + ft(o, q), T + tt(w, q)) + τ + G[q, j]`` is nondecreasing in each of those, and
-    q' is within range whenever q is, so the least over the listed stops equals the least
-    over all stops (dominance is a strict order on a finite set: every stop is dominated by
-    an undominated one). Stops that cannot reach j (``G = inf``) or are out of range even
-    with δ = 0 are left out; the truck's own stop w (arrival A, not T) is priced apart."""
-    key = (w, o)
-    got = tab._cands.get(key)
-    if got is not None:
-        return got
-    if len(tab._cands) > 1 << 14:
-        tab._cands.clear()
-    s = tab.s
-    if o >= 0:
-        a = tab.fst_np[o]
-        d = tab.fsd_np[o]
-        ok = d <= tab.limit
-    else:
-        a = np.zeros(s)
-        d = np.zeros(s)
-        ok = np.ones(s, dtype=bool)
-    b = tab.tt_np[w]
-    ok = ok.copy()
-    ok[w] = False
-    G = tab.Gnp  # (s, n)
-    le = (a[:, None] <= a[None, :]) & (b[:, None] <= b[None, :]) & (d[:, None] <= d[None, :])
-    lt = (a[:, None] < a[None, :]) | (b[:, None] < b[None, :]) | (d[:, None] < d[None, :])
-    idx = np.arange(s)
-    lt |= idx[:, None] < idx[None, :]
-    le &= ok[:, None]  # (q', q): only a usable stop dominates
-    dom = le[:, :, None] & (G[:, None, :] <= G[None, :, :])
-    dom &= lt[:, :, None] | (G[:, None, :] < G[None, :, :])
-    keep = ~dom.any(axis=0) & ok[:, None] & (G < INF)  # (q, n)
-    got = [
-        [
-            (float(a[q]), float(b[q]), float(d[q]), float(G[q, j]))
-            for q in np.flatnonzero(keep[:, j])
-        ]
-        for j in range(tab.n)
-    ]
-    tab._cands[key] = got
-    return got
-
-
 def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
-    """Per truck, per customer j of ``U`` (default all): the least time a sortie of that truck
-    not yet launched serves j (``inf`` where none can, and for the customers outside U).
+    """Per truck, per customer j: the least time a sortie of that truck not yet launched
+    serves j (``inf`` where none can). ``U`` is unused (kept for the callers' signature).
 
     An aboard drone launches here no sooner than ``max(A, ρ)`` (only toward customers a sortie
     from this stop can reach and still land: ``F``), or at another stop after the truck leaves
@@ -371,59 +317,30 @@ def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
     drive-and-fly time). An airborne drone must first be recovered at some stop q within its
     range: no sooner than ``max(t + ft(ℓ, q), arrival at q) + τ`` (the truck is at q at A if q is
     its stop, else no sooner than ``T + tt(w, q)``; a drone that has served nobody yet is
-    charged no flight to q), then ``G[q, j]`` (the least over q taken over the stops of
-    :func:`_stop_candidates`, the same value). Then τ at j. Each is a relaxation of the
+    charged no flight to q), then ``G[q, j]``. Then τ at j. Each is a relaxation of the
     actions of :func:`_children`, which only add constraints."""
     out: list[Any] = []
-    tau, limit = tab.tau, tab.limit
-    n = tab.n
-    drone_ok = tab.drone_ok
-    js = [j for j in range(n) if U >> j & 1 and drone_ok[j]]
+    tau = tab.tau
     for w, A, T, _ev, fin, _F, drones in trucks:
         if fin or not drones:
             out.append(None)
             continue
-        best = [INF] * n
         rho = INF
         for dr in drones:
             if dr[0] == 0 and dr[1] < rho:
                 rho = dr[1]
-        Gw = tab.G[w]
+        best = None
         if rho < INF:
-            a = rho if rho > A else A
-            Fw = tab.Flist[w]
-            for j in js:
-                v = a + Fw[j]
-                u = T + Gw[j]
-                best[j] = v if v < u else u
+            best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), tab.Gnp[w] + T)
         for dr in drones:
             if dr[0] != 1:
                 continue
-            o, t, delta = dr[1], dr[3], dr[4]
-            if o >= 0:
-                if delta + tab.fsd[o][w] <= limit:
-                    x = t + tab.fst[o][w]
-                    here = (x if x > A else A) + tau
-                else:
-                    here = INF
-            else:
-                here = (t if t > A else A) + tau
-            cands = _stop_candidates(tab, w, o)
-            for j in js:
-                e = best[j]
-                v = here + Gw[j]
-                if v < e:
-                    e = v
-                for fq, tq, dq, g in cands[j]:
-                    if delta + dq > limit:
-                        continue
-                    x = t + fq
-                    y = T + tq
-                    v = (x if x > y else y) + tau + g
-                    if v < e:
-                        e = v
-                best[j] = e
-        out.append([v + tau for v in best])
+            back, _ = _recoveries(tab, w, A, T, dr, None)
+            cand = (back[:, None] + tab.Gnp).min(axis=0)
+            best = cand if best is None else np.minimum(best, cand)
+        assert best is not None
+        best += tau
+        out.append(best.tolist())
     return out
 
 
@@ -586,8 +503,8 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     the largest of its terms.
 
     The terms are taken cheapest first (the last service so far, or the way home; the
-    trucks' covering walks; the drones' shared work; each unserved customer's earliest
-    service; the drones' sortie times), and once their maximum reaches ``cutoff`` it is
+    trucks' covering walks; the drones' shared work; the drones' sortie times; each unserved
+    customer's earliest service), and once their maximum reaches ``cutoff`` it is
     returned without the rest: still a valid bound (a maximum of valid terms), and at least
     ``cutoff``, so a caller that prunes at ``cutoff`` prunes the same labels."""
     S, M, svc, trucks = label
@@ -667,6 +584,13 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         b = v
         if b >= cutoff:
             return b
+    # the drones' sortie times (the most expensive term, but on one truck with several
+    # drones it prunes about 30 times as often as the earliest services)
+    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
+    if v > b:
+        b = v
+        if b >= cutoff:
+            return b
     # each unserved customer's earliest service, raised along the precedences
     fresh = _fresh_sorties(tab, trucks, unserved)
     tt = tab.tt
@@ -700,10 +624,7 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             e += back[j]
         if e > b:
             b = e
-    if b >= cutoff:
-        return b
-    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
-    return v if v > b else b
+    return b
 
 
 def _needed(tab: _Tables, S: int) -> int:
