@@ -503,8 +503,9 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     the largest of its terms.
 
     The terms are taken cheapest first (the last service so far, or the way home; the
-    trucks' covering walks; the drones' shared work; the drones' sortie times; each unserved
-    customer's earliest service), and once their maximum reaches ``cutoff`` it is
+    trucks' covering walks; the drones' sortie times; their shared work; each unserved
+    customer's earliest service: the order in which they prune most per microsecond on one
+    truck with two drones), and once their maximum reaches ``cutoff`` it is
     returned without the rest: still a valid bound (a maximum of valid terms), and at least
     ``cutoff``, so a caller that prunes at ``cutoff`` prunes the same labels."""
     S, M, svc, trucks = label
@@ -579,14 +580,14 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         b = v
         if b >= cutoff:
             return b
-    v = _water_fill(tab, S, trucks)
+    # the drones' sortie times (the most expensive term, but on one truck with several
+    # drones it prunes about 30 times as often as the earliest services)
+    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
     if v > b:
         b = v
         if b >= cutoff:
             return b
-    # the drones' sortie times (the most expensive term, but on one truck with several
-    # drones it prunes about 30 times as often as the earliest services)
-    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
+    v = _water_fill(tab, S, trucks)
     if v > b:
         b = v
         if b >= cutoff:
@@ -1238,7 +1239,8 @@ def label_search(
             break
         expanded += 1
         for child, act in _children(tab, label):
-            # dominance first (a dominated child needs no bound), then the bound
+            # the same discrete state first (a dominated child needs no bound), then the bound
+            # (cheapest terms first: most children are pruned by one), then metric dominance
             key, vec = _signature(tab, child)
             bucket = store.get(key)
             if bucket is not None:
@@ -1250,6 +1252,14 @@ def label_search(
                 if skip:
                     dominated += 1
                     continue
+            b = _bound(tab, child, cut)
+            if b < lb:
+                b = lb  # the parent's bound holds for the child's completions too
+            if b < floor:
+                b = floor
+            if b >= cut:
+                pruned += 1
+                continue
             entries = _metric_entries(tab, child) if metric else []
             hit = False
             for mkey, w, A, _T, mvec in entries:
@@ -1263,14 +1273,6 @@ def label_search(
                     break
             if hit:
                 dominated += 1
-                continue
-            b = _bound(tab, child, cut)
-            if b < lb:
-                b = lb  # the parent's bound holds for the child's completions too
-            if b < floor:
-                b = floor
-            if b >= cut:
-                pruned += 1
                 continue
             if bucket is not None:
                 keep = []
