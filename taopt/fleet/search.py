@@ -210,7 +210,7 @@ class _Tables:
         self.release = [0.0] * n
         # per-label work, memoised on what it depends on (the inner loops' plain lists and
         # caches; each cache is cleared when it grows past its cap)
-        self._watch: dict[int, tuple[int, tuple[int, ...]]] = {}  # _watched
+        self._watch: dict[int, tuple[int, tuple[int, ...], int]] = {}  # _watched
         self._cols: dict[int, np.ndarray] = {}  # _columns
         self._cols_size = 0
 
@@ -519,13 +519,13 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         # a stale drone launched with no customer yet takes one only after a predecessor
         # served since its launch (:func:`_appendable`); with none left it cannot be
         # completed
+        waits = -1
         for _w, _A, _T, _ev, _fin, _F, drones in trucks:
             for dr in drones:
                 if dr[0] == 1 and dr[2] == 0 and not dr[6]:
-                    if not any(
-                        unserved >> j & 1 and drone_ok[j] and pred_mask[j] & ~dr[7]
-                        for j in range(n)
-                    ):
+                    if waits < 0:  # the predecessors of the unserved drone-servable customers
+                        waits = _watched(tab, S)[2]
+                    if not waits & ~dr[7]:
                         return INF
     ret = tab.ret
     if not ret:
@@ -661,23 +661,28 @@ def _appendable(tab: _Tables, dr: tuple, need: int) -> tuple[bool, int]:
     return (dr[6], dr[7] & need)
 
 
-def _watched(tab: _Tables, S: int) -> tuple[int, tuple[int, ...]]:
+def _watched(tab: _Tables, S: int) -> tuple[int, tuple[int, ...], int]:
     """(:func:`_needed` of S, the served customers of S with an unserved successor, whose
-    service times the dominance compares); cached per S."""
+    service times the dominance compares, the predecessors of the unserved drone-servable
+    customers); cached per S."""
     got = tab._watch.get(S)
     if got is None:
         if len(tab._watch) > 1 << 16:
             tab._watch.clear()
         succ = tab.succ_mask
         watch = tuple(r for r in range(tab.n) if S >> r & 1 and succ[r] & ~S)
-        got = tab._watch[S] = (_needed(tab, S), watch)
+        waits = 0
+        for j in range(tab.n):
+            if not S >> j & 1 and tab.drone_ok[j]:
+                waits |= tab.pred_mask[j]
+        got = tab._watch[S] = (_needed(tab, S), watch, waits)
     return got
 
 
 def _signature(tab: _Tables, label: tuple) -> tuple[tuple, tuple]:
     """(key, vector): labels with equal keys compare by their vectors (all smaller = better)."""
     S, M, svc, trucks = label
-    need, watch = _watched(tab, S)
+    need, watch, _ = _watched(tab, S)
     vec: list[float] = [M] if not tab.ret else []
     for r in watch:
         vec.append(svc[r])
@@ -728,7 +733,7 @@ def _metric_entries(tab: _Tables, label: tuple) -> list[tuple[tuple, int, float,
     are all <= Y's: X can drive there and do all Y can, no later (tt is a metric), and its
     aboard drones are ready on arrival."""
     S, M, svc, trucks = label
-    need, watch = _watched(tab, S)
+    need, watch, _ = _watched(tab, S)
     head: list[float] = [M] if not tab.ret else []
     for r in watch:
         head.append(svc[r])
