@@ -213,6 +213,7 @@ class _Tables:
         self._watch: dict[int, tuple[int, tuple[int, ...], int]] = {}  # _watched
         self._cols: dict[int, np.ndarray] = {}  # _columns
         self._cols_size = 0
+        self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -307,9 +308,91 @@ def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any
     return back, arrive
 
 
-def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
+def _first_recoveries(
+    tab: _Tables,
+    k: int,
+    w: int,
+    A: float,
+    T: float,
+    dr: tuple,
+    S: int,
+    svc: Sequence[float],
+    times: Sequence[float] | None,
+) -> np.ndarray:
+    """Per stop q, the earliest a drone launched with no customer yet (``dr``: airborne,
+    m = 0) of truck k at stop w (arrival A, departure bound T) can be recovered there and
+    its τ done: :func:`_recoveries` for a drone that must first serve a customer.
+
+    Such a drone is recovered only after it has served some customer j it may still take
+    (unserved, drone-servable, on truck k's side under ``truck_of``, within range with a
+    landing, and when it is stale one with a predecessor served since its launch:
+    :func:`_appendable`; :func:`_complete` never ends a label with an empty sortie), no
+    sooner than ``a_j = max(t + ft(w_L, j) + τ, t_r for r -> j, release_j)``, ``t_r`` the
+    service time of a served predecessor or, with ``times``, the earliest service of an
+    unserved one (``times[r]``, a lower bound on it in every completion; without ``times``
+    an unserved predecessor is not counted). Its recovery at q, after any further customers
+    of the sortie (straight lines: the triangle inequality), is no sooner than
+    ``max(a_j + ft(j, q), arrival at q) + τ``, with ``d(w_L, j) + d(j, q)`` within the range
+    left (``svc``: the label's service times). The least over j is a lower bound; ``inf`` everywhere when it can take no one
+    (such a label has no completion)."""
+    lazy = tab.lazy
+    owner, pred_mask, release = tab.owner, tab.pred_mask, tab.release
+    ws = -dr[1] - 1
+    t, delta, seen = dr[3], dr[4], dr[7]
+    fresh = not lazy or dr[6]
+    tau, limit = tab.tau, tab.limit
+    firsts: list[int] = []
+    value: list[float] = []
+    spent: list[float] = []
+    for j in range(tab.n):
+        if S >> j & 1 or not tab.drone_ok[j] or (owner is not None and owner[j] != k):
+            continue
+        if not fresh and not pred_mask[j] & ~seen:
+            continue
+        dist = delta + tab.fsd[j][ws]
+        if dist + tab.near[j] > limit:
+            continue
+        a = t + tab.fst[j][ws] + tau
+        for r in tab.preds[j]:
+            if S >> r & 1:
+                tr = svc[r]
+            elif times is not None:
+                tr = times[r]
+            else:
+                continue
+            if tr > a:
+                a = tr
+        if release[j] > a:
+            a = release[j]
+        firsts.append(j)
+        value.append(a)
+        spent.append(dist)
+    if not firsts:
+        return np.full(tab.s, INF)
+    legs = tab._legs.get(ws)
+    if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range (δ = 0)
+        legs = tab._legs[ws] = np.where(
+            tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
+        )
+    if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
+        rows = tab.fst_np[firsts] + np.asarray(value)[:, None]
+        rows[tab.fsd_np[firsts] + np.asarray(spent)[:, None] > limit] = INF
+    else:
+        rows = legs[firsts] + np.asarray(value)[:, None]
+    arrive = T + tab.tt_np[w]
+    arrive[w] = A
+    back = np.maximum(rows.min(axis=0), arrive)
+    back += tau
+    return back
+
+
+def _fresh_sorties(
+    tab: _Tables, trucks: tuple, S: int | None = None, svc: Sequence[float] = ()
+) -> list[Any]:
     """Per truck, per customer j: the least time a sortie of that truck not yet launched
-    serves j (``inf`` where none can). ``U`` is unused (kept for the callers' signature).
+    serves j (``inf`` where none can). With the label's served set ``S`` and service times
+    ``svc``, a drone launched with no customer yet is recovered only after its first
+    customer (:func:`_first_recoveries`, unserved predecessors not counted).
 
     An aboard drone launches here no sooner than ``max(A, ρ)`` (only toward customers a sortie
     from this stop can reach and still land: ``F``), or at another stop after the truck leaves
@@ -321,7 +404,7 @@ def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
     actions of :func:`_children`, which only add constraints."""
     out: list[Any] = []
     tau = tab.tau
-    for w, A, T, _ev, fin, _F, drones in trucks:
+    for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
         if fin or not drones:
             out.append(None)
             continue
@@ -335,7 +418,10 @@ def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
         for dr in drones:
             if dr[0] != 1:
                 continue
-            back, _ = _recoveries(tab, w, A, T, dr, None)
+            if dr[2] == 0 and S is not None:
+                back = _first_recoveries(tab, k, w, A, T, dr, S, svc, None)
+            else:
+                back, _ = _recoveries(tab, w, A, T, dr, None)
             cand = (back[:, None] + tab.Gnp).min(axis=0)
             best = cand if best is None else np.minimum(best, cand)
         assert best is not None
@@ -344,7 +430,7 @@ def _fresh_sorties(tab: _Tables, trucks: tuple, U: int = -1) -> list[Any]:
     return out
 
 
-def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
+def _walk_bound(tab: _Tables, U: int, trucks: tuple, drop: int = 0, count: int = 0) -> float:
     """The trucks' covering walks: a lower bound on the objective of every completion in which
     the customers of ``U`` are served from the trucks' stops (each by the truck itself at its
     stop, or by a sortie launched from there).
@@ -362,7 +448,15 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     or more. ``inf`` when no unfinished truck is left for a nonempty U; 0 when U is empty or
     there is no table. Under ``"last_service"`` a truck whose part is all coverable at its
     own stop need not leave it, so that part ends nothing (T bounds only a departure: the
-    recoveries that set it may come after the last service)."""
+    recoveries that set it may come after the last service).
+
+    ``drop``, ``count``: customers of U of which at most ``count`` may be served by sorties
+    already in the air: the least over U \\ Y, Y ⊆ ``drop``, ``|Y| <= count`` (one truck;
+    with more, all of ``drop`` is left out, which is no more)."""
+    drop &= U
+    if drop and count > 0 and len(trucks) > 1:
+        U &= ~drop
+        drop = 0
     if not U or not tab.walk:
         return 0.0
     active: list[tuple[int, float, WalkTable]] = []
@@ -378,7 +472,16 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     if len(active) == 1:
         w, T, table = active[0]
         R = U & ~table.cover[w]
-        return T + float(table.value[R, w]) if R or ret else 0.0
+        least = T + float(table.value[R, w]) if R or ret else 0.0
+        if drop and count > 0 and least > 0.0:
+            bits = [1 << j for j in range(tab.n) if drop >> j & 1]
+            for size in range(1, min(count, len(bits)) + 1):
+                for Y in itertools.combinations(bits, size):
+                    R = (U & ~sum(Y)) & ~table.cover[w]
+                    v = T + float(table.value[R, w]) if R or ret else 0.0
+                    if v < least:
+                        least = v
+        return least
     subs = _submasks(tab, U)
 
     def ends(X: np.ndarray, w: int, T: float, table: WalkTable) -> np.ndarray:
@@ -396,7 +499,16 @@ def _walk_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     return float(min(np.min(ends(big, w, T, table)) for w, T, table in active))
 
 
-def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
+def _sortie_time_bound(
+    tab: _Tables,
+    U: int,
+    trucks: tuple,
+    S: int | None = None,
+    svc: Sequence[float] = (),
+    times: Sequence[float] | None = None,
+    drop: int = 0,
+    count: int = 0,
+) -> float:
     """The drones' sorties, the one-drone relaxation at a label: a lower bound on the
     objective of every completion in which the drone-only customers of ``U`` are served by
     sorties not yet launched.
@@ -418,36 +530,66 @@ def _sortie_time_bound(tab: _Tables, U: int, trucks: tuple) -> float:
     serves at least ``ceil(|U| / N)`` of them, so the least end over drones and subsets of
     that size or more. The pairs between different drones' parts are dropped, so at the root
     this is at most :func:`taopt.models.fleet._one_drone_floor` (which keeps them, and is the
-    search's ``floor``). 0 without a table or customers; ``inf`` without a drone."""
+    search's ``floor``). 0 without a table or customers; ``inf`` without a drone.
+
+    ``drop``, ``count``: customers of U of which at most ``count`` may be served by sorties
+    already in the air (and so need no new sortie): the least of the term over U \\ Y, Y ⊆
+    ``drop`` with ``|Y| <= count`` (from the least-largest values of every subset of U, up to
+    :data:`PARTITION_MAX_CUSTOMERS` customers; above, all of ``drop`` is left out, which is
+    no more)."""
     F = tab.sortie_time
+    drop &= U
+    if drop and count <= 0:
+        drop = 0
+    elif drop and int(tab.popcount[U]) > PARTITION_MAX_CUSTOMERS:
+        U &= ~drop
+        drop = 0
     if F is None or not U:
         return 0.0
     drones_left = [
-        (w, A, T, dr) for w, A, T, _ev, fin, _F, drones in trucks if not fin for dr in drones
+        (k, w, A, T, dr)
+        for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks)
+        if not fin
+        for dr in drones
     ]
     if not drones_left:
         return INF
-    if len(drones_left) == 1:  # one drone serves all of U: one column
-        w, A, T, dr = drones_left[0]
+
+    def back_of(k: int, w: int, A: float, T: float, dr: tuple) -> np.ndarray:
+        if dr[2] == 0 and S is not None:
+            return _first_recoveries(tab, k, w, A, T, dr, S, svc, times)
+        return cast(np.ndarray, _recoveries(tab, w, A, T, dr, None)[0])
+
+    if len(drones_left) == 1 and not drop:  # one drone serves all of U: one column
+        k, w, A, T, dr = drones_left[0]
         if dr[0] == 0:
             return (dr[1] if dr[1] > A else A) + float(F[w, U])
-        return float((_recoveries(tab, w, A, T, dr, None)[0] + F[:, U]).min())
+        return float((back_of(k, w, A, T, dr) + F[:, U]).min())
     cols = _columns(tab, U)
     ends: list[np.ndarray] = []
-    arrive = None
-    last_truck: tuple[int, float, float] | None = None
-    for w, A, T, dr in drones_left:
+    for k, w, A, T, dr in drones_left:
         if dr[0] == 0:
             ends.append(cols[w] + (dr[1] if dr[1] > A else A))
             continue
-        if (w, A, T) != last_truck:
-            arrive = None
-            last_truck = (w, A, T)
-        back, arrive = _recoveries(tab, w, A, T, dr, arrive)
+        back = back_of(k, w, A, T, dr)
         ends.append((back[:, None] + cols).min(axis=0))
     if not tab.one_drone or not tab.ret:
         for e in ends:
             e[0] = 0.0  # column 0 is the empty set: a drone that serves no one more ends nothing
+    if drop:
+        # per subset Z of U (local masks), the least largest end; then the least over the
+        # sets U \ Y left to new sorties
+        m = int(tab.popcount[U])
+        g = ends[0] if len(ends) == 1 else _least_largest(ends, m)
+        local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
+        top = (1 << m) - 1
+        least = float(g[top])
+        for size in range(1, min(count, len(local)) + 1):
+            for Y in itertools.combinations(local, size):
+                v = float(g[top ^ sum(1 << i for i in Y)])
+                if v < least:
+                    least = v
+        return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
         return float(np.maximum(ends[0], ends[1][::-1]).min())
     last = len(cols[0]) - 1
@@ -547,8 +689,11 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
                 b = v
     if b >= cutoff or not unserved:
         return b
-    # customers an airborne drone with room can still take, and its earliest such service
+    # customers an airborne drone with room can take next (``relaxed``, left out of the walk
+    # and sortie terms) and its earliest such service
     relaxed = 0
+    ext = 0  # customers a stale drone may take only after its next append ...
+    more = 0  # ... at most this many of them in all
     air: list[float] | None = None
     c = tab.c
     for k, (_w, _A, _T, _ev, fin, _F, drones) in enumerate(trucks):
@@ -560,29 +705,61 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             if air is None:
                 air = [INF] * n
             o = dr[1]
-            fresh_drone = not lazy or dr[6]
-            for j in range(n):
-                if not (unserved >> j & 1 and drone_ok[j]) or (owner is not None and owner[j] != k):
-                    continue  # (truck_of: only j's own truck may serve it)
-                if not fresh_drone and not pred_mask[j] & ~dr[7]:
-                    continue  # (a stale drone takes j only after a predecessor: _appendable)
-                if o >= 0:
-                    dist, fly = tab.fcd[o][j], tab.fct[o][j]
+            # a stale drone takes next only a customer with a predecessor served since its
+            # last event (:func:`_appendable`); after that append it is fresh, so with room
+            # for two it may go on to any customer within range (d(ℓ, j) + d(j, k) >=
+            # d(ℓ, k)), at most c - m - 1 of them: those may stay out of the walk and
+            # sortie terms too (``ext``, ``more``)
+            rule = lazy and not dr[6]
+            for _ in range(2):
+                takes = 0
+                for j in range(n):
+                    if not (unserved >> j & 1 and drone_ok[j]) or (
+                        owner is not None and owner[j] != k
+                    ):
+                        continue  # (truck_of: only j's own truck may serve it)
+                    if rule and not pred_mask[j] & ~dr[7]:
+                        continue
+                    if o >= 0:
+                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                    else:
+                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                    if dr[4] + dist + tab.near[j] <= tab.limit:
+                        takes |= 1 << j
+                        v = dr[3] + fly + tau
+                        if v < air[j]:
+                            air[j] = v
+                if rule:
+                    relaxed |= takes
+                    if not (takes and c - dr[2] >= 2):
+                        break
+                    rule = False
+                    more += c - dr[2] - 1
                 else:
-                    dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-                if dr[4] + dist + tab.near[j] <= tab.limit:
-                    relaxed |= 1 << j
-                    v = dr[3] + fly + tau
-                    if v < air[j]:
-                        air[j] = v
-    v = _walk_bound(tab, unserved & ~relaxed, trucks)
+                    if lazy and not dr[6]:
+                        ext |= takes
+                    else:
+                        relaxed |= takes
+                    break
+    ext &= ~relaxed
+    v = _walk_bound(tab, unserved & ~relaxed, trucks, ext, more)
     if v > b:
         b = v
         if b >= cutoff:
             return b
+    est = None
+    if any(dr[0] == 1 and dr[2] == 0 for tr in trucks if not tr[4] for dr in tr[6]):
+        # a drone launched with no customer yet: its first customer's predecessors'
+        # earliest services delay its recovery (:func:`_first_recoveries`), so those first
+        est = _earliest_services(tab, S, svc, trucks, air)
+        v = _service_term(tab, unserved, est)
+        if v > b:
+            b = v
+            if b >= cutoff:
+                return b
     # the drones' sortie times (the most expensive term, but on one truck with several
     # drones it prunes about 30 times as often as the earliest services)
-    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks)
+    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks, S, svc, est, ext, more)
     if v > b:
         b = v
         if b >= cutoff:
@@ -592,17 +769,45 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         b = v
         if b >= cutoff:
             return b
-    # each unserved customer's earliest service, raised along the precedences
-    fresh = _fresh_sorties(tab, trucks, unserved)
+    if est is None:
+        est = _earliest_services(tab, S, svc, trucks, air)
+        v = _service_term(tab, unserved, est)
+        if v > b:
+            b = v
+    return b
+
+
+def _service_term(tab: _Tables, unserved: int, est: list[float]) -> float:
+    """The largest earliest service of an unserved customer (under ``"return"`` plus its
+    least way home, ``back``)."""
+    b = 0.0
+    back = tab.back if tab.ret else None
+    for j in range(tab.n):
+        if unserved >> j & 1:
+            e = est[j] if back is None else est[j] + back[j]
+            if e > b:
+                b = e
+    return b
+
+
+def _earliest_services(
+    tab: _Tables, S: int, svc: Sequence[float], trucks: tuple, air: list[float] | None
+) -> list[float]:
+    """Per customer, its service time when served (in S), else the least time it can be
+    served from the label over the fleet (by a truck at its stop, by a sortie not yet
+    launched, :func:`_fresh_sorties`, or appended to an airborne sortie, ``air``), raised
+    along the precedences and to its release."""
+    n = tab.n
+    owner = tab.owner
+    fresh = _fresh_sorties(tab, trucks, S, svc)
     tt = tab.tt
     est = [0.0] * n
-    back = tab.back
     for j in tab.topo:
-        if not unserved >> j & 1:
+        if S >> j & 1:
             est[j] = svc[j]
             continue
         e = INF if air is None else air[j]
-        tok, dok = tab.truck_ok[j], drone_ok[j]
+        tok, dok = tab.truck_ok[j], tab.drone_ok[j]
         for k, (w, A, T, _ev, fin, _F, drones) in enumerate(trucks):
             if fin or (owner is not None and owner[j] != k):
                 continue
@@ -621,11 +826,7 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         if tab.release[j] > e:
             e = tab.release[j]
         est[j] = e
-        if ret:
-            e += back[j]
-        if e > b:
-            b = e
-    return b
+    return est
 
 
 def _needed(tab: _Tables, S: int) -> int:
