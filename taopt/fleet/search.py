@@ -216,6 +216,7 @@ class _Tables:
         self._cols: dict[int, np.ndarray] = {}  # _columns
         self._cols_size = 0
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
+        self._firsts: dict[tuple, np.ndarray] = {}
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -371,19 +372,26 @@ def _first_recoveries(
         spent.append(dist)
     if not firsts:
         return np.full(tab.s, INF)
-    legs = tab._legs.get(ws)
-    if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range (δ = 0)
-        legs = tab._legs[ws] = np.where(
-            tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
-        )
-    if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
-        rows = tab.fst_np[firsts] + np.asarray(value)[:, None]
-        rows[tab.fsd_np[firsts] + np.asarray(spent)[:, None] > limit] = INF
-    else:
-        rows = legs[firsts] + np.asarray(value)[:, None]
+    key = (ws, delta, tuple(firsts), tuple(value))
+    first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
+    if first is None:
+        if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
+            rows = tab.fst_np[firsts] + np.asarray(value)[:, None]
+            rows[tab.fsd_np[firsts] + np.asarray(spent)[:, None] > limit] = INF
+        else:
+            legs = tab._legs.get(ws)
+            if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range
+                legs = tab._legs[ws] = np.where(
+                    tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
+                )
+            rows = legs[firsts] + np.asarray(value)[:, None]
+        first = rows.min(axis=0)
+        if len(tab._firsts) > 1 << 15:
+            tab._firsts.clear()
+        tab._firsts[key] = first
     arrive = T + tab.tt_np[w]
     arrive[w] = A
-    back = np.maximum(rows.min(axis=0), arrive)
+    back = np.maximum(first, arrive)
     back += tau
     return back
 
