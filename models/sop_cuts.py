@@ -57,6 +57,7 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
+from taopt.models.sop_dp import RowCredit
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -65,6 +66,7 @@ from taopt.sop.problem import SopProblem
 __all__ = [
     "ALL_PAIRS_FIRST",
     "BAD_POINTS",
+    "CREDIT_ROWS",
     "CUTS_PER_ROUND",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
@@ -90,6 +92,10 @@ __all__ = [
     "round_point",
     "solve_sop_cuts",
 ]
+
+#: Cut rows of largest dual whose crossings the DP tracks per state
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`: one bit each in a ``uint64``).
+CREDIT_ROWS = 64
 
 #: Capacities of the maximum flows are the LP values times this, rounded down (scipy's
 #: maximum flow takes integers); a cut is added only if its value in floating point is
@@ -237,6 +243,8 @@ class SopCutModel:
         #: Some row or fixing holds only for the orders cheaper than the best one known,
         #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
         self.conditional = False
+        #: The clipped row duals and ``y^T b`` of the last :meth:`_lagrangian`.
+        self._last_duals: tuple[np.ndarray, float] = (np.zeros(0), 0.0)
         #: HiGHS's model status after the last LP of
         #: :meth:`~taopt.models.sop_cuts.SopCutModel.root`.
         self.last_status: Any = None
@@ -498,6 +506,7 @@ class SopCutModel:
         reduced = self.costs - matrix.T @ y
         free = ~self.fixed
         bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
+        self._last_duals = (y, float(constant.sum()))
         return bound, reduced
 
     def lagrangian_prices(self) -> tuple[float, np.ndarray] | None:
@@ -515,6 +524,44 @@ class SopCutModel:
         matrix = np.full((self.n, self.n), np.inf)
         matrix[self.tails, self.heads] = reduced
         return constant + float(np.minimum(reduced, 0.0).sum()), matrix
+
+    def row_credit(self, rows: int = CREDIT_ROWS) -> RowCredit | None:
+        """The last LP's prices in the form of the DP's prefix bound with row credit
+        (:class:`~taopt.models.sop_dp.RowCredit`, ``credit=`` of
+        :func:`~taopt.models.sop_dp.solve_sop_dp`): ``y^T b``, the signed reduced costs ``d``,
+        the ``rows`` cut rows of largest positive dual as bits of each arc, and the arcs of
+        negative ``d``. None without duals, or when an arc is fixed or a row other than the
+        degree and path-cut rows is in (the credit is then not worked out).
+
+        Every row priced here is a path cut ``Σ_{a ∈ C_r} x_a >= 1`` with 0/1 coefficients,
+        valid for every order, so an order crossing it ``k`` times pays ``y_r k`` in
+        ``y^T A x``, ``y_r (k - 1)`` more than ``y^T b`` counts (the proof is in
+        :mod:`taopt.models.sop_dp`, "Row credit").
+        """
+        raw, reduced = self._lagrangian()
+        if not math.isfinite(raw) or self.fixed.any() or self.pool_rows:
+            return None
+        y, constant = self._last_duals
+        priced = y[self.degree_rows :]
+        count = min(len(self.cut_rows), len(priced))
+        ranked = [k for k in np.argsort(-priced[:count], kind="stable") if priced[k] > 1e-9]
+        ranked = ranked[:rows]
+        bits = np.zeros((self.n, self.n), dtype=np.uint64)
+        weights = np.zeros(len(ranked))
+        for r, k in enumerate(ranked):
+            arcs = self.cut_rows[k]
+            bits[self.tails[arcs], self.heads[arcs]] |= np.uint64(1) << np.uint64(r)
+            weights[r] = priced[k]
+        signed = np.full((self.n, self.n), np.inf)
+        signed[self.tails, self.heads] = reduced
+        negative = np.flatnonzero(reduced < 0)
+        return RowCredit(
+            constant=constant,
+            reduced=signed,
+            bits=bits,
+            weights=weights,
+            negative=(self.tails[negative], self.heads[negative], reduced[negative]),
+        )
 
     def fix_by_reduced_cost(self, incumbent: float) -> int:
         """Fix to 0 every arc that no order better than ``incumbent`` can use, by the last
