@@ -23,6 +23,16 @@ separated *exactly* on an LP point: for each pair one maximum flow from i to j o
 point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``); a
 flow below 1 gives a violated row (the source side of a minimum cut).
 
+Once no pair's row is violated, two generalisations are separated over a list of candidates
+(:meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`, proofs there): *set path cuts*,
+with two sources preceding one sink (or one source preceding two sinks) and W shrunk by
+the predecessors (successors) of both, and *alternation rows* of side 2, for a chain
+``i ≺ t ≺ s ≺ j`` whose cut holds i and s on one side and t and j on the other. Root bounds
+(the cut loop run to its end, ``benchmarks/bench_sop.py``; optimum in brackets): p43.1
+28,100 → 28,135 [28,140], ry48p.1 14,712 → 14,775 [15,805], ft53.1 7,116 → 7,189 [7,531],
+prob.42 229 → 230 [243], ESC47 1,247 → 1,254 [1,288], br17.10 43 → 55 [55], ft53.4
+13,833 → 14,370 [14,425].
+
 Each row found is lifted by the precedences of its two sides
 (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti &
 Pulleyblank (1995) when i is the start or j the end, and their restrictions to the stretch from i to
@@ -66,6 +76,7 @@ from taopt.sop.problem import SopProblem
 __all__ = [
     "ALL_PAIRS_FIRST",
     "BAD_POINTS",
+    "CREDIT_NEGATIVE",
     "CREDIT_ROWS",
     "CUTS_PER_ROUND",
     "SET_CANDIDATES",
@@ -99,6 +110,10 @@ __all__ = [
 #: Cut rows of largest dual whose crossings the DP tracks per state
 #: (:meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`: one bit each in a ``uint64``).
 CREDIT_ROWS = 64
+
+#: Arcs of negative reduced cost that the DP's row-credit bound tracks per state at most
+#: (the most negative; :meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`).
+CREDIT_NEGATIVE = 64
 
 #: The root loop separates the set path cuts and alternation rows
 #: (:meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`) once the pair cuts hold.
@@ -263,7 +278,7 @@ class SopCutModel:
         #: Some row or fixing holds only for the orders cheaper than the best one known,
         #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
         self.conditional = False
-        #: The clipped row duals and ``y^T b`` of the last :meth:`_lagrangian`.
+        #: The clipped row duals and ``y^T b`` of the last Lagrangian bound worked out.
         self._last_duals: tuple[np.ndarray, float] = (np.zeros(0), 0.0)
         self._candidates: list[tuple[tuple[int, ...], tuple[int, ...], int]] | None = None
         #: The last maximum flow of each closure pair at a separated point (``inf``: none
@@ -719,6 +734,11 @@ class SopCutModel:
         signed = np.full((self.n, self.n), np.inf)
         signed[self.tails, self.heads] = reduced
         negative = np.flatnonzero(reduced < 0)
+        negative = negative[np.argsort(reduced[negative], kind="stable")]
+        # past CREDIT_NEGATIVE, the negative arcs are counted as usable by every rest (in
+        # the constant): a lower bound still, only not raised when they can no longer be used
+        constant += float(reduced[negative[CREDIT_NEGATIVE:]].sum())
+        negative = negative[:CREDIT_NEGATIVE]
         return RowCredit(
             constant=constant,
             reduced=signed,

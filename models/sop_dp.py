@@ -84,7 +84,7 @@ above 42 is dropped.
 
 Row credit. The same duals say more about a prefix than its reduced cost. Write the LP's
 rows as the degree rows (equalities) and path cuts ``Σ_{a ∈ C_r} x_a >= 1`` (0/1
-coefficients, duals ``y_r >= 0``; :class:`RowCredit`, from
+coefficients, duals ``y_r >= 0``; :class:`~taopt.models.sop_dp.RowCredit`, from
 :meth:`taopt.models.sop_cuts.SopCutModel.row_credit`). For an order ``x = p + q`` (the
 state's kept prefix ``p``, a completion ``q``), ``c x = y^T A x + d x`` exactly, and each
 cut row is crossed ``A_r x >= max(1, A_r p)`` times (``q >= 0``, coefficients >= 0), so
@@ -832,7 +832,8 @@ class RowCredit:
     Attributes
     ----------
     constant : float
-        ``y^T b``: the rows' sides times their (sign-clipped) duals.
+        ``y^T b`` (the rows' sides times their sign-clipped duals), plus ``d`` of the arcs of
+        negative ``d`` not in ``negative`` (counted as usable by every rest).
     reduced : ndarray
         ``n x n`` signed reduced costs ``d = c - A^T y`` of the usable arcs (``inf`` elsewhere).
     bits : ndarray
@@ -851,7 +852,8 @@ class RowCredit:
     negative: tuple[np.ndarray, np.ndarray, np.ndarray]
 
     def transposed(self) -> RowCredit:
-        """The same prices read backwards (:func:`reversed_problem`: arcs reversed)."""
+        """The same prices read backwards (:func:`~taopt.models.sop_dp.reversed_problem`: arcs
+        reversed)."""
         tails, heads, values = self.negative
         return RowCredit(
             self.constant,
@@ -875,7 +877,8 @@ class RowCredit:
 
 
 def _weighted(table: np.ndarray, masks: np.ndarray) -> np.ndarray:
-    """Per ``uint64`` mask, the sum of the weights of its bits (:meth:`RowCredit.byte_sums`)."""
+    """Per ``uint64`` mask, the sum of the weights of its bits
+    (:meth:`~taopt.models.sop_dp.RowCredit.byte_sums`)."""
     total = np.zeros(len(masks))
     for k in range(8):
         total += table[k][((masks >> np.uint64(8 * k)) & np.uint64(255)).astype(np.intp)]
