@@ -567,9 +567,13 @@ class SopCutModel:
                     continue
             elif max(flows[x, y] for x in xs for y in ys) >= 1 + SET_TIGHT:
                 continue
-            inside = ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+            inside: np.ndarray
             if side == 2:  # the chain's own W(i, j)
                 inside = ~before[:, xs[0]] & ~before[ys[1], :]
+            else:  # W = V minus π(X) and σ(Y)
+                inside = np.asarray(
+                    ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+                )
             starts = [x for x in xs if inside[x]]
             stops = [y for y in ys if inside[y]]
             keep = inside[tails] & inside[heads]
