@@ -1369,6 +1369,13 @@ CUTS_FIRST_MIN_LEFT = 20.0
 CPSAT_PROBE_SHARE = 0.15
 
 
+#: The root stage's prices reach the DP with their priced rows
+#: (:meth:`taopt.models.sop_cuts.SopCutModel.row_credit`): a state is then dropped by its
+#: kept prefix's reduced cost plus the duals of the path cuts it crosses more than once
+#: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
+ROW_CREDIT = True
+
+
 def _far(result: Solution) -> bool:
     """The run's relative gap is above :data:`CUTS_SECOND_STAGE_GAP` (or unknown)."""
     bound, value = result.bound, result.objective
@@ -1559,7 +1566,8 @@ def solve_sop_problem(
     cut engine's root cut loop first, in :data:`ROOT_SHARE` of the limit
     (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
     give the DP stages a Lagrangian bound that drops states
-    (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``), and the cut engine later goes
+    (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
+    path cuts, ``credit``, :data:`ROW_CREDIT`), and the cut engine later goes
     on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
@@ -1920,6 +1928,7 @@ def _stages(
         return nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
 
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
+    credit: Any = None  # the same LP's prices with its priced rows (the DP's row credit)
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
@@ -1991,6 +2000,7 @@ def _stages(
             both_prices=True,
             beam_width=0 if before is not None else 1024,
             lagrange=lagrange,
+            credit=credit,
         )
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
@@ -2030,6 +2040,8 @@ def _stages(
             root_model, lagrange, incumbent, cuts_first = _root_stage(
                 problem, deadline, incumbent, info, verbose
             )
+            if ROW_CREDIT and lagrange is not None:
+                credit = root_model.row_credit()
             if on_root is not None:
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]
@@ -2056,7 +2068,12 @@ def _stages(
             else:
                 expect(max_states, share, nonzeros=held())
                 result = solve_sop_dp(
-                    problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
+                    problem,
+                    share,
+                    incumbent=incumbent,
+                    max_states=max_states,
+                    lagrange=lagrange,
+                    credit=credit,
                 )
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
@@ -2084,6 +2101,7 @@ def _stages(
                     max_states=second_states,
                     both_prices=True,
                     lagrange=lagrange,
+                    credit=credit,
                 )
                 used = "dp+dp"
                 result = _combine(first, second)

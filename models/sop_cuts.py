@@ -23,6 +23,16 @@ separated *exactly* on an LP point: for each pair one maximum flow from i to j o
 point's support restricted to ``W(i, j)`` (``scipy.sparse.csgraph.maximum_flow``); a
 flow below 1 gives a violated row (the source side of a minimum cut).
 
+Once no pair's row is violated, two generalisations are separated over a list of candidates
+(:meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`, proofs there): *set path cuts*,
+with two sources preceding one sink (or one source preceding two sinks) and W shrunk by
+the predecessors (successors) of both, and *alternation rows* of side 2, for a chain
+``i ≺ t ≺ s ≺ j`` whose cut holds i and s on one side and t and j on the other. Root bounds
+(the cut loop run to its end, ``benchmarks/bench_sop.py``; optimum in brackets): p43.1
+28,100 → 28,135 [28,140], ry48p.1 14,712 → 14,775 [15,805], ft53.1 7,116 → 7,189 [7,531],
+prob.42 229 → 230 [243], ESC47 1,247 → 1,254 [1,288], br17.10 43 → 55 [55], ft53.4
+13,833 → 14,370 [14,425].
+
 Each row found is lifted by the precedences of its two sides
 (:meth:`~taopt.models.sop_cuts.SopCutModel.lifted`): the σ- and π-inequalities of Balas, Fischetti &
 Pulleyblank (1995) when i is the start or j the end, and their restrictions to the stretch from i to
@@ -57,6 +67,7 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
+from taopt.models.sop_dp import RowCredit
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -65,7 +76,12 @@ from taopt.sop.problem import SopProblem
 __all__ = [
     "ALL_PAIRS_FIRST",
     "BAD_POINTS",
+    "CREDIT_NEGATIVE",
+    "CREDIT_ROWS",
     "CUTS_PER_ROUND",
+    "SET_CANDIDATES",
+    "SET_CUTS",
+    "SET_TIGHT",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
     "KEEP_HIGHS_CUTS",
@@ -90,6 +106,28 @@ __all__ = [
     "round_point",
     "solve_sop_cuts",
 ]
+
+#: Cut rows of largest dual whose crossings the DP tracks per state
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`: one bit each in a ``uint64``).
+CREDIT_ROWS = 64
+
+#: Arcs of negative reduced cost that the DP's row-credit bound tracks per state at most
+#: (the most negative; :meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`).
+CREDIT_NEGATIVE = 64
+
+#: The root loop separates the set path cuts and alternation rows
+#: (:meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`) once the pair cuts hold.
+SET_CUTS = True
+
+#: Candidates (sources, sinks) of :meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`
+#: at most (one maximum flow each per round).
+SET_CANDIDATES = 6000
+
+#: A candidate of :meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets` is tried only
+#: when the maximum flow of each of its pairs (source, sink) at the point, found by the pair
+#: separation just before, is below ``side + SET_TIGHT`` (a heuristic: the set rows found
+#: on p43.1, ry48p.1 and ft53.1 were of nearly tight pairs).
+SET_TIGHT = 0.5
 
 #: Capacities of the maximum flows are the LP values times this, rounded down (scipy's
 #: maximum flow takes integers); a cut is added only if its value in floating point is
@@ -228,6 +266,9 @@ class SopCutModel:
         lp.a_matrix_.num_row_ = self.degree_rows
         self.highs.passModel(lp)
         self.cut_rows: list[np.ndarray] = []
+        #: The right-hand side of each cut row (1, or 2 for the alternation rows of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`).
+        self.cut_sides: list[float] = []
         self.is_mip = False
         #: Arcs fixed to 0 by :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`.
         self.fixed = np.zeros(n_arcs, dtype=bool)
@@ -237,26 +278,35 @@ class SopCutModel:
         #: Some row or fixing holds only for the orders cheaper than the best one known,
         #: so a bound ``B`` of the model bounds the SOP as ``min(B, best)``.
         self.conditional = False
+        #: The clipped row duals and ``y^T b`` of the last Lagrangian bound worked out.
+        self._last_duals: tuple[np.ndarray, float] = (np.zeros(0), 0.0)
+        self._candidates: list[tuple[tuple[int, ...], tuple[int, ...], int]] | None = None
+        #: The last maximum flow of each closure pair at a separated point (``inf``: none
+        #: yet), which picks the candidates of the set path cuts.
+        self.flows = np.full((n, n), np.inf)
         #: HiGHS's model status after the last LP of
         #: :meth:`~taopt.models.sop_cuts.SopCutModel.root`.
         self.last_status: Any = None
 
     # ------------------------------------------------------------------ rows
-    def add_cuts(self, cuts: list[np.ndarray]) -> int:
-        """Add rows ``Σ_{a in cut} x_a >= 1`` (new ones only); returns how many were added."""
-        fresh = []
-        for cut in cuts:
-            key = np.sort(cut).astype(np.int64).tobytes()
+    def add_cuts(self, cuts: list[np.ndarray], sides: list[float] | None = None) -> int:
+        """Add rows ``Σ_{a in cut} x_a >= side`` (side 1 unless ``sides`` says; new ones
+        only); returns how many were added."""
+        fresh, fresh_sides = [], []
+        for k, cut in enumerate(cuts):
+            side = 1.0 if sides is None else float(sides[k])
+            key = np.sort(cut).astype(np.int64).tobytes() + (b"" if side == 1.0 else b"=2")
             if key not in self._keys:
                 self._keys.add(key)
                 fresh.append(np.sort(cut).astype(np.int32))
+                fresh_sides.append(side)
         if not fresh:
             return 0
         starts = np.cumsum([0] + [len(c) for c in fresh[:-1]]).astype(np.int32)
         index = np.concatenate(fresh).astype(np.int32)
         self.highs.addRows(
             len(fresh),
-            np.ones(len(fresh)),
+            np.asarray(fresh_sides, dtype=float),
             np.full(len(fresh), highspy.kHighsInf),
             len(index),
             starts,
@@ -264,6 +314,7 @@ class SopCutModel:
             np.ones(len(index)),
         )
         self.cut_rows += fresh
+        self.cut_sides += fresh_sides
         return len(fresh)
 
     def add_pool_rows(
@@ -366,6 +417,7 @@ class SopCutModel:
             graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
             graph.sum_duplicates()
             result = maximum_flow(graph, int(i), int(j))
+            self.flows[i, j] = result.flow_value / FLOW_SCALE
             # a cut that holds is lifted only on the pairs of the start or the end (the σ-
             # and π-inequalities proper: 2n pairs at most, where the dense closures have
             # thousands of pairs)
@@ -425,6 +477,141 @@ class SopCutModel:
             (source & ~lifted_a, sink & ~lifted_a),
             (source & ~lifted_b, sink & ~lifted_b),
         ]
+
+    def set_candidates(self) -> list[tuple[tuple[int, ...], tuple[int, ...], int]]:
+        """The (sources, sinks, side) tried by
+        :meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`, at most
+        :data:`SET_CANDIDATES`, in a fixed order: chains ``i ≺ t ≺ s ≺ j`` (sources ``{i, s}``,
+        sinks ``{t, j}``, side 2), then two incomparable inner predecessors of one node (sources,
+        the node the sink) and two incomparable inner successors of one node, the inner nodes
+        first, then the end and the start."""
+        if self._candidates is not None:
+            return self._candidates
+        before, n = self.before, self.n
+        start, end = self.problem.start, self.problem.end
+        inner = np.ones(n, dtype=bool)
+        inner[[start, end]] = False
+        found: list[tuple[tuple[int, ...], tuple[int, ...], int]] = []
+        for i, j in self.pairs:
+            between = np.flatnonzero(before[i] & before[:, j])
+            for t in between:
+                for s in between[before[t, between]]:
+                    found.append(((int(i), int(s)), (int(t), int(j)), 2))
+                    if len(found) >= SET_CANDIDATES:
+                        self._candidates = found
+                        return found
+        for v in [*np.flatnonzero(inner), end, start]:
+            for a, b in ((before[:, v] & inner, True), (before[v] & inner, False)):
+                ends = np.flatnonzero(a)
+                # a pair whose W is that of one of its pair cuts gives a sub-family of that
+                # pair's cuts: only pairs each with a predecessor (successor) of its own
+                own = before.T[ends] & ~before[v] if b else before[ends] & ~before[:, v]
+                for k, x in enumerate(ends):
+                    for m, y in enumerate(ends[k + 1 :], start=k + 1):
+                        if before[x, y] or before[y, x]:
+                            continue
+                        if not (own[k] & ~own[m]).any() or not (own[m] & ~own[k]).any():
+                            continue
+                        pair = (int(x), int(y))
+                        found.append((pair, (int(v),), 1) if b else ((int(v),), pair, 1))
+                        if len(found) >= SET_CANDIDATES:
+                            self._candidates = found
+                            return found
+        self._candidates = found
+        return found
+
+    def separate_sets(
+        self, values: np.ndarray, limit: int = CUTS_PER_ROUND, deadline: Deadline | None = None
+    ) -> tuple[list[np.ndarray], list[float]]:
+        """Violated *set path cuts* at the point ``values`` (rows and their sides), most
+        violated first, at most ``limit``; a heuristic over the candidates of
+        :meth:`~taopt.models.sop_cuts.SopCutModel.set_candidates` (exact for each: one
+        maximum flow from its sources to its sinks).
+
+        For node sets X and Y with every node of X preceding every node of Y, let
+        ``W = V \\ (π(X) ∪ σ(Y))``; for every ``S ⊂ W`` holding ``X ∩ W`` and disjoint from Y::
+
+            Σ_{a = (u, v): u ∈ S, v ∈ W \\ S} x_a  >=  1.
+
+        Proof: in an order, let x be the last node of X and y the first of Y (x comes before
+        y). A node between them comes after every node of X, so it precedes none (it is not
+        in π(X)), and before every node of Y (not in σ(Y)); x itself is in no π(X) (it would
+        precede a later node of X) and y in no σ(Y). So the stretch from x to y lies in W and
+        goes from S to ``W \\ S``. With ``X = {i}``, ``Y = {j}`` this is the path cut; two
+        sources or two sinks shrink W.
+
+        *Alternation rows*: for a chain ``i ≺ t ≺ s ≺ j`` and ``W = W(i, j)``, every
+        ``S ⊂ W`` holding i and s, not t or j, is crossed twice::
+
+            Σ_{a = (u, v): u ∈ S, v ∈ W \\ S} x_a  >=  2,
+
+        as the stretch from i to j (inside W) visits i, t, s, j in this order and leaves S on
+        its way from i to t and again from s to j.
+        """
+        n = self.n
+        support = values > 1e-9
+        tails, heads = self.tails[support], self.heads[support]
+        caps = np.floor(values[support] * FLOW_SCALE).astype(np.int64)
+        before = self.before
+        big = 4 * FLOW_SCALE
+        source, sink = n, n + 1
+        found: list[tuple[float, np.ndarray, float]] = []
+        seen: set[bytes] = set()
+        flows = self.flows
+        for number, (xs, ys, side) in enumerate(self.set_candidates()):
+            if number % 64 == 0 and deadline is not None and deadline.expired(MARGIN):
+                break
+            # tried only where the pair cuts it is made of are nearly tight
+            if side == 2:
+                if flows[xs[0], ys[1]] >= side + SET_TIGHT:
+                    continue
+            elif max(flows[x, y] for x in xs for y in ys) >= 1 + SET_TIGHT:
+                continue
+            inside: np.ndarray
+            if side == 2:  # the chain's own W(i, j)
+                inside = ~before[:, xs[0]] & ~before[ys[1], :]
+            else:  # W = V minus π(X) and σ(Y)
+                inside = np.asarray(
+                    ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+                )
+            starts = [x for x in xs if inside[x]]
+            stops = [y for y in ys if inside[y]]
+            keep = inside[tails] & inside[heads]
+            graph = sp.csr_matrix(
+                (
+                    np.concatenate([caps[keep], np.full(len(starts) + len(stops), big)]).astype(
+                        np.int32
+                    ),
+                    (
+                        np.concatenate([tails[keep], np.full(len(starts), source), stops]),
+                        np.concatenate([heads[keep], starts, np.full(len(stops), sink)]),
+                    ),
+                ),
+                shape=(n + 2, n + 2),
+            )
+            graph.sum_duplicates()
+            result = maximum_flow(graph, source, sink)
+            if result.flow_value >= (side - CUT_TOLERANCE) * FLOW_SCALE:
+                continue
+            residual = graph - result.flow
+            residual.data[residual.data < 0] = 0
+            residual.eliminate_zeros()
+            reached = breadth_first_order(
+                residual, source, directed=True, return_predecessors=False
+            )
+            mark = np.zeros(n + 2, dtype=bool)
+            mark[reached] = True
+            near = mark[:n] & inside
+            arcs = np.flatnonzero(near[self.tails] & (inside & ~near)[self.heads])
+            lhs = float(values[arcs].sum())
+            key = arcs.tobytes() + bytes([side])
+            if lhs >= side - CUT_TOLERANCE or key in seen:
+                continue
+            seen.add(key)
+            found.append((lhs - side, arcs, float(side)))
+        found.sort(key=lambda item: item[0])
+        found = found[:limit]
+        return [arcs for _, arcs, _ in found], [side for _, _, side in found]
 
     # ------------------------------------------------------------------ solves
     def _run(self, deadline: Deadline | None, stop: Any = None) -> None:
@@ -498,6 +685,7 @@ class SopCutModel:
         reduced = self.costs - matrix.T @ y
         free = ~self.fixed
         bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
+        self._last_duals = (y, float(constant.sum()))
         return bound, reduced
 
     def lagrangian_prices(self) -> tuple[float, np.ndarray] | None:
@@ -515,6 +703,53 @@ class SopCutModel:
         matrix = np.full((self.n, self.n), np.inf)
         matrix[self.tails, self.heads] = reduced
         return constant + float(np.minimum(reduced, 0.0).sum()), matrix
+
+    def row_credit(self, rows: int = CREDIT_ROWS) -> RowCredit | None:
+        """The last LP's prices in the form of the DP's prefix bound with row credit
+        (:class:`~taopt.models.sop_dp.RowCredit`, ``credit=`` of
+        :func:`~taopt.models.sop_dp.solve_sop_dp`): ``y^T b``, the signed reduced costs ``d``,
+        the ``rows`` cut rows of largest positive dual as bits of each arc, and the arcs of
+        negative ``d``. None without duals, or when an arc is fixed or a row other than the
+        degree and path-cut rows is in (the credit is then not worked out).
+
+        Every row priced here is a path cut ``Σ_{a ∈ C_r} x_a >= 1`` with 0/1 coefficients,
+        valid for every order, so an order crossing it ``k`` times pays ``y_r k`` in
+        ``y^T A x``, ``y_r (k - 1)`` more than ``y^T b`` counts (the proof is in
+        :mod:`taopt.models.sop_dp`, "Row credit").
+        """
+        raw, reduced = self._lagrangian()
+        if not math.isfinite(raw) or self.fixed.any() or self.pool_rows:
+            return None
+        y, constant = self._last_duals
+        priced = y[self.degree_rows :]
+        count = min(len(self.cut_rows), len(priced))
+        ranked = [
+            k
+            for k in np.argsort(-priced[:count], kind="stable")
+            if priced[k] > 1e-9 and self.cut_sides[k] == 1.0  # rows of side 2: no credit
+        ]
+        ranked = ranked[:rows]
+        bits = np.zeros((self.n, self.n), dtype=np.uint64)
+        weights = np.zeros(len(ranked))
+        for r, k in enumerate(ranked):
+            arcs = self.cut_rows[k]
+            bits[self.tails[arcs], self.heads[arcs]] |= np.uint64(1) << np.uint64(r)
+            weights[r] = priced[k]
+        signed = np.full((self.n, self.n), np.inf)
+        signed[self.tails, self.heads] = reduced
+        negative = np.flatnonzero(reduced < 0)
+        negative = negative[np.argsort(reduced[negative], kind="stable")]
+        # past CREDIT_NEGATIVE, the negative arcs are counted as usable by every rest (in
+        # the constant): a lower bound still, only not raised when they can no longer be used
+        constant += float(reduced[negative[CREDIT_NEGATIVE:]].sum())
+        negative = negative[:CREDIT_NEGATIVE]
+        return RowCredit(
+            constant=constant,
+            reduced=signed,
+            bits=bits,
+            weights=weights,
+            negative=(self.tails[negative], self.heads[negative], reduced[negative]),
+        )
 
     def fix_by_reduced_cost(self, incumbent: float) -> int:
         """Fix to 0 every arc that no order better than ``incumbent`` can use, by the last
@@ -571,10 +806,13 @@ class SopCutModel:
                     break
                 every, stall = True, 0  # the subtour rows stall: every pair from now on
             cuts = self.separate(values, every=every, deadline=deadline)
+            sides = None
+            if not cuts and SET_CUTS:  # the pairs hold: the set path cuts
+                cuts, sides = self.separate_sets(values, deadline=deadline)
             if not cuts:  # none violated, unless the deadline cut the separation short
                 complete = deadline is None or not deadline.expired(MARGIN)
                 break
-            self.add_cuts(cuts)
+            self.add_cuts(cuts, sides)
         return RootCuts(value, bound, done, len(self.cut_rows), complete, values)
 
     def make_integral(self, integral: bool = True) -> None:

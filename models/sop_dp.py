@@ -82,6 +82,26 @@ and the state is dropped when it reaches ``UB - tol`` like ``f + g``
 p43.1 the root's ``L`` is 28,098 against the optimum 28,140: a prefix of reduced cost
 above 42 is dropped.
 
+Row credit. The same duals say more about a prefix than its reduced cost. Write the LP's
+rows as the degree rows (equalities) and path cuts ``Σ_{a ∈ C_r} x_a >= 1`` (0/1
+coefficients, duals ``y_r >= 0``; :class:`~taopt.models.sop_dp.RowCredit`, from
+:meth:`taopt.models.sop_cuts.SopCutModel.row_credit`). For an order ``x = p + q`` (the
+state's kept prefix ``p``, a completion ``q``), ``c x = y^T A x + d x`` exactly, and each
+cut row is crossed ``A_r x >= max(1, A_r p)`` times (``q >= 0``, coefficients >= 0), so
+
+    c x >= y^T b + Σ_r y_r (A_r p - 1)^+ + d p + d q,
+
+and ``q`` uses only arcs from ``{v} ∪ U`` into ``U`` (``U`` the nodes still to visit), so
+``d q >= Σ d_a`` over the arcs of negative ``d`` among those. The DP keeps per state the
+priced rows its prefix has crossed (one bit each, 64 rows of largest dual at most: rows left
+out only lose credit) and adds ``y_r`` whenever an arc crosses row ``r`` again; the bound is
+never below the prefix bound above (it differs by the credit and by the negative arcs the
+rest can no longer use), and it is the one used when ``credit=`` is given. As above, the
+kept prefix is the cheapest of its state, so a bound on the orders through it bounds every
+order through the state. On prob.42 with its optimum 243 as the incumbent, the forward
+search kept 80,945 states at depth 10 with the credit against 151,910 without (the
+backward one 128,599 against 184,671).
+
 References
 ----------
 Thesis §5.2, (5.7) (precedences), §5.4 (the orderings NIA, MMA, SMMA give the
@@ -95,6 +115,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -110,6 +131,7 @@ from taopt.sop.problem import SopProblem, path_cost
 __all__ = [
     "MAX_NODES",
     "IDEAL_CAP",
+    "RowCredit",
     "count_ideals",
     "completion_bound",
     "reversed_problem",
@@ -803,6 +825,66 @@ def reversed_problem(problem: SopProblem) -> SopProblem:
     )
 
 
+@dataclass(frozen=True)
+class RowCredit:
+    """An LP's prices for the prefix bound with row credit (module docstring, "Row credit").
+
+    Attributes
+    ----------
+    constant : float
+        ``y^T b`` (the rows' sides times their sign-clipped duals), plus ``d`` of the arcs of
+        negative ``d`` not in ``negative`` (counted as usable by every rest).
+    reduced : ndarray
+        ``n x n`` signed reduced costs ``d = c - A^T y`` of the usable arcs (``inf`` elsewhere).
+    bits : ndarray
+        ``n x n`` ``uint64``: bit ``r`` of arc ``(u, w)`` is set when the arc is in priced row
+        ``r`` (a row ``Σ_{a ∈ C_r} x_a >= 1`` with dual ``weights[r] > 0``).
+    weights : ndarray
+        The priced rows' duals (64 at most).
+    negative : (ndarray, ndarray, ndarray)
+        Tails, heads and ``d`` of the arcs with ``d < 0``.
+    """
+
+    constant: float
+    reduced: np.ndarray
+    bits: np.ndarray
+    weights: np.ndarray
+    negative: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+    def transposed(self) -> RowCredit:
+        """The same prices read backwards (:func:`~taopt.models.sop_dp.reversed_problem`: arcs
+        reversed)."""
+        tails, heads, values = self.negative
+        return RowCredit(
+            self.constant,
+            np.ascontiguousarray(self.reduced.T),
+            np.ascontiguousarray(self.bits.T),
+            self.weights,
+            (heads, tails, values),
+        )
+
+    def byte_sums(self) -> np.ndarray:
+        """``(8, 256)``: ``[k, b]`` the sum of the weights of the rows whose bits in byte ``k``
+        of a mask are set in ``b`` (a weighted popcount by table look-ups)."""
+        weights = np.zeros(64)
+        weights[: len(self.weights)] = self.weights
+        byte = np.arange(256)
+        table = np.zeros((8, 256))
+        for k in range(8):
+            for bit in range(8):
+                table[k] += np.where((byte >> bit) & 1, weights[8 * k + bit], 0.0)
+        return table
+
+
+def _weighted(table: np.ndarray, masks: np.ndarray) -> np.ndarray:
+    """Per ``uint64`` mask, the sum of the weights of its bits
+    (:meth:`~taopt.models.sop_dp.RowCredit.byte_sums`)."""
+    total = np.zeros(len(masks))
+    for k in range(8):
+        total += table[k][((masks >> np.uint64(8 * k)) & np.uint64(255)).astype(np.intp)]
+    return total
+
+
 class _Run:
     """One direction of the exact DP, advanced one layer per :meth:`step`.
 
@@ -815,9 +897,15 @@ class _Run:
         problem: SopProblem,
         reverse: bool,
         lagrange: tuple[float, np.ndarray, float] | None = None,
+        credit: RowCredit | None = None,
     ) -> None:
         self.reverse = reverse
         self.lagrange = lagrange
+        #: The row-credit prices read in this direction, and their byte tables.
+        self.credit = credit
+        self._table = None if credit is None else credit.byte_sums()
+        #: Per layer, the priced rows each state's kept prefix has crossed (with ``credit``).
+        self.crossed: list[np.ndarray] = [np.zeros(1, dtype=np.uint64)]
         #: Per layer, the reduced cost ``Σ max(d_a, 0)`` of each state's kept prefix.
         self.reduced: list[np.ndarray] = [np.zeros(1)]
         #: States dropped by the LP bound alone (``f + g`` not evaluated).
@@ -850,18 +938,50 @@ class _Run:
         self.best_path: list[int] | None = None
 
     def _drop_priced(
-        self, grown: tuple[np.ndarray, ...], reduced: np.ndarray, low: np.ndarray, below: float
-    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
+        self,
+        grown: tuple[np.ndarray, ...],
+        reduced: np.ndarray,
+        low: np.ndarray,
+        below: float,
+        crossed: np.ndarray | None = None,
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray, np.ndarray | None]:
         """Keep the grown states whose LP bound ``low`` is below ``below`` (counted as pruned,
         by the LP bound, otherwise)."""
         fits = low < below
         if fits.all():
-            return grown, reduced, low
+            return grown, reduced, low, crossed
         dropped = int((~fits).sum())
         self.pruned += dropped
         self.lagrange_pruned += dropped
         self.pruned_min = min(self.pruned_min, float(low[~fits].min()))
-        return tuple(a[fits] for a in grown), reduced[fits], low[fits]
+        kept = None if crossed is None else crossed[fits]
+        return tuple(a[fits] for a in grown), reduced[fits], low[fits], kept
+
+    def _credited(
+        self, grown: tuple[np.ndarray, ...], unit: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(reduced, crossed, low)`` of the grown states by the row-credit bound: the kept
+        prefix's signed reduced cost plus the credit of its repeated crossings of priced rows,
+        its rows crossed, and the bound ``y^T b + that + Σ d_a`` over the negative arcs the
+        rest can still use (tail not yet visited or the last node, head not yet visited)."""
+        credit, table = self.credit, self._table
+        assert credit is not None and table is not None
+        parent, mask, last = grown[3], grown[0], grown[1]
+        before = self.layers[-1][1][parent]
+        was = self.crossed[-1][parent]
+        arc_bits = credit.bits[before, last]
+        reduced = (
+            self.reduced[-1][parent]
+            + credit.reduced[before, last]
+            + _weighted(table, was & arc_bits)
+        )
+        crossed = was | arc_bits
+        rest = np.zeros(len(last))
+        for tail, head, value in zip(*credit.negative, strict=True):
+            usable = ~has(mask, int(head)) & (~has(mask, int(tail)) | (last == tail))
+            rest += np.where(usable, value, 0.0)
+        low = _rounded_up(credit.constant + reduced + rest, unit)
+        return reduced, crossed, low
 
     def step(
         self, upper: float, tolerance: float, deadline: Deadline, limit: float, room: int | None
@@ -872,13 +992,18 @@ class _Run:
         if grown is None:
             out_of_time = deadline.expired(MARGIN) or self.search.merge_refused
             return "time_limit" if out_of_time else "max_states"
-        reduced = low = None
-        if self.lagrange is not None:  # the LP bound first: it is one addition per state
+        reduced = low = crossed = None
+        if self.credit is not None and self.lagrange is not None:  # the bound with row credit
+            reduced, crossed, low = self._credited(grown, self.lagrange[2])
+            grown, reduced, low, crossed = self._drop_priced(
+                grown, reduced, low, upper - tolerance, crossed
+            )
+        elif self.lagrange is not None:  # the LP bound first: it is one addition per state
             constant, matrix, unit = self.lagrange
             parent = grown[3]
             reduced = self.reduced[-1][parent] + matrix[self.layers[-1][1][parent], grown[1]]
             low = _rounded_up(constant + reduced, unit)
-            grown, reduced, low = self._drop_priced(grown, reduced, low, upper - tolerance)
+            grown, reduced, low, _ = self._drop_priced(grown, reduced, low, upper - tolerance)
             if self.lagrange_rest is not None and len(low):
                 rest = np.empty(len(low))
                 for lo in range(0, len(low), LAGRANGE_CHUNK):  # the deadline between chunks
@@ -887,7 +1012,7 @@ class _Run:
                     part = slice(lo, lo + LAGRANGE_CHUNK)
                     rest[part] = self.lagrange_rest(grown[0][part], grown[1][part])
                 low = np.maximum(low, _rounded_up(constant + reduced + rest, unit))
-                grown, reduced, low = self._drop_priced(grown, reduced, low, upper - tolerance)
+                grown, reduced, low, _ = self._drop_priced(grown, reduced, low, upper - tolerance)
         # drop the states whose value plus completion bound cannot beat the incumbent
         # (with no incumbent: those the bound sees cannot be completed, g = inf)
         total = self.search.totals(grown[0], grown[1], grown[2], deadline, cutoff=upper - tolerance)
@@ -902,10 +1027,14 @@ class _Run:
             grown = tuple(a[keep] for a in grown)
             if reduced is not None:
                 reduced = reduced[keep]
+            if crossed is not None:
+                crossed = crossed[keep]
         if room is not None and len(grown[0]) > room:
             return "max_states"  # the previous layer stays the open one
         if reduced is not None:
             self.reduced.append(reduced)
+        if crossed is not None:
+            self.crossed.append(crossed)
         self.layers.append(grown)
         self.layer_total = total[keep]
         self.kept += len(grown[0])
@@ -1014,6 +1143,7 @@ def solve_sop_dp(
     both: bool = True,
     both_prices: bool = BOTH_PRICES,
     lagrange: tuple[float, np.ndarray] | None = None,
+    credit: RowCredit | None = None,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1056,6 +1186,10 @@ def solve_sop_dp(
         computed, and ``L`` (rounded up to the costs' gcd) is a proven bound of a stopped
         run. Valid for the orders cheaper than ``UB``, as long as the LP's rows hold for
         them. ``info["lagrange_pruned"]``: the states it dropped.
+    credit : RowCredit, optional
+        The same LP's prices with its priced rows (with ``lagrange``;
+        :meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`): the states are then dropped
+        by the bound with row credit of the module docstring instead, never weaker.
 
     Returns
     -------
@@ -1105,7 +1239,7 @@ def solve_sop_dp(
             _cheap_bound(problem) if cheap_bound is None else cheap_bound,
             float(_rounded_up(np.array([constant]), unit)[0]),
         )
-    runs = _directions(problem, both, both_prices, oriented)
+    runs = _directions(problem, both, both_prices, oriented, credit if oriented else None)
     info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
     done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info)
     if done is not None and done.best_path is not None:
@@ -1204,6 +1338,7 @@ def _directions(
     both: bool,
     both_prices: bool,
     lagrange: tuple[float, np.ndarray, float] | None = None,
+    credit: RowCredit | None = None,
 ) -> list[_Run]:
     """The forward search and (``both``) the backward one on :func:`reversed_problem`,
     each (``both_prices``) also bounded on the other's assignment prices; ``lagrange``
@@ -1211,8 +1346,9 @@ def _directions(
     backward = None
     if lagrange is not None:
         backward = (lagrange[0], np.ascontiguousarray(lagrange[1].T), lagrange[2])
-    runs = [_Run(problem, False, lagrange)] + (
-        [_Run(reversed_problem(problem), True, backward)] if both else []
+    back_credit = None if credit is None else credit.transposed()
+    runs = [_Run(problem, False, lagrange, credit)] + (
+        [_Run(reversed_problem(problem), True, backward, back_credit)] if both else []
     )
     if both and both_prices:
         # the assignment LP is degenerate: the reversed problem's optimal prices (read
