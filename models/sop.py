@@ -64,7 +64,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -788,6 +788,156 @@ def root_gap(upper: float | None, lower: float) -> float:
     return float(min(1.0, max(0.0, (upper - lower) / upper)))
 
 
+#: The probe's share of the first DP stage's time (:class:`LayerWatch`; a few % of the
+#: limit: the estimate is made after it, before the rest of the stages).
+PROBE_SHARE = 0.02
+
+#: The most seconds the probe's layers get, whatever the limit.
+PROBE_MAX_SECONDS = 1.0
+
+#: The probe stops before its layers keep more than this many states (both directions).
+PROBE_STATES = 50_000
+
+
+@dataclass(frozen=True)
+class Probe:
+    """What :class:`LayerWatch` measured: the kept states of each layer of the forward and
+    the backward direction (layer 0 first, after pruning with the incumbent, the completion
+    bound and the LP bound), whether a direction finished (every path pruned or completed,
+    or the two met), the states kept over both and the seconds it took (setup included)."""
+
+    forward: tuple[int, ...]
+    backward: tuple[int, ...]
+    finished: bool
+    states: int
+    seconds: float
+
+
+class LayerWatch:
+    """The memory probe: the first layers of the portfolio's first DP stage, watched
+    (``solve_sop_dp(..., watch=...)``, :func:`taopt.models.sop_dp.solve_sop_dp`), so its
+    states are the stage's own (none made twice, no extra time).
+
+    From the first layer on, the kept states of each layer of both directions (after pruning
+    with the incumbent, the completion bound and the LP bound) are read until ``seconds``
+    pass, the states kept reach ``max_states``, a direction finishes or the two meet; then
+    ``done(probe)`` is called once with the :class:`Probe`. :meth:`close` calls it with what
+    was seen when the stage stopped first.
+    """
+
+    def __init__(
+        self, seconds: float, done: Callable[[Probe], None], max_states: int = PROBE_STATES
+    ) -> None:
+        self.seconds = seconds
+        self.max_states = max_states
+        self.done = done
+        self.began: float | None = None
+        self.seen: Probe | None = None
+        self.closed = False
+
+    def __call__(self, runs: Sequence[Any]) -> None:
+        if self.closed:
+            return
+        now = time.perf_counter()
+        if self.began is None:
+            self.began = now
+        n = runs[0].n
+        finished = any(r.finished for r in runs) or (
+            len(runs) > 1 and sum(len(r.layers) - 1 for r in runs) >= n - 2
+        )
+        forward = tuple(len(layer[0]) for layer in runs[0].layers)
+        backward = tuple(len(layer[0]) for layer in runs[1].layers) if len(runs) > 1 else (1,)
+        kept = sum(r.kept for r in runs)
+        self.seen = Probe(forward, backward, finished, kept, now - self.began)
+        if finished or kept >= self.max_states or now - self.began >= self.seconds:
+            self.close()
+
+    def close(self) -> None:
+        """Hand what was seen to ``done`` (once; nothing when no layer was seen)."""
+        if not self.closed and self.seen is not None:
+            self.closed = True
+            self.done(self.seen)
+
+
+#: Growth damping of the probe's extrapolation (:func:`probe_extrapolation`): the log of a
+#: direction's layer-to-layer growth shrinks by this factor a layer, so a layer ends at
+#: most ``g ** (d / (1 - d))`` times the last measured one (fitted, :func:`predicted_peak`).
+PROBE_DAMPING = 0.8
+
+#: Layers over which the probe's last growth is measured (a geometric mean).
+PROBE_GROWTH_LAYERS = 2
+
+
+def _growth(sizes: tuple[int, ...]) -> float:
+    """The last layers' growth of one direction (:data:`PROBE_GROWTH_LAYERS`, geometric)."""
+    span = min(PROBE_GROWTH_LAYERS, len(sizes) - 1)
+    if span < 1 or sizes[-1] <= 0:
+        return 0.0
+    return float((sizes[-1] / max(sizes[-1 - span], 1)) ** (1.0 / span))
+
+
+def probe_extrapolation(n: int, probe: Probe) -> float:
+    """The states a DP stage on ``n`` nodes keeps until its directions meet, extrapolated
+    from ``probe``: the states it measured, plus for each direction its half of the layers
+    left (``n - 2`` less those measured) grown from its last layer at its last growth ``g``
+    (:func:`_growth`), damped by :data:`PROBE_DAMPING` a layer. Never below the states
+    measured; exactly them when the probe finished."""
+    measured = float(probe.states)
+    if probe.finished:
+        return measured
+    left = max(0, n - 2 - (len(probe.forward) - 1) - (len(probe.backward) - 1))
+    future = 0.0
+    for sizes in (probe.forward, probe.backward):
+        g = _growth(sizes)
+        if g <= 0.0:  # this direction kept nothing: the DP ends
+            return measured
+        steps = np.arange(1, (left + 1) // 2 + 1, dtype=float)
+        logs = np.log(g) * PROBE_DAMPING ** (steps - 1.0)
+        future += float(sizes[-1] * np.exp(np.minimum(np.cumsum(logs), 40.0)).sum())
+    return measured + future
+
+
+#: States a DP stage that fills its states keeps per second of its share, up to 64 nodes
+#: (in proportion to ``64 / n`` above; :func:`fill_states`): fitted on the runs that stop on
+#: their time (prob.42, ry48p.1, ft53.1, p43.1, rbg050c at 10 and 60 s, CP-SAT off).
+FILL_STATES_PER_SECOND = 31_000.0
+
+#: The share of :data:`FILL_STATES_PER_SECOND` left to the DP when CP-SAT's worker runs
+#: beside it on this 2-core machine (fitted: the same runs with CP-SAT beside).
+FILL_BESIDE_SHARE = 0.4
+
+
+def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
+    """The states a DP stage of ``seconds`` (None: no limit, infinite) on ``n`` nodes keeps
+    when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` (times
+    ``min(1, 64 / n)``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``) a
+    second; increasing in ``seconds``."""
+    if seconds is None:
+        return float("inf")
+    rate = FILL_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1)) / max(share, 1e-9)
+    return rate * max(float(seconds), 0.0) * (FILL_BESIDE_SHARE if beside else 1.0)
+
+
+def probe_states(
+    n: int,
+    probe: Probe,
+    seconds: float | None,
+    cap: float,
+    allowed: float | None,
+    beside: bool,
+    share: float = 1.0,
+) -> float:
+    """The DP states the reported estimate expects of a stage of ``seconds`` after ``probe``:
+    the smaller of its extrapolation (:func:`probe_extrapolation`), the states it can fill in
+    its time (:func:`fill_states`), its ``cap`` and the states the ideals allow
+    (``allowed``, None: not counted); never below the states the probe measured."""
+    filled = fill_states(n, seconds, beside, share)
+    states = min(probe_extrapolation(n, probe), filled, float(cap))
+    if allowed is not None:
+        states = min(states, float(allowed))
+    return max(states, float(probe.states))
+
+
 #: The reported estimate's DP states (:func:`predicted_states`) as a share of
 #: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted, :func:`predicted_peak`).
 PREDICTED_RATE_SHARE = 0.5
@@ -827,6 +977,8 @@ def predicted_peak(
     allowed: float | None,
     nonzeros: float,
     cut_seconds: float | None = 0.0,
+    probe: Probe | None = None,
+    beside: bool = False,
 ) -> tuple[float, dict[str, Any]]:
     """The reported memory estimate (``info["memory_estimate"]``), predicted once before the
     portfolio's stages run, and its parts.
@@ -852,12 +1004,18 @@ def predicted_peak(
     2.4-2.9x above it; with CP-SAT beside, and at 10 s, every shipped file was within 2x,
     and every generated instance at 10 s).
     """
-    states = 0.0 if path == "cuts" else predicted_states(problem.n, seconds, cap, allowed)
-    dp = dp_bytes(problem.n, states) * dp_state_share(problem)
+    share = dp_state_share(problem)
+    if path == "cuts":
+        states = 0.0
+    elif probe is not None:
+        states = probe_states(problem.n, probe, seconds, cap, allowed, beside, share)
+    else:
+        states = predicted_states(problem.n, seconds, cap, allowed)
+    dp = dp_bytes(problem.n, states) * share
     held = cut_engine_bytes(nonzeros, 0.0)
     cut = cut_engine_bytes(nonzeros, cut_seconds) if cut_seconds != 0 else 0.0
     peak = BASE_BYTES + max(dp + held, cut)
-    features = {
+    features: dict[str, Any] = {
         "path": path,
         "seconds": seconds,
         "cap": cap,
@@ -870,7 +1028,18 @@ def predicted_peak(
         "states": states,
         "dp": dp,
         "cut": cut,
+        "beside": beside,
     }
+    if probe is not None:
+        features["probe"] = {
+            "forward": list(probe.forward),
+            "backward": list(probe.backward),
+            "finished": probe.finished,
+            "states": probe.states,
+            "seconds": probe.seconds,
+            "extrapolated": probe_extrapolation(problem.n, probe),
+            "fill": fill_states(problem.n, seconds, beside, share),
+        }
     return peak, features
 
 
@@ -1861,24 +2030,35 @@ def _stages(
     state_share = dp_state_share(problem)
     cheap = _cheap_bound(problem)
 
-    def predict(path: str, known: Any, lower: float, seconds: float | None, cap: float) -> None:
+    def predict(
+        path: str, known: Any, lower: float, seconds: float | None, cap: float
+    ) -> LayerWatch | None:
         """Record the reported estimate (``info["memory_estimate"]``), once, before the
         stages: :func:`predicted_peak` from what is known now (``path``: "dp" alone, "dp"
-        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``)."""
+        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``).
+        Where a DP stage runs first, the watch returned (:class:`LayerWatch`, handed to it)
+        replaces it with the prediction from its first layers, made after PROBE_SHARE of the
+        stage's time."""
         value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
         gap = root_gap(None if value is None else value[0], max(lower, cheap))
         nonzeros = held() if path != "dp" or root_model is not None else 0.0
-        peak, features = predicted_peak(
-            problem,
-            path,
-            seconds,
-            cap,
-            None if capped else every_state,
-            nonzeros,
-            cut_time(path),
-        )
-        info["memory_prediction"] = {**features, "gap": gap}
-        predicted.append(peak)
+        beside = on_root is not None  # CP-SAT's worker beside (on_root is its hook)
+        allowed = None if capped else every_state
+
+        def made(probe: Probe | None) -> None:
+            peak, features = predicted_peak(
+                problem, path, seconds, cap, allowed, nonzeros, cut_time(path), probe, beside
+            )
+            info["memory_prediction"] = {**features, "gap": gap}
+            if probe is None and path != "cuts":
+                info["memory_prediction"]["probe"] = "not run (no DP layer yet)"
+            predicted[:] = [peak]
+
+        made(None)  # replaced by the probe's, when the DP stage gets its first layers
+        if path == "cuts":
+            return None
+        budget = PROBE_MAX_SECONDS if seconds is None else PROBE_SHARE * seconds
+        return LayerWatch(min(budget, PROBE_MAX_SECONDS), made)
 
     predicted: list[float] = []
 
@@ -2019,13 +2199,18 @@ def _stages(
         alone = None if alone_states >= every_state else alone_states  # None: no cap
         dp_cap = max_states if capped else alone
         expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
-        predict(
+        watch = predict(
             "dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap
         )
-        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
+        result = solve_sop_dp(
+            problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap, watch=watch
+        )
+        if watch is not None:  # stopped before the probe's end: what it saw
+            watch.close()
         used = "dp"
     else:
         cuts_first = False
+        watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
                 problem, deadline, incumbent, info, verbose
@@ -2035,7 +2220,7 @@ def _stages(
             root_bound = info["root_stage"]["bound"]
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
-            predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
+            watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if cuts_first:  # the root closed most of the gap: the cut engine gets the time
             result = milp(incumbent, deadline.remaining())
             used = "milp"
@@ -2056,8 +2241,15 @@ def _stages(
             else:
                 expect(max_states, share, nonzeros=held())
                 result = solve_sop_dp(
-                    problem, share, incumbent=incumbent, max_states=max_states, lagrange=lagrange
+                    problem,
+                    share,
+                    incumbent=incumbent,
+                    max_states=max_states,
+                    lagrange=lagrange,
+                    watch=watch,
                 )
+                if watch is not None:  # stopped before the probe's end: what it saw
+                    watch.close()
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
