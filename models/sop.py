@@ -694,8 +694,9 @@ def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int, reserve: floa
 
 #: Peak resident bytes of CP-SAT's worker process beside the portfolio (a Python with
 #: OR-Tools imported; measured 157-165 MB from 9 to 80 nodes, ``ru_maxrss`` of the reaped
-#: worker; 157-159 MB on the shipped files of 9-18 nodes, 165 MB on 27-49, 2026-11-27).
-CPSAT_WORKER_BYTES = 157e6
+#: worker; 157-159 MB on the shipped files of 9-18 nodes, 165 MB on 27-49, 2026-11-27; 158-166
+#: MB on 9-54 nodes, 2026-11-27 later: the largest, so the guard stays above the peak).
+CPSAT_WORKER_BYTES = 166e6
 
 #: Peak bytes of CP-SAT's worker per node pair (n^2) above :data:`CPSAT_WORKER_BYTES`
 #: (fitted on the rbg-like stand-ins of 110-380 nodes beside the portfolio for 60 s: 157,
@@ -932,10 +933,9 @@ def probe_states(
     its time (:func:`fill_states`), its ``cap`` and the states the ideals allow
     (``allowed``, None: not counted); never below the states the probe measured."""
     filled = fill_states(n, seconds, beside, share)
-    states = min(probe_extrapolation(n, probe), filled, float(cap))
-    if allowed is not None:
-        states = min(states, float(allowed))
-    return max(states, float(probe.states))
+    states = max(min(probe_extrapolation(n, probe), filled), float(probe.states))
+    states = min(states, float(cap))
+    return states if allowed is None else min(states, float(allowed))
 
 
 #: The reported estimate's DP states (:func:`predicted_states`) as a share of
@@ -1118,7 +1118,13 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     if seconds is not None:  # a DP stage keeps at most about the states it can make in its
         # time (GUARD_STATE_FACTOR times the expected, the whole limit: the stages after the
         # first, use_the_rest's included, may run up to the limit); the caps bound it anyway
-        wanted = int(GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds))
+        # (at least the states the reported estimate lets a filling stage keep in the limit)
+        wanted = int(
+            max(
+                GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds),
+                fill_states(problem.n, seconds, False),
+            )
+        )
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
