@@ -863,7 +863,7 @@ class LayerWatch:
 #: Growth damping of the probe's extrapolation (:func:`probe_extrapolation`): the log of a
 #: direction's layer-to-layer growth shrinks by this factor a layer, so a layer ends at
 #: most ``g ** (d / (1 - d))`` times the last measured one (fitted, :func:`predicted_peak`).
-PROBE_DAMPING = 0.8
+PROBE_DAMPING = 0.7
 
 #: Layers over which the probe's last growth is measured (a geometric mean).
 PROBE_GROWTH_LAYERS = 2
@@ -879,24 +879,36 @@ def _growth(sizes: tuple[int, ...]) -> float:
 
 def probe_extrapolation(n: int, probe: Probe) -> float:
     """The states a DP stage on ``n`` nodes keeps until its directions meet, extrapolated
-    from ``probe``: the states it measured, plus for each direction its half of the layers
-    left (``n - 2`` less those measured) grown from its last layer at its last growth ``g``
-    (:func:`_growth`), damped by :data:`PROBE_DAMPING` a layer. Never below the states
-    measured; exactly them when the probe finished."""
+    from ``probe`` as the DP goes on (:func:`taopt.models.sop_dp.solve_sop_dp`): the layers
+    left (``n - 2`` less those measured) are added one at a time to the direction whose last
+    layer is smaller, each grown from that direction's last layer by its last growth ``g``
+    (:func:`_growth`), the log of the growth shrunk by :data:`PROBE_DAMPING` at each of its
+    layers; the total is the states measured plus the layers added. Never below the states
+    measured; exactly them when the probe finished or a direction kept nothing."""
     measured = float(probe.states)
     if probe.finished:
         return measured
     left = max(0, n - 2 - (len(probe.forward) - 1) - (len(probe.backward) - 1))
+    sides = (probe.forward, probe.backward)
+    growth = [_growth(sizes) for sizes in sides]
+    if min(growth) <= 0.0:  # a direction kept nothing: the DP ends
+        return measured
+    logs = [float(np.log(g)) for g in growth]
+    size = [float(sizes[-1]) for sizes in sides]
+    grown = [0, 0]
     future = 0.0
-    for sizes in (probe.forward, probe.backward):
-        g = _growth(sizes)
-        if g <= 0.0:  # this direction kept nothing: the DP ends
-            return measured
-        steps = np.arange(1, (left + 1) // 2 + 1, dtype=float)
-        logs = np.log(g) * PROBE_DAMPING ** (steps - 1.0)
-        future += float(sizes[-1] * np.exp(np.minimum(np.cumsum(logs), 40.0)).sum())
+    for _ in range(left):
+        d = 0 if size[0] <= size[1] else 1
+        size[d] = min(size[d] * float(np.exp(logs[d] * PROBE_DAMPING ** grown[d])), 1e15)
+        grown[d] += 1
+        future += size[d]
     return measured + future
 
+
+#: Share of the states its ideals allow (``2 n`` times the ideals, counted) a DP stage is
+#: expected to keep after a probe (:func:`probe_states`; fitted: p43.4, ry48p.4 and ft53.4,
+#: which close, kept 4.5 %, 6.3 % and 3.0 %; their probes extrapolate 2-6 times that).
+PROBE_ALLOWED_SHARE = 0.04
 
 #: States a DP stage that fills its states keeps per second of its share, up to 64 nodes
 #: (in proportion to ``64 / n`` above; :func:`fill_states`): fitted on the runs that stop on
@@ -905,14 +917,17 @@ FILL_STATES_PER_SECOND = 31_000.0
 
 #: The share of :data:`FILL_STATES_PER_SECOND` left to the DP when CP-SAT's worker runs
 #: beside it on this 2-core machine (fitted: the same runs with CP-SAT beside).
-FILL_BESIDE_SHARE = 0.4
+FILL_BESIDE_SHARE = 0.5
 
 
 def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
     """The states a DP stage of ``seconds`` (None: no limit, infinite) on ``n`` nodes keeps
-    when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` (times
-    ``min(1, 64 / n)``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``) a
-    second; increasing in ``seconds``."""
+    when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` a second
+    (times ``min(1, 64 / n)``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``),
+    divided by ``share`` (:func:`dp_state_share`: a state of fewer extensions costs less time
+    as it costs fewer bytes, so a filling stage's bytes a second do not depend on it;
+    rbg050c, share 0.6, kept 1.98 million states in a 25 s stage, 79,000 a second);
+    increasing in ``seconds``."""
     if seconds is None:
         return float("inf")
     rate = FILL_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1)) / max(share, 1e-9)
@@ -930,11 +945,13 @@ def probe_states(
 ) -> float:
     """The DP states the reported estimate expects of a stage of ``seconds`` after ``probe``:
     the smaller of its extrapolation (:func:`probe_extrapolation`), the states it can fill in
-    its time (:func:`fill_states`), its ``cap`` and the states the ideals allow
-    (``allowed``, None: not counted); never below the states the probe measured."""
-    filled = fill_states(n, seconds, beside, share)
-    states = max(min(probe_extrapolation(n, probe), filled), float(probe.states))
-    states = min(states, float(cap))
+    its time (:func:`fill_states`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
+    allow (``allowed``, None: not counted), never below the states the probe measured, and
+    at most its ``cap`` and ``allowed``."""
+    states = min(probe_extrapolation(n, probe), fill_states(n, seconds, beside, share))
+    if allowed is not None:
+        states = min(states, PROBE_ALLOWED_SHARE * float(allowed))
+    states = min(max(states, float(probe.states)), float(cap))
     return states if allowed is None else min(states, float(allowed))
 
 
@@ -980,29 +997,30 @@ def predicted_peak(
     probe: Probe | None = None,
     beside: bool = False,
 ) -> tuple[float, dict[str, Any]]:
-    """The reported memory estimate (``info["memory_estimate"]``), predicted once before the
-    portfolio's stages run, and its parts.
+    """The reported memory estimate (``info["memory_estimate"]``) and its parts, predicted
+    before the portfolio's later stages run.
 
     ``path`` is the rule's choice: "dp" (the DP alone on counted ideals), "root+dp" (the
     root stage, then the DP stages, then the cut engine) or "cuts" (the cut engine first);
     ``seconds`` the first DP stage's time, ``cap`` its state cap, ``allowed`` the states the
     ideals allow (None: too many to count), ``nonzeros`` the root stage's cut model
-    (:func:`nonzero_count`, 0 for none) and ``cut_seconds`` the time the cut engine may get
-    (0: it does not run). The peak is the base plus the larger of the DP phase (the
-    :func:`predicted_states`, at :func:`dp_bytes` scaled by :func:`dp_state_share`, beside
-    the root stage's model) and the cut engine's phase (:func:`cut_engine_bytes`).
+    (:func:`nonzero_count`, 0 for none), ``cut_seconds`` the time the cut engine may get
+    (0: it does not run), ``probe`` what the first DP stage's first layers measured
+    (:class:`LayerWatch`; None: no layer yet) and ``beside`` whether CP-SAT's worker runs
+    beside. The peak is the base plus the larger of the DP phase (the DP's states at
+    :func:`dp_bytes` scaled by :func:`dp_state_share`, beside the root stage's model) and the
+    cut engine's phase (:func:`cut_engine_bytes`).
 
-    Fitted (``python benchmarks/bench_sop.py --resources T --cpsat both --record runs.jsonl``
-    at 10 and 60 s on the shipped files, p43.1, prob.42, ry48p.1, ft53.1 and the generated
-    instances of ``GENERATED`` at 10 s; 2026-11-27, this 2-core machine, load 4-8 from other
-    sessions) to keep the ratio peak / estimate within [0.5, 2] on the most runs. What is
-    known before the stages does not tell the instances that close early from those that
-    fill their states: ESC47 (root gap 0.17, 23,000 states, 181 MB) and ry48p.1 (root gap
-    0.11, 1.25 million states, 845 MB) look alike at 60 s without CP-SAT, so one of the two is
-    outside 2x; the estimate keeps the early closers in (docs/benchmarks.md, SOP memory:
-    without CP-SAT at 60 s prob.42, ry48p.1 and rbg050c, which fill their DP stages, were
-    2.4-2.9x above it; with CP-SAT beside, and at 10 s, every shipped file was within 2x,
-    and every generated instance at 10 s).
+    The DP's states, with a probe (:func:`probe_states`): what its layers measured,
+    extrapolated to the middle by their damped growth (:func:`probe_extrapolation`), at most
+    what a stage that fills its states keeps in its time (:func:`fill_states`); the two
+    kinds of instance the inputs known before the stages do not tell apart (ESC25 and
+    ry48p.1, root gaps 0.12 and 0.11) grow 1.1-2 and 15-36 times a layer in the probe.
+    Without one (the estimate first recorded, replaced by the probe's): the old fit,
+    :func:`predicted_states`. Measured and fitted with ``python benchmarks/bench_sop.py
+    --resources T --cpsat both --record rows.jsonl`` at 10 and 60 s on the shipped files and
+    p43.1, prob.42, ry48p.1, ft53.1 (docs/benchmarks.md, "SOP memory: a probe of the DP's
+    first layers"; 2026-11-27, this 2-core machine, load 3-6 from other sessions).
     """
     share = dp_state_share(problem)
     if path == "cuts":

@@ -402,3 +402,14 @@ def test_run_records_the_probe_before_its_later_stages(esc25):
     assert isinstance(probe, dict), probe
     assert probe["extrapolated"] >= probe["states"] >= 1
     assert BASE_BYTES <= result.info["memory_estimate"] <= guard
+
+
+def test_probe_extrapolation_advances_the_smaller_direction():
+    """As in the DP, the layers left go to the direction whose last layer is smaller: a
+    slowly growing small direction beside an explosive large one extrapolates far below two
+    explosive directions (rbg048a's probe: it closed with 94,000 states)."""
+    from taopt.models.sop import probe_extrapolation
+
+    one_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 1240, 1889, 2850])
+    both_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 257, 1282, 5397])
+    assert probe_extrapolation(50, one_fast) < probe_extrapolation(50, both_fast) / 10
