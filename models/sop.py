@@ -955,8 +955,9 @@ def probe_states(
     return states if allowed is None else min(states, float(allowed))
 
 
-#: The reported estimate's DP states (:func:`predicted_states`) as a share of
-#: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted, :func:`predicted_peak`).
+#: The reported estimate's DP states without a probe (:func:`predicted_states`: the estimate
+#: first recorded, kept only when the first DP stage made no layer) as a share of
+#: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted before the probe, 2026-11-27).
 PREDICTED_RATE_SHARE = 0.5
 
 #: Exponent of the reported estimate's DP states in the stage's length (fitted; below
@@ -1814,8 +1815,10 @@ def solve_sop_problem(
         ``worker``: why its worker was stopped), ``order_from`` / ``bound_from``
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
-        ``memory_estimate`` (the peak bytes predicted once before the stages,
-        :func:`predicted_peak`, with its inputs in ``memory_prediction``; where the rule made
+        ``memory_estimate`` (the peak bytes predicted before the later stages,
+        :func:`predicted_peak`: after the first DP stage's first layers, measured by its
+        probe :class:`LayerWatch`, or before the cut engine when it goes first; its inputs,
+        the probe's layers included, in ``memory_prediction``; where the rule made
         no prediction, a degraded or forced engine, the largest of the stages' estimates;
         plus CP-SAT's worker when it ran beside, :func:`cpsat_worker_bytes`;
         ``info["cpsat"]["memory_estimate"]`` is the worker's), ``memory_stages`` (the
