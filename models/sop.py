@@ -789,15 +789,20 @@ def root_gap(upper: float | None, lower: float) -> float:
     return float(min(1.0, max(0.0, (upper - lower) / upper)))
 
 
-#: The probe's share of the first DP stage's time (:class:`LayerWatch`; a few % of the
-#: limit: the estimate is made after it, before the rest of the stages).
-PROBE_SHARE = 0.02
+#: The probe's share of the time left when the first DP stage starts (:class:`LayerWatch`;
+#: a few % of the limit: the estimate is made after it, before the rest of the stages; the
+#: probe's layers are the stage's own, so it costs no time of its own).
+PROBE_SHARE = 0.05
 
 #: The most seconds the probe's layers get, whatever the limit.
-PROBE_MAX_SECONDS = 1.0
+PROBE_MAX_SECONDS = 3.0
 
-#: The probe stops before its layers keep more than this many states (both directions).
-PROBE_STATES = 50_000
+#: The probe ends once its layers keep this many states (both directions): at 100,000 the
+#: extrapolation of the shipped files' first stages is within 2x of the states they kept
+#: (rbg048a 102,000 for 89,000; ry48p.4 294,000 for 422,000; ESC47 exact; rbg050c past its
+#: fill), at 20,000 up to 10x above (ft53.4; ``/work/scratch/s35-mem/emu.py`` on the layers
+#: of whole runs, 2026-11-27).
+PROBE_STATES = 100_000
 
 
 @dataclass(frozen=True)
@@ -863,7 +868,7 @@ class LayerWatch:
 #: Growth damping of the probe's extrapolation (:func:`probe_extrapolation`): the log of a
 #: direction's layer-to-layer growth shrinks by this factor a layer, so a layer ends at
 #: most ``g ** (d / (1 - d))`` times the last measured one (fitted, :func:`predicted_peak`).
-PROBE_DAMPING = 0.7
+PROBE_DAMPING = 0.8
 
 #: Layers over which the probe's last growth is measured (a geometric mean).
 PROBE_GROWTH_LAYERS = 2
@@ -917,7 +922,7 @@ FILL_STATES_PER_SECOND = 31_000.0
 
 #: The share of :data:`FILL_STATES_PER_SECOND` left to the DP when CP-SAT's worker runs
 #: beside it on this 2-core machine (fitted: the same runs with CP-SAT beside).
-FILL_BESIDE_SHARE = 0.5
+FILL_BESIDE_SHARE = 0.7
 
 
 def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
@@ -2084,8 +2089,9 @@ def _stages(
         made(None)  # replaced by the probe's, when the DP stage gets its first layers
         if path == "cuts":
             return None
-        budget = PROBE_MAX_SECONDS if seconds is None else PROBE_SHARE * seconds
-        return LayerWatch(min(budget, PROBE_MAX_SECONDS), made)
+        left = deadline.remaining()  # the probe: PROBE_SHARE of the time left, at most
+        budget = PROBE_MAX_SECONDS if left is None else min(PROBE_SHARE * left, PROBE_MAX_SECONDS)
+        return LayerWatch(budget, made)
 
     predicted: list[float] = []
 
