@@ -910,6 +910,12 @@ def probe_extrapolation(n: int, probe: Probe) -> float:
     return measured + future
 
 
+#: The share of the cut engine's time (when it goes first) a DP stage after it is expected to
+#: fill (:func:`predicted_peak`, path "cuts"; :func:`taopt.models.sop_stages.use_the_rest`):
+#: the cut engine's MIP rounds stop at 43-53 s of 60 s, and p43.1's DP after them peaked at
+#: 320-701 MB (2026-11-27, 60 s, CP-SAT off, load 6-9).
+CUTS_REST_SHARE = 0.25
+
 #: Share of the states its ideals allow (``2 n`` times the ideals, counted) a DP stage is
 #: expected to keep after a probe (:func:`probe_states`; fitted: p43.4, ry48p.4 and ft53.4,
 #: which close, kept 4.5 %, 6.3 % and 3.0 %; their probes extrapolate 2-6 times that).
@@ -1029,8 +1035,9 @@ def predicted_peak(
     first layers"; 2026-11-27, this 2-core machine, load 3-6 from other sessions).
     """
     share = dp_state_share(problem)
-    if path == "cuts":
-        states = 0.0
+    if path == "cuts":  # a DP stage after the cut engine (use_the_rest), filling its states
+        rest = None if cut_seconds is None else CUTS_REST_SHARE * cut_seconds
+        states = min(fill_states(problem.n, rest, beside, share), float(cap))
     elif probe is not None:
         states = probe_states(problem.n, probe, seconds, cap, allowed, beside, share)
     else:
