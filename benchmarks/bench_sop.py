@@ -25,9 +25,11 @@ objective, bound, wall time (``time.perf_counter`` around the call), the overrun
 (``resource.getrusage``, ``ru_maxrss``) plus CP-SAT's worker's beside it (the reaped
 children's ``ru_maxrss``), against the memory guard's upper estimate made before the run
 (:func:`taopt.runtime.footprint`, CP-SAT's worker counted when it runs; a ratio above 2 is
-marked) and the reported estimate (``info["memory_estimate"]``, predicted once before the
-stages by :func:`taopt.models.sop.predicted_peak`; a ratio outside [0.5, 2] is marked
-``**out**``), listed at the end. ``--load`` starts a second process spinning on one core for
+marked) and the reported estimate (``info["memory_estimate"]``, predicted by
+:func:`taopt.models.sop.predicted_peak` after the probe of the first DP stage's first layers,
+:class:`taopt.models.sop.LayerWatch`, before the later stages; a ratio outside [0.5, 2] is
+marked ``**out**``), listed at the end, with the states the estimate expected (the probe's
+measured states → its expectation; "states kept" is the last DP stage's count). ``--load`` starts a second process spinning on one core for
 the duration (the shared-machine condition of issue 33). ``--generated`` adds the generated
 instances of :data:`GENERATED` (``taopt.sop.generate``). ``--record FILE`` appends each run's
 row (the prediction's inputs, the states kept, the peaks) as JSON, the data
@@ -398,9 +400,10 @@ def resources(
     print(
         "| instance | n | cpsat | status | objective | bound | wall (s) | over | parent peak (MB) |"
         " worker peak (MB) | peak (MB) | guard (MB) | peak / guard | estimate (MB) |"
-        " peak / estimate | states kept | engine | after the stages | CP-SAT beside |"
+        " peak / estimate | states kept | probe → expected states | engine | after the stages |"
+        " CP-SAT beside |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     runs = [(name, side) for name in names for side in cpsat]
     outside = []
     try:
@@ -437,12 +440,17 @@ def resources(
                 if mark:
                     outside.append(f"{name} ({flag}, {what}: {ratio:.2f})")
                 ratios.append(f"{ratio:.2f}{mark}")
+            prediction = r.get("prediction") or {}
+            probe = prediction.get("probe")
+            expected = f"{prediction['states']:,.0f}" if "states" in prediction else ""
+            if isinstance(probe, dict):
+                expected = f"{probe['states']:,} → {expected}"
             print(
                 f"| {name} | {r['n']} | {flag} | {r['status']} | {r['objective']:g} | "
                 f"{r['bound']:g} | {r['wall']:.2f} | {over} | {r['peak'] / 1e6:.0f} | "
                 f"{r['worker_peak'] / 1e6:.0f} | {peak / 1e6:.0f} | {r['estimate'] / 1e6:.0f} | "
                 f"{ratios[0]} | {r['staged'] / 1e6:.0f} | {ratios[1]} | {r['states']:,} | "
-                f"{r['engine']} | {', '.join(r['rest'] or [])} | {r['cpsat']} |",
+                f"{expected} | {r['engine']} | {', '.join(r['rest'] or [])} | {r['cpsat']} |",
                 flush=True,
             )
         print(

@@ -64,7 +64,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -694,8 +694,9 @@ def dp_state_cap(n: int, max_memory_gb: float | None, wanted: int, reserve: floa
 
 #: Peak resident bytes of CP-SAT's worker process beside the portfolio (a Python with
 #: OR-Tools imported; measured 157-165 MB from 9 to 80 nodes, ``ru_maxrss`` of the reaped
-#: worker; 157-159 MB on the shipped files of 9-18 nodes, 165 MB on 27-49, 2026-11-27).
-CPSAT_WORKER_BYTES = 157e6
+#: worker; 157-159 MB on the shipped files of 9-18 nodes, 165 MB on 27-49, 2026-11-27; 158-166
+#: MB on 9-54 nodes, 2026-11-27 later: the largest, so the guard stays above the peak).
+CPSAT_WORKER_BYTES = 166e6
 
 #: Peak bytes of CP-SAT's worker per node pair (n^2) above :data:`CPSAT_WORKER_BYTES`
 #: (fitted on the rbg-like stand-ins of 110-380 nodes beside the portfolio for 60 s: 157,
@@ -788,8 +789,186 @@ def root_gap(upper: float | None, lower: float) -> float:
     return float(min(1.0, max(0.0, (upper - lower) / upper)))
 
 
-#: The reported estimate's DP states (:func:`predicted_states`) as a share of
-#: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted, :func:`predicted_peak`).
+#: The probe's share of the time left when the first DP stage starts (:class:`LayerWatch`;
+#: a few % of the limit: the estimate is made after it, before the rest of the stages; the
+#: probe's layers are the stage's own, so it costs no time of its own).
+PROBE_SHARE = 0.05
+
+#: The most seconds the probe's layers get, whatever the limit.
+PROBE_MAX_SECONDS = 3.0
+
+#: The probe ends once its layers keep this many states (both directions): at 100,000 the
+#: extrapolation of the shipped files' first stages is within 2x of the states they kept
+#: (rbg048a 102,000 for 89,000; ry48p.4 294,000 for 422,000; ESC47 exact; rbg050c past its
+#: fill), at 20,000 up to 10x above (ft53.4; ``/work/scratch/s35-mem/emu.py`` on the layers
+#: of whole runs, 2026-11-27).
+PROBE_STATES = 100_000
+
+
+@dataclass(frozen=True)
+class Probe:
+    """What :class:`LayerWatch` measured: the kept states of each layer of the forward and
+    the backward direction (layer 0 first, after pruning with the incumbent, the completion
+    bound and the LP bound), whether a direction finished (every path pruned or completed,
+    or the two met), the states kept over both and the seconds it took (setup included)."""
+
+    forward: tuple[int, ...]
+    backward: tuple[int, ...]
+    finished: bool
+    states: int
+    seconds: float
+
+
+class LayerWatch:
+    """The memory probe: the first layers of the portfolio's first DP stage, watched
+    (``solve_sop_dp(..., watch=...)``, :func:`taopt.models.sop_dp.solve_sop_dp`), so its
+    states are the stage's own (none made twice, no extra time).
+
+    From the first layer on, the kept states of each layer of both directions (after pruning
+    with the incumbent, the completion bound and the LP bound) are read until ``seconds``
+    pass, the states kept reach ``max_states``, a direction finishes or the two meet; then
+    ``done(probe)`` is called once with the :class:`Probe`. :meth:`close` calls it with what
+    was seen when the stage stopped first.
+    """
+
+    def __init__(
+        self, seconds: float, done: Callable[[Probe], None], max_states: int = PROBE_STATES
+    ) -> None:
+        self.seconds = seconds
+        self.max_states = max_states
+        self.done = done
+        self.began: float | None = None
+        self.seen: Probe | None = None
+        self.closed = False
+
+    def __call__(self, runs: Sequence[Any]) -> None:
+        if self.closed:
+            return
+        now = time.perf_counter()
+        if self.began is None:
+            self.began = now
+        n = runs[0].n
+        finished = any(r.finished for r in runs) or (
+            len(runs) > 1 and sum(len(r.layers) - 1 for r in runs) >= n - 2
+        )
+        forward = tuple(len(layer[0]) for layer in runs[0].layers)
+        backward = tuple(len(layer[0]) for layer in runs[1].layers) if len(runs) > 1 else (1,)
+        kept = sum(r.kept for r in runs)
+        self.seen = Probe(forward, backward, finished, kept, now - self.began)
+        if finished or kept >= self.max_states or now - self.began >= self.seconds:
+            self.close()
+
+    def close(self) -> None:
+        """Hand what was seen to ``done`` (once; nothing when no layer was seen)."""
+        if not self.closed and self.seen is not None:
+            self.closed = True
+            self.done(self.seen)
+
+
+#: Growth damping of the probe's extrapolation (:func:`probe_extrapolation`): the log of a
+#: direction's layer-to-layer growth shrinks by this factor a layer, so a layer ends at
+#: most ``g ** (d / (1 - d))`` times the last measured one (fitted, :func:`predicted_peak`).
+PROBE_DAMPING = 0.8
+
+#: Layers over which the probe's last growth is measured (a geometric mean).
+PROBE_GROWTH_LAYERS = 2
+
+
+def _growth(sizes: tuple[int, ...]) -> float:
+    """The last layers' growth of one direction (:data:`PROBE_GROWTH_LAYERS`, geometric)."""
+    span = min(PROBE_GROWTH_LAYERS, len(sizes) - 1)
+    if span < 1 or sizes[-1] <= 0:
+        return 0.0
+    return float((sizes[-1] / max(sizes[-1 - span], 1)) ** (1.0 / span))
+
+
+def probe_extrapolation(n: int, probe: Probe) -> float:
+    """The states a DP stage on ``n`` nodes keeps until its directions meet, extrapolated
+    from ``probe`` as the DP goes on (:func:`taopt.models.sop_dp.solve_sop_dp`): the layers
+    left (``n - 2`` less those measured) are added one at a time to the direction whose last
+    layer is smaller, each grown from that direction's last layer by its last growth ``g``
+    (:func:`_growth`), the log of the growth shrunk by :data:`PROBE_DAMPING` at each of its
+    layers; the total is the states measured plus the layers added. Never below the states
+    measured; exactly them when the probe finished or a direction kept nothing."""
+    measured = float(probe.states)
+    if probe.finished:
+        return measured
+    left = max(0, n - 2 - (len(probe.forward) - 1) - (len(probe.backward) - 1))
+    sides = (probe.forward, probe.backward)
+    growth = [_growth(sizes) for sizes in sides]
+    if min(growth) <= 0.0:  # a direction kept nothing: the DP ends
+        return measured
+    logs = [float(np.log(g)) for g in growth]
+    size = [float(sizes[-1]) for sizes in sides]
+    grown = [0, 0]
+    future = 0.0
+    for _ in range(left):
+        d = 0 if size[0] <= size[1] else 1
+        size[d] = min(size[d] * float(np.exp(logs[d] * PROBE_DAMPING ** grown[d])), 1e15)
+        grown[d] += 1
+        future += size[d]
+    return measured + future
+
+
+#: The share of the cut engine's time (when it goes first) a DP stage after it is expected to
+#: fill (:func:`predicted_peak`, path "cuts"; :func:`taopt.models.sop_stages.use_the_rest`):
+#: the cut engine's MIP rounds stop at 43-53 s of 60 s, and p43.1's DP after them peaked at
+#: 320-701 MB (2026-11-27, 60 s, CP-SAT off, load 6-9).
+CUTS_REST_SHARE = 0.25
+
+#: Share of the states its ideals allow (``2 n`` times the ideals, counted) a DP stage is
+#: expected to keep after a probe (:func:`probe_states`; fitted: p43.4, ry48p.4 and ft53.4,
+#: which close, kept 4.5 %, 6.3 % and 3.0 %; their probes extrapolate 2-6 times that).
+PROBE_ALLOWED_SHARE = 0.04
+
+#: States a DP stage that fills its states keeps per second of its share, up to 64 nodes
+#: (in proportion to ``64 / n`` above; :func:`fill_states`): fitted on the runs that stop on
+#: their time (prob.42, ry48p.1, ft53.1, p43.1, rbg050c at 10 and 60 s, CP-SAT off).
+FILL_STATES_PER_SECOND = 31_000.0
+
+#: The share of :data:`FILL_STATES_PER_SECOND` left to the DP when CP-SAT's worker runs
+#: beside it on this 2-core machine (fitted: the same runs with CP-SAT beside).
+FILL_BESIDE_SHARE = 0.7
+
+
+def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
+    """The states a DP stage of ``seconds`` (None: no limit, infinite) on ``n`` nodes keeps
+    when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` a second
+    (times ``min(1, 64 / n)``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``),
+    divided by ``share`` (:func:`dp_state_share`: a state of fewer extensions costs less time
+    as it costs fewer bytes, so a filling stage's bytes a second do not depend on it;
+    rbg050c, share 0.6, kept 1.98 million states in a 25 s stage, 79,000 a second);
+    increasing in ``seconds``."""
+    if seconds is None:
+        return float("inf")
+    rate = FILL_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1)) / max(share, 1e-9)
+    return rate * max(float(seconds), 0.0) * (FILL_BESIDE_SHARE if beside else 1.0)
+
+
+def probe_states(
+    n: int,
+    probe: Probe,
+    seconds: float | None,
+    cap: float,
+    allowed: float | None,
+    beside: bool,
+    share: float = 1.0,
+) -> float:
+    """The DP states the reported estimate expects of a stage of ``seconds`` after ``probe``:
+    the smaller of its extrapolation (:func:`probe_extrapolation`), the states it can fill in
+    its time (:func:`fill_states`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
+    allow (``allowed``, None: not counted), never below the states the probe measured, and
+    at most its ``cap`` and ``allowed``."""
+    states = min(probe_extrapolation(n, probe), fill_states(n, seconds, beside, share))
+    if allowed is not None:
+        states = min(states, PROBE_ALLOWED_SHARE * float(allowed))
+    states = min(max(states, float(probe.states)), float(cap))
+    return states if allowed is None else min(states, float(allowed))
+
+
+#: The reported estimate's DP states without a probe (:func:`predicted_states`: the estimate
+#: first recorded, kept only when the first DP stage made no layer) as a share of
+#: :func:`dp_states_in`'s rate at :data:`DP_RATE_SECONDS` (fitted before the probe, 2026-11-27).
 PREDICTED_RATE_SHARE = 0.5
 
 #: Exponent of the reported estimate's DP states in the stage's length (fitted; below
@@ -827,37 +1006,47 @@ def predicted_peak(
     allowed: float | None,
     nonzeros: float,
     cut_seconds: float | None = 0.0,
+    probe: Probe | None = None,
+    beside: bool = False,
 ) -> tuple[float, dict[str, Any]]:
-    """The reported memory estimate (``info["memory_estimate"]``), predicted once before the
-    portfolio's stages run, and its parts.
+    """The reported memory estimate (``info["memory_estimate"]``) and its parts, predicted
+    before the portfolio's later stages run.
 
     ``path`` is the rule's choice: "dp" (the DP alone on counted ideals), "root+dp" (the
     root stage, then the DP stages, then the cut engine) or "cuts" (the cut engine first);
     ``seconds`` the first DP stage's time, ``cap`` its state cap, ``allowed`` the states the
     ideals allow (None: too many to count), ``nonzeros`` the root stage's cut model
-    (:func:`nonzero_count`, 0 for none) and ``cut_seconds`` the time the cut engine may get
-    (0: it does not run). The peak is the base plus the larger of the DP phase (the
-    :func:`predicted_states`, at :func:`dp_bytes` scaled by :func:`dp_state_share`, beside
-    the root stage's model) and the cut engine's phase (:func:`cut_engine_bytes`).
+    (:func:`nonzero_count`, 0 for none), ``cut_seconds`` the time the cut engine may get
+    (0: it does not run), ``probe`` what the first DP stage's first layers measured
+    (:class:`LayerWatch`; None: no layer yet) and ``beside`` whether CP-SAT's worker runs
+    beside. The peak is the base plus the larger of the DP phase (the DP's states at
+    :func:`dp_bytes` scaled by :func:`dp_state_share`, beside the root stage's model) and the
+    cut engine's phase (:func:`cut_engine_bytes`).
 
-    Fitted (``python benchmarks/bench_sop.py --resources T --cpsat both --record runs.jsonl``
-    at 10 and 60 s on the shipped files, p43.1, prob.42, ry48p.1, ft53.1 and the generated
-    instances of ``GENERATED`` at 10 s; 2026-11-27, this 2-core machine, load 4-8 from other
-    sessions) to keep the ratio peak / estimate within [0.5, 2] on the most runs. What is
-    known before the stages does not tell the instances that close early from those that
-    fill their states: ESC47 (root gap 0.17, 23,000 states, 181 MB) and ry48p.1 (root gap
-    0.11, 1.25 million states, 845 MB) look alike at 60 s without CP-SAT, so one of the two is
-    outside 2x; the estimate keeps the early closers in (docs/benchmarks.md, SOP memory:
-    without CP-SAT at 60 s prob.42, ry48p.1 and rbg050c, which fill their DP stages, were
-    2.4-2.9x above it; with CP-SAT beside, and at 10 s, every shipped file was within 2x,
-    and every generated instance at 10 s).
+    The DP's states, with a probe (:func:`probe_states`): what its layers measured,
+    extrapolated to the middle by their damped growth (:func:`probe_extrapolation`), at most
+    what a stage that fills its states keeps in its time (:func:`fill_states`); the two
+    kinds of instance the inputs known before the stages do not tell apart (ESC25 and
+    ry48p.1, root gaps 0.12 and 0.11) grow 1.1-2 and 15-36 times a layer in the probe.
+    Without one (the estimate first recorded, replaced by the probe's): the old fit,
+    :func:`predicted_states`. Measured and fitted with ``python benchmarks/bench_sop.py
+    --resources T --cpsat both --record rows.jsonl`` at 10 and 60 s on the shipped files and
+    p43.1, prob.42, ry48p.1, ft53.1 (docs/benchmarks.md, "SOP memory: a probe of the DP's
+    first layers"; 2026-11-27, this 2-core machine, load 3-6 from other sessions).
     """
-    states = 0.0 if path == "cuts" else predicted_states(problem.n, seconds, cap, allowed)
-    dp = dp_bytes(problem.n, states) * dp_state_share(problem)
+    share = dp_state_share(problem)
+    if path == "cuts":  # a DP stage after the cut engine (use_the_rest), filling its states
+        rest = None if cut_seconds is None else CUTS_REST_SHARE * cut_seconds
+        states = min(fill_states(problem.n, rest, beside, share), float(cap))
+    elif probe is not None:
+        states = probe_states(problem.n, probe, seconds, cap, allowed, beside, share)
+    else:
+        states = predicted_states(problem.n, seconds, cap, allowed)
+    dp = dp_bytes(problem.n, states) * share
     held = cut_engine_bytes(nonzeros, 0.0)
     cut = cut_engine_bytes(nonzeros, cut_seconds) if cut_seconds != 0 else 0.0
     peak = BASE_BYTES + max(dp + held, cut)
-    features = {
+    features: dict[str, Any] = {
         "path": path,
         "seconds": seconds,
         "cap": cap,
@@ -870,7 +1059,18 @@ def predicted_peak(
         "states": states,
         "dp": dp,
         "cut": cut,
+        "beside": beside,
     }
+    if probe is not None:
+        features["probe"] = {
+            "forward": list(probe.forward),
+            "backward": list(probe.backward),
+            "finished": probe.finished,
+            "states": probe.states,
+            "seconds": probe.seconds,
+            "extrapolated": probe_extrapolation(problem.n, probe),
+            "fill": fill_states(problem.n, seconds, beside, share),
+        }
     return peak, features
 
 
@@ -949,7 +1149,13 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
     if seconds is not None:  # a DP stage keeps at most about the states it can make in its
         # time (GUARD_STATE_FACTOR times the expected, the whole limit: the stages after the
         # first, use_the_rest's included, may run up to the limit); the caps bound it anyway
-        wanted = int(GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds))
+        # (at least the states the reported estimate lets a filling stage keep in the limit)
+        wanted = int(
+            max(
+                GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds),
+                fill_states(problem.n, seconds, False),
+            )
+        )
     states = dp_state_cap(
         problem.n, limit, wanted if capped else min(wanted, 2 * problem.n * count)
     )
@@ -1629,8 +1835,10 @@ def solve_sop_problem(
         ``worker``: why its worker was stopped), ``order_from`` / ``bound_from``
         ("portfolio" or "cpsat") and ``proved_by`` when optimal, ``ideals`` and
         ``ideals_capped``, the DP's ``states``/``pruned`` when it ran, ``memory_plan``,
-        ``memory_estimate`` (the peak bytes predicted once before the stages,
-        :func:`predicted_peak`, with its inputs in ``memory_prediction``; where the rule made
+        ``memory_estimate`` (the peak bytes predicted before the later stages,
+        :func:`predicted_peak`: after the first DP stage's first layers, measured by its
+        probe :class:`LayerWatch`, or before the cut engine when it goes first; its inputs,
+        the probe's layers included, in ``memory_prediction``; where the rule made
         no prediction, a degraded or forced engine, the largest of the stages' estimates;
         plus CP-SAT's worker when it ran beside, :func:`cpsat_worker_bytes`;
         ``info["cpsat"]["memory_estimate"]`` is the worker's), ``memory_stages`` (the
@@ -1869,24 +2077,36 @@ def _stages(
     state_share = dp_state_share(problem)
     cheap = _cheap_bound(problem)
 
-    def predict(path: str, known: Any, lower: float, seconds: float | None, cap: float) -> None:
+    def predict(
+        path: str, known: Any, lower: float, seconds: float | None, cap: float
+    ) -> LayerWatch | None:
         """Record the reported estimate (``info["memory_estimate"]``), once, before the
         stages: :func:`predicted_peak` from what is known now (``path``: "dp" alone, "dp"
-        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``)."""
+        after the root stage or "cuts" first; the root gap of ``known`` against ``lower``).
+        Where a DP stage runs first, the watch returned (:class:`LayerWatch`, handed to it)
+        replaces it with the prediction from its first layers, made after PROBE_SHARE of the
+        stage's time."""
         value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
         gap = root_gap(None if value is None else value[0], max(lower, cheap))
         nonzeros = held() if path != "dp" or root_model is not None else 0.0
-        peak, features = predicted_peak(
-            problem,
-            path,
-            seconds,
-            cap,
-            None if capped else every_state,
-            nonzeros,
-            cut_time(path),
-        )
-        info["memory_prediction"] = {**features, "gap": gap}
-        predicted.append(peak)
+        beside = on_root is not None  # CP-SAT's worker beside (on_root is its hook)
+        allowed = None if capped else every_state
+
+        def made(probe: Probe | None) -> None:
+            peak, features = predicted_peak(
+                problem, path, seconds, cap, allowed, nonzeros, cut_time(path), probe, beside
+            )
+            info["memory_prediction"] = {**features, "gap": gap}
+            if probe is None and path != "cuts":
+                info["memory_prediction"]["probe"] = "not run (no DP layer yet)"
+            predicted[:] = [peak]
+
+        made(None)  # replaced by the probe's, when the DP stage gets its first layers
+        if path == "cuts":
+            return None
+        left = deadline.remaining()  # the probe: PROBE_SHARE of the time left, at most
+        budget = PROBE_MAX_SECONDS if left is None else min(PROBE_SHARE * left, PROBE_MAX_SECONDS)
+        return LayerWatch(budget, made)
 
     predicted: list[float] = []
 
@@ -2029,13 +2249,18 @@ def _stages(
         alone = None if alone_states >= every_state else alone_states  # None: no cap
         dp_cap = max_states if capped else alone
         expect(every_state if dp_cap is None else dp_cap, deadline.remaining())
-        predict(
+        watch = predict(
             "dp", incumbent, cheap, deadline.remaining(), every_state if dp_cap is None else dp_cap
         )
-        result = solve_sop_dp(problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap)
+        result = solve_sop_dp(
+            problem, deadline.remaining(), incumbent=incumbent, max_states=dp_cap, watch=watch
+        )
+        if watch is not None:  # stopped before the probe's end: what it saw
+            watch.close()
         used = "dp"
     else:
         cuts_first = False
+        watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
                 problem, deadline, incumbent, info, verbose
@@ -2047,7 +2272,7 @@ def _stages(
             root_bound = info["root_stage"]["bound"]
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
-            predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
+            watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if cuts_first:  # the root closed most of the gap: the cut engine gets the time
             result = milp(incumbent, deadline.remaining())
             used = "milp"
@@ -2074,7 +2299,10 @@ def _stages(
                     max_states=max_states,
                     lagrange=lagrange,
                     credit=credit,
+                    watch=watch,
                 )
+                if watch is not None:  # stopped before the probe's end: what it saw
+                    watch.close()
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)

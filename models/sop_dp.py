@@ -114,7 +114,7 @@ Operations Research 37(2), 1989 (bounds on reduced costs).
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -1144,6 +1144,7 @@ def solve_sop_dp(
     both_prices: bool = BOTH_PRICES,
     lagrange: tuple[float, np.ndarray] | None = None,
     credit: RowCredit | None = None,
+    watch: Callable[[Sequence[_Run]], None] | None = None,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1190,6 +1191,9 @@ def solve_sop_dp(
         The same LP's prices with its priced rows (with ``lagrange``;
         :meth:`~taopt.models.sop_cuts.SopCutModel.row_credit`): the states are then dropped
         by the bound with row credit of the module docstring instead, never weaker.
+    watch : callable, optional
+        Called with the directions' runs once before the first layer and after each layer
+        kept (the portfolio's memory probe, :class:`taopt.models.sop.LayerWatch`).
 
     Returns
     -------
@@ -1241,7 +1245,7 @@ def solve_sop_dp(
         )
     runs = _directions(problem, both, both_prices, oriented, credit if oriented else None)
     info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
-    done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info)
+    done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info, watch)
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
         if cost < upper:
@@ -1369,12 +1373,16 @@ def _expand(
     deadline: Deadline,
     max_states: int | None,
     info: dict[str, Any],
+    watch: Callable[[Sequence[_Run]], None] | None = None,
 ) -> tuple[_Run | None, str | None]:
     """Layer after layer, the direction with the smaller last layer first (forward on
     ties: each grows into its widest layers only as far as the other is wider), until one
     finishes, the two meet (joined; ``info["met"]``) or a limit stops them. Returns the
-    finished run (None if stopped) and why it stopped (None if it finished)."""
+    finished run (None if stopped) and why it stopped (None if it finished); ``watch(runs)``
+    before the first layer and after each one kept."""
     both = len(runs) > 1
+    if watch is not None:
+        watch(runs)
     stopped_by = None
     done = None
     while done is None:
@@ -1384,6 +1392,8 @@ def _expand(
         stopped_by = run.step(upper, tolerance, deadline, limit, room)
         if stopped_by is not None:
             break
+        if watch is not None:
+            watch(runs)
         if run.finished:
             done = run
         elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:

@@ -262,3 +262,154 @@ def test_solve_counts_the_ideals_once(monkeypatch):
     assert len(calls) == 1 and result.status == OPTIMAL
     again = solve_sop_problem(problem, time_limit=5.0, cpsat=False)
     assert len(calls) == 2 and again.objective == result.objective
+
+
+def _probe(forward, backward, finished=False):
+    """A :class:`~taopt.models.sop.Probe` of these layer sizes (states: their sum)."""
+    from taopt.models.sop import Probe
+
+    return Probe(tuple(forward), tuple(backward), finished, sum(forward) + sum(backward), 0.1)
+
+
+#: Probes of the first layers as measured on the shipped files (closing: slow growth;
+#: filling: tens of times a layer; shrinking; one direction empty; finished).
+PROBES = {
+    "slow": ([1, 24, 39, 64, 100, 180, 282, 419, 554, 745], [1, 36, 97, 204, 384, 732]),
+    "explosive": ([1, 37, 1327], [1, 36, 1238, 20568]),
+    "shrinking": ([1, 30, 20, 12, 8], [1, 25, 14, 9]),
+    "empty": ([1, 5, 0], [1, 4, 3]),
+    "one layer": ([1], [1]),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(PROBES))
+@pytest.mark.parametrize("n", [20, 49, 120])
+def test_probe_extrapolation_is_never_below_what_it_measured(kind, n):
+    """The probe's extrapolation is at least the states it measured, exactly them when the
+    probe finished (or a direction kept nothing), and finite."""
+    import math
+
+    from taopt.models.sop import probe_extrapolation
+
+    forward, backward = PROBES[kind]
+    probe = _probe(forward, backward)
+    extrapolated = probe_extrapolation(n, probe)
+    assert math.isfinite(extrapolated) and extrapolated >= probe.states
+    assert probe_extrapolation(n, _probe(forward, backward, finished=True)) == probe.states
+    if kind == "empty":
+        assert extrapolated == probe.states
+
+
+def test_probe_extrapolation_grows_with_the_growth_and_the_layers_left():
+    """Faster growth of the last layers, or more layers left to the middle, never lowers the
+    extrapolation; explosive growth extrapolates far beyond slow growth."""
+    from taopt.models.sop import probe_extrapolation
+
+    slow = _probe([1, 10, 100, 200], [1, 10, 100, 200])
+    fast = _probe([1, 10, 100, 1000], [1, 10, 100, 1000])
+    assert probe_extrapolation(49, fast) > 10 * probe_extrapolation(49, slow)
+    by_n = [probe_extrapolation(n, slow) for n in (10, 20, 49, 100)]
+    assert by_n == sorted(by_n)
+
+
+def test_probe_states_keep_within_the_cap_the_ideals_and_the_fill():
+    """The states predicted after a probe are at most the stage's cap and the states the
+    ideals allow, at most what a filling stage keeps in its time unless the probe measured
+    more, fewer with CP-SAT beside, and never below the probe's states under the cap."""
+    from taopt.models.sop import fill_states, probe_states
+
+    explosive = _probe(*PROBES["explosive"])
+    fill = fill_states(49, 10.0, False)
+    assert probe_states(49, explosive, 10.0, 1e9, None, False) == pytest.approx(fill)
+    assert probe_states(49, explosive, 10.0, 1e9, None, True) < fill
+    assert probe_states(49, explosive, 10.0, 5_000, None, False) == 5_000
+    assert probe_states(49, explosive, 10.0, 1e9, 3_000.0, False) == 3_000
+    assert probe_states(49, explosive, 1e-6, 1e9, None, False) == explosive.states
+    times = [probe_states(49, explosive, t, 1e9, None, False) for t in (0.1, 1.0, 10.0, 60.0)]
+    assert times == sorted(times)
+
+
+def test_fill_states_grow_with_the_time_and_fall_beside_cpsat():
+    """A filling stage keeps more states the longer it runs, none in no time, fewer beside
+    CP-SAT's worker and fewer a second beyond 64 nodes; no limit: unbounded."""
+    from taopt.models.sop import fill_states
+
+    at = [fill_states(49, t, False) for t in (0.0, 1.0, 10.0, 60.0)]
+    assert at[0] == 0.0 and at == sorted(at) and at[-1] > at[1]
+    assert fill_states(49, 10.0, True) < at[2]
+    assert fill_states(128, 10.0, False) == pytest.approx(at[2] / 2)
+    assert fill_states(49, None, False) == float("inf")
+
+
+@pytest.mark.parametrize("limit", [1.0, 10.0, 60.0])
+@pytest.mark.parametrize("kind", sorted(PROBES))
+def test_guard_is_never_below_an_estimate_made_from_a_probe(esc47, limit, kind):
+    """The guard is at least the estimate made from any probe of the first DP stage (with or
+    without CP-SAT beside, the DP alone or after the root stage) whose states a stage could
+    keep in the limit."""
+    from taopt.models.sop import (
+        PORTFOLIO_MAX_STATES,
+        fill_states,
+        nonzero_count,
+        predicted_peak,
+    )
+
+    probe = _probe(*PROBES[kind])
+    assert probe.states <= fill_states(esc47.n, limit, False)
+    guard, _ = _footprint(esc47, {"time_limit": limit, "cpsat": False})
+    nonzeros = nonzero_count(esc47.cost, esc47.closure, esc47.start, "cuts")
+    for path, held in (("dp", 0), ("root+dp", nonzeros)):
+        for seconds in (0.01 * limit, 0.5 * limit, limit):
+            for beside in (False, True):
+                estimate, features = predicted_peak(
+                    esc47, path, seconds, PORTFOLIO_MAX_STATES, None, held, 0.0, probe, beside
+                )
+                assert estimate <= guard
+                assert features["probe"]["extrapolated"] >= probe.states
+
+
+def test_layer_watch_reads_the_first_layers_of_the_dp():
+    """The watch handed to the DP sees both directions' first layers once (layer 0 of one
+    state each), never more states than the stage kept, and a DP that closes within its
+    time is seen finished."""
+    from taopt.models.sop import LayerWatch
+    from taopt.models.sop_dp import solve_sop_dp
+
+    problem = SopProblem.load("ESC12")
+    seen = []
+    result = solve_sop_dp(problem, incumbent=None, watch=LayerWatch(60.0, seen.append))
+    assert result.status == OPTIMAL
+    assert len(seen) == 1
+    probe = seen[0]
+    assert probe.finished and probe.forward[0] == probe.backward[0] == 1
+    assert probe.states <= result.info["states"]
+    stopped = []
+    watch = LayerWatch(60.0, stopped.append, max_states=20)
+    solve_sop_dp(problem, watch=watch)
+    assert len(stopped) == 1 and stopped[0].states >= 20 and not stopped[0].finished
+    watch.close()  # closed already: nothing more
+    assert len(stopped) == 1
+
+
+def test_run_records_the_probe_before_its_later_stages(esc25):
+    """A portfolio run whose DP stage ran records its estimate from the probe of that stage's
+    first layers (layer sizes, states measured, extrapolated), within the guard."""
+    guard, _ = _footprint(esc25, {"time_limit": 2.0, "cpsat": False})
+    result = solve_sop_problem(esc25, time_limit=2.0, cpsat=False)
+    prediction = result.info["memory_prediction"]
+    assert prediction["path"] in ("dp", "root+dp")
+    probe = prediction["probe"]
+    assert isinstance(probe, dict), probe
+    assert probe["extrapolated"] >= probe["states"] >= 1
+    assert BASE_BYTES <= result.info["memory_estimate"] <= guard
+
+
+def test_probe_extrapolation_advances_the_smaller_direction():
+    """As in the DP, the layers left go to the direction whose last layer is smaller: a
+    slowly growing small direction beside an explosive large one extrapolates far below two
+    explosive directions (rbg048a's probe: it closed with 94,000 states)."""
+    from taopt.models.sop import probe_extrapolation
+
+    one_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 1240, 1889, 2850])
+    both_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 257, 1282, 5397])
+    assert probe_extrapolation(50, one_fast) < probe_extrapolation(50, both_fast) / 10
