@@ -931,6 +931,14 @@ FILL_STATES_PER_SECOND = 31_000.0
 FILL_BESIDE_SHARE = 0.7
 
 
+#: The guard counts a filling DP stage at the fastest fill measured, not the fitted one
+#: (:data:`FILL_STATES_PER_SECOND`): rbg050c kept 79,000 states a second in a 25 s stage
+#: (load about 5), and ry48p.1 526,170 states in a 10 s run (load 1.7, CP-SAT beside), where
+#: the guard at the fitted rate counted 310,000 and the parent's peak passed it (603 MB
+#: against 590 MB, 2026-11-27, ``bench_sop.py --resources 10``).
+GUARD_FILL_FACTOR = 80_000.0 / FILL_STATES_PER_SECOND
+
+
 def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
     """The states a DP stage of ``seconds`` (None: no limit, infinite) on ``n`` nodes keeps
     when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` a second
@@ -1153,7 +1161,7 @@ def _footprint(problem: SopProblem, options: dict) -> tuple[float, str]:
         wanted = int(
             max(
                 GUARD_STATE_FACTOR * dp_states_in(problem.n, seconds),
-                fill_states(problem.n, seconds, False),
+                GUARD_FILL_FACTOR * fill_states(problem.n, seconds, False),
             )
         )
     states = dp_state_cap(

@@ -94,6 +94,7 @@ def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
     from taopt.models.sop import (
         BASE_BYTES,
         DP_STATES_PER_SECOND,
+        GUARD_FILL_FACTOR,
         GUARD_STATE_FACTOR,
         _footprint,
         dp_bytes,
@@ -107,7 +108,8 @@ def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
     assert fill_states(128, 60.0, False) == fill_states(64, 60.0, False) / 2
     problem = rbg_like_sop(150, 1, 0.8)
     estimate, _ = _footprint(problem, {"time_limit": 60.0, "engine": "dp", "cpsat": False})
-    states = max(GUARD_STATE_FACTOR * dp_states_in(150, 60.0), fill_states(150, 60.0, False))
+    fill = GUARD_FILL_FACTOR * fill_states(150, 60.0, False)
+    states = max(GUARD_STATE_FACTOR * dp_states_in(150, 60.0), fill)
     assert estimate <= BASE_BYTES + dp_bytes(150, states) + 1
 
 
