@@ -9,8 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from taopt.models import sop as sop_model
-from taopt.models.sop import solve_sop_problem
 from taopt.models.sop_cuts import SopCutModel
 from taopt.models.sop_dp import RowCredit, solve_sop_dp
 from taopt.result import OPTIMAL
@@ -123,20 +121,3 @@ def test_row_credit_drops_more_states():
         plain += kept[0].info["states"]
         credited += kept[1].info["states"]
     assert credited <= plain
-
-
-@pytest.mark.parametrize("seed", range(0, 20, 3))
-@pytest.mark.parametrize("row_credit", [False, True])
-def test_portfolio_with_and_without_row_credit(monkeypatch, seed, row_credit):
-    """The portfolio through its root stage (the DP first) gives the brute-force optimum with
-    the row credit on and off."""
-    monkeypatch.setattr(sop_model, "ROW_CREDIT", row_credit)
-    monkeypatch.setattr(sop_model, "CUTS_FIRST_SHARE", 2.0)
-    problem = _instance(seed)
-    optimum = sop_brute_force(problem)
-    result = solve_sop_problem(problem, ideal_cap=1, max_states=2, cpsat=False)
-    if not math.isfinite(optimum):
-        assert result.status == "infeasible"
-        return
-    assert result.status == OPTIMAL
-    assert result.objective == pytest.approx(optimum)

@@ -89,10 +89,13 @@ def test_stopped_dp_with_lagrange_keeps_a_valid_bound(seed):
 
 @pytest.mark.parametrize("seed", range(0, 30, 3))
 @pytest.mark.parametrize("cuts_first", [0.0, 2.0])
-def test_root_stage_either_way_matches_brute_force(monkeypatch, seed, cuts_first):
+@pytest.mark.parametrize("row_credit", [False, True])
+def test_root_stage_either_way_matches_brute_force(monkeypatch, seed, cuts_first, row_credit):
     """The portfolio with its root stage, the cut engine first (share 0) or the DP first
-    (share 2, never), gives the brute-force optimum with a feasible order."""
+    (share 2, never), with the DP's row credit on and off, gives the brute-force optimum with
+    a feasible order."""
     monkeypatch.setattr(sop_model, "CUTS_FIRST_SHARE", cuts_first)
+    monkeypatch.setattr(sop_model, "ROW_CREDIT", row_credit)
     problem = sop_instance(seed)
     optimum = sop_brute_force(problem)
     result = solve_sop_problem(problem, ideal_cap=1, max_states=2, cpsat=False)
