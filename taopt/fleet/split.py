@@ -339,6 +339,7 @@ def split_search(
     from taopt.fleet.search import _simple_plan, label_search
 
     deadline = Deadline(time_limit)
+    deadline_start = time.perf_counter()
     closure = _closure(problem)
     early = _earliest(problem)
     best, best_plan = best_of(problem, (incumbent, _simple_plan(problem)))
@@ -363,10 +364,13 @@ def split_search(
     popped: set[int] = set()
     solved = coupled = solves = 0
     timings: list[tuple[int, int, float]] = []
+    trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
     stopped_by = "optimal"
     least = INF
     while heap:
         key, i = heap[0]
+        if key > least or least == INF:
+            trace.append(("least", round(time.perf_counter() - deadline_start, 3), key))
         least = key
         if best <= max(key, floor) * (1 + CERTIFY):
             break
@@ -416,7 +420,20 @@ def split_search(
                     release=_releases(closure, early, mask, members),
                 )
                 solves += 1
-                timings.append((len(members), d, time.perf_counter() - started))
+                seconds = time.perf_counter() - started
+                timings.append((len(members), d, seconds))
+                trace.append(
+                    (
+                        "part",
+                        round(time.perf_counter() - deadline_start, 3),
+                        len(members),
+                        round(seconds, 3),
+                        found["stopped_by"],
+                        round(item.bound, 3),
+                        round(float(found["bound"]), 3),
+                        round(key, 3),
+                    )
+                )
                 item.bound = max(item.bound, float(found["bound"]))
                 if found["stopped_by"] == "infeasible":
                     item.bound, item.level = INF, 3
@@ -453,6 +470,7 @@ def split_search(
             value = INF
         if value < best:
             best, best_plan = value, plan
+            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
         if value <= key * (1 + CERTIFY):
             solved += 1
             continue
@@ -473,6 +491,10 @@ def split_search(
         )
         if found["plan"] is not None and found["value"] < best:
             best, best_plan = float(found["value"]), found["plan"]
+            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
+        trace.append(
+            ("coupled", round(time.perf_counter() - deadline_start, 3), found["stopped_by"], key)
+        )
         if found["stopped_by"] != "optimal":
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
@@ -498,6 +520,7 @@ def split_search(
         "coupled": coupled,
         "parts": solves,
         "part_seconds": [(m, d, round(s, 3)) for m, d, s in timings[:5]],
+        "trace": trace,
     }
 
 
