@@ -23,7 +23,8 @@ its drones (``"return"``). The plan's objective is the maximum over the trucks, 
 ``f(plan) >= max_k opt_k(X_k)`` for every plan of split X,
 
 and the least such bound over the splits left is a bound on the optimum. Any valid lower
-bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapest first:
+bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapest first (each
+lifted to the supersets, *Monotonicity* below):
 
 0. ``max_{j in X} e_j`` (:func:`taopt.fleet.bounds.earliest_service`, the fastest any of truck
    k's vehicles can serve j; a truck without drones only by itself) and the drone work
@@ -46,6 +47,29 @@ bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapes
    waits, and combine into better plans: on the shipped example a plan of 120.0, the root
    bound, certified in seconds (without releases: 121.16 [120] after 600 s). The releases
    depend on X_k alone, so the cache key is unchanged.
+
+*Monotonicity.* For one truck with its drones (a part, with or without releases), dropping a
+customer never raises the optimum: take an optimal plan of the part and remove customer j.
+If the truck served j, the truck keeps its walk and skips that service; if a drone served j,
+its sortie flies straight from j's predecessor in the sortie (or the launch stop) to j's
+successor (or the recovery stop), no longer than through j (Euclidean flights: the triangle
+inequality), so it stays within the range, and a sortie left empty is dropped. Every event
+time of the earliest schedule is a maximum of sums of nonnegative terms over the events
+before it (travel, flight, τ, the releases, the precedence pairs); the edit removes terms or
+shortens them, and the pairs and releases left are those of the smaller part, so no event is
+later, and neither is the last service or the return. Hence, for parts Y ⊆ X with the same
+drones and releases ``r_X(j) >= r_Y(j)`` on Y (:func:`_releases`: the latest earliest service of
+j's closure predecessors outside the part, which holds when no predecessor in X \\ Y is later
+than those outside X), ``opt(Y) <= opt(X)``: a lower bound proven for Y is one for X. Bounds of
+the part without releases (the set bounds, :func:`taopt.fleet.bounds.fleet_lower`, the
+sortie-walk bound) lift to every superset; the label search's bounds (with releases) to the
+supersets that keep Y's releases. :func:`_subset_max` closes the set bounds this way, and each
+refinement is lifted into the cache at once.
+
+*Drone split bound.* Level 0 also holds :func:`_drone_split_bounds`: the part's drone-only
+customers split over its drones, each drone with its own copy of the truck, priced by the
+one-drone table :func:`taopt.fleet.cover.one_drone_table` (on fleet10, K2D2c2, it raises the
+least split bound before any part is refined from about 140 to 199-247).
 
 *Search.* The splits are kept in a heap by their current bound (the maximum of their parts'
 current bounds); identical trucks (same drone count) make splits that differ by a
@@ -84,6 +108,9 @@ SPLIT_MAX_SPLITS = 400_000
 
 #: Share of the time left that a part's first exact solve may take (doubled at each retry).
 SLICE = 0.1
+
+#: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
+DRONE_SPLIT_SHARE = 0.25
 
 #: Relative tolerance of the stop rule (best <= bound (1 + CERTIFY)), as the fleet's exact
 #: method uses for its root bound.
@@ -195,6 +222,93 @@ def _set_bounds(problem: FleetProblem, drones: int) -> np.ndarray:
     sorties = -(-count // c)
     work = work + np.maximum(0, sorties - drones) * rho
     return np.maximum(reach, work / drones)
+
+
+def _subset_max(values: np.ndarray) -> np.ndarray:
+    """``out[X] = max_{Y ⊆ X} values[Y]`` (a superset-closed copy), by one pass per bit.
+
+    A bound of a part lifts to every superset part by monotonicity (module docstring,
+    *Monotonicity*): this makes any per-set bound table monotone, so a set never gets less
+    than what one of its subsets already proves."""
+    out = np.array(values, dtype=float, copy=True)
+    size = out.shape[0]
+    bit = 1
+    while bit < size:
+        view = out.reshape(-1, 2 * bit)
+        np.maximum(view[:, bit:], view[:, :bit], out=view[:, bit:])
+        bit <<= 1
+    return out
+
+
+def _submasks(X: int) -> np.ndarray:
+    """Every subset of the set ``X`` (bit mask), as an array."""
+    subs = np.zeros(1, dtype=np.int64)
+    rest = X
+    while rest:
+        low = rest & -rest
+        subs = np.concatenate((subs, subs | low))
+        rest ^= low
+    return subs
+
+
+def _drone_split_bounds(
+    problem: FleetProblem,
+    closure: list[tuple[int, int]],
+    drone_counts: set[int],
+    deadline: Deadline,
+) -> dict[int, np.ndarray]:
+    """For every customer set X (bit mask) and drone count D in ``drone_counts``, a lower
+    bound on the optimum of one truck with D drones serving exactly X (the part of
+    :func:`sub_problem`, with or without releases): the drones' sets split over their own
+    copies of the truck,
+
+    ``B_1[X] = V[depot, X ∩ O]``, ``B_D[X] = min_{A ⊆ X} max(B_1[A], B_{D-1}[X \\ A])``,
+
+    ``V`` the one-drone table :func:`taopt.fleet.cover.one_drone_table` of ``problem`` with the
+    precedence closure as its pairs, O the drone-only customers.
+
+    *Proof.* Let P be a plan of the part. Dropping its customers outside O never raises its
+    objective (module docstring, *Monotonicity*), so ``f(P) >= opt(X ∩ O)``, and it is enough
+    to bound a plan P' serving exactly X ∩ O, all by drones. Let A_1, ..., A_D be the sets
+    its D drones serve (a partition of X ∩ O). For each drone d, give it its own copy of the
+    truck (same stops in the same order, waiting only for drone d): no service and no return
+    of drone d is later (the one-drone relaxation's argument,
+    :func:`taopt.fleet.cover.one_drone_table`), and the copy is a one-truck, one-drone plan of
+    A_d that respects every closure pair inside A_d (a closure pair holds in every plan of the
+    part, :func:`sub_problem`; one drone serves its customers in time order), so drone d's
+    last service (or its copy's return under ``"return"``) is at least ``V[depot, A_d]``.
+    The part's objective is at least the maximum over its drones, hence at least
+    ``max_d V[depot, A_d] >= B_D[X]`` (the recursion takes the least such maximum over every
+    split of X into D sets, empty ones included, ``V[depot, ∅] = 0``). Releases only delay
+    the part, so the bound holds with them.
+
+    Zeros (no bound) when the table exceeds its work cap or the deadline passes, or n > 14
+    (the min-max convolution is ``3^n`` steps)."""
+    from taopt.fleet.cover import one_drone_table
+
+    n = problem.n
+    size = 1 << n
+    zero = {d: np.zeros(size) for d in drone_counts}
+    if n > 14 or max(drone_counts, default=0) == 0:
+        return zero
+    table = one_drone_table(problem.replace(precedences=closure), deadline)
+    if table is None:
+        return zero
+    only = sum(
+        1 << j for j in range(n) if problem.drone_servable(j) and not problem.truck_servable(j)
+    )
+    one = np.asarray(table[problem.depot], dtype=float)[np.arange(size) & only]
+    out = {1: one}
+    for D in range(2, max(drone_counts) + 1):
+        prev = out[D - 1]
+        cur = np.empty(size)
+        for X in range(size):
+            if X & 255 == 0 and deadline.expired():
+                return zero
+            A = _submasks(X)
+            cur[X] = np.min(np.maximum(one[A], prev[X ^ A]))
+        out[D] = cur
+    return {d: (out[d] if d > 0 else np.zeros(size)) for d in drone_counts}
 
 
 def _splits(problem: FleetProblem) -> list[tuple[int, ...]]:
@@ -315,6 +429,20 @@ def _releases(
     return out
 
 
+def _keeps_releases(preds: list[list[int]], early: np.ndarray, inner: int, outer: int) -> bool:
+    """Whether the part ``outer`` (a superset of ``inner``) has, on every member of
+    ``inner``, releases (:func:`_releases`) no earlier than the part ``inner`` has: no closure
+    predecessor (``preds[j]``) in ``outer \\ inner`` has a later :func:`_earliest` than the
+    latest of those outside ``outer`` (the condition of *Monotonicity*, module docstring)."""
+    for j in _members(inner):
+        between = [early[r] for r in preds[j] if outer >> r & 1 and not inner >> r & 1]
+        if between:
+            outside = max((early[r] for r in preds[j] if not outer >> r & 1), default=0.0)
+            if max(between) > outside:
+                return False
+    return True
+
+
 def split_search(
     problem: FleetProblem,
     time_limit: float | None = None,
@@ -343,9 +471,36 @@ def split_search(
     closure = _closure(problem)
     early = _earliest(problem)
     best, best_plan = best_of(problem, (incumbent, _simple_plan(problem)))
-    level0 = {d: _set_bounds(problem, d) for d in set(problem.drones)}
+    counts = set(problem.drones)
+    left = deadline.remaining()
+    split_bounds = _drone_split_bounds(
+        problem, closure, counts, Deadline(None if left is None else DRONE_SPLIT_SHARE * left)
+    )
+    level0 = {d: _subset_max(np.maximum(_set_bounds(problem, d), split_bounds[d])) for d in counts}
+    full = (1 << problem.n) - 1
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in closure:
+        preds[j].append(r)
     splits = _splits(problem)
     parts: dict[tuple[int, int], _Part] = {}
+    lifts = 0
+
+    def lift(mask: int, d: int, bound: float, released: bool) -> None:
+        """Monotonicity (module docstring): ``bound`` proven for the part ``mask`` (with its
+        releases when ``released``) bounds every superset part with the same drones (whose
+        releases are no earlier on ``mask``'s members, when ``released``)."""
+        nonlocal lifts
+        table = level0[d]
+        for outer in (full ^ _submasks(full ^ mask)).tolist():
+            if outer == mask or table[outer] >= bound:
+                continue
+            if released and not _keeps_releases(preds, early, mask, outer):
+                continue
+            table[outer] = bound
+            got = parts.get((outer, d))
+            if got is not None and got.level < 3 and got.bound < bound:
+                got.bound = bound
+                lifts += 1
 
     def part(mask: int, d: int) -> _Part:
         got = parts.get((mask, d))
@@ -355,6 +510,37 @@ def split_search(
                 got.level, got.bound = 3, 0.0
                 got.plan = FleetPlan([[problem.depot]], [[]], [[[] for _ in range(d)]])
         return got
+
+    def combine(split: tuple[int, ...]) -> tuple[FleetPlan, float]:
+        """The fleet plan of a split whose parts are all exact, and its value (inf when the
+        cross-truck precedences deadlock it)."""
+        routes, served, flights = [], [], []
+        for k, m in enumerate(split):
+            sub_plan = part(m, problem.drones[k]).plan
+            assert sub_plan is not None
+            route, truck_served, sorties = _lift(sub_plan, _members(m))
+            routes.append(route)
+            served.append(truck_served)
+            flights.append(sorties)
+        plan = FleetPlan(routes, served, flights)
+        try:
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            value = INF
+        return plan, value
+
+    def partner(mask: int, d: int) -> tuple[FleetPlan, float] | None:
+        """Two trucks: the part ``mask`` just became exact; when the other part of its split
+        is exact too, their combined plan (an incumbent found as soon as possible, not when
+        the split reaches the top of the heap)."""
+        if problem.K != 2:
+            return None
+        for k in range(2):
+            other = parts.get((full ^ mask, problem.drones[1 - k]))
+            if problem.drones[k] == d and other is not None and other.plan is not None:
+                split = (mask, full ^ mask) if k == 0 else (full ^ mask, mask)
+                return combine(split)
+        return None
 
     def key_of(split: tuple[int, ...]) -> float:
         return max(part(m, problem.drones[k]).bound for k, m in enumerate(split))
@@ -405,6 +591,7 @@ def split_search(
                     lower = max(lower, fleet_cover_bound(sub, lower, best, sub_deadline))
                 item.bound = max(item.bound, lower)
                 item.level = 1 if not deadline.expired() else 0
+                lift(mask, d, item.bound, released=False)
             else:
                 started = time.perf_counter()
                 left = deadline.remaining()
@@ -442,6 +629,12 @@ def split_search(
                         item.plan = found["plan"]
                         item.bound = float(found["value"])
                         item.level = 3
+                        paired = partner(mask, d)
+                        if paired is not None and paired[1] < best:
+                            best, best_plan = paired[1], paired[0]
+                            trace.append(
+                                ("paired", round(time.perf_counter() - deadline_start, 3), best)
+                            )
                     else:
                         item.bound = max(item.bound, best)  # cannot beat the best plan
                         item.level = 2
@@ -452,22 +645,11 @@ def split_search(
                     break
                 else:  # stopped by its slice or the clock: the bound it proved is kept
                     item.attempts += 1
+                lift(mask, d, item.bound, released=True)
             heapq.heappush(heap, (key_of(split), i))
             continue
         # every part exact: combine and score
-        routes, served, flights = [], [], []
-        for k, m in enumerate(split):
-            sub_plan = part(m, problem.drones[k]).plan
-            assert sub_plan is not None
-            route, truck_served, sorties = _lift(sub_plan, _members(m))
-            routes.append(route)
-            served.append(truck_served)
-            flights.append(sorties)
-        plan = FleetPlan(routes, served, flights)
-        try:
-            value = evaluate_fleet(problem, plan)
-        except FeasibilityError:
-            value = INF
+        plan, value = combine(split)
         if value < best:
             best, best_plan = value, plan
             trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
@@ -520,6 +702,7 @@ def split_search(
         "coupled": coupled,
         "parts": solves,
         "part_seconds": [(m, d, round(s, 3)) for m, d, s in timings[:5]],
+        "lifted": lifts,
         "trace": trace,
     }
 
