@@ -311,6 +311,21 @@ def _drone_split_bounds(
     return {d: (out[d] if d > 0 else np.zeros(size)) for d in drone_counts}
 
 
+def _chain_tables(
+    problem: FleetProblem,
+    closure: list[tuple[int, int]],
+    drone_counts: set[int],
+    deadline: Deadline,
+) -> dict[int, np.ndarray]:
+    """Per drone count D and customer set A, a release-free lower bound on the *last service*
+    of one truck with D drones serving exactly A: :func:`_set_bounds` and
+    :func:`_drone_split_bounds` of the problem under ``"last_service"``, closed over subsets
+    (:func:`_subset_max`); the ``chain`` of :func:`_releases`."""
+    ls = problem.replace(objective="last_service")
+    split = _drone_split_bounds(ls, closure, drone_counts, deadline)
+    return {d: _subset_max(np.maximum(_set_bounds(ls, d), split[d])) for d in drone_counts}
+
+
 def _splits(problem: FleetProblem) -> list[tuple[int, ...]]:
     """Every split (one mask per truck), identical trucks' permutations once."""
     n, K = problem.n, problem.K
@@ -412,7 +427,11 @@ def _earliest(problem: FleetProblem) -> np.ndarray:
 
 
 def _releases(
-    closure: list[tuple[int, int]], early: np.ndarray, mask: int, members: list[int]
+    closure: list[tuple[int, int]],
+    early: np.ndarray,
+    mask: int,
+    members: list[int],
+    chain: np.ndarray | None = None,
 ) -> list[float]:
     """Per member of a part (in the part's numbering), the latest :func:`_earliest` of its
     predecessors served by other trucks (0 without one).
@@ -420,27 +439,38 @@ def _releases(
     Valid for the split's bound: in every plan, a closure pair (r, j) with r outside the part
     gives t_j >= t_r >= early[r], so truck k's part of any plan of the split is a plan of its
     sub-problem that also meets these releases, and its objective there is at least the
-    optimum with them (the earliest schedule only moves later when a release is added)."""
+    optimum with them (the earliest schedule only moves later when a release is added).
+
+    ``chain`` (two trucks): per customer set A, a lower bound on the *last service* of one
+    truck with the other truck's drones serving exactly A (release-free: :func:`_set_bounds`
+    and :func:`_drone_split_bounds` under ``"last_service"``). With two trucks the other
+    truck serves exactly the complement O of the part, so for a closure pair (r, j) with r in
+    O, ``t_r >= chain[A_r]``, ``A_r = {r} ∪ (r's closure predecessors in O)``: the other
+    truck's plan with every customer outside A_r dropped serves A_r no later (*Monotonicity*,
+    module docstring) and keeps the pairs inside A_r, and in it every member of A_r is
+    served by t_r (they precede r), so its last service, at least ``chain[A_r]``, is at most
+    t_r. The release of j is then the larger of ``early[r]`` and that."""
     where = {j: i for i, j in enumerate(members)}
     out = [0.0] * len(members)
+    ancestors: dict[int, int] = {}
+    if chain is not None:
+        for r, j in closure:
+            ancestors[j] = ancestors.get(j, 0) | 1 << r
+    other = ~mask & ((1 << len(early)) - 1)
     for r, j in closure:
         if j in where and not mask >> r & 1:
-            out[where[j]] = max(out[where[j]], float(early[r]))
+            value = float(early[r])
+            if chain is not None:
+                value = max(value, float(chain[(ancestors.get(r, 0) & other) | 1 << r]))
+            out[where[j]] = max(out[where[j]], value)
     return out
 
 
-def _keeps_releases(preds: list[list[int]], early: np.ndarray, inner: int, outer: int) -> bool:
-    """Whether the part ``outer`` (a superset of ``inner``) has, on every member of
-    ``inner``, releases (:func:`_releases`) no earlier than the part ``inner`` has: no closure
-    predecessor (``preds[j]``) in ``outer \\ inner`` has a later :func:`_earliest` than the
-    latest of those outside ``outer`` (the condition of *Monotonicity*, module docstring)."""
-    for j in _members(inner):
-        between = [early[r] for r in preds[j] if outer >> r & 1 and not inner >> r & 1]
-        if between:
-            outside = max((early[r] for r in preds[j] if not outer >> r & 1), default=0.0)
-            if max(between) > outside:
-                return False
-    return True
+def _dominates(outer: dict[int, float], inner: dict[int, float], mask: int) -> bool:
+    """Whether the releases ``outer`` (customer -> release, of a superset part) are no earlier
+    than ``inner`` (of the part ``mask``) on every member of ``mask``: the condition of
+    *Monotonicity* (module docstring) for lifting a bound proven with releases."""
+    return all(outer.get(j, 0.0) >= inner.get(j, 0.0) - 1e-12 for j in _members(mask))
 
 
 def split_search(
@@ -478,9 +508,33 @@ def split_search(
     )
     level0 = {d: _subset_max(np.maximum(_set_bounds(problem, d), split_bounds[d])) for d in counts}
     full = (1 << problem.n) - 1
-    preds: list[list[int]] = [[] for _ in range(problem.n)]
-    for r, j in closure:
-        preds[j].append(r)
+    chain: dict[int, np.ndarray | None] = {d: None for d in counts}
+    if problem.K == 2:  # the other truck's last-service bounds (:func:`_releases`)
+        if problem.objective == "last_service":
+            chain = {d: level0[d].copy() for d in counts}
+        else:
+            left = deadline.remaining()
+            tables = _chain_tables(
+                problem,
+                closure,
+                counts,
+                Deadline(None if left is None else DRONE_SPLIT_SHARE * left),
+            )
+            chain = {d: tables[d] for d in counts}
+    released_at: dict[tuple[int, int], dict[int, float]] = {}
+
+    def release_of(mask: int, d: int) -> dict[int, float]:
+        """The part's releases (:func:`_releases`, with the other truck's chain bound when
+        K = 2), per customer; cached."""
+        got = released_at.get((mask, d))
+        if got is None:
+            members = _members(mask)
+            other = problem.drones[1] if problem.drones[0] == d else problem.drones[0]
+            table = chain[other] if problem.K == 2 else None
+            values = _releases(closure, early, mask, members, table)
+            got = released_at[(mask, d)] = dict(zip(members, values, strict=True))
+        return got
+
     splits = _splits(problem)
     parts: dict[tuple[int, int], _Part] = {}
     lifts = 0
@@ -494,7 +548,7 @@ def split_search(
         for outer in (full ^ _submasks(full ^ mask)).tolist():
             if outer == mask or table[outer] >= bound:
                 continue
-            if released and not _keeps_releases(preds, early, mask, outer):
+            if released and not _dominates(release_of(outer, d), release_of(mask, d), mask):
                 continue
             table[outer] = bound
             got = parts.get((outer, d))
@@ -548,6 +602,7 @@ def split_search(
     heap = [(key_of(sp), i) for i, sp in enumerate(splits)]
     heapq.heapify(heap)
     popped: set[int] = set()
+    coupled_tries: dict[int, int] = {}
     solved = coupled = solves = 0
     timings: list[tuple[int, int, float]] = []
     trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
@@ -604,7 +659,7 @@ def split_search(
                     max_labels=max_labels,
                     floor=item.bound,
                     cutoff=best,
-                    release=_releases(closure, early, mask, members),
+                    release=list(release_of(mask, d).values()),
                 )
                 solves += 1
                 seconds = time.perf_counter() - started
@@ -662,9 +717,14 @@ def split_search(
             for j in _members(m):
                 owner[j] = k
         coupled += 1
+        left = deadline.remaining()
+        if left is not None:  # a slice, doubled at each retry of this split, like the parts'
+            tries = coupled_tries.get(i, 0)
+            coupled_tries[i] = tries + 1
+            left = min(left, max(2.0, SLICE * left) * 2**tries)
         found = label_search(
             problem,
-            time_limit=deadline.remaining(),
+            time_limit=left,
             incumbent=plan if value < INF else None,
             max_labels=max_labels,
             truck_of=owner,

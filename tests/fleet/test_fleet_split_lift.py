@@ -10,10 +10,11 @@ from taopt.fleet.brute import brute_force, tiny_instance
 from taopt.fleet.problem import FleetProblem
 from taopt.fleet.search import label_search
 from taopt.fleet.split import (
+    _chain_tables,
     _closure,
+    _dominates,
     _drone_split_bounds,
     _earliest,
-    _keeps_releases,
     _members,
     _releases,
     _subset_max,
@@ -74,31 +75,40 @@ def test_subset_max_is_the_largest_value_of_a_subset():
         assert out[X] == max(values[Y] for Y in range(32) if Y & ~X == 0)
 
 
-def _released_optima(problem: FleetProblem, D: int) -> dict[int, float]:
-    """Every part's optimum (label search, exact) with its split releases."""
+def _released_optima(
+    problem: FleetProblem, D: int, chain: bool
+) -> tuple[dict[int, float], dict[int, dict[int, float]]]:
+    """Every part's optimum (label search, exact) with its split releases (with the other
+    truck's chain bound when ``chain``), and those releases."""
     closure, early = _closure(problem), _earliest(problem)
-    out = {}
+    table = _chain_tables(problem, closure, {D}, Deadline(None))[D] if chain else None
+    values, releases = {}, {}
     for mask in range(1, 1 << problem.n):
         members = _members(mask)
+        release = _releases(closure, early, mask, members, table)
+        releases[mask] = dict(zip(members, release, strict=True))
         sub = sub_problem(problem, members, D, closure)
-        found = label_search(sub, release=_releases(closure, early, mask, members), beam=0)
+        found = label_search(sub, release=release, beam=0)
         assert found["stopped_by"] == "optimal"
-        out[mask] = float(found["value"])
-    return out
+        values[mask] = float(found["value"])
+    return values, releases
 
 
 @pytest.mark.parametrize(
-    "seed, objective", [(0, "last_service"), (1, "return"), (3, "last_service"), (7, "return")]
+    "seed, objective, chain",
+    [
+        (0, "last_service", False),
+        (1, "return", True),
+        (3, "last_service", True),
+        (7, "return", False),
+    ],
 )
-def test_lifting_never_exceeds_the_superset_optimum(seed, objective):
-    """Monotonicity: opt(Y) <= opt(X) for Y within X when X keeps Y's releases, and without
-    releases for every Y within X."""
+def test_lifting_never_exceeds_the_superset_optimum(seed, objective, chain):
+    """Monotonicity: opt(Y) <= opt(X) for Y within X when X's releases are no earlier on Y
+    (the lifting rule), and without releases for every Y within X."""
     problem = _instance(seed, 4, 1, 2, True, objective)
-    closure, early = _closure(problem), _earliest(problem)
-    preds: list[list[int]] = [[] for _ in range(problem.n)]
-    for r, j in closure:
-        preds[j].append(r)
-    released = _released_optima(problem, 1)
+    closure = _closure(problem)
+    released, releases = _released_optima(problem, 1, chain)
     free = {
         mask: float(label_search(sub_problem(problem, _members(mask), 1, closure), beam=0)["value"])
         for mask in range(1, 16)
@@ -109,10 +119,35 @@ def test_lifting_never_exceeds_the_superset_optimum(seed, objective):
             if inner == outer or inner & ~outer:
                 continue
             assert free[inner] <= free[outer] + 1e-9, (inner, outer)
-            if _keeps_releases(preds, early, inner, outer):
+            if _dominates(releases[outer], releases[inner], inner):
                 kept += 1
                 assert released[inner] <= released[outer] + 1e-9, (inner, outer)
     assert kept > 0
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+def test_chain_releases_bound_the_split_optimum(seed):
+    """Two trucks: the parts priced with the chain releases never exceed the optimum
+    restricted to their split (brute force), for every split, and are never below the
+    releases without the chain."""
+    from taopt.fleet.brute import brute_force as brute
+
+    problem = _instance(seed, 3, 1, 1, True, "last_service")
+    closure, early = _closure(problem), _earliest(problem)
+    table = _chain_tables(problem, closure, {1}, Deadline(None))[1]
+    for mask in range(1, 8):
+        owner = [0 if mask >> j & 1 else 1 for j in range(3)]
+        restricted = brute(problem, truck_of=owner)[0]
+        for part in (mask, 7 ^ mask):
+            if not part:
+                continue
+            members = _members(part)
+            weak = _releases(closure, early, part, members)
+            strong = _releases(closure, early, part, members, table)
+            assert all(a <= b + 1e-12 for a, b in zip(weak, strong, strict=True))
+            sub = sub_problem(problem, members, 1, closure)
+            value = label_search(sub, release=strong, beam=0)["value"]
+            assert value <= restricted + 1e-9, (mask, part)
 
 
 @pytest.mark.parametrize("seed, D, c, precedence, objective", CASES[:6])
@@ -129,7 +164,7 @@ def test_split_search_with_lifting_equals_brute_force(seed, D, c, precedence, ob
 
 def test_time_limited_split_with_lifting_keeps_its_bound_below_the_optimum():
     """A tiny time limit: time_limit or optimal, bound never above the brute-force optimum."""
-    problem = _instance(3, 3, 2, 2, True, "last_service")
+    problem = _instance(3, 3, 1, 2, True, "last_service")
     value = brute_force(problem)[0]
     found = split_search(problem, time_limit=0.01)
     assert found["bound"] <= value + 1e-9
