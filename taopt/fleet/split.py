@@ -80,9 +80,20 @@ scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck precedenc
 vehicle wait, or deadlock). If its value equals the split's bound, the split is solved;
 otherwise the coupled problem restricted to the split is solved by the label search with
 ``truck_of`` (each customer only on its truck), the split's bound as a floor and the best
-value as a cutoff. The run stops when the best plan is no worse than the least bound of the
+value as a cutoff, in doubling time slices like the parts' (the split goes back to the heap
+with the bound each slice proves: at 600 s one such search took 380 s of fleet10 seed 0's
+run). The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
+The part solves run without the label search's beam pass (they are cut off at the best
+plan; the beam took 40-65 % of a 5-customer part's time). With two trucks, a part that
+becomes exact is paired at once with its complement when that one is exact too, and the
+combined plan scored (an incumbent before the split reaches the top of the heap).
+
+The result's ``trace`` records, with seconds since the start, each rise of the least bound
+(``"least"``), each better plan (``"best"``, ``"paired"``), each exact part solve
+(``"part"``: customers, seconds, how it stopped, the bound before, the bound proved, the
+split's key) and each coupled search (``"coupled"``).
 """
 
 from __future__ import annotations
