@@ -125,14 +125,16 @@ def test_lifting_never_exceeds_the_superset_optimum(seed, objective, chain):
     assert kept > 0
 
 
-@pytest.mark.parametrize("seed", [0, 3, 7])
-def test_chain_releases_bound_the_split_optimum(seed):
+@pytest.mark.parametrize(
+    "seed, c, objective", [(0, 1, "last_service"), (3, 2, "return"), (7, 2, "last_service")]
+)
+def test_chain_releases_bound_the_split_optimum(seed, c, objective):
     """Two trucks: the parts priced with the chain releases never exceed the optimum
     restricted to their split (brute force), for every split, and are never below the
     releases without the chain."""
     from taopt.fleet.brute import brute_force as brute
 
-    problem = _instance(seed, 3, 1, 1, True, "last_service")
+    problem = _instance(seed, 3, 1, c, True, objective)
     closure, early = _closure(problem), _earliest(problem)
     table = _chain_tables(problem, closure, {1}, Deadline(None))[1]
     for mask in range(1, 8):
