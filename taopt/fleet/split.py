@@ -123,6 +123,10 @@ SLICE = 0.1
 #: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
 DRONE_SPLIT_SHARE = 0.25
 
+#: Most seconds of one exact chain solve (:func:`split_search`'s ``exact_chain``: the other
+#: truck's last service over a cross predecessor and its ancestors there).
+CHAIN_SECONDS = 1.0
+
 #: Relative tolerance of the stop rule (best <= bound (1 + CERTIFY)), as the fleet's exact
 #: method uses for its root bound.
 CERTIFY = 1e-6
@@ -533,6 +537,33 @@ def split_search(
             )
             chain = {d: tables[d] for d in counts}
     released_at: dict[tuple[int, int], dict[int, float]] = {}
+    ancestors: dict[int, int] = {}
+    for r, j in closure:
+        ancestors[j] = ancestors.get(j, 0) | 1 << r
+    chained: set[tuple[int, int]] = set()
+    last_service = problem.replace(objective="last_service")
+
+    def exact_chain(A: int, d: int, table: np.ndarray) -> None:
+        """Raise ``table[A]`` (a chain bound, :func:`_releases`) to the last-service optimum
+        of one truck with ``d`` drones serving exactly A (the label search, release-free, at
+        most :data:`CHAIN_SECONDS`; its proven bound when stopped): still a lower bound on
+        that last service, so the chain's argument holds. Sets of two or more customers,
+        once each."""
+        if A & (A - 1) == 0 or (A, d) in chained or deadline.expired():
+            return
+        chained.add((A, d))
+        left = deadline.remaining()
+        sub = sub_problem(last_service, _members(A), d, closure)
+        found = label_search(
+            sub,
+            time_limit=CHAIN_SECONDS if left is None else min(left, CHAIN_SECONDS),
+            floor=float(table[A]),
+            beam=0,
+        )
+        if found["stopped_by"] == "optimal":
+            table[A] = max(float(table[A]), float(found["value"]))
+        elif found["stopped_by"] == "time_limit":
+            table[A] = max(float(table[A]), float(found["bound"]))
 
     def release_of(mask: int, d: int) -> dict[int, float]:
         """The part's releases (:func:`_releases`, with the other truck's chain bound when
@@ -542,6 +573,10 @@ def split_search(
             members = _members(mask)
             other = problem.drones[1] if problem.drones[0] == d else problem.drones[0]
             table = chain[other] if problem.K == 2 else None
+            if table is not None:
+                for r, j in closure:
+                    if mask >> j & 1 and not mask >> r & 1:
+                        exact_chain((ancestors.get(r, 0) & ~mask & full) | 1 << r, other, table)
             values = _releases(closure, early, mask, members, table)
             got = released_at[(mask, d)] = dict(zip(members, values, strict=True))
         return got

@@ -171,3 +171,15 @@ def test_time_limited_split_with_lifting_keeps_its_bound_below_the_optimum():
     found = split_search(problem, time_limit=0.01)
     assert found["bound"] <= value + 1e-9
     assert found["stopped_by"] in ("time_limit", "optimal")
+
+
+@pytest.mark.parametrize("objective", ["last_service", "return"])
+def test_split_search_with_exact_chains_equals_brute_force(objective):
+    """A chain 0 -> 1 -> 2 over two trucks (a cross predecessor with an ancestor on its own
+    truck: the exact chain solve runs): the split search equals the brute force."""
+    problem = _instance(1, 3, 1, 1, True, objective).replace(precedences=[(0, 1), (1, 2)])
+    value, plan, _ = brute_force(problem)
+    assert plan is not None
+    found = split_search(problem)
+    assert found["stopped_by"] == "optimal"
+    assert found["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
