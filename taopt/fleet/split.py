@@ -71,6 +71,19 @@ customers split over its drones, each drone with its own copy of the truck, pric
 one-drone table :func:`taopt.fleet.cover.one_drone_table` (on fleet10, K2D2c2, it raises the
 least split bound before any part is refined from about 140 to 199-247).
 
+*Topological releases* (a split whose combined plan waits, before its coupled search): in
+a topological order of G^p, ``L_j`` is the larger of ``early[j]``, ``L_r`` for every closure
+predecessor r on another truck, and the last-service optimum (label search, at most
+:data:`CHAIN_SECONDS`, its proven bound when stopped) of j's own truck with its drones serving
+exactly j and its closure predecessors on that truck under the releases L. Every plan of the
+split has ``t_j >= L_j``, by induction: ``t_j >= t_r >= L_r``; and j's truck's plan with its
+other customers dropped is a plan of that sub-problem meeting the releases L on its members
+(its earliest schedule is no later than the plan's own times, which meet them), in which
+every member is served by t_j. Each part is then solved again with releases L (L is at least
+:func:`_releases`, so the part's cached bound is a valid floor); the larger of the split's key
+and the parts' values bounds every plan of the split, and the split goes back to the heap
+with it (once per split).
+
 *Search.* The splits are kept in a heap by their current bound (the maximum of their parts'
 current bounds); identical trucks (same drone count) make splits that differ by a
 permutation of those trucks the same, so each is listed once. The least split is refined:
@@ -488,6 +501,46 @@ def _dominates(outer: dict[int, float], inner: dict[int, float], mask: int) -> b
     return all(outer.get(j, 0.0) >= inner.get(j, 0.0) - 1e-12 for j in _members(mask))
 
 
+def _split_releases(
+    problem: FleetProblem,
+    owner: list[int],
+    closure: list[tuple[int, int]],
+    early: np.ndarray,
+    deadline: Deadline,
+) -> list[float]:
+    """The *topological releases* ``L_j`` of the split ``owner`` (customer -> truck; module
+    docstring: every plan of that split has ``t_j >= L_j``)."""
+    import networkx as nx
+
+    from taopt.fleet.search import label_search
+
+    last_service = problem.replace(objective="last_service")
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in closure:
+        preds[j].append(r)
+    L = [float(x) for x in early]
+    for j in nx.topological_sort(problem.precedence_graph):
+        k = owner[j]
+        for r in preds[j]:
+            if owner[r] != k:
+                L[j] = max(L[j], L[r])
+        own = sorted({r for r in preds[j] if owner[r] == k} | {j})
+        if len(own) >= 2 and not deadline.expired():
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(last_service, own, problem.drones[k], closure),
+                time_limit=CHAIN_SECONDS if left is None else min(left, CHAIN_SECONDS),
+                floor=L[j],
+                release=[L[a] for a in own],
+                beam=0,
+            )
+            if found["stopped_by"] == "optimal" and found["plan"] is not None:
+                L[j] = max(L[j], float(found["value"]))
+            elif found["stopped_by"] == "time_limit":
+                L[j] = max(L[j], float(found["bound"]))
+    return L
+
+
 def split_search(
     problem: FleetProblem,
     time_limit: float | None = None,
@@ -507,6 +560,7 @@ def split_search(
     ``parts`` (exact part solves) and ``part_seconds`` (the slowest part solves, as
     ``(customers, drones, seconds)``).
     """
+
     from taopt.fleet.bounds import fleet_lower
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
@@ -649,6 +703,40 @@ def split_search(
     heapq.heapify(heap)
     popped: set[int] = set()
     coupled_tries: dict[int, int] = {}
+    tightened: set[int] = set()
+
+    def solved_value(found: dict[str, Any], cap: float) -> float:
+        """What a label search run proves: its optimum (below ``cap``), ``cap`` when it
+        found none below it, or its bound when stopped."""
+        if found["stopped_by"] == "optimal":
+            if found["plan"] is not None and found["value"] < cap:
+                return float(found["value"])
+            return cap
+        if found["stopped_by"] == "infeasible":
+            return INF
+        return float(found["bound"])
+
+    def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
+        """The split's *topological releases* (module docstring) and its parts re-solved
+        with them: a bound on every plan of the split, at least ``key``."""
+        L = _split_releases(problem, owner, closure, early, deadline)
+        bound = key
+        for k, m in enumerate(split):
+            if not m or deadline.expired():
+                continue
+            members = _members(m)
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(problem, members, problem.drones[k], closure),
+                time_limit=None if left is None else min(left, max(1.0, SLICE * left)),
+                floor=part(m, problem.drones[k]).bound,  # proven with releases no later
+                cutoff=best,
+                release=[L[j] for j in members],
+                beam=0,
+            )
+            bound = max(bound, solved_value(found, best))
+        return bound
+
     solved = coupled = solves = 0
     timings: list[tuple[int, int, float]] = []
     trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
@@ -763,6 +851,13 @@ def split_search(
         for k, m in enumerate(split):
             for j in _members(m):
                 owner[j] = k
+        if i not in tightened:
+            tightened.add(i)
+            raised = tighten(split, owner, key)
+            trace.append(("tight", round(time.perf_counter() - deadline_start, 3), key, raised))
+            if raised > key * (1 + CERTIFY):
+                heapq.heappush(heap, (raised, i))
+                continue
         coupled += 1
         left = deadline.remaining()
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'

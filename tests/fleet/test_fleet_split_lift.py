@@ -183,3 +183,27 @@ def test_split_search_with_exact_chains_equals_brute_force(objective):
     found = split_search(problem)
     assert found["stopped_by"] == "optimal"
     assert found["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    "seed, c, objective", [(1, 1, "last_service"), (3, 2, "return"), (5, 2, "last_service")]
+)
+def test_topological_releases_bound_the_split_optimum(seed, c, objective):
+    """The split's topological releases L: each part re-solved with them stays at or below
+    the brute-force optimum restricted to that split (K = 2, D = 1, every split)."""
+    from taopt.fleet.split import _split_releases
+
+    problem = _instance(seed, 3, 1, c, True, objective).replace(precedences=[(0, 1), (1, 2)])
+    closure, early = _closure(problem), _earliest(problem)
+    for mask in range(1, 8):
+        owner = [0 if mask >> j & 1 else 1 for j in range(3)]
+        restricted = brute_force(problem, truck_of=owner)[0]
+        L = _split_releases(problem, owner, closure, early, Deadline(None))
+        assert all(a >= b - 1e-12 for a, b in zip(L, early, strict=True))
+        for part in (mask, 7 ^ mask):
+            if not part:
+                continue
+            members = _members(part)
+            sub = sub_problem(problem, members, 1, closure)
+            value = label_search(sub, release=[L[j] for j in members], beam=0)["value"]
+            assert value <= restricted + 1e-9, (mask, part)
