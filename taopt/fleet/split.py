@@ -911,6 +911,8 @@ def split_search(
 
 __all__ = [
     "CERTIFY",
+    "CHAIN_SECONDS",
+    "DRONE_SPLIT_SHARE",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
     "SLICE",
