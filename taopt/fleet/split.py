@@ -725,13 +725,16 @@ def split_search(
             if not m or deadline.expired():
                 continue
             members = _members(m)
+            # the part's own releases hold in every plan of the split too: the larger is kept,
+            # so its cached bound (proven with those) is a valid floor
+            cached = release_of(m, problem.drones[k])
             left = deadline.remaining()
             found = label_search(
                 sub_problem(problem, members, problem.drones[k], closure),
                 time_limit=None if left is None else min(left, max(1.0, SLICE * left)),
-                floor=part(m, problem.drones[k]).bound,  # proven with releases no later
+                floor=part(m, problem.drones[k]).bound,
                 cutoff=best,
-                release=[L[j] for j in members],
+                release=[max(L[j], cached[j]) for j in members],
                 beam=0,
             )
             bound = max(bound, solved_value(found, best))
