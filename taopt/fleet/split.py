@@ -704,6 +704,9 @@ def split_search(
     popped: set[int] = set()
     coupled_tries: dict[int, int] = {}
     tightened: set[int] = set()
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in closure:
+        preds[j].append(r)
 
     def solved_value(found: dict[str, Any], cap: float) -> float:
         """What a label search run proves: its optimum (below ``cap``), ``cap`` when it
@@ -715,6 +718,60 @@ def split_search(
         if found["stopped_by"] == "infeasible":
             return INF
         return float(found["bound"])
+
+    def repair(
+        split: tuple[int, ...], plan: FleetPlan, value: float
+    ) -> tuple[FleetPlan, float] | None:
+        """Two trucks, a combined plan that waits: each part in turn re-solved (cut off at the
+        best plan) with the other part's service times in that plan as releases, and combined
+        with the other part's plan; the better plan (scored by
+        :func:`~taopt.fleet.evaluate.evaluate_fleet`, a primal step: it proves nothing)."""
+        from taopt.fleet.evaluate import schedule
+
+        if problem.K != 2 or not math.isfinite(value):
+            return None
+        times = schedule(problem, plan).service
+        found_best: tuple[FleetPlan, float] | None = None
+        for k in range(2):
+            m, d = split[k], problem.drones[k]
+            if not m or deadline.expired():
+                continue
+            members = _members(m)
+            cached = release_of(m, d)
+            waits = [
+                max([cached[j]] + [float(times[r]) for r in preds[j] if not m >> r & 1])
+                for j in members
+            ]
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(problem, members, d, closure),
+                time_limit=None if left is None else min(left, max(1.0, SLICE * left)),
+                floor=part(m, d).bound,
+                cutoff=min(best, value),
+                release=waits,
+                beam=0,
+            )
+            if found["stopped_by"] != "optimal" or found["plan"] is None:
+                continue
+            sub_plan = found["plan"]
+            route, truck_served, sorties = _lift(sub_plan, members)
+            other = split[1 - k]
+            other_plan = part(other, problem.drones[1 - k]).plan
+            assert other_plan is not None
+            o_route, o_served, o_sorties = _lift(other_plan, _members(other))
+            pieces = [(route, truck_served, sorties), (o_route, o_served, o_sorties)]
+            if k == 1:
+                pieces.reverse()
+            candidate = FleetPlan(
+                [p[0] for p in pieces], [p[1] for p in pieces], [p[2] for p in pieces]
+            )
+            try:
+                score = evaluate_fleet(problem, candidate)
+            except FeasibilityError:
+                continue
+            if found_best is None or score < found_best[1]:
+                found_best = (candidate, score)
+        return found_best
 
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
@@ -856,6 +913,13 @@ def split_search(
                 owner[j] = k
         if i not in tightened:
             tightened.add(i)
+            repaired = repair(split, plan, value)
+            if repaired is not None and repaired[1] < best:
+                best, best_plan = repaired[1], repaired[0]
+                trace.append(("repaired", round(time.perf_counter() - deadline_start, 3), best))
+                if best <= key * (1 + CERTIFY):
+                    solved += 1
+                    continue
             raised = tighten(split, owner, key)
             trace.append(("tight", round(time.perf_counter() - deadline_start, 3), key, raised))
             if raised > key * (1 + CERTIFY):
