@@ -23,7 +23,8 @@ its drones (``"return"``). The plan's objective is the maximum over the trucks, 
 ``f(plan) >= max_k opt_k(X_k)`` for every plan of split X,
 
 and the least such bound over the splits left is a bound on the optimum. Any valid lower
-bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapest first:
+bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapest first (each
+lifted to the supersets, *Monotonicity* below):
 
 0. ``max_{j in X} e_j`` (:func:`taopt.fleet.bounds.earliest_service`, the fastest any of truck
    k's vehicles can serve j; a truck without drones only by itself) and the drone work
@@ -47,6 +48,48 @@ bound ``lb_k(X_k) <= opt_k(X_k)`` may replace ``opt_k``; three are used, cheapes
    bound, certified in seconds (without releases: 121.16 [120] after 600 s). The releases
    depend on X_k alone, so the cache key is unchanged.
 
+*Monotonicity.* For one truck with its drones (a part, with or without releases), dropping a
+customer never raises the optimum: take an optimal plan of the part and remove customer j.
+If the truck served j, the truck keeps its walk and skips that service; if a drone served j,
+its sortie flies straight from j's predecessor in the sortie (or the launch stop) to j's
+successor (or the recovery stop), no longer than through j (Euclidean flights: the triangle
+inequality), so it stays within the range, and a sortie left empty is dropped. Every event
+time of the earliest schedule is a maximum of sums of nonnegative terms over the events
+before it (travel, flight, τ, the releases, the precedence pairs); the edit removes terms or
+shortens them, and the pairs and releases left are those of the smaller part, so no event is
+later, and neither is the last service or the return. Hence, for parts Y ⊆ X with the same
+drones and releases ``r_X(j) >= r_Y(j)`` on Y (:func:`_releases`: the latest earliest service of
+j's closure predecessors outside the part, which holds when no predecessor in X \\ Y is later
+than those outside X), ``opt(Y) <= opt(X)``: a lower bound proven for Y is one for X. Bounds of
+the part without releases (the set bounds, :func:`taopt.fleet.bounds.fleet_lower`, the
+sortie-walk bound) lift to every superset; the label search's bounds (with releases) to the
+supersets that keep Y's releases. :func:`_subset_max` closes the set bounds this way, and each
+refinement is lifted into the cache at once.
+
+*Drone split bound.* Level 0 also holds :func:`_drone_split_bounds`: the part's drone-only
+customers split over its drones, each drone with its own copy of the truck, priced by the
+one-drone table :func:`taopt.fleet.cover.one_drone_table` (on fleet10, K2D2c2, it raises the
+least split bound before any part is refined from about 140 to 199-247).
+
+*Repair* (two trucks, a split whose combined plan waits, first): each part in turn is solved
+again with the other part's service times in that plan as releases (and its own), cut off at
+the best value, and combined with the other part's plan; a plan, not a bound. On fleet10
+seed 0 the combined plan was 232.34 against the split's bound 232.16; the repaired plan is
+232.16, which certified the run at 240 s (no other plan or bound had closed it in 600 s).
+
+*Topological releases* (a split whose combined plan waits, before its coupled search): in
+a topological order of G^p, ``L_j`` is the larger of ``early[j]``, ``L_r`` for every closure
+predecessor r on another truck, and the last-service optimum (label search, at most
+:data:`CHAIN_SECONDS`, its proven bound when stopped) of j's own truck with its drones serving
+exactly j and its closure predecessors on that truck under the releases L. Every plan of the
+split has ``t_j >= L_j``, by induction: ``t_j >= t_r >= L_r``; and j's truck's plan with its
+other customers dropped is a plan of that sub-problem meeting the releases L on its members
+(its earliest schedule is no later than the plan's own times, which meet them), in which
+every member is served by t_j. Each part is then solved again with releases L (L is at least
+:func:`_releases`, so the part's cached bound is a valid floor); the larger of the split's key
+and the parts' values bounds every plan of the split, and the split goes back to the heap
+with it (once per split).
+
 *Search.* The splits are kept in a heap by their current bound (the maximum of their parts'
 current bounds); identical trucks (same drone count) make splits that differ by a
 permutation of those trucks the same, so each is listed once. The least split is refined:
@@ -56,9 +99,20 @@ scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck precedenc
 vehicle wait, or deadlock). If its value equals the split's bound, the split is solved;
 otherwise the coupled problem restricted to the split is solved by the label search with
 ``truck_of`` (each customer only on its truck), the split's bound as a floor and the best
-value as a cutoff. The run stops when the best plan is no worse than the least bound of the
+value as a cutoff, in doubling time slices like the parts' (the split goes back to the heap
+with the bound each slice proves: at 600 s one such search took 380 s of fleet10 seed 0's
+run). The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
+The part solves run without the label search's beam pass (they are cut off at the best
+plan; the beam took 40-65 % of a 5-customer part's time). With two trucks, a part that
+becomes exact is paired at once with its complement when that one is exact too, and the
+combined plan scored (an incumbent before the split reaches the top of the heap).
+
+The result's ``trace`` records, with seconds since the start, each rise of the least bound
+(``"least"``), each better plan (``"best"``, ``"paired"``), each exact part solve
+(``"part"``: customers, seconds, how it stopped, the bound before, the bound proved, the
+split's key) and each coupled search (``"coupled"``).
 """
 
 from __future__ import annotations
@@ -84,6 +138,13 @@ SPLIT_MAX_SPLITS = 400_000
 
 #: Share of the time left that a part's first exact solve may take (doubled at each retry).
 SLICE = 0.1
+
+#: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
+DRONE_SPLIT_SHARE = 0.25
+
+#: Most seconds of one exact chain solve (:func:`split_search`'s ``exact_chain``: the other
+#: truck's last service over a cross predecessor and its ancestors there).
+CHAIN_SECONDS = 1.0
 
 #: Relative tolerance of the stop rule (best <= bound (1 + CERTIFY)), as the fleet's exact
 #: method uses for its root bound.
@@ -197,6 +258,108 @@ def _set_bounds(problem: FleetProblem, drones: int) -> np.ndarray:
     return np.maximum(reach, work / drones)
 
 
+def _subset_max(values: np.ndarray) -> np.ndarray:
+    """``out[X] = max_{Y ⊆ X} values[Y]`` (a superset-closed copy), by one pass per bit.
+
+    A bound of a part lifts to every superset part by monotonicity (module docstring,
+    *Monotonicity*): this makes any per-set bound table monotone, so a set never gets less
+    than what one of its subsets already proves."""
+    out = np.array(values, dtype=float, copy=True)
+    size = out.shape[0]
+    bit = 1
+    while bit < size:
+        view = out.reshape(-1, 2 * bit)
+        np.maximum(view[:, bit:], view[:, :bit], out=view[:, bit:])
+        bit <<= 1
+    return out
+
+
+def _submasks(X: int) -> np.ndarray:
+    """Every subset of the set ``X`` (bit mask), as an array."""
+    subs = np.zeros(1, dtype=np.int64)
+    rest = X
+    while rest:
+        low = rest & -rest
+        subs = np.concatenate((subs, subs | low))
+        rest ^= low
+    return subs
+
+
+def _drone_split_bounds(
+    problem: FleetProblem,
+    closure: list[tuple[int, int]],
+    drone_counts: set[int],
+    deadline: Deadline,
+) -> dict[int, np.ndarray]:
+    """For every customer set X (bit mask) and drone count D in ``drone_counts``, a lower
+    bound on the optimum of one truck with D drones serving exactly X (the part of
+    :func:`sub_problem`, with or without releases): the drones' sets split over their own
+    copies of the truck,
+
+    ``B_1[X] = V[depot, X ∩ O]``, ``B_D[X] = min_{A ⊆ X} max(B_1[A], B_{D-1}[X \\ A])``,
+
+    ``V`` the one-drone table :func:`taopt.fleet.cover.one_drone_table` of ``problem`` with the
+    precedence closure as its pairs, O the drone-only customers.
+
+    *Proof.* Let P be a plan of the part. Dropping its customers outside O never raises its
+    objective (module docstring, *Monotonicity*), so ``f(P) >= opt(X ∩ O)``, and it is enough
+    to bound a plan P' serving exactly X ∩ O, all by drones. Let A_1, ..., A_D be the sets
+    its D drones serve (a partition of X ∩ O). For each drone d, give it its own copy of the
+    truck (same stops in the same order, waiting only for drone d): no service and no return
+    of drone d is later (the one-drone relaxation's argument,
+    :func:`taopt.fleet.cover.one_drone_table`), and the copy is a one-truck, one-drone plan of
+    A_d that respects every closure pair inside A_d (a closure pair holds in every plan of the
+    part, :func:`sub_problem`; one drone serves its customers in time order), so drone d's
+    last service (or its copy's return under ``"return"``) is at least ``V[depot, A_d]``.
+    The part's objective is at least the maximum over its drones, hence at least
+    ``max_d V[depot, A_d] >= B_D[X]`` (the recursion takes the least such maximum over every
+    split of X into D sets, empty ones included, ``V[depot, ∅] = 0``). Releases only delay
+    the part, so the bound holds with them.
+
+    Zeros (no bound) when the table exceeds its work cap or the deadline passes, or n > 14
+    (the min-max convolution is ``3^n`` steps)."""
+    from taopt.fleet.cover import one_drone_table
+
+    n = problem.n
+    size = 1 << n
+    zero = {d: np.zeros(size) for d in drone_counts}
+    if n > 14 or max(drone_counts, default=0) == 0:
+        return zero
+    table = one_drone_table(problem.replace(precedences=closure), deadline)
+    if table is None:
+        return zero
+    only = sum(
+        1 << j for j in range(n) if problem.drone_servable(j) and not problem.truck_servable(j)
+    )
+    one = np.asarray(table[problem.depot], dtype=float)[np.arange(size) & only]
+    out = {1: one}
+    for D in range(2, max(drone_counts) + 1):
+        prev = out[D - 1]
+        cur = np.empty(size)
+        for X in range(size):
+            if X & 255 == 0 and deadline.expired():
+                return zero
+            A = _submasks(X)
+            cur[X] = np.min(np.maximum(one[A], prev[X ^ A]))
+        out[D] = cur
+    return {d: (out[d] if d > 0 else np.zeros(size)) for d in drone_counts}
+
+
+def _chain_tables(
+    problem: FleetProblem,
+    closure: list[tuple[int, int]],
+    drone_counts: set[int],
+    deadline: Deadline,
+) -> dict[int, np.ndarray]:
+    """Per drone count D and customer set A, a release-free lower bound on the *last service*
+    of one truck with D drones serving exactly A: :func:`_set_bounds` and
+    :func:`_drone_split_bounds` of the problem under ``"last_service"``, closed over subsets
+    (:func:`_subset_max`); the ``chain`` of :func:`_releases`."""
+    ls = problem.replace(objective="last_service")
+    split = _drone_split_bounds(ls, closure, drone_counts, deadline)
+    return {d: _subset_max(np.maximum(_set_bounds(ls, d), split[d])) for d in drone_counts}
+
+
 def _splits(problem: FleetProblem) -> list[tuple[int, ...]]:
     """Every split (one mask per truck), identical trucks' permutations once."""
     n, K = problem.n, problem.K
@@ -298,7 +461,11 @@ def _earliest(problem: FleetProblem) -> np.ndarray:
 
 
 def _releases(
-    closure: list[tuple[int, int]], early: np.ndarray, mask: int, members: list[int]
+    closure: list[tuple[int, int]],
+    early: np.ndarray,
+    mask: int,
+    members: list[int],
+    chain: np.ndarray | None = None,
 ) -> list[float]:
     """Per member of a part (in the part's numbering), the latest :func:`_earliest` of its
     predecessors served by other trucks (0 without one).
@@ -306,13 +473,78 @@ def _releases(
     Valid for the split's bound: in every plan, a closure pair (r, j) with r outside the part
     gives t_j >= t_r >= early[r], so truck k's part of any plan of the split is a plan of its
     sub-problem that also meets these releases, and its objective there is at least the
-    optimum with them (the earliest schedule only moves later when a release is added)."""
+    optimum with them (the earliest schedule only moves later when a release is added).
+
+    ``chain`` (two trucks): per customer set A, a lower bound on the *last service* of one
+    truck with the other truck's drones serving exactly A (release-free: :func:`_set_bounds`
+    and :func:`_drone_split_bounds` under ``"last_service"``). With two trucks the other
+    truck serves exactly the complement O of the part, so for a closure pair (r, j) with r in
+    O, ``t_r >= chain[A_r]``, ``A_r = {r} ∪ (r's closure predecessors in O)``: the other
+    truck's plan with every customer outside A_r dropped serves A_r no later (*Monotonicity*,
+    module docstring) and keeps the pairs inside A_r, and in it every member of A_r is
+    served by t_r (they precede r), so its last service, at least ``chain[A_r]``, is at most
+    t_r. The release of j is then the larger of ``early[r]`` and that."""
     where = {j: i for i, j in enumerate(members)}
     out = [0.0] * len(members)
+    ancestors: dict[int, int] = {}
+    if chain is not None:
+        for r, j in closure:
+            ancestors[j] = ancestors.get(j, 0) | 1 << r
+    other = ~mask & ((1 << len(early)) - 1)
     for r, j in closure:
         if j in where and not mask >> r & 1:
-            out[where[j]] = max(out[where[j]], float(early[r]))
+            value = float(early[r])
+            if chain is not None:
+                value = max(value, float(chain[(ancestors.get(r, 0) & other) | 1 << r]))
+            out[where[j]] = max(out[where[j]], value)
     return out
+
+
+def _dominates(outer: dict[int, float], inner: dict[int, float], mask: int) -> bool:
+    """Whether the releases ``outer`` (customer -> release, of a superset part) are no earlier
+    than ``inner`` (of the part ``mask``) on every member of ``mask``: the condition of
+    *Monotonicity* (module docstring) for lifting a bound proven with releases."""
+    return all(outer.get(j, 0.0) >= inner.get(j, 0.0) - 1e-12 for j in _members(mask))
+
+
+def _split_releases(
+    problem: FleetProblem,
+    owner: list[int],
+    closure: list[tuple[int, int]],
+    early: np.ndarray,
+    deadline: Deadline,
+) -> list[float]:
+    """The *topological releases* ``L_j`` of the split ``owner`` (customer -> truck; module
+    docstring: every plan of that split has ``t_j >= L_j``)."""
+    import networkx as nx
+
+    from taopt.fleet.search import label_search
+
+    last_service = problem.replace(objective="last_service")
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in closure:
+        preds[j].append(r)
+    L = [float(x) for x in early]
+    for j in nx.topological_sort(problem.precedence_graph):
+        k = owner[j]
+        for r in preds[j]:
+            if owner[r] != k:
+                L[j] = max(L[j], L[r])
+        own = sorted({r for r in preds[j] if owner[r] == k} | {j})
+        if len(own) >= 2 and not deadline.expired():
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(last_service, own, problem.drones[k], closure),
+                time_limit=CHAIN_SECONDS if left is None else min(left, CHAIN_SECONDS),
+                floor=L[j],
+                release=[L[a] for a in own],
+                beam=0,
+            )
+            if found["stopped_by"] == "optimal" and found["plan"] is not None:
+                L[j] = max(L[j], float(found["value"]))
+            elif found["stopped_by"] == "time_limit":
+                L[j] = max(L[j], float(found["bound"]))
+    return L
 
 
 def split_search(
@@ -334,17 +566,101 @@ def split_search(
     ``parts`` (exact part solves) and ``part_seconds`` (the slowest part solves, as
     ``(customers, drones, seconds)``).
     """
+
     from taopt.fleet.bounds import fleet_lower
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
 
     deadline = Deadline(time_limit)
+    deadline_start = time.perf_counter()
     closure = _closure(problem)
     early = _earliest(problem)
     best, best_plan = best_of(problem, (incumbent, _simple_plan(problem)))
-    level0 = {d: _set_bounds(problem, d) for d in set(problem.drones)}
+    counts = set(problem.drones)
+    left = deadline.remaining()
+    split_bounds = _drone_split_bounds(
+        problem, closure, counts, Deadline(None if left is None else DRONE_SPLIT_SHARE * left)
+    )
+    level0 = {d: _subset_max(np.maximum(_set_bounds(problem, d), split_bounds[d])) for d in counts}
+    full = (1 << problem.n) - 1
+    chain: dict[int, np.ndarray | None] = {d: None for d in counts}
+    if problem.K == 2:  # the other truck's last-service bounds (:func:`_releases`)
+        if problem.objective == "last_service":
+            chain = {d: level0[d].copy() for d in counts}
+        else:
+            left = deadline.remaining()
+            tables = _chain_tables(
+                problem,
+                closure,
+                counts,
+                Deadline(None if left is None else DRONE_SPLIT_SHARE * left),
+            )
+            chain = {d: tables[d] for d in counts}
+    released_at: dict[tuple[int, int], dict[int, float]] = {}
+    ancestors: dict[int, int] = {}
+    for r, j in closure:
+        ancestors[j] = ancestors.get(j, 0) | 1 << r
+    chained: set[tuple[int, int]] = set()
+    last_service = problem.replace(objective="last_service")
+
+    def exact_chain(A: int, d: int, table: np.ndarray) -> None:
+        """Raise ``table[A]`` (a chain bound, :func:`_releases`) to the last-service optimum
+        of one truck with ``d`` drones serving exactly A (the label search, release-free, at
+        most :data:`CHAIN_SECONDS`; its proven bound when stopped): still a lower bound on
+        that last service, so the chain's argument holds. Sets of two or more customers,
+        once each."""
+        if A & (A - 1) == 0 or (A, d) in chained or deadline.expired():
+            return
+        chained.add((A, d))
+        left = deadline.remaining()
+        sub = sub_problem(last_service, _members(A), d, closure)
+        found = label_search(
+            sub,
+            time_limit=CHAIN_SECONDS if left is None else min(left, CHAIN_SECONDS),
+            floor=float(table[A]),
+            beam=0,
+        )
+        if found["stopped_by"] == "optimal":
+            table[A] = max(float(table[A]), float(found["value"]))
+        elif found["stopped_by"] == "time_limit":
+            table[A] = max(float(table[A]), float(found["bound"]))
+
+    def release_of(mask: int, d: int) -> dict[int, float]:
+        """The part's releases (:func:`_releases`, with the other truck's chain bound when
+        K = 2), per customer; cached."""
+        got = released_at.get((mask, d))
+        if got is None:
+            members = _members(mask)
+            other = problem.drones[1] if problem.drones[0] == d else problem.drones[0]
+            table = chain[other] if problem.K == 2 else None
+            if table is not None:
+                for r, j in closure:
+                    if mask >> j & 1 and not mask >> r & 1:
+                        exact_chain((ancestors.get(r, 0) & ~mask & full) | 1 << r, other, table)
+            values = _releases(closure, early, mask, members, table)
+            got = released_at[(mask, d)] = dict(zip(members, values, strict=True))
+        return got
+
     splits = _splits(problem)
     parts: dict[tuple[int, int], _Part] = {}
+    lifts = 0
+
+    def lift(mask: int, d: int, bound: float, released: bool) -> None:
+        """Monotonicity (module docstring): ``bound`` proven for the part ``mask`` (with its
+        releases when ``released``) bounds every superset part with the same drones (whose
+        releases are no earlier on ``mask``'s members, when ``released``)."""
+        nonlocal lifts
+        table = level0[d]
+        for outer in (full ^ _submasks(full ^ mask)).tolist():
+            if outer == mask or table[outer] >= bound:
+                continue
+            if released and not _dominates(release_of(outer, d), release_of(mask, d), mask):
+                continue
+            table[outer] = bound
+            got = parts.get((outer, d))
+            if got is not None and got.level < 3 and got.bound < bound:
+                got.bound = bound
+                lifts += 1
 
     def part(mask: int, d: int) -> _Part:
         got = parts.get((mask, d))
@@ -355,18 +671,147 @@ def split_search(
                 got.plan = FleetPlan([[problem.depot]], [[]], [[[] for _ in range(d)]])
         return got
 
+    def combine(split: tuple[int, ...]) -> tuple[FleetPlan, float]:
+        """The fleet plan of a split whose parts are all exact, and its value (inf when the
+        cross-truck precedences deadlock it)."""
+        routes, served, flights = [], [], []
+        for k, m in enumerate(split):
+            sub_plan = part(m, problem.drones[k]).plan
+            assert sub_plan is not None
+            route, truck_served, sorties = _lift(sub_plan, _members(m))
+            routes.append(route)
+            served.append(truck_served)
+            flights.append(sorties)
+        plan = FleetPlan(routes, served, flights)
+        try:
+            value = evaluate_fleet(problem, plan)
+        except FeasibilityError:
+            value = INF
+        return plan, value
+
+    def partner(mask: int, d: int) -> tuple[FleetPlan, float] | None:
+        """Two trucks: the part ``mask`` just became exact; when the other part of its split
+        is exact too, their combined plan (an incumbent found as soon as possible, not when
+        the split reaches the top of the heap)."""
+        if problem.K != 2:
+            return None
+        for k in range(2):
+            other = parts.get((full ^ mask, problem.drones[1 - k]))
+            if problem.drones[k] == d and other is not None and other.plan is not None:
+                split = (mask, full ^ mask) if k == 0 else (full ^ mask, mask)
+                return combine(split)
+        return None
+
     def key_of(split: tuple[int, ...]) -> float:
         return max(part(m, problem.drones[k]).bound for k, m in enumerate(split))
 
     heap = [(key_of(sp), i) for i, sp in enumerate(splits)]
     heapq.heapify(heap)
     popped: set[int] = set()
+    coupled_tries: dict[int, int] = {}
+    tightened: set[int] = set()
+    preds: list[list[int]] = [[] for _ in range(problem.n)]
+    for r, j in closure:
+        preds[j].append(r)
+
+    def solved_value(found: dict[str, Any], cap: float) -> float:
+        """What a label search run proves: its optimum (below ``cap``), ``cap`` when it
+        found none below it, or its bound when stopped."""
+        if found["stopped_by"] == "optimal":
+            if found["plan"] is not None and found["value"] < cap:
+                return float(found["value"])
+            return cap
+        if found["stopped_by"] == "infeasible":
+            return INF
+        return float(found["bound"])
+
+    def repair(
+        split: tuple[int, ...], plan: FleetPlan, value: float
+    ) -> tuple[FleetPlan, float] | None:
+        """Two trucks, a combined plan that waits: each part in turn re-solved (cut off at the
+        best plan) with the other part's service times in that plan as releases, and combined
+        with the other part's plan; the better plan (scored by
+        :func:`~taopt.fleet.evaluate.evaluate_fleet`, a primal step: it proves nothing)."""
+        from taopt.fleet.evaluate import schedule
+
+        if problem.K != 2 or not math.isfinite(value):
+            return None
+        times = schedule(problem, plan).service
+        found_best: tuple[FleetPlan, float] | None = None
+        for k in range(2):
+            m, d = split[k], problem.drones[k]
+            if not m or deadline.expired():
+                continue
+            members = _members(m)
+            cached = release_of(m, d)
+            waits = [
+                max([cached[j]] + [float(times[r]) for r in preds[j] if not m >> r & 1])
+                for j in members
+            ]
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(problem, members, d, closure),
+                time_limit=None if left is None else min(left, max(1.0, SLICE * left)),
+                floor=part(m, d).bound,
+                cutoff=min(best, value),
+                release=waits,
+                beam=0,
+            )
+            if found["stopped_by"] != "optimal" or found["plan"] is None:
+                continue
+            sub_plan = found["plan"]
+            route, truck_served, sorties = _lift(sub_plan, members)
+            other = split[1 - k]
+            other_plan = part(other, problem.drones[1 - k]).plan
+            assert other_plan is not None
+            o_route, o_served, o_sorties = _lift(other_plan, _members(other))
+            pieces = [(route, truck_served, sorties), (o_route, o_served, o_sorties)]
+            if k == 1:
+                pieces.reverse()
+            candidate = FleetPlan(
+                [p[0] for p in pieces], [p[1] for p in pieces], [p[2] for p in pieces]
+            )
+            try:
+                score = evaluate_fleet(problem, candidate)
+            except FeasibilityError:
+                continue
+            if found_best is None or score < found_best[1]:
+                found_best = (candidate, score)
+        return found_best
+
+    def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
+        """The split's *topological releases* (module docstring) and its parts re-solved
+        with them: a bound on every plan of the split, at least ``key``."""
+        L = _split_releases(problem, owner, closure, early, deadline)
+        bound = key
+        for k, m in enumerate(split):
+            if not m or deadline.expired():
+                continue
+            members = _members(m)
+            # the part's own releases hold in every plan of the split too: the larger is kept,
+            # so its cached bound (proven with those) is a valid floor
+            cached = release_of(m, problem.drones[k])
+            left = deadline.remaining()
+            found = label_search(
+                sub_problem(problem, members, problem.drones[k], closure),
+                time_limit=None if left is None else min(left, max(1.0, SLICE * left)),
+                floor=part(m, problem.drones[k]).bound,
+                cutoff=best,
+                release=[max(L[j], cached[j]) for j in members],
+                beam=0,
+            )
+            bound = max(bound, solved_value(found, best))
+        return bound
+
     solved = coupled = solves = 0
     timings: list[tuple[int, int, float]] = []
+    trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
     stopped_by = "optimal"
     least = INF
     while heap:
         key, i = heap[0]
+        if key > least or least == INF:
+            trace.append(("least", round(time.perf_counter() - deadline_start, 3), key))
         least = key
         if best <= max(key, floor) * (1 + CERTIFY):
             break
@@ -401,6 +846,7 @@ def split_search(
                     lower = max(lower, fleet_cover_bound(sub, lower, best, sub_deadline))
                 item.bound = max(item.bound, lower)
                 item.level = 1 if not deadline.expired() else 0
+                lift(mask, d, item.bound, released=False)
             else:
                 started = time.perf_counter()
                 left = deadline.remaining()
@@ -413,10 +859,24 @@ def split_search(
                     max_labels=max_labels,
                     floor=item.bound,
                     cutoff=best,
-                    release=_releases(closure, early, mask, members),
+                    release=list(release_of(mask, d).values()),
+                    beam=0,  # cut off at the best plan: a beam incumbent only costs (40-65 %)
                 )
                 solves += 1
-                timings.append((len(members), d, time.perf_counter() - started))
+                seconds = time.perf_counter() - started
+                timings.append((len(members), d, seconds))
+                trace.append(
+                    (
+                        "part",
+                        round(time.perf_counter() - deadline_start, 3),
+                        len(members),
+                        round(seconds, 3),
+                        found["stopped_by"],
+                        round(item.bound, 3),
+                        round(float(found["bound"]), 3),
+                        round(key, 3),
+                    )
+                )
                 item.bound = max(item.bound, float(found["bound"]))
                 if found["stopped_by"] == "infeasible":
                     item.bound, item.level = INF, 3
@@ -425,6 +885,12 @@ def split_search(
                         item.plan = found["plan"]
                         item.bound = float(found["value"])
                         item.level = 3
+                        paired = partner(mask, d)
+                        if paired is not None and paired[1] < best:
+                            best, best_plan = paired[1], paired[0]
+                            trace.append(
+                                ("paired", round(time.perf_counter() - deadline_start, 3), best)
+                            )
                     else:
                         item.bound = max(item.bound, best)  # cannot beat the best plan
                         item.level = 2
@@ -435,24 +901,14 @@ def split_search(
                     break
                 else:  # stopped by its slice or the clock: the bound it proved is kept
                     item.attempts += 1
+                lift(mask, d, item.bound, released=True)
             heapq.heappush(heap, (key_of(split), i))
             continue
         # every part exact: combine and score
-        routes, served, flights = [], [], []
-        for k, m in enumerate(split):
-            sub_plan = part(m, problem.drones[k]).plan
-            assert sub_plan is not None
-            route, truck_served, sorties = _lift(sub_plan, _members(m))
-            routes.append(route)
-            served.append(truck_served)
-            flights.append(sorties)
-        plan = FleetPlan(routes, served, flights)
-        try:
-            value = evaluate_fleet(problem, plan)
-        except FeasibilityError:
-            value = INF
+        plan, value = combine(split)
         if value < best:
             best, best_plan = value, plan
+            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
         if value <= key * (1 + CERTIFY):
             solved += 1
             continue
@@ -461,10 +917,29 @@ def split_search(
         for k, m in enumerate(split):
             for j in _members(m):
                 owner[j] = k
+        if i not in tightened:
+            tightened.add(i)
+            repaired = repair(split, plan, value)
+            if repaired is not None and repaired[1] < best:
+                best, best_plan = repaired[1], repaired[0]
+                trace.append(("repaired", round(time.perf_counter() - deadline_start, 3), best))
+                if best <= key * (1 + CERTIFY):
+                    solved += 1
+                    continue
+            raised = tighten(split, owner, key)
+            trace.append(("tight", round(time.perf_counter() - deadline_start, 3), key, raised))
+            if raised > key * (1 + CERTIFY):
+                heapq.heappush(heap, (raised, i))
+                continue
         coupled += 1
+        left = deadline.remaining()
+        if left is not None:  # a slice, doubled at each retry of this split, like the parts'
+            tries = coupled_tries.get(i, 0)
+            coupled_tries[i] = tries + 1
+            left = min(left, max(2.0, SLICE * left) * 2**tries)
         found = label_search(
             problem,
-            time_limit=deadline.remaining(),
+            time_limit=left,
             incumbent=plan if value < INF else None,
             max_labels=max_labels,
             truck_of=owner,
@@ -473,6 +948,10 @@ def split_search(
         )
         if found["plan"] is not None and found["value"] < best:
             best, best_plan = float(found["value"]), found["plan"]
+            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
+        trace.append(
+            ("coupled", round(time.perf_counter() - deadline_start, 3), found["stopped_by"], key)
+        )
         if found["stopped_by"] != "optimal":
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
@@ -498,11 +977,15 @@ def split_search(
         "coupled": coupled,
         "parts": solves,
         "part_seconds": [(m, d, round(s, 3)) for m, d, s in timings[:5]],
+        "lifted": lifts,
+        "trace": trace,
     }
 
 
 __all__ = [
     "CERTIFY",
+    "CHAIN_SECONDS",
+    "DRONE_SPLIT_SHARE",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
     "SLICE",
