@@ -127,6 +127,7 @@ import numpy as np
 
 from taopt.errors import FeasibilityError
 from taopt.fleet.evaluate import best_of, evaluate_fleet
+from taopt.fleet.operations import _submasks
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
 from taopt.runtime import Deadline
 
@@ -274,17 +275,6 @@ def _subset_max(values: np.ndarray) -> np.ndarray:
     return out
 
 
-def _submasks(X: int) -> np.ndarray:
-    """Every subset of the set ``X`` (bit mask), as an array."""
-    subs = np.zeros(1, dtype=np.int64)
-    rest = X
-    while rest:
-        low = rest & -rest
-        subs = np.concatenate((subs, subs | low))
-        rest ^= low
-    return subs
-
-
 def _drone_split_bounds(
     problem: FleetProblem,
     closure: list[tuple[int, int]],
@@ -339,7 +329,7 @@ def _drone_split_bounds(
         for X in range(size):
             if X & 255 == 0 and deadline.expired():
                 return zero
-            A = _submasks(X)
+            A = _submasks(X, empty=True)
             cur[X] = np.min(np.maximum(one[A], prev[X ^ A]))
         out[D] = cur
     return {d: (out[d] if d > 0 else np.zeros(size)) for d in drone_counts}
@@ -651,7 +641,7 @@ def split_search(
         releases are no earlier on ``mask``'s members, when ``released``)."""
         nonlocal lifts
         table = level0[d]
-        for outer in (full ^ _submasks(full ^ mask)).tolist():
+        for outer in (full ^ _submasks(full ^ mask, empty=True)).tolist():
             if outer == mask or table[outer] >= bound:
                 continue
             if released and not _dominates(release_of(outer, d), release_of(mask, d), mask):
