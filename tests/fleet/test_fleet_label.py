@@ -249,3 +249,66 @@ def test_three_drone_sortie_term_lifts_the_residential_root():
     value, plan = synced_plan(problem)
     assert plan is not None
     assert sized < exact <= value
+
+
+def test_identical_drones_permuted_share_a_signature():
+    """Two labels that differ only by a permutation of one truck's identical drones have the
+    same dominance key and vector (and metric entries), so the search keeps one of them."""
+    from taopt.fleet.search import _metric_entries, _signature
+
+    problem = residential_fleet(5, 1, 3, 2, seed=1)
+    tab = _Tables(problem)
+    svc = (12.0, -1.0, -1.0, 40.0, -1.0)
+    drones = (
+        (0, 55.0),
+        (1, 0, 1, 42.0, 90.0, True, True, 0b01001),
+        (1, -3, 0, 30.0, 0.0, True, False, 0b01001),
+    )
+    labels = []
+    for order in ((0, 1, 2), (2, 0, 1), (1, 2, 0)):
+        trucks = ((4, 30.0, 30.0, True, False, 0.0, tuple(drones[i] for i in order)),)
+        labels.append((0b01001, 40.0, svc, trucks))
+    first = _signature(tab, labels[0])
+    assert all(_signature(tab, label) == first for label in labels[1:])
+    entries = _metric_entries(tab, labels[0])
+    assert all(_metric_entries(tab, label) == entries for label in labels[1:])
+
+
+#: (D, objective, brute-force optimum) of tiny_instance(291, 3, 1, D, 2, True, objective,
+#: stops=2) made drone-only (recomputed by the slow test below)
+RELAX_CASES = [
+    (2, "last_service", 34.87062726675864),
+    (2, "return", 60.51667381555947),
+    (3, "last_service", 30.258336907779736),
+    (3, "return", 60.51667381555947),
+]
+
+
+def _drone_only(drones: int, objective: str):
+    p = tiny_instance(291, 3, 1, drones, 2, True, objective, stops=2)
+    return p.replace(service=("drone",) * 3, customer_stop=(None,) * 3)
+
+
+@pytest.mark.parametrize("case", RELAX_CASES)
+def test_root_cover_from_the_relaxation_stays_below_the_optimum(case):
+    """The sortie-walk bound started from the one-drone relaxation (the one-truck dispatch's
+    order) is at least the relaxation and at most the brute-force optimum (drone-only, with
+    precedence)."""
+    from taopt.models.fleet import _one_drone_floor, _root_cover
+
+    drones, objective, value = case
+    p = _drone_only(drones, objective)
+    relaxed = _one_drone_floor(p, None)
+    assert 0.0 < relaxed <= value * (1 + 1e-9) + 1e-9
+    bound, incumbent = _root_cover(p, None, None, relaxed)
+    assert relaxed <= bound <= value * (1 + 1e-9) + 1e-9
+    assert evaluate_fleet(p, incumbent) >= value * (1 - 1e-9)
+
+
+@pytest.mark.slow
+def test_relax_cases_are_the_brute_force_optima():
+    """RELAX_CASES' optima are brute_force's (about 7 s)."""
+    for drones, objective, value in RELAX_CASES:
+        got, plan, _ = brute_force(_drone_only(drones, objective))
+        assert plan is not None
+        assert got == pytest.approx(value, rel=1e-12, abs=1e-12)
