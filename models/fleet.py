@@ -355,7 +355,8 @@ def _root_cover(
     incumbent = min(candidates, key=lambda plan: _score_or_inf(problem, plan))
     lower = max(fleet_lower(problem, "fast"), known)
     deadline = Deadline(None if time_limit is None else COVER_SHARE * time_limit)
-    bound = fleet_cover_bound(problem, lower, _score_or_inf(problem, incumbent), deadline)
+    value = _score_or_inf(problem, incumbent)
+    bound = fleet_cover_bound(problem, lower, value, deadline, settled=known > 0.0)
     return bound, incumbent
 
 

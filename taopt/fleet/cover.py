@@ -467,12 +467,17 @@ def fleet_cover_bound(
     deadline: Deadline | None = None,
     tolerance: float = 1e-7,
     resolution: float = 1e-4,
+    settled: bool = False,
 ) -> float:
     """The root sortie-walk bound: the largest T (bisection between the valid ``lower`` and
     the incumbent value ``upper``, to a relative ``resolution``) for which
     :func:`fleet_coverable` fails, at least ``lower``; ``upper (1 - tolerance)`` when even that
     fails (the incumbent is then optimal within the tolerance). Only for n <= 14 (the DP is
-    over customer subsets); ``lower`` otherwise, or when the deadline expires first."""
+    over customer subsets); ``lower`` otherwise, or when the deadline expires first.
+
+    ``settled``: ``lower`` is a strong bound (the one-drone relaxation's) that the walks
+    likely cannot beat: ``lower (1 + resolution)`` is tested first, and when it passes
+    ``lower`` is returned (the bisection could return nothing larger)."""
     if not math.isfinite(upper) or problem.n > 14:
         return lower
     tab = CoverTables(problem)
@@ -487,7 +492,7 @@ def fleet_cover_bound(
     def test(T: float) -> bool:
         return fleet_coverable(tab, stab, T, trucks, release, deadline=deadline)
 
-    if lower > 0.0 and test(min(lower * (1.0 + resolution), top)):
+    if settled and test(min(lower * (1.0 + resolution), top)):
         # a stronger bound is already known (the one-drone relaxation): the walks pass just
         # above it, so the bisection could only return ``lower`` (one test instead of ~14)
         return lower
