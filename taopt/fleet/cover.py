@@ -566,9 +566,7 @@ def walk_table(
     R_i ≠ ∅. Keep the positions that cover something new, ``q_1 = w_{i_1}, q_2, ...``: by
     the triangle inequality of tt, ``A_{i_l} >= T +`` the drives of the DP's path through
     them, whose value is the max over l of those drives plus ``end(R_{i_l}, q_l)`` (and,
-    after the last, the way home under ``"return"``); the DP's minimum is no larger. (``end``
-    is taken at every kept position, not only the last: the drone-work term of a larger R can
-    exceed the drive to a later position plus that of a smaller one.)
+    after the last, the way home under ``"return"``); the DP's minimum is no larger.
     Precedences and the drones' sharing between trucks are relaxed.
 
     Notes
@@ -624,7 +622,7 @@ def walk_table(
             rest = R[:, None] & ~cover[None, :]  # (L, s)
             val = value[rest, stops[None, :]]
             end = np.maximum(worst[R], home[None, :])
-            val = np.where(rest == 0, end, np.maximum(val, end))
+            val = np.where(rest == 0, end, val)
             val[rest == R[:, None]] = INF  # q covers nothing of R
             value[R] = np.min(tt[None, :, :] + val[:, None, :], axis=2)
     return WalkTable([int(x) for x in cover], value)
