@@ -417,4 +417,209 @@ def _rebuild(
     return FleetPlan(routes, [[] for _ in range(problem.K)], [[sorts] for sorts in sorties])
 
 
-__all__ = ["MAX_LABELS", "coupled_applies", "coupled_dp"]
+def _project(label: tuple, k: int, index: dict[int, int], members: list[int]) -> tuple:
+    """Truck k's part of a coupled label, in its part's numbering (:func:`coupled_search`):
+    the customers served among ``members``, their times, the label's last service and truck
+    k's state alone, every airborne drone made *fresh* (free to take any customer in range
+    next: a relaxation, the argument in :func:`coupled_search`)."""
+    S, M, svc, trucks = label
+    S_k = 0
+    seen_of: dict[int, int] = {}
+    for i, j in enumerate(members):
+        if S >> j & 1:
+            S_k |= 1 << i
+    w, A, T, ev, fin, F, drones = trucks[k]
+    out = []
+    for dr in drones:
+        if dr[0] != 1:
+            out.append(dr)
+            continue
+        o = dr[1]
+        if o >= 0:
+            o = index[o]
+        seen = seen_of.get(dr[7])
+        if seen is None:
+            seen = seen_of[dr[7]] = sum(1 << i for i, j in enumerate(members) if dr[7] >> j & 1)
+        out.append((1, o, dr[2], dr[3], dr[4], dr[5], True, seen))
+    return (S_k, M, tuple(svc[j] for j in members), ((w, A, T, ev, fin, F, tuple(out)),))
+
+
+def coupled_search(
+    problem: FleetProblem,
+    owner: list[int],
+    release: list[float] | None = None,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    max_labels: int | None = None,
+) -> dict[str, Any]:
+    """The optimum of ``problem`` over the plans of one split (customer j served by truck
+    ``owner[j]`` or its drones), any drones per truck: the label search of
+    :func:`taopt.fleet.search.label_search` over the trucks' joint states, each label also
+    bounded by every truck's *own part* (proof below).
+
+    ``release``: per customer a time no plan of the split serves it before (for example the
+    split search's topological releases, :func:`taopt.fleet.split._split_releases`); added as
+    releases they remove no plan of the split (each plan's earliest schedule meets them
+    already), so the optimum is unchanged, and they strengthen every bound.
+
+    *Per-truck bound.* Let λ be a label of the joint search and P a completion of λ (a plan of
+    the split whose first actions are λ's). Restrict P to truck k: its route, its drones'
+    sorties and its truck services, all over X_k = {j : owner[j] = k}. That is a plan of
+    :func:`taopt.fleet.split.sub_problem` (truck k alone with its D_k drones serving exactly
+    X_k, the closure pairs inside X_k) with the releases added: it meets every pair kept (P
+    does) and every release (P's times are at least them). The sub-problem's earliest
+    schedule of the same actions is no later than P's (it has a subset of P's constraints),
+    so the sub-problem's objective of that plan, and of every completion of λ's projection
+    (:func:`_project`: truck k's state and the services among X_k, the times λ fixed), is at
+    most P's objective restricted to X_k, which is at most P's. The projection makes every
+    airborne drone *fresh*: it may take any customer in range next, which only adds
+    completions (the canonical-append rule of :func:`taopt.fleet.search._appendable` loses no
+    plan's times, so the projected completion's times are reached by some sequence the
+    sub-problem's search allows). The label search's bound of the projection (a valid lower
+    bound on its completions in the sub-problem, :func:`taopt.fleet.search._bound`) is then
+    at most ``f(P)``; so is the joint label's own bound and the maximum of them all. Trucks
+    are not interchangeable here (``owner``), as with ``truck_of``.
+
+    Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
+    ``bound``, ``stopped_by``, ``labels``, ``expanded``): ``"optimal"`` when the optimum over
+    the split's plans is proven (the value; or, with no plan below ``cutoff``, the bound
+    ``min(cutoff, incumbent)``), else the least open label's bound (proven)."""
+    from operator import le
+
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.fleet.search import (
+        DEFAULT_MAX_LABELS,
+        _bound,
+        _children,
+        _complete,
+        _rebuild,
+        _signature,
+        _simple_plan,
+        _Tables,
+    )
+    from taopt.fleet.split import _closure, sub_problem
+
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
+    n = problem.n
+    rel = [0.0] * n if release is None else [float(r) for r in release]
+    tab = _Tables(problem)
+    tab.owner = [int(k) for k in owner]
+    tab.groups = [[k] for k in range(problem.K)]
+    tab.release = rel
+    closure = _closure(problem)
+    parts = []
+    for k in range(problem.K):
+        members = [j for j in range(n) if owner[j] == k]
+        if not members:
+            continue
+        sub_tab = _Tables(sub_problem(problem, members, problem.drones[k], closure))
+        sub_tab.release = [rel[j] for j in members]
+        parts.append((k, sub_tab, {j: i for i, j in enumerate(members)}, members))
+
+    def bound(label: tuple, cut: float) -> float:
+        b = _bound(tab, label, cut)
+        for k, sub_tab, index, members in parts:
+            if b >= cut:
+                return b
+            v = _bound(sub_tab, _project(label, k, index, members), cut)
+            if v > b:
+                b = v
+        return b
+
+    best_plan: Any = None
+    best = INF
+    for candidate in (incumbent, _simple_plan(problem, owner)):
+        if candidate is None:
+            continue
+        try:
+            value = evaluate_fleet(problem, candidate)
+        except FeasibilityError:
+            continue
+        if value < best:
+            best, best_plan = value, candidate
+    planned = best
+    best = min(best, cutoff)
+    root_trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    root = (0, 0.0, (-1.0,) * n, root_trucks)
+    labels: list[tuple] = [root]
+    parent: list[int] = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {}
+    key, vec = _signature(tab, root)
+    store[key] = [(vec, 0)]
+    slack = 1e-12
+    cut = best * (1 - slack)
+    heap: list[tuple[float, int, int]] = [(max(bound(root, cut), floor), 0, 0)]
+    expanded = 0
+    stopped_by = "optimal"
+    found = -1
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= cut:
+            heap.clear()
+            break
+        if deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        label = labels[i]
+        if _complete(tab, label):
+            found = i
+            best = lb
+            break
+        expanded += 1
+        for child, act in _children(tab, label):
+            key, vec = _signature(tab, child)
+            bucket = store.get(key)
+            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+                continue
+            b = max(bound(child, cut), lb, floor)
+            if b >= cut:
+                continue
+            if bucket is not None:
+                keep = []
+                for other, oid in bucket:
+                    if all(map(le, vec, other)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
+            cid = len(labels)
+            labels.append(child)
+            parent.append(i)
+            action.append(act)
+            dead.append(0)
+            bucket.append((vec, cid))
+            heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
+        if len(labels) > cap:
+            stopped_by = "size"
+            break
+    result: dict[str, Any] = {"labels": len(labels), "expanded": expanded, "stopped_by": stopped_by}
+    value = planned
+    if found >= 0:
+        plan = _rebuild(problem, tab, trace(parent, action, found), labels[found])
+        value = evaluate_fleet(problem, plan)  # no later than the search's (releases only delay)
+        best_plan, best = plan, min(best, value)
+        result.update(plan=plan, value=value, bound=min(lb, value))
+        return result
+    bound_value = best
+    if stopped_by != "optimal":
+        live = [b for b, _, j in heap if not dead[j]]
+        bound_value = min(min(live, default=best), best)
+    result.update(plan=best_plan, value=value, bound=bound_value)
+    return result
+
+
+__all__ = ["MAX_LABELS", "coupled_applies", "coupled_dp", "coupled_search"]

@@ -896,6 +896,9 @@ def split_search(
             continue
         # every part exact: combine and score
         plan, value = combine(split)
+        trace.append(
+            ("combined", round(time.perf_counter() - deadline_start, 3), split, key, value)
+        )
         if value < best:
             best, best_plan = value, plan
             trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
@@ -917,7 +920,9 @@ def split_search(
                     solved += 1
                     continue
             raised = tighten(split, owner, key)
-            trace.append(("tight", round(time.perf_counter() - deadline_start, 3), key, raised))
+            trace.append(
+                ("tight", round(time.perf_counter() - deadline_start, 3), split, key, raised)
+            )
             if raised > key * (1 + CERTIFY):
                 heapq.heappush(heap, (raised, i))
                 continue
@@ -940,7 +945,14 @@ def split_search(
             best, best_plan = float(found["value"]), found["plan"]
             trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
         trace.append(
-            ("coupled", round(time.perf_counter() - deadline_start, 3), found["stopped_by"], key)
+            (
+                "coupled",
+                round(time.perf_counter() - deadline_start, 3),
+                split,
+                found["stopped_by"],
+                key,
+                round(float(found["bound"]), 4),
+            )
         )
         if found["stopped_by"] != "optimal":
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
