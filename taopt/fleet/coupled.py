@@ -497,7 +497,6 @@ def coupled_search(
         _complete,
         _rebuild,
         _signature,
-        _simple_plan,
         _Tables,
     )
     from taopt.fleet.split import _closure, sub_problem
@@ -512,7 +511,7 @@ def coupled_search(
     tab.release = rel
     closure = _closure(problem)
     parts = []
-    for k in range(problem.K):
+    for k in range(problem.K if problem.K > 1 else 0):  # one truck: its part is the problem
         members = [j for j in range(n) if owner[j] == k]
         if not members:
             continue
@@ -532,15 +531,11 @@ def coupled_search(
 
     best_plan: Any = None
     best = INF
-    for candidate in (incumbent, _simple_plan(problem, owner)):
-        if candidate is None:
-            continue
+    if incumbent is not None:
         try:
-            value = evaluate_fleet(problem, candidate)
+            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
         except FeasibilityError:
-            continue
-        if value < best:
-            best, best_plan = value, candidate
+            pass
     planned = best
     best = min(best, cutoff)
     root_trucks = tuple(
@@ -610,9 +605,9 @@ def coupled_search(
     value = planned
     if found >= 0:
         plan = _rebuild(problem, tab, trace(parent, action, found), labels[found])
-        value = evaluate_fleet(problem, plan)  # no later than the search's (releases only delay)
-        best_plan, best = plan, min(best, value)
-        result.update(plan=plan, value=value, bound=min(lb, value))
+        # the search's value (with the releases); the scorer, which has none, may only say less
+        assert evaluate_fleet(problem, plan) <= lb * (1 + 1e-9) + 1e-9
+        result.update(plan=plan, value=lb, bound=lb)
         return result
     bound_value = best
     if stopped_by != "optimal":
@@ -622,4 +617,317 @@ def coupled_search(
     return result
 
 
-__all__ = ["MAX_LABELS", "coupled_applies", "coupled_dp", "coupled_search"]
+#: Grid (seconds) to which :func:`leader_search` rounds the leader's interface times down
+#: before pricing the follower at them (fewer follower solves; rounding down keeps the bound).
+LEADER_GRID = 2.0
+
+
+def leader_of(problem: FleetProblem, owner: list[int]) -> int | None:
+    """Two trucks whose cross-truck closure pairs all go one way: the truck they leave (the
+    *leader*, which never waits for the other), else None (:func:`leader_search`)."""
+    from taopt.fleet.split import _closure
+
+    if problem.K != 2:
+        return None
+    ways = {owner[r] for r, j in _closure(problem) if owner[r] != owner[j]}
+    return ways.pop() if len(ways) == 1 else None
+
+
+def leader_search(
+    problem: FleetProblem,
+    owner: list[int],
+    release: list[float] | None = None,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    max_labels: int | None = None,
+) -> dict[str, Any]:
+    """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
+    by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
+    the *leader* (:func:`leader_of`), to the other, the *follower*; any drones per truck.
+
+    A label search over the leader's part alone, each leader label priced also by the
+    follower's optimum at the leader's interface times (a follower solve, cached).
+
+    *Decomposition.* Let ``X_l``, ``X_f`` be the two parts, ``I`` the leader's customers with
+    a closure successor in ``X_f`` and, for a vector θ over I, ``h(θ)`` the optimum of the
+    follower's part (:func:`taopt.fleet.split.sub_problem`) with the releases
+    ``max(release_j, θ_r for closure pairs (r, j), r in I)``. In a plan P of the split no
+    leader event waits for a follower event (no pair goes that way), so the leader's times are
+    those of its own sub-plan P_l alone (with ``release``: every plan of the split meets it,
+    so it changes no earliest schedule). The follower's sub-plan P_f is then scheduled with
+    every cross pair (r, j) as ``t_j >= t_r``: exactly the follower's part with the releases
+    θ(P_l) (the leader's times on I; again ``release`` changes nothing). So
+    ``f(P) = max(f_l(P_l), f_f(P_f; θ(P_l)))`` and, over the follower's sub-plans,
+    ``min f(P) = max(f_l(P_l), h(θ(P_l)))``. The split's optimum is the least of that over the
+    leader's plans.
+
+    *Monotone.* Raising a release never lowers the follower's optimum (each plan's earliest
+    schedule is a maximum of sums of nonnegative terms and the releases), so ``h`` is
+    non-decreasing in every component. For a leader label λ and each r in I, ``e_r(λ)``,
+    its service time when λ served it, else the least time λ's truck and drones can serve it
+    (:func:`taopt.fleet.search._earliest_services`, with the airborne drones allowed any
+    customer in range), is at most r's time in every completion; so every completion of λ
+    costs at least ``max(b_l(λ), h(e(λ)))``, ``b_l`` the label search's bound of λ in the
+    leader's part (:func:`taopt.fleet.search._bound`). The search prices labels with the
+    largest cached follower value at a point ``<= e(λ)`` (a lower bound of ``h(e(λ))``); a
+    label popped with a price below the cutoff has the follower solved at ``e(λ)`` rounded
+    down to :data:`LEADER_GRID` (still ``<= e(λ)``; its own point when λ is complete) and is
+    pushed back when its price rose. A complete label popped at its exact price is optimal:
+    every other label's price is a lower bound of its completions. Dominance compares the
+    leader labels as the label search does, with the interface times added to the compared
+    times (a label later on I is no better for the follower).
+
+    Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
+    ``bound``, ``stopped_by``) with the counters ``labels``, ``expanded`` and
+    ``follower_solves``."""
+    from operator import le
+
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.fleet.search import (
+        DEFAULT_MAX_LABELS,
+        _bound,
+        _children,
+        _complete,
+        _earliest_services,
+        _signature,
+        _Tables,
+    )
+    from taopt.fleet.search import _rebuild as rebuild_label
+    from taopt.fleet.split import _closure, _lift, sub_problem
+
+    leader = leader_of(problem, owner)
+    if leader is None:
+        raise ValueError("leader_search needs two trucks with one-way cross-truck pairs")
+    follower = 1 - leader
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
+    n = problem.n
+    rel = [0.0] * n if release is None else [float(r) for r in release]
+    closure = _closure(problem)
+    lead = [j for j in range(n) if owner[j] == leader]
+    foll = [j for j in range(n) if owner[j] == follower]
+    li = {j: i for i, j in enumerate(lead)}
+    sub_l = sub_problem(problem, lead, problem.drones[leader], closure)
+    sub_f = sub_problem(problem, foll, problem.drones[follower], closure)
+    tab = _Tables(sub_l)
+    tab.release = [rel[j] for j in lead]
+    cross = [(r, j) for r, j in closure if owner[r] == leader and owner[j] == follower]
+    inter = sorted({r for r, _ in cross})
+    inter_l = [li[r] for r in inter]  # in the leader's numbering
+    succ_of = {r: [foll.index(j) for rr, j in cross if rr == r] for r in inter}
+    base_f = [rel[j] for j in foll]
+    c, tau = tab.c, tab.tau
+
+    best_plan: Any = None
+    best = INF
+    if incumbent is not None:
+        try:
+            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
+        except FeasibilityError:
+            pass
+    planned = best
+    best = min(best, cutoff)
+    cut = best * (1 - 1e-12)
+    cache: list[tuple[tuple[float, ...], float]] = []  # (θ, a lower bound of h(θ))
+    exact: dict[tuple[float, ...], tuple[float, Any]] = {}  # θ -> (h(θ) or >= cut, plan)
+    solves = 0
+    tried: set[tuple[float, ...]] = set()  # points solved once without an exact answer
+
+    def h_low(theta: tuple[float, ...]) -> float:
+        v = 0.0
+        for point, value in cache:
+            if value > v and all(map(le, point, theta)):
+                v = value
+        return v
+
+    def solve(theta: tuple[float, ...], limit: float | None) -> float:
+        """h(θ) (or a lower bound: cut when no follower plan is below it, or the bound of a
+        stopped solve), cached."""
+        nonlocal solves
+        releases = base_f[:]
+        for r, t in zip(inter, theta, strict=True):
+            for i in succ_of[r]:
+                if t > releases[i]:
+                    releases[i] = t
+        solves += 1
+        found = coupled_search(
+            sub_f,
+            [0] * len(foll),
+            release=releases,
+            time_limit=limit,
+            floor=h_low(theta),
+            cutoff=best,
+        )
+        if found["stopped_by"] == "optimal":
+            if found["plan"] is not None and found["value"] < best:
+                value = float(found["value"])
+                exact[theta] = (value, found["plan"])
+            else:
+                value = best
+                exact[theta] = (value, None)
+        else:
+            value = float(found["bound"])
+        cache.append((theta, value))
+        return value
+
+    def interface(label: tuple) -> tuple[float, ...]:
+        S, _M, svc, trucks = label
+        if all(S >> i & 1 for i in inter_l):
+            return tuple(svc[i] for i in inter_l)
+        air = [INF] * tab.n
+        for _w, _A, _T, _ev, fin, _F, drones in trucks:
+            if fin:
+                continue
+            for dr in drones:
+                if not (dr[0] == 1 and dr[5] and dr[2] < c):
+                    continue
+                o = dr[1]
+                for j in range(tab.n):
+                    if S >> j & 1 or not tab.drone_ok[j]:
+                        continue
+                    if o >= 0:
+                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                    else:
+                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                    if dr[4] + dist + tab.near[j] <= tab.limit:
+                        v = dr[3] + fly + tau
+                        if v < air[j]:
+                            air[j] = v
+        est = _earliest_services(tab, S, svc, trucks, air)
+        return tuple(
+            svc[i]
+            if S >> i & 1
+            else (math.floor(est[i] / LEADER_GRID) * LEADER_GRID if est[i] < INF else INF)
+            for i in inter_l
+        )
+
+    def price(label: tuple, theta: tuple[float, ...]) -> float:
+        if INF in theta:
+            return INF  # an interface customer it can no longer serve
+        b = _bound(tab, label, cut)
+        if b >= cut:
+            return b
+        return max(b, h_low(theta))
+
+    def signature(label: tuple) -> tuple[tuple, tuple]:
+        key, vec = _signature(tab, label)
+        svc = label[2]
+        return key, vec + tuple(svc[i] for i in inter_l)
+
+    solve(tuple(rel[r] for r in inter), deadline.remaining())
+    root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
+    root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
+    labels: list[tuple] = [root]
+    thetas: list[tuple[float, ...]] = [interface(root)]
+    parent: list[int] = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {}
+    key, vec = signature(root)
+    store[key] = [(vec, 0)]
+    heap: list[tuple[float, int, int]] = [(max(price(root, thetas[0]), floor), 0, 0)]
+    expanded = 0
+    stopped_by = "optimal"
+    found = -1
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= cut:
+            heap.clear()
+            break
+        if deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        label, theta = labels[i], thetas[i]
+        done = _complete(tab, label)
+        if theta not in exact and (done or theta not in tried):
+            tried.add(theta)
+            left = deadline.remaining()
+            solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)))
+            now = max(lb, price(label, theta))
+            if now > lb:
+                if now < cut:
+                    heapq.heappush(heap, (now, -bin(label[0]).count("1"), i))
+                continue
+        if done and theta not in exact:  # its follower solve stopped: the clock (or size)
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit" if deadline.expired() else "size"
+            break
+        if done:
+            now = max(lb, exact[theta][0])
+            if now > lb:
+                if now < cut:
+                    heapq.heappush(heap, (now, -bin(label[0]).count("1"), i))
+                continue
+            found = i
+            break
+        expanded += 1
+        for child, act in _children(tab, label):
+            key, vec = signature(child)
+            bucket = store.get(key)
+            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+                continue
+            theta_c = interface(child)
+            b = max(price(child, theta_c), lb, floor)
+            if b >= cut:
+                continue
+            if bucket is not None:
+                keep = []
+                for other, oid in bucket:
+                    if all(map(le, vec, other)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
+            cid = len(labels)
+            labels.append(child)
+            thetas.append(theta_c)
+            parent.append(i)
+            action.append(act)
+            dead.append(0)
+            bucket.append((vec, cid))
+            heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
+        if len(labels) > cap:
+            stopped_by = "size"
+            break
+    result: dict[str, Any] = {
+        "labels": len(labels),
+        "expanded": expanded,
+        "stopped_by": stopped_by,
+        "follower_solves": solves,
+    }
+    if found >= 0:
+        lead_plan = rebuild_label(sub_l, tab, trace(parent, action, found), labels[found])
+        foll_plan = exact[thetas[found]][1]
+        assert foll_plan is not None  # priced below the cutoff: a follower plan exists
+        pieces = [_lift(lead_plan, lead), _lift(foll_plan, foll)]
+        if leader == 1:
+            pieces.reverse()
+        plan = FleetPlan([x[0] for x in pieces], [x[1] for x in pieces], [x[2] for x in pieces])
+        value = evaluate_fleet(problem, plan)  # the coupled schedule: no later (see above)
+        result.update(plan=plan, value=value, bound=min(lb, value))
+        return result
+    bound_value = best
+    if stopped_by != "optimal":
+        live = [b for b, _, j in heap if not dead[j]]
+        bound_value = min(min(live, default=best), best)
+    result.update(plan=best_plan, value=planned, bound=bound_value)
+    return result
+
+
+__all__ = [
+    "LEADER_GRID",
+    "MAX_LABELS",
+    "coupled_applies",
+    "coupled_dp",
+    "coupled_search",
+    "leader_of",
+    "leader_search",
+]
