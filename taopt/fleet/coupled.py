@@ -694,6 +694,7 @@ def leader_search(
         _earliest_services,
         _signature,
         _Tables,
+        label_search,
     )
     from taopt.fleet.search import _rebuild as rebuild_label
     from taopt.fleet.split import _closure, _lift, sub_problem
@@ -743,9 +744,11 @@ def leader_search(
                 v = value
         return v
 
-    def solve(theta: tuple[float, ...], limit: float | None) -> float:
-        """h(θ) (or a lower bound: cut when no follower plan is below it, or the bound of a
-        stopped solve), cached."""
+    def solve(theta: tuple[float, ...], limit: float | None, complete: bool) -> float:
+        """A lower bound of h(θ) (cut when no follower plan is below it, or the bound of a
+        stopped solve), cached; for a complete label (``complete``) h(θ) itself, with its
+        plan, when the solve ends (:func:`coupled_search`, which takes no incumbent priced
+        without the releases); else the label search's bound (its own, faster search)."""
         nonlocal solves
         releases = base_f[:]
         for r, t in zip(inter, theta, strict=True):
@@ -753,6 +756,17 @@ def leader_search(
                 if t > releases[i]:
                     releases[i] = t
         solves += 1
+        if not complete:
+            found = label_search(
+                sub_f, time_limit=limit, floor=h_low(theta), cutoff=best, release=releases, beam=0
+            )
+            value = (
+                INF
+                if found["stopped_by"] == "infeasible"
+                else float(found["value" if found["stopped_by"] == "optimal" else "bound"])
+            )
+            cache.append((theta, min(value, best)))
+            return value
         found = coupled_search(
             sub_f,
             [0] * len(foll),
@@ -817,7 +831,7 @@ def leader_search(
         svc = label[2]
         return key, vec + tuple(svc[i] for i in inter_l)
 
-    solve(tuple(rel[r] for r in inter), deadline.remaining())
+    solve(tuple(rel[r] for r in inter), deadline.remaining(), False)
     root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
     root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
     labels: list[tuple] = [root]
@@ -848,7 +862,7 @@ def leader_search(
         if theta not in exact and (done or theta not in tried):
             tried.add(theta)
             left = deadline.remaining()
-            solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)))
+            solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)), done)
             now = max(lb, price(label, theta))
             if now > lb:
                 if now < cut:

@@ -143,6 +143,10 @@ SLICE = 0.1
 #: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
 DRONE_SPLIT_SHARE = 0.25
 
+#: Share of the time left that one leader search (:func:`taopt.fleet.coupled.leader_search`,
+#: a split whose cross pairs go one way) may take at its first try (doubled at each retry).
+LEADER_SHARE = 0.5
+
 #: Most seconds of one exact chain solve (:func:`split_search`'s ``exact_chain``: the other
 #: truck's last service over a cross predecessor and its ancestors there).
 CHAIN_SECONDS = 1.0
@@ -558,6 +562,7 @@ def split_search(
     """
 
     from taopt.fleet.bounds import fleet_lower
+    from taopt.fleet.coupled import leader_of, leader_search
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
 
@@ -769,10 +774,12 @@ def split_search(
                 found_best = (candidate, score)
         return found_best
 
+    topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
+
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
         with them: a bound on every plan of the split, at least ``key``."""
-        L = _split_releases(problem, owner, closure, early, deadline)
+        L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
         bound = key
         for k, m in enumerate(split):
             if not m or deadline.expired():
@@ -928,22 +935,45 @@ def split_search(
                 continue
         coupled += 1
         left = deadline.remaining()
+        leader = leader_of(problem, owner)
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'
             tries = coupled_tries.get(i, 0)
             coupled_tries[i] = tries + 1
-            left = min(left, max(2.0, SLICE * left) * 2**tries)
-        found = label_search(
-            problem,
-            time_limit=left,
-            incumbent=plan if value < INF else None,
-            max_labels=max_labels,
-            truck_of=owner,
-            floor=key * (1 - 1e-9),
-            cutoff=best,
-        )
+            share = LEADER_SHARE if leader is not None else SLICE
+            left = min(left, max(2.0, share * left) * 2**tries)
+        L = topological.get(split)
+        if L is None:
+            L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
+        if leader is not None:  # one-way cross pairs: the leader's search (exact)
+            found = leader_search(
+                problem,
+                owner,
+                release=L,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                max_labels=max_labels,
+            )
+        else:
+            found = label_search(
+                problem,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                max_labels=max_labels,
+                truck_of=owner,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                release=L,  # met by every plan of the split: same optimum, stronger bounds
+            )
         if found["plan"] is not None and found["value"] < best:
-            best, best_plan = float(found["value"]), found["plan"]
-            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
+            try:
+                scored = evaluate_fleet(problem, found["plan"])
+            except FeasibilityError:
+                scored = INF
+            if scored < best:
+                best, best_plan = scored, found["plan"]
+                trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
         trace.append(
             (
                 "coupled",
@@ -988,6 +1018,7 @@ __all__ = [
     "CERTIFY",
     "CHAIN_SECONDS",
     "DRONE_SPLIT_SHARE",
+    "LEADER_SHARE",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
     "SLICE",
