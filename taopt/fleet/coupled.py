@@ -674,7 +674,11 @@ def leader_search(
     largest cached follower value at a point ``<= e(λ)`` (a lower bound of ``h(e(λ))``); a
     label popped with a price below the cutoff has the follower solved at ``e(λ)`` rounded
     down to :data:`LEADER_GRID` (still ``<= e(λ)``; its own point when λ is complete) and is
-    pushed back when its price rose. A complete label popped at its exact price is optimal:
+    pushed back when its price rose. The follower is solved by :func:`coupled_search` (its
+    optimum under the releases; the label search's incumbents are priced without them, so
+    its value may be only a bound), and not at all for an incomplete label when a point
+    ``>= e(λ)`` solved exactly has ``h`` at most the label's price (h there is no larger:
+    the price could not rise). A complete label popped at its exact price is optimal:
     every other label's price is a lower bound of its completions. Dominance compares the
     leader labels as the label search does, with the interface times added to the compared
     times (a label later on I is no better for the follower).
@@ -694,7 +698,6 @@ def leader_search(
         _earliest_services,
         _signature,
         _Tables,
-        label_search,
     )
     from taopt.fleet.search import _rebuild as rebuild_label
     from taopt.fleet.split import _closure, _lift, sub_problem
@@ -744,11 +747,10 @@ def leader_search(
                 v = value
         return v
 
-    def solve(theta: tuple[float, ...], limit: float | None, complete: bool) -> float:
-        """A lower bound of h(θ) (cut when no follower plan is below it, or the bound of a
-        stopped solve), cached; for a complete label (``complete``) h(θ) itself, with its
-        plan, when the solve ends (:func:`coupled_search`, which takes no incumbent priced
-        without the releases); else the label search's bound (its own, faster search)."""
+    def solve(theta: tuple[float, ...], limit: float | None) -> float:
+        """h(θ) with its plan (:func:`coupled_search`, which takes no incumbent priced
+        without the releases), or a lower bound of it (cut when no follower plan is below
+        it, the bound of a stopped solve), cached."""
         nonlocal solves
         releases = base_f[:]
         for r, t in zip(inter, theta, strict=True):
@@ -756,17 +758,6 @@ def leader_search(
                 if t > releases[i]:
                     releases[i] = t
         solves += 1
-        if not complete:
-            found = label_search(
-                sub_f, time_limit=limit, floor=h_low(theta), cutoff=best, release=releases, beam=0
-            )
-            value = (
-                INF
-                if found["stopped_by"] == "infeasible"
-                else float(found["value" if found["stopped_by"] == "optimal" else "bound"])
-            )
-            cache.append((theta, min(value, best)))
-            return value
         found = coupled_search(
             sub_f,
             [0] * len(foll),
@@ -786,6 +777,13 @@ def leader_search(
             value = float(found["bound"])
         cache.append((theta, value))
         return value
+
+    def known_below(theta: tuple[float, ...], price: float) -> bool:
+        """Whether some point solved exactly at or above θ has ``h <= price`` (then
+        ``h(θ) <= price`` by monotonicity: solving at θ cannot raise the label's price)."""
+        return any(
+            value[0] <= price and all(map(le, theta, point)) for point, value in exact.items()
+        )
 
     def interface(label: tuple) -> tuple[float, ...]:
         S, _M, svc, trucks = label
@@ -831,7 +829,7 @@ def leader_search(
         svc = label[2]
         return key, vec + tuple(svc[i] for i in inter_l)
 
-    solve(tuple(rel[r] for r in inter), deadline.remaining(), False)
+    solve(tuple(rel[r] for r in inter), deadline.remaining())
     root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
     root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
     labels: list[tuple] = [root]
@@ -862,7 +860,8 @@ def leader_search(
         if theta not in exact and (done or theta not in tried):
             tried.add(theta)
             left = deadline.remaining()
-            solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)), done)
+            if done or not known_below(theta, lb):
+                solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)))
             now = max(lb, price(label, theta))
             if now > lb:
                 if now < cut:
