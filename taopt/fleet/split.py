@@ -97,11 +97,14 @@ its cheapest unrefined part moves one level up, and the split is pushed back wit
 bound. When every part is exact, the parts' plans are combined into one fleet plan and
 scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck precedences may make a
 vehicle wait, or deadlock). If its value equals the split's bound, the split is solved;
-otherwise the coupled problem restricted to the split is solved by the label search with
-``truck_of`` (each customer only on its truck), the split's bound as a floor and the best
-value as a cutoff, in doubling time slices like the parts' (the split goes back to the heap
-with the bound each slice proves: at 600 s one such search took 380 s of fleet10 seed 0's
-run). The run stops when the best plan is no worse than the least bound of the
+otherwise the coupled problem restricted to the split is solved, the split's bound as a
+floor and the best value as a cutoff, in doubling time slices like the parts' (the split
+goes back to the heap with the bound each slice proves): with two trucks whose cross pairs
+go one way, by :func:`taopt.fleet.coupled.leader_search` (exact; :data:`LEADER_SHARE` of the
+time left at its first try), else by the label search with ``truck_of`` (each customer only
+on its truck) and the split's topological releases (met by every plan of the split, so the
+optimum over the split is the same; at 600 s one such search took 380 s of fleet10 seed
+0's run). The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
 The part solves run without the label search's beam pass (they are cut off at the best
