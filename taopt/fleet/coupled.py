@@ -642,6 +642,7 @@ def leader_search(
     floor: float = 0.0,
     cutoff: float = INF,
     max_labels: int | None = None,
+    memo: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
     by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
@@ -682,6 +683,11 @@ def leader_search(
     every other label's price is a lower bound of its completions. Dominance compares the
     leader labels as the label search does, with the interface times added to the compared
     times (a label later on I is no better for the follower).
+
+    ``memo``: a dict kept by the caller between runs on the same split with the same
+    ``release`` and a cutoff that never rises (the split search's slices): the follower
+    solves are kept there and reused (each cached value stays a lower bound of h, and an
+    exact one stays exact).
 
     Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
     ``bound``, ``stopped_by``) with the counters ``labels``, ``expanded`` and
@@ -735,10 +741,13 @@ def leader_search(
     planned = best
     best = min(best, cutoff)
     cut = best * (1 - 1e-12)
-    cache: list[tuple[tuple[float, ...], float]] = []  # (θ, a lower bound of h(θ))
-    exact: dict[tuple[float, ...], tuple[float, Any]] = {}  # θ -> (h(θ) or >= cut, plan)
+    memo = {} if memo is None else memo
+    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan); points solved
+    # once without an exact answer
+    cache: list[tuple[tuple[float, ...], float]] = memo.setdefault("cache", [])
+    exact: dict[tuple[float, ...], tuple[float, Any]] = memo.setdefault("exact", {})
+    tried: set[tuple[float, ...]] = memo.setdefault("tried", set())
     solves = 0
-    tried: set[tuple[float, ...]] = set()  # points solved once without an exact answer
 
     def h_low(theta: tuple[float, ...]) -> float:
         v = 0.0
@@ -829,7 +838,8 @@ def leader_search(
         svc = label[2]
         return key, vec + tuple(svc[i] for i in inter_l)
 
-    solve(tuple(rel[r] for r in inter), deadline.remaining())
+    if not cache:
+        solve(tuple(rel[r] for r in inter), deadline.remaining())
     root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
     root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
     labels: list[tuple] = [root]

@@ -778,6 +778,7 @@ def split_search(
         return found_best
 
     topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
+    leader_memo: dict[tuple[int, ...], dict[str, Any]] = {}  # its follower solves
 
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
@@ -957,6 +958,7 @@ def split_search(
                 floor=key * (1 - 1e-9),
                 cutoff=best,
                 max_labels=max_labels,
+                memo=leader_memo.setdefault(split, {}),
             )
         else:
             found = label_search(

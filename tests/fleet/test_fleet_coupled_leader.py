@@ -98,3 +98,17 @@ def test_time_limited_leader_search_keeps_a_bound_below_the_optimum():
     found = leader_search(problem, owner, time_limit=0.0)
     assert found["stopped_by"] in ("time_limit", "optimal")
     assert found["bound"] <= value + 1e-9
+
+
+def test_leader_search_resumed_with_its_memo_equals_the_brute_force():
+    """A run stopped at once, then resumed with the same memo (the split search's slices):
+    the optimum over the split, as the brute force."""
+    problem = _problem(3, 1, 2, "return", [(0, 2), (1, 3)])
+    owner = [0, 0, 1, 1]
+    value = brute_force(problem, truck_of=owner)[0]
+    memo: dict = {}
+    first = leader_search(problem, owner, time_limit=0.0, memo=memo)
+    assert first["bound"] <= value + 1e-9
+    found = leader_search(problem, owner, memo=memo)
+    assert found["stopped_by"] == "optimal"
+    assert found["value"] == pytest.approx(value, rel=1e-9)
