@@ -647,6 +647,7 @@ def leader_search(
     """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
     by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
     the *leader* (:func:`leader_of`), to the other, the *follower*; any drones per truck.
+    With pairs both ways, a bound of it (*Both ways* below).
 
     A label search over the leader's part alone, each leader label priced also by the
     follower's optimum at the leader's interface times (a follower solve, cached).
@@ -684,6 +685,18 @@ def leader_search(
     leader labels as the label search does, with the interface times added to the compared
     times (a label later on I is no better for the follower).
 
+    *Both ways* (no leader: :func:`leader_of` is None). The truck with more cross pairs
+    leaving it leads, and the same search is a relaxation: a follower -> leader pair is kept
+    only through ``release`` (the caller's lower bounds of those times, e.g. the topological
+    releases). In a plan P of the split, the leader's sub-plan under ``release`` alone has
+    times no later than P's (fewer constraints), so its objective and its interface times θ'
+    are at most P's, and the follower's part of P meets the releases ``max(release, θ')``
+    (its times are at least those of P's leader events), so ``f(P) >= max(f_l(P_l; release),
+    h(θ'))``: the least of that over the leader's plans, what the search computes, bounds
+    the split's optimum. When the plan it ends on scores that value (``evaluate``, with every
+    pair) it is the optimum; else the run ends with ``stopped_by == "relaxed"``, that value as
+    ``bound`` and the plan as a candidate (kept when it scores below the incumbent).
+
     ``memo``: a dict kept by the caller between runs on the same split with the same
     ``release`` and a cutoff that never rises (the split search's slices): the follower
     solves are kept there and reused (each cached value stays a lower bound of h, and an
@@ -708,9 +721,16 @@ def leader_search(
     from taopt.fleet.search import _rebuild as rebuild_label
     from taopt.fleet.split import _closure, _lift, sub_problem
 
+    if problem.K != 2:
+        raise ValueError("leader_search needs two trucks")
     leader = leader_of(problem, owner)
-    if leader is None:
-        raise ValueError("leader_search needs two trucks with one-way cross-truck pairs")
+    one_way = leader is not None
+    if leader is None:  # both ways (or none): the relaxation, led by the truck with more
+        ways = [0, 0]
+        for r, j in _closure(problem):
+            if owner[r] != owner[j]:
+                ways[owner[r]] += 1
+        leader = 0 if ways[0] >= ways[1] else 1
     follower = 1 - leader
     deadline = Deadline(time_limit)
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
@@ -934,7 +954,18 @@ def leader_search(
         if leader == 1:
             pieces.reverse()
         plan = FleetPlan([x[0] for x in pieces], [x[1] for x in pieces], [x[2] for x in pieces])
-        value = evaluate_fleet(problem, plan)  # the coupled schedule: no later (see above)
+        try:
+            value = evaluate_fleet(problem, plan)  # the coupled schedule: no later (see above)
+        except FeasibilityError:  # both ways: the relaxation's plan may deadlock
+            value = INF
+        if not one_way and value > lb * (1 + 1e-9):
+            # the relaxation's optimum: a bound of the split, its plan (when it scores) no proof
+            result.update(stopped_by="relaxed", bound=lb)
+            if value < planned:
+                result.update(plan=plan, value=value)
+            else:
+                result.update(plan=best_plan, value=planned)
+            return result
         result.update(plan=plan, value=value, bound=min(lb, value))
         return result
     bound_value = best

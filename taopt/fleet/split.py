@@ -779,6 +779,7 @@ def split_search(
 
     topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
     leader_memo: dict[tuple[int, ...], dict[str, Any]] = {}  # its follower solves
+    relaxed: set[int] = set()  # splits (both ways) whose leader relaxation has run
 
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
@@ -939,16 +940,18 @@ def split_search(
                 continue
         coupled += 1
         left = deadline.remaining()
-        leader = leader_of(problem, owner)
+        # one-way cross pairs: the leader search, exact; both ways: its relaxation once (a
+        # bound of the split, maybe its optimum), then the label search restricted to it
+        leader = problem.K == 2 and (leader_of(problem, owner) is not None or i not in relaxed)
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'
             tries = coupled_tries.get(i, 0)
             coupled_tries[i] = tries + 1
-            share = LEADER_SHARE if leader is not None else SLICE
+            share = LEADER_SHARE if leader else SLICE
             left = min(left, max(2.0, share * left) * 2**tries)
         L = topological.get(split)
         if L is None:
             L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
-        if leader is not None:  # one-way cross pairs: the leader's search (exact)
+        if leader:
             found = leader_search(
                 problem,
                 owner,
@@ -989,6 +992,8 @@ def split_search(
                 round(float(found["bound"]), 4),
             )
         )
+        if found["stopped_by"] == "relaxed":
+            relaxed.add(i)
         if found["stopped_by"] != "optimal":
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
