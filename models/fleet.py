@@ -211,8 +211,8 @@ def solve_fleet(
             # the root bound gets COVER_SHARE of the limit, but never more than
             # SPLIT_COVER_LEFT of what the improver left (under load the improver may run
             # late; the limit is wall-clock for every phase)
-            left = max(time_limit - (time.perf_counter() - start), 0.0)
-            cover_limit = min(time_limit, SPLIT_COVER_LEFT * left / COVER_SHARE)
+            spare = max(time_limit - (time.perf_counter() - start), 0.0)
+            cover_limit = min(time_limit, SPLIT_COVER_LEFT * spare / COVER_SHARE)
         floor, incumbent = _root_cover(problem, incumbent, cover_limit)
         left = None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0)
         result = split_search(
