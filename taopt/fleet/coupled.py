@@ -643,6 +643,7 @@ def leader_search(
     cutoff: float = INF,
     max_labels: int | None = None,
     memo: dict[str, Any] | None = None,
+    leading: int | None = None,
 ) -> dict[str, Any]:
     """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
     by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
@@ -697,6 +698,9 @@ def leader_search(
     pair) it is the optimum; else the run ends with ``stopped_by == "relaxed"``, that value as
     ``bound`` and the plan as a candidate (kept when it scores below the incumbent).
 
+    ``leading``: with pairs both ways, the truck that leads the relaxation (default: the one
+    with more cross pairs leaving it); ignored when the pairs go one way.
+
     ``memo``: a dict kept by the caller between runs on the same split with the same
     ``release`` and a cutoff that never rises (the split search's slices): the follower
     solves are kept there and reused (each cached value stays a lower bound of h, and an
@@ -730,7 +734,7 @@ def leader_search(
         for r, j in _closure(problem):
             if owner[r] != owner[j]:
                 ways[owner[r]] += 1
-        leader = 0 if ways[0] >= ways[1] else 1
+        leader = (0 if ways[0] >= ways[1] else 1) if leading is None else int(leading)
     follower = 1 - leader
     deadline = Deadline(time_limit)
     cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)

@@ -124,17 +124,19 @@ def test_leader_search_resumed_with_its_memo_equals_the_brute_force():
     ],
 )
 def test_leader_relaxation_bounds_two_way_splits(seed, D, c, objective):
-    """Cross pairs both ways: the leader search's value is a bound never above the brute
-    force over the split's plans, and equal to it when it ends "optimal"."""
+    """Cross pairs both ways, either truck leading: the leader search's value is a bound
+    never above the brute force over the split's plans, and equal to it when it ends
+    "optimal"."""
     problem = _problem(seed, D, c, objective, [(0, 2), (3, 1)])
     owner = _owner(problem, [0, 0, 1, 1])
     if leader_of(problem, owner) is not None:
         pytest.skip("one way at this size")
     value = brute_force(problem, truck_of=owner)[0]
     L = _split_releases(problem, owner, _closure(problem), _earliest(problem), Deadline(None))
-    found = leader_search(problem, owner, release=L)
-    assert found["bound"] <= value + 1e-9
-    if found["stopped_by"] == "optimal":
-        assert found["value"] == pytest.approx(value, rel=1e-9)
-    else:
-        assert found["stopped_by"] == "relaxed"
+    for leading in (0, 1):
+        found = leader_search(problem, owner, release=L, leading=leading)
+        assert found["bound"] <= value + 1e-9
+        if found["stopped_by"] == "optimal":
+            assert found["value"] == pytest.approx(value, rel=1e-9)
+        else:
+            assert found["stopped_by"] == "relaxed"
