@@ -1,4 +1,13 @@
-"""The coupled problem of one split, several trucks with one drone each: exact by a joint DP.
+"""The coupled problem of one split: the fleet's optimum over the plans that serve each customer
+by a given truck (or its drones), with the cross-truck precedences.
+
+Three methods. :func:`coupled_dp` (below): several trucks with one drone each, drone-only
+customers, a joint DP over the trucks' sortie sequences. :func:`leader_search`: two trucks,
+any drones, cross pairs one way (exact: a search over the leading truck's part, the other
+priced by its optimum under the leader's service times as releases) or both ways (a
+relaxation, a bound). :func:`coupled_search`: any split, the label search's joint states,
+each label also bounded by every truck's own part (exact; slower than the leader search where
+that applies). Proofs in their docstrings.
 
 :func:`taopt.fleet.sorties.split_dp` bounds each split (X_1, ..., X_K) by its trucks' parts
 solved apart; where cross-truck precedences make the combined plan wait, the optimum restricted
