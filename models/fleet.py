@@ -21,7 +21,8 @@
    (:func:`taopt.fleet.split.split_applies`): the split search
    (:func:`taopt.fleet.split.split_search`: splits in increasing bound, each truck's part by
    the label search on its one-truck sub-problem, the coupled search where cross-truck
-   precedences bind), from the root sortie-walk bound;
+   precedences bind: exact by :func:`taopt.fleet.coupled.leader_search` when they all go
+   one way), from the root sortie-walk bound;
 7. anything else (one truck): the best-first label search with dominance
    (:mod:`taopt.fleet.search`).
 """
@@ -59,6 +60,10 @@ COVER_SHARE = 0.2
 #: there and lifts no bound (certifying needs 33k or more). A fifth of 10 s cut it short at
 #: load 7 (K1D3c2 242.58 instead of 248.50, K1D3c3 235.03 instead of 244.98).
 RELAX_SHARE = 0.35
+
+#: K >= 2 (the split search): the root sortie-walk bound takes at most this share of the time
+#: the improver left (and at most :data:`COVER_SHARE` of the limit).
+SPLIT_COVER_LEFT = 0.5
 
 
 def _score_or_inf(problem: FleetProblem, plan: Any) -> float:
@@ -205,7 +210,14 @@ def solve_fleet(
             incumbent = improve(problem, incumbent, share)
         # (the one-drone relaxation is left out here: on fleet8's K2D2 rows it gave the split
         # search's own bound, 197.06 / 190.43 / 184.97, for 1-2 s of its limit)
-        floor, incumbent = _root_cover(problem, incumbent, time_limit)
+        cover_limit = time_limit
+        if time_limit is not None:
+            # the root bound gets COVER_SHARE of the limit, but never more than
+            # SPLIT_COVER_LEFT of what the improver left (under load the improver may run
+            # late; the limit is wall-clock for every phase)
+            spare = max(time_limit - (time.perf_counter() - start), 0.0)
+            cover_limit = min(time_limit, SPLIT_COVER_LEFT * spare / COVER_SHARE)
+        floor, incumbent = _root_cover(problem, incumbent, cover_limit)
         left = None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0)
         result = split_search(
             problem, time_limit=left, incumbent=incumbent, max_labels=max_labels, floor=floor
@@ -394,5 +406,6 @@ __all__ = [
     "IMPROVE_SECONDS_PER_CUSTOMER",
     "IMPROVE_SHARE",
     "RELAX_SHARE",
+    "SPLIT_COVER_LEFT",
     "solve_fleet",
 ]

@@ -1,4 +1,13 @@
-"""The coupled problem of one split, several trucks with one drone each: exact by a joint DP.
+"""The coupled problem of one split: the fleet's optimum over the plans that serve each customer
+by a given truck (or its drones), with the cross-truck precedences.
+
+Three methods. :func:`coupled_dp` (below): several trucks with one drone each, drone-only
+customers, a joint DP over the trucks' sortie sequences. :func:`leader_search`: two trucks,
+any drones, cross pairs one way (exact: a search over the leading truck's part, the other
+priced by its optimum under the leader's service times as releases) or both ways (a
+relaxation, a bound). :func:`coupled_search`: any split, the label search's joint states,
+each label also bounded by every truck's own part (exact; slower than the leader search where
+that applies). Proofs in their docstrings.
 
 :func:`taopt.fleet.sorties.split_dp` bounds each split (X_1, ..., X_K) by its trucks' parts
 solved apart; where cross-truck precedences make the combined plan wait, the optimum restricted
@@ -417,4 +426,575 @@ def _rebuild(
     return FleetPlan(routes, [[] for _ in range(problem.K)], [[sorts] for sorts in sorties])
 
 
-__all__ = ["MAX_LABELS", "coupled_applies", "coupled_dp"]
+def _project(label: tuple, k: int, index: dict[int, int], members: list[int]) -> tuple:
+    """Truck k's part of a coupled label, in its part's numbering (:func:`coupled_search`):
+    the customers served among ``members``, their times, the label's last service and truck
+    k's state alone, every airborne drone made *fresh* (free to take any customer in range
+    next: a relaxation, the argument in :func:`coupled_search`)."""
+    S, M, svc, trucks = label
+    S_k = 0
+    seen_of: dict[int, int] = {}
+    for i, j in enumerate(members):
+        if S >> j & 1:
+            S_k |= 1 << i
+    w, A, T, ev, fin, F, drones = trucks[k]
+    out = []
+    for dr in drones:
+        if dr[0] != 1:
+            out.append(dr)
+            continue
+        o = dr[1]
+        if o >= 0:
+            o = index[o]
+        seen = seen_of.get(dr[7])
+        if seen is None:
+            seen = seen_of[dr[7]] = sum(1 << i for i, j in enumerate(members) if dr[7] >> j & 1)
+        out.append((1, o, dr[2], dr[3], dr[4], dr[5], True, seen))
+    return (S_k, M, tuple(svc[j] for j in members), ((w, A, T, ev, fin, F, tuple(out)),))
+
+
+def coupled_search(
+    problem: FleetProblem,
+    owner: list[int],
+    release: list[float] | None = None,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    max_labels: int | None = None,
+) -> dict[str, Any]:
+    """The optimum of ``problem`` over the plans of one split (customer j served by truck
+    ``owner[j]`` or its drones), any drones per truck: the label search of
+    :func:`taopt.fleet.search.label_search` over the trucks' joint states, each label also
+    bounded by every truck's *own part* (proof below).
+
+    ``release``: per customer a time no plan of the split serves it before (for example the
+    split search's topological releases, :func:`taopt.fleet.split._split_releases`); added as
+    releases they remove no plan of the split (each plan's earliest schedule meets them
+    already), so the optimum is unchanged, and they strengthen every bound.
+
+    *Per-truck bound.* Let λ be a label of the joint search and P a completion of λ (a plan of
+    the split whose first actions are λ's). Restrict P to truck k: its route, its drones'
+    sorties and its truck services, all over X_k = {j : owner[j] = k}. That is a plan of
+    :func:`taopt.fleet.split.sub_problem` (truck k alone with its D_k drones serving exactly
+    X_k, the closure pairs inside X_k) with the releases added: it meets every pair kept (P
+    does) and every release (P's times are at least them). The sub-problem's earliest
+    schedule of the same actions is no later than P's (it has a subset of P's constraints),
+    so the sub-problem's objective of that plan, and of every completion of λ's projection
+    (:func:`_project`: truck k's state and the services among X_k, the times λ fixed), is at
+    most P's objective restricted to X_k, which is at most P's. The projection makes every
+    airborne drone *fresh*: it may take any customer in range next, which only adds
+    completions (the canonical-append rule of :func:`taopt.fleet.search._appendable` loses no
+    plan's times, so the projected completion's times are reached by some sequence the
+    sub-problem's search allows). The label search's bound of the projection (a valid lower
+    bound on its completions in the sub-problem, :func:`taopt.fleet.search._bound`) is then
+    at most ``f(P)``; so is the joint label's own bound and the maximum of them all. Trucks
+    are not interchangeable here (``owner``), as with ``truck_of``.
+
+    Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
+    ``bound``, ``stopped_by``, ``labels``, ``expanded``): ``"optimal"`` when the optimum over
+    the split's plans is proven (the value; or, with no plan below ``cutoff``, the bound
+    ``min(cutoff, incumbent)``), else the least open label's bound (proven)."""
+    from operator import le
+
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.fleet.search import (
+        DEFAULT_MAX_LABELS,
+        _bound,
+        _children,
+        _complete,
+        _rebuild,
+        _signature,
+        _Tables,
+    )
+    from taopt.fleet.split import _closure, sub_problem
+
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
+    n = problem.n
+    rel = [0.0] * n if release is None else [float(r) for r in release]
+    tab = _Tables(problem)
+    tab.owner = [int(k) for k in owner]
+    tab.groups = [[k] for k in range(problem.K)]
+    tab.release = rel
+    closure = _closure(problem)
+    parts = []
+    for k in range(problem.K if problem.K > 1 else 0):  # one truck: its part is the problem
+        members = [j for j in range(n) if owner[j] == k]
+        if not members:
+            continue
+        sub_tab = _Tables(sub_problem(problem, members, problem.drones[k], closure))
+        sub_tab.release = [rel[j] for j in members]
+        parts.append((k, sub_tab, {j: i for i, j in enumerate(members)}, members))
+
+    def bound(label: tuple, cut: float) -> float:
+        b = _bound(tab, label, cut)
+        for k, sub_tab, index, members in parts:
+            if b >= cut:
+                return b
+            v = _bound(sub_tab, _project(label, k, index, members), cut)
+            if v > b:
+                b = v
+        return b
+
+    best_plan: Any = None
+    best = INF
+    if incumbent is not None:
+        try:
+            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
+        except FeasibilityError:
+            pass
+    planned = best
+    best = min(best, cutoff)
+    root_trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    root = (0, 0.0, (-1.0,) * n, root_trucks)
+    labels: list[tuple] = [root]
+    parent: list[int] = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {}
+    key, vec = _signature(tab, root)
+    store[key] = [(vec, 0)]
+    slack = 1e-12
+    cut = best * (1 - slack)
+    heap: list[tuple[float, int, int]] = [(max(bound(root, cut), floor), 0, 0)]
+    expanded = 0
+    stopped_by = "optimal"
+    found = -1
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= cut:
+            heap.clear()
+            break
+        if deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        label = labels[i]
+        if _complete(tab, label):
+            found = i
+            best = lb
+            break
+        expanded += 1
+        for child, act in _children(tab, label):
+            key, vec = _signature(tab, child)
+            bucket = store.get(key)
+            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+                continue
+            b = max(bound(child, cut), lb, floor)
+            if b >= cut:
+                continue
+            if bucket is not None:
+                keep = []
+                for other, oid in bucket:
+                    if all(map(le, vec, other)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
+            cid = len(labels)
+            labels.append(child)
+            parent.append(i)
+            action.append(act)
+            dead.append(0)
+            bucket.append((vec, cid))
+            heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
+        if len(labels) > cap:
+            stopped_by = "size"
+            break
+    result: dict[str, Any] = {"labels": len(labels), "expanded": expanded, "stopped_by": stopped_by}
+    value = planned
+    if found >= 0:
+        plan = _rebuild(problem, tab, trace(parent, action, found), labels[found])
+        # the search's value (with the releases); the scorer, which has none, may only say less
+        assert evaluate_fleet(problem, plan) <= lb * (1 + 1e-9) + 1e-9
+        result.update(plan=plan, value=lb, bound=lb)
+        return result
+    bound_value = best
+    if stopped_by != "optimal":
+        live = [b for b, _, j in heap if not dead[j]]
+        bound_value = min(min(live, default=best), best)
+    result.update(plan=best_plan, value=value, bound=bound_value)
+    return result
+
+
+#: Grid (seconds) to which :func:`leader_search` rounds the leader's interface times down
+#: before pricing the follower at them (fewer follower solves; rounding down keeps the bound).
+LEADER_GRID = 2.0
+
+
+def leader_of(problem: FleetProblem, owner: list[int]) -> int | None:
+    """Two trucks whose cross-truck closure pairs all go one way: the truck they leave (the
+    *leader*, which never waits for the other), else None (:func:`leader_search`)."""
+    from taopt.fleet.split import _closure
+
+    if problem.K != 2:
+        return None
+    ways = {owner[r] for r, j in _closure(problem) if owner[r] != owner[j]}
+    return ways.pop() if len(ways) == 1 else None
+
+
+def leader_search(
+    problem: FleetProblem,
+    owner: list[int],
+    release: list[float] | None = None,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    max_labels: int | None = None,
+    memo: dict[str, Any] | None = None,
+    leading: int | None = None,
+) -> dict[str, Any]:
+    """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
+    by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
+    the *leader* (:func:`leader_of`), to the other, the *follower*; any drones per truck.
+    With pairs both ways, a bound of it (*Both ways* below).
+
+    A label search over the leader's part alone, each leader label priced also by the
+    follower's optimum at the leader's interface times (a follower solve, cached).
+
+    *Decomposition.* Let ``X_l``, ``X_f`` be the two parts, ``I`` the leader's customers with
+    a closure successor in ``X_f`` and, for a vector θ over I, ``h(θ)`` the optimum of the
+    follower's part (:func:`taopt.fleet.split.sub_problem`) with the releases
+    ``max(release_j, θ_r for closure pairs (r, j), r in I)``. In a plan P of the split no
+    leader event waits for a follower event (no pair goes that way), so the leader's times are
+    those of its own sub-plan P_l alone (with ``release``: every plan of the split meets it,
+    so it changes no earliest schedule). The follower's sub-plan P_f is then scheduled with
+    every cross pair (r, j) as ``t_j >= t_r``: exactly the follower's part with the releases
+    θ(P_l) (the leader's times on I; again ``release`` changes nothing). So
+    ``f(P) = max(f_l(P_l), f_f(P_f; θ(P_l)))`` and, over the follower's sub-plans,
+    ``min f(P) = max(f_l(P_l), h(θ(P_l)))``. The split's optimum is the least of that over the
+    leader's plans.
+
+    *Monotone.* Raising a release never lowers the follower's optimum (each plan's earliest
+    schedule is a maximum of sums of nonnegative terms and the releases), so ``h`` is
+    non-decreasing in every component. For a leader label λ and each r in I, ``e_r(λ)``,
+    its service time when λ served it, else the least time λ's truck and drones can serve it
+    (:func:`taopt.fleet.search._earliest_services`, with the airborne drones allowed any
+    customer in range), is at most r's time in every completion; so every completion of λ
+    costs at least ``max(b_l(λ), h(e(λ)))``, ``b_l`` the label search's bound of λ in the
+    leader's part (:func:`taopt.fleet.search._bound`). The search prices labels with the
+    largest cached follower value at a point ``<= e(λ)`` (a lower bound of ``h(e(λ))``); a
+    label popped with a price below the cutoff has the follower solved at ``e(λ)`` rounded
+    down to :data:`LEADER_GRID` (still ``<= e(λ)``; its own point when λ is complete) and is
+    pushed back when its price rose. The follower is solved by :func:`coupled_search` (its
+    optimum under the releases; the label search's incumbents are priced without them, so
+    its value may be only a bound), and not at all for an incomplete label when a point
+    ``>= e(λ)`` solved exactly has ``h`` at most the label's price (h there is no larger:
+    the price could not rise). A complete label popped at its exact price is optimal:
+    every other label's price is a lower bound of its completions. Dominance compares the
+    leader labels as the label search does, with the interface times added to the compared
+    times (a label later on I is no better for the follower).
+
+    *Both ways* (no leader: :func:`leader_of` is None). The truck with more cross pairs
+    leaving it leads, and the same search is a relaxation: a follower -> leader pair is kept
+    only through ``release`` (the caller's lower bounds of those times, e.g. the topological
+    releases). In a plan P of the split, the leader's sub-plan under ``release`` alone has
+    times no later than P's (fewer constraints), so its objective and its interface times θ'
+    are at most P's, and the follower's part of P meets the releases ``max(release, θ')``
+    (its times are at least those of P's leader events), so ``f(P) >= max(f_l(P_l; release),
+    h(θ'))``: the least of that over the leader's plans, what the search computes, bounds
+    the split's optimum. When the plan it ends on scores that value (``evaluate``, with every
+    pair) it is the optimum; else the run ends with ``stopped_by == "relaxed"``, that value as
+    ``bound`` and the plan as a candidate (kept when it scores below the incumbent).
+
+    ``leading``: with pairs both ways, the truck that leads the relaxation (default: the one
+    with more cross pairs leaving it); ignored when the pairs go one way.
+
+    ``memo``: a dict kept by the caller between runs on the same split with the same
+    ``release`` and a cutoff that never rises (the split search's slices): the follower
+    solves are kept there and reused (each cached value stays a lower bound of h, and an
+    exact one stays exact).
+
+    Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
+    ``bound``, ``stopped_by``) with the counters ``labels``, ``expanded`` and
+    ``follower_solves``."""
+    from operator import le
+
+    from taopt.errors import FeasibilityError
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.fleet.search import (
+        DEFAULT_MAX_LABELS,
+        _bound,
+        _children,
+        _complete,
+        _earliest_services,
+        _signature,
+        _Tables,
+    )
+    from taopt.fleet.search import _rebuild as rebuild_label
+    from taopt.fleet.split import _closure, _lift, sub_problem
+
+    if problem.K != 2:
+        raise ValueError("leader_search needs two trucks")
+    leader = leader_of(problem, owner)
+    one_way = leader is not None
+    if leader is None:  # both ways (or none): the relaxation, led by the truck with more
+        ways = [0, 0]
+        for r, j in _closure(problem):
+            if owner[r] != owner[j]:
+                ways[owner[r]] += 1
+        leader = (0 if ways[0] >= ways[1] else 1) if leading is None else int(leading)
+    follower = 1 - leader
+    deadline = Deadline(time_limit)
+    cap = DEFAULT_MAX_LABELS if max_labels is None else int(max_labels)
+    n = problem.n
+    rel = [0.0] * n if release is None else [float(r) for r in release]
+    closure = _closure(problem)
+    lead = [j for j in range(n) if owner[j] == leader]
+    foll = [j for j in range(n) if owner[j] == follower]
+    li = {j: i for i, j in enumerate(lead)}
+    sub_l = sub_problem(problem, lead, problem.drones[leader], closure)
+    sub_f = sub_problem(problem, foll, problem.drones[follower], closure)
+    tab = _Tables(sub_l)
+    tab.release = [rel[j] for j in lead]
+    cross = [(r, j) for r, j in closure if owner[r] == leader and owner[j] == follower]
+    inter = sorted({r for r, _ in cross})
+    inter_l = [li[r] for r in inter]  # in the leader's numbering
+    succ_of = {r: [foll.index(j) for rr, j in cross if rr == r] for r in inter}
+    base_f = [rel[j] for j in foll]
+    c, tau = tab.c, tab.tau
+
+    best_plan: Any = None
+    best = INF
+    if incumbent is not None:
+        try:
+            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
+        except FeasibilityError:
+            pass
+    planned = best
+    best = min(best, cutoff)
+    cut = best * (1 - 1e-12)
+    memo = {} if memo is None else memo
+    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan); points solved
+    # once without an exact answer
+    cache: list[tuple[tuple[float, ...], float]] = memo.setdefault("cache", [])
+    exact: dict[tuple[float, ...], tuple[float, Any]] = memo.setdefault("exact", {})
+    tried: set[tuple[float, ...]] = memo.setdefault("tried", set())
+    solves = 0
+
+    def h_low(theta: tuple[float, ...]) -> float:
+        v = 0.0
+        for point, value in cache:
+            if value > v and all(map(le, point, theta)):
+                v = value
+        return v
+
+    def solve(theta: tuple[float, ...], limit: float | None) -> float:
+        """h(θ) with its plan (:func:`coupled_search`, which takes no incumbent priced
+        without the releases), or a lower bound of it (cut when no follower plan is below
+        it, the bound of a stopped solve), cached."""
+        nonlocal solves
+        releases = base_f[:]
+        for r, t in zip(inter, theta, strict=True):
+            for i in succ_of[r]:
+                if t > releases[i]:
+                    releases[i] = t
+        solves += 1
+        found = coupled_search(
+            sub_f,
+            [0] * len(foll),
+            release=releases,
+            time_limit=limit,
+            floor=h_low(theta),
+            cutoff=best,
+        )
+        if found["stopped_by"] == "optimal":
+            if found["plan"] is not None and found["value"] < best:
+                value = float(found["value"])
+                exact[theta] = (value, found["plan"])
+            else:
+                value = best
+                exact[theta] = (value, None)
+        else:
+            value = float(found["bound"])
+        cache.append((theta, value))
+        return value
+
+    def known_below(theta: tuple[float, ...], price: float) -> bool:
+        """Whether some point solved exactly at or above θ has ``h <= price`` (then
+        ``h(θ) <= price`` by monotonicity: solving at θ cannot raise the label's price)."""
+        return any(
+            value[0] <= price and all(map(le, theta, point)) for point, value in exact.items()
+        )
+
+    def interface(label: tuple) -> tuple[float, ...]:
+        S, _M, svc, trucks = label
+        if all(S >> i & 1 for i in inter_l):
+            return tuple(svc[i] for i in inter_l)
+        air = [INF] * tab.n
+        for _w, _A, _T, _ev, fin, _F, drones in trucks:
+            if fin:
+                continue
+            for dr in drones:
+                if not (dr[0] == 1 and dr[5] and dr[2] < c):
+                    continue
+                o = dr[1]
+                for j in range(tab.n):
+                    if S >> j & 1 or not tab.drone_ok[j]:
+                        continue
+                    if o >= 0:
+                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                    else:
+                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                    if dr[4] + dist + tab.near[j] <= tab.limit:
+                        v = dr[3] + fly + tau
+                        if v < air[j]:
+                            air[j] = v
+        est = _earliest_services(tab, S, svc, trucks, air)
+        return tuple(
+            svc[i]
+            if S >> i & 1
+            else (math.floor(est[i] / LEADER_GRID) * LEADER_GRID if est[i] < INF else INF)
+            for i in inter_l
+        )
+
+    def price(label: tuple, theta: tuple[float, ...]) -> float:
+        if INF in theta:
+            return INF  # an interface customer it can no longer serve
+        b = _bound(tab, label, cut)
+        if b >= cut:
+            return b
+        return max(b, h_low(theta))
+
+    def signature(label: tuple) -> tuple[tuple, tuple]:
+        key, vec = _signature(tab, label)
+        svc = label[2]
+        return key, vec + tuple(svc[i] for i in inter_l)
+
+    if not cache:
+        solve(tuple(rel[r] for r in inter), deadline.remaining())
+    root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
+    root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
+    labels: list[tuple] = [root]
+    thetas: list[tuple[float, ...]] = [interface(root)]
+    parent: list[int] = [-1]
+    action: list[Any] = [None]
+    dead = bytearray(1)
+    store: dict[tuple, list[tuple[tuple, int]]] = {}
+    key, vec = signature(root)
+    store[key] = [(vec, 0)]
+    heap: list[tuple[float, int, int]] = [(max(price(root, thetas[0]), floor), 0, 0)]
+    expanded = 0
+    stopped_by = "optimal"
+    found = -1
+    while heap:
+        lb, _, i = heapq.heappop(heap)
+        if dead[i]:
+            continue
+        if lb >= cut:
+            heap.clear()
+            break
+        if deadline.expired():
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit"
+            break
+        label, theta = labels[i], thetas[i]
+        done = _complete(tab, label)
+        if theta not in exact and (done or theta not in tried):
+            tried.add(theta)
+            left = deadline.remaining()
+            if done or not known_below(theta, lb):
+                solve(theta, left if done or left is None else min(left, max(1.0, 0.1 * left)))
+            now = max(lb, price(label, theta))
+            if now > lb:
+                if now < cut:
+                    heapq.heappush(heap, (now, -bin(label[0]).count("1"), i))
+                continue
+        if done and theta not in exact:  # its follower solve stopped: the clock (or size)
+            heapq.heappush(heap, (lb, 0, i))
+            stopped_by = "time_limit" if deadline.expired() else "size"
+            break
+        if done:
+            now = max(lb, exact[theta][0])
+            if now > lb:
+                if now < cut:
+                    heapq.heappush(heap, (now, -bin(label[0]).count("1"), i))
+                continue
+            found = i
+            break
+        expanded += 1
+        for child, act in _children(tab, label):
+            key, vec = signature(child)
+            bucket = store.get(key)
+            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+                continue
+            theta_c = interface(child)
+            b = max(price(child, theta_c), lb, floor)
+            if b >= cut:
+                continue
+            if bucket is not None:
+                keep = []
+                for other, oid in bucket:
+                    if all(map(le, vec, other)):
+                        dead[oid] = 1
+                    else:
+                        keep.append((other, oid))
+                bucket[:] = keep
+            else:
+                bucket = store[key] = []
+            cid = len(labels)
+            labels.append(child)
+            thetas.append(theta_c)
+            parent.append(i)
+            action.append(act)
+            dead.append(0)
+            bucket.append((vec, cid))
+            heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
+        if len(labels) > cap:
+            stopped_by = "size"
+            break
+    result: dict[str, Any] = {
+        "labels": len(labels),
+        "expanded": expanded,
+        "stopped_by": stopped_by,
+        "follower_solves": solves,
+    }
+    if found >= 0:
+        lead_plan = rebuild_label(sub_l, tab, trace(parent, action, found), labels[found])
+        foll_plan = exact[thetas[found]][1]
+        assert foll_plan is not None  # priced below the cutoff: a follower plan exists
+        pieces = [_lift(lead_plan, lead), _lift(foll_plan, foll)]
+        if leader == 1:
+            pieces.reverse()
+        plan = FleetPlan([x[0] for x in pieces], [x[1] for x in pieces], [x[2] for x in pieces])
+        try:
+            value = evaluate_fleet(problem, plan)  # the coupled schedule: no later (see above)
+        except FeasibilityError:  # both ways: the relaxation's plan may deadlock
+            value = INF
+        if not one_way and value > lb * (1 + 1e-9):
+            # the relaxation's optimum: a bound of the split, its plan (when it scores) no proof
+            result.update(stopped_by="relaxed", bound=lb)
+            if value < planned:
+                result.update(plan=plan, value=value)
+            else:
+                result.update(plan=best_plan, value=planned)
+            return result
+        result.update(plan=plan, value=value, bound=min(lb, value))
+        return result
+    bound_value = best
+    if stopped_by != "optimal":
+        live = [b for b, _, j in heap if not dead[j]]
+        bound_value = min(min(live, default=best), best)
+    result.update(plan=best_plan, value=planned, bound=bound_value)
+    return result
+
+
+__all__ = [
+    "LEADER_GRID",
+    "MAX_LABELS",
+    "coupled_applies",
+    "coupled_dp",
+    "coupled_search",
+    "leader_of",
+    "leader_search",
+]

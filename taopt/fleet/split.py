@@ -97,11 +97,16 @@ its cheapest unrefined part moves one level up, and the split is pushed back wit
 bound. When every part is exact, the parts' plans are combined into one fleet plan and
 scored by :func:`taopt.fleet.evaluate.evaluate_fleet` (the cross-truck precedences may make a
 vehicle wait, or deadlock). If its value equals the split's bound, the split is solved;
-otherwise the coupled problem restricted to the split is solved by the label search with
-``truck_of`` (each customer only on its truck), the split's bound as a floor and the best
-value as a cutoff, in doubling time slices like the parts' (the split goes back to the heap
-with the bound each slice proves: at 600 s one such search took 380 s of fleet10 seed 0's
-run). The run stops when the best plan is no worse than the least bound of the
+otherwise the coupled problem restricted to the split is solved, the split's bound as a
+floor and the best value as a cutoff, in doubling time slices like the parts' (the split
+goes back to the heap with the bound each slice proves): with two trucks whose cross pairs
+go one way, by :func:`taopt.fleet.coupled.leader_search` (exact; :data:`LEADER_SHARE` of the
+time left at its first try); with pairs both ways, first by its relaxation led by each truck
+in turn (each a bound of the split, and its optimum when its plan scores it), then by the
+label search with ``truck_of`` (each customer only
+on its truck) and the split's topological releases (met by every plan of the split, so the
+optimum over the split is the same; at 600 s one such search took 380 s of fleet10 seed
+0's run). The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
 The part solves run without the label search's beam pass (they are cut off at the best
@@ -142,6 +147,10 @@ SLICE = 0.1
 
 #: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
 DRONE_SPLIT_SHARE = 0.25
+
+#: Share of the time left that one leader search (:func:`taopt.fleet.coupled.leader_search`,
+#: a split whose cross pairs go one way) may take at its first try (doubled at each retry).
+LEADER_SHARE = 0.5
 
 #: Most seconds of one exact chain solve (:func:`split_search`'s ``exact_chain``: the other
 #: truck's last service over a cross predecessor and its ancestors there).
@@ -490,6 +499,16 @@ def _releases(
     return out
 
 
+def _lead(problem: FleetProblem, owner: list[int]) -> int:
+    """Two trucks, cross pairs both ways: the truck with more cross closure pairs leaving it
+    (the default leader of :func:`taopt.fleet.coupled.leader_search`'s relaxation)."""
+    ways = [0, 0]
+    for r, j in _closure(problem):
+        if owner[r] != owner[j]:
+            ways[owner[r]] += 1
+    return 0 if ways[0] >= ways[1] else 1
+
+
 def _dominates(outer: dict[int, float], inner: dict[int, float], mask: int) -> bool:
     """Whether the releases ``outer`` (customer -> release, of a superset part) are no earlier
     than ``inner`` (of the part ``mask``) on every member of ``mask``: the condition of
@@ -558,6 +577,7 @@ def split_search(
     """
 
     from taopt.fleet.bounds import fleet_lower
+    from taopt.fleet.coupled import leader_of, leader_search
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
 
@@ -769,10 +789,14 @@ def split_search(
                 found_best = (candidate, score)
         return found_best
 
+    topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
+    leader_memo: dict[tuple[tuple[int, ...], int], dict[str, Any]] = {}  # follower solves
+    relaxed: dict[int, int] = {}  # splits (both ways): leader relaxations run (each truck once)
+
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
         with them: a bound on every plan of the split, at least ``key``."""
-        L = _split_releases(problem, owner, closure, early, deadline)
+        L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
         bound = key
         for k, m in enumerate(split):
             if not m or deadline.expired():
@@ -896,6 +920,9 @@ def split_search(
             continue
         # every part exact: combine and score
         plan, value = combine(split)
+        trace.append(
+            ("combined", round(time.perf_counter() - deadline_start, 3), split, key, value)
+        )
         if value < best:
             best, best_plan = value, plan
             trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
@@ -917,31 +944,70 @@ def split_search(
                     solved += 1
                     continue
             raised = tighten(split, owner, key)
-            trace.append(("tight", round(time.perf_counter() - deadline_start, 3), key, raised))
+            trace.append(
+                ("tight", round(time.perf_counter() - deadline_start, 3), split, key, raised)
+            )
             if raised > key * (1 + CERTIFY):
                 heapq.heappush(heap, (raised, i))
                 continue
         coupled += 1
         left = deadline.remaining()
+        # one-way cross pairs: the leader search, exact; both ways: its relaxation once (a
+        # bound of the split, maybe its optimum), then the label search restricted to it
+        one_way = problem.K == 2 and leader_of(problem, owner) is not None
+        leader = problem.K == 2 and (one_way or relaxed.get(i, 0) < 2)
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'
             tries = coupled_tries.get(i, 0)
             coupled_tries[i] = tries + 1
-            left = min(left, max(2.0, SLICE * left) * 2**tries)
-        found = label_search(
-            problem,
-            time_limit=left,
-            incumbent=plan if value < INF else None,
-            max_labels=max_labels,
-            truck_of=owner,
-            floor=key * (1 - 1e-9),
-            cutoff=best,
-        )
+            share = LEADER_SHARE if leader else SLICE
+            left = min(left, max(2.0, share * left) * 2**tries)
+        L = topological.get(split)
+        if L is None:
+            L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
+        if leader:
+            found = leader_search(
+                problem,
+                owner,
+                release=L,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                max_labels=max_labels,
+                memo=leader_memo.setdefault((split, relaxed.get(i, 0)), {}),
+                leading=None if one_way or not relaxed.get(i, 0) else 1 - _lead(problem, owner),
+            )
+        else:
+            found = label_search(
+                problem,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                max_labels=max_labels,
+                truck_of=owner,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                release=L,  # met by every plan of the split: same optimum, stronger bounds
+            )
         if found["plan"] is not None and found["value"] < best:
-            best, best_plan = float(found["value"]), found["plan"]
-            trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
+            try:
+                scored = evaluate_fleet(problem, found["plan"])
+            except FeasibilityError:
+                scored = INF
+            if scored < best:
+                best, best_plan = scored, found["plan"]
+                trace.append(("best", round(time.perf_counter() - deadline_start, 3), best))
         trace.append(
-            ("coupled", round(time.perf_counter() - deadline_start, 3), found["stopped_by"], key)
+            (
+                "coupled",
+                round(time.perf_counter() - deadline_start, 3),
+                split,
+                found["stopped_by"],
+                key,
+                round(float(found["bound"]), 4),
+            )
         )
+        if found["stopped_by"] == "relaxed":
+            relaxed[i] = relaxed.get(i, 0) + 1
         if found["stopped_by"] != "optimal":
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
@@ -976,6 +1042,7 @@ __all__ = [
     "CERTIFY",
     "CHAIN_SECONDS",
     "DRONE_SPLIT_SHARE",
+    "LEADER_SHARE",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
     "SLICE",
