@@ -405,7 +405,7 @@ class _Bound:
         """
         group, unique = _groups(mask)
         in_sum, out_sum, entry, ready, forced, todo_all = self._per_ideal(unique)
-        done = ~todo_all.any(axis=1)  # per ideal: nothing left to visit
+        done = ~np.asarray(todo_all.any(axis=1))  # per ideal: nothing left to visit
         # only the nodes available in some ideal, or entered from v only, take part in the
         # terms of v (every other column adds nothing): a few dozen under dense precedence
         unentered = todo_all & ~np.isfinite(entry)
@@ -493,8 +493,8 @@ class _Bound:
         n = self.n
         member = _members(mask, n)  # (k, n) bool: node held by the ideal
         open_t = np.ascontiguousarray(~member.T)  # (n, k): node still to visit
-        held_by_all = member.all(axis=0)
-        held_by_some = member.any(axis=0)
+        held_by_all = np.asarray(member.all(axis=0))
+        held_by_some = np.asarray(member.any(axis=0))
         todo_all = ~member
         todo_all[:, self.start] = False
         # available: every predecessor held; decided for the whole layer unless one is in
@@ -874,7 +874,7 @@ class _Search:
         index = np.arange(len(mask))
         # a node every mask holds, or one with a predecessor no mask holds, extends none
         member = _members(mask, self.problem.n)
-        held_by_all, held_by_some = member.all(axis=0), member.any(axis=0)
+        held_by_all, held_by_some = np.asarray(member.all(axis=0)), np.asarray(member.any(axis=0))
         for w in range(self.problem.n):
             if w == self.problem.start or held_by_all[w]:
                 continue
