@@ -1510,6 +1510,7 @@ def _beam_start(
                     info["beam_skipped"] = width
                     break
             key = _problem_key(problem, width)
+            beam: tuple[float, list[int]] | None
             if key in _BEAMS:  # ran to its end in an earlier stage (deterministic): reused
                 beam, seconds = _BEAMS[key]
             else:

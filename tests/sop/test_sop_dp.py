@@ -332,3 +332,17 @@ def test_cheapest_extension_per_state_equals_a_full_sort(n, words):
     first = np.ones(size, dtype=bool)
     first[1:] = differs(mask[order]) | (last[order][1:] != last[order][:-1])
     assert np.array_equal(_cheapest_per_state(mask, last, value, n), order[first])
+
+
+def test_beam_passes_run_to_their_end_are_reused(sop_esc25):
+    """A beam pass that ran to its end is remembered per problem and width and reused by a
+    later call (a second DP stage), which proves the same optimum."""
+    from taopt.models import sop_dp
+
+    sop_dp._BEAMS.clear()
+    first = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
+    keys = {sop_dp._problem_key(sop_esc25, w) for w in (64, 256)}
+    assert keys <= set(sop_dp._BEAMS)
+    again = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
+    assert again.status == first.status == OPTIMAL and again.objective == first.objective
+    assert again.info["beam"] == first.info["beam"]
