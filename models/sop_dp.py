@@ -44,7 +44,7 @@ ESC25 and ESC47: without the prices the DP kept 2.3 million states on ESC25 and 
 finish ESC47 within 2 million; with them 454 and about 25,000. The minima over ``U``
 are found per ideal as the first arc, in each node's arcs sorted by reduced cost, whose
 other end is still unvisited, ``O(n log n)`` per state by binary search; a layer's ideals
-share most of it (:meth:`_Bound._per_ideal_band`): a node every ideal of the layer holds
+share most of it (``_Bound._per_ideal_band``): a node every ideal of the layer holds
 takes no part, and a node whose cheapest arc's other end no ideal holds gets that arc in
 every ideal, so only the *band* (nodes some but not all ideals hold, a few dozen under the
 dense precedence of the rbg files) is looked at per ideal. The arc
@@ -223,7 +223,7 @@ DENSE_NODES = 100
 DENSE_ARC_SHARE = 0.75
 
 
-#: The completion bound's per-ideal sums by :meth:`_Bound._per_ideal_band` (the work
+#: The completion bound's per-ideal sums by ``_Bound._per_ideal_band`` (the work
 #: confined to the nodes some but not all of a layer's ideals hold) instead of a binary
 #: search per node and ideal (the same values, tested). The DP alone on rbg-atsp-150 in 20 s
 #: (load 2-5): 186,139 states kept before (13.2 s of the 20 in the per-ideal sums), 716,612

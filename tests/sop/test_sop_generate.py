@@ -89,7 +89,7 @@ def test_portfolio_certifies_a_wide_rbg_like_instance():
 
 
 def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
-    """The states a DP stage is expected to make and to keep per second halve at 128 nodes, so
+    """The states a DP stage is expected to make (keep) per second halve at 128 (256) nodes, so
     the guard at 60 s of a 150-node rbg-like instance counts at most that many states."""
     from taopt.models.sop import (
         BASE_BYTES,
@@ -105,7 +105,7 @@ def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
 
     assert dp_states_per_second(40) == dp_states_per_second(64) == DP_STATES_PER_SECOND
     assert dp_states_per_second(128) == DP_STATES_PER_SECOND / 2
-    assert fill_states(128, 60.0, False) == fill_states(64, 60.0, False) / 2
+    assert fill_states(256, 60.0, False) == fill_states(64, 60.0, False) / 2
     problem = rbg_like_sop(150, 1, 0.8)
     estimate, _ = _footprint(problem, {"time_limit": 60.0, "engine": "dp", "cpsat": False})
     fill = GUARD_FILL_FACTOR * fill_states(150, 60.0, False)
