@@ -167,9 +167,11 @@ BEAM_SHARE = 0.25
 
 #: A wider beam pass is started only when the last one's time, grown as the ratio of the widths
 #: to this power, fits in the beam's budget. Measured 64 -> 256 -> 1,024: 1.6x and 3x on
-#: rbg-atsp-150, 1.9x and 3.7x on ESC47, 3.1x and 7x on rbg-atsp-255; the square root (2x a
-#: step) errs towards starting the middle pass, which found rbg-atsp-150's optimum.
-BEAM_TIME_EXPONENT = 0.5
+#: rbg-atsp-150, 1.6x and 4x on rbg-atsp-175, 1.9x and 3.7x on ESC47, 3.1x and 7x on
+#: rbg-atsp-255. 0.35 (1.62x a step) is the least growth measured, so a pass is skipped only
+#: when even that would not fit: with the square root (2x) rbg-atsp-150 at 60 s under load
+#: 6-10 skipped its middle pass in both DP stages and ended 2116 [2107] (the pass finds 2107).
+BEAM_TIME_EXPONENT = 0.35
 
 #: Width of the first, narrow beam pass.
 NARROW_BEAM = 64
