@@ -922,9 +922,20 @@ CUTS_REST_SHARE = 0.25
 PROBE_ALLOWED_SHARE = 0.04
 
 #: States a DP stage that fills its states keeps per second of its share, up to 64 nodes
-#: (in proportion to ``64 / n`` above; :func:`fill_states`): fitted on the runs that stop on
-#: their time (prob.42, ry48p.1, ft53.1, p43.1, rbg050c at 10 and 60 s, CP-SAT off).
+#: (times ``(64 / n) ** FILL_WIDE_EXPONENT`` above; :func:`fill_states`): fitted on the runs
+#: that stop on their time (prob.42, ry48p.1, ft53.1, p43.1, rbg050c at 10 and 60 s, CP-SAT
+#: off).
 FILL_STATES_PER_SECOND = 31_000.0
+
+#: How the fill rate falls beyond 64 nodes: ``(64 / n) ** FILL_WIDE_EXPONENT``. It was
+#: ``64 / n`` while the completion bound searched every node's arcs per ideal; with the
+#: band's bound (``taopt.models.sop_dp._Bound._per_ideal_band``) a state's work no
+#: longer grows with ``n`` as fast. Measured, the DP alone for 15 s without an incumbent,
+#: main then the branch in the same minutes (load 8.6): rbg-atsp-150-0.6 4,939 -> 42,119
+#: states a second, ESC47 23,879 -> 68,426; 150 nodes against 49: 0.21 before, 0.62 after,
+#: ``(49 / 150) ** 0.43``. With ``64 / n`` the estimate of rbg-atsp-150-0.6 at 60 s was
+#: 593 MB against a 1,340 MB peak (2.26).
+FILL_WIDE_EXPONENT = 0.5
 
 #: The share of :data:`FILL_STATES_PER_SECOND` left to the DP when CP-SAT's worker runs
 #: beside it on this 2-core machine (fitted: the same runs with CP-SAT beside).
@@ -942,14 +953,15 @@ GUARD_FILL_FACTOR = 80_000.0 / FILL_STATES_PER_SECOND
 def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
     """The states a DP stage of ``seconds`` (None: no limit, infinite) on ``n`` nodes keeps
     when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` a second
-    (times ``min(1, 64 / n)``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``),
+    (times ``min(1, 64 / n) ** FILL_WIDE_EXPONENT``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``),
     divided by ``share`` (:func:`dp_state_share`: a state of fewer extensions costs less time
     as it costs fewer bytes, so a filling stage's bytes a second do not depend on it;
     rbg050c, share 0.6, kept 1.98 million states in a 25 s stage, 79,000 a second);
     increasing in ``seconds``."""
     if seconds is None:
         return float("inf")
-    rate = FILL_STATES_PER_SECOND * min(1.0, 64.0 / max(n, 1)) / max(share, 1e-9)
+    wide = min(1.0, 64.0 / max(n, 1)) ** FILL_WIDE_EXPONENT
+    rate = FILL_STATES_PER_SECOND * wide / max(share, 1e-9)
     return rate * max(float(seconds), 0.0) * (FILL_BESIDE_SHARE if beside else 1.0)
 
 

@@ -312,3 +312,37 @@ def test_both_price_sets_still_equal_brute_force(seed):
         return
     assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
     assert result.bound == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize(("n", "words"), [(20, 1), (58, 1), (130, 3)])
+def test_cheapest_extension_per_state_equals_a_full_sort(n, words):
+    """The merge keeps, per (mask, last), the extension a stable sort by (mask, last, value)
+    puts first: the same states, values and parents, ties included."""
+    from taopt.ideals import differs, lex_keys
+    from taopt.models.sop_dp import _cheapest_per_state
+
+    rng = np.random.default_rng(n)
+    size = 5_000
+    pool = rng.integers(0, 2 ** min(n, 63), (200, words), dtype=np.uint64)
+    mask = pool[rng.integers(0, 200, size)]
+    mask = mask[:, 0] if words == 1 else mask
+    last = rng.integers(0, n, size)
+    value = rng.integers(0, 20, size).astype(float)  # many ties
+    order = np.lexsort((value, last, *lex_keys(mask)))
+    first = np.ones(size, dtype=bool)
+    first[1:] = differs(mask[order]) | (last[order][1:] != last[order][:-1])
+    assert np.array_equal(_cheapest_per_state(mask, last, value, n), order[first])
+
+
+def test_beam_passes_run_to_their_end_are_reused(sop_esc25):
+    """A beam pass that ran to its end is remembered per problem and width and reused by a
+    later call (a second DP stage), which proves the same optimum."""
+    from taopt.models import sop_dp
+
+    sop_dp._BEAMS.clear()
+    first = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
+    keys = {sop_dp._problem_key(sop_esc25, w) for w in (64, 256)}
+    assert keys <= set(sop_dp._BEAMS)
+    again = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
+    assert again.status == first.status == OPTIMAL and again.objective == first.objective
+    assert again.info["beam"] == first.info["beam"]

@@ -10,7 +10,7 @@ from reference_exact import sop_brute_force
 from taopt.models import sop_dp
 from taopt.models.sop import solve_sop_problem
 from taopt.result import OPTIMAL
-from taopt.sop.generate import atsp_sop, esc_like_sop, rbg_from_atsp, rbg_like_sop
+from taopt.sop.generate import atsp_sop, esc_like_sop, random_sop, rbg_from_atsp, rbg_like_sop
 from taopt.sop.problem import evaluate_order
 
 
@@ -89,7 +89,7 @@ def test_portfolio_certifies_a_wide_rbg_like_instance():
 
 
 def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
-    """The states a DP stage is expected to make and to keep per second halve at 128 nodes, so
+    """The states a DP stage is expected to make (keep) per second halve at 128 (256) nodes, so
     the guard at 60 s of a 150-node rbg-like instance counts at most that many states."""
     from taopt.models.sop import (
         BASE_BYTES,
@@ -105,7 +105,7 @@ def test_dp_rate_of_the_memory_estimate_falls_beyond_64_nodes():
 
     assert dp_states_per_second(40) == dp_states_per_second(64) == DP_STATES_PER_SECOND
     assert dp_states_per_second(128) == DP_STATES_PER_SECOND / 2
-    assert fill_states(128, 60.0, False) == fill_states(64, 60.0, False) / 2
+    assert fill_states(256, 60.0, False) == fill_states(64, 60.0, False) / 2
     problem = rbg_like_sop(150, 1, 0.8)
     estimate, _ = _footprint(problem, {"time_limit": 60.0, "engine": "dp", "cpsat": False})
     fill = GUARD_FILL_FACTOR * fill_states(150, 60.0, False)
@@ -192,3 +192,34 @@ def test_portfolio_equals_cpsat_proof_on_a_crane_instance():
     theirs = cpsat_sop(problem, time_limit=30)
     assert ours.status == OPTIMAL and theirs.status == OPTIMAL
     assert ours.objective == theirs.objective == evaluate_order(problem, ours.order)
+
+
+@pytest.mark.parametrize(
+    "problem",
+    [random_sop(14, 0.5, 3), rbg_like_sop(70, 4, 0.7), rbg_like_sop(130, 2, 0.85)],
+    ids=["random-14-dense", "rbg-like-70", "rbg-like-130"],
+)
+def test_band_and_per_node_ideal_bounds_agree(problem, monkeypatch):
+    """The completion bound confined to the layer's band equals the per-node binary searches."""
+    search = sop_dp._Search(problem)
+    layer = search.first()[:3]
+    for _ in range(min(10, problem.n - 3)):
+        layer = search.grow(*layer, sop_dp.Deadline(None))[:3]
+        monkeypatch.setattr(sop_dp, "BAND", True)
+        band = search.bound(layer[0], layer[1])
+        monkeypatch.setattr(sop_dp, "BAND", False)
+        monkeypatch.setattr(sop_dp, "DENSE_NODES", 0)  # per-node binary searches
+        assert np.allclose(band, search.bound(layer[0], layer[1]), equal_nan=True)
+        assert np.isfinite(band).any()
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_band_dp_equals_brute_force_on_dense_precedence(seed):
+    """The DP with the band's completion bound, each direction and both met, proves the
+    brute-force optimum of random 10-node SOPs with dense precedence."""
+    problem = random_sop(10, 0.6 + 0.05 * seed, seed)
+    expected = sop_brute_force(problem)
+    for both in (False, True):
+        result = sop_dp.solve_sop_dp(problem, beam_width=0, both=both)
+        assert result.status == OPTIMAL and result.objective == expected
+        assert result.bound <= expected + 1e-9

@@ -337,7 +337,7 @@ def test_fill_states_grow_with_the_time_and_fall_beside_cpsat():
     at = [fill_states(49, t, False) for t in (0.0, 1.0, 10.0, 60.0)]
     assert at[0] == 0.0 and at == sorted(at) and at[-1] > at[1]
     assert fill_states(49, 10.0, True) < at[2]
-    assert fill_states(128, 10.0, False) == pytest.approx(at[2] / 2)
+    assert fill_states(256, 10.0, False) == pytest.approx(at[2] / 2)
     assert fill_states(49, None, False) == float("inf")
 
 
