@@ -1589,6 +1589,16 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
+#: Share of the time limit the root stage gives the iterated SOP-3-exchange local search
+#: (:func:`taopt.heuristics.sop_search.iterated_local_search`) on the best order it knows,
+#: before the DP and the cut engine prune with that order's cost (0: not run). From a width-64
+#: beam's order, 3 s of it gave prob.42 247-248 (the portfolio had 261 at 10 s and 250 at
+#: 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1 stayed at 16321 (16331 at 60 s).
+ILS_SHARE = 0.1
+
+#: Iterations of that search in a run without a time limit.
+ILS_ITERATIONS = 1000
+
 
 def _far(result: Solution) -> bool:
     """The run's relative gap is above :data:`CUTS_SECOND_STAGE_GAP` (or unknown)."""
@@ -1752,6 +1762,7 @@ def solve_sop_problem(
     max_states: int = PORTFOLIO_MAX_STATES,
     max_memory_gb: float | None = None,
     cpsat: bool | None = None,
+    seed: int = 0,
 ) -> Solution:
     """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
     MILP for sparse precedence, and CP-SAT beside them.
@@ -1831,6 +1842,8 @@ def solve_sop_problem(
     cpsat : bool, optional
         Run CP-SAT beside the stages: True (a :class:`~taopt.errors.SolverError` when it is
         not available), False (never), None (default: the rule above).
+    seed : int
+        Seed of the root stage's iterated local search (:data:`ILS_SHARE`).
 
     Returns
     -------
@@ -1863,6 +1876,7 @@ def solve_sop_problem(
     options = dict(
         formulation=formulation, mip_gap=mip_gap, verbose=verbose, incumbent=incumbent,
         engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
+        seed=seed,
     )  # fmt: skip
     peer, why = _cpsat_peer(problem, cpsat, engine, time_limit, max_memory_gb)
     counted: tuple[int, bool, float] | None = None
@@ -1989,18 +2003,21 @@ def _root_stage(
     incumbent: Any,
     info: dict[str, Any],
     verbose: bool,
+    seed: int = 0,
 ) -> tuple[Any, tuple[float, np.ndarray] | None, Any, bool]:
     """The portfolio's root stage: the cut engine's root cut loop within :data:`ROOT_SHARE`
-    of the limit, before the DP.
+    of the limit, then the iterated local search on the best order within :data:`ILS_SHARE`
+    (``seed``), before the DP.
 
     Returns ``(model, lagrange, incumbent, cuts_first)``: the cut model (its rows kept for the
     cut engine), its LP's Lagrangian bound for the DP
     (:meth:`taopt.models.sop_cuts.SopCutModel.lagrangian_prices`, None without duals), the
-    better of ``incumbent`` and the LP point's rounded order, and whether the cut engine goes
+    better of ``incumbent`` and the LP point's rounded order after the local search, and whether the cut engine goes
     first (:data:`CUTS_FIRST_SHARE`). The root's rows are precedence path cuts valid for every
     order, and no arc is fixed here, so the Lagrangian bound holds for every order
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``). ``info`` gains
-    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed).
+    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed, and ``ils``: the
+    search's start and end costs, iterations and seconds).
     """
     from taopt.models.sop_cuts import SopCutModel, round_point
 
@@ -2013,6 +2030,21 @@ def _root_stage(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
             incumbent = Order(rounded[1])
+    searched: dict[str, Any] | None = None
+    if ILS_SHARE > 0 and known is not None and not deadline.expired(MARGIN):
+        from taopt.heuristics.sop_search import iterated_local_search
+
+        searching = time.perf_counter()
+        budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+        iterations = None if deadline.limited else ILS_ITERATIONS
+        value, order, searched = iterated_local_search(
+            problem, known[1], budget, iterations=iterations, seed=seed
+        )
+        searched = {**searched, "from": known[0], "to": value}
+        searched["seconds"] = time.perf_counter() - searching
+        if value < known[0]:
+            known = (value, order)
+            incumbent = Order(order)
     lagrange = model.lagrangian_prices()
     cheap = _cheap_bound(problem)
     closed = 0.0
@@ -2026,6 +2058,7 @@ def _root_stage(
         "rounds": root.rounds,
         "closed": closed,
         "cuts_first": cuts_first,
+        "ils": searched,
     }
     return model, lagrange, incumbent, cuts_first
 
@@ -2043,6 +2076,7 @@ def _stages(
     max_memory_gb: float | None,
     on_root: Callable[[bool], None] | None = None,
     counted: tuple[int, bool, float] | None = None,
+    seed: int = 0,
 ) -> Solution:
     """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
 
@@ -2271,7 +2305,7 @@ def _stages(
         watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
-                problem, deadline, incumbent, info, verbose
+                problem, deadline, incumbent, info, verbose, seed
             )
             if ROW_CREDIT and lagrange is not None:
                 credit = root_model.row_credit()
