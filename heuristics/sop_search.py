@@ -101,23 +101,30 @@ def _limits(on_path: np.ndarray) -> np.ndarray:
 
 
 def best_exchange(
-    cost: np.ndarray, before: np.ndarray, order: Sequence[int] | np.ndarray
+    cost: np.ndarray,
+    before: np.ndarray,
+    order: Sequence[int] | np.ndarray,
+    span: tuple[int, int] | None = None,
 ) -> tuple[float, int, int, int]:
     """The best feasible SOP-3-exchange of ``order``: ``(Δ, h, i, j)`` of the module
-    docstring (Δ = inf when there is none)."""
+    docstring (Δ = inf when there is none); with ``span = (lo, hi)`` only the moves with
+    ``lo <= h`` and ``j < hi`` (both segments and their ends inside the span)."""
     o = np.asarray(order, dtype=np.intp)
     n = len(o)
-    if n < 4:
-        return np.inf, 0, 1, 2
+    lo, hi = (0, n - 1) if span is None else (max(0, span[0]), min(n - 1, span[1]))
+    if hi - lo < 3:
+        return np.inf, lo, lo + 1, lo + 2
     x = cost[np.ix_(o, o)]
     limit = _limits(before[np.ix_(o, o)])
     arcs = np.append(x[np.arange(n - 1), np.arange(1, n)], 0.0)
-    i = np.arange(1, n - 2)[None, :, None]
-    j = np.arange(2, n - 1)[None, None, :]
-    step = max(1, CHUNK_CELLS // max(1, (n - 3) * (n - 3)))
-    best = (np.inf, 0, 1, 2)
-    for low in range(0, n - 3, step):
-        h = np.arange(low, min(low + step, n - 3))[:, None, None]
+    firsts = np.arange(lo + 1, hi - 1)
+    seconds = np.arange(lo + 2, hi)
+    i = firsts[None, :, None]
+    j = seconds[None, None, :]
+    step = max(1, CHUNK_CELLS // max(1, len(firsts) * len(seconds)))
+    best = (np.inf, lo, lo + 1, lo + 2)
+    for low in range(lo, hi - 2, step):
+        h = np.arange(low, min(low + step, hi - 2))[:, None, None]
         with np.errstate(invalid="ignore"):
             delta = x[h, i + 1] + x[j, h + 1] + x[i, j + 1] - arcs[h] - arcs[i] - arcs[j]
         valid = (h < i) & (i < j) & (j < limit[h, i])
@@ -125,7 +132,7 @@ def best_exchange(
         at = int(np.argmin(delta))
         a, b, c = np.unravel_index(at, delta.shape)
         if delta[a, b, c] < best[0]:
-            best = (float(delta[a, b, c]), low + int(a), int(b) + 1, int(c) + 2)
+            best = (float(delta[a, b, c]), low + int(a), int(firsts[b]), int(seconds[c]))
     return best
 
 
@@ -141,32 +148,35 @@ def local_search(
     before: np.ndarray,
     order: Sequence[int] | np.ndarray,
     deadline: Deadline | None = None,
+    span: tuple[int, int] | None = None,
 ) -> np.ndarray:
     """``order`` improved by the best SOP-3-exchange (:func:`best_exchange`) until none lowers
-    its cost (or ``deadline`` expires); precedence-feasible when ``order`` is."""
+    its cost (or ``deadline`` expires); precedence-feasible when ``order`` is. With ``span``,
+    the moves inside it first (those a perturbation there opened), then every move."""
     current = np.asarray(order, dtype=np.intp)
     tolerance = 1e-9 * max(1.0, float(np.nanmax(np.where(np.isfinite(cost), cost, 0.0))))
-    while deadline is None or not deadline.expired():
-        delta, h, i, j = best_exchange(cost, before, current)
-        if not delta < -tolerance:
-            break
-        current = _swapped(current, h, i, j)
+    for where in (span, None) if span is not None else (None,):
+        while deadline is None or not deadline.expired():
+            delta, h, i, j = best_exchange(cost, before, current, where)
+            if not delta < -tolerance:
+                break
+            current = _swapped(current, h, i, j)
     return current
 
 
 def _kick(
     before: np.ndarray, order: np.ndarray, rng: np.random.Generator, longest: int
-) -> np.ndarray:
-    """A random feasible segment swap of segments of at most ``longest`` nodes (``order``
-    itself when 100 draws find none)."""
+) -> tuple[np.ndarray, int, int]:
+    """A random feasible segment swap of segments of at most ``longest`` nodes, with the first
+    and last positions it changed (``order`` itself, ``(0, 0)``, when 100 draws find none)."""
     n = len(order)
     for _ in range(100):
         h = int(rng.integers(0, n - 3))
         i = h + int(rng.integers(1, longest + 1))
         j = i + int(rng.integers(1, longest + 1))
         if j <= n - 2 and not before[np.ix_(order[h + 1 : i + 1], order[i + 1 : j + 1])].any():
-            return _swapped(order, h, i, j)
-    return order
+            return _swapped(order, h, i, j), h, j + 1
+    return order, 0, 0
 
 
 def _cost(cost: np.ndarray, order: np.ndarray) -> float:
@@ -217,10 +227,12 @@ def iterated_local_search(
         deadline is None or not deadline.expired()
     ):
         done += 1
-        candidate = current
+        candidate, first, last = current, problem.n, 0
         for _ in range(KICKS):
-            candidate = _kick(before, candidate, rng, longest)
-        candidate = local_search(cost, before, candidate, deadline)
+            candidate, low, high = _kick(before, candidate, rng, longest)
+            first, last = min(first, low), max(last, high)
+        span = (first - longest, last + longest)
+        candidate = local_search(cost, before, candidate, deadline, span)
         value = _cost(cost, candidate)
         if value < best_cost:
             best, best_cost, since = candidate, value, 0

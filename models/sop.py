@@ -1589,12 +1589,13 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
-#: Share of the time limit the root stage gives the iterated SOP-3-exchange local search
-#: (:func:`taopt.heuristics.sop_search.iterated_local_search`) on the best order it knows,
-#: before the DP and the cut engine prune with that order's cost (0: not run). From a width-64
-#: beam's order, 3 s of it gave prob.42 247-248 (the portfolio had 261 at 10 s and 250 at
+#: Share of the time limit the root stage gives the DP's narrow beam
+#: (:func:`taopt.models.sop_dp.beam_order`, width ``NARROW_BEAM``) and then the iterated
+#: SOP-3-exchange local search (:func:`taopt.heuristics.sop_search.iterated_local_search`)
+#: on the best order it knows, before the DP and the cut engine prune with that order's cost
+#: (0: neither runs). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the portfolio had 261 at 10 s and 250 at
 #: 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1 stayed at 16321 (16331 at 60 s).
-ILS_SHARE = 0.1
+ILS_SHARE = 0.15
 
 #: Iterations of that search in a run without a time limit.
 ILS_ITERATIONS = 1000
@@ -2034,8 +2035,16 @@ def _root_stage(
     if ILS_SHARE > 0 and known is not None and not deadline.expired(MARGIN):
         from taopt.heuristics.sop_search import iterated_local_search
 
+        from taopt.models.sop_dp import NARROW_BEAM, beam_order
+
         searching = time.perf_counter()
         budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+        # the narrow beam's order first: the search gets far from it in seconds, and little
+        # from the insertion orders' (prob.42: 347 -> 339 in 0.9 s; from the beam's 276, 248)
+        beam = beam_order(problem, NARROW_BEAM, budget.remaining())
+        if beam is not None and beam[0] < known[0]:
+            known = beam
+            incumbent = Order(beam[1])
         iterations = None if deadline.limited else ILS_ITERATIONS
         value, order, searched = iterated_local_search(
             problem, known[1], budget, iterations=iterations, seed=seed

@@ -27,12 +27,17 @@ def _random(seed: int, n: int = 9) -> SopProblem:
     return SopProblem(cost, pairs, 0, n - 1, name=f"random-{seed}")
 
 
-def _swaps(problem: SopProblem, order: list[int]) -> list[tuple[float, list[int]]]:
-    """Every segment swap of ``order`` that keeps the precedences, with its change of cost."""
+def _swaps(
+    problem: SopProblem, order: list[int], lo: int = 0, hi: int = 10**9
+) -> list[tuple[float, list[int]]]:
+    """Every segment swap of ``order`` with ``lo <= h`` and ``j < hi`` that keeps the
+    precedences, with its change of cost."""
     n, base = len(order), evaluate_order(problem, order)
     where_ok = {tuple(o) for o in sop_orders(problem)}
     found = []
     for h, i, j in itertools.combinations(range(n - 1), 3):
+        if h < lo or j >= hi:
+            continue
         new = order[: h + 1] + order[i + 1 : j + 1] + order[h + 1 : i + 1] + order[j + 1 :]
         if tuple(new) in where_ok:
             found.append((evaluate_order(problem, new) - base, new))
@@ -52,6 +57,19 @@ def test_best_exchange_is_the_best_feasible_swap(seed: int) -> None:
     assert delta == pytest.approx(min(d for d, _ in swaps))
     moved = order[: h + 1] + order[i + 1 : j + 1] + order[h + 1 : i + 1] + order[j + 1 :]
     assert evaluate_order(problem, moved) == pytest.approx(evaluate_order(problem, order) + delta)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_best_exchange_in_a_span(seed: int) -> None:
+    """Within a span, the best move equals the best feasible swap enumerated inside it."""
+    problem = _random(seed, 8)
+    order = next(iter(sop_orders(problem)))
+    for lo, hi in ((0, 4), (1, 6), (2, 7), (3, 5)):
+        swaps = _swaps(problem, order, lo, hi)
+        delta, h, _, j = best_exchange(problem.cost, before_matrix(problem), order, (lo, hi))
+        assert delta == pytest.approx(min((d for d, _ in swaps), default=np.inf))
+        if swaps:
+            assert lo <= h and j < hi
 
 
 @pytest.mark.parametrize("seed", range(10))
