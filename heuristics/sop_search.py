@@ -192,6 +192,7 @@ def iterated_local_search(
     deadline: Deadline | None = None,
     iterations: int | None = None,
     seed: int = 0,
+    patience: int | None = None,
 ) -> tuple[float, list[int], dict[str, Any]]:
     """An iterated SOP-3-exchange local search from a feasible ``order`` (module docstring).
 
@@ -206,6 +207,8 @@ def iterated_local_search(
         Perturbations at most (None: until the deadline; with neither, one descent only).
     seed : int
         Seed of the perturbations.
+    patience : int, optional
+        Stop after this many iterations in a row without a new best order.
 
     Returns
     -------
@@ -224,11 +227,14 @@ def iterated_local_search(
     if problem.n < 5 or (iterations is None and deadline is None):
         return best_cost, [int(v) for v in best], info
     longest = max(2, int(KICK_LENGTH_SHARE * problem.n))
-    since = 0
+    since = 0  # iterations since the last new best or the last return to it
+    idle = 0  # iterations since the last new best
     done = 0
     while (iterations is None or done < iterations) and (
         deadline is None or not deadline.expired()
     ):
+        if patience is not None and idle >= patience:
+            break
         done += 1
         candidate, first, last = current, problem.n, 0
         for _ in range(KICKS):
@@ -238,9 +244,10 @@ def iterated_local_search(
         candidate = local_search(cost, before, candidate, deadline, span)
         value = _cost(cost, candidate)
         if value < best_cost:
-            best, best_cost, since = candidate, value, 0
+            best, best_cost, since, idle = candidate, value, 0, 0
         else:
             since += 1
+            idle += 1
         if value <= current_cost or value <= best_cost * (1.0 + ACCEPT_SHARE):
             current, current_cost = candidate, value
         if since >= STALL:

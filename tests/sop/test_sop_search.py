@@ -100,3 +100,11 @@ def test_iterated_search_is_seeded() -> None:
     start = next(iter(sop_orders(problem)))
     first = iterated_local_search(problem, start, iterations=20, seed=5)
     assert iterated_local_search(problem, start, iterations=20, seed=5)[1] == first[1]
+
+
+def test_iterated_search_stops_without_progress() -> None:
+    """With a patience of 5, a search that finds no better order stops after 5 iterations."""
+    problem = sop_instance(0)
+    optimum = min(sop_orders(problem), key=lambda order: evaluate_order(problem, order))
+    _, _, info = iterated_local_search(problem, optimum, iterations=100, patience=5)
+    assert info["iterations"] == 5
