@@ -1589,22 +1589,28 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
-#: Share of the time limit the root stage gives the DP's narrow beam
-#: (:func:`taopt.models.sop_dp.beam_order`, width ``NARROW_BEAM``) and then the iterated
-#: SOP-3-exchange local search (:func:`taopt.heuristics.sop_search.iterated_local_search`)
-#: on the best order it knows, before the DP and the cut engine prune with that order's cost
-#: (0: neither runs). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the portfolio had 261 at 10 s and 250 at
-#: 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1 stayed at 16321 (16331 at 60 s).
-ILS_SHARE = 0.15
+#: Share of the time left after the first DP stage (when it stopped without a proof) given to
+#: the iterated SOP-3-exchange local search
+#: (:func:`taopt.heuristics.sop_search.iterated_local_search`) on the stage's order (after its
+#: beam passes), before the second stage and the cut engine prune with that order's cost (0:
+#: not run). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the
+#: portfolio had 261 at 10 s and 250 at 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1
+#: stayed at 16321 (16331 at 60 s).
+ILS_SHARE = 0.2
 
 #: Iterations of that search in a run without a time limit.
 ILS_ITERATIONS = 1000
 
-#: The search stops after this many iterations without a new best order (p43.1, whose root
-#: closes the gap, lost 9 s of its 60 to it: optimal in 16.1 s against 5.7 s). It is not run
-#: at all when the root already closed :data:`CUTS_FIRST_SHARE` of the gap (the cut engine
-#: goes first).
+#: The search stops after this many iterations without a new best order.
 ILS_PATIENCE = 400
+
+#: It is not run when the stage's order is at most this share above its bound
+#: (:func:`root_gap`): the later stages close such gaps (p43.1 at 10 s, under 1 %, closed in
+#: 7.1 s without the search and not at all with 1.5 s of it before the DP), while the orders of
+#: prob.42, ry48p.1 and ft53.1 were 13-17 % above the root bound. Run before the first DP
+#: stage instead, from the insertion orders, it cost ESC47 its 10 s proof (2 iterations in
+#: 1.3 s from an order of 2,430, optimum 1,288).
+ILS_MIN_GAP = 0.05
 
 
 def _far(result: Solution) -> bool:
@@ -1850,7 +1856,7 @@ def solve_sop_problem(
         Run CP-SAT beside the stages: True (a :class:`~taopt.errors.SolverError` when it is
         not available), False (never), None (default: the rule above).
     seed : int
-        Seed of the root stage's iterated local search (:data:`ILS_SHARE`).
+        Seed of the iterated local search after the first DP stage (:data:`ILS_SHARE`).
 
     Returns
     -------
@@ -2010,21 +2016,18 @@ def _root_stage(
     incumbent: Any,
     info: dict[str, Any],
     verbose: bool,
-    seed: int = 0,
 ) -> tuple[Any, tuple[float, np.ndarray] | None, Any, bool]:
     """The portfolio's root stage: the cut engine's root cut loop within :data:`ROOT_SHARE`
-    of the limit, then the iterated local search on the best order within :data:`ILS_SHARE`
-    (``seed``), before the DP.
+    of the limit, before the DP.
 
     Returns ``(model, lagrange, incumbent, cuts_first)``: the cut model (its rows kept for the
     cut engine), its LP's Lagrangian bound for the DP
     (:meth:`taopt.models.sop_cuts.SopCutModel.lagrangian_prices`, None without duals), the
-    better of ``incumbent`` and the LP point's rounded order after the local search, and whether the cut engine goes
+    better of ``incumbent`` and the LP point's rounded order, and whether the cut engine goes
     first (:data:`CUTS_FIRST_SHARE`). The root's rows are precedence path cuts valid for every
     order, and no arc is fixed here, so the Lagrangian bound holds for every order
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``). ``info`` gains
-    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed, and ``ils``: the
-    search's start and end costs, iterations and seconds).
+    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed).
     """
     from taopt.models.sop_cuts import SopCutModel, round_point
 
@@ -2037,40 +2040,11 @@ def _root_stage(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
             incumbent = Order(rounded[1])
-    cheap = _cheap_bound(problem)
-
-    def closed_by(order: tuple[float, list[int]] | None) -> float:
-        """The share of the gap between ``cheap`` and ``order``'s cost the root closed."""
-        if order is None or order[0] <= cheap or not np.isfinite(root.bound):
-            return 0.0
-        return float((root.bound - cheap) / (order[0] - cheap))
-
-    searched: dict[str, Any] | str | None = None
-    if closed_by(known) >= CUTS_FIRST_SHARE:  # the cut engine goes first: its time, not ours
-        searched = "skipped: the root closed CUTS_FIRST_SHARE of the gap"
-    elif ILS_SHARE > 0 and known is not None and not deadline.expired(MARGIN):
-        from taopt.heuristics.sop_search import iterated_local_search
-        from taopt.models.sop_dp import NARROW_BEAM, beam_order
-
-        searching = time.perf_counter()
-        budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
-        # the narrow beam's order first: the search gets far from it in seconds, and little
-        # from the insertion orders' (prob.42: 347 -> 339 in 0.9 s; from the beam's 276, 248)
-        beam = beam_order(problem, NARROW_BEAM, budget.remaining())
-        if beam is not None and beam[0] < known[0]:
-            known = beam
-            incumbent = Order(beam[1])
-        iterations = None if deadline.limited else ILS_ITERATIONS
-        value, order, found = iterated_local_search(
-            problem, known[1], budget, iterations=iterations, seed=seed, patience=ILS_PATIENCE
-        )
-        searched = {**found, "from": known[0], "to": value}
-        searched["seconds"] = time.perf_counter() - searching
-        if value < known[0]:
-            known = (value, order)
-            incumbent = Order(order)
     lagrange = model.lagrangian_prices()
-    closed = closed_by(known)
+    cheap = _cheap_bound(problem)
+    closed = 0.0
+    if known is not None and known[0] > cheap and np.isfinite(root.bound):
+        closed = (root.bound - cheap) / (known[0] - cheap)
     left = deadline.remaining()
     cuts_first = bool(closed >= CUTS_FIRST_SHARE) and (left is None or left >= CUTS_FIRST_MIN_LEFT)
     info["root_stage"] = {
@@ -2079,9 +2053,51 @@ def _root_stage(
         "rounds": root.rounds,
         "closed": closed,
         "cuts_first": cuts_first,
-        "ils": searched,
     }
     return model, lagrange, incumbent, cuts_first
+
+
+def _searched(
+    problem: SopProblem,
+    result: Solution,
+    deadline: Deadline,
+    seed: int,
+    info: dict[str, Any],
+    lower: float,
+) -> Solution:
+    """``result`` (the first DP stage's, stopped) with its order improved by the iterated
+    SOP-3-exchange local search (:func:`taopt.heuristics.sop_search.iterated_local_search`,
+    ``seed``) within :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run
+    when its order is at most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower``
+    (the root stage's bound). The bound is kept (an order changes no bound); ``info["ils"]``
+    says what ran."""
+    from taopt.heuristics.sop_search import iterated_local_search
+
+    if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
+        info["ils"] = "skipped: no order"
+        return result
+    gap = root_gap(result.objective, max(result.bound or 0.0, lower))
+    if gap <= ILS_MIN_GAP:
+        info["ils"] = f"skipped: the gap is {100 * gap:.1f} %"
+        return result
+    began = time.perf_counter()
+    budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+    iterations = None if deadline.limited else ILS_ITERATIONS
+    value, order, found = iterated_local_search(
+        problem,
+        list(result.solution),
+        budget,
+        iterations=iterations,
+        seed=seed,
+        patience=ILS_PATIENCE,
+    )
+    info["ils"] = {**found, "from": result.objective, "to": value}
+    info["ils"]["seconds"] = time.perf_counter() - began
+    if not value < result.objective:
+        return result
+    bound = min(result.bound if result.bound is not None else -np.inf, value)
+    status, _ = decide("time_limit", value, bound)
+    return result.replace(solution=Order(order), objective=value, bound=bound, status=status)
 
 
 def _stages(
@@ -2326,7 +2342,7 @@ def _stages(
         watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
-                problem, deadline, incumbent, info, verbose, seed
+                problem, deadline, incumbent, info, verbose
             )
             if ROW_CREDIT and lagrange is not None:
                 credit = root_model.row_credit()
@@ -2366,6 +2382,10 @@ def _stages(
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
+            if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+                root_bound = info.get("root_stage", {}).get("bound", cheap)
+                lower = float(root_bound) if np.isfinite(root_bound) else cheap
+                result = _searched(problem, result, deadline, seed, info, lower)
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
