@@ -5,16 +5,21 @@ returned keeps the precedences and is never costlier than its start."""
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 import pytest
 
+import taopt.models.sop as sop_model
+import taopt.models.sop_dp as sop_dp
 from taopt.heuristics.sop_search import (
     before_matrix,
     best_exchange,
     iterated_local_search,
     local_search,
 )
+from taopt.models.sop import solve_sop_problem
+from taopt.result import OPTIMAL, TIME_LIMIT, Order
 from taopt.sop.problem import SopProblem, evaluate_order
 from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
 
@@ -108,3 +113,35 @@ def test_iterated_search_stops_without_progress() -> None:
     optimum = min(sop_orders(problem), key=lambda order: evaluate_order(problem, order))
     _, _, info = iterated_local_search(problem, optimum, iterations=100, patience=5)
     assert info["iterations"] == 5
+
+
+@pytest.mark.parametrize("seed", range(0, 30, 3))
+def test_portfolio_with_the_search_matches_brute_force(monkeypatch, seed: int) -> None:
+    """When the first DP stage stops with the costliest order (made to, bound 0), the search
+    runs on it and the portfolio still gives the brute-force optimum with a feasible order."""
+    problem = sop_instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    worst = max(sop_orders(problem), key=lambda order: evaluate_order(problem, order))
+    real = sop_dp.solve_sop_dp
+    calls: list[int] = []
+
+    def first_stopped(*args, **kwargs):
+        result = real(*args, **kwargs)
+        calls.append(1)
+        if len(calls) > 1:
+            return result
+        value = evaluate_order(problem, worst)
+        return result.replace(solution=Order(worst), objective=value, bound=0.0, status=TIME_LIMIT)
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stopped)
+    monkeypatch.setattr(sop_model, "CUTS_FIRST_SHARE", 2.0)  # the DP first
+    monkeypatch.setattr(sop_model, "ILS_MIN_GAP", -1.0)
+    monkeypatch.setattr(sop_model, "ILS_PATIENCE", 30)
+    result = solve_sop_problem(problem, ideal_cap=1, max_states=2, cpsat=False, seed=seed)
+    assert isinstance(result.info["ils"], dict)
+    assert result.info["ils"]["to"] <= evaluate_order(problem, worst)
+    assert result.status == OPTIMAL
+    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    assert result.objective == pytest.approx(optimum)
