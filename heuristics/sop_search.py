@@ -1,9 +1,10 @@
 """SOP-3-exchange local search and an iterated local search for sequential ordering.
 
-The portfolio's warm start (:func:`taopt.models.sop.solve_sop_problem`) hands the DP and the
-cut engine the order it knows; their pruning is only as good as that order's cost (issue 33:
-prob.42's insertion orders cost 428 against the optimum 243). This module improves an order
-before the exact stages start.
+The SOP portfolio (:func:`taopt.models.sop.solve_sop_problem`) hands its DP and cut engine
+the best order it knows; their pruning is only as good as that order's cost, and a stopped run
+reports it (issue 33: prob.42's insertion orders cost 428 against the optimum 243). The
+portfolio improves its first DP stage's order with this search before the later stages
+(``taopt.models.sop.ILS_SHARE``).
 
 The move (Gambardella and Dorigo, 2000). For an order ``o_0 = start, ..., o_{n-1} = end`` and
 positions ``h < i < j <= n - 2``, the *path-preserving 3-exchange* swaps the two consecutive
@@ -11,7 +12,7 @@ segments ``L = o_{h+1..i}`` and ``R = o_{i+1..j}``::
 
     o_0 .. o_h  o_{i+1} .. o_j  o_{h+1} .. o_i  o_{j+1} .. o_{n-1},
 
-keeping each segment's direction (costs are asymmetric). Its change of cost is
+keeping each segment's direction (costs are asymmetric). Its change of cost is::
 
     Δ(h, i, j) = c[o_h, o_{i+1}] + c[o_j, o_{h+1}] + c[o_i, o_{j+1}]
                  - c[o_h, o_{h+1}] - c[o_i, o_{i+1}] - c[o_j, o_{j+1}].
