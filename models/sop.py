@@ -1601,6 +1601,29 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
+#: Share of the time left after the first DP stage (when it stopped without a proof) given to
+#: the iterated SOP-3-exchange local search
+#: (:func:`taopt.heuristics.sop_search.iterated_local_search`) on the stage's order (after its
+#: beam passes), before the second stage and the cut engine prune with that order's cost (0:
+#: not run). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the
+#: portfolio had 261 at 10 s and 250 at 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1
+#: stayed at 16321 (16331 at 60 s).
+ILS_SHARE = 0.2
+
+#: Iterations of that search in a run without a time limit.
+ILS_ITERATIONS = 1000
+
+#: The search stops after this many iterations without a new best order.
+ILS_PATIENCE = 400
+
+#: It is not run when the stage's order is at most this share above its bound
+#: (:func:`root_gap`): the later stages close such gaps (p43.1 at 10 s, under 1 %, closed in
+#: 7.1 s without the search and not at all with 1.5 s of it before the DP), while the orders of
+#: prob.42, ry48p.1 and ft53.1 were 13-17 % above the root bound. Run before the first DP
+#: stage instead, from the insertion orders, it cost ESC47 its 10 s proof (2 iterations in
+#: 1.3 s from an order of 2,430, optimum 1,288).
+ILS_MIN_GAP = 0.05
+
 
 def _far(result: Solution) -> bool:
     """The run's relative gap is above :data:`CUTS_SECOND_STAGE_GAP` (or unknown)."""
@@ -1764,6 +1787,7 @@ def solve_sop_problem(
     max_states: int = PORTFOLIO_MAX_STATES,
     max_memory_gb: float | None = None,
     cpsat: bool | None = None,
+    seed: int = 0,
 ) -> Solution:
     """The SOP portfolio (the registered "exact"): the ideal DP for dense precedence, the
     MILP for sparse precedence, and CP-SAT beside them.
@@ -1843,6 +1867,8 @@ def solve_sop_problem(
     cpsat : bool, optional
         Run CP-SAT beside the stages: True (a :class:`~taopt.errors.SolverError` when it is
         not available), False (never), None (default: the rule above).
+    seed : int
+        Seed of the iterated local search after the first DP stage (:data:`ILS_SHARE`).
 
     Returns
     -------
@@ -1875,6 +1901,7 @@ def solve_sop_problem(
     options = dict(
         formulation=formulation, mip_gap=mip_gap, verbose=verbose, incumbent=incumbent,
         engine=engine, ideal_cap=ideal_cap, max_states=max_states, max_memory_gb=max_memory_gb,
+        seed=seed,
     )  # fmt: skip
     peer, why = _cpsat_peer(problem, cpsat, engine, time_limit, max_memory_gb)
     counted: tuple[int, bool, float] | None = None
@@ -2042,6 +2069,49 @@ def _root_stage(
     return model, lagrange, incumbent, cuts_first
 
 
+def _searched(
+    problem: SopProblem,
+    result: Solution,
+    deadline: Deadline,
+    seed: int,
+    info: dict[str, Any],
+    lower: float,
+) -> Solution:
+    """``result`` (the first DP stage's, stopped) with its order improved by the iterated
+    SOP-3-exchange local search (:func:`taopt.heuristics.sop_search.iterated_local_search`,
+    ``seed``) within :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run
+    when its order is at most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower``
+    (the root stage's bound). The bound is kept (an order changes no bound); ``info["ils"]``
+    says what ran."""
+    from taopt.heuristics.sop_search import iterated_local_search
+
+    if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
+        info["ils"] = "skipped: no order"
+        return result
+    gap = root_gap(result.objective, max(result.bound or 0.0, lower))
+    if gap <= ILS_MIN_GAP:
+        info["ils"] = f"skipped: the gap is {100 * gap:.1f} %"
+        return result
+    began = time.perf_counter()
+    budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+    iterations = None if deadline.limited else ILS_ITERATIONS
+    value, order, found = iterated_local_search(
+        problem,
+        list(result.solution),
+        budget,
+        iterations=iterations,
+        seed=seed,
+        patience=ILS_PATIENCE,
+    )
+    info["ils"] = {**found, "from": result.objective, "to": value}
+    info["ils"]["seconds"] = time.perf_counter() - began
+    if not value < result.objective:
+        return result
+    bound = min(result.bound if result.bound is not None else -np.inf, value)
+    status, _ = decide("time_limit", value, bound)
+    return result.replace(solution=Order(order), objective=value, bound=bound, status=status)
+
+
 def _stages(
     problem: SopProblem,
     time_limit: float | None,
@@ -2055,6 +2125,7 @@ def _stages(
     max_memory_gb: float | None,
     on_root: Callable[[bool], None] | None = None,
     counted: tuple[int, bool, float] | None = None,
+    seed: int = 0,
 ) -> Solution:
     """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
 
@@ -2323,6 +2394,10 @@ def _stages(
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
+            if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
+                root_bound = info.get("root_stage", {}).get("bound", cheap)
+                lower = float(root_bound) if np.isfinite(root_bound) else cheap
+                result = _searched(problem, result, deadline, seed, info, lower)
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
