@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from operator import le
 from typing import Any
 
 import numpy as np
@@ -406,6 +407,49 @@ def _push(
     heapq.heappush(heap, (b, -S.bit_count(), cid))
 
 
+class _Labels:
+    """The labels of one best-first label search of :func:`coupled_search` or
+    :func:`leader_search` (as in :func:`taopt.fleet.search.label_search`): each label's
+    parent and action (for :func:`taopt.fleet.search.trace`), a dead flag, and the
+    dominance store: per discrete key the metric vectors kept, a vector dominated when
+    another of its key is no larger everywhere. A new label that dominates kept ones marks
+    them dead; the search skips dead labels when they are popped."""
+
+    def __init__(self, root: tuple, key: tuple, vec: tuple) -> None:
+        self.labels: list[tuple] = [root]
+        self.parent: list[int] = [-1]
+        self.action: list[Any] = [None]
+        self.dead = bytearray(1)
+        self.store: dict[tuple, list[tuple[tuple, int]]] = {key: [(vec, 0)]}
+
+    def dominated(self, key: tuple, vec: tuple) -> bool:
+        """Whether a kept label of the same key is no larger than ``vec`` everywhere."""
+        bucket = self.store.get(key)
+        return bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket)
+
+    def add(self, child: tuple, act: Any, parent: int, key: tuple, vec: tuple) -> int:
+        """Keep ``child`` (not dominated, :meth:`dominated`), mark the kept labels it
+        dominates dead; returns its index."""
+        bucket = self.store.get(key)
+        if bucket is not None:
+            keep = []
+            for other, oid in bucket:
+                if all(map(le, vec, other)):
+                    self.dead[oid] = 1
+                else:
+                    keep.append((other, oid))
+            bucket[:] = keep
+        else:
+            bucket = self.store[key] = []
+        cid = len(self.labels)
+        self.labels.append(child)
+        self.parent.append(parent)
+        self.action.append(act)
+        self.dead.append(0)
+        bucket.append((vec, cid))
+        return cid
+
+
 def _rebuild(
     problem: FleetProblem, seqs: list[tuple[int, ...]], acts: list[Any], geometry: Any
 ) -> FleetPlan:
@@ -495,9 +539,7 @@ def coupled_search(
     ``bound``, ``stopped_by``, ``labels``, ``expanded``): ``"optimal"`` when the optimum over
     the split's plans is proven (the value; or, with no plan below ``cutoff``, the bound
     ``min(cutoff, incumbent)``), else the least open label's bound (proven)."""
-    from operator import le
-
-    from taopt.errors import FeasibilityError
+    from taopt.errors import FeasibilityError, SolverError
     from taopt.fleet.evaluate import evaluate_fleet
     from taopt.fleet.search import (
         DEFAULT_MAX_LABELS,
@@ -552,13 +594,8 @@ def coupled_search(
         for d in problem.drones
     )
     root = (0, 0.0, (-1.0,) * n, root_trucks)
-    labels: list[tuple] = [root]
-    parent: list[int] = [-1]
-    action: list[Any] = [None]
-    dead = bytearray(1)
-    store: dict[tuple, list[tuple[tuple, int]]] = {}
-    key, vec = _signature(tab, root)
-    store[key] = [(vec, 0)]
+    kept = _Labels(root, *_signature(tab, root))
+    labels, dead = kept.labels, kept.dead
     slack = 1e-12
     cut = best * (1 - slack)
     heap: list[tuple[float, int, int]] = [(max(bound(root, cut), floor), 0, 0)]
@@ -584,28 +621,12 @@ def coupled_search(
         expanded += 1
         for child, act in _children(tab, label):
             key, vec = _signature(tab, child)
-            bucket = store.get(key)
-            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+            if kept.dominated(key, vec):
                 continue
             b = max(bound(child, cut), lb, floor)
             if b >= cut:
                 continue
-            if bucket is not None:
-                keep = []
-                for other, oid in bucket:
-                    if all(map(le, vec, other)):
-                        dead[oid] = 1
-                    else:
-                        keep.append((other, oid))
-                bucket[:] = keep
-            else:
-                bucket = store[key] = []
-            cid = len(labels)
-            labels.append(child)
-            parent.append(i)
-            action.append(act)
-            dead.append(0)
-            bucket.append((vec, cid))
+            cid = kept.add(child, act, i, key, vec)
             heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
         if len(labels) > cap:
             stopped_by = "size"
@@ -613,9 +634,13 @@ def coupled_search(
     result: dict[str, Any] = {"labels": len(labels), "expanded": expanded, "stopped_by": stopped_by}
     value = planned
     if found >= 0:
-        plan = _rebuild(problem, tab, trace(parent, action, found), labels[found])
+        plan = _rebuild(problem, tab, trace(kept.parent, kept.action, found), labels[found])
         # the search's value (with the releases); the scorer, which has none, may only say less
-        assert evaluate_fleet(problem, plan) <= lb * (1 + 1e-9) + 1e-9
+        scored = evaluate_fleet(problem, plan)
+        if scored > lb * (1 + 1e-9) + 1e-9:
+            raise SolverError(
+                f"coupled search: the plan found scores {scored!r} above the search's {lb!r}"
+            )
         result.update(plan=plan, value=lb, bound=lb)
         return result
     bound_value = best
@@ -718,8 +743,6 @@ def leader_search(
     Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
     ``bound``, ``stopped_by``) with the counters ``labels``, ``expanded`` and
     ``follower_solves``."""
-    from operator import le
-
     from taopt.errors import FeasibilityError
     from taopt.fleet.evaluate import evaluate_fleet
     from taopt.fleet.search import (
@@ -875,14 +898,9 @@ def leader_search(
         solve(tuple(rel[r] for r in inter), deadline.remaining())
     root_trucks = ((sub_l.depot, 0.0, 0.0, True, False, 0.0, ((0, 0.0),) * sub_l.drones[0]),)
     root = (0, 0.0, (-1.0,) * tab.n, root_trucks)
-    labels: list[tuple] = [root]
+    kept = _Labels(root, *signature(root))
+    labels, dead = kept.labels, kept.dead
     thetas: list[tuple[float, ...]] = [interface(root)]
-    parent: list[int] = [-1]
-    action: list[Any] = [None]
-    dead = bytearray(1)
-    store: dict[tuple, list[tuple[tuple, int]]] = {}
-    key, vec = signature(root)
-    store[key] = [(vec, 0)]
     heap: list[tuple[float, int, int]] = [(max(price(root, thetas[0]), floor), 0, 0)]
     expanded = 0
     stopped_by = "optimal"
@@ -925,30 +943,14 @@ def leader_search(
         expanded += 1
         for child, act in _children(tab, label):
             key, vec = signature(child)
-            bucket = store.get(key)
-            if bucket is not None and any(all(map(le, other, vec)) for other, _ in bucket):
+            if kept.dominated(key, vec):
                 continue
             theta_c = interface(child)
             b = max(price(child, theta_c), lb, floor)
             if b >= cut:
                 continue
-            if bucket is not None:
-                keep = []
-                for other, oid in bucket:
-                    if all(map(le, vec, other)):
-                        dead[oid] = 1
-                    else:
-                        keep.append((other, oid))
-                bucket[:] = keep
-            else:
-                bucket = store[key] = []
-            cid = len(labels)
-            labels.append(child)
+            cid = kept.add(child, act, i, key, vec)
             thetas.append(theta_c)
-            parent.append(i)
-            action.append(act)
-            dead.append(0)
-            bucket.append((vec, cid))
             heapq.heappush(heap, (b, -bin(child[0]).count("1"), cid))
         if len(labels) > cap:
             stopped_by = "size"
@@ -960,7 +962,7 @@ def leader_search(
         "follower_solves": solves,
     }
     if found >= 0:
-        lead_plan = rebuild_label(sub_l, tab, trace(parent, action, found), labels[found])
+        lead_plan = rebuild_label(sub_l, tab, trace(kept.parent, kept.action, found), labels[found])
         foll_plan = exact[thetas[found]][1]
         assert foll_plan is not None  # priced below the cutoff: a follower plan exists
         pieces = [_lift(lead_plan, lead), _lift(foll_plan, foll)]
