@@ -1603,7 +1603,7 @@ ROW_CREDIT = True
 
 #: Share of the time left after the first DP stage (when it stopped without a proof) given to
 #: the iterated SOP-3-exchange local search
-#: (:func:`taopt.heuristics.sop_search.iterated_local_search`) on the stage's order (after its
+#: (:func:`taopt.models.sop_search.iterated_local_search`) on the stage's order (after its
 #: beam passes), before the second stage and the cut engine prune with that order's cost (0:
 #: not run). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the
 #: portfolio had 261 at 10 s and 250 at 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1
@@ -2078,12 +2078,12 @@ def _searched(
     lower: float,
 ) -> Solution:
     """``result`` (the first DP stage's, stopped) with its order improved by the iterated
-    SOP-3-exchange local search (:func:`taopt.heuristics.sop_search.iterated_local_search`,
+    SOP-3-exchange local search (:func:`taopt.models.sop_search.iterated_local_search`,
     ``seed``) within :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run
     when its order is at most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower``
     (the root stage's bound). The bound is kept (an order changes no bound); ``info["ils"]``
     says what ran."""
-    from taopt.heuristics.sop_search import iterated_local_search
+    from taopt.models.sop_search import iterated_local_search
 
     if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
         info["ils"] = "skipped: no order"

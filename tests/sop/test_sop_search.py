@@ -12,13 +12,13 @@ import pytest
 
 import taopt.models.sop as sop_model
 import taopt.models.sop_dp as sop_dp
-from taopt.heuristics.sop_search import (
+from taopt.models.sop import solve_sop_problem
+from taopt.models.sop_search import (
     before_matrix,
     best_exchange,
     iterated_local_search,
     local_search,
 )
-from taopt.models.sop import solve_sop_problem
 from taopt.result import OPTIMAL, TIME_LIMIT, Order
 from taopt.sop.problem import SopProblem, evaluate_order
 from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
