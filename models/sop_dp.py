@@ -514,6 +514,16 @@ class _Bound:
             ready[:, w] = todo_all[:, w] & holds(mask, self.pred[w])
         entry = self._band_minima(self.into_ends, self.in_first, held_by_all, held_by_some, open_t)
         leave = self._band_minima(self.out_ends, self.out_first, held_by_all, held_by_some, open_t)
+        return self._sums(entry, leave, ready, todo_all)
+
+    def _sums(
+        self, entry: np.ndarray, leave: np.ndarray, ready: np.ndarray, todo_all: np.ndarray
+    ) -> tuple[np.ndarray, ...]:
+        """Per ideal, from its nodes' cheapest entering (``entry``) and leaving (``leave``)
+        arcs over the nodes still to visit (``todo_all``): the sum of the finite entries, the
+        sum of the leaving ones (the end node leaves nowhere), the entries (inf off the todo
+        set), ``ready``, the count of todo nodes with no entering arc, and ``todo_all``: the
+        tuple :meth:`_per_ideal` returns, shared by its band and dense forms."""
         entry[~todo_all] = np.inf
         finite = np.isfinite(entry)
         in_sum = np.where(finite, entry, 0.0).sum(axis=1)
@@ -594,14 +604,7 @@ class _Bound:
             open_ = ~member[lo : lo + step]
             entry[lo : lo + step] = np.where(open_[:, :, None], arcs[None], np.inf).min(axis=1)
             leave[lo : lo + step] = np.where(open_[:, None, :], arcs[None], np.inf).min(axis=2)
-        entry[~todo_all] = np.inf
-        finite = np.isfinite(entry)
-        in_sum = np.where(finite, entry, 0.0).sum(axis=1)
-        forced = (todo_all & ~finite).sum(axis=1)
-        leaving = todo_all.copy()
-        leaving[:, self.end] = False
-        out_sum = np.where(leaving, leave, 0.0).sum(axis=1)
-        return in_sum, out_sum, entry, ready, forced, todo_all
+        return self._sums(entry, leave, ready, todo_all)
 
 
 def _cheapest_per_state(
