@@ -89,6 +89,10 @@ SYNCED_SHARE = 0.1
 #: drones (3^m pairs per drone, :func:`_least_largest`).
 PARTITION_MAX_CUSTOMERS = 9
 
+#: Per dominance key, how many labels pruned by the bound the label search remembers to
+#: drop the labels they dominate without a bound.
+PRUNED_PER_KEY = 8
+
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
 
@@ -1432,7 +1436,8 @@ def label_search(
     key, vec = _signature(tab, root)
     store[key] = [(vec, 0)]
     heap: list[tuple[float, int, int]] = [(max(_bound(tab, root), floor), 0, 0)]
-    expanded = dominated = pruned = 0
+    expanded = dominated = pruned = dominated_cut = 0
+    cutoffs: dict[tuple, list[tuple]] = {}  # per key, vectors of labels pruned by the bound
     stopped_by = "optimal"
     found = -1
     slack = 1e-12
@@ -1468,6 +1473,16 @@ def label_search(
                 if skip:
                     dominated += 1
                     continue
+            gone = cutoffs.get(key)
+            if gone is not None:
+                skip = False
+                for other in gone:
+                    if all(map(le, other, vec)):
+                        skip = True
+                        break
+                if skip:
+                    dominated_cut += 1
+                    continue
             b = _bound(tab, child, cut)
             if b < lb:
                 b = lb  # the parent's bound holds for the child's completions too
@@ -1475,6 +1490,15 @@ def label_search(
                 b = floor
             if b >= cut:
                 pruned += 1
+                # remembered: a later label it dominates has no completion below the cut
+                # either (its completions are matched by this one's, no better), so it is
+                # dropped without its bound (the cut only falls)
+                if gone is None:
+                    cutoffs[key] = [vec]
+                elif len(gone) < PRUNED_PER_KEY:
+                    gone.append(vec)
+                else:
+                    gone[pruned % PRUNED_PER_KEY] = vec
                 continue
             entries = _metric_entries(tab, child) if metric else []
             hit = False
@@ -1531,6 +1555,7 @@ def label_search(
         "expanded": expanded,
         "dominated": dominated,
         "pruned": pruned,
+        "dominated_by_pruned": dominated_cut,
         "stopped_by": stopped_by,
         "seconds": {
             name: round(b - a, 4)

@@ -16,6 +16,7 @@ from taopt.fleet.search import (
     _bound,
     _children,
     _complete,
+    _signature,
     _sortie_time_bound,
     _Tables,
     _walk_bound,
@@ -119,6 +120,41 @@ def test_bound_never_above_a_labels_best_completion_with_waiting_drones(seed, ob
     assert len(seen) > 1000
     for bound, best in seen:
         assert bound <= best * (1 + 1e-9) + 1e-9
+
+
+def test_dominance_holds_between_labels_of_one_key():
+    """Two labels of a tiny instance with precedences and waiting drones with the same
+    dominance key (a sample of the pairs), one's vector <= the other's: its best completion
+    is <= the other's (what lets the search drop a label dominated by a kept one or by one
+    the bound pruned)."""
+    p = tiny_instance(1000, 3, 1, 2, 2, True, "last_service", stops=2)
+    p = p.replace(service=("drone",) * 3, customer_stop=(None,) * 3)
+    tab = _Tables(p)
+    memo: dict = {}
+    _best_below(tab, _root(p), memo, [])
+    groups: dict = {}
+    for label, best in memo.items():
+        key, vec = _signature(tab, label)
+        groups.setdefault(key, []).append((vec, best))
+    pairs = 0
+    for entries in groups.values():
+        for vec, best in entries:
+            for other, other_best in entries[:24]:  # (a sample: the pairs grow quadratically)
+                if other is not vec and all(a <= b for a, b in zip(other, vec, strict=True)):
+                    pairs += 1
+                    assert other_best <= best * (1 + 1e-9) + 1e-9
+    assert pairs > 100
+
+
+@pytest.mark.parametrize("case", [CASES[3], CASES[11], CASES[15]])
+def test_labels_dominated_by_pruned_ones_keep_the_optimum(case):
+    """With the optimum as cutoff the search drops labels dominated by labels the bound
+    pruned, and still proves the brute-force optimum."""
+    result = label_search(_instance(case), beam=0, cutoff=case[5] * (1 + 1e-6))
+    assert result["dominated_by_pruned"] > 0
+    assert result["stopped_by"] == "optimal"
+    assert result["value"] == pytest.approx(case[5], rel=1e-9, abs=1e-9)
+    assert result["bound"] == pytest.approx(case[5], rel=1e-9, abs=1e-9)
 
 
 @pytest.mark.slow
