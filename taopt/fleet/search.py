@@ -45,7 +45,9 @@ and the parent's bound; taken cheapest first and cut off at the incumbent,
 :func:`_bound`), so the first complete label popped is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
 flags, each drone's ℓ or launch stop and m, identical drones and identical trucks taken as
 interchangeable) where one's times and distances are all <= the other's: the other is
-dropped. An incumbent (the caller's, or a simple sequential plan) prunes labels whose bound
+dropped; so is a label dominated by one the bound pruned (it has no completion below the
+cut either; the last :data:`~taopt.fleet.search.PRUNED_PER_KEY` pruned per key are kept for
+this). An incumbent (the caller's, or a simple sequential plan) prunes labels whose bound
 reaches it. A wall-clock limit and a label cap stop the search with the incumbent and the
 least open bound, proven.
 """
