@@ -580,6 +580,7 @@ def split_search(
     from taopt.fleet.coupled import leader_of, leader_search
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
+    from taopt.fleet.twoway import two_way_search
 
     deadline = Deadline(time_limit)
     deadline_start = time.perf_counter()
@@ -952,10 +953,11 @@ def split_search(
                 continue
         coupled += 1
         left = deadline.remaining()
-        # one-way cross pairs: the leader search, exact; both ways: its relaxation once (a
-        # bound of the split, maybe its optimum), then the label search restricted to it
+        # two trucks: one-way cross pairs, the leader search; both ways, the box search over
+        # the follower's cross predecessors' times (both exact); more trucks: the label
+        # search restricted to the split
         one_way = problem.K == 2 and leader_of(problem, owner) is not None
-        leader = problem.K == 2 and (one_way or relaxed.get(i, 0) < 2)
+        leader = problem.K == 2
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'
             tries = coupled_tries.get(i, 0)
             coupled_tries[i] = tries + 1
@@ -964,7 +966,19 @@ def split_search(
         L = topological.get(split)
         if L is None:
             L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
-        if leader:
+        if leader and not one_way:  # both ways: the box search over the follower's times
+            found = two_way_search(
+                problem,
+                owner,
+                release=L,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                max_labels=max_labels,
+                memo=leader_memo.setdefault((split, -1), {}),
+            )
+        elif leader:
             found = leader_search(
                 problem,
                 owner,

@@ -1,0 +1,267 @@
+"""Two trucks whose cross-truck precedences go both ways: the optimum of one split, exact, by a
+branch and bound over the times of the follower's cross-truck predecessors.
+
+:func:`taopt.fleet.coupled.leader_search` is exact for a split whose cross pairs all leave one
+truck. With pairs both ways it is a relaxation: a follower -> leader pair enters only through
+the caller's releases. :func:`two_way_search` closes that gap.
+
+*Boxes.* Fix the leader l and the follower f (:func:`taopt.fleet.split._lead`), and let R be
+the follower's customers with a closure successor on the leader. For a plan P of the split
+let ``ψ(P) = (t_r(P))_{r in R}`` (its earliest schedule). A *box* is a product of intervals
+``[lo_r, hi_r]``; it holds the plans with ``ψ(P)`` inside. The root box ``[L_r, best]`` holds
+every plan below the best plan's value ``best`` (``L`` the caller's releases, met by every
+plan of the split; a plan below ``best`` serves r before its objective, at most ``best``).
+
+*Bound of a box.* Let ``G(box)`` be the value :func:`~taopt.fleet.coupled.leader_search`
+computes with the releases ``max(L_j, lo_r)`` on the leader's j for every closure pair
+(r, j), r in R (and ``lo_r`` on r itself), and the deadlines ``hi_r`` on the follower's r
+(its ``due``). For a plan P in the box:
+
+- each closure pair (r, j) has ``t_j >= t_r >= lo_r``, so P meets every release, and its
+  follower meets every deadline;
+- P's leader sub-plan scheduled with those releases alone (the follower's events dropped)
+  has times no later than P's (a subset of P's constraints: the earliest schedule is the
+  least solution), so its objective and its interface times θ' are at most P's;
+- P's follower sub-plan scheduled with the releases θ(P) (the leader's times) has P's times
+  (adding releases P meets leaves the least solution unchanged), which meet the deadlines:
+  it is one of the plans ``h`` ranges over, so ``f(P) >= h(θ(P)) >= h(θ')`` (``h`` is
+  non-decreasing in θ).
+
+So ``f(P) >= max(f_l(P_l'), h(θ')) >= G(box)``: ``G`` bounds every plan in the box. When the
+search's plan (combined and scored with every pair by :func:`taopt.fleet.evaluate.evaluate_fleet`)
+reaches ``G`` (``stopped_by == "optimal"``), no plan of the box is below that plan: the box is
+closed. Otherwise (``"relaxed"``) the box is *split* on one r at a point m with
+``lo_r < m < hi_r``: ``[lo_r, m]`` and ``[m, hi_r]`` cover it, each child's bound is at least
+its parent's (a smaller box), and a child's follower solves may start from its parent's
+(their lower bounds stay lower bounds: tighter deadlines and higher releases never lower
+``h``). The point: the follower -> leader pair (r, j) the relaxed plan violates most
+(``t_r > t_j`` in its schedule with those pairs dropped), m halfway between, which excludes
+both the relaxed follower plan (``t_r > m``) and, where j's time is what it was, the
+leader's (``t_j < m``); else the widest interval halved.
+
+*Search.* Best first over the boxes by their bounds; a box's leader search runs in doubling
+slices (its memo kept). The split's optimum is proven when every open box's bound reaches
+the best plan's value; at the clock, the least open bound is the split's proven bound.
+Every plan found is scored with every pair before it is kept.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from typing import Any
+
+from taopt.errors import FeasibilityError
+from taopt.fleet.problem import FleetProblem
+from taopt.runtime import Deadline
+
+INF = math.inf
+
+#: Share of the time left that a box's first leader search may take (doubled at each retry).
+BOX_SHARE = 0.25
+
+#: Narrowest interval a box is split on (seconds): narrower, it is not split on that customer.
+BOX_MIN_WIDTH = 1e-3
+
+
+def _violations(
+    problem: FleetProblem, owner: list[int], plan: Any, leader: int
+) -> list[tuple[float, int, float, float]]:
+    """The follower -> leader closure pairs (r, j) that ``plan`` breaks when scheduled with
+    those pairs dropped: (violation, r, t_j, t_r), largest first."""
+    from taopt.fleet.evaluate import schedule
+    from taopt.fleet.split import _closure
+
+    follower = 1 - leader
+    kept = [
+        (r, j) for r, j in problem.precedences if not (owner[r] == follower and owner[j] == leader)
+    ]
+    try:
+        t = schedule(problem.replace(precedences=kept), plan, check=False).service
+    except FeasibilityError:
+        return []
+    out = []
+    for r, j in _closure(problem):
+        if owner[r] == follower and owner[j] == leader and t[r] > t[j]:
+            out.append((float(t[r] - t[j]), r, float(t[j]), float(t[r])))
+    out.sort(reverse=True)
+    return out
+
+
+def two_way_search(
+    problem: FleetProblem,
+    owner: list[int],
+    release: list[float] | None = None,
+    time_limit: float | None = None,
+    incumbent: Any = None,
+    floor: float = 0.0,
+    cutoff: float = INF,
+    max_labels: int | None = None,
+    memo: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
+    by truck ``owner[j]`` or its drones), cross pairs any way: the box search of the module
+    docstring (exact; with pairs one way the root box's leader search is already exact).
+
+    Parameters
+    ----------
+    release : list of float, optional
+        Per customer a time no plan of the split serves it before (the split search's
+        topological releases): the root box's lower ends and the leader's releases.
+    incumbent, cutoff : optional
+        A plan (scored) and a value: only plans below both are sought.
+    floor : float
+        A proven bound of the split (the boxes' bounds start there).
+    memo : dict, optional
+        Kept by the caller between runs on the same split with the same ``release`` (the
+        split search's slices): the open boxes and their leader searches' memos.
+
+    Returns
+    -------
+    dict
+        ``plan``, ``value`` (the best plan found, scored with every pair, or the incumbent),
+        ``bound`` (proven: the least open box's bound, at most ``value``), ``stopped_by``
+        (``"optimal"``, ``"time_limit"``, ``"size"``), and the counters ``boxes`` (opened)
+        and ``box_searches``.
+    """
+    from taopt.fleet.coupled import leader_of, leader_search
+    from taopt.fleet.evaluate import evaluate_fleet
+    from taopt.fleet.split import _closure, _lead
+
+    if problem.K != 2:
+        raise ValueError("two_way_search needs two trucks")
+    deadline = Deadline(time_limit)
+    n = problem.n
+    rel = [0.0] * n if release is None else [float(r) for r in release]
+    best, best_plan = INF, None
+    if incumbent is not None:
+        try:
+            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
+        except FeasibilityError:
+            pass
+    planned = best
+    best = min(best, cutoff)
+    one_way = leader_of(problem, owner) is not None
+    leader = _lead(problem, owner)
+    follower = 1 - leader
+    pairs = [(r, j) for r, j in _closure(problem) if owner[r] == follower and owner[j] == leader]
+    sources = sorted({r for r, _ in pairs})
+    memo = {} if memo is None else memo
+    # box: (bound, id, lo, hi, tries); memos[id]: its leader search's memo
+    boxes: list[tuple[float, int, tuple[float, ...], tuple[float, ...], int]] = memo.setdefault(
+        "boxes", []
+    )
+    memos: dict[int, dict[str, Any]] = memo.setdefault("memos", {})
+    if "next" not in memo:
+        memo["next"] = 1
+        boxes.append((floor, 0, tuple(rel[r] for r in sources), (INF,) * len(sources), 0))
+        memos[0] = {}
+    searches = 0
+    stopped_by = "optimal"
+    slack = 1 - 1e-12
+    while boxes:
+        bound, bid, lo, hi, tries = boxes[0]
+        if bound >= best * slack:
+            break
+        if deadline.expired():
+            stopped_by = "time_limit"
+            break
+        heapq.heappop(boxes)
+        box_release = rel[:]
+        due = [INF] * n
+        for r, a, b in zip(sources, lo, hi, strict=True):
+            box_release[r] = max(box_release[r], a)
+            due[r] = b
+        for r, j in pairs:
+            box_release[j] = max(box_release[j], lo[sources.index(r)])
+        left = deadline.remaining()
+        if left is not None:
+            left = min(left, max(1.0, BOX_SHARE * left) * 2**tries)
+        found = leader_search(
+            problem,
+            owner,
+            release=box_release,
+            time_limit=left,
+            floor=bound,
+            cutoff=best,
+            max_labels=max_labels,
+            memo=memos[bid],
+            leading=leader,
+            due=None if one_way else due,
+        )
+        searches += 1
+        plan = found.get("plan")
+        if plan is not None and found["value"] < best:
+            try:
+                scored = evaluate_fleet(problem, plan)
+            except FeasibilityError:
+                scored = INF
+            if scored < best:
+                best, best_plan = scored, plan
+        raised = max(bound, float(found["bound"]))
+        if found["stopped_by"] == "optimal":
+            memos.pop(bid, None)  # closed: no plan in it below the best
+            continue
+        if found["stopped_by"] in ("time_limit", "size"):
+            heapq.heappush(boxes, (raised, bid, lo, hi, tries + 1))
+            if found["stopped_by"] == "size":
+                stopped_by = "size"
+                break
+            continue
+        # relaxed: split the box
+        cut = _split_point(problem, owner, found.get("relaxed_plan"), leader, sources, lo, hi, best)
+        if cut is None:  # nowhere to split: keep the box open with its bound
+            heapq.heappush(boxes, (raised, bid, lo, hi, tries + 1))
+            stopped_by = "time_limit"
+            break
+        i, m = cut
+        parent = memos.pop(bid, {})
+        for a, b in ((lo[i], m), (m, hi[i])):
+            child = memo["next"]
+            memo["next"] += 1
+            new_lo = lo[:i] + (a,) + lo[i + 1 :]
+            new_hi = hi[:i] + (b,) + hi[i + 1 :]
+            # the parent's follower lower bounds stay lower bounds in the child
+            memos[child] = {"cache": list(parent.get("cache", []))}
+            heapq.heappush(boxes, (raised, child, new_lo, new_hi, 0))
+    least = min((b for b, *_ in boxes), default=INF)
+    value = best if best_plan is not None else planned
+    return {
+        "plan": best_plan,
+        "value": value if best_plan is not None else INF,
+        "bound": min(best, max(least, floor)),
+        "stopped_by": stopped_by,
+        "boxes": memo["next"],
+        "box_searches": searches,
+        "open_boxes": len(boxes),
+    }
+
+
+def _split_point(
+    problem: FleetProblem,
+    owner: list[int],
+    plan: Any,
+    leader: int,
+    sources: list[int],
+    lo: tuple[float, ...],
+    hi: tuple[float, ...],
+    best: float,
+) -> tuple[int, float] | None:
+    """Where to split a box (module docstring): (index into ``sources``, point)."""
+    top = [min(b, best) for b in hi]
+    if plan is not None:
+        for _, r, tj, tr in _violations(problem, owner, plan, leader):
+            i = sources.index(r)
+            m = 0.5 * (tj + tr)
+            if lo[i] + BOX_MIN_WIDTH < m < top[i] - BOX_MIN_WIDTH:
+                return i, m
+    widths = [b - a for a, b in zip(lo, top, strict=True)]
+    if not widths:
+        return None
+    i = max(range(len(widths)), key=lambda x: widths[x])
+    if not math.isfinite(widths[i]) or widths[i] < 2 * BOX_MIN_WIDTH:
+        return None
+    return i, lo[i] + 0.5 * widths[i]
+
+
+__all__ = ["BOX_MIN_WIDTH", "BOX_SHARE", "two_way_search"]
