@@ -577,7 +577,8 @@ def coupled_search(
     plan). ``incumbent`` is then only a cutoff (the caller's).
 
     Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
-    ``bound``, ``stopped_by``, ``labels``, ``expanded``): ``"optimal"`` when the optimum over
+    ``bound``, ``stopped_by``, ``labels``, ``expanded``; with a plan found, its service times
+    under the releases, ``times``): ``"optimal"`` when the optimum over
     the split's plans is proven (the value; or, with no plan below ``cutoff``, the bound
     ``min(cutoff, incumbent)``), else the least open label's bound (proven)."""
     from taopt.errors import FeasibilityError, SolverError
@@ -698,7 +699,7 @@ def coupled_search(
             raise SolverError(
                 f"coupled search: the plan found scores {scored!r} above the search's {lb!r}"
             )
-        result.update(plan=plan, value=lb, bound=lb)
+        result.update(plan=plan, value=lb, bound=lb, times=list(labels[found][2]))
         return result
     bound_value = best
     if stopped_by != "optimal":
@@ -798,7 +799,8 @@ def leader_search(
     optimum over its plans meeting them, still non-decreasing in the releases, and the search
     is over the split's plans whose follower meets them (every argument above holds with
     those plans; :func:`taopt.fleet.twoway.two_way_search`'s boxes). A relaxed run also
-    returns its plan as ``relaxed_plan``.
+    returns its plan as ``relaxed_plan`` and its service times (the leader's under
+    ``release``, the follower's under the leader's times) as ``relaxed_times``.
 
     ``memo``: a dict kept by the caller between runs on the same split with the same
     ``release`` and a cutoff that never rises (the split search's slices): the follower
@@ -900,10 +902,10 @@ def leader_search(
         if found["stopped_by"] == "optimal":
             if found["plan"] is not None and found["value"] < best:
                 value = float(found["value"])
-                exact[theta] = (value, found["plan"])
+                exact[theta] = (value, found["plan"], found.get("times"))
             else:
                 value = best
-                exact[theta] = (value, None)
+                exact[theta] = (value, None, None)
         else:
             value = float(found["bound"])
         cache.append((theta, value))
@@ -1022,7 +1024,12 @@ def leader_search(
             value = INF
         if not one_way and value > lb * (1 + 1e-9):
             # the relaxation's optimum: a bound of the split, its plan (when it scores) no proof
-            result.update(stopped_by="relaxed", bound=lb, relaxed_plan=plan)
+            times = [INF] * n
+            for i, j in enumerate(lead):
+                times[j] = float(labels[found][2][i])
+            for i, j in enumerate(foll):
+                times[j] = float(exact[thetas[found]][2][i])
+            result.update(stopped_by="relaxed", bound=lb, relaxed_plan=plan, relaxed_times=times)
             if value < planned:
                 result.update(plan=plan, value=value)
             else:

@@ -1022,7 +1022,12 @@ def split_search(
         )
         if found["stopped_by"] == "relaxed":
             relaxed[i] = relaxed.get(i, 0) + 1
-        if found["stopped_by"] != "optimal":
+        boxed = leader and not one_way
+        if found["stopped_by"] != "optimal" or (
+            boxed and float(found["bound"]) < best * (1 - 1e-12)
+        ):
+            # (a box search certified within CERTIFY keeps its proven bound: the split goes
+            # back with it and ends the run when it is the least)
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
                 stopped_by = "size"

@@ -60,32 +60,12 @@ INF = math.inf
 #: Share of the time left that a box's first leader search may take (doubled at each retry).
 BOX_SHARE = 0.25
 
-#: Narrowest interval a box is split on (seconds): narrower, it is not split on that customer.
+#: Narrowest interval a box is halved on (seconds) when no violated pair says where to split.
 BOX_MIN_WIDTH = 1e-3
 
-
-def _violations(
-    problem: FleetProblem, owner: list[int], plan: Any, leader: int
-) -> list[tuple[float, int, float, float]]:
-    """The follower -> leader closure pairs (r, j) that ``plan`` breaks when scheduled with
-    those pairs dropped: (violation, r, t_j, t_r), largest first."""
-    from taopt.fleet.evaluate import schedule
-    from taopt.fleet.split import _closure
-
-    follower = 1 - leader
-    kept = [
-        (r, j) for r, j in problem.precedences if not (owner[r] == follower and owner[j] == leader)
-    ]
-    try:
-        t = schedule(problem.replace(precedences=kept), plan, check=False).service
-    except FeasibilityError:
-        return []
-    out = []
-    for r, j in _closure(problem):
-        if owner[r] == follower and owner[j] == leader and t[r] > t[j]:
-            out.append((float(t[r] - t[j]), r, float(t[j]), float(t[r])))
-    out.sort(reverse=True)
-    return out
+#: A box split at a violated pair (r, j) is split at ``t_r (1 - SPLIT_BELOW)`` (module
+#: docstring, *Split point*).
+SPLIT_BELOW = 1e-7
 
 
 def two_way_search(
@@ -98,6 +78,7 @@ def two_way_search(
     cutoff: float = INF,
     max_labels: int | None = None,
     memo: dict[str, Any] | None = None,
+    leading: int | None = None,
 ) -> dict[str, Any]:
     """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
     by truck ``owner[j]`` or its drones), cross pairs any way: the box search of the module
@@ -115,6 +96,9 @@ def two_way_search(
     memo : dict, optional
         Kept by the caller between runs on the same split with the same ``release`` (the
         split search's slices): the open boxes and their leader searches' memos.
+    leading : int, optional
+        The leader (default :func:`taopt.fleet.split._lead`: the truck with more cross pairs
+        leaving it); the search is exact either way.
 
     Returns
     -------
@@ -126,7 +110,7 @@ def two_way_search(
     """
     from taopt.fleet.coupled import leader_of, leader_search
     from taopt.fleet.evaluate import evaluate_fleet
-    from taopt.fleet.split import _closure, _lead
+    from taopt.fleet.split import CERTIFY, _closure, _lead
 
     if problem.K != 2:
         raise ValueError("two_way_search needs two trucks")
@@ -142,7 +126,7 @@ def two_way_search(
     planned = best
     best = min(best, cutoff)
     one_way = leader_of(problem, owner) is not None
-    leader = _lead(problem, owner)
+    leader = _lead(problem, owner) if leading is None or one_way else int(leading)
     follower = 1 - leader
     pairs = [(r, j) for r, j in _closure(problem) if owner[r] == follower and owner[j] == leader]
     sources = sorted({r for r, _ in pairs})
@@ -158,10 +142,9 @@ def two_way_search(
         memos[0] = {}
     searches = 0
     stopped_by = "optimal"
-    slack = 1 - 1e-12
     while boxes:
         bound, bid, lo, hi, tries = boxes[0]
-        if bound >= best * slack:
+        if best <= bound * (1 + CERTIFY):
             break
         if deadline.expired():
             stopped_by = "time_limit"
@@ -190,12 +173,16 @@ def two_way_search(
             due=None if one_way else due,
         )
         searches += 1
-        plan = found.get("plan")
-        if plan is not None and found["value"] < best:
+        relaxed_value = INF
+        for plan in (found.get("plan"), found.get("relaxed_plan")):
+            if plan is None:
+                continue
             try:
                 scored = evaluate_fleet(problem, plan)
             except FeasibilityError:
                 scored = INF
+            if plan is found.get("relaxed_plan"):
+                relaxed_value = scored
             if scored < best:
                 best, best_plan = scored, plan
         raised = max(bound, float(found["bound"]))
@@ -209,7 +196,11 @@ def two_way_search(
                 break
             continue
         # relaxed: split the box
-        cut = _split_point(problem, owner, found.get("relaxed_plan"), leader, sources, lo, hi, best)
+        if relaxed_value <= raised * (1 + CERTIFY):  # its plan is within the tolerance
+            memos.pop(bid, None)
+            memo["closed"] = min(memo.get("closed", INF), raised)
+            continue
+        cut = _split_point(pairs, found.get("relaxed_times"), sources, lo, hi, best)
         if cut is None:  # nowhere to split: keep the box open with its bound
             heapq.heappush(boxes, (raised, bid, lo, hi, tries + 1))
             stopped_by = "time_limit"
@@ -229,7 +220,7 @@ def two_way_search(
     return {
         "plan": best_plan,
         "value": value if best_plan is not None else INF,
-        "bound": min(best, max(least, floor)),
+        "bound": min(best, max(least, floor), memo.get("closed", INF)),
         "stopped_by": stopped_by,
         "boxes": memo["next"],
         "box_searches": searches,
@@ -238,23 +229,23 @@ def two_way_search(
 
 
 def _split_point(
-    problem: FleetProblem,
-    owner: list[int],
-    plan: Any,
-    leader: int,
+    pairs: list[tuple[int, int]],
+    times: list[float] | None,
     sources: list[int],
     lo: tuple[float, ...],
     hi: tuple[float, ...],
     best: float,
 ) -> tuple[int, float] | None:
     """Where to split a box (module docstring): (index into ``sources``, point)."""
-    top = [min(b, best) for b in hi]
-    if plan is not None:
-        for _, r, tj, tr in _violations(problem, owner, plan, leader):
+    if times is not None:
+        worst = max(((times[r] - times[j], r) for r, j in pairs), default=(0.0, -1))
+        if worst[0] > 0:
+            r = worst[1]
             i = sources.index(r)
-            m = 0.5 * (tj + tr)
-            if lo[i] + BOX_MIN_WIDTH < m < top[i] - BOX_MIN_WIDTH:
+            m = times[r] - SPLIT_BELOW * max(1.0, abs(times[r]))
+            if lo[i] < m < hi[i]:
                 return i, m
+    top = [min(b, best) for b in hi]
     widths = [b - a for a, b in zip(lo, top, strict=True)]
     if not widths:
         return None
@@ -264,4 +255,4 @@ def _split_point(
     return i, lo[i] + 0.5 * widths[i]
 
 
-__all__ = ["BOX_MIN_WIDTH", "BOX_SHARE", "two_way_search"]
+__all__ = ["BOX_MIN_WIDTH", "BOX_SHARE", "SPLIT_BELOW", "two_way_search"]
