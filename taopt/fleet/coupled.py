@@ -865,10 +865,10 @@ def leader_search(
     best = min(best, cutoff)
     cut = best * (1 - 1e-12)
     memo = {} if memo is None else memo
-    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan); points solved
+    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan, its times); points solved
     # once without an exact answer
     cache: list[tuple[tuple[float, ...], float]] = memo.setdefault("cache", [])
-    exact: dict[tuple[float, ...], tuple[float, Any]] = memo.setdefault("exact", {})
+    exact: dict[tuple[float, ...], tuple[float, Any, Any]] = memo.setdefault("exact", {})
     tried: set[tuple[float, ...]] = memo.setdefault("tried", set())
     solves = 0
 
