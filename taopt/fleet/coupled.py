@@ -5,9 +5,10 @@ Three methods. :func:`coupled_dp` (below): several trucks with one drone each, d
 customers, a joint DP over the trucks' sortie sequences. :func:`leader_search`: two trucks,
 any drones, cross pairs one way (exact: a search over the leading truck's part, the other
 priced by its optimum under the leader's service times as releases) or both ways (a
-relaxation, a bound). :func:`coupled_search`: any split, the label search's joint states,
-each label also bounded by every truck's own part (exact; slower than the leader search where
-that applies). Proofs in their docstrings.
+relaxation, a bound, which :func:`taopt.fleet.twoway.two_way_search` makes exact by
+splitting boxes of the follower's times). :func:`coupled_search`: any split, the label
+search's joint states, each label also bounded by every truck's own part (exact; slower than
+the leader search where that applies). Proofs in their docstrings.
 
 :func:`taopt.fleet.sorties.split_dp` bounds each split (X_1, ..., X_K) by its trucks' parts
 solved apart; where cross-truck precedences make the combined plan wait, the optimum restricted
@@ -865,8 +866,8 @@ def leader_search(
     best = min(best, cutoff)
     cut = best * (1 - 1e-12)
     memo = {} if memo is None else memo
-    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan, its times); points solved
-    # once without an exact answer
+    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan, its times);
+    # points solved once without an exact answer
     cache: list[tuple[tuple[float, ...], float]] = memo.setdefault("cache", [])
     exact: dict[tuple[float, ...], tuple[float, Any, Any]] = memo.setdefault("exact", {})
     tried: set[tuple[float, ...]] = memo.setdefault("tried", set())

@@ -101,12 +101,14 @@ otherwise the coupled problem restricted to the split is solved, the split's bou
 floor and the best value as a cutoff, in doubling time slices like the parts' (the split
 goes back to the heap with the bound each slice proves): with two trucks whose cross pairs
 go one way, by :func:`taopt.fleet.coupled.leader_search` (exact; :data:`LEADER_SHARE` of the
-time left at its first try); with pairs both ways, first by its relaxation led by each truck
-in turn (each a bound of the split, and its optimum when its plan scores it), then by the
-label search with ``truck_of`` (each customer only
-on its truck) and the split's topological releases (met by every plan of the split, so the
-optimum over the split is the same; at 600 s one such search took 380 s of fleet10 seed
-0's run). The run stops when the best plan is no worse than the least bound of the
+time left at its first try); with pairs both ways, by
+:func:`taopt.fleet.twoway.two_way_search` (exact: a box search over the times of the
+follower's cross predecessors, each box bounded by the leader search with releases and
+follower deadlines; fleet10 seed 2's open split closed in 84 s); with more trucks, by the
+label search with ``truck_of`` (each customer only on its truck) and the split's topological
+releases (met by every plan of the split, so the optimum over the split is the same). A box
+search certified within :data:`CERTIFY` returns its proven bound, and the split goes back to
+the heap with it. The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
 The part solves run without the label search's beam pass (they are cut off at the best
