@@ -1025,12 +1025,15 @@ def leader_search(
             value = INF
         if not one_way and value > lb * (1 + 1e-9):
             # the relaxation's optimum: a bound of the split, its plan (when it scores) no proof
-            times = [INF] * n
-            for i, j in enumerate(lead):
-                times[j] = float(labels[found][2][i])
-            for i, j in enumerate(foll):
-                times[j] = float(exact[thetas[found]][2][i])
-            result.update(stopped_by="relaxed", bound=lb, relaxed_plan=plan, relaxed_times=times)
+            result.update(stopped_by="relaxed", bound=lb, relaxed_plan=plan)
+            foll_times = exact[thetas[found]][2]
+            if foll_times is not None:
+                times = [INF] * n
+                for i, j in enumerate(lead):
+                    times[j] = float(labels[found][2][i])
+                for i, j in enumerate(foll):
+                    times[j] = float(foll_times[i])
+                result["relaxed_times"] = times
             if value < planned:
                 result.update(plan=plan, value=value)
             else:
