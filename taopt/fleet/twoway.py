@@ -49,10 +49,14 @@ the tolerance. Without such a pair the widest interval (capped at the best value
 On tiny two-way splits this closes in 3 boxes; the midpoint of (t_j, t_r), tried first, only
 converged geometrically (thousands of boxes, bound and optimum equal to 1e-5).
 
-*Search.* Best first over the boxes by their bounds; a box's leader search runs in doubling
+*Search.* Each truck leads in turn with boxes of its own (the argument above holds for either
+leader; which relaxation is tighter depends on the split: on fleet10 seed 3's open split the
+second leader's root box is exact, on seed 2's the first's needs six box searches). Per
+leader, best first over the boxes by their bounds; a box's leader search runs in doubling
 slices (:data:`BOX_SHARE` of the time left at first; its memo kept). The split's optimum is
-proven when every open box's bound reaches the best plan's value (within ``CERTIFY``); at the
-clock, the least open bound is the split's proven bound. Every plan found is scored with
+proven when every open box of one leader has a bound at the best plan's value (within
+``CERTIFY``); at the clock, the larger of the two leaders' least open bounds is the split's
+proven bound. Every plan found is scored with
 every pair before it is kept.
 """
 
@@ -108,8 +112,9 @@ def two_way_search(
         Kept by the caller between runs on the same split with the same ``release`` (the
         split search's slices): the open boxes and their leader searches' memos.
     leading : int, optional
-        The leader (default :func:`taopt.fleet.split._lead`: the truck with more cross pairs
-        leaving it); the search is exact either way.
+        Only this truck leads. By default both trucks lead in turn, each with its own boxes
+        (:func:`taopt.fleet.split._lead`'s first): each truck's boxes bound the split, so
+        the larger of their least bounds is proven and either truck's closing proves it.
 
     Returns
     -------
@@ -128,39 +133,60 @@ def two_way_search(
     deadline = Deadline(time_limit)
     n = problem.n
     rel = [0.0] * n if release is None else [float(r) for r in release]
-    best, best_plan = INF, None
+    plan_value, best_plan = INF, None
     if incumbent is not None:
         try:
-            best, best_plan = evaluate_fleet(problem, incumbent), incumbent
+            plan_value, best_plan = evaluate_fleet(problem, incumbent), incumbent
         except FeasibilityError:
             pass
-    planned = best
-    best = min(best, cutoff)
+    best = min(plan_value, cutoff)
     one_way = leader_of(problem, owner) is not None
-    leader = _lead(problem, owner) if leading is None or one_way else int(leading)
-    follower = 1 - leader
-    pairs = [(r, j) for r, j in _closure(problem) if owner[r] == follower and owner[j] == leader]
-    sources = sorted({r for r, _ in pairs})
+    first = _lead(problem, owner)
+    if one_way:
+        leaders = [first]
+    elif leading is not None:
+        leaders = [int(leading)]
+    else:
+        leaders = [first, 1 - first]
     memo = {} if memo is None else memo
-    # box: (bound, id, lo, hi, tries); memos[id]: its leader search's memo
-    boxes: list[tuple[float, int, tuple[float, ...], tuple[float, ...], int]] = memo.setdefault(
-        "boxes", []
-    )
-    memos: dict[int, dict[str, Any]] = memo.setdefault("memos", {})
-    if "next" not in memo:
-        memo["next"] = 1
-        boxes.append((floor, 0, tuple(rel[r] for r in sources), (INF,) * len(sources), 0))
-        memos[0] = {}
+    states: dict[int, dict[str, Any]] = memo.setdefault("leaders", {})
+    for leader in leaders:
+        if leader not in states:
+            pairs = [
+                (r, j)
+                for r, j in _closure(problem)
+                if owner[r] == 1 - leader and owner[j] == leader
+            ]
+            sources = sorted({r for r, _ in pairs})
+            # box: (bound, id, lo, hi, tries); memos[id]: its leader search's memo
+            states[leader] = {
+                "pairs": pairs,
+                "sources": sources,
+                "boxes": [(floor, 0, tuple(rel[r] for r in sources), (INF,) * len(sources), 0)],
+                "memos": {0: {}},
+                "next": 1,
+                "closed": INF,
+                "searches": 0,
+            }
+
+    def least(state: dict[str, Any]) -> float:
+        """A proven bound of the split from one leader's boxes."""
+        return min(min((b for b, *_ in state["boxes"]), default=INF), state["closed"])
+
     searches = 0
     stopped_by = "optimal"
-    while boxes:
-        bound, bid, lo, hi, tries = boxes[0]
-        if best <= bound * (1 + CERTIFY):
-            break
+    while True:
+        if any(best <= least(states[x]) * (1 + CERTIFY) for x in leaders):
+            break  # one leader's boxes prove the split
         if deadline.expired():
             stopped_by = "time_limit"
             break
-        heapq.heappop(boxes)
+        # the leaders take turns (either may be the one whose boxes close first)
+        leader = min(leaders, key=lambda x: states[x]["searches"])
+        state = states[leader]
+        boxes, memos = state["boxes"], state["memos"]
+        pairs, sources = state["pairs"], state["sources"]
+        bound, bid, lo, hi, tries = heapq.heappop(boxes)
         box_release = rel[:]
         due = [INF] * n
         for r, a, b in zip(sources, lo, hi, strict=True):
@@ -184,6 +210,7 @@ def two_way_search(
             due=None if one_way else due,
         )
         searches += 1
+        state["searches"] += 1
         relaxed_value = INF
         for plan in (found.get("plan"), found.get("relaxed_plan")):
             if plan is None:
@@ -194,8 +221,9 @@ def two_way_search(
                 scored = INF
             if plan is found.get("relaxed_plan"):
                 relaxed_value = scored
-            if scored < best:
-                best, best_plan = scored, plan
+            if scored < plan_value:
+                plan_value, best_plan = scored, plan
+                best = min(best, scored)
         raised = max(bound, float(found["bound"]))
         if found["stopped_by"] == "optimal":
             memos.pop(bid, None)  # closed: no plan in it below the best
@@ -209,7 +237,7 @@ def two_way_search(
         # relaxed: split the box
         if relaxed_value <= raised * (1 + CERTIFY):  # its plan is within the tolerance
             memos.pop(bid, None)
-            memo["closed"] = min(memo.get("closed", INF), raised)
+            state["closed"] = min(state["closed"], raised)
             continue
         cut = _split_point(pairs, found.get("relaxed_times"), sources, lo, hi, best)
         if cut is None:  # nowhere to split: keep the box open with its bound
@@ -219,23 +247,22 @@ def two_way_search(
         i, m = cut
         parent = memos.pop(bid, {})
         for a, b in ((lo[i], m), (m, hi[i])):
-            child = memo["next"]
-            memo["next"] += 1
+            child = state["next"]
+            state["next"] += 1
             new_lo = lo[:i] + (a,) + lo[i + 1 :]
             new_hi = hi[:i] + (b,) + hi[i + 1 :]
             # the parent's follower lower bounds stay lower bounds in the child
             memos[child] = {"cache": list(parent.get("cache", []))}
             heapq.heappush(boxes, (raised, child, new_lo, new_hi, 0))
-    least = min((b for b, *_ in boxes), default=INF)
-    value = best if best_plan is not None else planned
+    proven = max(least(states[x]) for x in leaders)  # each leader's boxes bound the split
     return {
         "plan": best_plan,
-        "value": value if best_plan is not None else INF,
-        "bound": min(best, max(least, floor), memo.get("closed", INF)),
+        "value": plan_value,
+        "bound": min(best, max(proven, floor)),
         "stopped_by": stopped_by,
-        "boxes": memo["next"],
+        "boxes": sum(states[x]["next"] for x in leaders),
         "box_searches": searches,
-        "open_boxes": len(boxes),
+        "open_boxes": sum(len(states[x]["boxes"]) for x in leaders),
     }
 
 

@@ -60,14 +60,14 @@ def _two_way(problem: FleetProblem, owner: list) -> bool:
 @pytest.mark.parametrize("seed, D, c, objective, case, leading", ROWS)
 def test_two_way_search_equals_the_restricted_brute_force(seed, D, c, objective, case, leading):
     """Cross pairs both ways: the box search's optimum (with and without the topological
-    releases) equals the brute force over the split's plans, its plan scores it and its
-    bound is never above it."""
+    releases, one leader or both in turn) equals the brute force over the split's plans, its
+    plan scores it and its bound is never above it."""
     problem, owner = _problem(seed, D, c, objective, case)
     assert leader_of(problem, owner) is None and _two_way(problem, owner)
     value = brute_force(problem, truck_of=owner)[0]
     L = _split_releases(problem, owner, _closure(problem), _earliest(problem), Deadline(None))
-    for release in (None, L):
-        found = two_way_search(problem, owner, release=release, leading=leading)
+    for release, lead in ((None, leading), (L, leading), (L, None)):
+        found = two_way_search(problem, owner, release=release, leading=lead)
         assert found["stopped_by"] == "optimal"
         assert found["bound"] <= value + 1e-9
         if math.isinf(value):
