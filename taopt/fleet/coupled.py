@@ -5,9 +5,10 @@ Three methods. :func:`coupled_dp` (below): several trucks with one drone each, d
 customers, a joint DP over the trucks' sortie sequences. :func:`leader_search`: two trucks,
 any drones, cross pairs one way (exact: a search over the leading truck's part, the other
 priced by its optimum under the leader's service times as releases) or both ways (a
-relaxation, a bound). :func:`coupled_search`: any split, the label search's joint states,
-each label also bounded by every truck's own part (exact; slower than the leader search where
-that applies). Proofs in their docstrings.
+relaxation, a bound, which :func:`taopt.fleet.twoway.two_way_search` makes exact by
+splitting boxes of the follower's times). :func:`coupled_search`: any split, the label
+search's joint states, each label also bounded by every truck's own part (exact; slower than
+the leader search where that applies). Proofs in their docstrings.
 
 :func:`taopt.fleet.sorties.split_dp` bounds each split (X_1, ..., X_K) by its trucks' parts
 solved apart; where cross-truck precedences make the combined plan wait, the optimum restricted
@@ -497,6 +498,34 @@ def _project(label: tuple, k: int, index: dict[int, int], members: list[int]) ->
     return (S_k, M, tuple(svc[j] for j in members), ((w, A, T, ev, fin, F, tuple(out)),))
 
 
+def _airborne(tab: Any, S: int, trucks: tuple) -> list[float]:
+    """Per customer, the least time an airborne drone with room (of an unfinished truck) can
+    serve it next, every such drone allowed any unserved customer within range (more than
+    the label search's append rule allows: a lower bound), ``inf`` where none can: the
+    ``air`` argument of :func:`taopt.fleet.search._earliest_services`."""
+    air = [INF] * tab.n
+    c, tau = tab.c, tab.tau
+    for _w, _A, _T, _ev, fin, _F, drones in trucks:
+        if fin:
+            continue
+        for dr in drones:
+            if not (dr[0] == 1 and dr[5] and dr[2] < c):
+                continue
+            o = dr[1]
+            for j in range(tab.n):
+                if S >> j & 1 or not tab.drone_ok[j]:
+                    continue
+                if o >= 0:
+                    dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                else:
+                    dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                if dr[4] + dist + tab.near[j] <= tab.limit:
+                    v = dr[3] + fly + tau
+                    if v < air[j]:
+                        air[j] = v
+    return air
+
+
 def coupled_search(
     problem: FleetProblem,
     owner: list[int],
@@ -506,6 +535,7 @@ def coupled_search(
     floor: float = 0.0,
     cutoff: float = INF,
     max_labels: int | None = None,
+    due: list[float] | None = None,
 ) -> dict[str, Any]:
     """The optimum of ``problem`` over the plans of one split (customer j served by truck
     ``owner[j]`` or its drones), any drones per truck: the label search of
@@ -535,8 +565,21 @@ def coupled_search(
     at most ``f(P)``; so is the joint label's own bound and the maximum of them all. Trucks
     are not interchangeable here (``owner``), as with ``truck_of``.
 
+    ``due``: per customer a time by which it must be served (``inf``: none); the search is
+    then over the plans of the split whose earliest schedule meets them (the deadlines of
+    :func:`taopt.fleet.twoway.two_way_search`'s boxes). A label's service times are final
+    (its earliest schedule's), so a child serving j after ``due[j]`` has no such completion
+    and is dropped; so is a label with an unserved j whose earliest service
+    (:func:`taopt.fleet.search._earliest_services`, with every airborne drone allowed any
+    customer in range: :func:`_airborne`) is after ``due[j]``: a lower bound of t_j in each
+    completion. Dominance keeps its proof: a completion of a dominated label is matched by
+    one of the dominating label whose every later event is no later, so it meets the
+    deadlines too. The per-truck bound holds as above (a plan meeting the deadlines is a
+    plan). ``incumbent`` is then only a cutoff (the caller's).
+
     Returns the dict of :func:`taopt.fleet.search.label_search` (``plan``, ``value``,
-    ``bound``, ``stopped_by``, ``labels``, ``expanded``): ``"optimal"`` when the optimum over
+    ``bound``, ``stopped_by``, ``labels``, ``expanded``; with a plan found, its service times
+    under the releases, ``times``): ``"optimal"`` when the optimum over
     the split's plans is proven (the value; or, with no plan below ``cutoff``, the bound
     ``min(cutoff, incumbent)``), else the least open label's bound (proven)."""
     from taopt.errors import FeasibilityError, SolverError
@@ -546,6 +589,7 @@ def coupled_search(
         _bound,
         _children,
         _complete,
+        _earliest_services,
         _rebuild,
         _signature,
         _Tables,
@@ -570,7 +614,22 @@ def coupled_search(
         sub_tab.release = [rel[j] for j in members]
         parts.append((k, sub_tab, {j: i for i, j in enumerate(members)}, members))
 
+    dues = [] if due is None else [(j, float(d) + 1e-9) for j, d in enumerate(due) if d < INF]
+
+    def late(label: tuple) -> bool:
+        """Whether a deadline is missed: by a service, or by an unserved customer's
+        earliest service (``due``)."""
+        S, _M, svc, trucks = label
+        if any(S >> j & 1 and svc[j] > d for j, d in dues):
+            return True
+        if all(S >> j & 1 for j, _ in dues):
+            return False
+        est = _earliest_services(tab, S, svc, trucks, _airborne(tab, S, trucks))
+        return any(est[j] > d for j, d in dues)
+
     def bound(label: tuple, cut: float) -> float:
+        if dues and late(label):
+            return INF
         b = _bound(tab, label, cut)
         for k, sub_tab, index, members in parts:
             if b >= cut:
@@ -641,7 +700,7 @@ def coupled_search(
             raise SolverError(
                 f"coupled search: the plan found scores {scored!r} above the search's {lb!r}"
             )
-        result.update(plan=plan, value=lb, bound=lb)
+        result.update(plan=plan, value=lb, bound=lb, times=list(labels[found][2]))
         return result
     bound_value = best
     if stopped_by != "optimal":
@@ -678,6 +737,7 @@ def leader_search(
     max_labels: int | None = None,
     memo: dict[str, Any] | None = None,
     leading: int | None = None,
+    due: list[float] | None = None,
 ) -> dict[str, Any]:
     """The optimum of a two-truck ``problem`` over the plans of one split (customer j served
     by truck ``owner[j]`` or its drones) whose cross-truck precedences all go from one truck,
@@ -735,6 +795,14 @@ def leader_search(
     ``leading``: with pairs both ways, the truck that leads the relaxation (default: the one
     with more cross pairs leaving it); ignored when the pairs go one way.
 
+    ``due``: per follower customer a time by which it must be served (``inf``: none), passed
+    to each follower solve (:func:`coupled_search`'s ``due``): ``h`` is then the follower's
+    optimum over its plans meeting them, still non-decreasing in the releases, and the search
+    is over the split's plans whose follower meets them (every argument above holds with
+    those plans; :func:`taopt.fleet.twoway.two_way_search`'s boxes). A relaxed run also
+    returns its plan as ``relaxed_plan`` and its service times (the leader's under
+    ``release``, the follower's under the leader's times) as ``relaxed_times``.
+
     ``memo``: a dict kept by the caller between runs on the same split with the same
     ``release`` and a cutoff that never rises (the split search's slices): the follower
     solves are kept there and reused (each cached value stays a lower bound of h, and an
@@ -785,7 +853,7 @@ def leader_search(
     inter_l = [li[r] for r in inter]  # in the leader's numbering
     succ_of = {r: [foll.index(j) for rr, j in cross if rr == r] for r in inter}
     base_f = [rel[j] for j in foll]
-    c, tau = tab.c, tab.tau
+    due_f = None if due is None else [float(due[j]) for j in foll]
 
     best_plan: Any = None
     best = INF
@@ -798,10 +866,10 @@ def leader_search(
     best = min(best, cutoff)
     cut = best * (1 - 1e-12)
     memo = {} if memo is None else memo
-    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan); points solved
-    # once without an exact answer
+    # (θ, a lower bound of h(θ)); θ -> (h(θ) or >= the cutoff then, plan, its times);
+    # points solved once without an exact answer
     cache: list[tuple[tuple[float, ...], float]] = memo.setdefault("cache", [])
-    exact: dict[tuple[float, ...], tuple[float, Any]] = memo.setdefault("exact", {})
+    exact: dict[tuple[float, ...], tuple[float, Any, Any]] = memo.setdefault("exact", {})
     tried: set[tuple[float, ...]] = memo.setdefault("tried", set())
     solves = 0
 
@@ -830,14 +898,15 @@ def leader_search(
             time_limit=limit,
             floor=h_low(theta),
             cutoff=best,
+            due=due_f,
         )
         if found["stopped_by"] == "optimal":
             if found["plan"] is not None and found["value"] < best:
                 value = float(found["value"])
-                exact[theta] = (value, found["plan"])
+                exact[theta] = (value, found["plan"], found.get("times"))
             else:
                 value = best
-                exact[theta] = (value, None)
+                exact[theta] = (value, None, None)
         else:
             value = float(found["bound"])
         cache.append((theta, value))
@@ -854,26 +923,7 @@ def leader_search(
         S, _M, svc, trucks = label
         if all(S >> i & 1 for i in inter_l):
             return tuple(svc[i] for i in inter_l)
-        air = [INF] * tab.n
-        for _w, _A, _T, _ev, fin, _F, drones in trucks:
-            if fin:
-                continue
-            for dr in drones:
-                if not (dr[0] == 1 and dr[5] and dr[2] < c):
-                    continue
-                o = dr[1]
-                for j in range(tab.n):
-                    if S >> j & 1 or not tab.drone_ok[j]:
-                        continue
-                    if o >= 0:
-                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
-                    else:
-                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-                    if dr[4] + dist + tab.near[j] <= tab.limit:
-                        v = dr[3] + fly + tau
-                        if v < air[j]:
-                            air[j] = v
-        est = _earliest_services(tab, S, svc, trucks, air)
+        est = _earliest_services(tab, S, svc, trucks, _airborne(tab, S, trucks))
         return tuple(
             svc[i]
             if S >> i & 1
@@ -975,7 +1025,15 @@ def leader_search(
             value = INF
         if not one_way and value > lb * (1 + 1e-9):
             # the relaxation's optimum: a bound of the split, its plan (when it scores) no proof
-            result.update(stopped_by="relaxed", bound=lb)
+            result.update(stopped_by="relaxed", bound=lb, relaxed_plan=plan)
+            foll_times = exact[thetas[found]][2]
+            if foll_times is not None:
+                times = [INF] * n
+                for i, j in enumerate(lead):
+                    times[j] = float(labels[found][2][i])
+                for i, j in enumerate(foll):
+                    times[j] = float(foll_times[i])
+                result["relaxed_times"] = times
             if value < planned:
                 result.update(plan=plan, value=value)
             else:

@@ -101,12 +101,14 @@ otherwise the coupled problem restricted to the split is solved, the split's bou
 floor and the best value as a cutoff, in doubling time slices like the parts' (the split
 goes back to the heap with the bound each slice proves): with two trucks whose cross pairs
 go one way, by :func:`taopt.fleet.coupled.leader_search` (exact; :data:`LEADER_SHARE` of the
-time left at its first try); with pairs both ways, first by its relaxation led by each truck
-in turn (each a bound of the split, and its optimum when its plan scores it), then by the
-label search with ``truck_of`` (each customer only
-on its truck) and the split's topological releases (met by every plan of the split, so the
-optimum over the split is the same; at 600 s one such search took 380 s of fleet10 seed
-0's run). The run stops when the best plan is no worse than the least bound of the
+time left at its first try); with pairs both ways, by
+:func:`taopt.fleet.twoway.two_way_search` (exact: a box search over the times of the
+follower's cross predecessors, each box bounded by the leader search with releases and
+follower deadlines; fleet10 seed 2's open split closed in 84 s); with more trucks, by the
+label search with ``truck_of`` (each customer only on its truck) and the split's topological
+releases (met by every plan of the split, so the optimum over the split is the same). A box
+search certified within :data:`CERTIFY` returns its proven bound, and the split goes back to
+the heap with it. The run stops when the best plan is no worse than the least bound of the
 splits left (certified), or at the wall-clock limit with the best plan and that least bound
 (proven). Unbalanced splits are never solved: their cheap bound stays above the optimum.
 The part solves run without the label search's beam pass (they are cut off at the best
@@ -580,6 +582,7 @@ def split_search(
     from taopt.fleet.coupled import leader_of, leader_search
     from taopt.fleet.cover import fleet_cover_bound
     from taopt.fleet.search import _simple_plan, label_search
+    from taopt.fleet.twoway import two_way_search
 
     deadline = Deadline(time_limit)
     deadline_start = time.perf_counter()
@@ -952,10 +955,11 @@ def split_search(
                 continue
         coupled += 1
         left = deadline.remaining()
-        # one-way cross pairs: the leader search, exact; both ways: its relaxation once (a
-        # bound of the split, maybe its optimum), then the label search restricted to it
+        # two trucks: one-way cross pairs, the leader search; both ways, the box search over
+        # the follower's cross predecessors' times (both exact); more trucks: the label
+        # search restricted to the split
         one_way = problem.K == 2 and leader_of(problem, owner) is not None
-        leader = problem.K == 2 and (one_way or relaxed.get(i, 0) < 2)
+        leader = problem.K == 2
         if left is not None:  # a slice, doubled at each retry of this split, like the parts'
             tries = coupled_tries.get(i, 0)
             coupled_tries[i] = tries + 1
@@ -964,7 +968,19 @@ def split_search(
         L = topological.get(split)
         if L is None:
             L = topological[split] = _split_releases(problem, owner, closure, early, deadline)
-        if leader:
+        if leader and not one_way:  # both ways: the box search over the follower's times
+            found = two_way_search(
+                problem,
+                owner,
+                release=L,
+                time_limit=left,
+                incumbent=plan if value < INF else None,
+                floor=key * (1 - 1e-9),
+                cutoff=best,
+                max_labels=max_labels,
+                memo=leader_memo.setdefault((split, -1), {}),
+            )
+        elif leader:
             found = leader_search(
                 problem,
                 owner,
@@ -1008,7 +1024,12 @@ def split_search(
         )
         if found["stopped_by"] == "relaxed":
             relaxed[i] = relaxed.get(i, 0) + 1
-        if found["stopped_by"] != "optimal":
+        boxed = leader and not one_way
+        if found["stopped_by"] != "optimal" or (
+            boxed and float(found["bound"]) < best * (1 - 1e-12)
+        ):
+            # (a box search certified within CERTIFY keeps its proven bound: the split goes
+            # back with it and ends the run when it is the least)
             heapq.heappush(heap, (max(key, float(found["bound"])), i))
             if found["stopped_by"] == "size":
                 stopped_by = "size"
