@@ -195,11 +195,19 @@ SECOND_PRICES_MIN_SHARE = 0.02
 #: by the rate measured on the last chunk).
 CHUNK_SECONDS = 0.25
 
+#: Most (state, node) pairs the completion bound is evaluated on at once (``_Search.totals``):
+#: its work arrays are a few ``states x nodes`` tables (the ideals' cheapest arcs in and out,
+#: their sums: about 50 bytes a pair), so a chunk's memory stays near 50 MB whatever the
+#: bound's speed. Chunks sized by time alone (:data:`CHUNK_SECONDS`) grew with the band's
+#: faster bound to 200,000 states of 48 nodes (ry48p.1).
+BOUND_ENTRIES = 1 << 20
+
 #: Seconds per state, node and mask word of the completion bound before one chunk was timed
 #: (200,000 states on 49 nodes took 2-3 s on a loaded core, ESC47).
 BOUND_SECONDS = 3e-7
 
-#: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
+#: Seconds per state to put a layer's merged blocks in order (``_Search.grow``), before one
+#: was timed (1 million in 0.3 s).
 MERGE_SECONDS = 3e-7
 
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
@@ -390,8 +398,15 @@ class _Bound:
         ``alpha_v``)."""
         price = self.beta + np.where(np.arange(self.n) != self.end, self.alpha, 0.0)
         price[self.start] = 0.0
-        # the sum over the nodes not yet visited: all of them less those the mask holds
-        return float(price.sum()) - _members(mask, self.n) @ price
+        # the sum over the nodes not yet visited: all of them less those the mask holds, in
+        # blocks (the membership table is cast to floats for the product: 8 bytes per node
+        # and mask, 270 MB at once for ry48p.1's widest layer)
+        total = float(price.sum())
+        out = np.empty(len(mask))
+        step = max(1, DENSE_BLOCK // self.n)
+        for lo in range(0, len(mask), step):
+            out[lo : lo + step] = total - _members(mask[lo : lo + step], self.n) @ price
+        return out
 
     def __call__(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
         """``g`` for each state ``(mask[i], last[i])``."""
@@ -877,16 +892,31 @@ class _Search:
         deadline: Deadline,
         limit: float = np.inf,
     ) -> tuple[np.ndarray, ...] | None:
-        """Every one-node extension of the layer, the cheapest per (ideal, last); None when
-        the deadline passed first, or the extensions before merging passed ``limit``."""
+        """Every one-node extension of the layer, the cheapest per (ideal, last), in the order
+        of the states (by mask, then last node); None when the deadline passed first, the
+        merge could not end in time, or the extensions before merging passed ``limit``.
+
+        The extensions by one node ``w`` are merged as they are made: two extensions
+        ``(I ∪ {w}, w)`` and ``(I' ∪ {w}, w)`` with ``w`` in neither ideal are the same state
+        only when ``I = I'``, so states made by different nodes never coincide and each
+        node's block is reduced to its distinct states at once (:func:`_cheapest_per_state`
+        on the block). Only the merged blocks are kept (a few states per ideal instead of
+        every extension: ry48p.1's last layer of a 10 s run held 2.7 million extensions,
+        180 MB, before its merge), then one sort puts them in order. The same states and
+        parents as one merge of all the extensions: within a block the parents keep their
+        order, and no state is in two blocks.
+        """
         bits, pred, usable = self.bits, self.pred, self.usable
+        n = self.problem.n
         new_mask, new_last, new_value, new_parent = [], [], [], []
-        count = 0
+        count = merged = 0
         index = np.arange(len(mask))
+        left = deadline.remaining()
+        ends = None if left is None else time.perf_counter() + left - MARGIN
         # a node every mask holds, or one with a predecessor no mask holds, extends none
-        member = _members(mask, self.problem.n)
-        held_by_all, held_by_some = np.asarray(member.all(axis=0)), np.asarray(member.any(axis=0))
-        for w in range(self.problem.n):
+        held_by_all = _members(np.bitwise_and.reduce(mask, axis=0)[None], n)[0]
+        held_by_some = _members(np.bitwise_or.reduce(mask, axis=0)[None], n)[0]
+        for w in range(n):
             if w == self.problem.start or held_by_all[w]:
                 continue
             if not held_by_some[self.bound.pred_nodes[w]].all():
@@ -901,31 +931,43 @@ class _Search:
             if not finite.any():
                 continue
             chosen = index[ok][finite]
+            del ok
             count += len(chosen)
             if count > limit:
                 return None
-            new_mask.append(mask[chosen] | bits[w])
-            new_last.append(np.full(len(chosen), w, dtype=np.int64))
-            new_value.append(value[chosen] + step[finite])
-            new_parent.append(chosen)
+            block = mask[chosen] | bits[w]
+            block_value = value[chosen] + step[finite]
+            del step, finite
+            ours = _cheapest_per_state(block, np.full(len(chosen), w, np.int64), block_value, n)
+            new_mask.append(block[ours])
+            new_last.append(np.full(len(ours), w, dtype=np.int64))
+            new_value.append(block_value[ours])
+            new_parent.append(chosen[ours])
+            merged += len(ours)
+            del block, block_value, chosen, ours
+            # the final sort cannot be interrupted: stop as soon as it cannot end in time
+            # (at the slowest rate seen so far; millions of states take seconds on a loaded
+            # core), before more extensions are made for nothing
+            if ends is not None and merged * self.merge_rate > ends - time.perf_counter():
+                self.merge_refused = True  # out of time, not of states
+                return None
         if not new_mask:
             empty = np.zeros(0)
             return (mask[:0], empty.astype(np.int64), empty, empty.astype(np.int64))
-        # the merge below cannot be interrupted: start it only if it should end in time (at
-        # the slowest rate seen so far; millions of extensions take seconds on a loaded core)
-        left = deadline.remaining()
-        if left is not None and count * self.merge_rate > left - MARGIN:
-            self.merge_refused = True  # out of time, not of states
-            return None
         began = time.perf_counter()
         c_mask = np.concatenate(new_mask)
+        del new_mask
         c_last = np.concatenate(new_last)
-        c_value = np.concatenate(new_value)
-        c_parent = np.concatenate(new_parent)
-        chosen = _cheapest_per_state(c_mask, c_last, c_value, self.problem.n)
-        if count >= 10_000:
-            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / count)
-        return c_mask[chosen], c_last[chosen], c_value[chosen], c_parent[chosen]
+        del new_last
+        # no two states are equal now: this sort only orders them (by mask, then last)
+        order = _cheapest_per_state(c_mask, c_last, np.zeros(len(c_last)), n)
+        c_mask, c_last = c_mask[order], c_last[order]
+        c_value = np.concatenate(new_value)[order]
+        del new_value
+        c_parent = np.concatenate(new_parent)[order]
+        if merged >= 10_000:  # the final sort, per state
+            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / merged)
+        return c_mask, c_last, c_value, c_parent
 
     def totals(
         self,
@@ -958,6 +1000,9 @@ class _Search:
                 # changes it: 37,000 states on 54 nodes took 4.8 s at load 16), and never
                 # more than the time left, so the deadline is looked at in time
                 size = chunk or max(1_000, int(CHUNK_SECONDS / (self.bound_rate * unit)))
+                # and at most BOUND_ENTRIES (state, node) pairs: the bound's work arrays are
+                # a few ``states x nodes`` tables of floats (``_Bound._per_ideal_band``)
+                size = min(size, max(100, BOUND_ENTRIES // self.problem.n))
                 left = deadline.remaining()
                 if left is not None:
                     fits = int((left - MARGIN) / (self.bound_rate * unit))

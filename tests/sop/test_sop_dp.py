@@ -346,3 +346,44 @@ def test_beam_passes_run_to_their_end_are_reused(sop_esc25):
     again = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
     assert again.status == first.status == OPTIMAL and again.objective == first.objective
     assert again.info["beam"] == first.info["beam"]
+
+
+def _grown_at_once(search, mask, last, value):
+    """Every extension of a layer, then one merge of them all (the reference of ``grow``)."""
+    from taopt.ideals import has, holds
+    from taopt.models.sop_dp import _cheapest_per_state
+
+    parts = []
+    for w in range(search.problem.n):
+        if w == search.problem.start:
+            continue
+        ok = np.flatnonzero(~has(mask, w) & holds(mask, search.pred[w]))
+        step = search.usable[last[ok], w]
+        ok, step = ok[np.isfinite(step)], step[np.isfinite(step)]
+        parts.append((mask[ok] | search.bits[w], np.full(len(ok), w), value[ok] + step, ok))
+    c_mask, c_last, c_value, c_parent = (np.concatenate(a) for a in zip(*parts, strict=True))
+    chosen = _cheapest_per_state(c_mask, c_last, c_value, search.problem.n)
+    return c_mask[chosen], c_last[chosen], c_value[chosen], c_parent[chosen]
+
+
+@pytest.mark.parametrize(("n", "shuffled"), [(14, False), (14, True), (70, False), (70, True)])
+def test_layer_merged_per_node_equals_one_merge_of_all_extensions(n, shuffled):
+    """``grow`` (each node's extensions merged as they are made, then one sort) keeps the
+    same states, values and parents, in the same order, as one merge of every extension;
+    also from a layer not in mask order (a beam's) and with two-word masks."""
+    from taopt.models.sop_dp import Deadline, _Search
+    from taopt.sop.generate import random_sop
+
+    problem = random_sop(n, 0.05, 3, high=5)  # costs 0-5: many equal values
+    search = _Search(problem)
+    layer = search.first()[:3]
+    rng = np.random.default_rng(n)
+    for _ in range(4):
+        if shuffled:
+            layer = tuple(a[rng.permutation(len(layer[0]))] for a in layer)
+        got = search.grow(*layer, Deadline(None))
+        want = _grown_at_once(search, *layer)
+        assert got is not None and len(got[0]) > 0
+        for a, b in zip(got, want, strict=True):
+            assert np.array_equal(a, b)
+        layer = got[:3]
