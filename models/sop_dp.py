@@ -653,6 +653,14 @@ def _cheapest_per_state(
     return order[hits[first]]
 
 
+def _state_order(mask: np.ndarray, last: np.ndarray, n: int) -> np.ndarray:
+    """The stable order of the states by mask, then last node (the order
+    :func:`_cheapest_per_state` returns them in), with no other work array than the key."""
+    if mask.ndim == 1 and n <= 58:
+        return np.argsort((mask << np.uint64(6)) | last.astype(np.uint64), kind="stable")
+    return np.lexsort((last, *lex_keys(mask)))
+
+
 def _members(mask: np.ndarray, n: int) -> np.ndarray:
     """``(k, n)`` bool: whether each mask holds each node (bits unpacked, little-endian)."""
     words = (mask[:, None] if mask.ndim == 1 else mask).astype("<u8", copy=False)
@@ -960,7 +968,7 @@ class _Search:
         c_last = np.concatenate(new_last)
         del new_last
         # no two states are equal now: this sort only orders them (by mask, then last)
-        order = _cheapest_per_state(c_mask, c_last, np.zeros(len(c_last)), n)
+        order = _state_order(c_mask, c_last, n)
         c_mask, c_last = c_mask[order], c_last[order]
         c_value = np.concatenate(new_value)[order]
         del new_value
