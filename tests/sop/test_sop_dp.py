@@ -387,3 +387,22 @@ def test_layer_merged_per_node_equals_one_merge_of_all_extensions(n, shuffled):
         for a, b in zip(got, want, strict=True):
             assert np.array_equal(a, b)
         layer = got[:3]
+
+
+@pytest.mark.parametrize("n", [20, 64, 130])
+def test_open_prices_by_byte_table_equal_the_membership_product(n):
+    """The completion bound's open prices read from its byte table equal the prices summed
+    over the nodes each mask does not hold (one- and multi-word masks)."""
+    from taopt.ideals import full, words
+    from taopt.models.sop_dp import _Bound, _members
+
+    rng = np.random.default_rng(n)
+    usable = rng.integers(1, 50, (n, n)).astype(float)
+    bound = _Bound(usable, 0, n - 1, (rng.normal(size=n), rng.normal(size=n)))
+    mask = rng.integers(0, 2**63, (500, words(n)), dtype=np.uint64)
+    mask = mask[:, 0] if words(n) == 1 else mask
+    mask &= full(n)
+    price = bound.beta + np.where(np.arange(n) != n - 1, bound.alpha, 0.0)
+    price[0] = 0.0
+    want = price.sum() - _members(mask, n).astype(float) @ price
+    assert np.allclose(bound._open_prices(mask), want, rtol=0, atol=1e-9)
