@@ -403,6 +403,8 @@ class _Bound:
         if self._price_table is None:
             self._price_table = self._price_bytes()
         total, table = self._price_table
+        if not len(mask):
+            return np.zeros(0)
         raw = np.ascontiguousarray(mask.astype("<u8", copy=False)).view(np.uint8)
         raw = raw.reshape(len(mask), -1)
         out = np.full(len(mask), total)
