@@ -165,6 +165,14 @@ IDEAL_CAP = 200_000
 #: Share of the time limit the beam passes may use.
 BEAM_SHARE = 0.25
 
+#: Share of the stage's time the first (narrowest) beam pass may use when the beam's budget
+#: (:data:`BEAM_SHARE`) is shorter: a pass cut by its time finds nothing, and the DP then starts
+#: from the warm start's order. ESC47 at 10 s under load (its own process niced, a spinner
+#: beside, load 6-7): the 64-wide pass (1291 in 0.3 s quiet) was cut by a budget of about 1 s,
+#: the DP kept 54,645 states from 1506 without closing, where from 1291 it closes with
+#: 30,170 (2026-11-27).
+FIRST_BEAM_SHARE = 0.5
+
 #: A wider beam pass is started only when the last one's time, grown as the ratio of the widths
 #: to this power, fits in the beam's budget. Measured 64 -> 256 -> 1,024: 1.6x and 3x on
 #: rbg-atsp-150, 1.6x and 4x on rbg-atsp-175, 1.9x and 3.7x on ESC47, 3.1x and 7x on
@@ -1568,14 +1576,15 @@ def _beam_start(
 ) -> tuple[float, list[int]] | None:
     """The incumbent improved by beam passes (:func:`beam_order`): a narrow beam first (a
     good path in a fraction of a second), then :data:`MIDDLE_BEAM`, then ``beam_width``, within
-    :data:`BEAM_SHARE` of the time, each started only if it should end in it
+    :data:`BEAM_SHARE` of the time (the first, narrowest pass at least
+    :data:`FIRST_BEAM_SHARE`), each started only if it should end in it
     (:data:`BEAM_TIME_EXPONENT`); ``info["beam"]`` the beam's cost when it improved the
     incumbent, ``info["beam_skipped"]`` the first width not started."""
     if beam_width:
         budget = Deadline(deadline.share(BEAM_SHARE))
         last: tuple[int, float] | None = None  # the last pass's width and seconds
         for width in sorted({min(w, beam_width) for w in (NARROW_BEAM, MIDDLE_BEAM, beam_width)}):
-            if budget.expired(MARGIN):
+            if budget.expired(MARGIN) and (last is not None or deadline.expired(MARGIN)):
                 break
             left = budget.remaining()
             if last is not None and left is not None:
@@ -1585,6 +1594,10 @@ def _beam_start(
                 if last[1] * (width / last[0]) ** BEAM_TIME_EXPONENT > left:
                     info["beam_skipped"] = width
                     break
+            if last is None:  # the first pass: at least FIRST_BEAM_SHARE of the stage
+                first = deadline.share(FIRST_BEAM_SHARE)
+                if left is not None and first is not None:
+                    left = max(left, first)
             key = _problem_key(problem, width)
             beam: tuple[float, list[int]] | None
             if key in _BEAMS:  # ran to its end in an earlier stage (deterministic): reused

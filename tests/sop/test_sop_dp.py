@@ -406,3 +406,15 @@ def test_open_prices_by_byte_table_equal_the_membership_product(n):
     price[0] = 0.0
     want = price.sum() - _members(mask, n).astype(float) @ price
     assert np.allclose(bound._open_prices(mask), want, rtol=0, atol=1e-9)
+
+
+def test_narrow_beam_pass_runs_past_a_spent_beam_budget(monkeypatch, sop_esc25):
+    """With the beam's budget spent before it starts, the first (narrowest) pass still runs
+    on its share of the stage and gives the DP its order; the DP proves ESC25's optimum."""
+    from taopt.models import sop_dp
+
+    monkeypatch.setattr(sop_dp, "BEAM_SHARE", 0.0)
+    monkeypatch.setattr(sop_dp, "_BEAMS", {})
+    result = sop_dp.solve_sop_dp(sop_esc25, 60, beam_width=64)
+    assert result.info["beam"] is not None
+    assert str(result.status) == "optimal" and result.objective == 1681
