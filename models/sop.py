@@ -981,6 +981,22 @@ def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0)
     return rate * max(float(seconds), 0.0) * (FILL_BESIDE_SHARE if beside else 1.0)
 
 
+def expected_fill(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
+    """The states the reported estimate expects a filling DP stage to keep:
+    :func:`fill_states` divided by the words of a mask beyond 64 nodes
+    (:func:`taopt.ideals.words`), as the DP's own clock counts a state's bound work per node
+    and word. Measured at 60 s under load (2026-11-27, ``--resources 60 --unseen --load``): the
+    two-word stand-ins of 65-80 nodes (esc-like, ftv70) kept 43,000-261,000 states where
+    :func:`fill_states` expected 500,000-690,000, and their estimates were 1.5-2x their
+    peaks (peak / estimate 0.50-0.65); recomputed on the recorded rows with the words counted,
+    0.67-0.83, the other rows at 10 and 60 s unchanged or closer (0.62-1.07 in all). The
+    guard keeps :func:`fill_states` itself."""
+    from taopt.ideals import is_wide, words
+
+    fill = fill_states(n, seconds, beside, share)
+    return fill / words(n) if is_wide(n) else fill
+
+
 def probe_states(
     n: int,
     probe: Probe,
@@ -992,10 +1008,10 @@ def probe_states(
 ) -> float:
     """The DP states the reported estimate expects of a stage of ``seconds`` after ``probe``:
     the smaller of its extrapolation (:func:`probe_extrapolation`), the states it can fill in
-    its time (:func:`fill_states`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
+    its time (:func:`expected_fill`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
     allow (``allowed``, None: not counted), never below the states the probe measured, and
     at most its ``cap`` and ``allowed``."""
-    states = min(probe_extrapolation(n, probe), fill_states(n, seconds, beside, share))
+    states = min(probe_extrapolation(n, probe), expected_fill(n, seconds, beside, share))
     if allowed is not None:
         states = min(states, PROBE_ALLOWED_SHARE * float(allowed))
     states = min(max(states, float(probe.states)), float(cap))
@@ -1062,7 +1078,7 @@ def predicted_peak(
 
     The DP's states, with a probe (:func:`probe_states`): what its layers measured,
     extrapolated to the middle by their damped growth (:func:`probe_extrapolation`), at most
-    what a stage that fills its states keeps in its time (:func:`fill_states`); the two
+    what a stage that fills its states keeps in its time (:func:`expected_fill`); the two
     kinds of instance the inputs known before the stages do not tell apart (ESC25 and
     ry48p.1, root gaps 0.12 and 0.11) grow 1.1-2 and 15-36 times a layer in the probe.
     Without one (the estimate first recorded, replaced by the probe's): the old fit,
@@ -1074,7 +1090,7 @@ def predicted_peak(
     share = dp_state_share(problem)
     if path == "cuts":  # a DP stage after the cut engine (use_the_rest), filling its states
         rest = None if cut_seconds is None else CUTS_REST_SHARE * cut_seconds
-        states = min(fill_states(problem.n, rest, beside, share), float(cap))
+        states = min(expected_fill(problem.n, rest, beside, share), float(cap))
     elif probe is not None:
         states = probe_states(problem.n, probe, seconds, cap, allowed, beside, share)
     else:
@@ -1106,7 +1122,7 @@ def predicted_peak(
             "states": probe.states,
             "seconds": probe.seconds,
             "extrapolated": probe_extrapolation(problem.n, probe),
-            "fill": fill_states(problem.n, seconds, beside, share),
+            "fill": expected_fill(problem.n, seconds, beside, share),
         }
     return peak, features
 
