@@ -545,7 +545,10 @@ BASE_BYTES = 160e6
 #: 60``). Per state alone the peaks of short runs spread from 94 B (p43.4, dense precedence:
 #: few extensions per state) to 1.5 KB (ESC47, ft53.1: a setup of 50-100 MB the base
 #: absorbs); the reported estimate (:func:`predicted_peak`) scales it by
-#: :func:`dp_state_share`, the guard does not.
+#: :func:`dp_state_share` (squared), the guard does not. Since the layers' extensions are
+#: merged per node as they are made (``taopt.models.sop_dp._Search.grow``, 2026-11-27) the
+#: measured peaks are 150-1,070 B per expected state (ry48p.1 at 10 s: 442-556 MB before,
+#: 247-264 MB after): the guard and the state caps kept at 700 B stay above them.
 DP_BYTES_PER_STATE = 700.0
 
 
@@ -653,6 +656,19 @@ def dp_state_share(problem: SopProblem) -> float:
     estimate at 2.4x its peak. Used for the estimate only; the state caps keep the full
     constant."""
     return float(min(1.0, max(0.2, (1.0 - closure_share(problem)) / 0.89)))
+
+
+#: Exponent of :func:`dp_state_share` in the reported estimate's bytes a state
+#: (:func:`predicted_peak`). Since a layer's extensions are merged per node as they are made
+#: (``taopt.models.sop_dp._Search.grow``) and the bound works in chunks of fixed size, the
+#: peak above the base follows the widest layer's merged states, which fall with the
+#: extensions a state has, as does the count of states (:func:`fill_states`): measured per
+#: expected state at 10 s (2026-11-27, ``bench_sop.py --resources 10``, shipped set and
+#: ``--unseen``, load 5-6), 66-157 B at share 0.48-0.50 (p43.4, ry48p.4, ft53.4),
+#: 280-390 B at 0.66-0.68 (rbg048a, rbg050c), 240-1,070 B at 1. With the share itself
+#: ft53.4's estimate was 1.85x its peak; squared, the shipped and stand-in runs sit at
+#: 0.77-1.06 of their peaks.
+DP_SHARE_EXPONENT = 2.0
 
 
 def closure_share(problem: SopProblem) -> float:
@@ -955,7 +971,7 @@ def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0)
     when its bound prunes too little to close: :data:`FILL_STATES_PER_SECOND` a second
     (times ``min(1, 64 / n) ** FILL_WIDE_EXPONENT``, times :data:`FILL_BESIDE_SHARE` when CP-SAT runs ``beside``),
     divided by ``share`` (:func:`dp_state_share`: a state of fewer extensions costs less time
-    as it costs fewer bytes, so a filling stage's bytes a second do not depend on it;
+    as it costs fewer bytes;
     rbg050c, share 0.6, kept 1.98 million states in a 25 s stage, 79,000 a second);
     increasing in ``seconds``."""
     if seconds is None:
@@ -963,6 +979,22 @@ def fill_states(n: int, seconds: float | None, beside: bool, share: float = 1.0)
     wide = min(1.0, 64.0 / max(n, 1)) ** FILL_WIDE_EXPONENT
     rate = FILL_STATES_PER_SECOND * wide / max(share, 1e-9)
     return rate * max(float(seconds), 0.0) * (FILL_BESIDE_SHARE if beside else 1.0)
+
+
+def expected_fill(n: int, seconds: float | None, beside: bool, share: float = 1.0) -> float:
+    """The states the reported estimate expects a filling DP stage to keep:
+    :func:`fill_states` divided by the words of a mask beyond 64 nodes
+    (:func:`taopt.ideals.words`), as the DP's own clock counts a state's bound work per node
+    and word. Measured at 60 s under load (2026-11-27, ``--resources 60 --unseen --load``): the
+    two-word stand-ins of 65-80 nodes (esc-like, ftv70) kept 43,000-261,000 states where
+    :func:`fill_states` expected 500,000-690,000, and their estimates were 1.5-2x their
+    peaks (peak / estimate 0.50-0.65); recomputed on the recorded rows with the words counted,
+    0.67-0.83, the other rows at 10 and 60 s unchanged or closer (0.62-1.07 in all). The
+    guard keeps :func:`fill_states` itself."""
+    from taopt.ideals import is_wide, words
+
+    fill = fill_states(n, seconds, beside, share)
+    return fill / words(n) if is_wide(n) else fill
 
 
 def probe_states(
@@ -976,10 +1008,10 @@ def probe_states(
 ) -> float:
     """The DP states the reported estimate expects of a stage of ``seconds`` after ``probe``:
     the smaller of its extrapolation (:func:`probe_extrapolation`), the states it can fill in
-    its time (:func:`fill_states`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
+    its time (:func:`expected_fill`) and :data:`PROBE_ALLOWED_SHARE` of the states the ideals
     allow (``allowed``, None: not counted), never below the states the probe measured, and
     at most its ``cap`` and ``allowed``."""
-    states = min(probe_extrapolation(n, probe), fill_states(n, seconds, beside, share))
+    states = min(probe_extrapolation(n, probe), expected_fill(n, seconds, beside, share))
     if allowed is not None:
         states = min(states, PROBE_ALLOWED_SHARE * float(allowed))
     states = min(max(states, float(probe.states)), float(cap))
@@ -1040,12 +1072,13 @@ def predicted_peak(
     (0: it does not run), ``probe`` what the first DP stage's first layers measured
     (:class:`LayerWatch`; None: no layer yet) and ``beside`` whether CP-SAT's worker runs
     beside. The peak is the base plus the larger of the DP phase (the DP's states at
-    :func:`dp_bytes` scaled by :func:`dp_state_share`, beside the root stage's model) and the
+    :func:`dp_bytes` scaled by :func:`dp_state_share` to the power
+    :data:`DP_SHARE_EXPONENT`, beside the root stage's model) and the
     cut engine's phase (:func:`cut_engine_bytes`).
 
     The DP's states, with a probe (:func:`probe_states`): what its layers measured,
     extrapolated to the middle by their damped growth (:func:`probe_extrapolation`), at most
-    what a stage that fills its states keeps in its time (:func:`fill_states`); the two
+    what a stage that fills its states keeps in its time (:func:`expected_fill`); the two
     kinds of instance the inputs known before the stages do not tell apart (ESC25 and
     ry48p.1, root gaps 0.12 and 0.11) grow 1.1-2 and 15-36 times a layer in the probe.
     Without one (the estimate first recorded, replaced by the probe's): the old fit,
@@ -1057,12 +1090,12 @@ def predicted_peak(
     share = dp_state_share(problem)
     if path == "cuts":  # a DP stage after the cut engine (use_the_rest), filling its states
         rest = None if cut_seconds is None else CUTS_REST_SHARE * cut_seconds
-        states = min(fill_states(problem.n, rest, beside, share), float(cap))
+        states = min(expected_fill(problem.n, rest, beside, share), float(cap))
     elif probe is not None:
         states = probe_states(problem.n, probe, seconds, cap, allowed, beside, share)
     else:
         states = predicted_states(problem.n, seconds, cap, allowed)
-    dp = dp_bytes(problem.n, states) * share
+    dp = dp_bytes(problem.n, states) * share**DP_SHARE_EXPONENT
     held = cut_engine_bytes(nonzeros, 0.0)
     cut = cut_engine_bytes(nonzeros, cut_seconds) if cut_seconds != 0 else 0.0
     peak = BASE_BYTES + max(dp + held, cut)
@@ -1089,7 +1122,7 @@ def predicted_peak(
             "states": probe.states,
             "seconds": probe.seconds,
             "extrapolated": probe_extrapolation(problem.n, probe),
-            "fill": fill_states(problem.n, seconds, beside, share),
+            "fill": expected_fill(problem.n, seconds, beside, share),
         }
     return peak, features
 

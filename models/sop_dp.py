@@ -165,6 +165,14 @@ IDEAL_CAP = 200_000
 #: Share of the time limit the beam passes may use.
 BEAM_SHARE = 0.25
 
+#: Share of the stage's time the first (narrowest) beam pass may use when the beam's budget
+#: (:data:`BEAM_SHARE`) is shorter: a pass cut by its time finds nothing, and the DP then starts
+#: from the warm start's order. ESC47 at 10 s under load (its own process niced, a spinner
+#: beside, load 6-7): the 64-wide pass (1291 in 0.3 s quiet) was cut by a budget of about 1 s,
+#: the DP kept 54,645 states from 1506 without closing, where from 1291 it closes with
+#: 30,170 (2026-11-27).
+FIRST_BEAM_SHARE = 0.5
+
 #: A wider beam pass is started only when the last one's time, grown as the ratio of the widths
 #: to this power, fits in the beam's budget. Measured 64 -> 256 -> 1,024: 1.6x and 3x on
 #: rbg-atsp-150, 1.6x and 4x on rbg-atsp-175, 1.9x and 3.7x on ESC47, 3.1x and 7x on
@@ -195,11 +203,19 @@ SECOND_PRICES_MIN_SHARE = 0.02
 #: by the rate measured on the last chunk).
 CHUNK_SECONDS = 0.25
 
+#: Most (state, node) pairs the completion bound is evaluated on at once (``_Search.totals``):
+#: its work arrays are a few ``states x nodes`` tables (the ideals' cheapest arcs in and out,
+#: their sums: about 50 bytes a pair), so a chunk's memory stays near 50 MB whatever the
+#: bound's speed. Chunks sized by time alone (:data:`CHUNK_SECONDS`) grew with the band's
+#: faster bound to 200,000 states of 48 nodes (ry48p.1).
+BOUND_ENTRIES = 1 << 20
+
 #: Seconds per state, node and mask word of the completion bound before one chunk was timed
 #: (200,000 states on 49 nodes took 2-3 s on a loaded core, ESC47).
 BOUND_SECONDS = 3e-7
 
-#: Seconds per extension to merge a layer, before one was timed (1 million in 0.3 s).
+#: Seconds per state to put a layer's merged blocks in order (``_Search.grow``), before one
+#: was timed (1 million in 0.3 s).
 MERGE_SECONDS = 3e-7
 
 #: Relative tolerance of the pruning test ``f + g >= UB - tol``.
@@ -302,6 +318,8 @@ class _Bound:
             potentials = (np.zeros(n), np.zeros(n))
         self.alpha: np.ndarray = potentials[0]
         self.beta: np.ndarray = potentials[1]
+        #: The open prices' total and byte table (:meth:`_price_bytes`), made when first used.
+        self._price_table: tuple[float, np.ndarray] | None = None
         usable = usable - self.alpha[:, None] - self.beta[None, :]  # reduced costs (inf stays)
         self.usable = usable
         bits = node_bits(n)
@@ -387,11 +405,34 @@ class _Bound:
 
     def _open_prices(self, mask: np.ndarray) -> np.ndarray:
         """Per mask, the prices of the nodes still to be left and entered (``P`` less
-        ``alpha_v``)."""
+        ``alpha_v``): the sum over all of them less those the mask holds, read byte by byte
+        from a table (:meth:`_price_bytes`; a product with the membership table cast to
+        floats took 20 % of ESC47's DP and 8 bytes per node and mask)."""
+        if self._price_table is None:
+            self._price_table = self._price_bytes()
+        total, table = self._price_table
+        if not len(mask):
+            return np.zeros(0)
+        raw = np.ascontiguousarray(mask.astype("<u8", copy=False)).view(np.uint8)
+        raw = raw.reshape(len(mask), -1)
+        out = np.full(len(mask), total)
+        for k in range(min(raw.shape[1], len(table))):
+            out -= table[k][raw[:, k]]
+        return out
+
+    def _price_bytes(self) -> tuple[float, np.ndarray]:
+        """The sum of the open prices over every node and ``[k, b]``: the sum over the nodes
+        whose bits in byte ``k`` of a mask are set in ``b``."""
         price = self.beta + np.where(np.arange(self.n) != self.end, self.alpha, 0.0)
         price[self.start] = 0.0
-        # the sum over the nodes not yet visited: all of them less those the mask holds
-        return float(price.sum()) - _members(mask, self.n) @ price
+        padded = np.zeros(-(-self.n // 8) * 8)
+        padded[: self.n] = price
+        byte = np.arange(256)
+        table = np.zeros((len(padded) // 8, 256))
+        for k in range(len(table)):
+            for bit in range(8):
+                table[k] += np.where((byte >> bit) & 1, padded[8 * k + bit], 0.0)
+        return float(price.sum()), table
 
     def __call__(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
         """``g`` for each state ``(mask[i], last[i])``."""
@@ -638,6 +679,14 @@ def _cheapest_per_state(
     return order[hits[first]]
 
 
+def _state_order(mask: np.ndarray, last: np.ndarray, n: int) -> np.ndarray:
+    """The stable order of the states by mask, then last node (the order
+    :func:`_cheapest_per_state` returns them in), with no other work array than the key."""
+    if mask.ndim == 1 and n <= 58:
+        return np.argsort((mask << np.uint64(6)) | last.astype(np.uint64), kind="stable")
+    return np.lexsort((last, *lex_keys(mask)))
+
+
 def _members(mask: np.ndarray, n: int) -> np.ndarray:
     """``(k, n)`` bool: whether each mask holds each node (bits unpacked, little-endian)."""
     words = (mask[:, None] if mask.ndim == 1 else mask).astype("<u8", copy=False)
@@ -877,16 +926,31 @@ class _Search:
         deadline: Deadline,
         limit: float = np.inf,
     ) -> tuple[np.ndarray, ...] | None:
-        """Every one-node extension of the layer, the cheapest per (ideal, last); None when
-        the deadline passed first, or the extensions before merging passed ``limit``."""
+        """Every one-node extension of the layer, the cheapest per (ideal, last), in the order
+        of the states (by mask, then last node); None when the deadline passed first, the
+        merge could not end in time, or the extensions before merging passed ``limit``.
+
+        The extensions by one node ``w`` are merged as they are made: two extensions
+        ``(I ∪ {w}, w)`` and ``(I' ∪ {w}, w)`` with ``w`` in neither ideal are the same state
+        only when ``I = I'``, so states made by different nodes never coincide and each
+        node's block is reduced to its distinct states at once (:func:`_cheapest_per_state`
+        on the block). Only the merged blocks are kept (a few states per ideal instead of
+        every extension: ry48p.1's last layer of a 10 s run held 2.7 million extensions,
+        180 MB, before its merge), then one sort puts them in order. The same states and
+        parents as one merge of all the extensions: within a block the parents keep their
+        order, and no state is in two blocks.
+        """
         bits, pred, usable = self.bits, self.pred, self.usable
+        n = self.problem.n
         new_mask, new_last, new_value, new_parent = [], [], [], []
-        count = 0
+        count = merged = 0
         index = np.arange(len(mask))
+        left = deadline.remaining()
+        ends = None if left is None else time.perf_counter() + left - MARGIN
         # a node every mask holds, or one with a predecessor no mask holds, extends none
-        member = _members(mask, self.problem.n)
-        held_by_all, held_by_some = np.asarray(member.all(axis=0)), np.asarray(member.any(axis=0))
-        for w in range(self.problem.n):
+        held_by_all = _members(np.bitwise_and.reduce(mask, axis=0)[None], n)[0]
+        held_by_some = _members(np.bitwise_or.reduce(mask, axis=0)[None], n)[0]
+        for w in range(n):
             if w == self.problem.start or held_by_all[w]:
                 continue
             if not held_by_some[self.bound.pred_nodes[w]].all():
@@ -901,31 +965,43 @@ class _Search:
             if not finite.any():
                 continue
             chosen = index[ok][finite]
+            del ok
             count += len(chosen)
             if count > limit:
                 return None
-            new_mask.append(mask[chosen] | bits[w])
-            new_last.append(np.full(len(chosen), w, dtype=np.int64))
-            new_value.append(value[chosen] + step[finite])
-            new_parent.append(chosen)
+            block = mask[chosen] | bits[w]
+            block_value = value[chosen] + step[finite]
+            del step, finite
+            ours = _cheapest_per_state(block, np.full(len(chosen), w, np.int64), block_value, n)
+            new_mask.append(block[ours])
+            new_last.append(np.full(len(ours), w, dtype=np.int64))
+            new_value.append(block_value[ours])
+            new_parent.append(chosen[ours])
+            merged += len(ours)
+            del block, block_value, chosen, ours
+            # the final sort cannot be interrupted: stop as soon as it cannot end in time
+            # (at the slowest rate seen so far; millions of states take seconds on a loaded
+            # core), before more extensions are made for nothing
+            if ends is not None and merged * self.merge_rate > ends - time.perf_counter():
+                self.merge_refused = True  # out of time, not of states
+                return None
         if not new_mask:
             empty = np.zeros(0)
             return (mask[:0], empty.astype(np.int64), empty, empty.astype(np.int64))
-        # the merge below cannot be interrupted: start it only if it should end in time (at
-        # the slowest rate seen so far; millions of extensions take seconds on a loaded core)
-        left = deadline.remaining()
-        if left is not None and count * self.merge_rate > left - MARGIN:
-            self.merge_refused = True  # out of time, not of states
-            return None
         began = time.perf_counter()
         c_mask = np.concatenate(new_mask)
+        del new_mask
         c_last = np.concatenate(new_last)
-        c_value = np.concatenate(new_value)
-        c_parent = np.concatenate(new_parent)
-        chosen = _cheapest_per_state(c_mask, c_last, c_value, self.problem.n)
-        if count >= 10_000:
-            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / count)
-        return c_mask[chosen], c_last[chosen], c_value[chosen], c_parent[chosen]
+        del new_last
+        # no two states are equal now: this sort only orders them (by mask, then last)
+        order = _state_order(c_mask, c_last, n)
+        c_mask, c_last = c_mask[order], c_last[order]
+        c_value = np.concatenate(new_value)[order]
+        del new_value
+        c_parent = np.concatenate(new_parent)[order]
+        if merged >= 10_000:  # the final sort, per state
+            self.merge_rate = max(self.merge_rate, (time.perf_counter() - began) / merged)
+        return c_mask, c_last, c_value, c_parent
 
     def totals(
         self,
@@ -958,6 +1034,9 @@ class _Search:
                 # changes it: 37,000 states on 54 nodes took 4.8 s at load 16), and never
                 # more than the time left, so the deadline is looked at in time
                 size = chunk or max(1_000, int(CHUNK_SECONDS / (self.bound_rate * unit)))
+                # and at most BOUND_ENTRIES (state, node) pairs: the bound's work arrays are
+                # a few ``states x nodes`` tables of floats (``_Bound._per_ideal_band``)
+                size = min(size, max(100, BOUND_ENTRIES // self.problem.n))
                 left = deadline.remaining()
                 if left is not None:
                     fits = int((left - MARGIN) / (self.bound_rate * unit))
@@ -1497,14 +1576,15 @@ def _beam_start(
 ) -> tuple[float, list[int]] | None:
     """The incumbent improved by beam passes (:func:`beam_order`): a narrow beam first (a
     good path in a fraction of a second), then :data:`MIDDLE_BEAM`, then ``beam_width``, within
-    :data:`BEAM_SHARE` of the time, each started only if it should end in it
+    :data:`BEAM_SHARE` of the time (the first, narrowest pass at least
+    :data:`FIRST_BEAM_SHARE`), each started only if it should end in it
     (:data:`BEAM_TIME_EXPONENT`); ``info["beam"]`` the beam's cost when it improved the
     incumbent, ``info["beam_skipped"]`` the first width not started."""
     if beam_width:
         budget = Deadline(deadline.share(BEAM_SHARE))
         last: tuple[int, float] | None = None  # the last pass's width and seconds
         for width in sorted({min(w, beam_width) for w in (NARROW_BEAM, MIDDLE_BEAM, beam_width)}):
-            if budget.expired(MARGIN):
+            if budget.expired(MARGIN) and (last is not None or deadline.expired(MARGIN)):
                 break
             left = budget.remaining()
             if last is not None and left is not None:
@@ -1514,6 +1594,10 @@ def _beam_start(
                 if last[1] * (width / last[0]) ** BEAM_TIME_EXPONENT > left:
                     info["beam_skipped"] = width
                     break
+            if last is None:  # the first pass: at least FIRST_BEAM_SHARE of the stage
+                first = deadline.share(FIRST_BEAM_SHARE)
+                if left is not None and first is not None:
+                    left = max(left, first)
             key = _problem_key(problem, width)
             beam: tuple[float, list[int]] | None
             if key in _BEAMS:  # ran to its end in an earlier stage (deterministic): reused

@@ -346,3 +346,75 @@ def test_beam_passes_run_to_their_end_are_reused(sop_esc25):
     again = sop_dp.solve_sop_dp(sop_esc25, beam_width=256)
     assert again.status == first.status == OPTIMAL and again.objective == first.objective
     assert again.info["beam"] == first.info["beam"]
+
+
+def _grown_at_once(search, mask, last, value):
+    """Every extension of a layer, then one merge of them all (the reference of ``grow``)."""
+    from taopt.ideals import has, holds
+    from taopt.models.sop_dp import _cheapest_per_state
+
+    parts = []
+    for w in range(search.problem.n):
+        if w == search.problem.start:
+            continue
+        ok = np.flatnonzero(~has(mask, w) & holds(mask, search.pred[w]))
+        step = search.usable[last[ok], w]
+        ok, step = ok[np.isfinite(step)], step[np.isfinite(step)]
+        parts.append((mask[ok] | search.bits[w], np.full(len(ok), w), value[ok] + step, ok))
+    c_mask, c_last, c_value, c_parent = (np.concatenate(a) for a in zip(*parts, strict=True))
+    chosen = _cheapest_per_state(c_mask, c_last, c_value, search.problem.n)
+    return c_mask[chosen], c_last[chosen], c_value[chosen], c_parent[chosen]
+
+
+@pytest.mark.parametrize(("n", "shuffled"), [(14, False), (14, True), (70, False), (70, True)])
+def test_layer_merged_per_node_equals_one_merge_of_all_extensions(n, shuffled):
+    """``grow`` (each node's extensions merged as they are made, then one sort) keeps the
+    same states, values and parents, in the same order, as one merge of every extension;
+    also from a layer not in mask order (a beam's) and with two-word masks."""
+    from taopt.models.sop_dp import Deadline, _Search
+    from taopt.sop.generate import random_sop
+
+    problem = random_sop(n, 0.05, 3, high=5)  # costs 0-5: many equal values
+    search = _Search(problem)
+    layer = search.first()[:3]
+    rng = np.random.default_rng(n)
+    for _ in range(4):
+        if shuffled:
+            layer = tuple(a[rng.permutation(len(layer[0]))] for a in layer)
+        got = search.grow(*layer, Deadline(None))
+        want = _grown_at_once(search, *layer)
+        assert got is not None and len(got[0]) > 0
+        for a, b in zip(got, want, strict=True):
+            assert np.array_equal(a, b)
+        layer = got[:3]
+
+
+@pytest.mark.parametrize("n", [20, 64, 130])
+def test_open_prices_by_byte_table_equal_the_membership_product(n):
+    """The completion bound's open prices read from its byte table equal the prices summed
+    over the nodes each mask does not hold (one- and multi-word masks)."""
+    from taopt.ideals import full, words
+    from taopt.models.sop_dp import _Bound, _members
+
+    rng = np.random.default_rng(n)
+    usable = rng.integers(1, 50, (n, n)).astype(float)
+    bound = _Bound(usable, 0, n - 1, (rng.normal(size=n), rng.normal(size=n)))
+    mask = rng.integers(0, 2**63, (500, words(n)), dtype=np.uint64)
+    mask = mask[:, 0] if words(n) == 1 else mask
+    mask &= full(n)
+    price = bound.beta + np.where(np.arange(n) != n - 1, bound.alpha, 0.0)
+    price[0] = 0.0
+    want = price.sum() - _members(mask, n).astype(float) @ price
+    assert np.allclose(bound._open_prices(mask), want, rtol=0, atol=1e-9)
+
+
+def test_narrow_beam_pass_runs_past_a_spent_beam_budget(monkeypatch, sop_esc25):
+    """With the beam's budget spent before it starts, the first (narrowest) pass still runs
+    on its share of the stage and gives the DP its order; the DP proves ESC25's optimum."""
+    from taopt.models import sop_dp
+
+    monkeypatch.setattr(sop_dp, "BEAM_SHARE", 0.0)
+    monkeypatch.setattr(sop_dp, "_BEAMS", {})
+    result = sop_dp.solve_sop_dp(sop_esc25, 60, beam_width=64)
+    assert result.info["beam"] is not None
+    assert str(result.status) == "optimal" and result.objective == 1681

@@ -413,3 +413,16 @@ def test_probe_extrapolation_advances_the_smaller_direction():
     one_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 1240, 1889, 2850])
     both_fast = _probe([1, 10, 257, 1282, 5397], [1, 10, 257, 1282, 5397])
     assert probe_extrapolation(50, one_fast) < probe_extrapolation(50, both_fast) / 10
+
+
+@pytest.mark.parametrize("n", [49, 64, 65, 130, 200])
+def test_expected_fill_counts_a_states_mask_words(n):
+    """The reported estimate's filling DP stage keeps the guard's fill rate up to 64 nodes and
+    that rate divided by the mask's words beyond (a state's bound work grows with them)."""
+    from taopt.ideals import words
+    from taopt.models.sop import expected_fill, fill_states
+
+    fill = fill_states(n, 60.0, False, 0.5)
+    want = fill if n <= 64 else fill / words(n)
+    assert expected_fill(n, 60.0, False, 0.5) == pytest.approx(want)
+    assert expected_fill(n, None, False) == float("inf")
