@@ -128,6 +128,7 @@ from taopt import ideals
 from taopt.errors import InstanceError
 from taopt.ideals import bits as node_bits
 from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
+from taopt.models.sop_remainder import RemainderBound
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, CancelToken, Deadline
 from taopt.sop.problem import SopProblem, path_cost
@@ -147,6 +148,11 @@ __all__ = [
 #: prefix. Off: on p43.1 with the optimal order it dropped 0.1 % more states at 1.35 times
 #: the time (the LP's reduced costs are mostly 0 on the arcs a completion needs).
 LAGRANGE_REST = False
+
+#: Default of ``solve_sop_dp(remainder=...)``: the states left by the DP's own bounds are
+#: also bounded by the remainder's assignment, re-optimised per ideal
+#: (:mod:`taopt.models.sop_remainder`).
+REMAINDER = True
 
 #: States per call of that bound between two looks at the deadline.
 LAGRANGE_CHUNK = 20_000
@@ -1084,6 +1090,7 @@ class _Run:
         reverse: bool,
         lagrange: tuple[float, np.ndarray, float] | None = None,
         credit: RowCredit | None = None,
+        remainder: bool = False,
     ) -> None:
         self.reverse = reverse
         self.lagrange = lagrange
@@ -1101,6 +1108,12 @@ class _Run:
         self.lagrange_rest: _Bound | None = None
         self.n = problem.n
         self.search = _Search(problem)
+        #: The remainder's assignment per ideal (``remainder=`` of :func:`solve_sop_dp`).
+        self.remainder: RemainderBound | None = None
+        if remainder:
+            self.remainder = RemainderBound(self.search.usable, problem.end)
+        #: States dropped by that bound.
+        self.remainder_pruned = 0
         mask, last, value, parent = self.search.first()
         self.layers: list[tuple[np.ndarray, ...]] = [
             (mask, last, value, parent)
@@ -1169,6 +1182,38 @@ class _Run:
         low = _rounded_up(credit.constant + reduced + rest, unit)
         return reduced, crossed, low
 
+    def _reoptimised(
+        self,
+        grown: tuple[np.ndarray, ...],
+        total: np.ndarray,
+        reduced: np.ndarray | None,
+        crossed: np.ndarray | None,
+        below: float,
+        deadline: Deadline,
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """Drop the states whose ``f`` plus the remainder's assignment
+        (:class:`~taopt.models.sop_remainder.RemainderBound`) reaches ``below``; the kept
+        states' bounds raised to it."""
+        assert self.remainder is not None
+        mask, last, value = grown[0], grown[1], grown[2]
+        group, unique = _groups(mask)
+        members = _members(unique, self.n)
+        bound = self.remainder.layer(members, group, last, value, total, below, deadline)
+        total = np.maximum(total, bound)
+        fits = total < below
+        if fits.all():
+            return grown, total, reduced, crossed
+        self.pruned += int((~fits).sum())
+        self.remainder_pruned += int((~fits).sum())
+        self.pruned_min = min(self.pruned_min, float(total[~fits].min()))
+        grown = tuple(a[fits] for a in grown)
+        return (
+            grown,
+            total[fits],
+            None if reduced is None else reduced[fits],
+            None if crossed is None else crossed[fits],
+        )
+
     def step(
         self, upper: float, tolerance: float, deadline: Deadline, limit: float, room: int | None
     ) -> str | None:
@@ -1215,6 +1260,11 @@ class _Run:
                 reduced = reduced[keep]
             if crossed is not None:
                 crossed = crossed[keep]
+        kept_total = total[keep]
+        if self.remainder is not None and np.isfinite(upper) and len(grown[0]):
+            grown, kept_total, reduced, crossed = self._reoptimised(
+                grown, kept_total, reduced, crossed, upper - tolerance, deadline
+            )
         if room is not None and len(grown[0]) > room:
             return "max_states"  # the previous layer stays the open one
         if reduced is not None:
@@ -1222,7 +1272,7 @@ class _Run:
         if crossed is not None:
             self.crossed.append(crossed)
         self.layers.append(grown)
-        self.layer_total = total[keep]
+        self.layer_total = kept_total
         self.kept += len(grown[0])
         self.peak = max(self.peak, len(grown[0]))
         if len(grown[0]) == 0 or len(self.layers) == self.n:
@@ -1331,6 +1381,7 @@ def solve_sop_dp(
     lagrange: tuple[float, np.ndarray] | None = None,
     credit: RowCredit | None = None,
     watch: Callable[[Sequence[_Run]], None] | None = None,
+    remainder: bool | None = None,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1380,6 +1431,11 @@ def solve_sop_dp(
     watch : callable, optional
         Called with the directions' runs once before the first layer and after each layer
         kept (the portfolio's memory probe, :class:`taopt.models.sop.LayerWatch`).
+    remainder : bool, optional
+        Also drop the states that survive the bounds above by ``f`` plus the assignment
+        relaxation of the remainder, solved per ideal
+        (:class:`~taopt.models.sop_remainder.RemainderBound`); None: :data:`REMAINDER`.
+        ``info["remainder_pruned"]``: the states it dropped.
 
     Returns
     -------
@@ -1429,7 +1485,11 @@ def solve_sop_dp(
             _cheap_bound(problem) if cheap_bound is None else cheap_bound,
             float(_rounded_up(np.array([constant]), unit)[0]),
         )
-    runs = _directions(problem, both, both_prices, oriented, credit if oriented else None)
+    if remainder is None:
+        remainder = REMAINDER
+    runs = _directions(
+        problem, both, both_prices, oriented, credit if oriented else None, remainder
+    )
     info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
     done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info, watch)
     if done is not None and done.best_path is not None:
@@ -1445,6 +1505,11 @@ def solve_sop_dp(
     info.update(states=kept, pruned=pruned, peak_layer=peak)
     if lagrange is not None:
         info["lagrange_pruned"] = sum(r.lagrange_pruned for r in runs)
+    if remainder:
+        info["remainder_pruned"] = sum(r.remainder_pruned for r in runs)
+        info["remainder_seconds"] = sum(
+            r.remainder.seconds for r in runs if r.remainder is not None
+        )
     objective = np.inf if known is None else known[0]
     runtime = time.perf_counter() - began
     if stopped_by is None and done is not None:  # done is set when nothing stopped the loop
@@ -1568,6 +1633,7 @@ def _directions(
     both_prices: bool,
     lagrange: tuple[float, np.ndarray, float] | None = None,
     credit: RowCredit | None = None,
+    remainder: bool = False,
 ) -> list[_Run]:
     """The forward search and (``both``) the backward one on :func:`reversed_problem`,
     each (``both_prices``) also bounded on the other's assignment prices; ``lagrange``
@@ -1576,8 +1642,8 @@ def _directions(
     if lagrange is not None:
         backward = (lagrange[0], np.ascontiguousarray(lagrange[1].T), lagrange[2])
     back_credit = None if credit is None else credit.transposed()
-    runs = [_Run(problem, False, lagrange, credit)] + (
-        [_Run(reversed_problem(problem), True, backward, back_credit)] if both else []
+    runs = [_Run(problem, False, lagrange, credit, remainder)] + (
+        [_Run(reversed_problem(problem), True, backward, back_credit, remainder)] if both else []
     )
     if both and both_prices:
         # the assignment LP is degenerate: the reversed problem's optimal prices (read
