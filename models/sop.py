@@ -1601,6 +1601,11 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
+#: The DP stages after the root stage bound their states also by the root's LP re-solved with
+#: each state's ideal fixed (:class:`taopt.models.sop_statelp.StateLp`, within its share of
+#: each stage's time).
+STATE_LP = True
+
 #: Share of the time left after the first DP stage (when it stopped without a proof) given to
 #: the iterated SOP-3-exchange local search
 #: (:func:`taopt.models.sop_search.iterated_local_search`) on the stage's order (after its
@@ -2238,6 +2243,14 @@ def _stages(
             return 0.0
         return nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
 
+    def state_lp() -> Any:
+        """The root model's LP re-solved per DP state (:data:`STATE_LP`), or None."""
+        if not STATE_LP or root_model is None or lagrange is None:
+            return None
+        from taopt.models.sop_statelp import StateLp
+
+        return StateLp(root_model)
+
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
     credit: Any = None  # the same LP's prices with its priced rows (the DP's row credit)
 
@@ -2312,6 +2325,7 @@ def _stages(
             beam_width=0 if before is not None else 1024,
             lagrange=lagrange,
             credit=credit,
+            state_lp=state_lp(),
         )
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
@@ -2391,6 +2405,7 @@ def _stages(
                     lagrange=lagrange,
                     credit=credit,
                     watch=watch,
+                    state_lp=state_lp(),
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
@@ -2425,6 +2440,7 @@ def _stages(
                     both_prices=True,
                     lagrange=lagrange,
                     credit=credit,
+                    state_lp=state_lp(),
                 )
                 used = "dp+dp"
                 result = _combine(first, second)

@@ -129,6 +129,7 @@ from taopt.errors import InstanceError
 from taopt.ideals import bits as node_bits
 from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
 from taopt.models.sop_remainder import RemainderBound
+from taopt.models.sop_statelp import StateLp
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, CancelToken, Deadline
 from taopt.sop.problem import SopProblem, path_cost
@@ -152,7 +153,7 @@ LAGRANGE_REST = False
 #: Default of ``solve_sop_dp(remainder=...)``: the states left by the DP's own bounds are
 #: also bounded by the remainder's assignment, re-optimised per ideal
 #: (:mod:`taopt.models.sop_remainder`).
-REMAINDER = True
+REMAINDER = False
 
 #: States per call of that bound between two looks at the deadline.
 LAGRANGE_CHUNK = 20_000
@@ -1091,8 +1092,13 @@ class _Run:
         lagrange: tuple[float, np.ndarray, float] | None = None,
         credit: RowCredit | None = None,
         remainder: bool = False,
+        state_lp: StateLp | None = None,
     ) -> None:
         self.reverse = reverse
+        #: The root's LP re-solved per state (``state_lp=`` of :func:`solve_sop_dp`).
+        self.state_lp = state_lp
+        #: States dropped by it.
+        self.lp_pruned = 0
         self.lagrange = lagrange
         #: The row-credit prices read in this direction, and their byte tables.
         self.credit = credit
@@ -1191,27 +1197,52 @@ class _Run:
         below: float,
         deadline: Deadline,
     ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray | None, np.ndarray | None]:
-        """Drop the states whose ``f`` plus the remainder's assignment
-        (:class:`~taopt.models.sop_remainder.RemainderBound`) reaches ``below``; the kept
-        states' bounds raised to it."""
-        assert self.remainder is not None
-        mask, last, value = grown[0], grown[1], grown[2]
-        group, unique = _groups(mask)
-        members = _members(unique, self.n)
-        bound = self.remainder.layer(members, group, last, value, total, below, deadline)
+        """Drop the states whose bound by the remainder's assignment
+        (:class:`~taopt.models.sop_remainder.RemainderBound`) or by the restricted LP
+        (:class:`~taopt.models.sop_statelp.StateLp`) reaches ``below``; the kept states'
+        bounds raised to them."""
+        if self.state_lp is not None and self.state_lp.usable():
+            members = _members(grown[0], self.n)
+            bound = self.state_lp.layer(members, grown[1], total, below, self.reverse, deadline)
+            grown, total, reduced, crossed, dropped = self._tighten(
+                grown, total, bound, reduced, crossed, below
+            )
+            self.lp_pruned += dropped
+        if self.remainder is not None and len(grown[0]):
+            mask, last, value = grown[0], grown[1], grown[2]
+            group, unique = _groups(mask)
+            members = _members(unique, self.n)
+            bound = self.remainder.layer(members, group, last, value, total, below, deadline)
+            grown, total, reduced, crossed, dropped = self._tighten(
+                grown, total, bound, reduced, crossed, below
+            )
+            self.remainder_pruned += dropped
+        return grown, total, reduced, crossed
+
+    def _tighten(
+        self,
+        grown: tuple[np.ndarray, ...],
+        total: np.ndarray,
+        bound: np.ndarray,
+        reduced: np.ndarray | None,
+        crossed: np.ndarray | None,
+        below: float,
+    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray | None, np.ndarray | None, int]:
+        """The states whose ``max(total, bound)`` is below ``below``, that bound, and how many
+        were dropped (counted as pruned)."""
         total = np.maximum(total, bound)
         fits = total < below
         if fits.all():
-            return grown, total, reduced, crossed
-        self.pruned += int((~fits).sum())
-        self.remainder_pruned += int((~fits).sum())
+            return grown, total, reduced, crossed, 0
+        dropped = int((~fits).sum())
+        self.pruned += dropped
         self.pruned_min = min(self.pruned_min, float(total[~fits].min()))
-        grown = tuple(a[fits] for a in grown)
         return (
-            grown,
+            tuple(a[fits] for a in grown),
             total[fits],
             None if reduced is None else reduced[fits],
             None if crossed is None else crossed[fits],
+            dropped,
         )
 
     def step(
@@ -1261,7 +1292,8 @@ class _Run:
             if crossed is not None:
                 crossed = crossed[keep]
         kept_total = total[keep]
-        if self.remainder is not None and np.isfinite(upper) and len(grown[0]):
+        tighter = self.remainder is not None or self.state_lp is not None
+        if tighter and np.isfinite(upper) and len(grown[0]):
             grown, kept_total, reduced, crossed = self._reoptimised(
                 grown, kept_total, reduced, crossed, upper - tolerance, deadline
             )
@@ -1382,6 +1414,7 @@ def solve_sop_dp(
     credit: RowCredit | None = None,
     watch: Callable[[Sequence[_Run]], None] | None = None,
     remainder: bool | None = None,
+    state_lp: StateLp | None = None,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1436,6 +1469,11 @@ def solve_sop_dp(
         relaxation of the remainder, solved per ideal
         (:class:`~taopt.models.sop_remainder.RemainderBound`); None: :data:`REMAINDER`.
         ``info["remainder_pruned"]``: the states it dropped.
+    state_lp : StateLp, optional
+        The root cut model's LP, re-solved per state with the state's ideal fixed
+        (:class:`~taopt.models.sop_statelp.StateLp`): the states of each layer left by the
+        bounds above are bounded by it, highest bound first, while it fits in its share of the
+        time. ``info["lp_pruned"]``, ``info["lp_solved"]``: the states it dropped, the LPs.
 
     Returns
     -------
@@ -1488,10 +1526,18 @@ def solve_sop_dp(
     if remainder is None:
         remainder = REMAINDER
     runs = _directions(
-        problem, both, both_prices, oriented, credit if oriented else None, remainder
+        problem, both, both_prices, oriented, credit if oriented else None, remainder, state_lp
     )
     info["setup_seconds"] = time.perf_counter() - setting_up  # bounds and first layers
-    done, stopped_by = _expand(problem, runs, upper, tolerance, deadline, max_states, info, watch)
+    if state_lp is not None:
+        state_lp.budget(deadline.remaining())
+    try:
+        done, stopped_by = _expand(
+            problem, runs, upper, tolerance, deadline, max_states, info, watch
+        )
+    finally:
+        if state_lp is not None:
+            state_lp.release()
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
         if cost < upper:
@@ -1505,6 +1551,10 @@ def solve_sop_dp(
     info.update(states=kept, pruned=pruned, peak_layer=peak)
     if lagrange is not None:
         info["lagrange_pruned"] = sum(r.lagrange_pruned for r in runs)
+    if state_lp is not None:
+        info["lp_pruned"] = sum(r.lp_pruned for r in runs)
+        info["lp_solved"] = state_lp.solved
+        info["lp_seconds"] = state_lp.seconds
     if remainder:
         info["remainder_pruned"] = sum(r.remainder_pruned for r in runs)
         info["remainder_seconds"] = sum(
@@ -1634,6 +1684,7 @@ def _directions(
     lagrange: tuple[float, np.ndarray, float] | None = None,
     credit: RowCredit | None = None,
     remainder: bool = False,
+    state_lp: StateLp | None = None,
 ) -> list[_Run]:
     """The forward search and (``both``) the backward one on :func:`reversed_problem`,
     each (``both_prices``) also bounded on the other's assignment prices; ``lagrange``
@@ -1642,8 +1693,10 @@ def _directions(
     if lagrange is not None:
         backward = (lagrange[0], np.ascontiguousarray(lagrange[1].T), lagrange[2])
     back_credit = None if credit is None else credit.transposed()
-    runs = [_Run(problem, False, lagrange, credit, remainder)] + (
-        [_Run(reversed_problem(problem), True, backward, back_credit, remainder)] if both else []
+    runs = [_Run(problem, False, lagrange, credit, remainder, state_lp)] + (
+        [_Run(reversed_problem(problem), True, backward, back_credit, remainder, state_lp)]
+        if both
+        else []
     )
     if both and both_prices:
         # the assignment LP is degenerate: the reversed problem's optimal prices (read

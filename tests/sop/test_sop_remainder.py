@@ -129,3 +129,72 @@ def test_members_of_the_layer_match_the_bound_input():
     """``_members`` unpacks the ideals the DP hands to the bound (node v held iff bit v set)."""
     mask = np.array([0b1011], dtype=np.uint64)
     assert _members(mask, 5).tolist() == [[True, True, False, True, False]]
+
+
+def _through(problem: SopProblem) -> tuple[dict, dict]:
+    """Per forward state (ideal, last) and per backward state (filter, first), the cheapest
+    feasible order through it."""
+    forward: dict[tuple[frozenset[int], int], float] = {}
+    backward: dict[tuple[frozenset[int], int], float] = {}
+    for order in sop_orders(problem):
+        cost = float(evaluate_order(problem, order))
+        for k in range(1, len(order) + 1):
+            key = (frozenset(order[:k]), order[k - 1])
+            forward[key] = min(forward.get(key, math.inf), cost)
+            key = (frozenset(order[-k:]), order[-k])
+            backward[key] = min(backward.get(key, math.inf), cost)
+    return forward, backward
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_state_lp_is_at_most_every_order_through_the_state(seed):
+    """The root's LP with a state's ideal (or filter) fixed never exceeds the cheapest order
+    through that state, forward and backward."""
+    from taopt.models.sop_cuts import SopCutModel
+    from taopt.models.sop_statelp import StateLp
+
+    problem = _instance(seed)
+    if not math.isfinite(sop_brute_force(problem)):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    lp = StateLp(model)
+    forward, backward = _through(problem)
+    for reverse, table in ((False, forward), (True, backward)):
+        for (held_set, last), cheapest in table.items():
+            held = np.zeros(problem.n, dtype=bool)
+            held[list(held_set)] = True
+            assert lp.bound(held, last, reverse, Deadline(None)) <= cheapest + 1e-6
+    lp.release()
+    assert (np.asarray(model.highs.getLp().col_upper_) == 1.0).all()
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_dp_with_state_lp_matches_brute_force(seed):
+    """The DP dropping states by the restricted LP (and the remainder's assignment), from a
+    middling order, gives the brute-force optimum and proves it."""
+    from taopt.models.sop_cuts import SopCutModel
+    from taopt.models.sop_statelp import StateLp
+
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    orders = sorted(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
+    model = SopCutModel(problem)
+    model.root()
+    lagrange, credit = model.lagrangian_prices(), model.row_credit()
+    for remainder in (False, True):
+        result = solve_sop_dp(
+            problem,
+            incumbent=orders[len(orders) // 2],
+            beam_width=0,
+            lagrange=lagrange,
+            credit=credit,
+            remainder=remainder,
+            state_lp=StateLp(model),
+        )
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert result.bound == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
