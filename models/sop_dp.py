@@ -1099,6 +1099,16 @@ class _Run:
         self.state_lp = state_lp
         #: States dropped by it.
         self.lp_pruned = 0
+        #: Per layer, the restricted-LP prices each state inherits (an index into
+        #: :attr:`prices`, -1: none) and the bound they give it (:meth:`_inherited`).
+        self.lp_sets: list[np.ndarray] = [np.full(1, -1, dtype=np.int64)]
+        self.lp_low: list[np.ndarray] = [np.full(1, -np.inf)]
+        #: ``max(d, 0)`` of the restricted LPs solved whose prices some kept state uses.
+        self.prices: dict[int, np.ndarray] = {}
+        self._next_prices = 0
+        self._pending: list[np.ndarray] = []
+        #: Every order's cost is a multiple of this (0: not integral), for rounding bounds up.
+        self._unit = _cost_unit(problem) if state_lp is not None else 0.0
         self.lagrange = lagrange
         #: The row-credit prices read in this direction, and their byte tables.
         self.credit = credit
@@ -1197,15 +1207,35 @@ class _Run:
         below: float,
         deadline: Deadline,
     ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray | None, np.ndarray | None]:
-        """Drop the states whose bound by the remainder's assignment
-        (:class:`~taopt.models.sop_remainder.RemainderBound`) or by the restricted LP
-        (:class:`~taopt.models.sop_statelp.StateLp`) reaches ``below``; the kept states'
-        bounds raised to them."""
-        if self.state_lp is not None and self.state_lp.usable():
+        """Drop the states whose bound by the restricted LP
+        (:class:`~taopt.models.sop_statelp.StateLp`: its own, or an ancestor's prices along the
+        kept prefix, :meth:`_inherited`) or by the remainder's assignment
+        (:class:`~taopt.models.sop_remainder.RemainderBound`) reaches ``below``; the kept
+        states' bounds raised to them."""
+        extra: list[np.ndarray] = []
+        if self.state_lp is not None:
+            sets, low = self._inherited(grown)
+            extra = [sets, low]
+            grown, total, reduced, crossed, extra, dropped = self._tighten(
+                grown, total, _rounded_up(low, self._unit), reduced, crossed, below, extra
+            )
+            self.lp_pruned += dropped
+        if self.state_lp is not None and self.state_lp.usable() and len(grown[0]):
             members = _members(grown[0], self.n)
-            bound = self.state_lp.layer(members, grown[1], total, below, self.reverse, deadline)
-            grown, total, reduced, crossed, dropped = self._tighten(
-                grown, total, bound, reduced, crossed, below
+            bound, prices = self.state_lp.layer(
+                members, grown[1], total, below, self.reverse, deadline
+            )
+            sets, low = extra
+            for k, (value, positive) in prices.items():  # the state's own prices from now
+                path = self.search.path([*self.layers, grown], k)
+                key = self._next_prices
+                self._next_prices += 1
+                self.prices[key] = positive
+                sets[k] = key
+                low[k] = value + float(positive[path[:-1], path[1:]].sum())
+            bound = np.maximum(bound, _rounded_up(low, self._unit))
+            grown, total, reduced, crossed, extra, dropped = self._tighten(
+                grown, total, bound, reduced, crossed, below, extra
             )
             self.lp_pruned += dropped
         if self.remainder is not None and len(grown[0]):
@@ -1213,11 +1243,30 @@ class _Run:
             group, unique = _groups(mask)
             members = _members(unique, self.n)
             bound = self.remainder.layer(members, group, last, value, total, below, deadline)
-            grown, total, reduced, crossed, dropped = self._tighten(
-                grown, total, bound, reduced, crossed, below
+            grown, total, reduced, crossed, extra, dropped = self._tighten(
+                grown, total, bound, reduced, crossed, below, extra
             )
             self.remainder_pruned += dropped
+        self._pending = extra
         return grown, total, reduced, crossed
+
+    def _inherited(self, grown: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """Per grown state, the restricted-LP prices it inherits from its kept parent (an index
+        into :attr:`prices`, -1: none) and the bound they give: ``B + Σ max(d_a, 0)`` over its
+        kept prefix, ``B`` the Lagrangian bound of the LP solved at an ancestor state (valid
+        for the descendant's own restricted LP: its fixed arcs hold the ancestor's, and any
+        sign-clipped duals bound an LP; the kept prefix's arcs are in every order it stands
+        for, :mod:`taopt.models.sop_statelp`). ``-inf`` without prices."""
+        parent, last = grown[3], grown[1]
+        sets = self.lp_sets[-1][parent]
+        low = self.lp_low[-1][parent].copy()
+        have = sets >= 0
+        if have.any():
+            keys, where = np.unique(sets[have], return_inverse=True)
+            stack = np.stack([self.prices[int(k)] for k in keys])
+            before = self.layers[-1][1][parent[have]]
+            low[have] += stack[where, before, last[have]]
+        return sets.copy(), low
 
     def _tighten(
         self,
@@ -1227,13 +1276,21 @@ class _Run:
         reduced: np.ndarray | None,
         crossed: np.ndarray | None,
         below: float,
-    ) -> tuple[tuple[np.ndarray, ...], np.ndarray, np.ndarray | None, np.ndarray | None, int]:
-        """The states whose ``max(total, bound)`` is below ``below``, that bound, and how many
-        were dropped (counted as pruned)."""
+        extra: list[np.ndarray],
+    ) -> tuple[
+        tuple[np.ndarray, ...],
+        np.ndarray,
+        np.ndarray | None,
+        np.ndarray | None,
+        list[np.ndarray],
+        int,
+    ]:
+        """The states whose ``max(total, bound)`` is below ``below``, that bound, the per-state
+        arrays filtered alike, and how many were dropped (counted as pruned)."""
         total = np.maximum(total, bound)
         fits = total < below
         if fits.all():
-            return grown, total, reduced, crossed, 0
+            return grown, total, reduced, crossed, extra, 0
         dropped = int((~fits).sum())
         self.pruned += dropped
         self.pruned_min = min(self.pruned_min, float(total[~fits].min()))
@@ -1242,6 +1299,7 @@ class _Run:
             total[fits],
             None if reduced is None else reduced[fits],
             None if crossed is None else crossed[fits],
+            [a[fits] for a in extra],
             dropped,
         )
 
@@ -1250,6 +1308,7 @@ class _Run:
     ) -> str | None:
         """Expand one layer; the reason to stop ("time_limit", "max_states") or None."""
         mask, last, value, _ = self.layers[-1]
+        self._pending = []
         grown = self.search.grow(mask, last, value, deadline, limit)
         if grown is None:
             out_of_time = deadline.expired(MARGIN) or self.search.merge_refused
@@ -1305,6 +1364,12 @@ class _Run:
             self.crossed.append(crossed)
         self.layers.append(grown)
         self.layer_total = kept_total
+        if self.state_lp is not None:
+            sets, low = self._pending if self._pending else self._inherited(grown)
+            self.lp_sets.append(sets)
+            self.lp_low.append(low)
+            used = set(np.unique(sets[sets >= 0]).tolist())
+            self.prices = {k: v for k, v in self.prices.items() if k in used}
         self.kept += len(grown[0])
         self.peak = max(self.peak, len(grown[0]))
         if len(grown[0]) == 0 or len(self.layers) == self.n:

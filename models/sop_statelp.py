@@ -91,6 +91,9 @@ class StateLp:
         #: Whether some column bound is the last state's (:meth:`release` restores them).
         self.changed = False
         self._matrix: tuple[Any, np.ndarray, np.ndarray] | None = None
+        #: The last LP's unrounded bound and its arcs' reduced costs ``d`` (None: no LP
+        #: optimum), for :meth:`positive`.
+        self.last_prices: tuple[float, np.ndarray] | None = None
         #: The most seconds all the LPs may take (:meth:`budget`); None: no limit.
         self.allowance: float | None = None
 
@@ -132,6 +135,8 @@ class StateLp:
             value = -math.inf
         else:
             value = self._dual_bound(zero)
+        if not math.isfinite(value):
+            self.last_prices = None
         spent = time.perf_counter() - began
         self.solved += 1
         self.seconds += spent
@@ -181,7 +186,15 @@ class StateLp:
         )
         reduced = self.model.costs - transposed @ y
         value = float(sides.sum() + np.minimum(reduced[~zero], 0.0).sum())
+        self.last_prices = (value, reduced)
         return float(self.model.round_up(value))
+
+    def positive(self, reduced: np.ndarray, reverse: bool) -> np.ndarray:
+        """``max(d, 0)`` of the arcs as an ``n x n`` matrix read in the search's direction
+        (transposed when ``reverse``; 0 off the model's arcs)."""
+        matrix = np.zeros((self.n, self.n))
+        matrix[self.model.tails, self.model.heads] = np.maximum(reduced, 0.0)
+        return np.ascontiguousarray(matrix.T) if reverse else matrix
 
     def release(self) -> None:
         """Give the model its own column bounds back (0 on its fixed arcs, 1 elsewhere)."""
@@ -199,12 +212,14 @@ class StateLp:
         below: float,
         reverse: bool,
         deadline: Deadline,
-    ) -> np.ndarray:
+    ) -> tuple[np.ndarray, dict[int, tuple[float, np.ndarray]]]:
         """Per state of a layer (``members``: ``(states, n)`` bools), the restricted LP's bound
-        (``-inf`` where not solved). The states of highest bound so far go first, while the
+        (``-inf`` where not solved), and per state solved and kept its LP's unrounded bound and
+        ``max(d, 0)`` (:meth:`positive`). The states of highest bound so far go first, while the
         LPs fit in their allowance (:meth:`budget`) and, after :data:`TRIAL` LPs, while they
         drop at least :data:`MIN_SHARE` of their states."""
         out = np.full(len(last), -np.inf)
+        prices: dict[int, tuple[float, np.ndarray]] = {}
         for k in np.argsort(-total, kind="stable"):
             if self.allowance is not None and self.seconds + self.rate > self.allowance:
                 break
@@ -215,4 +230,6 @@ class StateLp:
             out[k] = self.bound(members[k], int(last[k]), reverse, deadline)
             if out[k] >= below:
                 self.dropped += 1
-        return out
+            elif self.last_prices is not None:
+                prices[int(k)] = (self.last_prices[0], self.positive(self.last_prices[1], reverse))
+        return out, prices
