@@ -1822,8 +1822,9 @@ def solve_sop_problem(
     (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
     give the DP stages a Lagrangian bound that drops states
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
-    path cuts, ``credit``, :data:`ROW_CREDIT`), and the cut engine later goes
-    on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
+    path cuts, ``credit``, :data:`ROW_CREDIT`; and the root's LP re-solved per DP state with
+    the state's ideal fixed, its prices inherited along each state's kept prefix,
+    ``state_lp``, :data:`STATE_LP`), and the cut engine later goes on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
     limit has passed (its last order and bound kept). Otherwise the DP runs first with at

@@ -106,6 +106,15 @@ order through the state. On prob.42 with its optimum 243 as the incumbent, the f
 search kept 80,945 states at depth 10 with the credit against 151,910 without (the
 backward one 128,599 against 184,671).
 
+The root's LP per state. ``state_lp=`` (:class:`~taopt.models.sop_statelp.StateLp`)
+re-solves the root cut model's LP with a state's ideal fixed (no arc back into ``I``, none
+out of ``I`` but from ``v``) for the states of a layer that survive the bounds above, and a
+state's descendants inherit its prices: ``B + Σ_{a ∈ p} max(d_a, 0)`` along their kept prefix
+``p``, ``B`` the restricted LP's Lagrangian bound (the proof is in
+:mod:`taopt.models.sop_statelp`). It is a branch-and-bound with an LP per node whose nodes are
+the DP's states. On prob.42 with its optimum as the incumbent, the DP with it ended in 27 s
+(load 5-7); without it the DP kept 1.6 million states in 60 s without ending.
+
 References
 ----------
 Thesis §5.2, (5.7) (precedences), §5.4 (the orderings NIA, MMA, SMMA give the

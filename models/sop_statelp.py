@@ -124,7 +124,9 @@ class StateLp:
         highs.changeColsBounds(model.n_arcs, self.index, self.lower, upper)
         self.changed = True
         left = deadline.remaining()
-        if left is not None:  # HiGHS's limit is on its run time summed over the object's runs
+        if left is None:  # no limit: none left over from an earlier run either
+            highs.setOptionValue("time_limit", math.inf)
+        else:  # HiGHS's limit is on its run time summed over the object's runs
             spent = float(highs.getRunTime())
             highs.setOptionValue("time_limit", spent + max(left - MARGIN, 0.001))
         highs.run()

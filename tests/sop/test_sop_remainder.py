@@ -198,3 +198,37 @@ def test_dp_with_state_lp_matches_brute_force(seed):
         assert result.objective == pytest.approx(optimum)
         assert result.bound == pytest.approx(optimum)
         assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_inherited_lp_prices_bound_every_order_through_the_state(seed):
+    """With the restricted LP's prices of a state, ``B + Σ max(d_a, 0)`` over a whole order
+    through that state (the bound its descendants inherit along their kept prefix) is at most
+    that order's cost, forward and backward."""
+    from taopt.models.sop_cuts import SopCutModel
+    from taopt.models.sop_statelp import StateLp
+
+    problem = _instance(seed)
+    if not math.isfinite(sop_brute_force(problem)):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    lp = StateLp(model)
+    prices: dict[tuple[bool, frozenset[int], int], tuple[float, np.ndarray] | None] = {}
+    for order in sop_orders(problem):
+        cost = float(evaluate_order(problem, order))
+        for reverse in (False, True):
+            path = order[::-1] if reverse else order
+            for k in range(1, len(order) + 1):
+                key = (reverse, frozenset(path[:k]), path[k - 1])
+                if key not in prices:
+                    held = np.zeros(problem.n, dtype=bool)
+                    held[list(key[1])] = True
+                    lp.bound(held, key[2], reverse, Deadline(None))
+                    last = lp.last_prices
+                    prices[key] = None if last is None else (last[0], lp.positive(last[1], reverse))
+                found = prices[key]
+                if found is not None:
+                    value, positive = found
+                    assert value + positive[path[:-1], path[1:]].sum() <= cost + 1e-6
+    lp.release()
