@@ -161,7 +161,8 @@ LAGRANGE_REST = False
 
 #: Default of ``solve_sop_dp(remainder=...)``: the states left by the DP's own bounds are
 #: also bounded by the remainder's assignment, re-optimised per ideal
-#: (:mod:`taopt.models.sop_remainder`).
+#: (:mod:`taopt.models.sop_remainder`). Off: it drops states but costs more time than they
+#: save (its module docstring has the figures).
 REMAINDER = False
 
 #: States per call of that bound between two looks at the deadline.

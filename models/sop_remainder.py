@@ -30,11 +30,14 @@ bound with row credit 241, ``f + AP`` 245; the assignment drops 58 % of the laye
 
 Where it is used. :func:`taopt.models.sop_dp.solve_sop_dp` applies it (``remainder=``) to
 the states of each layer that survive the DP's own bounds, ideal by ideal (one
-:func:`scipy.optimize.linear_sum_assignment` of at most ``|U|`` rows, tens of microseconds),
-and drops those reaching the incumbent. The ideals whose states' bounds are already closest
-to the incumbent go first, in chunks of :data:`CHUNK`; a layer stops after a chunk in which
-it dropped under :data:`MIN_SHARE` of the states (it costs a few times the DP's own bound per
-state, so it is spent where it prunes).
+:func:`scipy.optimize.linear_sum_assignment` of at most ``|U|`` rows, 60-160 microseconds
+under load), and drops those reaching the incumbent. The ideals whose states' bounds are
+already closest to the incumbent go first, in chunks of :data:`CHUNK`; a layer stops after a
+chunk in which it dropped under :data:`MIN_SHARE` of the states. It is off by default
+(:data:`taopt.models.sop_dp.REMAINDER`): on prob.42 with the optimum as incumbent (30-60 s,
+load 5) it cut the states kept by 2.6-4x, but took 20-47 s of the run and the DP reached no
+deeper layer; the root's LP re-solved per state (:mod:`taopt.models.sop_statelp`) is the
+stronger re-optimisation.
 
 References
 ----------
