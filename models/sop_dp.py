@@ -1236,13 +1236,13 @@ class _Run:
                 members, grown[1], total, below, self.reverse, deadline
             )
             sets, low = extra
-            for k, (value, positive) in prices.items():  # the state's own prices from now
+            for k, (own, positive) in prices.items():  # the state's own prices from now
                 path = self.search.path([*self.layers, grown], k)
                 key = self._next_prices
                 self._next_prices += 1
                 self.prices[key] = positive
                 sets[k] = key
-                low[k] = value + float(positive[path[:-1], path[1:]].sum())
+                low[k] = own + float(positive[path[:-1], path[1:]].sum())
             bound = np.maximum(bound, _rounded_up(low, self._unit))
             grown, total, reduced, crossed, extra, dropped = self._tighten(
                 grown, total, bound, reduced, crossed, below, extra
