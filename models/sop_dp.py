@@ -1272,10 +1272,14 @@ class _Run:
         low = self.lp_low[-1][parent].copy()
         have = sets >= 0
         if have.any():
-            keys, where = np.unique(sets[have], return_inverse=True)
-            stack = np.stack([self.prices[int(k)] for k in keys])
-            before = self.layers[-1][1][parent[have]]
-            low[have] += stack[where, before, last[have]]
+            before = self.layers[-1][1][parent]
+            order = np.flatnonzero(have)
+            order = order[np.argsort(sets[order], kind="stable")]
+            keys, starts = np.unique(sets[order], return_index=True)
+            ends = np.append(starts[1:], len(order))
+            for key, lo, hi in zip(keys, starts, ends, strict=True):  # one price set at a time
+                at = order[lo:hi]
+                low[at] += self.prices[int(key)][before[at], last[at]]
         return sets.copy(), low
 
     def _tighten(
