@@ -1634,6 +1634,11 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
+#: The DP stages after the root stage bound their states also by the root's LP re-solved with
+#: each state's ideal fixed (:class:`taopt.models.sop_statelp.StateLp`, within its share of
+#: each stage's time).
+STATE_LP = True
+
 #: Share of the time left after the first DP stage (when it stopped without a proof) given to
 #: the iterated SOP-3-exchange local search
 #: (:func:`taopt.models.sop_search.iterated_local_search`) on the stage's order (after its
@@ -1850,8 +1855,9 @@ def solve_sop_problem(
     (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
     give the DP stages a Lagrangian bound that drops states
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
-    path cuts, ``credit``, :data:`ROW_CREDIT`), and the cut engine later goes
-    on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
+    path cuts, ``credit``, :data:`ROW_CREDIT`; and the root's LP re-solved per DP state with
+    the state's ideal fixed, its prices inherited along each state's kept prefix,
+    ``state_lp``, :data:`STATE_LP`), and the cut engine later goes on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
     limit has passed (its last order and bound kept). Otherwise the DP runs first with at
@@ -2271,6 +2277,14 @@ def _stages(
             return 0.0
         return nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
 
+    def state_lp() -> Any:
+        """The root model's LP re-solved per DP state (:data:`STATE_LP`), or None."""
+        if not STATE_LP or root_model is None or lagrange is None:
+            return None
+        from taopt.models.sop_statelp import StateLp
+
+        return StateLp(root_model)
+
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
     credit: Any = None  # the same LP's prices with its priced rows (the DP's row credit)
 
@@ -2345,6 +2359,7 @@ def _stages(
             beam_width=0 if before is not None else 1024,
             lagrange=lagrange,
             credit=credit,
+            state_lp=state_lp(),
         )
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
@@ -2424,6 +2439,7 @@ def _stages(
                     lagrange=lagrange,
                     credit=credit,
                     watch=watch,
+                    state_lp=state_lp(),
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
@@ -2458,6 +2474,7 @@ def _stages(
                     both_prices=True,
                     lagrange=lagrange,
                     credit=credit,
+                    state_lp=state_lp(),
                 )
                 used = "dp+dp"
                 result = _combine(first, second)
