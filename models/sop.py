@@ -1636,8 +1636,13 @@ ROW_CREDIT = True
 
 #: The DP stages after the root stage bound their states also by the root's LP re-solved with
 #: each state's ideal fixed (:class:`taopt.models.sop_statelp.StateLp`, within its share of
-#: each stage's time).
-STATE_LP = True
+#: each stage's time). Off: on a quiet machine at 10 s it raised no bound of prob.42, ry48p.1,
+#: ft53.1 or p43.1 (ry48p.1 14,794-14,798 on against 14,810-14,842 off, two runs each,
+#: alternated, load 1.6-1.9), and at 60 s it gave the same bounds within noise; its gain is
+#: below the incumbent's reach (prob.42 with its optimum 243 as the incumbent closes in 27 s
+#: with it, open at 60 s without). :func:`~taopt.models.sop_dp.solve_sop_dp` takes it as
+#: ``state_lp``.
+STATE_LP = False
 
 #: Share of the time left after the first DP stage (when it stopped without a proof) given to
 #: the iterated SOP-3-exchange local search
@@ -1855,9 +1860,10 @@ def solve_sop_problem(
     (:func:`_root_stage`): its rounded LP point may improve the warm start, its LP duals
     give the DP stages a Lagrangian bound that drops states
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
-    path cuts, ``credit``, :data:`ROW_CREDIT`; and the root's LP re-solved per DP state with
-    the state's ideal fixed, its prices inherited along each state's kept prefix,
-    ``state_lp``, :data:`STATE_LP`), and the cut engine later goes on from its rows. When the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
+    path cuts, ``credit``, :data:`ROW_CREDIT`; and, when :data:`STATE_LP` is on, the root's
+    LP re-solved per DP state with the state's ideal fixed, its prices inherited along each
+    state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. When
+    the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
     limit has passed (its last order and bound kept). Otherwise the DP runs first with at
