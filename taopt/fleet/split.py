@@ -794,7 +794,6 @@ def split_search(
 
     topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
     leader_memo: dict[tuple[tuple[int, ...], int], dict[str, Any]] = {}  # follower solves
-    relaxed: dict[int, int] = {}  # splits (both ways): leader relaxations run (each truck once)
 
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
         """The split's *topological releases* (module docstring) and its parts re-solved
@@ -990,8 +989,7 @@ def split_search(
                 floor=key * (1 - 1e-9),
                 cutoff=best,
                 max_labels=max_labels,
-                memo=leader_memo.setdefault((split, relaxed.get(i, 0)), {}),
-                leading=None if one_way or not relaxed.get(i, 0) else 1 - _lead(problem, owner),
+                memo=leader_memo.setdefault((split, 0), {}),
             )
         else:
             found = label_search(
@@ -1022,8 +1020,6 @@ def split_search(
                 round(float(found["bound"]), 4),
             )
         )
-        if found["stopped_by"] == "relaxed":
-            relaxed[i] = relaxed.get(i, 0) + 1
         boxed = leader and not one_way
         if found["stopped_by"] != "optimal" or (
             boxed and float(found["bound"]) < best * (1 - 1e-12)
