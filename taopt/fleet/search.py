@@ -1313,6 +1313,39 @@ def _beam(
         return INF, None
 
 
+def _memo_key(
+    problem: FleetProblem,
+    truck_of: Sequence[int] | None,
+    release: Sequence[float] | None,
+    metric: bool,
+    walk: bool,
+) -> tuple[Any, ...]:
+    """What a :func:`label_search` memo is valid for: the problem's data (its arrays' bytes),
+    ``truck_of``, ``release``, ``metric`` and ``walk``."""
+    p = problem
+    return (
+        p.n,
+        p.s,
+        p.depot,
+        tuple(p.drones),
+        p.capacity,
+        p.flight_limit,
+        p.v_drone,
+        p.service_time,
+        p.objective,
+        tuple(p.service),
+        tuple(p.customer_stop),
+        tuple(sorted(p.precedences)),
+        p.truck_time.tobytes(),
+        p.flight_stop.tobytes(),
+        p.flight_customer.tobytes(),
+        None if truck_of is None else tuple(int(k) for k in truck_of),
+        None if release is None else tuple(float(r) for r in release),
+        bool(metric),
+        bool(walk),
+    )
+
+
 def trace(parent: Sequence[int], action: Sequence[Any], found: int) -> list[Any]:
     """The actions from the root label (index 0) to label ``found``, in order, read back along
     the ``parent`` indices (the label searches' plan reconstruction)."""
@@ -1357,6 +1390,7 @@ def label_search(
     floor: float = 0.0,
     cutoff: float = INF,
     release: Sequence[float] | None = None,
+    memo: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Run the search; a dict with ``plan`` (best found or None), ``value``, ``bound``,
     ``stopped_by`` ("optimal", "infeasible", "time_limit" or "size") and counters.
@@ -1379,6 +1413,25 @@ def label_search(
     :func:`~taopt.fleet.evaluate.evaluate_fleet`, without them, which is no more: a run that
     ends on such a plan returns its release-free value, still a lower bound on the optimum
     with releases (no plan below it was found).
+
+    ``memo``: a dict kept by the caller between runs on the same sub-problem (the split
+    search's time slices, :func:`taopt.fleet.split.split_search`). A run stopped by the clock
+    or the label cap leaves in it its open search (tables, heap, label store, pruned store,
+    counters, best plan); a later run with the same memo continues it instead of starting
+    over, and a finished one (optimal, infeasible) empties it. It is valid only for the same
+    problem, ``truck_of``, ``release``, ``metric`` and ``walk`` (a key of those is kept: a run
+    with another starts fresh). A later run may differ in
+
+    * a lower ``cutoff`` or a better ``incumbent``: the cut only falls, so every label pruned
+      or dropped before had no completion below the new cut either, and every label kept
+      whose key reaches the new cut is dropped when popped (its key is a lower bound on its
+      completions); a *higher* cut than the one the memo was searched under starts fresh;
+    * a higher ``floor``: the heap keys are lower bounds on the labels' completions and so is
+      the floor (on the optimum), so their maximum is, taken when a label is popped;
+    * ``time_limit``, ``max_labels`` (the cap counts every label kept, the resumed ones too).
+
+    So the first complete label popped is still optimal, and the bound of a stopped run is
+    still the least open key (raised to the floor), proven.
     """
     deadline = Deadline(time_limit)
     clock = [time.perf_counter()]  # phase ends: start, tables, beam, search
@@ -1392,54 +1445,95 @@ def label_search(
             "labels": 0,
             "expanded": 0,
         }
-    tab = _Tables(
-        problem, walk=walk, deadline=Deadline(None if time_limit is None else 0.25 * time_limit)
-    )
-    if truck_of is not None:
-        tab.owner = [int(k) for k in truck_of]
-        tab.groups = [[k] for k in range(problem.K)]
-    if release is not None:
-        tab.release = [float(r) for r in release]
-    clock.append(time.perf_counter())
+    ident = _memo_key(problem, truck_of, release, metric, walk)
+    labels: list[tuple]
+    parent: list[int]
+    action: list[Any]
+    dead: bytearray
+    store: dict[tuple, list[tuple[tuple, int]]]
+    mindex: dict[tuple, list[tuple[int, float, float, tuple, int]]]
+    heap: list[tuple[float, int, int]]
+    cutoffs: dict[tuple, list[tuple]]
+    tab: _Tables
     best_plan: FleetPlan | None
-    candidates = [incumbent, _simple_plan(problem, truck_of)]
-    if truck_of is None and synced_applies(problem):
-        # one truck, several drones: the best synchronised plan (milliseconds at n = 8)
-        share = None if time_limit is None else SYNCED_SHARE * time_limit
-        candidates.append(synced_plan(problem, share)[1])
-    best, best_plan = best_of(problem, candidates)
-    if beam and time_limit is not None:
-        sub = Deadline(0.2 * time_limit)
+    state = None if memo is None else memo.pop("state", None)
+    if state is not None and state["key"] == ident:
+        # resume: the memo's best plan and the caller's incumbent; the beam and the simple
+        # plans were tried by the run that opened it
+        best, best_plan = best_of(problem, [incumbent, state["plan"]])
+        if min(best, cutoff) > state["best"]:
+            state = None  # a higher cut than the memo's: its pruned labels may matter now
     else:
-        sub = deadline
-    if beam and best > floor and incumbent is None:
-        # only without the caller's incumbent: at n = 6-8 with one truck and two or three
-        # drones the beam found no plan better than the ILS's in 2 s on any of 18 instances
-        # (most found none), while taking a fifth of the limit
-        value, beamed = _beam(problem, tab, beam, sub, best)
-        if beamed is not None and value < best:
-            best, best_plan = value, beamed
-    clock.append(time.perf_counter())
-    planned = best  # the best plan's value; best may drop to the cutoff (no plan there)
-    best = min(best, cutoff)
-    n = problem.n
-    root_trucks = tuple(
-        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
-        for d in problem.drones
-    )
-    root = (0, 0.0, (-1.0,) * n, root_trucks)
-    labels: list[tuple] = [root]
-    parent: list[int] = [-1]
-    action: list[Any] = [None]
-    dead = bytearray(1)
-    store: dict[tuple, list[tuple[tuple, int]]] = {}
-    mindex: dict[tuple, list[tuple[int, float, float, tuple, int]]] = {}
-    tt = tab.tt
-    key, vec = _signature(tab, root)
-    store[key] = [(vec, 0)]
-    heap: list[tuple[float, int, int]] = [(max(_bound(tab, root), floor), 0, 0)]
-    expanded = dominated = pruned = dominated_cut = 0
-    cutoffs: dict[tuple, list[tuple]] = {}  # per key, vectors of labels pruned by the bound
+        state = None
+    resumed = state is not None
+    if state is not None:
+        tab = state["tab"]
+        clock.append(time.perf_counter())
+        clock.append(time.perf_counter())
+        planned = best
+        best = min(best, cutoff)
+        labels, parent, action, dead = (
+            state["labels"],
+            state["parent"],
+            state["action"],
+            state["dead"],
+        )
+        store, mindex, cutoffs, heap = (
+            state["store"],
+            state["mindex"],
+            state["cutoffs"],
+            state["heap"],
+        )
+        expanded, dominated, pruned, dominated_cut = state["counters"]
+        tt = tab.tt
+    else:
+        tab = _Tables(
+            problem, walk=walk, deadline=Deadline(None if time_limit is None else 0.25 * time_limit)
+        )
+        if truck_of is not None:
+            tab.owner = [int(k) for k in truck_of]
+            tab.groups = [[k] for k in range(problem.K)]
+        if release is not None:
+            tab.release = [float(r) for r in release]
+        clock.append(time.perf_counter())
+        candidates = [incumbent, _simple_plan(problem, truck_of)]
+        if truck_of is None and synced_applies(problem):
+            # one truck, several drones: the best synchronised plan (milliseconds at n = 8)
+            share = None if time_limit is None else SYNCED_SHARE * time_limit
+            candidates.append(synced_plan(problem, share)[1])
+        best, best_plan = best_of(problem, candidates)
+        if beam and time_limit is not None:
+            sub = Deadline(0.2 * time_limit)
+        else:
+            sub = deadline
+        if beam and best > floor and incumbent is None:
+            # only without the caller's incumbent: at n = 6-8 with one truck and two or three
+            # drones the beam found no plan better than the ILS's in 2 s on any of 18 instances
+            # (most found none), while taking a fifth of the limit
+            value, beamed = _beam(problem, tab, beam, sub, best)
+            if beamed is not None and value < best:
+                best, best_plan = value, beamed
+        clock.append(time.perf_counter())
+        planned = best  # the best plan's value; best may drop to the cutoff (no plan there)
+        best = min(best, cutoff)
+        n = problem.n
+        root_trucks = tuple(
+            (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+            for d in problem.drones
+        )
+        root = (0, 0.0, (-1.0,) * n, root_trucks)
+        labels = [root]
+        parent = [-1]
+        action = [None]
+        dead = bytearray(1)
+        store = {}
+        mindex = {}
+        tt = tab.tt
+        key, vec = _signature(tab, root)
+        store[key] = [(vec, 0)]
+        heap = [(max(_bound(tab, root), floor), 0, 0)]
+        expanded = dominated = pruned = dominated_cut = 0
+        cutoffs = {}  # per key, vectors of labels pruned by the bound
     stopped_by = "optimal"
     found = -1
     slack = 1e-12
@@ -1448,6 +1542,8 @@ def label_search(
         lb, _, i = heapq.heappop(heap)
         if dead[i]:
             continue
+        if lb < floor:
+            lb = floor  # a resumed search's floor may have risen (docstring: ``memo``)
         if lb >= best * (1 - slack):
             heap.clear()
             break
@@ -1551,7 +1647,23 @@ def label_search(
     bound = best
     if stopped_by != "optimal":
         live = [b for b, _, j in heap if not dead[j]]
-        bound = min(min(live, default=best), best)
+        bound = min(max(min(live, default=best), floor), best)
+        if memo is not None:  # left to be continued (docstring: ``memo``)
+            memo["state"] = {
+                "key": ident,
+                "tab": tab,
+                "best": best,
+                "plan": best_plan,
+                "labels": labels,
+                "parent": parent,
+                "action": action,
+                "dead": dead,
+                "store": store,
+                "mindex": mindex,
+                "cutoffs": cutoffs,
+                "heap": heap,
+                "counters": (expanded, dominated, pruned, dominated_cut),
+            }
     result = {
         "labels": len(labels),
         "expanded": expanded,
@@ -1559,6 +1671,7 @@ def label_search(
         "pruned": pruned,
         "dominated_by_pruned": dominated_cut,
         "stopped_by": stopped_by,
+        "resumed": resumed,
         "seconds": {
             name: round(b - a, 4)
             for name, a, b in zip(("tables", "beam", "search"), clock, clock[1:], strict=False)
