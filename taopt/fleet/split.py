@@ -46,7 +46,11 @@ lifted to the supersets, *Monotonicity* below):
    added — still a relaxation of every plan of the split. Its part plans then allow for the
    waits, and combine into better plans: on the shipped example a plan of 120.0, the root
    bound, certified in seconds (without releases: 121.16 [120] after 600 s). The releases
-   depend on X_k alone, so the cache key is unchanged.
+   depend on X_k alone, so the cache key is unchanged. The solve runs in doubling time
+   slices (:data:`SLICE`) so other splits get a turn; a slice that stops leaves its open
+   search in the part's memo and the next slice continues it (``memo`` of
+   :func:`~taopt.fleet.search.label_search`: valid under the lower cutoff and higher floor
+   it then gets), up to :data:`PART_MEMO_LABELS` labels kept over all parts.
 
 *Monotonicity.* For one truck with its drones (a part, with or without releases), dropping a
 customer never raises the optimum: take an optimal plan of the part and remove customer j.
@@ -146,6 +150,12 @@ SPLIT_MAX_SPLITS = 400_000
 
 #: Share of the time left that a part's first exact solve may take (doubled at each retry).
 SLICE = 0.1
+
+#: Most labels the split search keeps in its parts' label-search memos (about 1 KB each):
+#: a part stopped by its time slice keeps its open search for its next slice
+#: (:func:`~taopt.fleet.search.label_search`, ``memo``); past this total the least recently
+#: solved parts' memos are dropped (those parts then restart from scratch).
+PART_MEMO_LABELS = 2_000_000
 
 #: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
 DRONE_SPLIT_SHARE = 0.25
@@ -792,6 +802,18 @@ def split_search(
                 found_best = (candidate, score)
         return found_best
 
+    def keep_memo(mask: int, d: int, memo: dict[str, Any], found: dict[str, Any]) -> None:
+        """Keep a part's label-search memo for its next slice when its search was stopped
+        (a finished one has nothing to continue), the most recent last; drop the least
+        recent ones past :data:`PART_MEMO_LABELS` labels in all."""
+        if "state" not in memo or found["labels"] > PART_MEMO_LABELS:
+            return
+        part_memo[(mask, d)] = (memo, int(found["labels"]))
+        total = sum(size for _, size in part_memo.values())
+        while total > PART_MEMO_LABELS:
+            oldest = next(iter(part_memo))
+            total -= part_memo.pop(oldest)[1]
+
     topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
     leader_memo: dict[tuple[tuple[int, ...], int], dict[str, Any]] = {}  # follower solves
 
@@ -819,6 +841,9 @@ def split_search(
             bound = max(bound, solved_value(found, best))
         return bound
 
+    # per part (mask, d): its label search's memo across its slices, with its label count,
+    # least recently solved first (PART_MEMO_LABELS)
+    part_memo: dict[tuple[int, int], tuple[dict[str, Any], int]] = {}
     solved = coupled = solves = 0
     timings: list[tuple[int, int, float]] = []
     trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
@@ -868,6 +893,7 @@ def split_search(
                 left = deadline.remaining()
                 if left is not None:  # a slice, doubled at each retry, so other splits get a turn
                     left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
+                memo = part_memo.pop((mask, d), ({}, 0))[0]
                 found = label_search(
                     sub,
                     incumbent=_restrict(problem, best_plan, mask, d),
@@ -877,7 +903,9 @@ def split_search(
                     cutoff=best,
                     release=list(release_of(mask, d).values()),
                     beam=0,  # cut off at the best plan: a beam incumbent only costs (40-65 %)
+                    memo=memo,
                 )
+                keep_memo(mask, d, memo, found)
                 solves += 1
                 seconds = time.perf_counter() - started
                 timings.append((len(members), d, seconds))
