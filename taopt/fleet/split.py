@@ -1088,6 +1088,7 @@ __all__ = [
     "CHAIN_SECONDS",
     "DRONE_SPLIT_SHARE",
     "LEADER_SHARE",
+    "PART_MEMO_LABELS",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
     "SLICE",
