@@ -151,11 +151,12 @@ SPLIT_MAX_SPLITS = 400_000
 #: Share of the time left that a part's first exact solve may take (doubled at each retry).
 SLICE = 0.1
 
-#: Most labels the split search keeps in its parts' label-search memos (about 1 KB each):
+#: Most labels the split search keeps in its parts' label-search memos (about 1 KB each, so
+#: about 0.5 GB at most):
 #: a part stopped by its time slice keeps its open search for its next slice
 #: (:func:`~taopt.fleet.search.label_search`, ``memo``); past this total the least recently
 #: solved parts' memos are dropped (those parts then restart from scratch).
-PART_MEMO_LABELS = 2_000_000
+PART_MEMO_LABELS = 500_000
 
 #: Share of the time left that the drone-split set bounds (:func:`_drone_split_bounds`) may take.
 DRONE_SPLIT_SHARE = 0.25
