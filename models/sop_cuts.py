@@ -68,6 +68,7 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
 from taopt.models.sop_dp import RowCredit
+from taopt.models.sop_statelp import clipped_duals
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -663,17 +664,7 @@ class SopCutModel:
         lp = self.highs.getLp()
         lower = np.asarray(lp.row_lower_, dtype=float)
         upper = np.asarray(lp.row_upper_, dtype=float)
-        equal = lower == upper
-        # y >= 0 prices a finite lower side, y <= 0 a finite upper side; equalities: any sign
-        positive = np.where(np.isfinite(lower), np.maximum(duals, 0.0), 0.0)
-        negative = np.where(np.isfinite(upper), np.minimum(duals, 0.0), 0.0)
-        y = np.where(equal, duals, positive + negative)
-        constant = np.where(
-            equal,
-            duals * np.where(equal, lower, 0.0),
-            positive * np.where(np.isfinite(lower), lower, 0.0)
-            + negative * np.where(np.isfinite(upper), upper, 0.0),
-        )
+        y, constant = clipped_duals(duals, lower, upper)
         matrix = sp.csc_matrix(
             (
                 np.asarray(lp.a_matrix_.value_),

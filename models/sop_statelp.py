@@ -65,7 +65,7 @@ import scipy.sparse as sp
 
 from taopt.runtime import MARGIN, Deadline
 
-__all__ = ["FIRST_SECONDS", "MIN_SHARE", "SHARE", "StateLp", "TRIAL"]
+__all__ = ["FIRST_SECONDS", "MIN_SHARE", "SHARE", "StateLp", "TRIAL", "clipped_duals"]
 
 #: Seconds an LP is taken to cost before one was timed.
 FIRST_SECONDS = 0.02
@@ -79,6 +79,29 @@ SHARE = 0.8
 #: of their states (where the root's LP already sees the ideals, they only cost time).
 TRIAL = 50
 MIN_SHARE = 0.1
+
+
+def clipped_duals(
+    duals: np.ndarray, lower: np.ndarray, upper: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Row duals made valid for a Lagrangian bound, and each row's side times its dual.
+
+    ``y >= 0`` prices a row's finite lower side and ``y <= 0`` its finite upper side (a dual
+    of the wrong sign for the sides a row has is clipped to 0); an equality row keeps its
+    dual, any sign. With these ``y``, ``sum(constant) + sum(min(c - A^T y, 0) * x_max)`` is
+    at most the LP's value for any ``y`` (weak duality), so clipping never overstates the
+    bound."""
+    equal = lower == upper
+    positive = np.where(np.isfinite(lower), np.maximum(duals, 0.0), 0.0)
+    negative = np.where(np.isfinite(upper), np.minimum(duals, 0.0), 0.0)
+    y = np.where(equal, duals, positive + negative)
+    constant = np.where(
+        equal,
+        duals * np.where(equal, lower, 0.0),
+        positive * np.where(np.isfinite(lower), lower, 0.0)
+        + negative * np.where(np.isfinite(upper), upper, 0.0),
+    )
+    return y, constant
 
 
 class StateLp:
@@ -190,16 +213,7 @@ class StateLp:
         transposed, lower, upper = self._rows()
         if len(duals) != len(lower):
             return -math.inf
-        equal = lower == upper
-        positive = np.where(np.isfinite(lower), np.maximum(duals, 0.0), 0.0)
-        negative = np.where(np.isfinite(upper), np.minimum(duals, 0.0), 0.0)
-        y = np.where(equal, duals, positive + negative)
-        sides = np.where(
-            equal,
-            duals * np.where(equal, lower, 0.0),
-            positive * np.where(np.isfinite(lower), lower, 0.0)
-            + negative * np.where(np.isfinite(upper), upper, 0.0),
-        )
+        y, sides = clipped_duals(duals, lower, upper)
         reduced = self.model.costs - transposed @ y
         value = float(sides.sum() + np.minimum(reduced[~zero], 0.0).sum())
         self.last_prices = (value, reduced)
