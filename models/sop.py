@@ -76,6 +76,7 @@ from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import HighsModel, solve_highs
+from taopt.models.sop_statelp import StateLp
 from taopt.result import (
     FEASIBLE,
     INFEASIBLE,
@@ -2287,8 +2288,6 @@ def _stages(
         """The root model's LP re-solved per DP state (:data:`STATE_LP`), or None."""
         if not STATE_LP or root_model is None or lagrange is None:
             return None
-        from taopt.models.sop_statelp import StateLp
-
         return StateLp(root_model)
 
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
