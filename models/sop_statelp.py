@@ -78,6 +78,8 @@ SHARE = 0.8
 #: After :data:`TRIAL` LPs, the LPs stop for good when they dropped under :data:`MIN_SHARE`
 #: of their states (where the root's LP already sees the ideals, they only cost time).
 TRIAL = 50
+
+#: Least share of their states the first :data:`TRIAL` LPs must drop for the LPs to go on.
 MIN_SHARE = 0.1
 
 
