@@ -120,6 +120,21 @@ plan; the beam took 40-65 % of a 5-customer part's time). With two trucks, a par
 becomes exact is paired at once with its complement when that one is exact too, and the
 combined plan scored (an incumbent before the split reaches the top of the heap).
 
+*Which part of a split first.* The cheap levels first; among the parts that need a label
+search, the one with the fewest slices stopped so far, then the highest bound, then the
+fewest customers. A split is closed as soon as *one* part's bound reaches the best plan, and
+the parts' costs differ by orders of magnitude (K2D3c1: one 4-customer part needed 14k labels,
+17 s at load 6, to reach 160.76, its complement 105 labels, 0.4 s): after a stopped slice the
+other part gets its turn, so the cheaper proof is found within about twice its own cost.
+Any order is exact: every part bound is proven, and a split's key is their maximum.
+
+*Eager complement* (two trucks, a primal step). When a part becomes exact with a plan below
+the best one and its complement is open with a bound below the best, the complement is
+solved at once (one slice, the same cached, lifted solve its split would run), the two
+plans combined, and a combined plan that waits repaired (*Repair*, once per split). Good
+plans then appear before their split reaches the top of the heap, and every later part
+search is cut off lower. It changes no bound.
+
 The result's ``trace`` records, with seconds since the start, each rise of the least bound
 (``"least"``), each better plan (``"best"``, ``"paired"``), each exact part solve
 (``"part"``: customers, seconds, how it stopped, the bound before, the bound proved, the
@@ -713,17 +728,17 @@ def split_search(
             value = INF
         return plan, value
 
-    def partner(mask: int, d: int) -> tuple[FleetPlan, float] | None:
+    def partner(mask: int, d: int) -> tuple[FleetPlan, float, tuple[int, ...]] | None:
         """Two trucks: the part ``mask`` just became exact; when the other part of its split
         is exact too, their combined plan (an incumbent found as soon as possible, not when
-        the split reaches the top of the heap)."""
+        the split reaches the top of the heap), its value and the split."""
         if problem.K != 2:
             return None
         for k in range(2):
             other = parts.get((full ^ mask, problem.drones[1 - k]))
             if problem.drones[k] == d and other is not None and other.plan is not None:
                 split = (mask, full ^ mask) if k == 0 else (full ^ mask, mask)
-                return combine(split)
+                return (*combine(split), split)
         return None
 
     def key_of(split: tuple[int, ...]) -> float:
@@ -815,7 +830,118 @@ def split_search(
             oldest = next(iter(part_memo))
             total -= part_memo.pop(oldest)[1]
 
+    solves = 0  # exact part solves
+
+    def exact_part(mask: int, d: int, key: float, eager: bool = True) -> str:
+        """One exact solve (a time slice) of the part ``mask`` with ``d`` drones by the label
+        search (cut off at the best plan, its releases, its memo); the part's bound, level
+        and plan updated and lifted (*Monotonicity*). When it becomes exact with a plan below
+        the best one (two trucks) and ``eager``, its complement is solved at once too
+        (:func:`eager_pair`). Returns how the search stopped."""
+        nonlocal best, best_plan, solves
+        item = part(mask, d)
+        members = _members(mask)
+        sub = sub_problem(problem, members, d, closure)
+        started = time.perf_counter()
+        left = deadline.remaining()
+        if left is not None:  # a slice, doubled at each retry, so other splits get a turn
+            left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
+        memo = part_memo.pop((mask, d), ({}, 0))[0]
+        found = label_search(
+            sub,
+            incumbent=_restrict(problem, best_plan, mask, d),
+            time_limit=left,
+            max_labels=max_labels,
+            floor=item.bound,
+            cutoff=best,
+            release=list(release_of(mask, d).values()),
+            beam=0,  # cut off at the best plan: a beam incumbent only costs (40-65 %)
+            memo=memo,
+        )
+        keep_memo(mask, d, memo, found)
+        solves += 1
+        seconds = time.perf_counter() - started
+        timings.append((len(members), d, seconds))
+        trace.append(
+            (
+                "part",
+                round(time.perf_counter() - deadline_start, 3),
+                len(members),
+                round(seconds, 3),
+                found["stopped_by"],
+                round(item.bound, 3),
+                round(float(found["bound"]), 3),
+                round(key, 3),
+            )
+        )
+        item.bound = max(item.bound, float(found["bound"]))
+        status = str(found["stopped_by"])
+        if status == "infeasible":
+            item.bound, item.level = INF, 3
+        elif status == "optimal":
+            if found["plan"] is not None and found["value"] < best:
+                item.plan = found["plan"]
+                item.bound = float(found["value"])
+                item.level = 3
+                paired = partner(mask, d)
+                if paired is not None and paired[1] < best:
+                    best, best_plan = paired[1], paired[0]
+                    trace.append(("paired", round(time.perf_counter() - deadline_start, 3), best))
+                if eager and status == "optimal":
+                    status = eager_pair(mask, d, paired)
+            else:
+                item.bound = max(item.bound, best)  # cannot beat the best plan
+                item.level = 2
+        elif status != "size":  # stopped by its slice or the clock: the bound it proved is kept
+            item.attempts += 1
+        lift(mask, d, item.bound, released=True)
+        return status
+
+    def eager_pair(
+        mask: int, d: int, paired: tuple[FleetPlan, float, tuple[int, ...]] | None
+    ) -> str:
+        """Two trucks: the part ``mask`` just became exact below the best plan. Its
+        complement (the other truck's part of the same split) is solved at once (one slice,
+        :func:`exact_part` without recursion) when its bound is below the best plan, and a
+        combined plan that waits is repaired (:func:`repair`, once per split): a primal step
+        that finds good plans before their split reaches the top of the heap, so every later
+        part search is cut off lower. It proves nothing by itself (the complement's solve is
+        the one the split would run, cached and lifted the same way). Returns how the
+        complement's search stopped ("optimal" when there was none to run)."""
+        nonlocal best, best_plan
+        if problem.K != 2 or deadline.expired():
+            return "optimal"
+        k = problem.drones.index(d)
+        if paired is None:
+            other = part(full ^ mask, problem.drones[1 - k])
+            if other.level >= 2 or other.bound >= best or not math.isfinite(best):
+                return "optimal"
+            trace.append(("eager", round(time.perf_counter() - deadline_start, 3), full ^ mask))
+            status = exact_part(full ^ mask, problem.drones[1 - k], other.bound, eager=False)
+            if status != "optimal" or other.plan is None:
+                return status
+            paired = partner(mask, d)
+            if paired is None:
+                return status
+            if paired[1] < best:
+                best, best_plan = paired[1], paired[0]
+                trace.append(("paired", round(time.perf_counter() - deadline_start, 3), best))
+        plan, value, split = paired
+        if problem.drones[0] == problem.drones[1]:  # identical trucks: the split listed once
+            split = (max(split), min(split))
+        if split in eager_repaired or not math.isfinite(value):
+            return "optimal"
+        eager_repaired.add(split)
+        key = max(part(m, problem.drones[kk]).bound for kk, m in enumerate(split))
+        if value > key * (1 + CERTIFY):
+            repaired = repair(split, plan, value)
+            if repaired is not None and repaired[1] < best:
+                best, best_plan = repaired[1], repaired[0]
+                trace.append(("repaired", round(time.perf_counter() - deadline_start, 3), best))
+        return "optimal"
+
     topological: dict[tuple[int, ...], list[float]] = {}  # a split's releases L
+    eager_repaired: set[tuple[int, ...]] = set()  # splits repaired by eager_pair
     leader_memo: dict[tuple[tuple[int, ...], int], dict[str, Any]] = {}  # follower solves
 
     def tighten(split: tuple[int, ...], owner: list[int], key: float) -> float:
@@ -845,7 +971,7 @@ def split_search(
     # per part (mask, d): its label search's memo across its slices, with its label count,
     # least recently solved first (PART_MEMO_LABELS)
     part_memo: dict[tuple[int, int], tuple[dict[str, Any], int]] = {}
-    solved = coupled = solves = 0
+    solved = coupled = 0
     timings: list[tuple[int, int, float]] = []
     trace: list[tuple[Any, ...]] = [("best", round(time.perf_counter() - deadline_start, 3), best)]
     stopped_by = "optimal"
@@ -870,12 +996,21 @@ def split_search(
             continue
         popped.add(i)
         pending = [
-            (part(m, problem.drones[k]).level, -part(m, problem.drones[k]).bound, m, k)
+            (
+                part(m, problem.drones[k]).level,
+                part(m, problem.drones[k]).attempts,
+                -part(m, problem.drones[k]).bound,
+                m.bit_count(),
+                m,
+                k,
+            )
             for k, m in enumerate(split)
             if part(m, problem.drones[k]).level < 3
         ]
         if pending:
-            level, _, mask, k = min(pending)
+            # (module docstring, *Search*: the cheap levels first, then the part with the
+            # fewest stopped slices, the highest bound and the fewest customers)
+            level, _, _, _, mask, k = min(pending)
             d = problem.drones[k]
             item = part(mask, d)
             members = _members(mask)
@@ -890,63 +1025,12 @@ def split_search(
                 item.level = 1 if not deadline.expired() else 0
                 lift(mask, d, item.bound, released=False)
             else:
-                started = time.perf_counter()
-                left = deadline.remaining()
-                if left is not None:  # a slice, doubled at each retry, so other splits get a turn
-                    left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
-                memo = part_memo.pop((mask, d), ({}, 0))[0]
-                found = label_search(
-                    sub,
-                    incumbent=_restrict(problem, best_plan, mask, d),
-                    time_limit=left,
-                    max_labels=max_labels,
-                    floor=item.bound,
-                    cutoff=best,
-                    release=list(release_of(mask, d).values()),
-                    beam=0,  # cut off at the best plan: a beam incumbent only costs (40-65 %)
-                    memo=memo,
-                )
-                keep_memo(mask, d, memo, found)
-                solves += 1
-                seconds = time.perf_counter() - started
-                timings.append((len(members), d, seconds))
-                trace.append(
-                    (
-                        "part",
-                        round(time.perf_counter() - deadline_start, 3),
-                        len(members),
-                        round(seconds, 3),
-                        found["stopped_by"],
-                        round(item.bound, 3),
-                        round(float(found["bound"]), 3),
-                        round(key, 3),
-                    )
-                )
-                item.bound = max(item.bound, float(found["bound"]))
-                if found["stopped_by"] == "infeasible":
-                    item.bound, item.level = INF, 3
-                elif found["stopped_by"] == "optimal":
-                    if found["plan"] is not None and found["value"] < best:
-                        item.plan = found["plan"]
-                        item.bound = float(found["value"])
-                        item.level = 3
-                        paired = partner(mask, d)
-                        if paired is not None and paired[1] < best:
-                            best, best_plan = paired[1], paired[0]
-                            trace.append(
-                                ("paired", round(time.perf_counter() - deadline_start, 3), best)
-                            )
-                    else:
-                        item.bound = max(item.bound, best)  # cannot beat the best plan
-                        item.level = 2
-                elif found["stopped_by"] == "size":
+                status = exact_part(mask, d, key)
+                if status == "size":
                     stopped_by = "size"  # the label cap: stop with the bound it proved
                     heapq.heappush(heap, (key_of(split), i))
                     least = heap[0][0]
                     break
-                else:  # stopped by its slice or the clock: the bound it proved is kept
-                    item.attempts += 1
-                lift(mask, d, item.bound, released=True)
             heapq.heappush(heap, (key_of(split), i))
             continue
         # every part exact: combine and score

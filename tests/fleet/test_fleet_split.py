@@ -173,3 +173,27 @@ def test_released_parts_bound_the_restricted_optimum(seed, owner):
     assert free - 1e-9 <= released <= restricted * (1 + 1e-9) + 1e-9
     if seed in (0, 7):  # the releases bite there (found by a scan of 192 splits)
         assert released > free + 1e-6
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        # (seed, n, K, D, c, precedence, objective, stops): a part becomes exact below the
+        # best plan while its complement is open, so the complement is solved at once
+        (0, 4, 2, 1, 1, True, "last_service", 2),
+        (7, 4, 2, 1, 2, True, "last_service", 2),
+        (1, 3, 2, 1, 2, True, "return", 2),
+        (4, 3, 2, 1, 1, True, "return", 2),
+        (6, 3, 2, 2, 2, True, "last_service", 2),
+        (7, 3, 2, 2, 1, True, "last_service", 2),
+    ],
+)
+def test_eager_complement_keeps_the_split_search_exact(case):
+    """The eager complement solve (a primal step) runs and the optimum equals the brute force."""
+    problem = tiny_instance(*case[:7], stops=case[7])
+    found = split_search(problem)
+    assert "eager" in [event[0] for event in found["trace"]]
+    value, _, _ = brute_force(problem)
+    assert found["stopped_by"] == "optimal"
+    assert found["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
+    assert taopt.evaluate(problem, found["plan"]) == pytest.approx(found["value"])
