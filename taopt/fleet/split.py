@@ -47,7 +47,7 @@ lifted to the supersets, *Monotonicity* below):
    waits, and combine into better plans: on the shipped example a plan of 120.0, the root
    bound, certified in seconds (without releases: 121.16 [120] after 600 s). The releases
    depend on X_k alone, so the cache key is unchanged. The solve runs in doubling time
-   slices (:data:`SLICE`) so other splits get a turn; a slice that stops leaves its open
+   slices (:data:`PART_SLICE`) so other splits get a turn; a slice that stops leaves its open
    search in the part's memo and the next slice continues it (``memo`` of
    :func:`~taopt.fleet.search.label_search`: valid under the lower cutoff and higher floor
    it then gets), up to :data:`PART_MEMO_LABELS` labels kept over all parts.
@@ -130,10 +130,11 @@ Any order is exact: every part bound is proven, and a split's key is their maxim
 
 *Eager complement* (two trucks, a primal step). When a part becomes exact with a plan below
 the best one and its complement is open with a bound below the best, the complement is
-solved at once (one slice, the same cached, lifted solve its split would run), the two
-plans combined, and a combined plan that waits repaired (*Repair*, once per split). Good
-plans then appear before their split reaches the top of the heap, and every later part
-search is cut off lower. It changes no bound.
+solved at once (up to :data:`EAGER_SLICES` doubling slices while its bound stays below the
+best plan: the same cached, lifted solve its split would run), the two plans combined, and a
+combined plan that waits repaired (*Repair*, once per split). Good plans then appear before
+their split reaches the top of the heap, and every later part search is cut off lower. It
+changes no bound.
 
 The result's ``trace`` records, with seconds since the start, each rise of the least bound
 (``"least"``), each better plan (``"best"``, ``"paired"``), each exact part solve
@@ -163,8 +164,22 @@ SPLIT_MAX_N = 16
 #: Most splits listed (after identical trucks are merged).
 SPLIT_MAX_SPLITS = 400_000
 
-#: Share of the time left that a part's first exact solve may take (doubled at each retry).
+#: Share of the time left that a repair, a tightening or (three or more trucks) a coupled
+#: search's first slice may take (doubled at each retry of a coupled search).
 SLICE = 0.1
+
+#: Share of the time left that a part's first exact solve may take, at least
+#: :data:`PART_SLICE_MIN` seconds (doubled at each retry, its search resumed from its memo):
+#: short first slices let the two parts of a split race (module docstring, *Which part of a
+#: split first*), and a resumed slice costs about what one run does.
+PART_SLICE = 0.02
+
+#: Least seconds of a part's first exact slice (:data:`PART_SLICE`).
+PART_SLICE_MIN = 0.25
+
+#: Most slices of one eager complement solve (module docstring, *Eager complement*; each
+#: slice doubles, so about 15 first slices in all).
+EAGER_SLICES = 4
 
 #: Most labels the split search keeps in its parts' label-search memos (about 1 KB each, so
 #: about 0.5 GB at most):
@@ -845,7 +860,7 @@ def split_search(
         started = time.perf_counter()
         left = deadline.remaining()
         if left is not None:  # a slice, doubled at each retry, so other splits get a turn
-            left = min(left, max(1.0, SLICE * left) * 2**item.attempts)
+            left = min(left, max(PART_SLICE_MIN, PART_SLICE * left) * 2**item.attempts)
         memo = part_memo.pop((mask, d), ({}, 0))[0]
         found = label_search(
             sub,
@@ -901,8 +916,9 @@ def split_search(
         mask: int, d: int, paired: tuple[FleetPlan, float, tuple[int, ...]] | None
     ) -> str:
         """Two trucks: the part ``mask`` just became exact below the best plan. Its
-        complement (the other truck's part of the same split) is solved at once (one slice,
-        :func:`exact_part` without recursion) when its bound is below the best plan, and a
+        complement (the other truck's part of the same split) is solved at once (up to
+        :data:`EAGER_SLICES` slices of :func:`exact_part`, without recursion) when its bound is
+        below the best plan, and a
         combined plan that waits is repaired (:func:`repair`, once per split): a primal step
         that finds good plans before their split reaches the top of the heap, so every later
         part search is cut off lower. It proves nothing by itself (the complement's solve is
@@ -917,7 +933,11 @@ def split_search(
             if other.level >= 2 or other.bound >= best or not math.isfinite(best):
                 return "optimal"
             trace.append(("eager", round(time.perf_counter() - deadline_start, 3), full ^ mask))
-            status = exact_part(full ^ mask, problem.drones[1 - k], other.bound, eager=False)
+            status = "time_limit"
+            for _ in range(EAGER_SLICES):  # doubling slices, while it may still beat the best
+                status = exact_part(full ^ mask, problem.drones[1 - k], other.bound, eager=False)
+                if status != "time_limit" or other.bound >= best or deadline.expired():
+                    break
             if status != "optimal" or other.plan is None:
                 return status
             paired = partner(mask, d)
@@ -1172,10 +1192,13 @@ __all__ = [
     "CERTIFY",
     "CHAIN_SECONDS",
     "DRONE_SPLIT_SHARE",
+    "EAGER_SLICES",
     "LEADER_SHARE",
     "PART_MEMO_LABELS",
     "SPLIT_MAX_N",
     "SPLIT_MAX_SPLITS",
+    "PART_SLICE",
+    "PART_SLICE_MIN",
     "SLICE",
     "count_splits",
     "split_applies",
