@@ -51,7 +51,10 @@ converged geometrically (thousands of boxes, bound and optimum equal to 1e-5).
 
 *Search.* Each truck leads in turn with boxes of its own (the argument above holds for either
 leader; which relaxation is tighter depends on the split: on fleet10 seed 3's open split the
-second leader's root box is exact, on seed 2's the first's needs six box searches). Per
+second leader's root box is exact, on seed 2's the first's needs six box searches). The
+leader with fewer sources (fewer pairs met only through the boxes: seed 3's exact leader has
+2 against 3; seed 2's tie keeps :func:`taopt.fleet.split._lead`'s) goes first and gets
+:data:`LEAD_TURNS` turns for each of the other's; either order is exact. Per
 leader, best first over the boxes by their bounds; a box's leader search runs in doubling
 slices (:data:`BOX_SHARE` of the time left at first; its memo kept). The split's optimum is
 proven when every open box of one leader has a bound at the best plan's value (within
@@ -77,6 +80,10 @@ BOX_SHARE = 0.25
 
 #: Narrowest interval a box is halved on (seconds) when no violated pair says where to split.
 BOX_MIN_WIDTH = 1e-3
+
+#: Turns the first leader (the one with fewer sources, :func:`two_way_search`) gets for each
+#: turn of the second.
+LEAD_TURNS = 2
 
 #: A box split at a violated pair (r, j) is split at ``t_r (1 - SPLIT_BELOW)`` (module
 #: docstring, *Split point*).
@@ -147,7 +154,7 @@ def two_way_search(
     elif leading is not None:
         leaders = [int(leading)]
     else:
-        leaders = [first, 1 - first]
+        leaders = sorted([first, 1 - first], key=lambda x: _source_count(problem, owner, x))
     memo = {} if memo is None else memo
     states: dict[int, dict[str, Any]] = memo.setdefault("leaders", {})
     for leader in leaders:
@@ -181,8 +188,11 @@ def two_way_search(
         if deadline.expired():
             stopped_by = "time_limit"
             break
-        # the leaders take turns (either may be the one whose boxes close first)
-        leader = min(leaders, key=lambda x: states[x]["searches"])
+        # the leaders take turns (either may be the one whose boxes close first), the first
+        # (fewer sources) LEAD_TURNS turns for each of the second's
+        leader = min(
+            leaders, key=lambda x: states[x]["searches"] * (1 if x == leaders[0] else LEAD_TURNS)
+        )
         state = states[leader]
         boxes, memos = state["boxes"], state["memos"]
         pairs, sources = state["pairs"], state["sources"]
@@ -266,6 +276,14 @@ def two_way_search(
     }
 
 
+def _source_count(problem: FleetProblem, owner: list[int], leader: int) -> int:
+    """How many follower customers have a closure successor on ``leader`` (the box
+    dimensions when it leads: the pairs its relaxation meets only through the boxes)."""
+    from taopt.fleet.split import _closure
+
+    return len({r for r, j in _closure(problem) if owner[r] == 1 - leader and owner[j] == leader})
+
+
 def _split_point(
     pairs: list[tuple[int, int]],
     times: list[float] | None,
@@ -293,4 +311,4 @@ def _split_point(
     return i, lo[i] + 0.5 * widths[i]
 
 
-__all__ = ["BOX_MIN_WIDTH", "BOX_SHARE", "SPLIT_BELOW", "two_way_search"]
+__all__ = ["BOX_MIN_WIDTH", "BOX_SHARE", "LEAD_TURNS", "SPLIT_BELOW", "two_way_search"]
