@@ -137,9 +137,10 @@ their split reaches the top of the heap, and every later part search is cut off 
 changes no bound.
 
 The result's ``trace`` records, with seconds since the start, each rise of the least bound
-(``"least"``), each better plan (``"best"``, ``"paired"``), each exact part solve
-(``"part"``: customers, seconds, how it stopped, the bound before, the bound proved, the
-split's key) and each coupled search (``"coupled"``).
+(``"least"``), each better plan (``"best"``, ``"paired"``, ``"repaired"``), each exact part
+solve (``"part"``: customers, seconds, how it stopped, the bound before, the bound proved,
+the split's key), each eager complement solve (``"eager"``: the complement's mask) and each
+coupled search (``"coupled"``).
 """
 
 from __future__ import annotations
