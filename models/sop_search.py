@@ -62,7 +62,9 @@ __all__ = [
     "before_matrix",
     "best_exchange",
     "iterated_local_search",
+    "kick",
     "local_search",
+    "order_cost",
 ]
 
 #: Cells of one chunk of the (h, i, j) move table (memory: 8 bytes a cell, a few arrays).
@@ -168,7 +170,7 @@ def local_search(
     return current
 
 
-def _kick(
+def kick(
     before: np.ndarray, order: np.ndarray, rng: np.random.Generator, longest: int
 ) -> tuple[np.ndarray, int, int]:
     """A random feasible segment swap of segments of at most ``longest`` nodes, with the first
@@ -183,7 +185,8 @@ def _kick(
     return order, 0, 0
 
 
-def _cost(cost: np.ndarray, order: np.ndarray) -> float:
+def order_cost(cost: np.ndarray, order: np.ndarray) -> float:
+    """The cost of the path ``order`` under ``cost``."""
     return float(cost[order[:-1], order[1:]].sum())
 
 
@@ -222,7 +225,7 @@ def iterated_local_search(
     before = before_matrix(problem)
     rng = np.random.default_rng(seed)
     current = local_search(cost, before, order, deadline)
-    current_cost = _cost(cost, current)
+    current_cost = order_cost(cost, current)
     best, best_cost = current, current_cost
     info: dict[str, Any] = {"start": best_cost, "iterations": 0}
     if problem.n < 5 or (iterations is None and deadline is None):
@@ -239,11 +242,11 @@ def iterated_local_search(
         done += 1
         candidate, first, last = current, problem.n, 0
         for _ in range(KICKS):
-            candidate, low, high = _kick(before, candidate, rng, longest)
+            candidate, low, high = kick(before, candidate, rng, longest)
             first, last = min(first, low), max(last, high)
         span = (first - longest, last + longest)
         candidate = local_search(cost, before, candidate, deadline, span)
-        value = _cost(cost, candidate)
+        value = order_cost(cost, candidate)
         if value < best_cost:
             best, best_cost, since, idle = candidate, value, 0, 0
         else:
