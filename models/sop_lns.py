@@ -20,13 +20,17 @@ first holding a closure successor (the kept nodes keep their relative order, whi
 feasible), and (ii) ``r`` is inserted only after every removed closure predecessor of ``r``
 (``S`` contains them). The kept order with the removed nodes in their old places is one of
 the paths of the programme, so the repaired order never costs more than the order it came
-from. Work ``O(n 2^k k^2)``, vectorised over the subsets of one size.
+from. It is computed along the new order (after ``t`` nodes, a state's gap is ``t - |S|``),
+each step vectorised over the subsets reached: work ``O(n 2^k k^2)``.
 
-:func:`repair` is one such step; :func:`large_neighbourhood_search` alternates it (removing a
-random window of consecutive positions, random positions, or a node and its cheapest
-neighbours) with the SOP-3-exchange descent and, when neither improves for a while, the
-iterated search's segment-swap kicks; seeded, stopped by a :class:`~taopt.runtime.Deadline`
-or an iteration count.
+:func:`repair` is one such step; :func:`large_neighbourhood_search` alternates it with the
+SOP-3-exchange descent and, when repairs stop improving, the iterated search's random segment
+swaps (kicks) with a strength that doubles while they find nothing better, then restarts from
+a random greedy order (:func:`random_order`); seeded, stopped by a
+:class:`~taopt.runtime.Deadline`, an iteration count or a patience. The portfolio runs it on
+its first DP stage's order (``taopt.models.sop.ILS_SHARE``): from a width-64 beam's order the
+iterated search alone stayed in that order's basin (ry48p.1 16,321 on every seed), this
+search left it (15,805, the optimum, on 3 of 5 seeds in 5 s under load 6-7).
 
 References
 ----------
@@ -59,6 +63,7 @@ from taopt.sop.problem import SopProblem
 
 __all__ = [
     "GREEDY_CHOICES",
+    "REACH",
     "REMOVE",
     "REPAIR_PATIENCE",
     "RESTART_KICKS",
@@ -70,6 +75,12 @@ __all__ = [
 #: Nodes removed by one repair step (``2^k`` subsets per gap: 8 keeps a step at a few
 #: milliseconds on 50 nodes).
 REMOVE = 8
+
+#: A removed node goes back at most this many gaps from where it was (:func:`repair`'s
+#: ``reach``; None: anywhere its precedences allow). Off: at 10 gaps a repair took 3.9 ms
+#: instead of 6.1 ms on ry48p.1, but from a width-64 beam's order 5 s of the search ended
+#: prob.42 at 256-260 on seeds 0-4 (247-248 without), load 5-6.
+REACH: int | None = None
 
 #: Repair steps in a row without improving the current order after which the search kicks it
 #: (the iterated search's segment swaps, :func:`~taopt.models.sop_search.kick`).
@@ -110,6 +121,7 @@ def repair(
     before: np.ndarray,
     order: Sequence[int] | np.ndarray,
     removed: Sequence[int] | np.ndarray,
+    reach: int | None = None,
 ) -> tuple[float, np.ndarray]:
     """The cheapest order that keeps ``order``'s other nodes in their order and reinserts the
     nodes at positions ``removed`` (module docstring).
@@ -124,6 +136,9 @@ def repair(
         A precedence-feasible order from start to end.
     removed : sequence of int
         Distinct inner positions (neither the first nor the last).
+    reach : int, optional
+        Each removed node goes back at most this many gaps from the gap it came from (None:
+        anywhere its precedences allow).
 
     Returns
     -------
@@ -148,6 +163,10 @@ def repair(
     positions = np.arange(m + 1)
     lo = np.where(pred, positions[:, None], -1).max(axis=0)
     hi = np.where(succ, positions[None, :], m + 1).min(axis=1)
+    if reach is not None:  # at most ``reach`` gaps from the gap each node came from
+        gap = np.searchsorted(np.flatnonzero(keep), at) - 1
+        lo = np.maximum(lo, gap - reach)
+        hi = np.minimum(hi, gap + reach + 1)
     sub = _subsets(k)
     size = 1 << k
     inner = before[np.ix_(moved, moved)]  # inner[a, b]: moved a precedes moved b
@@ -269,8 +288,9 @@ def large_neighbourhood_search(
 
     From a feasible ``order``: descend with the SOP-3-exchange
     (:func:`~taopt.models.sop_search.local_search`), then repeat: remove ``remove`` nodes
-    (:func:`_removal`) and reinsert them optimally (:func:`repair`); an improved order is
-    descended again. After :data:`REPAIR_PATIENCE` repairs in a row without improvement, the
+    (a random window of consecutive positions, random positions, or a random node and the
+    nodes joined to it by the cheapest arcs, a third of the time each) and reinsert them
+    optimally (:func:`repair`); an improved order is descended again. After :data:`REPAIR_PATIENCE` repairs in a row without improvement, the
     current order is kicked by random feasible segment swaps
     (:func:`~taopt.models.sop_search.kick`) and descended: :data:`~taopt.models.sop_search.KICKS`
     of them, doubled after each kick that found no better order since the last restart (at
@@ -335,7 +355,8 @@ def large_neighbourhood_search(
         if patience is not None and done - found >= patience:
             break
         done += 1
-        value, candidate = repair(cost, before, current, _removal(cost, current, remove, rng))
+        removal = _removal(cost, current, remove, rng)
+        value, candidate = repair(cost, before, current, removal, REACH)
         if value < current_cost:
             candidate = local_search(cost, before, candidate, deadline)
             current, current_cost = candidate, order_cost(cost, candidate)
