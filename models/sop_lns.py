@@ -322,7 +322,8 @@ def large_neighbourhood_search(
     -------
     tuple
         ``(cost, order, info)``: the best order found (never costlier than ``order``) and
-        its cost; ``info`` has ``iterations`` (repair steps), ``kicks``, ``restarts``,
+        its cost; ``info`` has ``iterations`` (repair steps), ``repaired`` (those that lowered
+        the current order's cost), ``kicks``, ``restarts``,
         ``start`` (the first descent's cost) and ``trace`` (seconds and cost of each new best).
     """
     began = time.perf_counter()
@@ -338,6 +339,7 @@ def large_neighbourhood_search(
     best, best_cost = current, current_cost
     trace = [(time.perf_counter() - began, best_cost)]
     info: dict[str, Any] = {"start": best_cost, "iterations": 0, "kicks": 0, "restarts": 0}
+    info["repaired"] = 0  # repair steps that lowered the current order's cost
     info["trace"] = trace
     if problem.n < 5 or (iterations is None and deadline is None):
         return best_cost, [int(v) for v in best], info
@@ -361,6 +363,7 @@ def large_neighbourhood_search(
             candidate = local_search(cost, before, candidate, deadline)
             current, current_cost = candidate, order_cost(cost, candidate)
             idle = 0
+            info["repaired"] += 1
         else:
             idle += 1
         if current_cost < local_cost:
