@@ -164,9 +164,9 @@ def repair(
     lo = np.where(pred, positions[:, None], -1).max(axis=0)
     hi = np.where(succ, positions[None, :], m + 1).min(axis=1)
     if reach is not None:  # at most ``reach`` gaps from the gap each node came from
-        gap = np.searchsorted(np.flatnonzero(keep), at) - 1
-        lo = np.maximum(lo, gap - reach)
-        hi = np.minimum(hi, gap + reach + 1)
+        came = np.searchsorted(np.flatnonzero(keep), at) - 1  # the gap each node left
+        lo = np.maximum(lo, came - reach)
+        hi = np.minimum(hi, came + reach + 1)
     sub = _subsets(k)
     size = 1 << k
     inner = before[np.ix_(moved, moved)]  # inner[a, b]: moved a precedes moved b

@@ -114,10 +114,13 @@ def best_exchange(
     before: np.ndarray,
     order: Sequence[int] | np.ndarray,
     span: tuple[int, int] | None = None,
+    deadline: Deadline | None = None,
 ) -> tuple[float, int, int, int]:
     """The best feasible SOP-3-exchange of ``order``: ``(Δ, h, i, j)`` of the module
     docstring (Δ = inf when there is none); with ``span = (lo, hi)`` only the moves with
-    ``lo <= h`` and ``j < hi`` (both segments and their ends inside the span)."""
+    ``lo <= h`` and ``j < hi`` (both segments and their ends inside the span). An expired
+    ``deadline`` stops the scan between chunks (the best move of the chunks scanned: a scan
+    of a 380-node order takes about a second under load)."""
     o = np.asarray(order, dtype=np.intp)
     n = len(o)
     lo, hi = (0, n - 1) if span is None else (max(0, span[0]), min(n - 1, span[1]))
@@ -133,6 +136,8 @@ def best_exchange(
     step = max(1, CHUNK_CELLS // max(1, len(firsts) * len(seconds)))
     best = (np.inf, lo, lo + 1, lo + 2)
     for low in range(lo, hi - 2, step):
+        if deadline is not None and low > lo and deadline.expired():
+            break
         h = np.arange(low, min(low + step, hi - 2))[:, None, None]
         with np.errstate(invalid="ignore"):
             delta = x[h, i + 1] + x[j, h + 1] + x[i, j + 1] - arcs[h] - arcs[i] - arcs[j]
@@ -166,7 +171,7 @@ def local_search(
     tolerance = 1e-9 * max(1.0, float(np.nanmax(np.where(np.isfinite(cost), cost, 0.0))))
     for where in (span, None) if span is not None else (None,):
         while deadline is None or not deadline.expired():
-            delta, h, i, j = best_exchange(cost, before, current, where)
+            delta, h, i, j = best_exchange(cost, before, current, where, deadline)
             if not delta < -tolerance:
                 break
             current = _swapped(current, h, i, j)
