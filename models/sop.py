@@ -1655,10 +1655,11 @@ STATE_LP = False
 #: the primal search (:func:`taopt.models.sop_lns.large_neighbourhood_search`: exact
 #: reinsertion of removed nodes, SOP-3-exchange descents, escalating kicks and restarts) on
 #: the stage's order (after its beam passes), before the second stage and the cut engine prune
-#: with that order's cost (0: not run). From a width-64 beam's order, 5 s of it gave ry48p.1
-#: 15805-16321 (seeds 0-4; the iterated local search 16321 on every seed), ft53.1 7569-7922
-#: (8114-8312) and prob.42 247-248 (248-257), load 6-7; it found them after 2-5 s, so it gets
-#: a larger share than the iterated search had (0.2: 0.8-0.9 s at a 10 s limit).
+#: with that order's cost (0: not run). From a width-64 beam's order, 5 CPU-seconds of it gave
+#: ry48p.1 15805 on seeds 0-4 (the iterated local search: 16321 on each), ft53.1 7569-7753
+#: (7922-8123) and prob.42 247-248 (248-257); 1 CPU-second was not enough (ry48p.1
+#: 15947-16321), so it gets a larger share than the iterated search had (0.2: 0.8-0.9 s of
+#: wall time at a 10 s limit).
 ILS_SHARE = 0.3
 
 #: Repair steps of that search in a run without a time limit.

@@ -29,8 +29,8 @@ swaps (kicks) with a strength that doubles while they find nothing better, then 
 a random greedy order (:func:`random_order`); seeded, stopped by a
 :class:`~taopt.runtime.Deadline`, an iteration count or a patience. The portfolio runs it on
 its first DP stage's order (``taopt.models.sop.ILS_SHARE``): from a width-64 beam's order the
-iterated search alone stayed in that order's basin (ry48p.1 16,321 on every seed), this
-search left it (15,805, the optimum, on 3 of 5 seeds in 5 s under load 6-7).
+iterated search alone stayed in that order's basin (ry48p.1 16,321 on seeds 0-4 after 5
+CPU-seconds), this search left it (15,805, the optimum, on each of them).
 
 References
 ----------
