@@ -88,7 +88,13 @@ from taopt.result import (
 )
 from taopt.runtime import MARGIN, CancelToken, Deadline, cancel_scope, register_footprint
 from taopt.runtime.workers import Background
-from taopt.sop.problem import SopProblem, check_sop, path_cost, sop_arborescence_bound
+from taopt.sop.problem import (
+    SopProblem,
+    check_sop,
+    evaluate_order,
+    path_cost,
+    sop_arborescence_bound,
+)
 from taopt.status import decide
 
 logger = logging.getLogger(__name__)  # a child of the "taopt" logger
@@ -1646,18 +1652,20 @@ ROW_CREDIT = True
 STATE_LP = False
 
 #: Share of the time left after the first DP stage (when it stopped without a proof) given to
-#: the iterated SOP-3-exchange local search
-#: (:func:`taopt.models.sop_search.iterated_local_search`) on the stage's order (after its
-#: beam passes), before the second stage and the cut engine prune with that order's cost (0:
-#: not run). From a width-64 beam's order, 3 s of the search gave prob.42 247-248 (the
-#: portfolio had 261 at 10 s and 250 at 60 s) and ft53.1 7767-7922 (7797, 7675); ry48p.1
-#: stayed at 16321 (16331 at 60 s).
-ILS_SHARE = 0.2
+#: the primal search (:func:`taopt.models.sop_lns.large_neighbourhood_search`: exact
+#: reinsertion of removed nodes, SOP-3-exchange descents, escalating kicks and restarts) on
+#: the stage's order (after its beam passes), before the second stage and the cut engine prune
+#: with that order's cost (0: not run). From a width-64 beam's order, 5 CPU-seconds of it gave
+#: ry48p.1 15805 on seeds 0-4 (the iterated local search: 16321 on each), ft53.1 7569-7753
+#: (7922-8123) and prob.42 247-248 (248-257); 1 CPU-second was not enough (ry48p.1
+#: 15947-16321), so it gets a larger share than the iterated search had (0.2: 0.8-0.9 s of
+#: wall time at a 10 s limit).
+ILS_SHARE = 0.3
 
-#: Iterations of that search in a run without a time limit.
+#: Repair steps of that search in a run without a time limit.
 ILS_ITERATIONS = 1000
 
-#: The search stops after this many iterations without a new best order.
+#: The search stops after this many repair steps without a new best order.
 ILS_PATIENCE = 400
 
 #: It is not run when the stage's order is at most this share above its bound
@@ -1914,7 +1922,7 @@ def solve_sop_problem(
         Run CP-SAT beside the stages: True (a :class:`~taopt.errors.SolverError` when it is
         not available), False (never), None (default: the rule above).
     seed : int
-        Seed of the iterated local search after the first DP stage (:data:`ILS_SHARE`).
+        Seed of the primal search after the first DP stage (:data:`ILS_SHARE`).
 
     Returns
     -------
@@ -2123,13 +2131,13 @@ def _searched(
     info: dict[str, Any],
     lower: float,
 ) -> Solution:
-    """``result`` (the first DP stage's, stopped) with its order improved by the iterated
-    SOP-3-exchange local search (:func:`taopt.models.sop_search.iterated_local_search`,
-    ``seed``) within :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run
-    when its order is at most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower``
-    (the root stage's bound). The bound is kept (an order changes no bound); ``info["ils"]``
-    says what ran."""
-    from taopt.models.sop_search import iterated_local_search
+    """``result`` (the first DP stage's, stopped) with its order improved by the primal search
+    (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within
+    :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run when its order is at
+    most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower`` (the root stage's
+    bound). The bound is kept (an order changes no bound); the order found is re-scored by
+    the family's scorer; ``info["ils"]`` says what ran."""
+    from taopt.models.sop_lns import large_neighbourhood_search
 
     if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
         info["ils"] = "skipped: no order"
@@ -2141,7 +2149,7 @@ def _searched(
     began = time.perf_counter()
     budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
     iterations = None if deadline.limited else ILS_ITERATIONS
-    value, order, found = iterated_local_search(
+    value, order, found = large_neighbourhood_search(
         problem,
         list(result.solution),
         budget,
@@ -2149,7 +2157,9 @@ def _searched(
         seed=seed,
         patience=ILS_PATIENCE,
     )
-    info["ils"] = {**found, "from": result.objective, "to": value}
+    value = evaluate_order(problem, order)  # re-scored: raises on a broken precedence
+    info["ils"] = {k: v for k, v in found.items() if k != "trace"}
+    info["ils"].update({"from": result.objective, "to": value})
     info["ils"]["seconds"] = time.perf_counter() - began
     if not value < result.objective:
         return result

@@ -145,3 +145,26 @@ def test_portfolio_with_the_search_matches_brute_force(monkeypatch, seed: int) -
     assert result.status == OPTIMAL
     assert evaluate_order(problem, result.order) == pytest.approx(optimum)
     assert result.objective == pytest.approx(optimum)
+
+
+class _Expired:
+    """A deadline that has always expired."""
+
+    def expired(self, margin: float = 0.0) -> bool:
+        return True
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_best_exchange_stops_between_chunks(monkeypatch, seed: int) -> None:
+    """With one h per chunk and an expired deadline, the scan keeps its first chunk: the best
+    move equals the best feasible swap with h = 0."""
+    import taopt.models.sop_search as sop_search
+
+    problem = _random(seed, 7)
+    order = next(iter(sop_orders(problem)))
+    monkeypatch.setattr(sop_search, "CHUNK_CELLS", 1)
+    delta, h, _, _ = best_exchange(problem.cost, before_matrix(problem), order, None, _Expired())
+    swaps = [d for d, new in _swaps(problem, order) if new[1] != order[1]]
+    assert delta == pytest.approx(min(swaps, default=np.inf))
+    if swaps:
+        assert h == 0
