@@ -1573,6 +1573,7 @@ def solve_sop_dp(
     watch: Callable[[Sequence[_Run]], None] | None = None,
     remainder: bool | None = None,
     state_lp: StateLp | None = None,
+    cutoff: float | None = None,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1668,8 +1669,11 @@ def solve_sop_dp(
     deadline = Deadline(time_limit)
     info: dict[str, Any] = {"beam": None}
     known = _beam_start(problem, _incumbent(problem, incumbent), beam_width, deadline, info)
-    upper = np.inf if known is None else known[0]
+    best = np.inf if known is None else known[0]  # the incumbent's cost
+    upper = best if cutoff is None else min(best, float(cutoff))  # what prunes
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
+    if cutoff is not None:
+        info["cutoff"] = upper
     setting_up = time.perf_counter()
     oriented = None
     if lagrange is not None:
@@ -1698,7 +1702,7 @@ def solve_sop_dp(
             state_lp.release()
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
-        if cost < upper:
+        if cost < best:
             known = (cost, done.best_path)
     kept = sum(r.kept for r in runs)
     pruned = sum(r.pruned for r in runs)
@@ -1732,7 +1736,20 @@ def solve_sop_dp(
                 runtime=runtime,
                 info={**info, "proof": "every ideal expanded"},
             )
-        # every cheaper path was pruned within tolerance: proven to 1e-9 relative
+        # every path is found or passes through a dropped state: min(found, dropped) bounds
+        # them all, whatever pruned (the incumbent or a trial cutoff below it)
+        proven = min(objective, pruned_min)
+        if cutoff is not None and proven < objective:  # the cutoff proven, no cheaper order
+            info["cutoff_proven"] = True
+            return finish(
+                problem,
+                None if known is None else Order(known[1]),
+                method="exact-sop-dp",
+                stop="solver_limit",
+                bound=proven,
+                runtime=runtime,
+                info=info,
+            )
         assert known is not None  # a pruned state needs an incumbent (upper < inf)
         return finish(
             problem,
@@ -1740,7 +1757,7 @@ def solve_sop_dp(
             method="exact-sop-dp",
             stop="complete",
             solver="dp",
-            bound=min(objective, pruned_min),
+            bound=proven,
             runtime=runtime,
             info=info,
         )

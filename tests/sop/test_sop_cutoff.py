@@ -1,0 +1,96 @@
+"""The DP at a trial cutoff (issue 33): a finished run proves the cutoff or finds an order below
+it, on random tiny SOPs checked against the brute force, forward, backward and meeting."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from taopt.models.sop_cuts import SopCutModel
+from taopt.models.sop_dp import solve_sop_dp
+from taopt.models.sop_statelp import StateLp
+from taopt.result import OPTIMAL, TIME_LIMIT
+from taopt.sop.problem import SopProblem, evaluate_order
+from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
+from tests.sop.test_sop_credit import _clustered
+
+
+def _instance(seed: int) -> SopProblem:
+    """Even seeds: the shared tiny SOPs; odd seeds: clustered ones with precedences."""
+    return sop_instance(seed) if seed % 2 == 0 else _clustered(seed)
+
+
+def _worst(problem: SopProblem) -> list[int]:
+    """The dearest feasible order (an incumbent far from the optimum)."""
+    return max(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
+
+
+@pytest.mark.parametrize("seed", range(24))
+@pytest.mark.parametrize("both", [True, False])
+def test_cutoff_below_the_optimum_proves_at_most_the_optimum(seed, both):
+    """A cutoff at or below the optimum: the run ends without a cheaper order and proves a
+    bound at least the cutoff (within 1e-9) and at most the brute-force optimum."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    worst = _worst(problem)
+    for cutoff in (optimum, optimum - 1.0, optimum - 7.5, 0.5 * optimum):
+        result = solve_sop_dp(problem, incumbent=worst, beam_width=0, both=both, cutoff=cutoff)
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if result.objective > optimum + 1e-6:  # the worst order was kept: nothing below
+            assert result.status == TIME_LIMIT
+            assert result.info["cutoff_proven"]
+            assert result.bound >= cutoff - 1e-9 * abs(cutoff) - 1e-9
+
+
+@pytest.mark.parametrize("seed", range(24))
+@pytest.mark.parametrize("both", [True, False])
+def test_cutoff_above_the_optimum_finds_and_proves_it(seed, both):
+    """A cutoff above the optimum (and below the incumbent) finds an optimal order and proves
+    it: status optimal, the brute-force value, a feasible order."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    worst = _worst(problem)
+    for cutoff in (optimum + 0.5, 0.5 * (optimum + evaluate_order(problem, worst))):
+        if not cutoff < evaluate_order(problem, worst):
+            continue
+        result = solve_sop_dp(problem, incumbent=worst, beam_width=0, both=both, cutoff=cutoff)
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_cutoff_with_root_prices_and_state_lp_stays_valid(seed):
+    """With the root's Lagrangian prices, row credit and the per-state LP, a cutoff at the
+    optimum proves a bound never above it, and one just above finds it."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    kwargs = {"lagrange": model.lagrangian_prices(), "credit": model.row_credit()}
+    for cutoff in (optimum, optimum + 0.5):
+        result = solve_sop_dp(
+            problem, beam_width=0, cutoff=cutoff, state_lp=StateLp(model), **kwargs
+        )
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if cutoff > optimum:
+            assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+        else:
+            assert result.status == TIME_LIMIT and result.info["cutoff_proven"]
+
+
+def test_cutoff_without_an_incumbent_returns_no_order_but_the_bound():
+    """A finished run at a cutoff below the optimum, without an incumbent, has no order and
+    proves at least the cutoff."""
+    problem = _instance(2)
+    optimum = sop_brute_force(problem)
+    result = solve_sop_dp(problem, beam_width=0, cutoff=optimum - 1.0)
+    assert result.status == TIME_LIMIT and result.solution is None
+    assert optimum - 1.0 - 1e-6 <= result.bound <= optimum
