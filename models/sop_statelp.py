@@ -114,10 +114,15 @@ class StateLp:
     model : SopCutModel
         The root stage's model (:meth:`taopt.models.sop_cuts.SopCutModel.root` run); its
         column bounds are restored after every LP, its rows are not touched.
+    share : float
+        Share of a DP run's limit the LPs may use in all (:data:`SHARE`; the portfolio's proof
+        stage, where the LPs are the work, gives them all of it).
     """
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: Any, share: float = SHARE) -> None:
         self.model = model
+        #: Share of a DP run's limit the LPs may use in all (:meth:`budget`).
+        self.share = share
         self.n = model.n
         self.index = np.arange(model.n_arcs, dtype=np.int32)
         self.lower = np.zeros(model.n_arcs)
@@ -137,8 +142,14 @@ class StateLp:
         self.allowance: float | None = None
 
     def budget(self, seconds: float | None) -> None:
-        """Let the LPs take :data:`SHARE` of ``seconds`` (a DP run's limit) in all."""
-        self.allowance = None if seconds is None else self.seconds + SHARE * seconds
+        """Let the LPs take :attr:`share` (default :data:`SHARE`) of ``seconds`` (a DP run's
+        limit) in all."""
+        self.allowance = None if seconds is None else self.seconds + self.share * seconds
+
+    def failed(self) -> bool:
+        """Whether the LPs stopped for good: after :data:`TRIAL` LPs they dropped under
+        :data:`MIN_SHARE` of their states (:meth:`layer`)."""
+        return self.solved >= TRIAL and self.dropped < MIN_SHARE * self.solved
 
     def usable(self) -> bool:
         """Whether the model is an LP with duals to read (not turned into the MIP)."""
@@ -255,7 +266,7 @@ class StateLp:
         for k in np.argsort(-total, kind="stable"):
             if self.allowance is not None and self.seconds + self.rate > self.allowance:
                 break
-            if self.solved >= TRIAL and self.dropped < MIN_SHARE * self.solved:
+            if self.failed():
                 break
             if deadline.expired(MARGIN):
                 break
