@@ -1,5 +1,6 @@
-"""The DP at a trial cutoff (issue 33): a finished run proves the cutoff or finds an order below
-it, on random tiny SOPs checked against the brute force, forward, backward and meeting."""
+"""Proving a known optimum (issue 33): the DP at a trial cutoff (a finished run proves the cutoff
+or finds an order below it), its give-up rule, and the portfolio's proof stage, on random tiny
+SOPs checked against the brute force, forward, backward and meeting."""
 
 from __future__ import annotations
 
@@ -94,3 +95,89 @@ def test_cutoff_without_an_incumbent_returns_no_order_but_the_bound():
     result = solve_sop_dp(problem, beam_width=0, cutoff=optimum - 1.0)
     assert result.status == TIME_LIMIT and result.solution is None
     assert optimum - 1.0 - 1e-6 <= result.bound <= optimum
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_give_up_keeps_a_valid_bound_and_an_ended_run_is_optimal(seed, monkeypatch):
+    """With the give-up rule (made to fire on any growth), the DP with the per-state LP either
+    proves the brute-force optimum or stops "time_limit" with a bound at most the optimum and
+    says why."""
+    from taopt.models import sop_dp
+
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    kwargs = {"lagrange": model.lagrangian_prices(), "credit": model.row_credit()}
+    for growth in (sop_dp.GIVE_UP_GROWTH, 0.5):
+        monkeypatch.setattr(sop_dp, "GIVE_UP_GROWTH", growth)
+        result = solve_sop_dp(
+            problem,
+            incumbent=_worst(problem),
+            beam_width=0,
+            state_lp=StateLp(model),
+            give_up=True,
+            **kwargs,
+        )
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if result.status == OPTIMAL:
+            assert result.objective == pytest.approx(optimum)
+        else:
+            assert result.status == TIME_LIMIT and result.info["gave_up"]
+
+
+def test_give_up_fires_on_a_growing_layer(monkeypatch):
+    """A layer past the first that grows more than GIVE_UP_GROWTH times stops the search, and
+    the reason names the layer."""
+    from taopt.models import sop_dp
+
+    monkeypatch.setattr(sop_dp, "GIVE_UP_GROWTH", 0.5)
+    problem = _clustered(3, n=9)
+    model = SopCutModel(problem)
+    model.root()
+    result = solve_sop_dp(
+        problem,
+        incumbent=_worst(problem),
+        beam_width=0,
+        lagrange=model.lagrangian_prices(),
+        credit=model.row_credit(),
+        state_lp=StateLp(model),
+        give_up=True,
+    )
+    if result.status == TIME_LIMIT:
+        assert "layer" in result.info["gave_up"]
+        assert result.bound <= sop_brute_force(problem) + 1e-6
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_portfolio_proof_stage_proves_the_brute_force_optimum(seed, monkeypatch):
+    """The portfolio with the root stage forced (ideals taken as too many) and the proof stage
+    run at any gap proves the brute-force optimum, and says the proof stage ran."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "PROOF_GAP", 1.0)
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(optimum)
+    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    assert isinstance(result.info["proof"], dict)
+
+
+def test_portfolio_skips_the_proof_stage_on_a_wide_gap(monkeypatch):
+    """With PROOF_GAP below 0 the proof stage never runs (its reason is recorded) and the
+    portfolio still proves the optimum."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
+    problem = _instance(5)
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(sop_brute_force(problem))
+    assert "proof" not in result.info or isinstance(result.info["proof"], str)
