@@ -1881,6 +1881,10 @@ def solve_sop_problem(
     path cuts, ``credit``, :data:`ROW_CREDIT`; and, when :data:`STATE_LP` is on, the root's
     LP re-solved per DP state with the state's ideal fixed, its prices inherited along each
     state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. When
+    the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
+    stage and its local search brought it there, the proof stage runs
+    (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
+    giving the time back as soon as its layers show it cannot end). When
     the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
@@ -1937,7 +1941,9 @@ def solve_sop_problem(
     -------
     Solution
         As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
-        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", or the degraded
+        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", with "proof" where the
+        proof stage ran (``info["proof"]``: why not, or its gap, status, bound, seconds,
+        states, LPs and why it gave up), or the degraded
         "beam" / "bound"; "+cpsat" appended when CP-SAT found the order kept, the larger
         bound or the proof), ``cpsat`` (why it did not run, or its ``status``,
         ``cpsat_status``, ``objective``, ``bound``, ``seconds``, ``startup``, ``nice`` and
