@@ -166,8 +166,8 @@ LAGRANGE_REST = False
 #: save (its module docstring has the figures).
 REMAINDER = False
 
-#: With ``give_up`` (:func:`solve_sop_dp`), the search stops when a layer past the first grows
-#: more than this many times its parent layer (:func:`_hopeless`). With their optima as the
+#: With ``give_up`` (:func:`~taopt.models.sop_dp.solve_sop_dp`), the search stops when a layer past the first grows
+#: more than this many times its parent layer. With their optima as the
 #: incumbent and the root's LP per state, prob.42's layers grew at most 2x a layer (4, 8, 14,
 #: 24, 34, ...) and it was proven; ft53.1's and ry48p.1's second layers grew 9-17x (31 -> 395,
 #: 33 -> 563) and neither was proven in 60 s.
@@ -1651,9 +1651,10 @@ def solve_sop_dp(
         with status "time_limit" (stop "solver_limit", ``info["cutoff_proven"]``). A run
         stopped by its limit proves the open layer's bound as always.
     give_up : bool
-        With ``state_lp``: stop early ("time_limit", ``info["gave_up"]`` says why) when the
-        next layer's LPs cannot end in the time left or the LPs stopped after their trial
-        (:func:`_hopeless`), so that a caller gives the time to another stage.
+        With ``state_lp``: stop early ("time_limit", ``info["gave_up"]`` says why) when a
+        layer past the first grew more than :data:`GIVE_UP_GROWTH` times the layer before,
+        the next layer's LPs are predicted past the time left, or the LPs stopped after their
+        trial, so that a caller gives the time to another stage.
 
     Returns
     -------
