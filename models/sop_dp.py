@@ -166,9 +166,9 @@ LAGRANGE_REST = False
 #: save (its module docstring has the figures).
 REMAINDER = False
 
-#: With ``give_up`` (:func:`~taopt.models.sop_dp.solve_sop_dp`), the search stops when a layer past the first grows
-#: more than this many times its parent layer. With their optima as the
-#: incumbent and the root's LP per state, prob.42's layers grew at most 2x a layer (4, 8, 14,
+#: With ``give_up`` (:func:`~taopt.models.sop_dp.solve_sop_dp`), the search stops when a
+#: layer past the first grows more than this many times its parent layer. With their optima as
+#: the incumbent and the root's LP per state, prob.42's layers grew at most 2x a layer (4, 8, 14,
 #: 24, 34, ...) and it was proven; ft53.1's and ry48p.1's second layers grew 9-17x (31 -> 395,
 #: 33 -> 563) and neither was proven in 60 s.
 GIVE_UP_GROWTH = 4.0
