@@ -2398,7 +2398,10 @@ def _stages(
         since the root stage). None when it does not run (``info["proof"]`` says why). A run
         that gave up is combined with the later stages' result at the end only, so their
         rules read their own gaps."""
-        if not PROOF_STAGE or root_model is None or lagrange is None:
+        if not PROOF_STAGE or root_model is None:
+            return None
+        if lagrange is None:
+            info["proof"] = "skipped: the root stage left no LP prices"
             return None
         value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
         root_bound = info.get("root_stage", {}).get("bound", cheap)
