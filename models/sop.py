@@ -2121,7 +2121,8 @@ def _root_stage(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
             incumbent = Order(rounded[1])
-    lagrange = model.lagrangian_prices()
+    # a loop stopped after adding rows has no LP solution: the last optimal LP's prices
+    lagrange = model.lagrangian_prices(saved=True)
     cheap = _cheap_bound(problem)
     closed = 0.0
     if known is not None and known[0] > cheap and np.isfinite(root.bound):
@@ -2485,7 +2486,7 @@ def _stages(
                 problem, deadline, incumbent, info, verbose
             )
             if ROW_CREDIT and lagrange is not None:
-                credit = root_model.row_credit()
+                credit = root_model.row_credit(saved=True)
             if on_root is not None:
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from taopt.models.sop_cuts import SopCutModel
@@ -181,3 +182,28 @@ def test_portfolio_skips_the_proof_stage_on_a_wide_gap(monkeypatch):
     assert result.status == OPTIMAL
     assert result.objective == pytest.approx(sop_brute_force(problem))
     assert "proof" not in result.info or isinstance(result.info["proof"], str)
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_saved_root_prices_bound_every_order(seed):
+    """A root loop stopped after adding rows (a round limit) has no LP solution; the prices of
+    its last optimal LP (``saved=True``) give ``L + Σ max(d_a, 0)`` at most every order's cost,
+    and the DP with them and their row credit proves the brute-force optimum."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root(rounds=1)
+    prices = model.lagrangian_prices(saved=True)
+    credit = model.row_credit(saved=True)
+    assert prices is not None and credit is not None
+    constant, reduced = prices
+    positive = np.maximum(np.nan_to_num(reduced, posinf=0.0), 0.0)
+    for order in sop_orders(problem):
+        arcs = positive[order[:-1], order[1:]]
+        assert constant + arcs.sum() <= evaluate_order(problem, order) + 1e-6
+    result = solve_sop_dp(
+        problem, incumbent=_worst(problem), beam_width=0, lagrange=prices, credit=credit
+    )
+    assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
