@@ -68,7 +68,7 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
 from taopt.models.sop_dp import RowCredit
-from taopt.models.sop_statelp import clipped_duals
+from taopt.models.sop_statelp import clipped_duals, constraint_matrix
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -678,14 +678,7 @@ class SopCutModel:
         lower = np.asarray(lp.row_lower_, dtype=float)
         upper = np.asarray(lp.row_upper_, dtype=float)
         y, constant = clipped_duals(duals, lower, upper)
-        matrix = sp.csc_matrix(
-            (
-                np.asarray(lp.a_matrix_.value_),
-                np.asarray(lp.a_matrix_.index_),
-                np.asarray(lp.a_matrix_.start_),
-            ),
-            shape=(lp.num_row_, lp.num_col_),
-        )
+        matrix = constraint_matrix(lp)
         reduced = self.costs - matrix.T @ y
         free = ~self.fixed
         bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())

@@ -65,7 +65,15 @@ import scipy.sparse as sp
 
 from taopt.runtime import MARGIN, Deadline
 
-__all__ = ["FIRST_SECONDS", "MIN_SHARE", "SHARE", "StateLp", "TRIAL", "clipped_duals"]
+__all__ = [
+    "FIRST_SECONDS",
+    "MIN_SHARE",
+    "SHARE",
+    "StateLp",
+    "TRIAL",
+    "clipped_duals",
+    "constraint_matrix",
+]
 
 #: Seconds an LP is taken to cost before one was timed.
 FIRST_SECONDS = 0.02
@@ -81,6 +89,21 @@ TRIAL = 50
 
 #: Least share of their states the first :data:`TRIAL` LPs must drop for the LPs to go on.
 MIN_SHARE = 0.1
+
+
+def constraint_matrix(lp: Any) -> sp.csc_matrix:
+    """The row matrix ``A`` of a ``highspy.HighsLp`` (rows x columns), whichever of its two
+    formats HiGHS keeps it in: column-wise as the cut model passes it, row-wise as HiGHS may
+    leave it after an LP it stopped (a 380-node stand-in's root loop cut by its time)."""
+    data = (
+        np.asarray(lp.a_matrix_.value_),
+        np.asarray(lp.a_matrix_.index_),
+        np.asarray(lp.a_matrix_.start_),
+    )
+    shape = (lp.num_row_, lp.num_col_)
+    if lp.a_matrix_.format_ == highspy.MatrixFormat.kRowwise:
+        return sp.csr_matrix(data, shape=shape).tocsc()
+    return sp.csc_matrix(data, shape=shape)
 
 
 def clipped_duals(
@@ -200,14 +223,7 @@ class StateLp:
         none."""
         if self._matrix is None:
             lp = self.model.highs.getLp()
-            matrix = sp.csc_matrix(
-                (
-                    np.asarray(lp.a_matrix_.value_),
-                    np.asarray(lp.a_matrix_.index_),
-                    np.asarray(lp.a_matrix_.start_),
-                ),
-                shape=(lp.num_row_, lp.num_col_),
-            )
+            matrix = constraint_matrix(lp)
             self._matrix = (
                 matrix.T.tocsr(),
                 np.asarray(lp.row_lower_, dtype=float),

@@ -207,3 +207,23 @@ def test_saved_root_prices_bound_every_order(seed):
         problem, incumbent=_worst(problem), beam_width=0, lagrange=prices, credit=credit
     )
     assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+
+
+def test_constraint_matrix_reads_either_format():
+    """The row matrix of a HiGHS LP is the same whether HiGHS holds it column-wise or row-wise
+    (as it may after an LP it stopped)."""
+    import highspy
+    import scipy.sparse as sp
+
+    from taopt.models.sop_statelp import constraint_matrix
+
+    dense = np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 4.0]])
+    for form, made in ((highspy.MatrixFormat.kColwise, sp.csc_matrix(dense)),
+                       (highspy.MatrixFormat.kRowwise, sp.csr_matrix(dense))):  # fmt: skip
+        lp = highspy.HighsLp()
+        lp.num_col_, lp.num_row_ = 3, 2
+        lp.a_matrix_.format_ = form
+        lp.a_matrix_.start_ = made.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = made.indices.astype(np.int32)
+        lp.a_matrix_.value_ = made.data
+        assert (constraint_matrix(lp).toarray() == dense).all()
