@@ -2396,6 +2396,10 @@ def _stages(
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
 
+    def root_closed() -> bool:
+        """The root stage closed at least :data:`CUTS_FIRST_SHARE` of the gap."""
+        return bool(info.get("root_stage", {}).get("closed", 0.0) >= CUTS_FIRST_SHARE)
+
     def proof(known: Any, bound: float | None) -> Solution | None:
         """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
         and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
@@ -2407,7 +2411,7 @@ def _stages(
         if lagrange is None:
             info["proof"] = "skipped: the root stage left no LP prices"
             return None
-        if info.get("root_stage", {}).get("closed", 0.0) >= CUTS_FIRST_SHARE:
+        if root_closed():
             # the root's LP closed most of the gap: the cut engine is the stage that closes it
             # (it goes first with time enough, CUTS_FIRST_MIN_LEFT)
             info["proof"] = "skipped: the root closed the gap (CUTS_FIRST_SHARE)"
@@ -2563,6 +2567,10 @@ def _stages(
                 )
             elif result.status == TIME_LIMIT and formulation == "cuts" and _far(result):
                 info["second_stage"] = "skipped: the DP's gap is wide, the cut engine gets the time"
+            elif result.status == TIME_LIMIT and formulation == "cuts" and root_closed():
+                # the DP's gap is narrow only by the root's prices (saved when its loop is cut):
+                # the root closed most of the gap, the cut engine is the stage that closes it
+                info["second_stage"] = "skipped: the root closed the gap (CUTS_FIRST_SHARE)"
             elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
                 # state, so not the first choice) with more states, from the best order so far
