@@ -1641,6 +1641,26 @@ CPSAT_PROBE_SHARE = 0.15
 #: (:mod:`taopt.models.sop_dp`, "Row credit"); False: the prefix's reduced cost alone.
 ROW_CREDIT = True
 
+#: The proof stage: when the best order is within :data:`PROOF_GAP` of the best bound (after
+#: the root stage, or else after the first DP stage and its local search), the DP runs with the
+#: root's LP re-solved per state (:class:`taopt.models.sop_statelp.StateLp`, a branch-and-bound
+#: whose nodes are the DP's states) for the time left, and gives the time back to the later
+#: stages as soon as its next layer's LPs cannot end in it
+#: (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``give_up``). With its optimum 243 as the
+#: incumbent, prob.42 is proven this way in 29-40 s after a 3-4 s root loop (layers of at most
+#: 85 states, 2,424 LPs, load 4-6), where the DP without the LPs kept 2.9 million states in 60 s.
+PROOF_STAGE = True
+
+#: The proof stage runs when the best order's relative gap to the best bound
+#: (:func:`root_gap`) is at most this (and the root stage closed less than
+#: :data:`CUTS_FIRST_SHARE` of the gap: above it the cut engine is the stage that closes it;
+#: p43.1 at 10 s under load 6.5 ended 28205 [28090] with the proof stage before its cut engine,
+#: 28205 [28135] without). The per-state LPs raise the bound of the first layers'
+#: states by 1-2 % of the root's (prob.42 230 -> 234, ry48p.1 14,775 -> 14,873, ft53.1
+#: 7,189 -> 7,226, each with its optimum as the incumbent): a state is dropped when its LP
+#: reaches the incumbent, so a wider gap leaves the layers growing and the stage giving up.
+PROOF_GAP = 0.06
+
 #: The DP stages after the root stage bound their states also by the root's LP re-solved with
 #: each state's ideal fixed (:class:`taopt.models.sop_statelp.StateLp`, within its share of
 #: each stage's time). Off: on a quiet machine at 10 s it raised no bound of prob.42, ry48p.1,
@@ -1872,6 +1892,10 @@ def solve_sop_problem(
     path cuts, ``credit``, :data:`ROW_CREDIT`; and, when :data:`STATE_LP` is on, the root's
     LP re-solved per DP state with the state's ideal fixed, its prices inherited along each
     state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. When
+    the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
+    stage and its local search brought it there, the proof stage runs
+    (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
+    giving the time back as soon as its layers show it cannot end). When
     the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
@@ -1928,7 +1952,9 @@ def solve_sop_problem(
     -------
     Solution
         As :func:`solve_sop`; status "infeasible" when no path exists. ``info`` has
-        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", or the degraded
+        ``engine`` ("dp", "milp", "dp+dp", "dp+milp", "dp+dp+milp", with "proof" where the
+        proof stage ran (``info["proof"]``: why not, or its gap, status, bound, seconds,
+        states, LPs and why it gave up), or the degraded
         "beam" / "bound"; "+cpsat" appended when CP-SAT found the order kept, the larger
         bound or the proof), ``cpsat`` (why it did not run, or its ``status``,
         ``cpsat_status``, ``objective``, ``bound``, ``seconds``, ``startup``, ``nice`` and
@@ -2106,7 +2132,8 @@ def _root_stage(
         if rounded is not None and (known is None or rounded[0] < known[0]):
             known = rounded
             incumbent = Order(rounded[1])
-    lagrange = model.lagrangian_prices()
+    # a loop stopped after adding rows has no LP solution: the last optimal LP's prices
+    lagrange = model.lagrangian_prices(saved=True)
     cheap = _cheap_bound(problem)
     closed = 0.0
     if known is not None and known[0] > cheap and np.isfinite(root.bound):
@@ -2379,6 +2406,67 @@ def _stages(
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
 
+    def root_closed() -> bool:
+        """The root stage closed at least :data:`CUTS_FIRST_SHARE` of the gap."""
+        return bool(info.get("root_stage", {}).get("closed", 0.0) >= CUTS_FIRST_SHARE)
+
+    def proof(known: Any, bound: float | None) -> Solution | None:
+        """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
+        and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
+        since the root stage). None when it does not run (``info["proof"]`` says why). A run
+        that gave up is combined with the later stages' result at the end only, so their
+        rules read their own gaps."""
+        if not PROOF_STAGE or root_model is None:
+            return None
+        if lagrange is None:
+            info["proof"] = "skipped: the root stage left no LP prices"
+            return None
+        if root_closed():
+            # the root's LP closed most of the gap: the cut engine is the stage that closes it
+            # (it goes first with time enough, CUTS_FIRST_MIN_LEFT)
+            info["proof"] = "skipped: the root closed the gap (CUTS_FIRST_SHARE)"
+            return None
+        value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
+        root_bound = info.get("root_stage", {}).get("bound", cheap)
+        lower = max(float(root_bound) if np.isfinite(root_bound) else cheap, cheap)
+        if bound is not None:
+            lower = max(lower, bound)
+        gap = root_gap(None if value is None else value[0], lower)
+        if gap > PROOF_GAP:
+            info["proof"] = f"skipped: the gap is {100 * gap:.1f} %"
+            return None
+        left = deadline.remaining()
+        if left is not None and left < 2 * setup_guess + MARGIN:
+            info["proof"] = f"skipped: {left:.2f} s left for a {setup_guess:.2f} s setup"
+            return None
+        stage_began = time.perf_counter()
+        expect(max_states, left, nonzeros=held())
+        lp = StateLp(root_model, share=1.0)  # the LPs are this stage's work
+        assert value is not None  # the gap is 1 without an order
+        found = solve_sop_dp(
+            problem,
+            None if left is None else max(left - MARGIN, MARGIN),
+            incumbent=Order(value[1]),
+            max_states=max_states,
+            beam_width=0,
+            lagrange=lagrange,
+            credit=credit,
+            state_lp=lp,
+            give_up=True,
+        )
+        setups.append(found.info.get("setup_seconds", 0.0))
+        info["proof"] = {
+            "gap": gap,
+            "status": str(found.status),
+            "bound": found.bound,
+            "seconds": time.perf_counter() - stage_began,
+            "states": found.info.get("states"),
+            "lp_solved": found.info.get("lp_solved"),
+            "lp_pruned": found.info.get("lp_pruned"),
+            "gave_up": found.info.get("gave_up"),
+        }
+        return found
+
     dp_next = engine != "milp"
     # a DP stage first sets up its bounds and first layers outside its clock, about as long
     # as the count just measured (both follow the machine's load): not started without that
@@ -2420,7 +2508,7 @@ def _stages(
                 problem, deadline, incumbent, info, verbose
             )
             if ROW_CREDIT and lagrange is not None:
-                credit = root_model.row_credit()
+                credit = root_model.row_credit(saved=True)
             if on_root is not None:
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]
@@ -2431,9 +2519,16 @@ def _stages(
             result = milp(incumbent, deadline.remaining())
             used = "milp"
         else:
+            # the proof stage first when the order known is already close to the root bound
+            proved = proof(incumbent, None)
+            if proved is not None and proved.solution is not None:
+                incumbent = proved.solution
             share = deadline.share(DP_SHARE)
-            used = "dp"
-            if share is not None and share < setup_guess + MARGIN:
+            used = "dp" if proved is None else "proof+dp"
+            if proved is not None and proved.status != TIME_LIMIT:
+                result = proved
+                used = "proof"
+            elif share is not None and share < setup_guess + MARGIN:
                 # the root stage left too little for the DP's setup (chains-380-8-x0.01 at
                 # 10 s, load 7: 0.7 s left, a 3.8 s setup, ended at 13-15 s): not started
                 info["dp"] = f"skipped: {share:.2f} s for a {setup_guess:.2f} s setup"
@@ -2443,7 +2538,7 @@ def _stages(
                 bound = info["root_stage"]["bound"]
                 stop_info = {"model": "not run", "setup_seconds": setup_guess}
                 result = _stopped(problem, known, bound, began, "portfolio", stop_info)
-                used = "root"
+                used = "root" if proved is None else "proof"
             else:
                 expect(max_states, share, nonzeros=held())
                 result = solve_sop_dp(
@@ -2462,6 +2557,13 @@ def _stages(
                 root_bound = info.get("root_stage", {}).get("bound", cheap)
                 lower = float(root_bound) if np.isfinite(root_bound) else cheap
                 result = _searched(problem, result, deadline, seed, info, lower)
+            if result.status == TIME_LIMIT and proved is None and not deadline.expired(MARGIN):
+                # the first stages brought the order close to the bound: the proof stage now
+                proved = proof(result.solution, result.bound)
+                if proved is not None:
+                    used += "+proof"
+                    if proved.status != TIME_LIMIT:
+                        result = proved
             # a second stage sets up as the first did (its bounds, its first layers; seconds under
             # load, outside the DP's clock): started only when its share covers twice that
             setup = result.info.get("setup_seconds", 0.0)
@@ -2475,6 +2577,10 @@ def _stages(
                 )
             elif result.status == TIME_LIMIT and formulation == "cuts" and _far(result):
                 info["second_stage"] = "skipped: the DP's gap is wide, the cut engine gets the time"
+            elif result.status == TIME_LIMIT and formulation == "cuts" and root_closed():
+                # the DP's gap is narrow only by the root's prices (saved when its loop is cut):
+                # the root closed most of the gap, the cut engine is the stage that closes it
+                info["second_stage"] = "skipped: the root closed the gap (CUTS_FIRST_SHARE)"
             elif result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 # second stage: the bound on both price sets (stronger, 1.5-1.7x slower per
                 # state, so not the first choice) with more states, from the best order so far
@@ -2491,13 +2597,17 @@ def _stages(
                     credit=credit,
                     state_lp=state_lp(),
                 )
-                used = "dp+dp"
+                used += "+dp"
                 result = _combine(first, second)
             if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 info.update({f"dp_{k}": v for k, v in result.info.items()})
                 known = result.solution if result.solution is not None else incumbent
                 result = milp(known, deadline.remaining(), dp_result=result)
                 used += "+milp"
+            if proved is not None and proved.status == TIME_LIMIT:
+                # a proof stage that gave up: its order and bound join at the end, the later
+                # stages' rules (CUTS_SECOND_STAGE_GAP) having read their own
+                result = _combine(proved, result)
     # a degraded stage has used the limit already; "none": too little time for a stage
     full = (plan == "dp" or engine == "milp") and used != "none"
     if full and result.status == TIME_LIMIT and deadline.limited and not deadline.expired(MARGIN):

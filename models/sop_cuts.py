@@ -68,7 +68,7 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
 from taopt.models.sop_dp import RowCredit
-from taopt.models.sop_statelp import clipped_duals
+from taopt.models.sop_statelp import clipped_duals, constraint_matrix
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -281,6 +281,10 @@ class SopCutModel:
         self.conditional = False
         #: The clipped row duals and ``y^T b`` of the last Lagrangian bound worked out.
         self._last_duals: tuple[np.ndarray, float] = (np.zeros(0), 0.0)
+        #: The row duals of the root loop's last optimal LP (None before one), for the prices
+        #: of a loop stopped after it added rows (``saved=`` of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.lagrangian_prices`).
+        self.root_duals: np.ndarray | None = None
         self._candidates: list[tuple[tuple[int, ...], tuple[int, ...], int]] | None = None
         #: The last maximum flow of each closure pair at a separated point (``inf``: none
         #: yet), which picks the candidates of the set path cuts.
@@ -654,40 +658,43 @@ class SopCutModel:
             return bound
         return float(self.step * math.ceil((bound - 1e-6) / self.step))
 
-    def _lagrangian(self) -> tuple[float, np.ndarray]:
+    def _lagrangian(self, saved: bool = False) -> tuple[float, np.ndarray]:
         """(The unrounded bound of :meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound`, the arcs'
-        reduced costs ``c - A^T y``); ``(-inf, empty)`` without duals."""
+        reduced costs ``c - A^T y``); ``(-inf, empty)`` without duals.
+
+        ``saved``: without the last LP's duals, those of the root loop's last optimal LP
+        (:attr:`root_duals`), 0 on the rows added since. Rows are only appended and a row of
+        dual 0 adds nothing, so this is that LP's own Lagrangian bound, valid for every order
+        while no arc is fixed (weak duality, :func:`~taopt.models.sop_statelp.clipped_duals`)."""
         solution = self.highs.getSolution()
-        if not solution.dual_valid:
-            return -math.inf, np.zeros(0)
-        duals = np.asarray(solution.row_dual, dtype=float)
         lp = self.highs.getLp()
+        if solution.dual_valid:
+            duals = np.asarray(solution.row_dual, dtype=float)
+        elif saved and self.root_duals is not None and not self.fixed.any():
+            duals = np.zeros(lp.num_row_)
+            duals[: len(self.root_duals)] = self.root_duals
+        else:
+            return -math.inf, np.zeros(0)
         lower = np.asarray(lp.row_lower_, dtype=float)
         upper = np.asarray(lp.row_upper_, dtype=float)
         y, constant = clipped_duals(duals, lower, upper)
-        matrix = sp.csc_matrix(
-            (
-                np.asarray(lp.a_matrix_.value_),
-                np.asarray(lp.a_matrix_.index_),
-                np.asarray(lp.a_matrix_.start_),
-            ),
-            shape=(lp.num_row_, lp.num_col_),
-        )
+        matrix = constraint_matrix(lp)
         reduced = self.costs - matrix.T @ y
         free = ~self.fixed
         bound = float(constant.sum() + np.minimum(reduced[free], 0.0).sum())
         self._last_duals = (y, float(constant.sum()))
         return bound, reduced
 
-    def lagrangian_prices(self) -> tuple[float, np.ndarray] | None:
+    def lagrangian_prices(self, saved: bool = False) -> tuple[float, np.ndarray] | None:
         """The last LP's Lagrangian bound for the DP (:func:`taopt.models.sop_dp.solve_sop_dp`'s
         ``lagrange``): ``(L, d)`` with ``d = c - A^T y`` on the usable arcs as an ``n x n``
         matrix (``inf`` elsewhere) and ``L = y^T b + Σ_a min(0, d_a)`` over every arc (fixed or
         not), so that every order ``x`` satisfying the rows costs at least
         ``L + Σ_{a ∈ x} max(d_a, 0)`` (:meth:`~taopt.models.sop_cuts.SopCutModel.dual_bound`'s
         argument). With ``conditional`` rows it holds for the orders better than the
-        incumbent. None without duals."""
-        raw, reduced = self._lagrangian()
+        incumbent. None without duals; ``saved``: then the root loop's last optimal LP's (its
+        rows added since priced at 0: that LP's own bound, valid while no arc is fixed)."""
+        raw, reduced = self._lagrangian(saved)
         if not math.isfinite(raw):
             return None
         constant = raw - float(np.minimum(reduced[~self.fixed], 0.0).sum())  # y^T b
@@ -695,7 +702,7 @@ class SopCutModel:
         matrix[self.tails, self.heads] = reduced
         return constant + float(np.minimum(reduced, 0.0).sum()), matrix
 
-    def row_credit(self, rows: int = CREDIT_ROWS) -> RowCredit | None:
+    def row_credit(self, rows: int = CREDIT_ROWS, saved: bool = False) -> RowCredit | None:
         """The last LP's prices in the form of the DP's prefix bound with row credit
         (:class:`~taopt.models.sop_dp.RowCredit`, ``credit=`` of
         :func:`~taopt.models.sop_dp.solve_sop_dp`): ``y^T b``, the signed reduced costs ``d``,
@@ -706,9 +713,10 @@ class SopCutModel:
         Every row priced here is a path cut ``Σ_{a ∈ C_r} x_a >= 1`` with 0/1 coefficients,
         valid for every order, so an order crossing it ``k`` times pays ``y_r k`` in
         ``y^T A x``, ``y_r (k - 1)`` more than ``y^T b`` counts (the proof is in
-        :mod:`taopt.models.sop_dp`, "Row credit").
+        :mod:`taopt.models.sop_dp`, "Row credit"). ``saved``: as
+        :meth:`~taopt.models.sop_cuts.SopCutModel.lagrangian_prices`.
         """
-        raw, reduced = self._lagrangian()
+        raw, reduced = self._lagrangian(saved)
         if not math.isfinite(raw) or self.fixed.any() or self.pool_rows:
             return None
         y, constant = self._last_duals
@@ -787,6 +795,7 @@ class SopCutModel:
             if self.last_status != highspy.HighsModelStatus.kOptimal:
                 break
             done += 1
+            self.root_duals = np.asarray(self.highs.getSolution().row_dual, dtype=float)
             new_value = float(self.highs.getInfo().objective_function_value)
             bound = max(bound, self.dual_bound())
             values = self.lp_values()

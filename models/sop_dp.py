@@ -138,12 +138,13 @@ from taopt.errors import InstanceError
 from taopt.ideals import bits as node_bits
 from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
 from taopt.models.sop_remainder import RemainderBound
-from taopt.models.sop_statelp import StateLp
+from taopt.models.sop_statelp import MIN_SHARE, StateLp
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, CancelToken, Deadline
 from taopt.sop.problem import SopProblem, path_cost
 
 __all__ = [
+    "GIVE_UP_GROWTH",
     "MAX_NODES",
     "IDEAL_CAP",
     "RowCredit",
@@ -164,6 +165,13 @@ LAGRANGE_REST = False
 #: (:mod:`taopt.models.sop_remainder`). Off: it drops states but costs more time than they
 #: save (its module docstring has the figures).
 REMAINDER = False
+
+#: With ``give_up`` (:func:`~taopt.models.sop_dp.solve_sop_dp`), the search stops when a
+#: layer past the first grows more than this many times its parent layer. With their optima as
+#: the incumbent and the root's LP per state, prob.42's layers grew at most 2x a layer (4, 8, 14,
+#: 24, 34, ...) and it was proven; ft53.1's and ry48p.1's second layers grew 9-17x (31 -> 395,
+#: 33 -> 563) and neither was proven in 60 s.
+GIVE_UP_GROWTH = 4.0
 
 #: States per call of that bound between two looks at the deadline.
 LAGRANGE_CHUNK = 20_000
@@ -1573,6 +1581,8 @@ def solve_sop_dp(
     watch: Callable[[Sequence[_Run]], None] | None = None,
     remainder: bool | None = None,
     state_lp: StateLp | None = None,
+    cutoff: float | None = None,
+    give_up: bool = False,
 ) -> Solution:
     """Exact SOP by dynamic programming over (order ideal, last node), with pruning.
 
@@ -1632,6 +1642,19 @@ def solve_sop_dp(
         (:class:`~taopt.models.sop_statelp.StateLp`): the states of each layer left by the
         bounds above are bounded by it, highest bound first, while it fits in its share of the
         time. ``info["lp_pruned"]``, ``info["lp_solved"]``: the states it dropped, the LPs.
+    cutoff : float, optional
+        A trial value below the incumbent's cost: states are dropped when their bound
+        reaches it instead (``info["cutoff"]``). Every order is either found or passes
+        through a dropped state, so a run that ends proves ``min(found, least dropped)``
+        whatever pruned: it finds an order below the cutoff (and proves it optimal), or it
+        proves a bound of at least the cutoff (to 1e-9 relative) and returns the incumbent
+        with status "time_limit" (stop "solver_limit", ``info["cutoff_proven"]``). A run
+        stopped by its limit proves the open layer's bound as always.
+    give_up : bool
+        With ``state_lp``: stop early ("time_limit", ``info["gave_up"]`` says why) when a
+        layer past the first grew more than :data:`GIVE_UP_GROWTH` times the layer before,
+        the next layer's LPs are predicted past the time left, or the LPs stopped after their
+        trial, so that a caller gives the time to another stage.
 
     Returns
     -------
@@ -1668,8 +1691,11 @@ def solve_sop_dp(
     deadline = Deadline(time_limit)
     info: dict[str, Any] = {"beam": None}
     known = _beam_start(problem, _incumbent(problem, incumbent), beam_width, deadline, info)
-    upper = np.inf if known is None else known[0]
+    best = np.inf if known is None else known[0]  # the incumbent's cost
+    upper = best if cutoff is None else min(best, float(cutoff))  # what prunes
     tolerance = PRUNE_TOLERANCE * max(1.0, abs(upper)) if np.isfinite(upper) else 0.0
+    if cutoff is not None:
+        info["cutoff"] = upper
     setting_up = time.perf_counter()
     oriented = None
     if lagrange is not None:
@@ -1691,14 +1717,22 @@ def solve_sop_dp(
         state_lp.budget(deadline.remaining())
     try:
         done, stopped_by = _expand(
-            problem, runs, upper, tolerance, deadline, max_states, info, watch
+            problem,
+            runs,
+            upper,
+            tolerance,
+            deadline,
+            max_states,
+            info,
+            watch,
+            state_lp if give_up else None,
         )
     finally:
         if state_lp is not None:
             state_lp.release()
     if done is not None and done.best_path is not None:
         cost = path_cost(problem.cost, done.best_path)  # re-scored on the original data
-        if cost < upper:
+        if cost < best:
             known = (cost, done.best_path)
     kept = sum(r.kept for r in runs)
     pruned = sum(r.pruned for r in runs)
@@ -1732,7 +1766,20 @@ def solve_sop_dp(
                 runtime=runtime,
                 info={**info, "proof": "every ideal expanded"},
             )
-        # every cheaper path was pruned within tolerance: proven to 1e-9 relative
+        # every path is found or passes through a dropped state: min(found, dropped) bounds
+        # them all, whatever pruned (the incumbent or a trial cutoff below it)
+        proven = min(objective, pruned_min)
+        if cutoff is not None and proven < objective:  # the cutoff proven, no cheaper order
+            info["cutoff_proven"] = True
+            return finish(
+                problem,
+                None if known is None else Order(known[1]),
+                method="exact-sop-dp",
+                stop="solver_limit",
+                bound=proven,
+                runtime=runtime,
+                info=info,
+            )
         assert known is not None  # a pruned state needs an incumbent (upper < inf)
         return finish(
             problem,
@@ -1740,7 +1787,7 @@ def solve_sop_dp(
             method="exact-sop-dp",
             stop="complete",
             solver="dp",
-            bound=min(objective, pruned_min),
+            bound=proven,
             runtime=runtime,
             info=info,
         )
@@ -1881,12 +1928,14 @@ def _expand(
     max_states: int | None,
     info: dict[str, Any],
     watch: Callable[[Sequence[_Run]], None] | None = None,
+    give_up: StateLp | None = None,
 ) -> tuple[_Run | None, str | None]:
     """Layer after layer, the direction with the smaller last layer first (forward on
     ties: each grows into its widest layers only as far as the other is wider), until one
     finishes, the two meet (joined; ``info["met"]``) or a limit stops them. Returns the
     finished run (None if stopped) and why it stopped (None if it finished); ``watch(runs)``
-    before the first layer and after each one kept."""
+    before the first layer and after each one kept. ``give_up``: the run's per-state LP; the
+    search stops ("time_limit", ``info["gave_up"]``) once :func:`_hopeless` says so."""
     both = len(runs) > 1
     if watch is not None:
         watch(runs)
@@ -1901,6 +1950,12 @@ def _expand(
             break
         if watch is not None:
             watch(runs)
+        if give_up is not None and not run.finished:
+            why = _hopeless(runs, give_up, deadline)
+            if why is not None:
+                info["gave_up"] = why
+                stopped_by = "time_limit"
+                break
         if run.finished:
             done = run
         elif both and sum(len(r.layers) - 1 for r in runs) >= problem.n - 2:
@@ -1910,3 +1965,43 @@ def _expand(
             done.pruned_min = min(r.pruned_min for r in runs)
             info["met"] = True
     return done, stopped_by
+
+
+def _hopeless(runs: Sequence[_Run], lp: StateLp, deadline: Deadline) -> str | None:
+    """Why a search that relies on its per-state LP cannot end in its time (None: it may).
+
+    A layer past the first that grew more than :data:`GIVE_UP_GROWTH` times its parent layer
+    says the LPs do not narrow the search: it would multiply its width by about the branching
+    factor again at each layer. The next layer to expand is the smaller direction's; its
+    states' LPs are predicted at its
+    width times its growth over the layer before (at least 1) times the LP's measured rate
+    (:attr:`~taopt.models.sop_statelp.StateLp.rate`). When that passes the time left, the
+    search would stop inside that layer, its bound no higher than the open layer's: it gives
+    the time back instead. It also stops once the LPs stopped for good after their trial
+    (:meth:`~taopt.models.sop_statelp.StateLp.failed`): the DP alone is then what the earlier
+    stages ran already.
+    """
+    if lp.failed():
+        return f"the LPs dropped under {MIN_SHARE:.0%} of their first states"
+    for grown in runs:  # past the start's own branching, a layer that multiplies its width
+        if len(grown.layers) > 2:
+            width, before = len(grown.layers[-1][0]), len(grown.layers[-2][0])
+            if width > GIVE_UP_GROWTH * max(before, 1):
+                direction = "backward" if grown.reverse else "forward"
+                return (
+                    f"{direction} layer {len(grown.layers) - 1}: {before:,} -> {width:,} states "
+                    f"(more than {GIVE_UP_GROWTH:g}x)"
+                )
+    run = min(runs, key=lambda r: len(r.layers[-1][0]))
+    width = len(run.layers[-1][0])
+    before = len(run.layers[-2][0]) if len(run.layers) > 1 else 1
+    growth = max(1.0, width / max(before, 1))
+    need = width * growth * lp.rate
+    left = deadline.remaining()
+    if left is not None and need > left:
+        direction = "backward" if run.reverse else "forward"
+        return (
+            f"{direction} layer {len(run.layers) - 1}: {width:,} states growing {growth:.1f}x, "
+            f"their LPs predicted {need:.1f} s against {left:.1f} s left"
+        )
+    return None

@@ -65,7 +65,15 @@ import scipy.sparse as sp
 
 from taopt.runtime import MARGIN, Deadline
 
-__all__ = ["FIRST_SECONDS", "MIN_SHARE", "SHARE", "StateLp", "TRIAL", "clipped_duals"]
+__all__ = [
+    "FIRST_SECONDS",
+    "MIN_SHARE",
+    "SHARE",
+    "StateLp",
+    "TRIAL",
+    "clipped_duals",
+    "constraint_matrix",
+]
 
 #: Seconds an LP is taken to cost before one was timed.
 FIRST_SECONDS = 0.02
@@ -81,6 +89,21 @@ TRIAL = 50
 
 #: Least share of their states the first :data:`TRIAL` LPs must drop for the LPs to go on.
 MIN_SHARE = 0.1
+
+
+def constraint_matrix(lp: Any) -> sp.csc_matrix:
+    """The row matrix ``A`` of a ``highspy.HighsLp`` (rows x columns), whichever of its two
+    formats HiGHS keeps it in: column-wise as the cut model passes it, row-wise as HiGHS may
+    leave it after an LP it stopped (a 380-node stand-in's root loop cut by its time)."""
+    data = (
+        np.asarray(lp.a_matrix_.value_),
+        np.asarray(lp.a_matrix_.index_),
+        np.asarray(lp.a_matrix_.start_),
+    )
+    shape = (lp.num_row_, lp.num_col_)
+    if lp.a_matrix_.format_ == highspy.MatrixFormat.kRowwise:
+        return sp.csr_matrix(data, shape=shape).tocsc()
+    return sp.csc_matrix(data, shape=shape)
 
 
 def clipped_duals(
@@ -114,10 +137,15 @@ class StateLp:
     model : SopCutModel
         The root stage's model (:meth:`taopt.models.sop_cuts.SopCutModel.root` run); its
         column bounds are restored after every LP, its rows are not touched.
+    share : float
+        Share of a DP run's limit the LPs may use in all (:data:`SHARE`; the portfolio's proof
+        stage, where the LPs are the work, gives them all of it).
     """
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: Any, share: float = SHARE) -> None:
         self.model = model
+        #: Share of a DP run's limit the LPs may use in all (:meth:`budget`).
+        self.share = share
         self.n = model.n
         self.index = np.arange(model.n_arcs, dtype=np.int32)
         self.lower = np.zeros(model.n_arcs)
@@ -137,8 +165,14 @@ class StateLp:
         self.allowance: float | None = None
 
     def budget(self, seconds: float | None) -> None:
-        """Let the LPs take :data:`SHARE` of ``seconds`` (a DP run's limit) in all."""
-        self.allowance = None if seconds is None else self.seconds + SHARE * seconds
+        """Let the LPs take :attr:`share` (default :data:`SHARE`) of ``seconds`` (a DP run's
+        limit) in all."""
+        self.allowance = None if seconds is None else self.seconds + self.share * seconds
+
+    def failed(self) -> bool:
+        """Whether the LPs stopped for good: after :data:`TRIAL` LPs they dropped under
+        :data:`MIN_SHARE` of their states (:meth:`layer`)."""
+        return self.solved >= TRIAL and self.dropped < MIN_SHARE * self.solved
 
     def usable(self) -> bool:
         """Whether the model is an LP with duals to read (not turned into the MIP)."""
@@ -189,14 +223,7 @@ class StateLp:
         none."""
         if self._matrix is None:
             lp = self.model.highs.getLp()
-            matrix = sp.csc_matrix(
-                (
-                    np.asarray(lp.a_matrix_.value_),
-                    np.asarray(lp.a_matrix_.index_),
-                    np.asarray(lp.a_matrix_.start_),
-                ),
-                shape=(lp.num_row_, lp.num_col_),
-            )
+            matrix = constraint_matrix(lp)
             self._matrix = (
                 matrix.T.tocsr(),
                 np.asarray(lp.row_lower_, dtype=float),
@@ -255,7 +282,7 @@ class StateLp:
         for k in np.argsort(-total, kind="stable"):
             if self.allowance is not None and self.seconds + self.rate > self.allowance:
                 break
-            if self.solved >= TRIAL and self.dropped < MIN_SHARE * self.solved:
+            if self.failed():
                 break
             if deadline.expired(MARGIN):
                 break

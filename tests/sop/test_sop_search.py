@@ -137,6 +137,7 @@ def test_portfolio_with_the_search_matches_brute_force(monkeypatch, seed: int) -
 
     monkeypatch.setattr(sop_dp, "solve_sop_dp", first_stopped)
     monkeypatch.setattr(sop_model, "CUTS_FIRST_SHARE", 2.0)  # the DP first
+    monkeypatch.setattr(sop_model, "PROOF_STAGE", False)  # its first call is the first DP stage
     monkeypatch.setattr(sop_model, "ILS_MIN_GAP", -1.0)
     monkeypatch.setattr(sop_model, "ILS_PATIENCE", 30)
     result = solve_sop_problem(problem, ideal_cap=1, max_states=2, cpsat=False, seed=seed)

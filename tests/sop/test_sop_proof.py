@@ -1,0 +1,229 @@
+"""Proving a known optimum (issue 33): the DP at a trial cutoff (a finished run proves the cutoff
+or finds an order below it), its give-up rule, and the portfolio's proof stage, on random tiny
+SOPs checked against the brute force, forward, backward and meeting."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from taopt.models.sop_cuts import SopCutModel
+from taopt.models.sop_dp import solve_sop_dp
+from taopt.models.sop_statelp import StateLp
+from taopt.result import OPTIMAL, TIME_LIMIT
+from taopt.sop.problem import SopProblem, evaluate_order
+from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
+from tests.sop.test_sop_credit import _clustered
+
+
+def _instance(seed: int) -> SopProblem:
+    """Even seeds: the shared tiny SOPs; odd seeds: clustered ones with precedences."""
+    return sop_instance(seed) if seed % 2 == 0 else _clustered(seed)
+
+
+def _worst(problem: SopProblem) -> list[int]:
+    """The dearest feasible order (an incumbent far from the optimum)."""
+    return max(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
+
+
+@pytest.mark.parametrize("seed", range(24))
+@pytest.mark.parametrize("both", [True, False])
+def test_cutoff_below_the_optimum_proves_at_most_the_optimum(seed, both):
+    """A cutoff at or below the optimum: the run ends without a cheaper order and proves a
+    bound at least the cutoff (within 1e-9) and at most the brute-force optimum."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    worst = _worst(problem)
+    for cutoff in (optimum, optimum - 1.0, optimum - 7.5, 0.5 * optimum):
+        result = solve_sop_dp(problem, incumbent=worst, beam_width=0, both=both, cutoff=cutoff)
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if result.objective > optimum + 1e-6:  # the worst order was kept: nothing below
+            assert result.status == TIME_LIMIT
+            assert result.info["cutoff_proven"]
+            assert result.bound >= cutoff - 1e-9 * abs(cutoff) - 1e-9
+
+
+@pytest.mark.parametrize("seed", range(24))
+@pytest.mark.parametrize("both", [True, False])
+def test_cutoff_above_the_optimum_finds_and_proves_it(seed, both):
+    """A cutoff above the optimum (and below the incumbent) finds an optimal order and proves
+    it: status optimal, the brute-force value, a feasible order."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    worst = _worst(problem)
+    for cutoff in (optimum + 0.5, 0.5 * (optimum + evaluate_order(problem, worst))):
+        if not cutoff < evaluate_order(problem, worst):
+            continue
+        result = solve_sop_dp(problem, incumbent=worst, beam_width=0, both=both, cutoff=cutoff)
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_cutoff_with_root_prices_and_state_lp_stays_valid(seed):
+    """With the root's Lagrangian prices, row credit and the per-state LP, a cutoff at the
+    optimum proves a bound never above it, and one just above finds it."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    kwargs = {"lagrange": model.lagrangian_prices(), "credit": model.row_credit()}
+    for cutoff in (optimum, optimum + 0.5):
+        result = solve_sop_dp(
+            problem, beam_width=0, cutoff=cutoff, state_lp=StateLp(model), **kwargs
+        )
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if cutoff > optimum:
+            assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+        else:
+            assert result.status == TIME_LIMIT and result.info["cutoff_proven"]
+
+
+def test_cutoff_without_an_incumbent_returns_no_order_but_the_bound():
+    """A finished run at a cutoff below the optimum, without an incumbent, has no order and
+    proves at least the cutoff."""
+    problem = _instance(2)
+    optimum = sop_brute_force(problem)
+    result = solve_sop_dp(problem, beam_width=0, cutoff=optimum - 1.0)
+    assert result.status == TIME_LIMIT and result.solution is None
+    assert optimum - 1.0 - 1e-6 <= result.bound <= optimum
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_give_up_keeps_a_valid_bound_and_an_ended_run_is_optimal(seed, monkeypatch):
+    """With the give-up rule (made to fire on any growth), the DP with the per-state LP either
+    proves the brute-force optimum or stops "time_limit" with a bound at most the optimum and
+    says why."""
+    from taopt.models import sop_dp
+
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root()
+    kwargs = {"lagrange": model.lagrangian_prices(), "credit": model.row_credit()}
+    for growth in (sop_dp.GIVE_UP_GROWTH, 0.5):
+        monkeypatch.setattr(sop_dp, "GIVE_UP_GROWTH", growth)
+        result = solve_sop_dp(
+            problem,
+            incumbent=_worst(problem),
+            beam_width=0,
+            state_lp=StateLp(model),
+            give_up=True,
+            **kwargs,
+        )
+        assert result.bound is not None and result.bound <= optimum + 1e-6
+        if result.status == OPTIMAL:
+            assert result.objective == pytest.approx(optimum)
+        else:
+            assert result.status == TIME_LIMIT and result.info["gave_up"]
+
+
+def test_give_up_fires_on_a_growing_layer(monkeypatch):
+    """A layer past the first that grows more than GIVE_UP_GROWTH times stops the search, and
+    the reason names the layer."""
+    from taopt.models import sop_dp
+
+    monkeypatch.setattr(sop_dp, "GIVE_UP_GROWTH", 0.5)
+    problem = _clustered(3, n=9)
+    model = SopCutModel(problem)
+    model.root()
+    result = solve_sop_dp(
+        problem,
+        incumbent=_worst(problem),
+        beam_width=0,
+        lagrange=model.lagrangian_prices(),
+        credit=model.row_credit(),
+        state_lp=StateLp(model),
+        give_up=True,
+    )
+    if result.status == TIME_LIMIT:
+        assert "layer" in result.info["gave_up"]
+        assert result.bound <= sop_brute_force(problem) + 1e-6
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_portfolio_proof_stage_proves_the_brute_force_optimum(seed, monkeypatch):
+    """The portfolio with the root stage forced (ideals taken as too many) and the proof stage
+    run at any gap proves the brute-force optimum, and says the proof stage ran."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "PROOF_GAP", 1.0)
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(optimum)
+    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    assert isinstance(result.info["proof"], dict)
+
+
+def test_portfolio_skips_the_proof_stage_on_a_wide_gap(monkeypatch):
+    """With PROOF_GAP below 0 the proof stage never runs (its reason is recorded) and the
+    portfolio still proves the optimum."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
+    problem = _instance(5)
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(sop_brute_force(problem))
+    assert "proof" not in result.info or isinstance(result.info["proof"], str)
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_saved_root_prices_bound_every_order(seed):
+    """A root loop stopped after adding rows (a round limit) has no LP solution; the prices of
+    its last optimal LP (``saved=True``) give ``L + Σ max(d_a, 0)`` at most every order's cost,
+    and the DP with them and their row credit proves the brute-force optimum."""
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return
+    model = SopCutModel(problem)
+    model.root(rounds=1)
+    prices = model.lagrangian_prices(saved=True)
+    credit = model.row_credit(saved=True)
+    assert prices is not None and credit is not None
+    constant, reduced = prices
+    positive = np.maximum(np.nan_to_num(reduced, posinf=0.0), 0.0)
+    for order in sop_orders(problem):
+        arcs = positive[order[:-1], order[1:]]
+        assert constant + arcs.sum() <= evaluate_order(problem, order) + 1e-6
+    result = solve_sop_dp(
+        problem, incumbent=_worst(problem), beam_width=0, lagrange=prices, credit=credit
+    )
+    assert result.status == OPTIMAL and result.objective == pytest.approx(optimum)
+
+
+def test_constraint_matrix_reads_either_format():
+    """The row matrix of a HiGHS LP is the same whether HiGHS holds it column-wise or row-wise
+    (as it may after an LP it stopped)."""
+    import highspy
+    import scipy.sparse as sp
+
+    from taopt.models.sop_statelp import constraint_matrix
+
+    dense = np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 4.0]])
+    for form, made in ((highspy.MatrixFormat.kColwise, sp.csc_matrix(dense)),
+                       (highspy.MatrixFormat.kRowwise, sp.csr_matrix(dense))):  # fmt: skip
+        lp = highspy.HighsLp()
+        lp.num_col_, lp.num_row_ = 3, 2
+        lp.a_matrix_.format_ = form
+        lp.a_matrix_.start_ = made.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = made.indices.astype(np.int32)
+        lp.a_matrix_.value_ = made.data
+        assert (constraint_matrix(lp).toarray() == dense).all()
