@@ -624,7 +624,7 @@ def _sortie_time_bound(
         least = float(np.maximum(ends[0], ends[1][::-1]).min())
         if least >= cutoff:
             return least  # (the shared-truck term is no lower: not needed to prune)
-        return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1])
+        return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
         # sets U \ Y left to new sorties
@@ -662,6 +662,7 @@ def _shared_recoveries(
     back2: np.ndarray,
     ends1: np.ndarray,
     ends2: np.ndarray,
+    cutoff: float = INF,
 ) -> float:
     r"""The sortie-time term of :func:`_sortie_time_bound` for two airborne drones of one
     truck, with their recoveries made by that one truck (a truck-timeline term: the copy of
@@ -696,30 +697,46 @@ def _shared_recoveries(
     ``max(ends_1[X_1], ends_2[X_2])`` pointwise (each case is), so this term is never below
     :func:`_sortie_time_bound`'s. A drone given nothing under ``"last_service"`` needs no
     recovery: that split keeps the independent value."""
-    apart = tab.tt_apart
-    tau = tab.tau
+    last = cols.shape[1] - 1
+    indep = np.maximum(ends1, ends2[::-1])
+    least = float(indep.min())  # the independent value
+    ridden = tab.one_drone and tab.ret  # every drone is recovered, even one given nothing
+    if cutoff < INF:
+        # the term at the independent term's best split first (its same-stop part, then
+        # the two orders): when one is below the cutoff so is the term (a least over the
+        # splits), and the independent value is returned
+        i = int(np.argmin(indep))
+        if not ridden and i in (0, last):
+            return least
+        if float(np.maximum(back1 + cols[:, i], back2 + cols[:, last - i]).min()) < cutoff:
+            return least
     # only the stops where a drone can be recovered (the other rows are inf throughout)
     at1 = np.flatnonzero(back1 < INF)
     at2 = np.flatnonzero(back2 < INF)
     if not len(at1) or not len(at2):
-        return float(np.maximum(ends1, ends2[::-1]).min())  # (a drone never recovered)
-    both = np.intersect1d(at1, at2, assume_unique=True)
+        return least  # (a drone never recovered)
+    apart, tau = tab.tt_apart, tab.tau
+    # max(back_d, g_d): drone d recovered after the other one, at another stop
+    wait2 = np.maximum(back2[at2], (back1[at1, None] + apart[at1]).min(axis=0)[at2] + tau)
+    wait1 = np.maximum(back1[at1], (back2[at2, None] + apart[at2]).min(axis=0)[at1] + tau)
+    if cutoff < INF:
+        v = max(float(ends1[i]), float((wait2 + cols[at2, last - i]).min()))
+        if v < cutoff:
+            return least
+        v = max(float(ends2[last - i]), float((wait1 + cols[at1, i]).min()))
+        if v < cutoff:
+            return least
+    late2 = (wait2[:, None] + cols[at2]).min(axis=0)
+    late1 = (wait1[:, None] + cols[at1]).min(axis=0)
+    J = np.minimum(np.maximum(ends1, late2[::-1]), np.maximum(late1, ends2[::-1]))
+    both = np.flatnonzero((back1 < INF) & (back2 < INF))
     if len(both):
-        same = np.maximum(back1[both, None] + cols[both], back2[both, None] + cols[both, ::-1]).min(
-            axis=0
-        )
-    else:
-        same = np.full(cols.shape[1], INF)
-    g1 = (back1[at1, None] + apart[at1]).min(axis=0) + tau
-    g2 = (back2[at2, None] + apart[at2]).min(axis=0) + tau
-    late1 = (np.maximum(back1[at1], g2[at1])[:, None] + cols[at1]).min(axis=0)
-    late2 = (np.maximum(back2[at2], g1[at2])[:, None] + cols[at2]).min(axis=0)
-    J = np.minimum(same, np.maximum(ends1, late2[::-1]))
-    J = np.minimum(J, np.maximum(late1, ends2[::-1]))
-    if not tab.one_drone or not tab.ret:
-        J[0] = ends2[-1]  # drone 1 serves no one more: no recovery needed
+        same = np.maximum(back1[both, None] + cols[both], back2[both, None] + cols[both, ::-1])
+        J = np.minimum(J, same.min(axis=0))
+    if not ridden:
+        J[0] = ends2[-1]  # a drone given nothing under "last_service" needs no recovery
         J[-1] = ends1[-1]
-    return float(J.min())
+    return max(float(J.min()), least)
 
 
 def _columns(tab: _Tables, U: int) -> np.ndarray:

@@ -381,7 +381,7 @@ def test_shared_recoveries_never_above_a_labels_best_completion(case, monkeypatc
     for bound, best in seen:
         assert bound <= best * (1 + 1e-9) + 1e-9
 
-    def independent(tab, cols, back1, back2, ends1, ends2):
+    def independent(tab, cols, back1, back2, ends1, ends2, cutoff=math.inf):
         return float(np.maximum(ends1, ends2[::-1]).min())
 
     monkeypatch.setattr(search, "_shared_recoveries", independent)
