@@ -40,7 +40,8 @@ fleet, raised along precedences, under ``"return"`` plus the least way home; the
 shared work (:func:`_water_fill`); the trucks' covering walks (:func:`_walk_bound`, a truck
 must bring its drones within reach of every customer no airborne drone can still take); the
 drones' sortie times (:func:`_sortie_time_bound`, each drone with a truck of its own, one
-launched with no customer yet recovered only after its first, :func:`_first_recoveries`);
+launched with no customer yet recovered only after its first, :func:`_first_recoveries`;
+two airborne drones of one truck recovered by that one truck, :func:`_shared_recoveries`);
 and the parent's bound; taken cheapest first and cut off at the incumbent,
 :func:`_bound`), so the first complete label popped is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
 flags, each drone's ℓ or launch stop and m, identical drones and identical trucks taken as
