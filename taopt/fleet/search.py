@@ -96,6 +96,11 @@ PARTITION_MAX_CUSTOMERS = 9
 #: drop the labels they dominate without a bound.
 PRUNED_PER_KEY = 8
 
+#: The shared-recovery term (:func:`_shared_recoveries`) is computed only for labels whose
+#: independent sortie-time term is at least this share of the cutoff (a label further below
+#: is seldom pruned by it; skipping a term leaves a valid, lower bound).
+SHARED_FROM = 0.95
+
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
 
@@ -623,8 +628,8 @@ def _sortie_time_bound(
             e[0] = 0.0  # column 0 is the empty set: a drone that serves no one more ends nothing
     if shared and not drop:
         least = float(np.maximum(ends[0], ends[1][::-1]).min())
-        if least >= cutoff:
-            return least  # (the shared-truck term is no lower: not needed to prune)
+        if least >= cutoff or (cutoff < INF and least < SHARED_FROM * cutoff):
+            return least  # (already pruned, or too far below the cutoff to be pruned by it)
         return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
@@ -639,11 +644,6 @@ def _sortie_time_bound(
                 v = float(g[top ^ sum(1 << i for i in Y)])
                 if v < least:
                     least = v
-        if shared and least < cutoff:
-            # the shared-truck term over U without the customers sorties in the air may
-            # take (each of the others is served by a new sortie), beside this one
-            rest = _sortie_time_bound(tab, U & ~drop, trucks, S, svc, times, cutoff=cutoff)
-            return max(least, rest)
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
         return float(np.maximum(ends[0], ends[1][::-1]).min())
