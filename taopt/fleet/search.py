@@ -40,7 +40,8 @@ fleet, raised along precedences, under ``"return"`` plus the least way home; the
 shared work (:func:`_water_fill`); the trucks' covering walks (:func:`_walk_bound`, a truck
 must bring its drones within reach of every customer no airborne drone can still take); the
 drones' sortie times (:func:`_sortie_time_bound`, each drone with a truck of its own, one
-launched with no customer yet recovered only after its first, :func:`_first_recoveries`);
+launched with no customer yet recovered only after its first, :func:`_first_recoveries`;
+two airborne drones of one truck recovered by that one truck, :func:`_shared_recoveries`);
 and the parent's bound; taken cheapest first and cut off at the incumbent,
 :func:`_bound`), so the first complete label popped is optimal. *Dominance*: two labels with the same served set and discrete state (stops,
 flags, each drone's ℓ or launch stop and m, identical drones and identical trucks taken as
@@ -95,6 +96,11 @@ PARTITION_MAX_CUSTOMERS = 9
 #: drop the labels they dominate without a bound.
 PRUNED_PER_KEY = 8
 
+#: The shared-recovery term (:func:`_shared_recoveries`) is computed only for labels whose
+#: independent sortie-time term is at least this share of the cutoff (a label further below
+#: is seldom pruned by it; skipping a term leaves a valid, lower bound).
+SHARED_FROM = 0.95
+
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
 
@@ -148,6 +154,9 @@ class _Tables:
         # F[w, j]: a sortie launched at w itself reaches j after ft(w, j) (inf when out of range)
         self.Fnp = np.where(ok.T, ft.T, INF)
         self.tt_np = np.asarray(tt, dtype=float)
+        # tt between different stops (inf on the diagonal): :func:`_shared_recoveries`
+        self.tt_apart = self.tt_np.copy()
+        np.fill_diagonal(self.tt_apart, INF)
         self.fst_np = np.asarray(ft, dtype=float)  # (n, s) flight times customer -> stop
         self.fsd_np = np.asarray(p.flight_stop, dtype=float)
         home = ft + p.service_time + tt[:, p.depot][None, :]  # (n, s)
@@ -223,6 +232,8 @@ class _Tables:
         self._cols_size = 0
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
         self._firsts: dict[tuple, np.ndarray] = {}
+        self._first_of: dict[tuple, np.ndarray] = {}  # _first_recoveries, per drone and label
+        self.nowhere = np.full(s, INF)  # (read only)
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -344,6 +355,28 @@ def _first_recoveries(
     ``max(a_j + ft(j, q), arrival at q) + τ``, with ``d(w_L, j) + d(j, q)`` within the range
     left (``svc``: the label's service times). The least over j is a lower bound; ``inf`` everywhere when it can take no one
     (such a label has no completion)."""
+    # the least a_j + ft(j, q) depends on the drone, the served set, the service times and
+    # ``times`` only: memoised on them (siblings and the terms of one label share it)
+    memo = (k, S, dr, svc, None if times is None else tuple(times))
+    first = tab._first_of.get(memo)
+    if first is None:
+        first = _first_legs(tab, k, dr, S, svc, times)
+        if len(tab._first_of) > 1 << 16:
+            tab._first_of.clear()
+        tab._first_of[memo] = first
+    arrive = T + tab.tt_np[w]
+    arrive[w] = A
+    back = np.maximum(first, arrive)
+    back += tab.tau
+    return back
+
+
+def _first_legs(
+    tab: _Tables, k: int, dr: tuple, S: int, svc: Sequence[float], times: Sequence[float] | None
+) -> np.ndarray:
+    """Per stop q, ``min_j a_j + ft(j, q)`` over the customers j a drone launched with no
+    customer yet may take first, within range (:func:`_first_recoveries`; ``inf`` everywhere
+    when it can take no one)."""
     lazy = tab.lazy
     owner, pred_mask, release = tab.owner, tab.pred_mask, tab.release
     ws = -dr[1] - 1
@@ -377,7 +410,7 @@ def _first_recoveries(
         value.append(a)
         spent.append(dist)
     if not firsts:
-        return np.full(tab.s, INF)
+        return tab.nowhere
     key = (ws, delta, tuple(firsts), tuple(value))
     first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
     if first is None:
@@ -395,11 +428,7 @@ def _first_recoveries(
         if len(tab._firsts) > 1 << 15:
             tab._firsts.clear()
         tab._firsts[key] = first
-    arrive = T + tab.tt_np[w]
-    arrive[w] = A
-    back = np.maximum(first, arrive)
-    back += tau
-    return back
+    return first
 
 
 def _fresh_sorties(
@@ -524,6 +553,7 @@ def _sortie_time_bound(
     times: Sequence[float] | None = None,
     drop: int = 0,
     count: int = 0,
+    cutoff: float = INF,
 ) -> float:
     """The drones' sorties, the one-drone relaxation at a label: a lower bound on the
     objective of every completion in which the drone-only customers of ``U`` are served by
@@ -583,15 +613,24 @@ def _sortie_time_bound(
         return float((back_of(k, w, A, T, dr) + F[:, U]).min())
     cols = _columns(tab, U)
     ends: list[np.ndarray] = []
+    backs: list[np.ndarray] = []
     for k, w, A, T, dr in drones_left:
         if dr[0] == 0:
             ends.append(cols[w] + (dr[1] if dr[1] > A else A))
             continue
         back = back_of(k, w, A, T, dr)
+        backs.append(back)
         ends.append((back[:, None] + cols).min(axis=0))
+    # two airborne drones of one truck: recovered by that one truck (:func:`_shared_recoveries`)
+    shared = len(backs) == 2 and len(ends) == 2 and drones_left[0][0] == drones_left[1][0]
     if not tab.one_drone or not tab.ret:
         for e in ends:
             e[0] = 0.0  # column 0 is the empty set: a drone that serves no one more ends nothing
+    if shared and not drop:
+        least = float(np.maximum(ends[0], ends[1][::-1]).min())
+        if least >= cutoff or (cutoff < INF and least < SHARED_FROM * cutoff):
+            return least  # (already pruned, or too far below the cutoff to be pruned by it)
+        return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
         # sets U \ Y left to new sorties
@@ -615,6 +654,90 @@ def _sortie_time_bound(
     size = -(-m // len(ends))
     big = tab.popcount[_submasks(tab, U)] >= size
     return float(min(np.min(e[big]) for e in ends))
+
+
+def _shared_recoveries(
+    tab: _Tables,
+    cols: np.ndarray,
+    back1: np.ndarray,
+    back2: np.ndarray,
+    ends1: np.ndarray,
+    ends2: np.ndarray,
+    cutoff: float = INF,
+) -> float:
+    r"""The sortie-time term of :func:`_sortie_time_bound` for two airborne drones of one
+    truck, with their recoveries made by that one truck (a truck-timeline term: the copy of
+    the truck each drone gets there never has to be at two stops).
+
+    ``cols[q, X]``: the sortie-time table's columns over the submasks X of U (ascending, so
+    X's complement in U is at the mirrored index); ``back_d[q]``: a lower bound on drone d's
+    recovery at stop q with its τ done (:func:`_recoveries`, :func:`_first_recoveries`);
+    ``ends_d[X] = min_q back_d[q] + cols[q, X]`` the independent ends (column 0 already
+    set to 0 where a drone given nothing ends nothing).
+
+    *Proof.* Take a completion in which drone d serves the set X_d of U by new sorties
+    (X_1, X_2 split U: only these two drones fly new sorties, U holding no customer an
+    airborne sortie may still take). A drone with X_d nonempty (under ``"return"`` with
+    the one-drone table, every drone: it rides home) is first recovered, at a position
+    p_d of the truck at stop q_d, at R_d >= back_d[q_d], and then ends no sooner than
+    R_d + cols[q_d, X_d] (the relaxation of :func:`_sortie_time_bound` started at its
+    recovery). Two cases:
+
+    * q_1 = q_2 = q: the objective is at least
+      ``same[X_1] = min_q max(back_1[q] + cols[q, X_1], back_2[q] + cols[q, X_2])``;
+    * q_1 != q_2: the positions differ; if p_a < p_b the truck leaves p_a no sooner than
+      R_a, reaches q_b no sooner than R_a + tt(q_a, q_b) (tt is a metric, so the stops in
+      between only add) and R_b is τ after its arrival at the latest, so
+      ``R_b >= g_a[q_b] = min_{q' != q_b} back_a[q'] + tt(q', q_b) + τ`` as well as
+      ``back_b[q_b]``; the objective is at least
+      ``max(ends_a[X_a], late_b[X_b])``, ``late_b[X] = min_q max(back_b[q], g_a[q]) +
+      cols[q, X]``.
+
+    So every completion is at least the least, over X_1, of the smallest of the three
+    (the two orders and the same stop), and at least the independent
+    ``max(ends_1[X_1], ends_2[X_2])`` pointwise (each case is), so this term is never below
+    :func:`_sortie_time_bound`'s. A drone given nothing under ``"last_service"`` needs no
+    recovery: that split keeps the independent value."""
+    last = cols.shape[1] - 1
+    indep = np.maximum(ends1, ends2[::-1])
+    least = float(indep.min())  # the independent value
+    ridden = tab.one_drone and tab.ret  # every drone is recovered, even one given nothing
+    if cutoff < INF:
+        # the term at the independent term's best split first (its same-stop part, then
+        # the two orders): when one is below the cutoff so is the term (a least over the
+        # splits), and the independent value is returned
+        i = int(np.argmin(indep))
+        if not ridden and i in (0, last):
+            return least
+        if float(np.maximum(back1 + cols[:, i], back2 + cols[:, last - i]).min()) < cutoff:
+            return least
+    # only the stops where a drone can be recovered (the other rows are inf throughout)
+    at1 = np.flatnonzero(back1 < INF)
+    at2 = np.flatnonzero(back2 < INF)
+    if not len(at1) or not len(at2):
+        return least  # (a drone never recovered)
+    apart, tau = tab.tt_apart, tab.tau
+    # max(back_d, g_d): drone d recovered after the other one, at another stop
+    wait2 = np.maximum(back2[at2], (back1[at1, None] + apart[at1]).min(axis=0)[at2] + tau)
+    wait1 = np.maximum(back1[at1], (back2[at2, None] + apart[at2]).min(axis=0)[at1] + tau)
+    if cutoff < INF:
+        v = max(float(ends1[i]), float((wait2 + cols[at2, last - i]).min()))
+        if v < cutoff:
+            return least
+        v = max(float(ends2[last - i]), float((wait1 + cols[at1, i]).min()))
+        if v < cutoff:
+            return least
+    late2 = (wait2[:, None] + cols[at2]).min(axis=0)
+    late1 = (wait1[:, None] + cols[at1]).min(axis=0)
+    J = np.minimum(np.maximum(ends1, late2[::-1]), np.maximum(late1, ends2[::-1]))
+    both = np.flatnonzero((back1 < INF) & (back2 < INF))
+    if len(both):
+        same = np.maximum(back1[both, None] + cols[both], back2[both, None] + cols[both, ::-1])
+        J = np.minimum(J, same.min(axis=0))
+    if not ridden:
+        J[0] = ends2[-1]  # a drone given nothing under "last_service" needs no recovery
+        J[-1] = ends1[-1]
+    return max(float(J.min()), least)
 
 
 def _columns(tab: _Tables, U: int) -> np.ndarray:
@@ -775,7 +898,9 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
                 return b
     # the drones' sortie times (the most expensive term, but on one truck with several
     # drones it prunes about 30 times as often as the earliest services)
-    v = _sortie_time_bound(tab, tab.drone_only & ~S & ~relaxed, trucks, S, svc, est, ext, more)
+    v = _sortie_time_bound(
+        tab, tab.drone_only & ~S & ~relaxed, trucks, S, svc, est, ext, more, cutoff
+    )
     if v > b:
         b = v
         if b >= cutoff:

@@ -348,3 +348,45 @@ def test_relax_cases_are_the_brute_force_optima():
         got, plan, _ = brute_force(_drone_only(drones, objective))
         assert plan is not None
         assert got == pytest.approx(value, rel=1e-12, abs=1e-12)
+
+
+#: (seed, n, stops, c, precedence, objective): drone-only tiny instances (K = 1, D = 2) with
+#: labels where two airborne drones' shared recoveries lift the sortie-time term
+SHARED_CASES = [
+    (4006, 4, 2, 1, False, "last_service"),
+    (4006, 4, 2, 1, True, "last_service"),
+    (4024, 4, 2, 2, True, "last_service"),
+    (3015, 3, 3, 1, False, "return"),
+    (3015, 3, 3, 1, True, "return"),
+    (3015, 3, 3, 2, False, "return"),
+]
+
+
+@pytest.mark.parametrize("case", SHARED_CASES)
+def test_shared_recoveries_never_above_a_labels_best_completion(case, monkeypatch):
+    """At every label the bound with the shared-truck recovery term is <= the best completion
+    below it, and the term lifts some labels above the independent drones' term."""
+    import numpy as np
+
+    import taopt.fleet.search as search
+
+    seed, n, stops, c, precedence, objective = case
+    p = tiny_instance(seed, n, 1, 2, c, precedence, objective, stops=stops)
+    p = p.replace(service=("drone",) * n, customer_stop=(None,) * n)
+    assert bool(p.precedences) == precedence
+    tab = _Tables(p)
+    seen: list = []
+    memo: dict = {}
+    _best_below(tab, _root(p), memo, seen)
+    for bound, best in seen:
+        assert bound <= best * (1 + 1e-9) + 1e-9
+
+    def independent(tab, cols, back1, back2, ends1, ends2, cutoff=math.inf):
+        return float(np.maximum(ends1, ends2[::-1]).min())
+
+    monkeypatch.setattr(search, "_shared_recoveries", independent)
+    # (memo and seen are filled together, in the same order)
+    lifted = sum(
+        bound > _bound(tab, label) + 1e-9 for label, (bound, _) in zip(memo, seen, strict=True)
+    )
+    assert lifted > 0
