@@ -154,7 +154,8 @@ def two_way_search(
     elif leading is not None:
         leaders = [int(leading)]
     else:
-        leaders = sorted([first, 1 - first], key=lambda x: _source_count(problem, owner, x))
+        closure = _closure(problem)
+        leaders = sorted([first, 1 - first], key=lambda x: _source_count(closure, owner, x))
     memo = {} if memo is None else memo
     states: dict[int, dict[str, Any]] = memo.setdefault("leaders", {})
     for leader in leaders:
@@ -276,12 +277,10 @@ def two_way_search(
     }
 
 
-def _source_count(problem: FleetProblem, owner: list[int], leader: int) -> int:
-    """How many follower customers have a closure successor on ``leader`` (the box
+def _source_count(closure: list[tuple[int, int]], owner: list[int], leader: int) -> int:
+    """How many follower customers have a ``closure`` successor on ``leader`` (the box
     dimensions when it leads: the pairs its relaxation meets only through the boxes)."""
-    from taopt.fleet.split import _closure
-
-    return len({r for r, j in _closure(problem) if owner[r] == 1 - leader and owner[j] == leader})
+    return len({r for r, j in closure if owner[r] == 1 - leader and owner[j] == leader})
 
 
 def _split_point(
