@@ -76,6 +76,7 @@ from scipy.optimize import linear_sum_assignment
 
 from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import HighsModel, solve_highs
+from taopt.models.sop_lns import large_neighbourhood_search
 from taopt.models.sop_statelp import StateLp
 from taopt.result import (
     FEASIBLE,
@@ -2164,7 +2165,6 @@ def _searched(
     most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower`` (the root stage's
     bound). The bound is kept (an order changes no bound); the order found is re-scored by
     the family's scorer; ``info["ils"]`` says what ran."""
-    from taopt.models.sop_lns import large_neighbourhood_search
 
     if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
         info["ils"] = "skipped: no order"
