@@ -72,11 +72,18 @@ from taopt.ideals import has, words
 from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem
 
-__all__ = ["WindowCompletion", "WindowPrices", "window_bound", "window_prices", "windows"]
+__all__ = [
+    "WindowCompletion",
+    "WindowPrices",
+    "start_prices",
+    "window_bound",
+    "window_prices",
+    "windows",
+]
 
 #: Subgradient steps at most (:func:`window_prices`); the deadline usually ends it first on
 #: the large files.
-ITERATIONS = 300
+ITERATIONS = 1000
 
 #: Polyak's step factor at the start; halved after :data:`PATIENCE` steps without a better
 #: bound, the loop ends below :data:`MIN_FACTOR`.
@@ -172,6 +179,23 @@ def _visits(walks: _Walks, n: int) -> np.ndarray:
         came_node = int(walks.layers[k - 2][came]) if k >= 2 and came >= 0 else -1
         which = 2 if came_node == node else 1
         at, k = previous, k - 1
+
+
+def start_prices(alpha: np.ndarray, beta: np.ndarray, start: int, end: int) -> np.ndarray:
+    """Node prices from an assignment relaxation's dual prices (``alpha`` of the tails,
+    ``beta`` of the heads, reduced costs ``c[u, w] - alpha_u - beta_w >= 0`` on the usable
+    arcs, :func:`taopt.models.sop_dp.assignment_potentials`): ``lam_v = alpha_v + beta_v``,
+    without ``alpha_end`` and ``beta_start``.
+
+    A walk leaves ``x_0 .. x_{n-2}`` (never ``end``, which only position ``n - 1`` holds) and
+    enters ``x_1 .. x_{n-1}`` (never ``start``), so its priced cost is the sum of its arcs'
+    reduced costs (at least 0): ``L(lam) = min walk reduced cost + Σ_v lam_v``, and ``Σ_v lam_v`` is the assignment bound. The
+    window bound from these prices is never below the assignment bound, and the subgradient
+    keeps the best it sees."""
+    lam = np.asarray(alpha, float) + np.asarray(beta, float)
+    lam[end] -= alpha[end]
+    lam[start] -= beta[start]
+    return lam
 
 
 def _usable(problem: SopProblem) -> np.ndarray:

@@ -10,10 +10,12 @@ import numpy as np
 import pytest
 
 from taopt.ideals import bits
-from taopt.models.sop_dp import reversed_problem, solve_sop_dp
+from taopt.models.sop_dp import assignment_potentials, reversed_problem, solve_sop_dp
 from taopt.models.sop_window import (
     WindowCompletion,
     _popcount,
+    _usable,
+    start_prices,
     window_bound,
     window_prices,
     windows,
@@ -162,3 +164,22 @@ def test_dp_with_the_window_bound_equals_brute_force(seed):
         assert result.objective == pytest.approx(optimum)
         assert result.bound == pytest.approx(optimum)
         assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_from_the_assignment_prices_the_bound_is_at_least_the_assignment_bound(seed):
+    """Started from the assignment's dual prices, ``L(lam)`` is at least the assignment bound
+    (and at most the optimum), and the subgradient from there keeps at least that."""
+    problem = _problem(seed)
+    usable = _usable(problem)
+    alpha, beta = assignment_potentials(usable, problem.start, problem.end)
+    inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]
+    assignment = alpha[problem.start] + alpha[inner].sum() + np.delete(beta, problem.start).sum()
+    lam = start_prices(alpha, beta, problem.start, problem.end)
+    optimum = min((evaluate_order(problem, o) for o in sop_orders(problem)), default=math.inf)
+    if not math.isfinite(assignment):
+        return
+    assert window_bound(problem, lam) >= assignment - 1e-6
+    assert window_bound(problem, lam) <= optimum + 1e-6
+    if math.isfinite(optimum):
+        assert window_prices(problem, optimum + 1, lam=lam).bound >= assignment - 1e-6
