@@ -1632,12 +1632,6 @@ ROOT_SHARE = 0.1
 #: (:func:`_window_stage`).
 WINDOW_SHARE = 0.1
 
-#: The window stage runs only when the positions' windows are narrow: their mean width at most
-#: this share of the nodes. Wider, the windows carry little of the precedence and the walks
-#: are free: p43.1's windows are 0.90 of its 44 positions, its window bound 4,337 against the
-#: root LP's 28,098.
-WINDOW_MAX_WIDTH = 0.5
-
 #: The cut engine runs first, with the whole limit, when its root bound closes at least this
 #: share of the gap between the DP's root bound (the assignment/arborescence bound) and the
 #: best order: the DP's completion bound then prunes almost nothing the cut engine needs
@@ -1916,7 +1910,12 @@ def solve_sop_problem(
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
     path cuts, ``credit``, :data:`ROW_CREDIT`; and, when :data:`STATE_LP` is on, the root's
     LP re-solved per DP state with the state's ideal fixed, its prices inherited along each
-    state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. When
+    state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. Unless
+    the cut engine goes first, a window stage follows (:func:`_window_stage`, at most
+    :data:`WINDOW_SHARE` of the limit): the position-window
+    Lagrangian bound (:mod:`taopt.models.sop_window`) from the assignment's prices; when it is
+    above the assignment/arborescence bound and the root stage's, its prices bound every DP
+    stage's states (``window``); the reported bound is never below it (``info["window"]``). When
     the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
     stage and its local search brought it there, the proof stage runs
     (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
@@ -2176,32 +2175,28 @@ def _root_stage(
 
 
 def _window_stage(
-    problem: SopProblem, deadline: Deadline, incumbent: Any, info: dict[str, Any]
+    problem: SopProblem, deadline: Deadline, incumbent: Any, info: dict[str, Any], floor: float
 ) -> tuple[np.ndarray | None, float]:
     """The portfolio's window stage: the position-window Lagrangian bound
-    (:mod:`taopt.models.sop_window`) within :data:`WINDOW_SHARE` of the limit, towards the best
-    order's cost, when the windows are narrow (:data:`WINDOW_MAX_WIDTH`).
+    (:mod:`taopt.models.sop_window`) from the assignment's prices, within
+    :data:`WINDOW_SHARE` of the limit, towards the best order's cost.
 
     Returns ``(prices, bound)``: the prices for the DP stages (``window=`` of
-    :func:`taopt.models.sop_dp.solve_sop_dp`), None when its root bound is not above the
-    assignment/arborescence bound (the DP's own completion bound at the root: the tables would
-    prune little for their cost), and the bound (``-inf`` when it did not run), valid for every
-    order whatever the prices. ``info["window"]`` says what ran."""
-    low, high = windows(problem)
-    width = float(np.mean(high - low + 1)) / problem.n
-    if width > WINDOW_MAX_WIDTH:
-        info["window"] = f"skipped: the windows are {width:.2f} of the positions"
-        return None, -np.inf
-    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
-    if known is None:
-        info["window"] = "skipped: no order to aim at"
-        return None, -np.inf
+    :func:`taopt.models.sop_dp.solve_sop_dp`), None when its bound is not above ``floor`` (the
+    largest root bound known: the assignment/arborescence bound, the DP's own completion bound
+    at the root, and the root stage's LP; the subgradient then stops after its trial,
+    :data:`taopt.models.sop_window.TRIAL`), and the bound (``-inf`` without an order to aim
+    at), valid for every order whatever the prices. ``info["window"]`` says what ran."""
     from taopt.models.sop_dp import (  # sop_dp imports this module
         _cost_unit,
         _rounded_up,
         assignment_potentials,
     )
 
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    if known is None:
+        info["window"] = "skipped: no order to aim at"
+        return None, -np.inf
     # from the assignment's prices: the bound starts at the assignment bound
     tails, heads = usable_arcs(problem.cost, problem.closure)
     usable = np.full(problem.cost.shape, np.inf)
@@ -2212,16 +2207,18 @@ def _window_stage(
         known[0],
         Deadline(deadline.share(WINDOW_SHARE), cancel=deadline.token),
         lam=start_prices(alpha, beta, problem.start, problem.end),
+        floor=floor,
     )
     # every order's cost is a multiple of the costs' gcd when they are integral
     bound = float(_rounded_up(np.array([found.bound]), _cost_unit(problem))[0])
-    cheap = _cheap_bound(problem)
-    used = bool(bound > cheap)
+    used = bool(bound > floor)
+    low, high = windows(problem)
     info["window"] = {
         "bound": bound,
         "seconds": found.seconds,
         "iterations": found.iterations,
-        "width": width,
+        "width": float(np.mean(high - low + 1)) / problem.n,
+        "floor": floor,
         "used": used,
     }
     return (found.lam if used else None), bound
@@ -2591,9 +2588,10 @@ def _stages(
                 credit = root_model.row_credit(saved=True)
             if on_root is not None:
                 on_root(cuts_first)
-            if not cuts_first:
-                window, window_bound = _window_stage(problem, deadline, incumbent, info)
             root_bound = info["root_stage"]["bound"]
+            if not cuts_first:
+                floor = max(cheap, float(root_bound) if np.isfinite(root_bound) else cheap)
+                window, window_bound = _window_stage(problem, deadline, incumbent, info, floor)
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)

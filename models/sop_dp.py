@@ -115,6 +115,14 @@ state's descendants inherit its prices: ``B + Σ_{a ∈ p} max(d_a, 0)`` along t
 the DP's states. On prob.42 with its optimum as the incumbent, the DP with it ended in 27 s
 (load 5-7); without it the DP kept 1.6 million states in 60 s without ending.
 
+Position windows. ``window=`` (node prices ``lam`` of :mod:`taopt.models.sop_window`) bounds
+every state's completion also by ``H(k, v) + Σ_{u ∈ U} lam_u``: the cheapest relaxed walk
+from ``v`` at position ``k = |I| - 1`` to ``end`` through the nodes whose position windows
+allow them (the proof is in that module), a table look-up and a masked sum per state, taken
+first; the assignment-based ``g`` is then computed only for the states it leaves. On
+rbg-atsp-175 with its optimum 1,879 as the incumbent the DP kept 3.59 million states with it
+against 3.99 million without (prices of 300 subgradient steps from zero, root bound 1,833).
+
 References
 ----------
 Thesis §5.2, (5.7) (precedences), §5.4 (the orderings NIA, MMA, SMMA give the

@@ -85,6 +85,9 @@ __all__ = [
 #: the large files.
 ITERATIONS = 1000
 
+#: Steps before the bound is compared with ``floor`` (:func:`window_prices`).
+TRIAL = 50
+
 #: Polyak's step factor at the start; halved after :data:`PATIENCE` steps without a better
 #: bound, the loop ends below :data:`MIN_FACTOR`.
 FACTOR = 1.0
@@ -137,19 +140,29 @@ def _layers(low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
 
 def _sweep(layers: list[np.ndarray], blocks: list[np.ndarray], lam: np.ndarray) -> _Walks:
     """The cheapest walks (module docstring) through ``layers``, ``blocks[k]`` the arc costs
-    from layer ``k`` to layer ``k + 1`` (``inf``: no arc), every visit priced ``-lam``."""
+    from layer ``k`` to layer ``k + 1`` (``inf``: no arc), every visit priced ``-lam``.
+
+    A walk to ``(k, v)`` came from one node, so in the block from layer ``k`` at most one
+    entry per row, the step back to that node, takes the second cheapest walk instead: the
+    block is summed with the cheapest and those entries are mended."""
     first = layers[0]
     best = [-lam[first]]
     second = [np.full(len(first), np.inf)]
     by = [np.full(len(first), -1, dtype=np.int64)]
     by_second = [np.full(len(first), -1, dtype=np.int64)]
+    slot = np.full(len(lam), -1, dtype=np.int64)  # a node's index in the next layer
     for k, block in enumerate(blocks):
         there = layers[k + 1]
-        came = np.where(by[k] >= 0, layers[k - 1][by[k]] if k else -1, -1)
-        # the cheapest walk to (k, v) unless it came from w: then the second cheapest
-        back = came[:, None] == there[None, :]
-        value = np.where(back, second[k][:, None], best[k][:, None]) + block
         columns = np.arange(len(there))
+        value = best[k][:, None] + block
+        if k:
+            # the cheapest walk to (k, v) unless it came from w: then the second cheapest
+            slot[there] = columns
+            rows = np.flatnonzero(by[k] >= 0)
+            back = slot[layers[k - 1][by[k][rows]]]
+            rows, back = rows[back >= 0], back[back >= 0]
+            value[rows, back] = second[k][rows] + block[rows, back]
+            slot[there] = -1
         one = np.argmin(value, axis=0)
         low = value[one, columns]
         value[one, columns] = np.inf
@@ -251,12 +264,15 @@ def window_prices(
     deadline: Deadline | None = None,
     iterations: int = ITERATIONS,
     lam: np.ndarray | None = None,
+    floor: float = -np.inf,
 ) -> WindowPrices:
     """Subgradient on the window relaxation's prices (module docstring), from ``lam`` (zeros
     by default), towards ``target`` (an incumbent's cost: Polyak's step
     ``FACTOR (target - L) / ||1 - visits||²``), until ``iterations`` steps, the deadline, a
-    walk that visits every node once (then ``L`` is that order's cost) or a factor below
-    :data:`MIN_FACTOR`. Every step's bound is valid; the best is returned with its prices."""
+    walk that visits every node once (then ``L`` is that order's cost), a factor below
+    :data:`MIN_FACTOR`, or, after :data:`TRIAL` steps, a bound still at most ``floor`` (a bound
+    known elsewhere: this one is not the stronger). Every step's bound is valid; the best is
+    returned with its prices."""
     began = time.perf_counter()
     n = problem.n
     low, high = windows(problem)
@@ -279,6 +295,8 @@ def window_prices(
                 factor, stale = factor / 2, 0
         gradient = 1.0 - _visits(walks, n)
         if not gradient.any() or factor < MIN_FACTOR or best >= target - 1e-9:
+            break
+        if done >= TRIAL and best <= floor:
             break
         if deadline is not None and deadline.expired():
             break
