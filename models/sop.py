@@ -1914,8 +1914,8 @@ def solve_sop_problem(
     the cut engine goes first, a window stage follows (:func:`_window_stage`, at most
     :data:`WINDOW_SHARE` of the limit): the position-window
     Lagrangian bound (:mod:`taopt.models.sop_window`) from the assignment's prices; when it is
-    above the assignment/arborescence bound and the root stage's, its prices bound every DP
-    stage's states (``window``); the reported bound is never below it (``info["window"]``). When
+    above the assignment/arborescence bound, its prices bound every DP stage's states
+    (``window``); the reported bound is never below it (``info["window"]``). When
     the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
     stage and its local search brought it there, the proof stage runs
     (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
@@ -2183,10 +2183,13 @@ def _window_stage(
 
     Returns ``(prices, bound)``: the prices for the DP stages (``window=`` of
     :func:`taopt.models.sop_dp.solve_sop_dp`), None when its bound is not above ``floor`` (the
-    largest root bound known: the assignment/arborescence bound, the DP's own completion bound
-    at the root, and the root stage's LP; the subgradient then stops after its trial,
-    :data:`taopt.models.sop_window.TRIAL`), and the bound (``-inf`` without an order to aim
-    at), valid for every order whatever the prices. ``info["window"]`` says what ran."""
+    assignment/arborescence bound: the DP's own completion bound at the root; the subgradient
+    then stops after its trial, :data:`taopt.models.sop_window.TRIAL`), and the bound (``-inf``
+    without an order to aim at), valid for every order whatever the prices. Not compared with
+    the root stage's LP: on the rbg stand-ins that LP equals the assignment bound and the
+    window bound climbs above both only after hundreds of steps (rbg-atsp-255: a floor at the
+    LP's 2,268 stopped it after its trial; without, it reached 2,320 in 6 s); the LP's prices
+    bound the states' prefixes, these their completions. ``info["window"]`` says what ran."""
     from taopt.models.sop_dp import (  # sop_dp imports this module
         _cost_unit,
         _rounded_up,
@@ -2590,8 +2593,7 @@ def _stages(
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]
             if not cuts_first:
-                floor = max(cheap, float(root_bound) if np.isfinite(root_bound) else cheap)
-                window, window_bound = _window_stage(problem, deadline, incumbent, info, floor)
+                window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)

@@ -12,6 +12,7 @@ import pytest
 from taopt.ideals import bits
 from taopt.models.sop_dp import assignment_potentials, reversed_problem, solve_sop_dp
 from taopt.models.sop_window import (
+    TRIAL,
     WindowCompletion,
     _popcount,
     _usable,
@@ -183,3 +184,21 @@ def test_from_the_assignment_prices_the_bound_is_at_least_the_assignment_bound(s
     assert window_bound(problem, lam) <= optimum + 1e-6
     if math.isfinite(optimum):
         assert window_prices(problem, optimum + 1, lam=lam).bound >= assignment - 1e-6
+
+
+def test_a_bound_kept_at_the_floor_stops_after_the_trial():
+    """With a floor no bound reaches, the subgradient stops after its trial (TRIAL steps), its
+    bound still at most an order's cost; without one it goes on."""
+    rng = np.random.default_rng(7)
+    n = 30
+    cost = rng.integers(1, 100, size=(n, n)).astype(float)
+    pairs = [(a, b) for a in range(1, n - 1) for b in range(a + 1, n - 1) if rng.random() < 0.3]
+    problem = SopProblem(cost, pairs, 0, n - 1)
+    order = list(range(n))  # every pair (a, b) has a < b
+    target = evaluate_order(problem, order)
+    stopped = window_prices(problem, target, iterations=4 * TRIAL, floor=np.inf)
+    assert stopped.iterations == TRIAL
+    assert stopped.bound <= target
+    free = window_prices(problem, target, iterations=4 * TRIAL)
+    assert free.iterations > TRIAL
+    assert stopped.bound <= free.bound <= target
