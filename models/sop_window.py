@@ -31,8 +31,10 @@ from ``w``, and then the second is the cheapest that did not. Each layer step is
 
 Prices. ``lam`` is improved at the root by subgradient steps with Polyak's step length
 towards a target (the incumbent's cost): ``lam_v += step (1 - visits_v)``, ``visits_v`` the
-number of times the cheapest walk visits ``v`` (:func:`window_prices`). Every ``lam`` gives
-a valid bound; the best one seen is kept.
+number of times the cheapest walk visits ``v`` (:func:`window_prices`; the direction deflected
+by half the previous one). Every ``lam`` gives a valid bound; the best one seen is kept. The
+portfolio starts from the assignment relaxation's dual prices (:func:`start_prices`), where the
+bound is at least the assignment bound.
 
 Completion tables. For fixed ``lam`` the same sweep run from ``end`` backwards gives
 ``H(k, v)``: the cheapest priced cost of a walk ``x_k = v, ..., x_{n-1} = end`` counting the
@@ -85,17 +87,16 @@ __all__ = [
 #: the large files.
 ITERATIONS = 1000
 
-
 #: Polyak's step factor at the start; halved after :data:`PATIENCE` steps without a better
 #: bound, the loop ends below :data:`MIN_FACTOR`.
 FACTOR = 1.0
 PATIENCE = 30
+MIN_FACTOR = 1e-3
 
 #: Steps before the bound is compared with ``floor`` (:func:`window_prices`): three halvings of
 #: the step. From the assignment's prices the first steps overshoot: rbg-atsp-255's bound stayed
 #: at the assignment bound 2,263 for 50 steps, then rose to 2,293 at 100 and 2,311 at 200.
 TRIAL = 4 * PATIENCE
-MIN_FACTOR = 1e-3
 
 #: States per chunk of :meth:`WindowCompletion.__call__`.
 CHUNK = 50_000
@@ -205,9 +206,9 @@ def start_prices(alpha: np.ndarray, beta: np.ndarray, start: int, end: int) -> n
 
     A walk leaves ``x_0 .. x_{n-2}`` (never ``end``, which only position ``n - 1`` holds) and
     enters ``x_1 .. x_{n-1}`` (never ``start``), so its priced cost is the sum of its arcs'
-    reduced costs (at least 0): ``L(lam) = min walk reduced cost + Σ_v lam_v``, and ``Σ_v lam_v`` is the assignment bound. The
-    window bound from these prices is never below the assignment bound, and the subgradient
-    keeps the best it sees."""
+    reduced costs (at least 0): ``L(lam) = min walk reduced cost + Σ_v lam_v``, and
+    ``Σ_v lam_v`` is the assignment bound. The window bound from these prices is never below
+    the assignment bound, and the subgradient keeps the best it sees."""
     lam = np.asarray(alpha, float) + np.asarray(beta, float)
     lam[end] -= alpha[end]
     lam[start] -= beta[start]
