@@ -78,6 +78,7 @@ from taopt.errors import InstanceError, SolverError
 from taopt.models.highs import HighsModel, solve_highs
 from taopt.models.sop_lns import large_neighbourhood_search
 from taopt.models.sop_statelp import StateLp
+from taopt.models.sop_window import start_prices, window_prices, windows
 from taopt.result import (
     FEASIBLE,
     INFEASIBLE,
@@ -1600,6 +1601,18 @@ def _combine(first: Solution, second: Solution) -> Solution:
     return best.replace(bound=bound, status=status)
 
 
+def _raised(result: Solution, bound: float) -> Solution:
+    """``result`` with its bound raised to ``bound`` (a bound proven elsewhere; never above
+    its objective), the status by the one rule."""
+    if result.bound is not None and result.bound >= bound:
+        return result
+    bound = min(bound, result.objective)
+    status = result.status
+    if np.isfinite(result.objective):
+        status, _ = decide("time_limit", result.objective, bound)
+    return result.replace(bound=bound, status=status)
+
+
 #: With the cut engine, the second DP stage runs only when the first one's relative gap is
 #: at most this (rbg050c: 468 / 462 after the first stage, closed by the second; p43.1:
 #: 28,845 / 2,720, prob.42: 276 / 182, where the DP's bound is far and the cuts' is close).
@@ -1613,6 +1626,11 @@ CUTS_SECOND_STAGE_GAP = 0.05
 #: and the cut engine goes on from its rows later. Root loops measured 1.0-3.0 s on prob.42,
 #: p43.1, ry48p.1, ft53.1 and ESC47 at load 5, 11 s on rbg050c.
 ROOT_SHARE = 0.1
+
+#: Share of the time limit the position-window bound's subgradient
+#: (:func:`taopt.models.sop_window.window_prices`) may use after the root stage
+#: (:func:`_window_stage`).
+WINDOW_SHARE = 0.1
 
 #: The cut engine runs first, with the whole limit, when its root bound closes at least this
 #: share of the gap between the DP's root bound (the assignment/arborescence bound) and the
@@ -1892,7 +1910,12 @@ def solve_sop_problem(
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``, with the row credit of its
     path cuts, ``credit``, :data:`ROW_CREDIT`; and, when :data:`STATE_LP` is on, the root's
     LP re-solved per DP state with the state's ideal fixed, its prices inherited along each
-    state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. When
+    state's kept prefix, ``state_lp``), and the cut engine later goes on from its rows. Unless
+    the cut engine goes first, a window stage follows (:func:`_window_stage`, at most
+    :data:`WINDOW_SHARE` of the limit): the position-window
+    Lagrangian bound (:mod:`taopt.models.sop_window`) from the assignment's prices; when it is
+    above the assignment/arborescence bound, its prices bound every DP stage's states
+    (``window``); the reported bound is never below it (``info["window"]``). When
     the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
     stage and its local search brought it there, the proof stage runs
     (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
@@ -2151,6 +2174,59 @@ def _root_stage(
     return model, lagrange, incumbent, cuts_first
 
 
+def _window_stage(
+    problem: SopProblem, deadline: Deadline, incumbent: Any, info: dict[str, Any], floor: float
+) -> tuple[np.ndarray | None, float]:
+    """The portfolio's window stage: the position-window Lagrangian bound
+    (:mod:`taopt.models.sop_window`) from the assignment's prices, within
+    :data:`WINDOW_SHARE` of the limit, towards the best order's cost.
+
+    Returns ``(prices, bound)``: the prices for the DP stages (``window=`` of
+    :func:`taopt.models.sop_dp.solve_sop_dp`), None when its bound is not above ``floor`` (the
+    assignment/arborescence bound: the DP's own completion bound at the root; the subgradient
+    then stops after its trial, :data:`taopt.models.sop_window.TRIAL`), and the bound (``-inf``
+    without an order to aim at), valid for every order whatever the prices. Not compared with
+    the root stage's LP: on the rbg stand-ins that LP equals the assignment bound and the
+    window bound climbs above both only after hundreds of steps (rbg-atsp-255: a floor at the
+    LP's 2,268 stopped it after its trial; without, it reached 2,320 in 6 s); the LP's prices
+    bound the states' prefixes, these their completions. ``info["window"]`` says what ran."""
+    from taopt.models.sop_dp import (  # sop_dp imports this module
+        _cost_unit,
+        _rounded_up,
+        assignment_potentials,
+    )
+
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    if known is None:
+        info["window"] = "skipped: no order to aim at"
+        return None, -np.inf
+    # from the assignment's prices: the bound starts at the assignment bound
+    tails, heads = usable_arcs(problem.cost, problem.closure)
+    usable = np.full(problem.cost.shape, np.inf)
+    usable[tails, heads] = problem.cost[tails, heads]
+    alpha, beta = assignment_potentials(usable, problem.start, problem.end)
+    found = window_prices(
+        problem,
+        known[0],
+        Deadline(deadline.share(WINDOW_SHARE), cancel=deadline.token),
+        lam=start_prices(alpha, beta, problem.start, problem.end),
+        floor=floor,
+    )
+    # every order's cost is a multiple of the costs' gcd when they are integral
+    bound = float(_rounded_up(np.array([found.bound]), _cost_unit(problem))[0])
+    used = bool(bound > floor)
+    low, high = windows(problem)
+    info["window"] = {
+        "bound": bound,
+        "seconds": found.seconds,
+        "iterations": found.iterations,
+        "width": float(np.mean(high - low + 1)) / problem.n,
+        "floor": floor,
+        "used": used,
+    }
+    return (found.lam if used else None), bound
+
+
 def _searched(
     problem: SopProblem,
     result: Solution,
@@ -2328,6 +2404,8 @@ def _stages(
         return StateLp(root_model)
 
     lagrange: tuple[float, np.ndarray] | None = None  # its LP's Lagrangian bound, for the DP
+    window: np.ndarray | None = None  # the window stage's prices, for the DP
+    window_bound = -np.inf  # and its bound
     credit: Any = None  # the same LP's prices with its priced rows (the DP's row credit)
 
     def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
@@ -2402,6 +2480,7 @@ def _stages(
             lagrange=lagrange,
             credit=credit,
             state_lp=state_lp(),
+            window=window,
         )
         setups.append(again.info.get("setup_seconds", 0.0))
         return again if before is None else _combine(before, again)
@@ -2428,7 +2507,7 @@ def _stages(
             return None
         value = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
         root_bound = info.get("root_stage", {}).get("bound", cheap)
-        lower = max(float(root_bound) if np.isfinite(root_bound) else cheap, cheap)
+        lower = max(float(root_bound) if np.isfinite(root_bound) else cheap, cheap, window_bound)
         if bound is not None:
             lower = max(lower, bound)
         gap = root_gap(None if value is None else value[0], lower)
@@ -2453,6 +2532,7 @@ def _stages(
             credit=credit,
             state_lp=lp,
             give_up=True,
+            window=window,
         )
         setups.append(found.info.get("setup_seconds", 0.0))
         info["proof"] = {
@@ -2512,6 +2592,8 @@ def _stages(
             if on_root is not None:
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]
+            if not cuts_first:
+                window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
@@ -2550,6 +2632,7 @@ def _stages(
                     credit=credit,
                     watch=watch,
                     state_lp=state_lp(),
+                    window=window,
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
@@ -2596,6 +2679,7 @@ def _stages(
                     lagrange=lagrange,
                     credit=credit,
                     state_lp=state_lp(),
+                    window=window,
                 )
                 used += "+dp"
                 result = _combine(first, second)
@@ -2617,6 +2701,8 @@ def _stages(
         last_cap = max(second_states, max_states) if grow else 1 << 62
         setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
+    if result.status == TIME_LIMIT and np.isfinite(window_bound):
+        result = _raised(result, window_bound)
     stage(BASE_BYTES)  # the process itself, whatever ran
     # the stages' upper estimate (each stage's, before it ran); the reported one is the
     # prediction made before the stages, where the rule's paths made one
