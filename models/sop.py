@@ -1680,6 +1680,23 @@ PROOF_STAGE = True
 #: reaches the incumbent, so a wider gap leaves the layers growing and the stage giving up.
 PROOF_GAP = 0.06
 
+#: Where the gap is wider than :data:`PROOF_GAP`, the proof stage runs trial cutoffs instead
+#: (:func:`taopt.models.sop_dp.trial_cutoffs`: the same DP with the per-state LP at cutoffs
+#: stepped up from the bound, :data:`taopt.models.sop_dp.TRIAL_STEP`), within
+#: :data:`TRIAL_SHARE` of the time left, after the first DP stage and the primal search only
+#: (run before the first DP stage, they cost the stand-in p43-0.3 its proof by the DP: 39 s
+#: against 13 s at 60 s, load 7.5); a proven cutoff is a bound, a trial that finds an order
+#: below its cutoff proves it optimal. Single cutoffs from the root's bounds, no incumbent
+#: (load 4-5): prob.42 240 proven in 3.4 s (root 230, optimum 243; at 244 it found and proved
+#: 243 in 17 s), ry48p.1 15,030 in 6 s (root 14,775), ft53.1 7,270 in 1.6 s and 7,360 in 19 s
+#: (root 7,189); the DP stages' own bounds stay at or near the root's.
+TRIAL_CUTOFFS = True
+
+#: Share of the time left the trial cutoffs may use: they replace the first DP stage's time
+#: where its bound stays at the root's, and leave the rest to the primal search and the cut
+#: engine as :data:`DP_SHARE` leaves it to the MILP.
+TRIAL_SHARE = 0.5
+
 #: The DP stages after the root stage bound their states also by the root's LP re-solved with
 #: each state's ideal fixed (:class:`taopt.models.sop_statelp.StateLp`, within its share of
 #: each stage's time). Off: on a quiet machine at 10 s it raised no bound of prob.42, ry48p.1,
@@ -2290,7 +2307,7 @@ def _stages(
 
     ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
     ``(ideals, capped, seconds)`` of a count already made (not made again)."""
-    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp
+    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp, trial_cutoffs
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
@@ -2489,10 +2506,12 @@ def _stages(
         """The root stage closed at least :data:`CUTS_FIRST_SHARE` of the gap."""
         return bool(info.get("root_stage", {}).get("closed", 0.0) >= CUTS_FIRST_SHARE)
 
-    def proof(known: Any, bound: float | None) -> Solution | None:
+    def proof(known: Any, bound: float | None, trials_ok: bool = False) -> Solution | None:
         """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
         and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
-        since the root stage). None when it does not run (``info["proof"]`` says why). A run
+        since the root stage; ``trials_ok``: where the gap is wider than :data:`PROOF_GAP`, the
+        trial cutoffs of :data:`TRIAL_CUTOFFS` instead of nothing). None when it does not run
+        (``info["proof"]`` says why). A run
         that gave up is combined with the later stages' result at the end only, so their
         rules read their own gaps."""
         if not PROOF_STAGE or root_model is None:
@@ -2511,10 +2530,11 @@ def _stages(
         if bound is not None:
             lower = max(lower, bound)
         gap = root_gap(None if value is None else value[0], lower)
-        if gap > PROOF_GAP:
+        trials = gap > PROOF_GAP
+        if trials and not (TRIAL_CUTOFFS and trials_ok):
             info["proof"] = f"skipped: the gap is {100 * gap:.1f} %"
             return None
-        left = deadline.remaining()
+        left = deadline.share(TRIAL_SHARE) if trials else deadline.remaining()
         if left is not None and left < 2 * setup_guess + MARGIN:
             info["proof"] = f"skipped: {left:.2f} s left for a {setup_guess:.2f} s setup"
             return None
@@ -2522,6 +2542,26 @@ def _stages(
         expect(max_states, left, nonzeros=held())
         lp = StateLp(root_model, share=1.0)  # the LPs are this stage's work
         assert value is not None  # the gap is 1 without an order
+        if trials:  # the gap is wide: raise the bound by trial cutoffs stepped up from it
+            found = trial_cutoffs(
+                problem,
+                Order(value[1]),
+                lower,
+                None if left is None else max(left - MARGIN, MARGIN),
+                lp,
+                lagrange,
+                credit,
+                max_states,
+            )
+            info["proof"] = {
+                "gap": gap,
+                "status": str(found.status),
+                "bound": found.bound,
+                "seconds": time.perf_counter() - stage_began,
+                "trials": found.info.get("trials"),
+            }
+            info["proof_trials"] = found.info.get("trials") or []
+            return found
         found = solve_sop_dp(
             problem,
             None if left is None else max(left - MARGIN, MARGIN),
@@ -2641,8 +2681,9 @@ def _stages(
                 lower = float(root_bound) if np.isfinite(root_bound) else cheap
                 result = _searched(problem, result, deadline, seed, info, lower)
             if result.status == TIME_LIMIT and proved is None and not deadline.expired(MARGIN):
-                # the first stages brought the order close to the bound: the proof stage now
-                proved = proof(result.solution, result.bound)
+                # the first stages brought the order close to the bound: the proof stage now,
+                # or its trial cutoffs where the gap is still wide (TRIAL_CUTOFFS)
+                proved = proof(result.solution, result.bound, trials_ok=True)
                 if proved is not None:
                     used += "+proof"
                     if proved.status != TIME_LIMIT:

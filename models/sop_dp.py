@@ -148,19 +148,21 @@ from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_mas
 from taopt.models.sop_remainder import RemainderBound
 from taopt.models.sop_statelp import MIN_SHARE, StateLp
 from taopt.models.sop_window import WindowCompletion
-from taopt.result import Order, Solution, finish
+from taopt.result import TIME_LIMIT, Order, Solution, finish
 from taopt.runtime import MARGIN, CancelToken, Deadline
 from taopt.sop.problem import SopProblem, path_cost
 
 __all__ = [
     "GIVE_UP_GROWTH",
     "MAX_NODES",
+    "TRIAL_STEP",
     "IDEAL_CAP",
     "RowCredit",
     "count_ideals",
     "completion_bound",
     "reversed_problem",
     "solve_sop_dp",
+    "trial_cutoffs",
 ]
 
 #: With an LP's Lagrangian bound (``lagrange=`` of :func:`solve_sop_dp`), also bound the
@@ -181,6 +183,20 @@ REMAINDER = False
 #: 24, 34, ...) and it was proven; ft53.1's and ry48p.1's second layers grew 9-17x (31 -> 395,
 #: 33 -> 563) and neither was proven in 60 s.
 GIVE_UP_GROWTH = 4.0
+
+#: :func:`trial_cutoffs` steps its trial cutoff up by this share of the bound: small steps
+#: bound the cost of overshooting the optimum (a trial's work grows about geometrically with
+#: its cutoff, 1.5x a unit of cost, 0.4 % of the bound, on prob.42), and the trials below it
+#: add a geometric series dominated by the last. The root gaps of the shipped .1 files are
+#: 0.02-6.5 % (p43.1, ft53.1, ry48p.1, prob.42): at most seven trials cross the widest. A step
+#: relative to the incumbent's gap instead followed the incumbent, 30 % above the bound before
+#: the primal search: prob.42's first trial was at 242 (optimum 243), ran 13 s and gave up.
+TRIAL_STEP = 0.01
+
+#: Share of the stage's time left one trial cutoff may use (the incumbent's own trial, the
+#: last, gets all of it): a trial cut by its time proves nothing, and the rest is left for a
+#: smaller step.
+TRIAL_TIME_SHARE = 0.5
 
 #: States per call of that bound between two looks at the deadline.
 LAGRANGE_CHUNK = 20_000
@@ -1216,6 +1232,8 @@ class _Run:
         self.lp_low: list[np.ndarray] = [np.full(1, -np.inf)]
         #: ``max(d, 0)`` of the restricted LPs solved whose prices some kept state uses.
         self.prices: dict[int, np.ndarray] = {}
+        #: The optimal basis of each of those LPs (each descendant's LP starts from it).
+        self.bases: dict[int, Any] = {}
         self._next_prices = 0
         self._pending: list[np.ndarray] = []
         #: Every order's cost is a multiple of this (0: not integral), for rounding bounds up.
@@ -1335,15 +1353,18 @@ class _Run:
             self.lp_pruned += dropped
         if self.state_lp is not None and self.state_lp.usable() and len(grown[0]):
             members = _members(grown[0], self.n)
-            bound, prices = self.state_lp.layer(
-                members, grown[1], total, below, self.reverse, deadline
-            )
             sets, low = extra
-            for k, (own, positive) in prices.items():  # the state's own prices from now
+            starts = [self.bases.get(int(key)) for key in sets]
+            bound, prices = self.state_lp.layer(
+                members, grown[1], total, below, self.reverse, deadline, starts
+            )
+            for k, (own, positive, basis) in prices.items():  # the state's own prices from now
                 path = self.search.path([*self.layers, grown], k)
                 key = self._next_prices
                 self._next_prices += 1
                 self.prices[key] = positive
+                if basis is not None:
+                    self.bases[key] = basis
                 sets[k] = key
                 low[k] = own + float(positive[path[:-1], path[1:]].sum())
             bound = np.maximum(bound, _rounded_up(low, self._unit))
@@ -1487,6 +1508,7 @@ class _Run:
             self.lp_low.append(low)
             used = set(np.unique(sets[sets >= 0]).tolist())
             self.prices = {k: v for k, v in self.prices.items() if k in used}
+            self.bases = {k: v for k, v in self.bases.items() if k in used}
         self.kept += len(grown[0])
         self.peak = max(self.peak, len(grown[0]))
         if len(grown[0]) == 0 or len(self.layers) == self.n:
@@ -1777,6 +1799,8 @@ def solve_sop_dp(
         info["lp_pruned"] = sum(r.lp_pruned for r in runs)
         info["lp_solved"] = state_lp.solved
         info["lp_seconds"] = state_lp.seconds
+        info["lp_stopped"] = state_lp.stopped
+        info["lp_iterations"] = state_lp.iterations
     if remainder:
         info["remainder_pruned"] = sum(r.remainder_pruned for r in runs)
         info["remainder_seconds"] = sum(
@@ -1902,6 +1926,105 @@ def _problem_key(problem: SopProblem, width: int) -> bytes:
     data = np.ascontiguousarray(problem.cost).tobytes() + pairs.tobytes()
     extra = np.array([problem.start, problem.end, width], dtype=np.int64).tobytes()
     return hashlib.blake2b(data + extra).digest()
+
+
+def trial_cutoffs(
+    problem: SopProblem,
+    incumbent: Order,
+    lower: float,
+    time_limit: float | None,
+    state_lp: StateLp,
+    lagrange: tuple[float, np.ndarray] | None = None,
+    credit: RowCredit | None = None,
+    max_states: int | None = None,
+) -> Solution:
+    """Raise a proven bound by the DP with the per-state LP at trial cutoffs, stepping up from
+    ``lower`` (a proven bound) towards the incumbent's cost ``UB``.
+
+    Each trial runs :func:`solve_sop_dp` with ``cutoff = lower + step`` (rounded up to the
+    costs' gcd; the incumbent itself, no cutoff, once that reaches ``UB``), ``step`` =
+    :data:`TRIAL_STEP` ``* lower``, its give-up rule, and at most
+    :data:`TRIAL_TIME_SHARE` of the time left. Every trial that ends proves what ``cutoff=``
+    promises: an order below the cutoff, the cheapest there is (returned: optimal), or no order
+    below it, so ``cutoff`` is a bound, the new ``lower``. A trial that gave up (or ran out of
+    its time) proves nothing more than its own bound; the next one halves the step, down to one
+    gcd. The stage stops on its time or once no step is left; it returns the incumbent with the
+    largest bound proven (status "time_limit" unless proven optimal), ``info["trials"]`` listing
+    each trial's cutoff, outcome and seconds.
+
+    Why small steps up: a trial's work grows about geometrically with its cutoff's distance
+    above the root's bound (prob.42, root bound 230, optimum 243: 713 LPs at a cutoff of 240,
+    3,913 at 244, 5,703 at 245), so the trials below the optimum are cheap bound raises (ft53.1:
+    7,270 in 1.6 s, 7,360 in 19 s, against a root bound of 7,189), their sum is dominated by
+    the last one, and a trial just above the optimum finds it and proves it; a trial far above
+    it costs the geometric factor of its overshoot (bisecting prob.42's gap 230-259 from the
+    middle, the first trial at 245 ran 16 s and gave up). The bound proven is also the
+    trials' whole output when they stop: a proven cutoff is kept whatever follows.
+    """
+    began = time.perf_counter()
+    deadline = Deadline(time_limit)
+    upper = path_cost(problem.cost, list(incumbent))
+    unit = _cost_unit(problem)
+    best_bound = lower
+    step = TRIAL_STEP * abs(lower)
+    trials: list[dict[str, Any]] = []
+    last: Solution | None = None
+    while lower < upper - 1e-9 * abs(upper) and not deadline.expired(MARGIN):
+        raised = lower + max(step, unit)
+        target = float(_rounded_up(np.array([raised]), unit)[0]) if unit else raised
+        cutoff = None if target >= upper else target
+        left = deadline.remaining()
+        if left is not None and cutoff is not None:
+            left *= TRIAL_TIME_SHARE
+        trial_began = time.perf_counter()
+        found = solve_sop_dp(
+            problem,
+            None if left is None else max(left - MARGIN, MARGIN),
+            incumbent=incumbent,
+            max_states=max_states,
+            beam_width=0,
+            lagrange=lagrange,
+            credit=credit,
+            state_lp=state_lp,
+            cutoff=cutoff,
+            give_up=True,
+        )
+        last = found
+        proven = bool(found.info.get("cutoff_proven"))
+        trials.append(
+            {
+                "cutoff": upper if cutoff is None else cutoff,
+                "status": str(found.status),
+                "proven": proven,
+                "bound": found.bound,
+                "gave_up": found.info.get("gave_up"),
+                "seconds": time.perf_counter() - trial_began,
+            }
+        )
+        if found.status != TIME_LIMIT:  # optimal (or infeasible): the whole answer
+            return found.replace(info={**found.info, "trials": trials})
+        if found.bound is not None:
+            best_bound = max(best_bound, float(found.bound))
+        if proven and cutoff is not None:
+            if not cutoff > lower:
+                break  # no step left to prove (a share of 0 on non-integral costs)
+            lower = max(lower, cutoff, best_bound)
+            step = TRIAL_STEP * abs(lower)
+        elif cutoff is None or step <= max(unit, 1e-9 * abs(upper)):
+            break  # the smallest trial gave up: nothing cheaper is left to try
+        else:
+            step /= 2
+    info = {} if last is None else dict(last.info)
+    info["trials"] = trials
+    return finish(
+        problem,
+        Order(list(incumbent)),
+        method="exact-sop-dp",
+        stop="time_limit",
+        bound=min(best_bound, upper),
+        runtime=time.perf_counter() - began,
+        info=info,
+    )
 
 
 def _cost_unit(problem: SopProblem) -> float:

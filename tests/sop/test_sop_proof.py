@@ -172,11 +172,12 @@ def test_portfolio_proof_stage_proves_the_brute_force_optimum(seed, monkeypatch)
 
 
 def test_portfolio_skips_the_proof_stage_on_a_wide_gap(monkeypatch):
-    """With PROOF_GAP below 0 the proof stage never runs (its reason is recorded) and the
-    portfolio still proves the optimum."""
+    """With PROOF_GAP below 0 and no trial cutoffs the proof stage never runs (its reason is
+    recorded) and the portfolio still proves the optimum."""
     from taopt.models import sop
 
     monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
+    monkeypatch.setattr(sop, "TRIAL_CUTOFFS", False)
     problem = _instance(5)
     result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
     assert result.status == OPTIMAL
@@ -227,3 +228,114 @@ def test_constraint_matrix_reads_either_format():
         lp.a_matrix_.index_ = made.indices.astype(np.int32)
         lp.a_matrix_.value_ = made.data
         assert (constraint_matrix(lp).toarray() == dense).all()
+
+
+def _trials(seed: int, step: float, slack: float = 0.0) -> tuple[SopProblem, float, object] | None:
+    """:func:`trial_cutoffs` on SOP ``seed`` from its dearest order and its root bound less
+    ``slack`` times its size plus ``slack`` (a weaker valid bound: more trials), with
+    ``TRIAL_STEP`` = ``step``; None when the SOP has no order."""
+    from taopt.models import sop_dp
+
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return None
+    model = SopCutModel(problem)
+    root = model.root()
+    lagrange, credit = model.lagrangian_prices(), model.row_credit()
+    old = sop_dp.TRIAL_STEP
+    sop_dp.TRIAL_STEP = step
+    try:
+        found = sop_dp.trial_cutoffs(
+            problem,
+            _worst(problem),
+            root.bound - slack * (abs(root.bound) + 1),
+            None,
+            StateLp(model, share=1.0),
+            lagrange,
+            credit,
+        )
+    finally:
+        sop_dp.TRIAL_STEP = old
+    return problem, optimum, found
+
+
+@pytest.mark.parametrize("seed", range(16))
+@pytest.mark.parametrize("step", [0.01, 0.2])
+@pytest.mark.parametrize("slack", [0.0, 0.3])
+def test_trial_cutoffs_prove_at_most_the_optimum(seed, step, slack):
+    """The trial cutoffs (steps of 1 % and 20 % of the bound) from the dearest order and the
+    root bound (or a weaker one):
+    every bound they prove is at most the brute-force optimum, their order is scored right, and
+    an optimal answer is the optimum; each trial's cutoff proven is at most the optimum."""
+    got = _trials(seed, step, slack)
+    if got is None:
+        return
+    problem, optimum, found = got
+    assert found.bound is not None and found.bound <= optimum + 1e-6
+    assert evaluate_order(problem, found.order) == pytest.approx(found.objective)
+    if found.status == OPTIMAL:
+        assert found.objective == pytest.approx(optimum)
+    for trial in found.info["trials"]:
+        if trial["proven"]:
+            assert trial["cutoff"] <= optimum + 1e-6
+
+
+def test_trial_cutoffs_prove_and_find():
+    """On the tiny SOPs the trials both prove cutoffs below the optimum and end optimal (the
+    paths of :func:`test_trial_cutoffs_prove_at_most_the_optimum` are exercised)."""
+    proven = optimal = 0
+    for seed in range(8):
+        got = _trials(seed, 0.01, 0.3)
+        if got is None:
+            continue
+        found = got[2]
+        proven += sum(t["proven"] for t in found.info["trials"])
+        optimal += found.status == OPTIMAL
+    assert proven > 0 and optimal > 0
+
+
+def _portfolio_with_trials(seed: int, monkeypatch) -> tuple[float, object] | None:
+    """The portfolio on SOP ``seed`` with the trial cutoffs at every gap (PROOF_GAP below 0),
+    its DP stages without the per-state LP stopped after their first state and a root loop of
+    one round (so that a gap is left for the trials); ``(optimum, result)``, None
+    without an order."""
+    from taopt.models import sop, sop_dp
+
+    plain = sop_dp.solve_sop_dp
+
+    def stopped_early(*args, **kwargs):
+        if kwargs.get("state_lp") is None:  # a DP stage, not a trial
+            kwargs["max_states"] = 1
+        return plain(*args, **kwargs)
+
+    root = SopCutModel.root
+
+    def one_round(self, deadline=None, rounds=1):  # a weaker root: a gap to trial
+        return root(self, deadline, rounds=1)
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", stopped_early)
+    monkeypatch.setattr(SopCutModel, "root", one_round)
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return None
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(optimum)
+    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    return optimum, result
+
+
+def test_portfolio_trial_cutoffs_prove_the_brute_force_optimum(monkeypatch):
+    """The portfolio with the trial cutoffs proves the brute-force optimum (checks of
+    :func:`_portfolio_with_trials`), and the trials ran (where the root had not closed the
+    gap already)."""
+    ran = 0
+    for seed in range(6):
+        got = _portfolio_with_trials(seed, monkeypatch)
+        if got is not None:
+            ran += "proof_trials" in got[1].info
+    assert ran > 0
