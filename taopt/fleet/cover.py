@@ -693,7 +693,15 @@ ONE_DRONE_MAX_WORK = 600_000_000
 
 
 def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> np.ndarray | None:
-    r"""``V[u, X]``: a lower bound on the objective's clock, counted from the moment a truck at
+    """``V[u, X]`` of :func:`one_drone_tables` (None when that is)."""
+    got = one_drone_tables(problem, deadline)
+    return None if got is None else got[0]
+
+
+def one_drone_tables(
+    problem: FleetProblem, deadline: Deadline | None = None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    r"""``(V, H)``, both indexed ``[u, X]``: ``V[u, X]``: a lower bound on the objective's clock, counted from the moment a truck at
     stop u and one drone aboard it are both ready, for that truck and that drone alone to serve
     exactly the drone-only customers of X by sorties, the precedence pairs inside X kept (``inf``
     where X holds another customer, or no such plan exists): the time of X's last service
@@ -725,6 +733,12 @@ def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> 
     relaxed to ``tt(v, q)`` after the launch) is at most its objective. Pairs with one end
     outside X are dropped (a relaxation).
 
+    ``H[v, X]`` is the same clock when the drone's first sortie is launched at v itself (the
+    DP's ``H``; ``H[v, ∅] = V[v, ∅]``): a drone ready at a whose truck stands at v and which
+    launches there ends no sooner than ``a + H[v, X]`` (and ``V[u, X] = min_v tt(u, v) +
+    H[v, X]``). The label search uses it for a drone that launches before its truck leaves
+    its stop (:func:`taopt.fleet.search._sortie_time_bound`).
+
     None when the table would take more than :data:`~taopt.fleet.cover.ONE_DRONE_MAX_WORK`
     steps or the deadline expires (checked every 16 sets)."""
     import itertools
@@ -750,8 +764,10 @@ def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> 
         pred[j] |= 1 << r
     V = np.full((size, s), INF)
     V[0] = tt[:, p.depot] if p.objective == "return" else 0.0
+    HX = np.full((size, s), INF)  # H per set (rows X, as V)
+    HX[0] = V[0]
     if not seqs:
-        return np.ascontiguousarray(V.T)
+        return np.ascontiguousarray(V.T), np.ascontiguousarray(HX.T)
     mask = np.zeros(count, dtype=np.int64)
     bad = np.zeros(count, dtype=np.int64)
     f = np.full((count, s), INF)  # launch -> last service
@@ -797,8 +813,9 @@ def one_drone_table(problem: FleetProblem, deadline: Deadline | None = None) -> 
             mi = idx[more]
             cand = np.min(rec[mi] + V[rest[more]][:, None, :], axis=(0, 2))
             H = np.minimum(H, cand)
+        HX[X] = H
         V[X] = np.min(tt + H[None, :], axis=1)
-    return np.ascontiguousarray(V.T)
+    return np.ascontiguousarray(V.T), np.ascontiguousarray(HX.T)
 
 
 __all__ = [
@@ -810,6 +827,7 @@ __all__ = [
     "coverable",
     "fleet_cover_bound",
     "one_drone_table",
+    "one_drone_tables",
     "ONE_DRONE_MAX_WORK",
     "fleet_coverable",
     "release_times",

@@ -72,7 +72,7 @@ from taopt.fleet.cover import (
     WALK_MAX_CUSTOMERS,
     CoverTables,
     WalkTable,
-    one_drone_table,
+    one_drone_tables,
     sortie_time_table,
     walk_table,
 )
@@ -207,14 +207,17 @@ class _Tables:
         # start stop and served set
         self.sortie_time: np.ndarray | None = None
         self.one_drone = False  # sortie_time is one_drone_table's (the objective's clock)
+        # launched here: the one-drone table's H (the first sortie launched at the start stop)
+        self.launch_here: np.ndarray | None = None
         self.drone_only = sum(1 << j for j in range(n) if not self.truck_ok[j] and self.drone_ok[j])
         if walk and n <= WALK_MAX_CUSTOMERS and self.drone_only:
             # the one-drone table (precedences inside the set, the objective's own clock) where
             # it fits, else the weaker precedence-free sortie-time table
-            self.sortie_time = one_drone_table(p, deadline)
-            if self.sortie_time is None:
+            tables = one_drone_tables(p, deadline)
+            if tables is None:
                 self.sortie_time = sortie_time_table(p, deadline)
             else:
+                self.sortie_time, self.launch_here = tables
                 self.one_drone = True
         self.masks = np.arange(1 << n, dtype=np.int64) if self.walk else np.zeros(0, np.int64)
         self._subs: dict[int, np.ndarray] = {}
@@ -229,6 +232,7 @@ class _Tables:
         # caches; each cache is cleared when it grows past its cap)
         self._watch: dict[int, tuple[int, tuple[int, ...], int]] = {}  # _watched
         self._cols: dict[int, np.ndarray] = {}  # _columns
+        self._here: dict[int, np.ndarray] = {}  # _columns of launch_here
         self._cols_size = 0
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
         self._firsts: dict[tuple, np.ndarray] = {}
@@ -565,7 +569,17 @@ def _sortie_time_bound(
     (``tab.one_drone``; the drone with a copy of its truck of its own, the precedence pairs
     inside X kept, the objective's clock: the last service, or the drone and its truck home
     under ``"return"``), else :func:`taopt.fleet.cover.sortie_time_table` (precedences
-    dropped, last service). An airborne one is first recovered at some stop q within its
+    dropped, last service). With the one-drone table this is sharpened on the truck's
+    timeline: the truck leaves w no sooner than T (every event at its position done, other
+    drones' recoveries included), so the drone's next launch is either at this position, no
+    sooner than a, from w itself, after which its copy of the truck ends no sooner than
+    ``a + H[w, X]`` (:func:`taopt.fleet.cover.one_drone_tables`: the first sortie launched
+    at the start stop; the copy relaxation started at that launch), or at a later position,
+    at some stop v reached no sooner than ``T + tt(w, v)``, after which it ends no sooner
+    than ``T + tt(w, v) + H[v, X] >= T + F[w, X]``; so no sooner than ``min(a + H[w, X],
+    T + F[w, X])`` (equal to ``a + F[w, X]`` when T = a; a drone given nothing does not
+    launch and ends no sooner than ``a + F[w, ∅]``, which ``H[w, ∅] = F[w, ∅]`` gives).
+    An airborne one is first recovered at some stop q within its
     range, no sooner than ``r_q = max(t + ft(ℓ, q), arrival at q) + τ`` (as in
     :func:`_fresh_sorties`), then ends no sooner than ``min_q r_q + F[q, X]``. So the
     objective is at least the least, over the partitions of U among the drones, of the
@@ -606,17 +620,25 @@ def _sortie_time_bound(
             return _first_recoveries(tab, k, w, A, T, dr, S, svc, times)
         return cast(np.ndarray, _recoveries(tab, w, A, T, dr, None)[0])
 
+    H = tab.launch_here
     if len(drones_left) == 1 and not drop:  # one drone serves all of U: one column
         k, w, A, T, dr = drones_left[0]
         if dr[0] == 0:
-            return (dr[1] if dr[1] > A else A) + float(F[w, U])
+            a = dr[1] if dr[1] > A else A
+            if T > a and H is not None:  # launched here from a, or after the truck leaves
+                return min(a + float(H[w, U]), T + float(F[w, U]))
+            return a + float(F[w, U])
         return float((back_of(k, w, A, T, dr) + F[:, U]).min())
     cols = _columns(tab, U)
     ends: list[np.ndarray] = []
     backs: list[np.ndarray] = []
     for k, w, A, T, dr in drones_left:
         if dr[0] == 0:
-            ends.append(cols[w] + (dr[1] if dr[1] > A else A))
+            a = dr[1] if dr[1] > A else A
+            if T > a and H is not None:  # launched here from a, or after the truck leaves
+                ends.append(np.minimum(_columns(tab, U, True)[w] + a, cols[w] + T))
+            else:
+                ends.append(cols[w] + a)
             continue
         back = back_of(k, w, A, T, dr)
         backs.append(back)
@@ -740,17 +762,20 @@ def _shared_recoveries(
     return max(float(J.min()), least)
 
 
-def _columns(tab: _Tables, U: int) -> np.ndarray:
-    """The sortie-time table's columns of the submasks of U, ascending (cached per U, the
-    cache cleared past 2^23 entries)."""
-    got = tab._cols.get(U)
+def _columns(tab: _Tables, U: int, here: bool = False) -> np.ndarray:
+    """The sortie-time table's columns of the submasks of U, ascending (with ``here``, those
+    of ``launch_here``; cached per U, the caches cleared past 2^23 entries in all)."""
+    cache = tab._here if here else tab._cols
+    got = cache.get(U)
     if got is None:
-        assert tab.sortie_time is not None
-        got = np.ascontiguousarray(tab.sortie_time[:, _submasks(tab, U)])
+        table = tab.launch_here if here else tab.sortie_time
+        assert table is not None
+        got = np.ascontiguousarray(table[:, _submasks(tab, U)])
         if tab._cols_size + got.size > 1 << 23:
             tab._cols.clear()
+            tab._here.clear()
             tab._cols_size = 0
-        tab._cols[U] = got
+        cache[U] = got
         tab._cols_size += got.size
     return got
 
