@@ -2506,11 +2506,14 @@ def _stages(
         """The root stage closed at least :data:`CUTS_FIRST_SHARE` of the gap."""
         return bool(info.get("root_stage", {}).get("closed", 0.0) >= CUTS_FIRST_SHARE)
 
-    def proof(known: Any, bound: float | None, trials_ok: bool = False) -> Solution | None:
+    def proof(
+        known: Any, bound: float | None, trials_ok: bool = False, setup: float = 0.0
+    ) -> Solution | None:
         """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
         and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
         since the root stage; ``trials_ok``: where the gap is wider than :data:`PROOF_GAP`, the
-        trial cutoffs of :data:`TRIAL_CUTOFFS` instead of nothing). None when it does not run
+        trial cutoffs of :data:`TRIAL_CUTOFFS` instead of nothing; ``setup``: the measured
+        setup of the DP stage before it, which it needs again). None when it does not run
         (``info["proof"]`` says why). A run
         that gave up is combined with the later stages' result at the end only, so their
         rules read their own gaps."""
@@ -2535,8 +2538,9 @@ def _stages(
             info["proof"] = f"skipped: the gap is {100 * gap:.1f} %"
             return None
         left = deadline.share(TRIAL_SHARE) if trials else deadline.remaining()
-        if left is not None and left < 2 * setup_guess + MARGIN:
-            info["proof"] = f"skipped: {left:.2f} s left for a {setup_guess:.2f} s setup"
+        need = max(setup_guess, setup, *setups)  # every trial sets up as a DP stage does
+        if left is not None and left < 2 * need + MARGIN:
+            info["proof"] = f"skipped: {left:.2f} s left for a {need:.2f} s setup"
             return None
         stage_began = time.perf_counter()
         expect(max_states, left, nonzeros=held())
@@ -2683,7 +2687,12 @@ def _stages(
             if result.status == TIME_LIMIT and proved is None and not deadline.expired(MARGIN):
                 # the first stages brought the order close to the bound: the proof stage now,
                 # or its trial cutoffs where the gap is still wide (TRIAL_CUTOFFS)
-                proved = proof(result.solution, result.bound, trials_ok=True)
+                proved = proof(
+                    result.solution,
+                    result.bound,
+                    trials_ok=True,
+                    setup=result.info.get("setup_seconds", 0.0),
+                )
                 if proved is not None:
                     used += "+proof"
                     if proved.status != TIME_LIMIT:
