@@ -87,8 +87,8 @@ __all__ = [
 #: the large files.
 ITERATIONS = 1000
 
-#: Polyak's step factor at the start; halved after :data:`PATIENCE` steps without a better
-#: bound, the loop ends below :data:`MIN_FACTOR`.
+#: Polyak's step factor at the start; halved after ``PATIENCE`` steps without a better
+#: bound, the loop ends below ``MIN_FACTOR``.
 FACTOR = 1.0
 PATIENCE = 30
 MIN_FACTOR = 1e-3
@@ -98,7 +98,7 @@ MIN_FACTOR = 1e-3
 #: at the assignment bound 2,263 for 50 steps, then rose to 2,293 at 100 and 2,311 at 200.
 TRIAL = 4 * PATIENCE
 
-#: States per chunk of :meth:`WindowCompletion.__call__`.
+#: States per chunk of ``WindowCompletion.__call__``.
 CHUNK = 50_000
 
 #: Share of the previous direction added to the subgradient (a deflected subgradient).
@@ -274,7 +274,7 @@ def window_prices(
     by default), towards ``target`` (an incumbent's cost: Polyak's step
     ``FACTOR (target - L) / ||1 - visits||²``), until ``iterations`` steps, the deadline, a
     walk that visits every node once (then ``L`` is that order's cost), a factor below
-    :data:`MIN_FACTOR`, or, after :data:`TRIAL` steps, a bound still at most ``floor`` (a bound
+    ``MIN_FACTOR``, or, after ``TRIAL`` steps, a bound still at most ``floor`` (a bound
     known elsewhere: this one is not the stronger). Every step's bound is valid; the best is
     returned with its prices."""
     began = time.perf_counter()
@@ -358,7 +358,7 @@ class WindowCompletion:
 
     def __call__(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
         """A lower bound on the cheapest completion of each state ``(mask[i], last[i])``, in
-        chunks of :data:`CHUNK` states (the byte look-ups are ``states x bytes`` tables)."""
+        chunks of ``CHUNK`` states (the byte look-ups are ``states x bytes`` tables)."""
         if len(last) <= CHUNK:
             return self._chunk(mask, last)
         return np.concatenate(
