@@ -96,6 +96,7 @@ from taopt.sop.problem import (
     evaluate_order,
     path_cost,
     sop_arborescence_bound,
+    usable_arcs,
 )
 from taopt.status import decide
 
@@ -118,22 +119,6 @@ __all__ = [
     "solve_sop_problem",
     "check_sop",
 ]
-
-
-# ----------------------------------------------------------------------------- data
-def usable_arcs(cost: np.ndarray, closure: nx.DiGraph) -> tuple[np.ndarray, np.ndarray]:
-    """Tails and heads of the arcs a path respecting ``closure`` can use.
-
-    ``i -> j`` is dropped when the cost is infinite, when ``j ≺ i``, or when
-    some k has ``i ≺ k ≺ j`` (k must be visited between them).
-    """
-    n = cost.shape[0]
-    before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
-    between = (before.astype(np.int32) @ before.astype(np.int32)) > 0  # i ≺ k ≺ j
-    allowed = np.isfinite(cost) & ~before.T & ~between
-    np.fill_diagonal(allowed, False)
-    tails, heads = np.nonzero(allowed)
-    return tails, heads
 
 
 # ----------------------------------------------------------------------------- model

@@ -1,7 +1,7 @@
 """A precedence-aware cut model of the SOP, built as arrays straight into HiGHS.
 
 The model is the arc formulation of :mod:`taopt.models.sop` without its flow columns:
-binary ``x_a`` per usable arc (``taopt.models.sop.usable_arcs``), the two degree
+binary ``x_a`` per usable arc (``taopt.sop.problem.usable_arcs``), the two degree
 rows, and rows added in a cut loop. Every row added is a *precedence path cut*:
 
     For a pair ``i ≺ j`` of the precedence closure (which holds ``start ≺ v`` and

@@ -21,7 +21,7 @@ to keep the best value of each ``(I, v)``.
 
 Completion bound. For a state ``(I, v)`` with ``U = V \\ I`` still to visit, the rest
 of any feasible path is ``v -> u_1 -> ... -> end`` through exactly ``U``, on arcs a
-path respecting the precedences can use (:func:`taopt.models.sop.usable_arcs`). So
+path respecting the precedences can use (:func:`taopt.sop.problem.usable_arcs`). So
 
 * every ``w`` in ``U`` is entered once, from ``v`` or from another node of ``U``:
   ``in(I, v) = Σ_{w ∈ U} min(c[v, w], min_{u ∈ U \\ {w}} c[u, w])``;
@@ -150,7 +150,7 @@ from taopt.models.sop_statelp import MIN_SHARE, StateLp
 from taopt.models.sop_window import WindowCompletion
 from taopt.result import TIME_LIMIT, Order, Solution, finish
 from taopt.runtime import MARGIN, CancelToken, Deadline
-from taopt.sop.problem import SopProblem, path_cost
+from taopt.sop.problem import SopProblem, path_cost, usable_arcs
 
 __all__ = [
     "GIVE_UP_GROWTH",
@@ -921,7 +921,6 @@ def completion_bound(problem: SopProblem, visited: set[int], last: int) -> float
         A lower bound on the cheapest path ``last -> (every node not in I) -> end``
         respecting the precedences; ``inf`` when the bound sees that none exists.
     """
-    from taopt.models.sop import usable_arcs
 
     tails, heads = usable_arcs(problem.cost, problem.closure)
     usable = np.full((problem.n, problem.n), np.inf)
@@ -941,7 +940,6 @@ class _Search:
     """The DP's data and one layer step, shared by the exact run and the beam pass."""
 
     def __init__(self, problem: SopProblem) -> None:
-        from taopt.models.sop import usable_arcs
 
         n = problem.n
         tails, heads = usable_arcs(problem.cost, problem.closure)
@@ -2030,7 +2028,6 @@ def trial_cutoffs(
 def _cost_unit(problem: SopProblem) -> float:
     """The gcd of the usable arcs' costs when they are integers (every order's cost is a
     multiple of it), else 0."""
-    from taopt.models.sop import usable_arcs
     from taopt.models.sop_cuts import _cost_step
 
     tails, heads = usable_arcs(problem.cost, problem.closure)

@@ -12,7 +12,7 @@ files (``benchmarks/bench_sop.py``), whatever ``n``.
 
 Relaxed walks (a state-space relaxation, Christofides, Mingozzi and Toth 1981). A *walk* is
 ``x_0 = start, x_1, ..., x_{n-1} = end`` with ``x_k`` in layer ``k``, every step
-``x_k -> x_{k+1}`` a usable arc (:func:`taopt.models.sop.usable_arcs`) and no immediate
+``x_k -> x_{k+1}`` a usable arc (:func:`taopt.sop.problem.usable_arcs`) and no immediate
 return ``x_{k+1} != x_{k-1}``; nodes may repeat or be missed otherwise. Every feasible order
 is such a walk (its positions are in their windows, its arcs usable, it repeats nothing).
 For prices ``lam`` (one per node) the walk's *priced cost* is
@@ -72,7 +72,7 @@ import numpy as np
 
 from taopt.ideals import has, words
 from taopt.runtime import Deadline
-from taopt.sop.problem import SopProblem
+from taopt.sop.problem import SopProblem, usable_arcs
 
 __all__ = [
     "WindowCompletion",
@@ -216,9 +216,8 @@ def start_prices(alpha: np.ndarray, beta: np.ndarray, start: int, end: int) -> n
 
 
 def _usable(problem: SopProblem) -> np.ndarray:
-    """``n x n``: the cost of each usable arc (:func:`taopt.models.sop.usable_arcs`), ``inf``
+    """``n x n``: the cost of each usable arc (:func:`taopt.sop.problem.usable_arcs`), ``inf``
     elsewhere."""
-    from taopt.models.sop import usable_arcs  # sop imports the DP, which imports this module
 
     n = problem.n
     tails, heads = usable_arcs(problem.cost, problem.closure)

@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import networkx as nx
 from reference import BruteForce, Reference
 
 import taopt
+from taopt.fleet.search import _bound, _children, _complete
 
 
 def _two_houses(objective: str) -> taopt.FleetProblem:
@@ -83,3 +85,33 @@ def _fleet_cases(seeds: range) -> list[tuple[taopt.FleetProblem, float]]:
 
 
 BRUTE_FORCE = [BruteForce("fleet", "exact", _fleet_cases, fast=6, slow=60)]
+
+
+def root_label(problem: taopt.FleetProblem) -> tuple:
+    """The label search's root label of ``problem`` (every truck at the depot at time 0, every
+    drone aboard and ready, nothing served): the layout of :mod:`taopt.fleet.search`."""
+    trucks = tuple(
+        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
+        for d in problem.drones
+    )
+    return (0, 0.0, (-1.0,) * problem.n, trucks)
+
+
+def best_completion(tab: Any, label: tuple, memo: dict, seen: list | None = None) -> float:
+    """The least objective over every completion of ``label`` in the label search's tables
+    ``tab`` (all children, no dominance: tiny instances only). Every label below it is memoised
+    in ``memo`` with its best completion; when ``seen`` is given, ``(bound, best)`` is appended
+    for each label visited (the label bound :func:`taopt.fleet.search._bound`)."""
+    got = memo.get(label)
+    if got is not None:
+        return got
+    if _complete(tab, label):
+        best = max(tr[5] for tr in label[3]) if tab.ret else label[1]
+    else:
+        best = math.inf
+        for child, _ in _children(tab, label):
+            best = min(best, best_completion(tab, child, memo, seen))
+    memo[label] = best
+    if seen is not None:
+        seen.append((_bound(tab, label), best))
+    return best

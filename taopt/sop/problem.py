@@ -60,6 +60,7 @@ __all__ = [
     "shipped_sop",
     "sop_path",
     "path_cost",
+    "usable_arcs",
 ]
 
 #: Proven optima of the shipped .sop files (TSPLIB95 DOC.PS Table 3; confirmed by
@@ -493,3 +494,18 @@ def sop_arborescence_bound(problem: SopProblem) -> float:
         weights[j, r] = np.inf  # j -> r would put r after j
     weights[problem.end, :] = np.inf  # nothing leaves the end of the path
     return float(min_arborescence(weights, problem.start))
+
+
+def usable_arcs(cost: np.ndarray, closure: nx.DiGraph) -> tuple[np.ndarray, np.ndarray]:
+    """Tails and heads of the arcs a path respecting ``closure`` can use.
+
+    ``i -> j`` is dropped when the cost is infinite, when ``j ≺ i``, or when
+    some k has ``i ≺ k ≺ j`` (k must be visited between them).
+    """
+    n = cost.shape[0]
+    before = nx.to_numpy_array(closure, nodelist=range(n), dtype=bool, weight=None)
+    between = (before.astype(np.int32) @ before.astype(np.int32)) > 0  # i ≺ k ≺ j
+    allowed = np.isfinite(cost) & ~before.T & ~between
+    np.fill_diagonal(allowed, False)
+    tails, heads = np.nonzero(allowed)
+    return tails, heads

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from reference_fleet import best_completion, root_label
 
 import taopt
 from taopt.fleet.brute import brute_force, tiny_instance
@@ -14,8 +15,6 @@ from taopt.fleet.evaluate import evaluate_fleet
 from taopt.fleet.instances import residential_fleet
 from taopt.fleet.search import (
     _bound,
-    _children,
-    _complete,
     _signature,
     _sortie_time_bound,
     _Tables,
@@ -56,14 +55,6 @@ def _instance(case: tuple):
     return tiny_instance(seed, 3, 1, D, c, prec, objective, stops=2)
 
 
-def _root(problem) -> tuple:
-    trucks = tuple(
-        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
-        for d in problem.drones
-    )
-    return (0, 0.0, (-1.0,) * problem.n, trucks)
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_search_equals_brute_force_one_truck_several_drones(case):
     """The label search (no beam, no incumbent) proves the brute-force optimum."""
@@ -78,30 +69,13 @@ def test_every_root_bound_term_is_below_the_optimum(case):
     """Each term of the root label bound is <= the brute-force optimum."""
     problem = _instance(case)
     tab = _Tables(problem)
-    root = _root(problem)
+    root = root_label(problem)
     trucks = root[3]
     top = case[5] * (1 + 1e-9) + 1e-9
     assert _walk_bound(tab, tab.full, trucks) <= top
     assert _sortie_time_bound(tab, tab.drone_only, trucks) <= top
     assert _water_fill(tab, 0, trucks) <= top
     assert _bound(tab, root) <= top
-
-
-def _best_below(tab: _Tables, label: tuple, memo: dict, seen: list) -> float:
-    """The least objective over every completion of ``label`` (all children, no dominance),
-    recording (bound, best) at each label visited."""
-    got = memo.get(label)
-    if got is not None:
-        return got
-    if _complete(tab, label):
-        best = max(tr[5] for tr in label[3]) if tab.ret else label[1]
-    else:
-        best = math.inf
-        for child, _ in _children(tab, label):
-            best = min(best, _best_below(tab, child, memo, seen))
-    memo[label] = best
-    seen.append((_bound(tab, label), best))
-    return best
 
 
 @pytest.mark.parametrize("objective", ["last_service", "return"])
@@ -116,7 +90,7 @@ def test_bound_never_above_a_labels_best_completion_with_waiting_drones(seed, ob
     assert p.precedences
     tab = _Tables(p)
     seen: list = []
-    assert _best_below(tab, _root(p), {}, seen) < math.inf
+    assert best_completion(tab, root_label(p), {}, seen) < math.inf
     assert len(seen) > 1000
     for bound, best in seen:
         assert bound <= best * (1 + 1e-9) + 1e-9
@@ -131,7 +105,7 @@ def test_dominance_holds_between_labels_of_one_key():
     p = p.replace(service=("drone",) * 3, customer_stop=(None,) * 3)
     tab = _Tables(p)
     memo: dict = {}
-    _best_below(tab, _root(p), memo, [])
+    best_completion(tab, root_label(p), memo, [])
     groups: dict = {}
     for label, best in memo.items():
         key, vec = _signature(tab, label)
@@ -255,7 +229,7 @@ def test_three_drone_sortie_term_is_exact_and_below_the_optimum():
             continue
         problem = _instance(case)
         tab = _Tables(problem)
-        trucks = _root(problem)[3]
+        trucks = root_label(problem)[3]
         exact = _sortie_time_bound(tab, tab.drone_only, trucks)
         saved = search.PARTITION_MAX_CUSTOMERS
         search.PARTITION_MAX_CUSTOMERS = -1
@@ -274,7 +248,7 @@ def test_three_drone_sortie_term_lifts_the_residential_root():
 
     problem = residential_fleet(6, 1, 3, 2, seed=0)
     tab = _Tables(problem)
-    trucks = _root(problem)[3]
+    trucks = root_label(problem)[3]
     exact = _sortie_time_bound(tab, tab.drone_only, trucks)
     saved = search.PARTITION_MAX_CUSTOMERS
     search.PARTITION_MAX_CUSTOMERS = -1
@@ -377,7 +351,7 @@ def test_shared_recoveries_never_above_a_labels_best_completion(case, monkeypatc
     tab = _Tables(p)
     seen: list = []
     memo: dict = {}
-    _best_below(tab, _root(p), memo, seen)
+    best_completion(tab, root_label(p), memo, seen)
     for bound, best in seen:
         assert bound <= best * (1 + 1e-9) + 1e-9
 

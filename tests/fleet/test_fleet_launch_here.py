@@ -6,42 +6,18 @@ for every number of trucks, drones and capacity tried."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
+from reference_fleet import best_completion, root_label
 
 from taopt.fleet.brute import tiny_instance
 from taopt.fleet.cover import one_drone_table, one_drone_tables
-from taopt.fleet.search import _bound, _children, _complete, _sortie_time_bound, _Tables
+from taopt.fleet.search import _bound, _sortie_time_bound, _Tables
 
 
 def _drone_only(seed: int, n: int, K: int, D: int, c: int, prec: bool, objective: str):
     p = tiny_instance(seed, n, K, D, c, prec, objective, stops=3)
     return p.replace(service=("drone",) * n, customer_stop=(None,) * n)
-
-
-def _root(p) -> tuple:
-    trucks = tuple(
-        (p.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d))) for d in p.drones
-    )
-    return (0, 0.0, (-1.0,) * p.n, trucks)
-
-
-def _best_below(tab: _Tables, label: tuple, memo: dict) -> float:
-    """The least objective over every completion of ``label`` (every label below it is
-    memoised in ``memo`` with its best completion)."""
-    got = memo.get(label)
-    if got is not None:
-        return got
-    if _complete(tab, label):
-        best = max(tr[5] for tr in label[3]) if tab.ret else label[1]
-    else:
-        best = math.inf
-        for child, _ in _children(tab, label):
-            best = min(best, _best_below(tab, child, memo))
-    memo[label] = best
-    return best
 
 
 @pytest.mark.parametrize("objective", ["last_service", "return"])
@@ -78,7 +54,7 @@ def test_bound_with_launch_here_never_above_a_labels_best_completion(shape, prec
         tab = _Tables(p)
         assert tab.launch_here is not None
         memo: dict = {}
-        _best_below(tab, _root(p), memo)
+        best_completion(tab, root_label(p), memo)
         for label, best in memo.items():
             b = _bound(tab, label)
             assert b <= best * (1 + 1e-9) + 1e-9, (seed, label, b, best)
@@ -93,7 +69,7 @@ def test_launch_here_lifts_the_sortie_term(monkeypatch):
         p = _drone_only(seed, 3, 1, 2, 1, False, "last_service")
         tab = _Tables(p)
         memo: dict = {}
-        _best_below(tab, _root(p), memo)
+        best_completion(tab, root_label(p), memo)
         closed = [
             (label, best)
             for label, best in memo.items()
