@@ -2556,6 +2556,7 @@ def _stages(
                 lagrange,
                 credit,
                 max_states,
+                window,
             )
             info["proof"] = {
                 "gap": gap,
