@@ -2541,6 +2541,7 @@ def _stages(
                 lagrange,
                 credit,
                 max_states,
+                window,
             )
             info["proof"] = {
                 "gap": gap,

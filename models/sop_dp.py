@@ -1935,6 +1935,7 @@ def trial_cutoffs(
     lagrange: tuple[float, np.ndarray] | None = None,
     credit: RowCredit | None = None,
     max_states: int | None = None,
+    window: np.ndarray | None = None,
 ) -> Solution:
     """Raise a proven bound by the DP with the per-state LP at trial cutoffs, stepping up from
     ``lower`` (a proven bound) towards the incumbent's cost ``UB``.
@@ -1942,7 +1943,10 @@ def trial_cutoffs(
     Each trial runs :func:`solve_sop_dp` with ``cutoff = lower + step`` (rounded up to the
     costs' gcd; the incumbent itself, no cutoff, once that reaches ``UB``), ``step`` =
     :data:`TRIAL_STEP` ``* lower``, its give-up rule, and at most
-    :data:`TRIAL_TIME_SHARE` of the time left. Every trial that ends proves what ``cutoff=``
+    :data:`TRIAL_TIME_SHARE` of the time left; ``lagrange``, ``credit`` and ``window`` are
+    :func:`solve_sop_dp`'s (each a bound valid for every order whatever its prices, so the
+    trials may take the best the caller has: the window's where they beat the root's, both
+    where neither is known to). Every trial that ends proves what ``cutoff=``
     promises: an order below the cutoff, the cheapest there is (returned: optimal), or no order
     below it, so ``cutoff`` is a bound, the new ``lower``. A trial that gave up (or ran out of
     its time) proves nothing more than its own bound; the next one halves the step, down to one
@@ -1986,6 +1990,7 @@ def trial_cutoffs(
             state_lp=state_lp,
             cutoff=cutoff,
             give_up=True,
+            window=window,
         )
         last = found
         proven = bool(found.info.get("cutoff_proven"))

@@ -12,6 +12,7 @@ import pytest
 from taopt.models.sop_cuts import SopCutModel
 from taopt.models.sop_dp import solve_sop_dp
 from taopt.models.sop_statelp import StateLp
+from taopt.models.sop_window import window_prices
 from taopt.result import OPTIMAL, TIME_LIMIT
 from taopt.sop.problem import SopProblem, evaluate_order
 from tests.reference_exact import sop_brute_force, sop_instance, sop_orders
@@ -230,10 +231,13 @@ def test_constraint_matrix_reads_either_format():
         assert (constraint_matrix(lp).toarray() == dense).all()
 
 
-def _trials(seed: int, step: float, slack: float = 0.0) -> tuple[SopProblem, float, object] | None:
+def _trials(
+    seed: int, step: float, slack: float = 0.0, window: bool = False
+) -> tuple[SopProblem, float, object] | None:
     """:func:`trial_cutoffs` on SOP ``seed`` from its dearest order and its root bound less
     ``slack`` times its size plus ``slack`` (a weaker valid bound: more trials), with
-    ``TRIAL_STEP`` = ``step``; None when the SOP has no order."""
+    ``TRIAL_STEP`` = ``step`` (and, with ``window``, the position-window prices of a
+    subgradient aimed at that order's cost); None when the SOP has no order."""
     from taopt.models import sop_dp
 
     problem = _instance(seed)
@@ -243,17 +247,20 @@ def _trials(seed: int, step: float, slack: float = 0.0) -> tuple[SopProblem, flo
     model = SopCutModel(problem)
     root = model.root()
     lagrange, credit = model.lagrangian_prices(), model.row_credit()
+    worst = _worst(problem)
+    lam = window_prices(problem, evaluate_order(problem, worst)).lam if window else None
     old = sop_dp.TRIAL_STEP
     sop_dp.TRIAL_STEP = step
     try:
         found = sop_dp.trial_cutoffs(
             problem,
-            _worst(problem),
+            worst,
             root.bound - slack * (abs(root.bound) + 1),
             None,
             StateLp(model, share=1.0),
             lagrange,
             credit,
+            window=lam,
         )
     finally:
         sop_dp.TRIAL_STEP = old
@@ -263,12 +270,13 @@ def _trials(seed: int, step: float, slack: float = 0.0) -> tuple[SopProblem, flo
 @pytest.mark.parametrize("seed", range(16))
 @pytest.mark.parametrize("step", [0.01, 0.2])
 @pytest.mark.parametrize("slack", [0.0, 0.3])
-def test_trial_cutoffs_prove_at_most_the_optimum(seed, step, slack):
+@pytest.mark.parametrize("window", [False, True])
+def test_trial_cutoffs_prove_at_most_the_optimum(seed, step, slack, window):
     """The trial cutoffs (steps of 1 % and 20 % of the bound) from the dearest order and the
-    root bound (or a weaker one):
+    root bound (or a weaker one), with and without the window prices:
     every bound they prove is at most the brute-force optimum, their order is scored right, and
     an optimal answer is the optimum; each trial's cutoff proven is at most the optimum."""
-    got = _trials(seed, step, slack)
+    got = _trials(seed, step, slack, window)
     if got is None:
         return
     problem, optimum, found = got
@@ -286,7 +294,7 @@ def test_trial_cutoffs_prove_and_find():
     paths of :func:`test_trial_cutoffs_prove_at_most_the_optimum` are exercised)."""
     proven = optimal = 0
     for seed in range(8):
-        got = _trials(seed, 0.01, 0.3)
+        got = _trials(seed, 0.01, 0.3, window=seed % 2 == 1)
         if got is None:
             continue
         found = got[2]
