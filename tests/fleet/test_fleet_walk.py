@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from reference_fleet import root_label
 
 from taopt.fleet.brute import brute_force, tiny_instance
 from taopt.fleet.cover import walk_table
@@ -35,14 +36,6 @@ def _optimum(case: tuple) -> float:
     value, plan, _ = brute_force(tiny_instance(*case[:7], stops=case[7]))
     assert plan is not None
     return value
-
-
-def _root(problem: FleetProblem) -> tuple:
-    trucks = tuple(
-        (problem.depot, 0.0, 0.0, True, False, 0.0, tuple((0, 0.0) for _ in range(d)))
-        for d in problem.drones
-    )
-    return (0, 0.0, (-1.0,) * problem.n, trucks)
 
 
 def _reference_walk(problem: FleetProblem, drones: int) -> dict[tuple[int, int], float]:
@@ -122,7 +115,7 @@ def test_walk_bound_never_above_the_brute_force_optimum(case):
     problem = tiny_instance(*case[:7], stops=case[7])
     value = _optimum(case)
     tab = _Tables(problem)
-    root = _root(problem)
+    root = root_label(problem)
     assert _walk_bound(tab, tab.full, root[3]) <= value * (1 + 1e-9) + 1e-9
     assert _bound(tab, root) <= value * (1 + 1e-9) + 1e-9
 
@@ -148,7 +141,7 @@ def test_search_with_walk_term_on_64_tiny_instances():
         problem = tiny_instance(seed, 3, K, D, c, prec, objective, stops=3)
         value, _, _ = brute_force(problem)
         tab = _Tables(problem)
-        assert _bound(tab, _root(problem)) <= value * (1 + 1e-9) + 1e-9
+        assert _bound(tab, root_label(problem)) <= value * (1 + 1e-9) + 1e-9
         assert label_search(problem, beam=0)["value"] == pytest.approx(value, rel=1e-9, abs=1e-9)
 
 
@@ -157,7 +150,7 @@ def test_two_trucks_take_the_best_split():
     larger of the two trucks' walk values (checked against an explicit enumeration)."""
     problem = tiny_instance(9, 4, 2, 1, 1, False, "last_service", stops=4)
     tab = _Tables(problem)
-    trucks = list(_root(problem)[3])
+    trucks = list(root_label(problem)[3])
     trucks[1] = (2, 5.0, 7.0, True, False, 0.0, trucks[1][6])
     table = tab.walk[1]
     U = tab.full
@@ -178,7 +171,7 @@ def test_walk_term_raises_the_root_bound_on_a_residential_instance():
     from taopt.fleet.instances import residential_fleet
 
     problem = residential_fleet(5, 1, 2, 2, seed=1)
-    root = _root(problem)
+    root = root_label(problem)
     assert _bound(_Tables(problem), root) > _bound(_Tables(problem, walk=False), root) + 1.0
 
 
