@@ -1142,11 +1142,12 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     if b >= cutoff or not unserved:
         return b
     # customers an airborne drone with room can take next (``relaxed``, left out of the walk
-    # and sortie terms) and its earliest such service
+    # term; the sortie term keeps them, save at most ``room``) and its earliest such service
     relaxed = 0
     ext = 0  # customers a stale drone may take only after its next append ...
     more = 0  # ... at most this many of them in all
     air: list[float] | None = None
+    room = 0  # how many customers the sorties in the air may still take, in all
     c = tab.c
     for k, (_w, _A, _T, _ev, fin, _F, drones) in enumerate(trucks):
         if fin:
@@ -1156,6 +1157,7 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
                 continue
             if air is None:
                 air = [INF] * n
+            room += c - dr[2]
             o = dr[1]
             # a stale drone takes next only a customer with a predecessor served since its
             # last event (:func:`_appendable`); after that append it is fresh, so with room
@@ -1210,9 +1212,12 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             if b >= cutoff:
                 return b
     # the drones' sortie times (the most expensive term, but on one truck with several
-    # drones it prunes about 30 times as often as the earliest services)
+    # drones it prunes about 30 times as often as the earliest services): every customer a
+    # sortie in the air may still take (``relaxed | ext``) is kept, save at most ``room`` of
+    # them (those sorties take no more in all; a drone launched with no customer yet is
+    # recovered only after its first, which :func:`_first_recoveries` charges)
     v = _sortie_time_bound(
-        tab, tab.drone_only & ~S & ~relaxed, trucks, S, svc, est, ext, more, cutoff
+        tab, tab.drone_only & ~S, trucks, S, svc, est, relaxed | ext, room, cutoff
     )
     if v > b:
         b = v
