@@ -252,9 +252,11 @@ class _Tables:
         self._firsts: dict[tuple, np.ndarray] = {}
         self._first_of: dict[tuple, np.ndarray] = {}  # _first_recoveries, per drone and label
         self.nowhere = np.full(s, INF)  # (read only)
-        self._release: dict[tuple[int, int], tuple | None] = {}  # _release_rows
+        self._release: dict[tuple[int, int, int, int], tuple | None] = {}  # _release_rows
         self._tail: tuple | None = None  # _tail_table
-        self._release_parts: dict[tuple[int, int], list[list[int]]] = {}  # per row, the parts
+        self._release_parts: dict[
+            tuple[int, int, int, int], list[list[int]]
+        ] = {}  # per row, the parts
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -680,13 +682,9 @@ def _sortie_time_bound(
             else _least_largest(ends, int(tab.popcount[U]))[-1]
         )
         if least < cutoff and (cutoff == INF or least >= RELEASE_FROM * cutoff):
-            plain = [
-                cols[w] + (dr[1] if dr[1] > A else A) if dr[0] == 0 else e
-                for (_k, w, A, _T, dr), e in zip(drones_left, ends, strict=True)
-            ]
-            for e in plain:
-                e[0] = 0.0
-            v = _release_term(tab, U, ends, plain, S, svc, times, cutoff)
+            v = _release_term(
+                tab, U, ends, _plain_ends(tab, cols, drones_left, ends), S, svc, times, cutoff
+            )
             if v > least:
                 if v >= cutoff or not (shared and not drop):
                     return v
@@ -711,6 +709,27 @@ def _sortie_time_bound(
                 v = float(g[top ^ sum(1 << i for i in Y)])
                 if v < least:
                     least = v
+        if (
+            least < cutoff
+            and least >= RELEASE_FROM * cutoff
+            and tab.lazy
+            and not tab.ret
+            and len(ends) <= RELEASE_MAX_DRONES
+        ):
+            v = _release_term(
+                tab,
+                U,
+                ends,
+                _plain_ends(tab, cols, drones_left, ends),
+                S,
+                svc,
+                times,
+                cutoff,
+                drop,
+                count,
+            )
+            if v > least:
+                least = v
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
         return float(np.maximum(ends[0], ends[1][::-1]).min())
@@ -807,35 +826,58 @@ def _shared_recoveries(
     return max(float(J.min()), least)
 
 
-def _release_rows(tab: _Tables, U: int, N: int) -> tuple | None:
+def _plain_ends(tab: _Tables, cols: np.ndarray, drones_left: list, ends: list) -> list:
+    """Per drone left, a lower bound on the time it has served all of each submask X of U by
+    new sorties (:func:`_release_term`'s ``plain``): ``a + V[w, X]`` aboard (ready at a), its
+    ``ends`` airborne; 0 for X = ∅."""
+    plain = [
+        cols[w] + (dr[1] if dr[1] > A else A) if dr[0] == 0 else e
+        for (_k, w, A, _T, dr), e in zip(drones_left, ends, strict=True)
+    ]
+    for e in plain:
+        e[0] = 0.0
+    return plain
+
+
+def _release_rows(tab: _Tables, U: int, N: int, drop: int = 0, count: int = 0) -> tuple | None:
     """The time-free part of :func:`_release_term` for the unserved set U and N drones,
-    memoised per (U, N): per assignment of U's customers to the drones (N^m rows) each
-    drone's part (local indices of the submasks of U), and per customer j of U in a
+    memoised per (U, N, drop, count): per assignment of U's customers to the drones, or to
+    the sorties in the air (only customers of ``drop``, at most ``count`` of them; "owner"
+    N), each drone's part (local indices of the submasks of U), and per customer j of U in a
     topological order: per drone d the local index of ``anc(j) ∩ X_d`` (with j itself on its
-    own drone), ``Tail[j, desc(j) ∩ X_own]`` per row, and per predecessor r of j in U the
-    least gap ``t_j - t_r`` (``hop(r, j)`` where both are on one drone, else 0). None when
-    N^m exceeds :data:`RELEASE_MAX_ROWS`."""
-    key = (U, N)
+    own drone), ``Tail[j, desc(j) ∩ X_own]`` per row (0 in the air), and per predecessor r
+    of j in U the least gap ``t_j - t_r`` (``hop(r, j)`` where one drone serves both by new
+    sorties, else 0). None when the rows exceed :data:`RELEASE_MAX_ROWS`."""
+    drop &= U
+    if not drop or not count:
+        drop = count = 0
+    key = (U, N, drop, count)
     got = tab._release.get(key)
     if got is not None or key in tab._release:
         return got
     cust = [j for j in range(tab.n) if U >> j & 1]
     m = len(cust)
-    if N**m > RELEASE_MAX_ROWS:
+    base = [N + 1 if count and drop >> j & 1 else N for j in cust]
+    if math.prod(base) > RELEASE_MAX_ROWS * (2 if count else 1):
         tab._release[key] = None
         return None
     if tab._tail is None:
         tab._tail = _tail_table(tab)
     hop, tail, anc, desc = tab._tail
-    rows = N**m
-    digits = np.arange(rows, dtype=np.int64)
-    own = np.empty((m, rows), dtype=np.int64)
+    digits = np.arange(math.prod(base), dtype=np.int64)
+    own = np.empty((m, len(digits)), dtype=np.int64)
     for i in range(m):
-        own[i] = digits % N
-        digits //= N
-    parts = np.zeros((N, rows), dtype=np.int64)
+        own[i] = digits % base[i]
+        digits //= base[i]
+    if count:
+        own = own[:, (own == N).sum(axis=0) <= count]
+        if own.shape[1] > RELEASE_MAX_ROWS:
+            tab._release[key] = None
+            return None
+    rows = own.shape[1]
+    parts = np.zeros((N + 1, rows), dtype=np.int64)  # (the last: in the air)
     for i, j in enumerate(cust):
-        for d in range(N):
+        for d in range(N + 1):
             parts[d] |= (own[i] == d).astype(np.int64) << j
     loc = np.zeros(1 << tab.n, dtype=np.int64)
     loc[_submasks(tab, U)] = np.arange(1 << m, dtype=np.int64)
@@ -846,19 +888,22 @@ def _release_rows(tab: _Tables, U: int, N: int) -> tuple | None:
         if j not in at:
             continue
         i = at[j]
-        mine = (parts >> j) & 1
-        idx = loc[(parts & anc[j]) | (mine << j)]
-        tj = tail[j][parts[own[i], every] & desc[j]]
+        drones = parts[:N]
+        mine = (drones >> j) & 1
+        idx = loc[(drones & anc[j]) | (mine << j)]
+        tj = np.where(own[i] < N, tail[j][parts[own[i], every] & desc[j]], 0.0)
         edges = [
-            (r, np.where(own[at[r]] == own[i], hop[r][j], 0.0)) for r in tab.preds[j] if r in at
+            (r, np.where((own[at[r]] == own[i]) & (own[i] < N), hop[r][j], 0.0))
+            for r in tab.preds[j]
+            if r in at
         ]
         items.append((j, idx, tj, edges))
-    got = (loc[parts], items)
+    got = (loc[parts[:N]], items)
     if len(tab._release) > 1 << 12:
         tab._release.clear()
         tab._release_parts.clear()
     tab._release[key] = got
-    tab._release_parts[key] = parts.T.tolist()
+    tab._release_parts[key] = parts[:N].T.tolist()
     return got
 
 
@@ -909,6 +954,8 @@ def _release_term(
     svc: Sequence[float],
     times: Sequence[float] | None,
     cutoff: float = INF,
+    drop: int = 0,
+    count: int = 0,
 ) -> float:
     r"""The sortie-time term with the releases across the drones' parts (``"last_service"``
     with precedences): a lower bound on the objective of every completion in which the
@@ -947,6 +994,13 @@ def _release_term(
     ends[d][X_d], max_j L_j + tail_j, max_d sequence_end(X_d))``, and every completion at
     least the least row.
 
+    With ``drop`` and ``count`` (customers of U of which at most ``count`` may be served by
+    the sorties in the air, :func:`_sortie_time_bound`), the rows also put customers of
+    ``drop``, at most ``count`` of them, in the air: such a customer is in no drone's part
+    and adds no tail and no hop, but keeps its release (served after its ancestors, so
+    ``t_j >= plain[e][anc(j) ∩ X_e]`` still, and ``t_j >= times[j]``); every completion is
+    then at the row of the assignment it makes.
+
     *Cost.* The first two parts are taken for every row at once (numpy, the index arrays
     memoised per U by :func:`_release_rows`); the orders (a DP per part, in Python) only for
     the rows still below ``cutoff``, least first, at most :data:`RELEASE_MAX_EXACT` of them
@@ -954,9 +1008,13 @@ def _release_term(
     its lower value), stopping at the first row that stays below the cutoff: the value
     returned is then the least of that row and the first two parts of the rows after it
     (no more than the least row, so still a lower bound)."""
-    got = _release_rows(tab, U, len(ends))
+    got = _release_rows(tab, U, len(ends), drop, count)
     if got is None:
         return 0.0
+    drop &= U
+    if not drop or not count:
+        drop = count = 0
+    key = (U, len(ends), drop, count)
     parts, items = got
     top = ends[0][parts[0]]
     for d in range(1, len(ends)):
@@ -989,7 +1047,7 @@ def _release_term(
         return least
     cand = cand[np.argsort(top[cand], kind="stable")]
     hop = tab._tail[0] if tab._tail is not None else []
-    owners = tab._release_parts[(U, len(ends))]
+    owners = tab._release_parts[key]
     rel = [0.0] * tab.n
     best = INF  # the least exact row so far
     for pos, r in enumerate(cand.tolist()):
