@@ -254,6 +254,7 @@ class _Tables:
         self.nowhere = np.full(s, INF)  # (read only)
         self._release: dict[tuple[int, int, int, int], tuple | None] = {}  # _release_rows
         self._tail: tuple | None = None  # _tail_table
+        self._kept: dict[tuple[int, int, int], np.ndarray] = {}  # _kept_sets
         self._release_parts: dict[
             tuple[int, int, int, int], list[list[int]]
         ] = {}  # per row, the parts
@@ -701,14 +702,7 @@ def _sortie_time_bound(
         # sets U \ Y left to new sorties
         m = int(tab.popcount[U])
         g = ends[0] if len(ends) == 1 else _least_largest(ends, m)
-        local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
-        top = (1 << m) - 1
-        least = float(g[top])
-        for size in range(1, min(count, len(local)) + 1):
-            for Y in itertools.combinations(local, size):
-                v = float(g[top ^ sum(1 << i for i in Y)])
-                if v < least:
-                    least = v
+        least = float(g[_kept_sets(tab, U, drop, count)].min())
         if (
             least < cutoff
             and least >= RELEASE_FROM * cutoff
@@ -824,6 +818,29 @@ def _shared_recoveries(
         J[0] = ends2[-1]  # a drone given nothing under "last_service" needs no recovery
         J[-1] = ends1[-1]
     return max(float(J.min()), least)
+
+
+def _kept_sets(tab: _Tables, U: int, drop: int, count: int) -> np.ndarray:
+    """The local indices (among the submasks of U, ascending) of the sets U \\ Y, Y ⊆ drop,
+    |Y| <= count (cached per (U, drop, count))."""
+    key = (U, drop, count)
+    got = tab._kept.get(key)
+    if got is None:
+        m = int(tab.popcount[U])
+        local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
+        top = (1 << m) - 1
+        got = np.array(
+            [
+                top ^ sum(1 << i for i in Y)
+                for size in range(min(count, len(local)) + 1)
+                for Y in itertools.combinations(local, size)
+            ],
+            dtype=np.int64,
+        )
+        if len(tab._kept) > 1 << 14:
+            tab._kept.clear()
+        tab._kept[key] = got
+    return got
 
 
 def _plain_ends(tab: _Tables, cols: np.ndarray, drones_left: list, ends: list) -> list:
