@@ -101,6 +101,20 @@ PRUNED_PER_KEY = 8
 #: is seldom pruned by it; skipping a term leaves a valid, lower bound).
 SHARED_FROM = 0.95
 
+#: The release term (:func:`_release_term`) is computed for at most this many drones left
+#: and this many assignments of the unserved customers to them.
+RELEASE_MAX_DRONES = 3
+RELEASE_MAX_ROWS = 6561
+
+#: ... and only for labels whose independent sortie-time term is at least this share of the
+#: cutoff (skipping a term leaves a valid, lower bound).
+RELEASE_FROM = 0.8
+
+#: The release term orders each part under its releases (:func:`_sequence_end`) for at most
+#: this many assignments below the cutoff, and parts of at most this many customers.
+RELEASE_MAX_EXACT = 256
+RELEASE_MAX_SEQUENCE = 8
+
 #: Relative agreement required between the search's value and the scorer's.
 MATCH_TOLERANCE = 1e-9
 
@@ -238,6 +252,12 @@ class _Tables:
         self._firsts: dict[tuple, np.ndarray] = {}
         self._first_of: dict[tuple, np.ndarray] = {}  # _first_recoveries, per drone and label
         self.nowhere = np.full(s, INF)  # (read only)
+        self._release: dict[tuple[int, int, int, int], tuple | None] = {}  # _release_rows
+        self._tail: tuple | None = None  # _tail_table
+        self._kept: dict[tuple[int, int, int], np.ndarray] = {}  # _kept_sets
+        self._release_parts: dict[
+            tuple[int, int, int, int], list[list[int]]
+        ] = {}  # per row, the parts
 
 
 def _submasks(tab: _Tables, U: int) -> np.ndarray:
@@ -648,6 +668,30 @@ def _sortie_time_bound(
     if not tab.one_drone or not tab.ret:
         for e in ends:
             e[0] = 0.0  # column 0 is the empty set: a drone that serves no one more ends nothing
+    if (
+        not drop
+        and tab.lazy
+        and not tab.ret
+        and len(ends) <= RELEASE_MAX_DRONES
+        and len(ends) ** int(tab.popcount[U]) <= RELEASE_MAX_ROWS
+    ):
+        # the releases across the drones' parts (:func:`_release_term`): only for labels
+        # whose independent term is near the cutoff (skipping it leaves a valid bound)
+        least = float(
+            np.maximum(ends[0], ends[1][::-1]).min()
+            if len(ends) == 2
+            else _least_largest(ends, int(tab.popcount[U]))[-1]
+        )
+        if least < cutoff and (cutoff == INF or least >= RELEASE_FROM * cutoff):
+            v = _release_term(
+                tab, U, ends, _plain_ends(tab, cols, drones_left, ends), S, svc, times, cutoff
+            )
+            if v > least:
+                if v >= cutoff or not (shared and not drop):
+                    return v
+                return max(
+                    v, _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
+                )
     if shared and not drop:
         least = float(np.maximum(ends[0], ends[1][::-1]).min())
         if least >= cutoff or (cutoff < INF and least < SHARED_FROM * cutoff):
@@ -658,14 +702,28 @@ def _sortie_time_bound(
         # sets U \ Y left to new sorties
         m = int(tab.popcount[U])
         g = ends[0] if len(ends) == 1 else _least_largest(ends, m)
-        local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
-        top = (1 << m) - 1
-        least = float(g[top])
-        for size in range(1, min(count, len(local)) + 1):
-            for Y in itertools.combinations(local, size):
-                v = float(g[top ^ sum(1 << i for i in Y)])
-                if v < least:
-                    least = v
+        least = float(g[_kept_sets(tab, U, drop, count)].min())
+        if (
+            least < cutoff
+            and least >= RELEASE_FROM * cutoff
+            and tab.lazy
+            and not tab.ret
+            and len(ends) <= RELEASE_MAX_DRONES
+        ):
+            v = _release_term(
+                tab,
+                U,
+                ends,
+                _plain_ends(tab, cols, drones_left, ends),
+                S,
+                svc,
+                times,
+                cutoff,
+                drop,
+                count,
+            )
+            if v > least:
+                least = v
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
         return float(np.maximum(ends[0], ends[1][::-1]).min())
@@ -762,6 +820,311 @@ def _shared_recoveries(
     return max(float(J.min()), least)
 
 
+def _kept_sets(tab: _Tables, U: int, drop: int, count: int) -> np.ndarray:
+    """The local indices (among the submasks of U, ascending) of the sets U \\ Y, Y ⊆ drop,
+    |Y| <= count (cached per (U, drop, count))."""
+    key = (U, drop, count)
+    got = tab._kept.get(key)
+    if got is None:
+        m = int(tab.popcount[U])
+        local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
+        top = (1 << m) - 1
+        got = np.array(
+            [
+                top ^ sum(1 << i for i in Y)
+                for size in range(min(count, len(local)) + 1)
+                for Y in itertools.combinations(local, size)
+            ],
+            dtype=np.int64,
+        )
+        if len(tab._kept) > 1 << 14:
+            tab._kept.clear()
+        tab._kept[key] = got
+    return got
+
+
+def _plain_ends(tab: _Tables, cols: np.ndarray, drones_left: list, ends: list) -> list:
+    """Per drone left, a lower bound on the time it has served all of each submask X of U by
+    new sorties (:func:`_release_term`'s ``plain``): ``a + V[w, X]`` aboard (ready at a), its
+    ``ends`` airborne; 0 for X = ∅."""
+    plain = [
+        cols[w] + (dr[1] if dr[1] > A else A) if dr[0] == 0 else e
+        for (_k, w, A, _T, dr), e in zip(drones_left, ends, strict=True)
+    ]
+    for e in plain:
+        e[0] = 0.0
+    return plain
+
+
+def _release_rows(tab: _Tables, U: int, N: int, drop: int = 0, count: int = 0) -> tuple | None:
+    """The time-free part of :func:`_release_term` for the unserved set U and N drones,
+    memoised per (U, N, drop, count): per assignment of U's customers to the drones, or to
+    the sorties in the air (only customers of ``drop``, at most ``count`` of them; "owner"
+    N), each drone's part (local indices of the submasks of U), and per customer j of U in a
+    topological order: per drone d the local index of ``anc(j) ∩ X_d`` (with j itself on its
+    own drone), ``Tail[j, desc(j) ∩ X_own]`` per row (0 in the air), and per predecessor r
+    of j in U the least gap ``t_j - t_r`` (``hop(r, j)`` where one drone serves both by new
+    sorties, else 0). None when the rows exceed :data:`RELEASE_MAX_ROWS`."""
+    drop &= U
+    if not drop or not count:
+        drop = count = 0
+    key = (U, N, drop, count)
+    got = tab._release.get(key)
+    if got is not None or key in tab._release:
+        return got
+    cust = [j for j in range(tab.n) if U >> j & 1]
+    m = len(cust)
+    base = [N + 1 if count and drop >> j & 1 else N for j in cust]
+    if math.prod(base) > RELEASE_MAX_ROWS * (2 if count else 1):
+        tab._release[key] = None
+        return None
+    if tab._tail is None:
+        tab._tail = _tail_table(tab)
+    hop, tail, anc, desc = tab._tail
+    digits = np.arange(math.prod(base), dtype=np.int64)
+    own = np.empty((m, len(digits)), dtype=np.int64)
+    for i in range(m):
+        own[i] = digits % base[i]
+        digits //= base[i]
+    if count:
+        own = own[:, (own == N).sum(axis=0) <= count]
+        if own.shape[1] > RELEASE_MAX_ROWS:
+            tab._release[key] = None
+            return None
+    rows = own.shape[1]
+    parts = np.zeros((N + 1, rows), dtype=np.int64)  # (the last: in the air)
+    for i, j in enumerate(cust):
+        for d in range(N + 1):
+            parts[d] |= (own[i] == d).astype(np.int64) << j
+    loc = np.zeros(1 << tab.n, dtype=np.int64)
+    loc[_submasks(tab, U)] = np.arange(1 << m, dtype=np.int64)
+    at = {j: i for i, j in enumerate(cust)}
+    items = []
+    every = np.arange(rows)
+    for j in tab.topo:
+        if j not in at:
+            continue
+        i = at[j]
+        drones = parts[:N]
+        mine = (drones >> j) & 1
+        idx = loc[(drones & anc[j]) | (mine << j)]
+        tj = np.where(own[i] < N, tail[j][parts[own[i], every] & desc[j]], 0.0)
+        edges = [
+            (r, np.where((own[at[r]] == own[i]) & (own[i] < N), hop[r][j], 0.0))
+            for r in tab.preds[j]
+            if r in at
+        ]
+        items.append((j, idx, tj, edges))
+    got = (loc[parts[:N]], items)
+    if len(tab._release) > 1 << 12:
+        tab._release.clear()
+        tab._release_parts.clear()
+    tab._release[key] = got
+    tab._release_parts[key] = parts[:N].T.tolist()
+    return got
+
+
+def _tail_table(tab: _Tables) -> tuple[list[list[float]], np.ndarray, list[int], list[int]]:
+    """(hop, tail, anc, desc): ``hop[a][b]`` a least time between a drone's services of a and
+    then b (:func:`_release_term`), ``tail[j][Y]`` the least sum of hops of a path from j
+    through every customer of Y (precedences dropped; 0 for Y = ∅), and per customer its
+    ancestors and descendants along the precedences (masks)."""
+    n, tau = tab.n, tab.tau
+    fst = tab.fst_np  # (n, s)
+    via = (fst[:, :, None] + tab.tt_np[None, :, :]).min(axis=1)  # (n, s): a -> stop -> stop v
+    hopm = (via[:, None, :] + fst[None, :, :]).min(axis=2) + 2 * tau  # recovered between
+    if tab.c > 1:
+        hopm = np.minimum(hopm, np.asarray(tab.fct) + tau)  # one sortie on
+    for k in range(n):  # the least over chains of hops (a lower bound kept)
+        hopm = np.minimum(hopm, hopm[:, k : k + 1] + hopm[k : k + 1, :])
+    size = 1 << n
+    B = np.full((size, n), INF)  # B[Z, f]: a path from f through Z (f in Z)
+    for f in range(n):
+        B[1 << f, f] = 0.0
+    for Z in range(1, size):
+        if Z & (Z - 1) == 0:
+            continue
+        for f in range(n):
+            if Z >> f & 1:
+                R = Z ^ (1 << f)
+                B[Z, f] = float(np.min(hopm[f] + B[R]))
+    tail = np.minimum.reduce([hopm[:, f : f + 1] + B[:, f][None, :] for f in range(n)])
+    tail[:, 0] = 0.0
+    anc = [0] * n
+    for j in tab.topo:
+        for r in tab.preds[j]:
+            anc[j] |= anc[r] | 1 << r
+    desc = [0] * n
+    for j in range(n):
+        for k in range(n):
+            if anc[k] >> j & 1:
+                desc[j] |= 1 << k
+    return hopm.tolist(), tail, anc, desc
+
+
+def _release_term(
+    tab: _Tables,
+    U: int,
+    ends: list[np.ndarray],
+    plain: list[np.ndarray],
+    S: int | None,
+    svc: Sequence[float],
+    times: Sequence[float] | None,
+    cutoff: float = INF,
+    drop: int = 0,
+    count: int = 0,
+) -> float:
+    r"""The sortie-time term with the releases across the drones' parts (``"last_service"``
+    with precedences): a lower bound on the objective of every completion in which the
+    drone-only customers of U are served by sorties not yet launched, at least the least
+    over the assignments of U to the drones of the largest ``ends[d][X_d]`` (the independent
+    term of :func:`_sortie_time_bound`).
+
+    ``ends[d][X]`` is that term's end of drone d serving exactly X; ``plain[d][X]`` a lower
+    bound on the time drone d has served all of X (the one-drone table from its ready time
+    a, ``a + V[w, X]``, for an aboard drone; its recovery bound plus ``V[q, X]`` for an
+    airborne one; 0 for X = ∅).
+
+    *Proof.* Take a completion, and let X_d be the customers of U drone d serves (by new
+    sorties: U holds none an airborne sortie may still take). Its objective is at least
+    ``ends[d][X_d]`` for every d (:func:`_sortie_time_bound`). For j in X_d and any drone e,
+    let ``Y = anc(j) ∩ X_e`` (with j added when e = d): every member of Y is served by
+    ``t_j`` (an ancestor through a chain of pairs ``t_j >= t_r``; or j itself). Drone e's
+    new sorties with every customer outside Y dropped (a sortie losing a customer flies
+    straight on, no longer by the triangle inequality; an emptied one removed) serve Y no
+    later, from the same recovery or ready time, on its own copy of the truck (where a
+    dropped first sortie moves the next launch to a later stop, so the one-drone table's
+    ``V`` and not its launch-here ``H`` applies): so ``t_j >= plain[e][Y]``. Also ``t_j >=
+    times[j]`` (a lower bound in every completion), ``t_j >=`` its release and its served
+    predecessors' times, and ``t_j >= t_r`` for r -> j, ``t_j >= t_r + hop(r, j)`` when one
+    drone serves both: between two services a then b of one drone it flies on from a to b
+    (``ft(a, b) + τ``, c >= 2), or is recovered at a stop q (``ft(a, q) + τ``), carried to a
+    launch stop v (``tt(q, v)``) and flies to b (``ft(v, b) + τ``); services in between add
+    such gaps, so the least over chains of gaps (``hop``) is a lower bound. These give
+    ``L_j <= t_j`` in a topological order. Drone d serves j's descendants in X_d after j, in
+    some order, each after the one before by at least a hop: its last service is at least
+    ``L_j + tail[j, desc(j) ∩ X_d]`` (the least path from j through them, precedences
+    dropped). Finally drone d serves all of X_d in some order respecting the pairs inside
+    X_d, each j no sooner than ``L_j`` and each after the one before by at least a hop, so
+    its last service is at least :func:`_sequence_end` of X_d under the releases L. So the
+    completion's objective is at least the row of its assignment: ``max(max_d
+    ends[d][X_d], max_j L_j + tail_j, max_d sequence_end(X_d))``, and every completion at
+    least the least row.
+
+    With ``drop`` and ``count`` (customers of U of which at most ``count`` may be served by
+    the sorties in the air, :func:`_sortie_time_bound`), the rows also put customers of
+    ``drop``, at most ``count`` of them, in the air: such a customer is in no drone's part
+    and adds no tail and no hop, but keeps its release (served after its ancestors, so
+    ``t_j >= plain[e][anc(j) ∩ X_e]`` still, and ``t_j >= times[j]``); every completion is
+    then at the row of the assignment it makes.
+
+    *Cost.* The first two parts are taken for every row at once (numpy, the index arrays
+    memoised per U by :func:`_release_rows`); the orders (a DP per part, in Python) only for
+    the rows still below ``cutoff``, least first, at most :data:`RELEASE_MAX_EXACT` of them
+    and parts of at most :data:`RELEASE_MAX_SEQUENCE` customers (a row or part skipped keeps
+    its lower value), stopping at the first row that stays below the cutoff: the value
+    returned is then the least of that row and the first two parts of the rows after it
+    (no more than the least row, so still a lower bound)."""
+    got = _release_rows(tab, U, len(ends), drop, count)
+    if got is None:
+        return 0.0
+    drop &= U
+    if not drop or not count:
+        drop = count = 0
+    key = (U, len(ends), drop, count)
+    parts, items = got
+    top = ends[0][parts[0]]
+    for d in range(1, len(ends)):
+        top = np.maximum(top, ends[d][parts[d]])
+    L: dict[int, np.ndarray] = {}
+    pred_mask = tab.pred_mask
+    for j, idx, tail, edges in items:
+        Lj = plain[0][idx[0]]
+        for d in range(1, len(plain)):
+            Lj = np.maximum(Lj, plain[d][idx[d]])
+        rel = tab.release[j]
+        if times is not None and times[j] > rel:
+            rel = times[j]
+        if S is not None and pred_mask[j] & S:
+            for r in tab.preds[j]:
+                if S >> r & 1 and svc[r] > rel:
+                    rel = svc[r]
+        if rel > 0.0:
+            Lj = np.maximum(Lj, rel)
+        for r, add in edges:
+            Lj = np.maximum(Lj, L[r] + add)
+        L[j] = Lj
+        top = np.maximum(top, Lj + tail)
+    least = float(top.min())
+    if least >= cutoff:
+        return least
+    # the rows below the cutoff, least first: each part's order under its releases
+    cand = np.flatnonzero(top < cutoff)
+    if len(cand) > RELEASE_MAX_EXACT:
+        return least
+    cand = cand[np.argsort(top[cand], kind="stable")]
+    hop = tab._tail[0] if tab._tail is not None else []
+    owners = tab._release_parts[key]
+    rel = [0.0] * tab.n
+    best = INF  # the least exact row so far
+    for pos, r in enumerate(cand.tolist()):
+        for j in L:
+            rel[j] = float(L[j][r])
+        v = float(top[r])
+        for X in owners[r]:
+            if X and int(tab.popcount[X]) <= RELEASE_MAX_SEQUENCE:
+                e = _sequence_end(tab, X, rel, hop, cutoff)
+                if e > v:
+                    v = e
+                    if v >= cutoff:
+                        break
+        if v < best:
+            best = v
+        if v < cutoff:  # the rows not examined are no lower than their own terms
+            after = float(top[cand[pos + 1]]) if pos + 1 < len(cand) else INF
+            return min(best, after)
+    rest = top[top >= cutoff]
+    return min(best, float(rest.min()) if len(rest) else INF)
+
+
+def _sequence_end(
+    tab: _Tables, X: int, rel: Sequence[float], hop: Sequence[Sequence[float]], cutoff: float
+) -> float:
+    """A lower bound on the last service of a drone serving the customers of X, each j no
+    sooner than ``rel[j]``, two consecutive a then b at least ``hop[a][b]`` apart, a
+    predecessor inside X before its successor: the least over such orders of ``t_last``, with
+    ``t_first = rel[first]`` and ``t_b = max(t_a + hop[a][b], rel[b])`` (a DP over the served
+    subset and the last customer; every time is non-decreasing in the one before, so the
+    least time per state is the only one needed). Partial orders at or above ``cutoff`` are
+    dropped (their ends are no lower), so the value is ``cutoff`` when every order reaches
+    it."""
+    pred_mask = tab.pred_mask
+    cust = [j for j in range(tab.n) if X >> j & 1]
+    cur: dict[tuple[int, int], float] = {}
+    for j in cust:
+        if not pred_mask[j] & X and rel[j] < cutoff:
+            cur[(1 << j, j)] = rel[j]
+    for _ in range(len(cust) - 1):
+        nxt: dict[tuple[int, int], float] = {}
+        for (Z, a), t in cur.items():
+            row = hop[a]
+            for b in cust:
+                if Z >> b & 1 or pred_mask[b] & X & ~Z:
+                    continue
+                u = t + row[b]
+                if rel[b] > u:
+                    u = rel[b]
+                if u >= cutoff:
+                    continue
+                key = (Z | 1 << b, b)
+                if u < nxt.get(key, INF):
+                    nxt[key] = u
+        cur = nxt
+        if not cur:
+            return cutoff
+    return min(cur.values()) if cur else cutoff
+
+
 def _columns(tab: _Tables, U: int, here: bool = False) -> np.ndarray:
     """The sortie-time table's columns of the submasks of U, ascending (with ``here``, those
     of ``launch_here``; cached per U, the caches cleared past 2^23 entries in all)."""
@@ -854,11 +1217,12 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     if b >= cutoff or not unserved:
         return b
     # customers an airborne drone with room can take next (``relaxed``, left out of the walk
-    # and sortie terms) and its earliest such service
+    # term; the sortie term keeps them, save at most ``room``) and its earliest such service
     relaxed = 0
     ext = 0  # customers a stale drone may take only after its next append ...
     more = 0  # ... at most this many of them in all
     air: list[float] | None = None
+    room = 0  # how many customers the sorties in the air may still take, in all
     c = tab.c
     for k, (_w, _A, _T, _ev, fin, _F, drones) in enumerate(trucks):
         if fin:
@@ -868,6 +1232,7 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
                 continue
             if air is None:
                 air = [INF] * n
+            room += c - dr[2]
             o = dr[1]
             # a stale drone takes next only a customer with a predecessor served since its
             # last event (:func:`_appendable`); after that append it is fresh, so with room
@@ -922,9 +1287,12 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             if b >= cutoff:
                 return b
     # the drones' sortie times (the most expensive term, but on one truck with several
-    # drones it prunes about 30 times as often as the earliest services)
+    # drones it prunes about 30 times as often as the earliest services): every customer a
+    # sortie in the air may still take (``relaxed | ext``) is kept, save at most ``room`` of
+    # them (those sorties take no more in all; a drone launched with no customer yet is
+    # recovered only after its first, which :func:`_first_recoveries` charges)
     v = _sortie_time_bound(
-        tab, tab.drone_only & ~S & ~relaxed, trucks, S, svc, est, ext, more, cutoff
+        tab, tab.drone_only & ~S, trucks, S, svc, est, relaxed | ext, room, cutoff
     )
     if v > b:
         b = v
