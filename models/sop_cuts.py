@@ -69,6 +69,7 @@ from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
 from taopt.models.sop_dp import RowCredit
 from taopt.models.sop_statelp import clipped_duals, constraint_matrix
+from taopt.models.sop_stretch import STRETCH_ROUNDS, StretchRow, stretch_rows
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.runtime.highs import interrupt_when, run_interruptibly
@@ -83,6 +84,7 @@ __all__ = [
     "SET_CANDIDATES",
     "SET_CUTS",
     "SET_TIGHT",
+    "STRETCH_CUTS",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
     "KEEP_HIGHS_CUTS",
@@ -134,6 +136,9 @@ SET_TIGHT = 0.5
 #: maximum flow takes integers); a cut is added only if its value in floating point is
 #: below ``1 - CUT_TOLERANCE``.
 FLOW_SCALE = 1_000_000
+
+#: Stretch-partition rows (:mod:`taopt.models.sop_stretch`) once the path and set rows hold.
+STRETCH_CUTS = True
 
 #: A row is violated when the LP point's left-hand side is below ``1 - CUT_TOLERANCE``.
 CUT_TOLERANCE = 1e-4
@@ -270,6 +275,12 @@ class SopCutModel:
         #: The right-hand side of each cut row (1, or 2 for the alternation rows of
         #: :meth:`~taopt.models.sop_cuts.SopCutModel.separate_sets`).
         self.cut_sides: list[float] = []
+        #: The weights of each cut row's arcs: None for the 0/1 rows of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.add_cuts`, an array for the stretch rows of
+        #: :meth:`~taopt.models.sop_cuts.SopCutModel.add_weighted_rows`.
+        self.cut_weights: list[np.ndarray | None] = []
+        #: Extended LPs of :mod:`taopt.models.sop_stretch` solved so far.
+        self.stretch_solves = 0
         self.is_mip = False
         #: Arcs fixed to 0 by :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`.
         self.fixed = np.zeros(n_arcs, dtype=bool)
@@ -320,6 +331,34 @@ class SopCutModel:
         )
         self.cut_rows += fresh
         self.cut_sides += fresh_sides
+        self.cut_weights += [None] * len(fresh)
+        return len(fresh)
+
+    def add_weighted_rows(self, rows: list[StretchRow]) -> int:
+        """Add rows ``Σ_k w_k x_{a_k} >= side`` given as (arcs, weights, side) (the stretch rows
+        of :func:`~taopt.models.sop_stretch.stretch_rows`); new ones only; returns how many."""
+        fresh = []
+        for arcs, weights, side in rows:
+            key = (
+                b"w" + np.concatenate([arcs, np.round(weights, 9), [side]]).astype(float).tobytes()
+            )
+            if key not in self._keys and len(arcs):
+                self._keys.add(key)
+                fresh.append((arcs.astype(np.int32), weights.astype(float), float(side)))
+        if not fresh:
+            return 0
+        self.highs.addRows(
+            len(fresh),
+            np.array([side for _, _, side in fresh]),
+            np.full(len(fresh), highspy.kHighsInf),
+            sum(len(arcs) for arcs, _, _ in fresh),
+            np.cumsum([0] + [len(arcs) for arcs, _, _ in fresh[:-1]]).astype(np.int32),
+            np.concatenate([arcs for arcs, _, _ in fresh]),
+            np.concatenate([weights for _, weights, _ in fresh]),
+        )
+        self.cut_rows += [arcs for arcs, _, _ in fresh]
+        self.cut_sides += [side for _, _, side in fresh]
+        self.cut_weights += [weights for _, weights, _ in fresh]
         return len(fresh)
 
     def add_pool_rows(
@@ -725,7 +764,8 @@ class SopCutModel:
         ranked = [
             k
             for k in np.argsort(-priced[:count], kind="stable")
-            if priced[k] > 1e-9 and self.cut_sides[k] == 1.0  # rows of side 2: no credit
+            # rows of side 2 and weighted rows: no credit
+            if priced[k] > 1e-9 and self.cut_sides[k] == 1.0 and self.cut_weights[k] is None
         ]
         ranked = ranked[:rows]
         bits = np.zeros((self.n, self.n), dtype=np.uint64)
@@ -811,9 +851,21 @@ class SopCutModel:
                 cuts, sides = self.separate_sets(values, deadline=deadline)
             if not cuts:  # none violated, unless the deadline cut the separation short
                 complete = deadline is None or not deadline.expired(MARGIN)
+                if complete and self._stretch(new_value, deadline):
+                    stall = 0
+                    continue
                 break
             self.add_cuts(cuts, sides)
         return RootCuts(value, bound, done, len(self.cut_rows), complete, values)
+
+    def _stretch(self, value: float, deadline: Deadline | None) -> bool:
+        """Once the path and set rows hold: the stretch rows of one extended LP
+        (:func:`~taopt.models.sop_stretch.stretch_rows`), at most :data:`STRETCH_ROUNDS` such LPs
+        per model, only when :data:`STRETCH_CUTS`; true when rows were added."""
+        if not STRETCH_CUTS or self.stretch_solves >= STRETCH_ROUNDS:
+            return False
+        self.stretch_solves += 1
+        return self.add_weighted_rows(stretch_rows(self, value, deadline)) > 0
 
     def make_integral(self, integral: bool = True) -> None:
         """Declare every arc binary (the MIP of the rows found so far), or continuous again."""
