@@ -861,11 +861,15 @@ class SopCutModel:
     def _stretch(self, value: float, deadline: Deadline | None) -> bool:
         """Once the path and set rows hold: the stretch rows of one extended LP
         (:func:`~taopt.models.sop_stretch.stretch_rows`), at most :data:`STRETCH_ROUNDS` such LPs
-        per model, only when :data:`STRETCH_CUTS`; true when rows were added."""
+        started per model, only when :data:`STRETCH_CUTS`; true when rows were added. An LP not
+        started for lack of time is tried again when a later loop (a MIP round's) completes."""
         if not STRETCH_CUTS or self.stretch_solves >= STRETCH_ROUNDS:
             return False
+        rows = stretch_rows(self, value, deadline)
+        if rows is None:  # not started (no inner pair, or too little time): a later loop may
+            return False
         self.stretch_solves += 1
-        return self.add_weighted_rows(stretch_rows(self, value, deadline)) > 0
+        return self.add_weighted_rows(rows) > 0
 
     def make_integral(self, integral: bool = True) -> None:
         """Declare every arc binary (the MIP of the rows found so far), or continuous again."""

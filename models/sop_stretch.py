@@ -122,27 +122,28 @@ def _chosen_pairs(model: SopCutModel, arcs: int) -> list[tuple[int, int]]:
 
 def stretch_rows(
     model: SopCutModel, value: float, deadline: Deadline | None = None
-) -> list[StretchRow]:
+) -> list[StretchRow] | None:
     """Stretch-partition rows violated at the cut model's last LP point (value ``value``),
-    from one extended LP (module docstring); empty when the model has no inner precedence
-    pair, the LP has no duals, the time left is too short for the extended LP, or that LP
-    does not solve to optimality in it."""
+    from one extended LP (module docstring). None when no extended LP was started: the model
+    has no inner precedence pair, the LP has no duals, or the time left is below
+    :data:`STRETCH_SECONDS` per column; empty when that LP found none or did not reach its
+    optimum in the time left."""
     n = model.n
     reduced = model._lagrangian()[1]
     if reduced.size == 0:
-        return []
+        return None
     x = model.lp_values()
     keep = ~model.fixed & ((x > 1e-9) | (reduced <= STRETCH_REDUCED * max(value, 0.0) / (n - 1)))
     kept = np.flatnonzero(keep)
     pairs = _chosen_pairs(model, len(kept))
     if not pairs:
-        return []
+        return None
     domains = [stretch_domains(model, i, j) for i, j in pairs]
     columns = sum(int((mask & keep).sum()) for blocks in domains for mask, _, _ in blocks)
     if deadline is not None and deadline.limited:
         left = (deadline.remaining() or 0.0) - MARGIN
         if left < STRETCH_SECONDS * (columns + len(kept)):
-            return []
+            return None
     lp = model.highs.getLp()
     base = constraint_matrix(lp).tocsc()[:, kept].tocsr()
     at = -np.ones(model.n_arcs, dtype=np.int64)

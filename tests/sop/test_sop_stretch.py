@@ -55,7 +55,7 @@ def test_stretch_rows_hold_on_every_feasible_order(seed, density):
         model.costs = costs
         model.highs.changeColsCost(model.n_arcs, np.arange(model.n_arcs, dtype=np.int32), costs)
         model.highs.run()
-        rows += stretch_rows(model, float(model.highs.getInfo().objective_function_value))
+        rows += stretch_rows(model, model.highs.getInfo().objective_function_value) or []
     for order in orders:
         used = _used(model, order)
         for arcs, weights, side in rows:
@@ -71,9 +71,8 @@ def test_stretch_rows_are_found():
         model = SopCutModel(problem)
         model.highs.run()
         x = model.lp_values()
-        for arcs, weights, side in stretch_rows(
-            model, model.highs.getInfo().objective_function_value
-        ):
+        rows = stretch_rows(model, model.highs.getInfo().objective_function_value) or []
+        for arcs, weights, side in rows:
             assert x[arcs] @ weights < side
             found += 1
     assert found > 0
