@@ -70,6 +70,7 @@ __all__ = [
     "STRETCH_REDUCED",
     "STRETCH_ROUNDS",
     "STRETCH_SECONDS",
+    "STRETCH_SHARE",
     "StretchRow",
     "stretch_domains",
     "stretch_rows",
@@ -83,8 +84,12 @@ STRETCH_REDUCED = 1.0
 
 #: At most this many (pair, arc) columns per stretch in one extended LP: pairs are taken, the
 #: tightest path cut first (smallest maximum flow at the last point), while ``pairs × arcs``
-#: stays below it. 12 pairs × 750 arcs (ry48p.1, ft53.1) solved in 2-4 s at load 4.
-STRETCH_COLUMNS = 20_000
+#: stays below it. 12 pairs × 750 arcs solved in 2-4 s at load 4 (ry48p.1, ft53.1); at 20,000,
+#: 26 pairs of ``p43-0.02-1`` did not solve in 40 s at load 8 (6 pairs: 6.4 s).
+STRETCH_COLUMNS = 10_000
+
+#: An extended LP gets at most this share of the time left (its own ``time_limit``).
+STRETCH_SHARE = 0.25
 
 #: Extended LPs solved per cut model at most (each one a few seconds; the first gives most).
 STRETCH_ROUNDS = 2
@@ -142,7 +147,7 @@ def stretch_rows(
     columns = sum(int((mask & keep).sum()) for blocks in domains for mask, _, _ in blocks)
     if deadline is not None and deadline.limited:
         left = (deadline.remaining() or 0.0) - MARGIN
-        if left < STRETCH_SECONDS * (columns + len(kept)):
+        if STRETCH_SHARE * left < STRETCH_SECONDS * (columns + len(kept)):
             return None
     lp = model.highs.getLp()
     base = constraint_matrix(lp).tocsc()[:, kept].tocsr()
@@ -246,9 +251,11 @@ def _extended_lp(
 
 
 def _solved(highs: highspy.Highs, deadline: Deadline | None) -> bool:
-    """Run the extended LP within the deadline; true when it reached its optimum."""
+    """Run the extended LP within :data:`STRETCH_SHARE` of the time left; true when it reached
+    its optimum."""
     if deadline is not None and deadline.limited:
-        highs.setOptionValue("time_limit", max((deadline.remaining() or 0.0) - MARGIN, 0.01))
+        left = (deadline.remaining() or 0.0) - MARGIN
+        highs.setOptionValue("time_limit", max(STRETCH_SHARE * left, 0.01))
     stop = (lambda: False) if deadline is None else (lambda: deadline.expired(MARGIN))
     with interrupt_when(highs, stop):
         run_interruptibly(highs)
