@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 import pytest
-from fleet.test_fleet_launch_here import _best_below, _drone_only, _root
+from fleet.test_fleet_launch_here import _drone_only
+from reference_fleet import best_completion, root_label
 
 from taopt.fleet import search
 from taopt.fleet.search import _bound, _sequence_end, _Tables
@@ -31,7 +32,7 @@ def _check_labels(shape, prec, objective, seeds, monkeypatch) -> None:
         p = _drone_only(seed + 100 * D + 10 * c + K, 3, K, D, c, prec, objective)
         tab = _Tables(p)
         memo: dict = {}
-        _best_below(tab, _root(p), memo)
+        best_completion(tab, root_label(p), memo)
         for label, best in memo.items():
             for cutoff in (math.inf, best * 1.01 + 1e-6, best):
                 b = _bound(tab, label, cutoff)
@@ -80,7 +81,7 @@ def test_release_term_lifts_the_bound(monkeypatch):
             continue
         tab = _Tables(p)
         memo: dict = {}
-        _best_below(tab, _root(p), memo)
+        best_completion(tab, root_label(p), memo)
         for label, best in memo.items():
             if math.isinf(best):
                 continue
