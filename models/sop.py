@@ -2401,7 +2401,7 @@ def _stages(
 
     def state_lp() -> Any:
         """The root model's LP re-solved per DP state (:data:`STATE_LP`), or None."""
-        if not STATE_LP or root_model is None or lagrange is None:
+        if not STATE_LP or root_model is None or lagrange is None or root_model.detached:
             return None
         return StateLp(root_model)
 

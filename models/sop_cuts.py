@@ -78,7 +78,7 @@ from taopt.models.sop_statelp import clipped_duals, constraint_matrix
 from taopt.models.sop_stretch import STRETCH_ROUNDS, StretchRow, stretch_rows
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
-from taopt.runtime.highs import interrupt_when, run_interruptibly
+from taopt.runtime.highs import DETACHED, interrupt_when, run_interruptibly
 from taopt.sop.problem import SopProblem
 
 __all__ = [
@@ -294,6 +294,9 @@ class SopCutModel:
         #: Extended LPs of :mod:`taopt.models.sop_stretch` solved so far.
         self.stretch_solves = 0
         self.is_mip = False
+        #: True once a MIP round was left running past the deadline
+        #: (:data:`taopt.runtime.highs.DETACHED`): ``highs`` must not be touched again.
+        self.detached = False
         #: Arcs fixed to 0 by :meth:`~taopt.models.sop_cuts.SopCutModel.fix_by_reduced_cost`.
         self.fixed = np.zeros(n_arcs, dtype=bool)
         #: Rows of HiGHS's own cut pool kept across MIP rounds
@@ -682,8 +685,13 @@ class SopCutModel:
                 left -= min(MIP_RESERVE * left, MIP_RESERVE_MAX)
             self.highs.setOptionValue("time_limit", spent + max(left - MARGIN, 0.01))
         expired = (lambda: False) if deadline is None else (lambda: deadline.expired(MARGIN))
+        give_up = None
+        if self.is_mip and deadline is not None and deadline.limited:
+            # a MIP round still going at the deadline is left to end on its own
+            give_up = time.perf_counter() + (deadline.remaining() or 0.0)
         with interrupt_when(self.highs, lambda: expired() or (stop is not None and stop())):
-            run_interruptibly(self.highs)
+            if run_interruptibly(self.highs, give_up=give_up) == DETACHED:
+                self.detached = True
 
     def lp_values(self) -> np.ndarray:
         """Column values of the last solve."""
@@ -1210,12 +1218,15 @@ def _mip_rounds(
             try:
                 model._run(deadline)
             finally:  # the LP loop must not stop at the cutoff
-                model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
+                if not model.detached:
+                    model.highs.setOptionValue("objective_bound", highspy.kHighsInf)
             last = time.perf_counter() - began
             rounds += 1
-            for value, seen_order in found:
+            for value, seen_order in list(found):
                 if known is None or value < known[0]:
                     known = (value, seen_order)
+            if model.detached:  # past the deadline and still running: keep what is known
+                return stop, rounds, known, bound
             # read before the pool's rows go in: changing the model resets HiGHS's status, and
             # a round proved infeasible below the cutoff was then taken for an open one
             status = model.highs.getModelStatus()
@@ -1261,9 +1272,10 @@ def _mip_rounds(
                 break  # an integral point that is no order violates a row: stay safe
             model.add_cuts(cuts)
     finally:
-        model.highs.cbMipImprovingSolution.unsubscribe(on_improving)
-        if KEEP_HIGHS_CUTS:
-            model.highs.cbMipGetCutPool.unsubscribe(on_pool)
+        if not model.detached:  # a detached run keeps its callbacks until it ends
+            model.highs.cbMipImprovingSolution.unsubscribe(on_improving)
+            if KEEP_HIGHS_CUTS:
+                model.highs.cbMipGetCutPool.unsubscribe(on_pool)
     return stop, rounds, known, bound
 
 

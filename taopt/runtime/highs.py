@@ -129,7 +129,15 @@ def interrupt_when(highs: highspy.Highs, stop: Callable[[], bool]) -> Iterator[N
         _subscribe(highs, hook, on=False)
 
 
-def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
+#: What :func:`run_interruptibly` returns for a run left running past its ``give_up`` time.
+DETACHED = "detached"
+
+#: Seconds a run past its ``give_up`` time is waited for, once asked to stop, before it is
+#: left to end on its own (:func:`run_interruptibly`).
+DETACH_GRACE = 0.25
+
+
+def run_interruptibly(highs: highspy.Highs, run: Any = None, give_up: float | None = None) -> Any:
     """``highs.run()`` that Ctrl-C stops within :data:`INTERRUPT_GRACE` seconds.
 
     Python handles a signal only in the main thread and only between bytecodes; while the
@@ -148,11 +156,19 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
     highs : highspy.Highs
     run : callable, optional
         The run to call (default ``highs.run``).
+    give_up : float, optional
+        A :func:`time.perf_counter` instant: a run still going then is asked to stop (its
+        interrupt callbacks) and, if it has not stopped :data:`DETACH_GRACE` seconds later,
+        left to end on its own (:func:`taopt.runtime.interrupt.detach`) and :data:`DETACHED`
+        returned. HiGHS's MIP solver can go seconds without looking at its clock or its
+        callbacks (sub-MIPs, the root's analytic centre): SOP cut-engine rounds ended 3-9 s
+        past their time limit at load 3-6. The caller must not touch ``highs`` again. Only on
+        the main thread with Ctrl-C catchable (elsewhere the run is plain).
 
     Returns
     -------
-    HighsStatus
-        What ``run()`` returned.
+    HighsStatus or str
+        What ``run()`` returned, or :data:`DETACHED`.
 
     Raises
     ------
@@ -193,7 +209,11 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None) -> Any:
     worker.start()
     try:
         while not finished.wait(0.05):
-            pass
+            if give_up is not None and time.perf_counter() >= give_up:
+                stop.set()
+                if not finished.wait(DETACH_GRACE):
+                    interrupt.detach(finished)
+                    return DETACHED
     except KeyboardInterrupt:
         stop.set()
         interrupt.note_solver_interrupted()
@@ -342,6 +362,7 @@ __all__ = [
     "stdout_discarded",
     "interrupt_when",
     "run_interruptibly",
+    "DETACHED",
     "cvxpy_interruptible",
     "run_arrays",
 ]

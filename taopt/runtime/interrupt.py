@@ -43,6 +43,7 @@ EXIT_INTERRUPTED = 130
 _INTERRUPTED = threading.Event()  # a solver run of this process was stopped by Ctrl-C
 _ABANDONED: list[threading.Event] = []  # the "finished" events of runs left running
 _ABANDON_LOCK = threading.Lock()
+_DETACHED: list[threading.Event] = []  # the "finished" events of runs left past a deadline
 
 
 def on_main_thread() -> bool:
@@ -142,6 +143,30 @@ def abandon(finished: threading.Event) -> None:
         _ABANDONED.append(finished)
 
 
+def detach(finished: threading.Event) -> None:
+    """Leave a native run that was asked to stop at a deadline, and did not, to finish on its
+    own; ``finished`` is set when it ends. At the end of the interpreter it is waited for (it
+    was asked to stop, so it ends at its next look at its callbacks or its clock): C++ still
+    running during the interpreter's teardown could abort the process."""
+    with _ABANDON_LOCK:
+        if not _DETACHED:
+            atexit.register(_wait_detached)
+        _DETACHED.append(finished)
+
+
+def detached() -> int:
+    """How many runs left past a deadline are still running."""
+    with _ABANDON_LOCK:
+        return sum(not finished.is_set() for finished in _DETACHED)
+
+
+def _wait_detached() -> None:
+    with _ABANDON_LOCK:
+        waiting = list(_DETACHED)
+    for finished in waiting:
+        finished.wait()
+
+
 def abandoned() -> int:
     """How many abandoned runs are still running."""
     with _ABANDON_LOCK:
@@ -183,6 +208,8 @@ __all__ = [
     "solver_interrupted",
     "abandon",
     "abandoned",
+    "detach",
+    "detached",
     "wait_abandoned",
     "exit_now",
 ]

@@ -403,3 +403,34 @@ def test_script_worker_is_niced(tmp_path):
     finally:
         worker.stop()
     assert worker.process.poll() is not None
+
+
+def test_a_run_past_its_give_up_time_is_detached_and_waited_for_at_exit():
+    """run_interruptibly(give_up=...) returns DETACHED soon after ``give_up`` when the run
+    ignores its callbacks (a sleep stands for HiGHS between two looks at them); the run counts
+    as detached until it ends, and the interpreter's exit waits for it (exit code 0). A run
+    that ends before ``give_up`` returns its own value. In a child process: the main thread
+    with Ctrl-C catchable, as a user's script."""
+    code = """
+import sys, time
+import highspy
+from taopt.runtime import interrupt
+from taopt.runtime.highs import DETACH_GRACE, DETACHED, run_interruptibly
+h = highspy.Highs()
+began = time.perf_counter()
+got = run_interruptibly(h, run=lambda: time.sleep(1.5), give_up=began + 0.2)
+took = time.perf_counter() - began
+assert got == DETACHED, got
+assert 0.2 <= took <= 0.2 + DETACH_GRACE + 0.5, took
+assert interrupt.detached() == 1
+time.sleep(1.6)
+assert interrupt.detached() == 0
+assert run_interruptibly(h, run=lambda: "done", give_up=time.perf_counter() + 5) == "done"
+run_interruptibly(h, run=lambda: time.sleep(0.8), give_up=time.perf_counter())
+print("ok", flush=True)
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "ok"  # after HiGHS's banner
