@@ -1022,7 +1022,8 @@ def solve_sop_cuts(
     Solution
         Status "optimal" when proven, else "time_limit" with the best order and the best
         proven bound; ``info`` has ``root_bound``, ``root_rounds``, ``cuts``, ``mip_rounds``,
-        ``fixed`` (arcs fixed by reduced cost) and ``pool_rows`` (HiGHS's cuts kept).
+        ``fixed`` (arcs fixed by reduced cost), ``pool_rows`` (HiGHS's cuts kept) and
+        ``detached`` (the last MIP round was left running at the deadline).
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
@@ -1059,6 +1060,7 @@ def solve_sop_cuts(
             "arcs": model.n_arcs,
             "fixed": int(model.fixed.sum()),
             "pool_rows": model.pool_rows,
+            "detached": model.detached,
         }
     )
     if stop == "infeasible":
