@@ -163,7 +163,8 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None, give_up: float | No
         returned. HiGHS's MIP solver can go seconds without looking at its clock or its
         callbacks (sub-MIPs, the root's analytic centre): SOP cut-engine rounds ended 3-9 s
         past their time limit at load 3-6. The caller must not touch ``highs`` again. Only on
-        the main thread with Ctrl-C catchable (elsewhere the run is plain).
+        the main thread with Ctrl-C catchable (elsewhere the run is plain). A later call
+        waits first for such runs to end, so two runs never overlap.
 
     Returns
     -------
@@ -176,6 +177,8 @@ def run_interruptibly(highs: highspy.Highs, run: Any = None, give_up: float | No
         Ctrl-C during the run.
     """
     run = run or highs.run
+    if interrupt.detached():  # a run left past its deadline is still going: never overlap it
+        interrupt.wait_detached()
     if not interrupt.sigint_catchable():
         return run()  # no Ctrl-C to wait for (a worker thread, or SIGINT ignored)
     stop = threading.Event()

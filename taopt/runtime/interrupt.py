@@ -160,11 +160,19 @@ def detached() -> int:
         return sum(not finished.is_set() for finished in _DETACHED)
 
 
-def _wait_detached() -> None:
+def wait_detached() -> None:
+    """Wait until every run left past a deadline has ended (HiGHS before 1.12 keeps one task
+    scheduler for the process: a new run must not overlap one still going)."""
     with _ABANDON_LOCK:
         waiting = list(_DETACHED)
     for finished in waiting:
         finished.wait()
+    with _ABANDON_LOCK:
+        _DETACHED[:] = [finished for finished in _DETACHED if not finished.is_set()]
+
+
+def _wait_detached() -> None:
+    wait_detached()
 
 
 def abandoned() -> int:
@@ -210,6 +218,7 @@ __all__ = [
     "abandoned",
     "detach",
     "detached",
+    "wait_detached",
     "wait_abandoned",
     "exit_now",
 ]

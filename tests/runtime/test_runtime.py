@@ -408,9 +408,9 @@ def test_script_worker_is_niced(tmp_path):
 def test_a_run_past_its_give_up_time_is_detached_and_waited_for_at_exit():
     """run_interruptibly(give_up=...) returns DETACHED soon after ``give_up`` when the run
     ignores its callbacks (a sleep stands for HiGHS between two looks at them); the run counts
-    as detached until it ends, and the interpreter's exit waits for it (exit code 0). A run
-    that ends before ``give_up`` returns its own value. In a child process: the main thread
-    with Ctrl-C catchable, as a user's script."""
+    as detached until it ends, the next run starts only after it, and the interpreter's exit
+    waits for a detached run (exit code 0). A run that ends before ``give_up`` returns its own
+    value. In a child process: the main thread with Ctrl-C catchable, as a user's script."""
     code = """
 import sys, time
 import highspy
@@ -423,7 +423,8 @@ took = time.perf_counter() - began
 assert got == DETACHED, got
 assert 0.2 <= took <= 0.2 + DETACH_GRACE + 0.5, took
 assert interrupt.detached() == 1
-time.sleep(1.6)
+started = run_interruptibly(h, run=time.perf_counter)  # waits for the detached run first
+assert started >= began + 1.5, started - began
 assert interrupt.detached() == 0
 assert run_interruptibly(h, run=lambda: "done", give_up=time.perf_counter() + 5) == "done"
 run_interruptibly(h, run=lambda: time.sleep(0.8), give_up=time.perf_counter())
