@@ -1289,6 +1289,18 @@ def _cheap_bound(problem: SopProblem) -> float:
     return value
 
 
+def proof_record(found: Solution, gap: float, began: float, *keys: str) -> dict[str, Any]:
+    """The proof stage's ``info["proof"]``: the gap it started from, the DP's status, bound
+    and seconds since ``began``, and the DP's ``info`` entries ``keys``."""
+    return {
+        "gap": gap,
+        "status": str(found.status),
+        "bound": found.bound,
+        "seconds": time.perf_counter() - began,
+        **{key: found.info.get(key) for key in keys},
+    }
+
+
 def _known_order(
     cost: np.ndarray, closure: nx.DiGraph, start: int, end: int, incumbent: Any
 ) -> tuple[float, list[int]] | None:
@@ -2543,13 +2555,7 @@ def _stages(
                 max_states,
                 window,
             )
-            info["proof"] = {
-                "gap": gap,
-                "status": str(found.status),
-                "bound": found.bound,
-                "seconds": time.perf_counter() - stage_began,
-                "trials": found.info.get("trials"),
-            }
+            info["proof"] = proof_record(found, gap, stage_began, "trials")
             info["proof_trials"] = found.info.get("trials") or []
             return found
         found = solve_sop_dp(
@@ -2565,16 +2571,9 @@ def _stages(
             window=window,
         )
         setups.append(found.info.get("setup_seconds", 0.0))
-        info["proof"] = {
-            "gap": gap,
-            "status": str(found.status),
-            "bound": found.bound,
-            "seconds": time.perf_counter() - stage_began,
-            "states": found.info.get("states"),
-            "lp_solved": found.info.get("lp_solved"),
-            "lp_pruned": found.info.get("lp_pruned"),
-            "gave_up": found.info.get("gave_up"),
-        }
+        info["proof"] = proof_record(
+            found, gap, stage_began, "states", "lp_solved", "lp_pruned", "gave_up"
+        )
         return found
 
     dp_next = engine != "milp"
