@@ -145,6 +145,7 @@ from taopt import ideals
 from taopt.errors import InstanceError
 from taopt.ideals import bits as node_bits
 from taopt.ideals import differs, has, holds, lex_keys, nonzero, predecessor_masks, row_keys
+from taopt.ideals import runs as _groups
 from taopt.models.sop_remainder import RemainderBound
 from taopt.models.sop_statelp import MIN_SHARE, StateLp
 from taopt.models.sop_window import WindowCompletion
@@ -719,14 +720,50 @@ def _cheapest_per_state(
         order = np.lexsort((last, *lex_keys(mask)))
         start = np.ones(len(order), dtype=bool)
         start[1:] = differs(mask[order]) | (last[order][1:] != last[order][:-1])
-    ordered = value[order]
+    return order[_least_per_run(value[order], start)]
+
+
+def _least_per_run(value: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """The position of the first least ``value`` in each run (``start`` marks a run's first
+    item): the kept extension of each state when the extensions are ordered by state."""
     heads = np.flatnonzero(start)
     run = np.cumsum(start) - 1
-    least = np.minimum.reduceat(ordered, heads)
-    hits = np.flatnonzero(ordered == least[run])  # NaN-free: costs are finite here
+    least = np.minimum.reduceat(value, heads)
+    hits = np.flatnonzero(value == least[run])  # NaN-free: costs are finite here
     first = np.ones(len(hits), dtype=bool)
     first[1:] = run[hits][1:] != run[hits][:-1]
-    return order[hits[first]]
+    return hits[first]
+
+
+def _in_mask_order(mask: np.ndarray) -> bool:
+    """Whether the masks are in the order :func:`_state_order` sorts them by (as integers,
+    the last word most significant; equal ones anywhere in a run)."""
+    if len(mask) <= 1:
+        return True
+    if mask.ndim == 1:
+        return bool((mask[1:] >= mask[:-1]).all())
+    greater = np.zeros(len(mask) - 1, dtype=bool)
+    equal = np.ones(len(mask) - 1, dtype=bool)
+    for i in range(mask.shape[1] - 1, -1, -1):
+        before, after = mask[:-1, i], mask[1:, i]
+        greater |= equal & (before > after)
+        equal &= before == after
+    return not greater.any()
+
+
+def _cheapest_per_block(
+    block: np.ndarray, value: np.ndarray, in_order: bool, n: int, w: int
+) -> np.ndarray:
+    """:func:`_cheapest_per_state` of the extensions of a layer by one node ``w`` (every
+    last node ``w``). From a layer in mask order (``in_order``, :func:`_in_mask_order`) the
+    block is in mask order too (adding a bit no mask holds keeps the order of the integers),
+    and two extensions are one state only when their parents share the ideal, consecutive
+    in the layer: the runs of equal masks are the states, with no sort. Else the sort."""
+    if not in_order:
+        return _cheapest_per_state(block, np.full(len(block), w, np.int64), value, n)
+    start = np.ones(len(block), dtype=bool)
+    start[1:] = differs(block)
+    return _least_per_run(value, start)
 
 
 def _state_order(mask: np.ndarray, last: np.ndarray, n: int) -> np.ndarray:
@@ -742,16 +779,6 @@ def _members(mask: np.ndarray, n: int) -> np.ndarray:
     words = (mask[:, None] if mask.ndim == 1 else mask).astype("<u8", copy=False)
     flat = np.unpackbits(words.view(np.uint8), axis=1, bitorder="little")
     return flat[:, :n].astype(bool)
-
-
-def _groups(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Runs of equal consecutive masks: each state's run index and one mask per run (equal
-    masks that are not consecutive stay apart: correct, only less shared)."""
-    if len(mask) <= 1:
-        return np.zeros(len(mask), dtype=np.int64), mask
-    new = np.ones(len(mask), dtype=bool)
-    new[1:] = differs(mask)
-    return np.cumsum(new) - 1, mask[new]
 
 
 def _completion(usable: np.ndarray, start: int, end: int, pred: np.ndarray | None = None) -> _Bound:
@@ -1000,6 +1027,7 @@ class _Search:
         # a node every mask holds, or one with a predecessor no mask holds, extends none
         held_by_all = _members(np.bitwise_and.reduce(mask, axis=0)[None], n)[0]
         held_by_some = _members(np.bitwise_or.reduce(mask, axis=0)[None], n)[0]
+        in_order = _in_mask_order(mask)  # every layer of the exact run; not a beam's
         for w in range(n):
             if w == self.problem.start or held_by_all[w]:
                 continue
@@ -1022,7 +1050,7 @@ class _Search:
             block = mask[chosen] | bits[w]
             block_value = value[chosen] + step[finite]
             del step, finite
-            ours = _cheapest_per_state(block, np.full(len(chosen), w, np.int64), block_value, n)
+            ours = _cheapest_per_block(block, block_value, in_order, n, w)
             new_mask.append(block[ours])
             new_last.append(np.full(len(ours), w, dtype=np.int64))
             new_value.append(block_value[ours])

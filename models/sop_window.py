@@ -70,7 +70,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from taopt.ideals import has, words
+from taopt.ideals import runs, words
 from taopt.runtime import Deadline
 from taopt.sop.problem import SopProblem, usable_arcs
 
@@ -399,16 +399,30 @@ class WindowCompletion:
         )
 
     def _chunk(self, mask: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """The bound of one chunk of states. The set size and the held prices depend on the
+        ideal alone: they are computed once per run of equal consecutive masks
+        (:func:`taopt.ideals.runs`; a DP layer is sorted by mask, a few last nodes per
+        ideal), and whether the cheapest walk's first step is held is one bit read per
+        state."""
         if len(last) == 0:
             return np.zeros(0)
-        k = _popcount(mask) - 1
+        group, unique = runs(mask)
+        k = (_popcount(unique) - 1)[group]
         step = self.step[k, last]
-        into = np.zeros(len(last), dtype=bool)
-        for s in np.unique(step[step >= 0]):
-            at = step == s
-            into[at] = has(mask[at], int(s))
+        into = _holds_node(mask, step)
         head = np.where(into, self.spare[k, last], self.table[k, last])
-        return head + self.total - self._held_prices(mask)
+        return head + self.total - self._held_prices(unique)[group]
+
+
+def _holds_node(mask: np.ndarray, node: np.ndarray) -> np.ndarray:
+    """Per mask, whether it holds its own ``node`` (False where ``node`` is negative): one
+    bit read per mask (1-D uint64 masks or rows of words)."""
+    at = np.maximum(node, 0).astype(np.uint64)
+    if mask.ndim == 1:
+        word = mask
+    else:
+        word = mask[np.arange(len(mask)), (at // np.uint64(64)).astype(np.int64)]
+    return (node >= 0) & (((word >> (at % np.uint64(64))) & np.uint64(1)) != 0)
 
 
 def _popcount(mask: np.ndarray) -> np.ndarray:

@@ -143,6 +143,17 @@ def differs(masks: np.ndarray) -> np.ndarray:
     return nonzero(masks[1:] ^ masks[:-1], True)
 
 
+def runs(masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Runs of equal consecutive masks: each mask's run index and one mask per run (equal
+    masks that are not consecutive stay apart: a caller that works per run is still right,
+    it only shares less). A DP layer is sorted by mask, so its runs are its distinct ideals."""
+    if len(masks) <= 1:
+        return np.zeros(len(masks), dtype=np.int64), masks
+    new = np.ones(len(masks), dtype=bool)
+    new[1:] = differs(masks)
+    return np.cumsum(new) - 1, masks[new]
+
+
 def predecessor_masks(n: int, pairs: Iterable[tuple[int, int]]) -> np.ndarray:
     """``need[j]``: the mask of every ``r`` with a pair ``(r, j)`` (r must precede j).
 
@@ -311,6 +322,7 @@ __all__ = [
     "row_keys",
     "lex_keys",
     "differs",
+    "runs",
     "predecessor_masks",
     "distinct",
     "ideal_layers",

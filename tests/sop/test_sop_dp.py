@@ -418,3 +418,37 @@ def test_narrow_beam_pass_runs_past_a_spent_beam_budget(monkeypatch, sop_esc25):
     result = sop_dp.solve_sop_dp(sop_esc25, 60, beam_width=64)
     assert result.info["beam"] is not None
     assert str(result.status) == "optimal" and result.objective == 1681
+
+
+@pytest.mark.parametrize(("n", "words"), [(20, 1), (62, 1), (130, 3)])
+def test_block_of_a_layer_in_mask_order_merged_without_a_sort(n, words):
+    """From masks in mask order (runs of equal masks, several last nodes each), the extensions
+    by one node merged by their runs keep the same states and parents as the sort; the order
+    check accepts sorted layers and rejects a swapped pair."""
+    from taopt.ideals import bits, differs, has
+    from taopt.models.sop_dp import (
+        _cheapest_per_block,
+        _cheapest_per_state,
+        _in_mask_order,
+        _state_order,
+    )
+
+    rng = np.random.default_rng(n)
+    pool = rng.integers(0, 2 ** min(n, 62), (300, words), dtype=np.uint64)
+    pool = pool[:, 0] if words == 1 else pool
+    mask = pool[rng.integers(0, 300, 3_000)]
+    last = rng.integers(0, n, 3_000)
+    layer = _state_order(mask, last, n)
+    mask = mask[layer]
+    assert _in_mask_order(mask)
+    w = n - 1
+    keep = ~has(mask, w)
+    block = mask[keep] | bits(n)[w]
+    value = rng.integers(0, 5, len(block)).astype(float)  # many ties
+    merged = _cheapest_per_block(block, value, True, n, w)
+    assert np.array_equal(merged, _cheapest_per_state(block, np.full(len(block), w), value, n))
+    distinct = np.flatnonzero(differs(mask))  # a pair of different masks, swapped
+    swapped = mask.copy()
+    i = int(distinct[len(distinct) // 2])
+    swapped[[i, i + 1]] = swapped[[i + 1, i]]
+    assert not _in_mask_order(swapped)

@@ -247,3 +247,33 @@ def test_stall_rule_ends_the_run_and_only_truncates_it(monkeypatch):
     free = window_prices(problem, target)
     assert free.iterations > ruled.iterations
     assert ruled.bound <= free.bound <= target
+
+
+@pytest.mark.parametrize("n", [20, 70, 130])
+def test_window_bound_per_run_of_masks_equals_the_bound_per_state(n):
+    """States sharing an ideal, in runs and shuffled (equal masks apart), and first steps in
+    and out of the ideal: the bound per run of masks equals ``H`` (or ``H2`` when the
+    cheapest walk's first step is held) plus the prices of the nodes not held, per state."""
+    rng = np.random.default_rng(n)
+    cost = rng.integers(1, 50, size=(n, n)).astype(float)
+    problem = SopProblem(cost, [(1, 2), (2, 3)], 0, n - 1)
+    lam = rng.normal(0, 10, n)
+    table = WindowCompletion(problem, lam)
+    node = bits(n)
+    sets, last = [], []
+    for _ in range(12):
+        held = rng.choice(np.arange(1, n - 1), size=int(rng.integers(1, n - 2)), replace=False)
+        held = np.append(held, 0)
+        for v in rng.choice(held, size=int(rng.integers(1, 4))):  # a run of last nodes
+            sets.append(held)
+            last.append(int(v))
+    for order in (np.arange(len(sets)), rng.permutation(len(sets))):
+        mask = np.array([np.bitwise_or.reduce(node[sets[i]], axis=0) for i in order])
+        ends = np.array([last[i] for i in order])
+        got = table(mask, ends)
+        for i, at in enumerate(order):
+            k = len(sets[at]) - 1
+            step = table.step[k, last[at]]
+            head = table.spare if step >= 0 and step in sets[at] else table.table
+            want = head[k, last[at]] + lam.sum() - lam[sets[at]].sum()
+            assert got[i] == pytest.approx(want) or (np.isinf(want) and got[i] == want)
