@@ -1614,10 +1614,19 @@ def beam_order(
         grown = search.grow(mask, last, value, deadline)
         if grown is None or len(grown[0]) == 0:
             return None
+        total = None
         if len(grown[0]) > 4 * width:  # bound only the cheapest prefixes of the layer
             cheapest = np.argsort(grown[2], kind="stable")[: 4 * width]
             grown = tuple(a[cheapest] for a in grown)
-        total = search.totals(grown[0], grown[1], grown[2], deadline)
+            # bounded in the layer's order (by mask: the states of one ideal side by side
+            # share its sums, _Bound.extra), then put back in the order of their values
+            by_mask = np.argsort(cheapest)
+            part = search.totals(grown[0][by_mask], grown[1][by_mask], grown[2][by_mask], deadline)
+            if part is not None:
+                total = np.empty(len(part))
+                total[by_mask] = part
+        else:
+            total = search.totals(grown[0], grown[1], grown[2], deadline)
         if total is None:
             return None
         alive = np.flatnonzero(np.isfinite(total))

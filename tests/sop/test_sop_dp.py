@@ -452,3 +452,22 @@ def test_block_of_a_layer_in_mask_order_merged_without_a_sort(n, words):
     i = int(distinct[len(distinct) // 2])
     swapped[[i, i + 1]] = swapped[[i + 1, i]]
     assert not _in_mask_order(swapped)
+
+
+def test_completion_bound_does_not_depend_on_the_order_of_the_states():
+    """The beam bounds its cut layer in mask order and puts the values back: ``totals`` of a
+    shuffled layer (the states of one ideal apart) equals the layer's, shuffled."""
+    from taopt.ideals import row_keys
+    from taopt.models.sop_dp import Deadline, _Search
+    from taopt.sop.generate import random_sop
+
+    problem = random_sop(70, 0.3, 3)
+    search = _Search(problem)
+    mask, last, value, _ = search.first()
+    for _ in range(6):  # a few layers deep: several last nodes per ideal
+        mask, last, value, _ = search.grow(mask, last, value, Deadline(None))
+    assert len(np.unique(row_keys(mask))) < len(mask)
+    whole = search.totals(mask, last, value, Deadline(None))
+    shuffle = np.random.default_rng(0).permutation(len(mask))
+    part = search.totals(mask[shuffle], last[shuffle], value[shuffle], Deadline(None))
+    assert np.array_equal(part, whole[shuffle])
