@@ -80,6 +80,8 @@ __all__ = [
     "NODE_STALL",
     "NODE_TIGHT",
     "ROUND_EVERY",
+    "STRONG_CANDIDATES",
+    "STRONG_ITERATIONS",
     "BranchCut",
     "node_bound",
     "solve_sop_bc",
@@ -107,6 +109,16 @@ NODE_FULL = 16
 #: The node's last LP point is rounded to an order (:func:`~taopt.models.sop_cuts.round_point`)
 #: at every this-many-th node (and at every node while no order is known).
 ROUND_EVERY = 4
+
+#: Strong branching: the child LPs of this many candidate branchings are solved and the one
+#: whose two children gain most (product) is taken; 1 takes the first candidate (nearest 1/2).
+STRONG_CANDIDATES = 8
+
+#: Simplex iterations of a strong-branching child LP at most.
+STRONG_ITERATIONS = 200
+
+#: HiGHS's default ``simplex_iteration_limit`` (none), restored after strong branching.
+ITERATIONS_UNLIMITED = 2**31 - 1
 
 #: A value this close to 0 or 1 is integral.
 INTEGRAL = 1e-6
@@ -330,37 +342,111 @@ class BranchCut:
             ones = np.union1d(ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
         basis = model.highs.getBasis()
         saved = (list(basis.col_status), list(basis.row_status))
-        for child_ones, child_zeros in self._children(values, ones, zeros):
-            self._push(bound, depth + 1, child_ones, child_zeros, saved, node.number)
+        candidates = self._candidates(values, ones, zeros)
+        pick, bounds = candidates[0], [bound, bound]
+        if STRONG_CANDIDATES > 1 and len(candidates) > 1:
+            pick, bounds = self._strong(candidates, lower, upper, basis, bound, deadline)
+        for (child_ones, child_zeros), child_bound in zip(pick, bounds, strict=True):
+            if child_bound <= self._limit():
+                self._push(child_bound, depth + 1, child_ones, child_zeros, saved, node.number)
         return True
 
     # ------------------------------------------------------------------ branching
-    def _children(
+    def _candidates(
         self, values: np.ndarray, ones: np.ndarray, zeros: np.ndarray
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The two children (ones, zeros) of a node with LP point ``values`` (module doc)."""
-        fractional = np.flatnonzero((values > INTEGRAL) & (values < 1 - INTEGRAL))
+    ) -> list[list[tuple[np.ndarray, np.ndarray]]]:
+        """Branchings of a node with LP point ``values``, best first, at most
+        :data:`STRONG_CANDIDATES` (one at least): each two children (ones, zeros) that
+        partition the node's orders (module doc). ``"split"``: the out/in-arc splits nearest
+        1/2 (the arcs rule when no node has one); ``"arc"``: the most fractional arcs."""
+        count = max(STRONG_CANDIDATES, 1)
         if self.branching == "split":
-            split = self._split(values, ones, zeros)
-            if split is not None:
-                first, rest = split
-                return [(ones, np.union1d(zeros, first)), (ones, np.union1d(zeros, rest))]
+            splits = self._splits(values, ones, zeros)[:count]
+            if splits:
+                return [
+                    [(ones, np.union1d(zeros, first)), (ones, np.union1d(zeros, rest))]
+                    for first, rest in splits
+                ]
+        fractional = np.flatnonzero((values > INTEGRAL) & (values < 1 - INTEGRAL))
         if not len(fractional):  # an integral point cut by no row: cannot happen (module doc)
             raise RuntimeError("an integral point that is no order violates no row")
-        arc = int(fractional[np.argmin(np.abs(values[fractional] - 0.5))])
-        return [(np.union1d(ones, [arc]), zeros), (ones, np.union1d(zeros, [arc]))]
+        ranked = fractional[np.argsort(np.abs(values[fractional] - 0.5), kind="stable")]
+        return [
+            [(np.union1d(ones, [arc]), zeros), (ones, np.union1d(zeros, [arc]))]
+            for arc in ranked[:count].tolist()
+        ]
 
-    def _split(
+    def _strong(
+        self,
+        candidates: list[list[tuple[np.ndarray, np.ndarray]]],
+        lower: np.ndarray,
+        upper: np.ndarray,
+        basis: Any,
+        bound: float,
+        deadline: Deadline,
+    ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[float]]:
+        """Strong branching: each candidate's two child LPs (warm from the node's basis, at
+        most :data:`STRONG_ITERATIONS` simplex iterations, no separation); the candidate of
+        the largest product of the two children's gains over ``bound`` is taken. Returns it
+        and its children's proven bounds: the node bound of a child LP solved to its end
+        (:func:`node_bound` on the child's box; ``inf`` for an infeasible one), else
+        ``bound``. The node's box and basis are restored after each child."""
+        model = self.model
+        highs = model.highs
+        highs.setOptionValue("simplex_iteration_limit", STRONG_ITERATIONS)
+        best: tuple[float, int, list[float]] = (-math.inf, 0, [bound, bound])
+        try:
+            for number, children in enumerate(candidates):
+                proven, gains = [], []
+                for child_ones, child_zeros in children:
+                    if deadline.expired(MARGIN):
+                        return candidates[best[1]], best[2]
+                    child_lower = np.zeros(model.n_arcs)
+                    child_lower[child_ones] = 1.0
+                    child_upper = np.where(model.fixed, 0.0, 1.0)
+                    child_upper[child_zeros] = 0.0
+                    changed = np.flatnonzero(
+                        (child_lower != lower) | (child_upper != upper)
+                    ).astype(np.int32)
+                    highs.changeColsBounds(
+                        len(changed), changed, child_lower[changed], child_upper[changed]
+                    )
+                    model._run(deadline)
+                    self.lps += 1
+                    status = highs.getModelStatus()
+                    value = bound
+                    if status == highspy.HighsModelStatus.kInfeasible:
+                        value = math.inf
+                    elif status == highspy.HighsModelStatus.kOptimal:
+                        raw, _ = node_bound(model, child_lower, child_upper)
+                        value = max(bound, model.round_up(raw))
+                    proven.append(value)
+                    gain = value
+                    if status not in (
+                        highspy.HighsModelStatus.kInfeasible,
+                        highspy.HighsModelStatus.kOptimal,
+                    ):  # stopped by its iteration limit: its value scores it only
+                        gain = max(bound, float(highs.getInfo().objective_function_value))
+                    gains.append(min(gain - bound, 1e12) + 1e-6 * max(abs(bound), 1.0))
+                    highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
+                    highs.setBasis(basis)
+                score = gains[0] * gains[1]
+                if score > best[0]:
+                    best = (score, number, proven)
+        finally:
+            highs.setOptionValue("simplex_iteration_limit", ITERATIONS_UNLIMITED)
+        return candidates[best[1]], best[2]
+
+    def _splits(
         self, values: np.ndarray, ones: np.ndarray, zeros: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The out- or in-arc split (F, rest of the node's open arcs) whose ``x(F)`` is
-        nearest 1/2, over the nodes with two open arcs of positive value at least and no arc
-        fixed to 1 on that side; F is built greedily from the arcs of largest value. None when
-        no node has such arcs."""
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The out- and in-arc splits (F, rest of the node's open arcs), ``x(F)`` nearest
+        1/2 first, over the nodes with two open arcs of positive value at least and no arc
+        fixed to 1 on that side; F is built greedily from the arcs of largest value."""
         model = self.model
         open_arc = ~model.fixed
         open_arc[zeros] = False
-        best: tuple[float, np.ndarray, np.ndarray] | None = None
+        found: list[tuple[float, np.ndarray, np.ndarray]] = []
         for ends in (model.tails, model.heads):
             positive = open_arc & (values > INTEGRAL)
             counts = np.bincount(ends[positive], minlength=model.n)
@@ -371,12 +457,9 @@ class BranchCut:
                 total = np.cumsum(values[ranked])
                 k = int(np.argmin(np.abs(total - 0.5)))
                 k = min(k, len(ranked) - 2)  # F and the rest both non-empty
-                score = abs(float(total[k]) - 0.5)
-                if best is None or score < best[0]:
-                    best = (score, ranked[: k + 1], ranked[k + 1 :])
-        if best is None:
-            return None
-        return best[1], best[2]
+                found.append((abs(float(total[k]) - 0.5), ranked[: k + 1], ranked[k + 1 :]))
+        found.sort(key=lambda item: item[0])
+        return [(first, rest) for _, first, rest in found]
 
 
 def solve_sop_bc(
