@@ -124,6 +124,15 @@ ITERATIONS_UNLIMITED = 2**31 - 1
 INTEGRAL = 1e-6
 
 
+#: HiGHS's basis statuses by their values (a basis is kept per open node as int8 arrays).
+_STATUSES = {int(status): status for status in highspy.HighsBasisStatus.__members__.values()}
+
+
+def _packed(statuses: Any) -> np.ndarray:
+    """Basis statuses as an int8 array (a node's basis in 1 byte per column and row)."""
+    return np.fromiter((int(status) for status in statuses), dtype=np.int8)
+
+
 def node_bound(
     model: SopCutModel, lower: np.ndarray, upper: np.ndarray
 ) -> tuple[float, np.ndarray]:
@@ -233,11 +242,12 @@ class BranchCut:
         if node.basis is not None and node.parent != self._last:
             col_status, row_status = node.basis
             basis = highspy.HighsBasis()
-            basis.col_status = col_status
+            basis.col_status = [_STATUSES[k] for k in col_status.tolist()]
             rows = highs.getNumRow()
-            basis.row_status = list(row_status) + [highspy.HighsBasisStatus.kBasic] * (
-                rows - len(row_status)
-            )
+            # rows added since: basic (their slacks), as HiGHS itself keeps them
+            basis.row_status = [_STATUSES[k] for k in row_status.tolist()] + [
+                highspy.HighsBasisStatus.kBasic
+            ] * (rows - len(row_status))
             basis.valid = True
             highs.setBasis(basis)
         self._last = node.number
@@ -341,7 +351,7 @@ class BranchCut:
             )
             ones = np.union1d(ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
         basis = model.highs.getBasis()
-        saved = (list(basis.col_status), list(basis.row_status))
+        saved = (_packed(basis.col_status), _packed(basis.row_status))
         candidates = self._candidates(values, ones, zeros)
         pick, bounds = candidates[0], [bound, bound]
         if STRONG_CANDIDATES > 1 and len(candidates) > 1:
