@@ -61,6 +61,7 @@ from typing import Any
 
 import highspy
 import numpy as np
+import scipy.sparse as sp
 
 from taopt.models.sop_cuts import (
     SET_CUTS,
@@ -69,6 +70,7 @@ from taopt.models.sop_cuts import (
     root_stage,
     round_point,
 )
+from taopt.models.sop_statelp import clipped_duals, constraint_matrix
 from taopt.result import Order, Solution, finish
 from taopt.runtime import MARGIN, Deadline
 from taopt.sop.problem import SopProblem
@@ -83,6 +85,7 @@ __all__ = [
     "STRONG_CANDIDATES",
     "STRONG_ITERATIONS",
     "BranchCut",
+    "Rows",
     "node_bound",
     "solve_sop_bc",
 ]
@@ -133,23 +136,50 @@ def _packed(statuses: Any) -> np.ndarray:
     return np.fromiter((int(status) for status in statuses), dtype=np.int8)
 
 
+@dataclass
+class Rows:
+    """The model's rows as of ``count`` rows: ``A^T`` (columns x rows, CSR) and the row
+    sides, read once from HiGHS (:func:`~taopt.models.sop_statelp.constraint_matrix`) and kept
+    while no row is added (the tree's LPs between two separations)."""
+
+    count: int
+    transposed: sp.csr_matrix
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @classmethod
+    def of(cls, model: SopCutModel) -> Rows:
+        """The rows of ``model``'s HiGHS object now."""
+        lp = model.highs.getLp()
+        return cls(
+            int(lp.num_row_),
+            constraint_matrix(lp).T.tocsr(),
+            np.asarray(lp.row_lower_, dtype=float),
+            np.asarray(lp.row_upper_, dtype=float),
+        )
+
+
 def node_bound(
-    model: SopCutModel, lower: np.ndarray, upper: np.ndarray
+    model: SopCutModel, lower: np.ndarray, upper: np.ndarray, rows: Rows | None = None
 ) -> tuple[float, np.ndarray]:
     """(The weak-duality bound of the last LP for the box ``lower <= x <= upper``, the arcs'
     reduced costs ``d``); ``(-inf, empty)`` without duals.
 
     ``y^T b + Σ_a min(d_a lower_a, d_a upper_a)`` over the arcs not fixed at the root (the
-    module's "Node bound"); unrounded.
+    module's "Node bound"), ``y`` the row duals clipped to their signs; unrounded. ``rows``:
+    the model's rows now (read from HiGHS when None).
     """
-    raw, reduced = model._lagrangian()
-    if not math.isfinite(raw):
-        return -math.inf, reduced
-    constant = model._last_duals[1]
+    if rows is None:
+        rows = Rows.of(model)
+    solution = model.highs.getSolution()
+    if not solution.dual_valid:
+        return -math.inf, np.zeros(0)
+    y, constant = clipped_duals(np.asarray(solution.row_dual, dtype=float), rows.lower, rows.upper)
+    reduced = model.costs - rows.transposed @ y
     free = ~model.fixed
     d = reduced[free]
     terms = np.minimum(d * lower[free], d * upper[free])
-    return float(constant + terms.sum()), reduced
+    return float(constant.sum() + terms.sum()), reduced
 
 
 @dataclass(order=True)
@@ -196,6 +226,13 @@ class BranchCut:
     _count: int = 0
     _last: int = -1  # the node whose LP HiGHS holds
     _changed: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    _rows: Rows | None = None
+
+    def _bound_of(self, lower: np.ndarray, upper: np.ndarray) -> tuple[float, np.ndarray]:
+        """:func:`node_bound` of the last LP, the rows read again only when rows were added."""
+        if self._rows is None or self._rows.count != self.model.highs.getNumRow():
+            self._rows = Rows.of(self.model)
+        return node_bound(self.model, lower, upper, self._rows)
 
     # ------------------------------------------------------------------ bounds
     def _limit(self) -> float:
@@ -306,7 +343,7 @@ class BranchCut:
             if status != highspy.HighsModelStatus.kOptimal:
                 return False  # stopped by the clock
             self.lps += 1
-            raw, reduced = node_bound(model, lower, upper)
+            raw, reduced = self._bound_of(lower, upper)
             bound = max(bound, model.round_up(raw))
             if bound > self._limit():
                 return True
@@ -428,7 +465,7 @@ class BranchCut:
                     if status == highspy.HighsModelStatus.kInfeasible:
                         value = math.inf
                     elif status == highspy.HighsModelStatus.kOptimal:
-                        raw, _ = node_bound(model, child_lower, child_upper)
+                        raw, _ = self._bound_of(child_lower, child_upper)
                         value = max(bound, model.round_up(raw))
                     proven.append(value)
                     gain = value
