@@ -48,7 +48,9 @@ j otherwise; the lifted row may be violated where the plain one is not.
 loop and :func:`solve_sop_cuts` then solves the MIP with the rows found, checks the
 integral point, adds the rows it violates and solves again (an exact method: each MIP is a
 relaxation, so its proven bound is a bound of the SOP, and an integral point that is an
-order is optimal).
+order is optimal). :mod:`taopt.models.sop_bc` searches a branch-and-cut tree of its own over the
+same model instead (every row separated at every node; the portfolio's choice between the two is
+:func:`taopt.models.sop_bc.wants_tree`).
 
 References
 ----------
