@@ -590,8 +590,9 @@ def solve_sop_bc(
     >>> from taopt.sop.problem import SopProblem
     >>> import numpy as np
     >>> cost = np.array([[0, 1, 5, 9], [9, 0, 1, 5], [1, 9, 0, 1], [9, 9, 9, 0]], float)
-    >>> solve_sop_bc(SopProblem(cost, [(2, 1)], 0, 3)).objective
-    7.0
+    >>> result = solve_sop_bc(SopProblem(cost, [(2, 1)], 0, 3))  # 2 before 1
+    >>> result.objective, list(result.order)
+    (19.0, [0, 2, 1, 3])
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from taopt.models import sop_bc
-from taopt.models.sop_bc import node_bound, solve_sop_bc
+from taopt.models.sop_bc import TREE_MIN_GAP, node_bound, solve_sop_bc, wants_tree
 from taopt.models.sop_cuts import SopCutModel
 from taopt.result import OPTIMAL, TIME_LIMIT
 from taopt.sop.problem import SopProblem, evaluate_order, load_sop
@@ -113,3 +113,11 @@ def test_tree_counts(monkeypatch):
     assert info["lps"] >= info["nodes"] > 1
     bounds = [b for _, b in info["trace"]]
     assert bounds == sorted(bounds)
+
+
+def test_wants_tree_reads_the_gap():
+    """The portfolio's rule: the tree for a gap above TREE_MIN_GAP or an unknown one, the MIP
+    rounds below it."""
+    assert wants_tree(100.0, 100.0 * (1 - 2 * TREE_MIN_GAP))
+    assert not wants_tree(100.0, 100.0 * (1 - TREE_MIN_GAP / 2))
+    assert wants_tree(math.inf, 5.0) and wants_tree(10.0, -math.inf)
