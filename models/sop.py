@@ -2426,11 +2426,22 @@ def _stages(
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
         if formulation == "cuts":  # array-built and interruptible: no compile to fear
+            from taopt.models.sop_bc import solve_sop_bc, wants_tree
             from taopt.models.sop_cuts import solve_sop_cuts
 
-            result = solve_sop_cuts(
-                problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
+            order = _known_order(problem.cost, problem.closure, problem.start, problem.end, known)
+            lower = max(
+                float(info.get("root_stage", {}).get("bound", -np.inf)),
+                -np.inf if dp_result is None else float(dp_result.bound or -np.inf),
             )
+            if wants_tree(np.inf if order is None else order[0], lower):  # our own tree
+                result = solve_sop_bc(problem, time_left, known, verbose=verbose, model=root_model)
+                info["cut_engine"] = "tree"
+            else:
+                result = solve_sop_cuts(
+                    problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
+                )
+                info["cut_engine"] = "mip-rounds"
             nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
             stage(BASE_BYTES + cut_engine_bytes(nonzeros, time_left))
         else:

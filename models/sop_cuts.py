@@ -48,7 +48,9 @@ j otherwise; the lifted row may be violated where the plain one is not.
 loop and :func:`solve_sop_cuts` then solves the MIP with the rows found, checks the
 integral point, adds the rows it violates and solves again (an exact method: each MIP is a
 relaxation, so its proven bound is a bound of the SOP, and an integral point that is an
-order is optimal).
+order is optimal). :mod:`taopt.models.sop_bc` searches a branch-and-cut tree of its own over the
+same model instead (every row separated at every node; the portfolio's choice between the two is
+:func:`taopt.models.sop_bc.wants_tree`).
 
 References
 ----------
@@ -69,7 +71,7 @@ import highspy
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, maximum_flow
+from scipy.sparse.csgraph import maximum_flow
 
 from taopt.models.highs import new_highs, thread_options
 from taopt.models.sop import _cheap_bound, _known_order, usable_arcs
@@ -113,6 +115,7 @@ __all__ = [
     "SopCutModel",
     "cut_bound",
     "polish",
+    "root_stage",
     "round_point",
     "solve_sop_cuts",
 ]
@@ -184,6 +187,30 @@ ROOT_STALL = 1e-5
 
 #: See :data:`ROOT_STALL`.
 ROOT_STALL_ROUNDS = 5
+
+
+def _sorted_csr(n: int, tails: np.ndarray, heads: np.ndarray, caps: np.ndarray) -> sp.csr_matrix:
+    """The ``n x n`` capacity matrix of the arcs ``tails -> heads`` (sorted by tail, then head,
+    no repeats: a subset of ``usable_arcs``'s order), built straight as CSR (the same matrix
+    as from coordinates, without their conversion)."""
+    indptr = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(np.bincount(tails, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((caps, heads.astype(np.int32), indptr), shape=(n, n))
+
+
+def _source_side(graph: sp.csr_matrix, flow: sp.csr_matrix, source: int) -> np.ndarray:
+    """The nodes reached from ``source`` in the residual graph of a maximum ``flow`` on the
+    capacities ``graph`` (the source side of a minimum cut), as a boolean mask: arcs of
+    ``graph - flow`` above 0 (a forward arc not saturated, or the reverse of an arc with flow),
+    breadth-first on dense rows."""
+    residual = graph.toarray() - flow.toarray() > 0
+    reached = np.zeros(graph.shape[0], dtype=bool)
+    reached[source] = True
+    frontier = reached.copy()
+    while frontier.any():
+        frontier = residual[frontier].any(axis=0) & ~reached
+        reached |= frontier
+    return reached
 
 
 def _before_matrix(closure: nx.DiGraph, n: int) -> np.ndarray:
@@ -428,21 +455,25 @@ class SopCutModel:
         limit: int = CUTS_PER_ROUND,
         every: bool = False,
         deadline: Deadline | None = None,
+        among: np.ndarray | None = None,
     ) -> list[np.ndarray]:
         """Violated precedence path cuts at the point ``values`` (exact: one maximum flow
         per closure pair), most violated first, at most ``limit``.
 
         The pairs ``(start, k)`` (the strengthened subtour rows) are tried first; the other
         pairs only when those give no row (most LP rounds of the root loop need only them),
-        or always with ``every``. Stops early (with the rows found so far) when
-        ``deadline`` passes.
+        or always with ``every``. ``among`` (a mask over ``pairs``) restricts the other pairs
+        (then a heuristic: the tree of :mod:`taopt.models.sop_bc` tries the pairs nearly tight
+        at an earlier point). Stops early (with the rows found so far) when ``deadline``
+        passes.
         """
         first = self.pairs[:, 0] == self.problem.start
+        rest = ~first if among is None else ~first & among
         found = self._separate(values, self.pairs[first], deadline)
         if every:
-            found += self._separate(values, self.pairs[~first], deadline)
+            found += self._separate(values, self.pairs[rest], deadline)
         elif not found:
-            found = self._separate(values, self.pairs[~first], deadline)
+            found = self._separate(values, self.pairs[rest], deadline)
         found.sort(key=lambda item: item[0])
         return [arcs for _, arcs in found[:limit]]
 
@@ -473,8 +504,7 @@ class SopCutModel:
             keep = inside[tails] & inside[heads]
             if not keep.any():
                 continue
-            graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
-            graph.sum_duplicates()
+            graph = _sorted_csr(n, tails[keep], heads[keep], caps[keep])
             result = maximum_flow(graph, int(i), int(j))
             self.flows[i, j] = result.flow_value / FLOW_SCALE
             # a cut that holds is lifted only on the pairs of the start or the end (the σ-
@@ -482,14 +512,7 @@ class SopCutModel:
             # thousands of pairs)
             if result.flow_value >= (wide if LIFT_ALL or i == start or j == end else plain):
                 continue
-            residual = graph - result.flow
-            residual.data[residual.data < 0] = 0
-            residual.eliminate_zeros()
-            reached = breadth_first_order(
-                residual, int(i), directed=True, return_predecessors=False
-            )
-            side = np.zeros(n, dtype=bool)
-            side[reached] = True
+            side = _source_side(graph, result.flow, int(i))
             candidates = [(side & inside, inside & ~side)]
             if LIFT:
                 candidates += self.lifted(int(i), int(j), side & inside, inside & ~side)
@@ -652,15 +675,7 @@ class SopCutModel:
             result = maximum_flow(graph, source, sink)
             if result.flow_value >= (side - CUT_TOLERANCE) * FLOW_SCALE:
                 continue
-            residual = graph - result.flow
-            residual.data[residual.data < 0] = 0
-            residual.eliminate_zeros()
-            reached = breadth_first_order(
-                residual, source, directed=True, return_predecessors=False
-            )
-            mark = np.zeros(n + 2, dtype=bool)
-            mark[reached] = True
-            near = mark[:n] & inside
+            near = _source_side(graph, result.flow, source)[:n] & inside
             arcs = np.flatnonzero(near[self.tails] & (inside & ~near)[self.heads])
             lhs = float(values[arcs].sum())
             key = arcs.tobytes() + bytes([side])
@@ -1027,27 +1042,7 @@ def solve_sop_cuts(
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
-    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
-    if model is None:
-        model = SopCutModel(problem, verbose)
-    cheap = _cheap_bound(problem)
-    before = model.dual_bound() if model.is_mip is False and model.cut_rows else -math.inf
-    root = model.root(deadline, stretch=_wants_stretch(known, before))
-    if root.values is not None:
-        rounded = round_point(model, root.values, deadline)
-        if rounded is not None and (known is None or rounded[0] < known[0]):
-            known = rounded
-    bound = max(root.bound, cheap)
-    fixed = 0
-    if REDUCED_COST_FIXING and known is not None and root.values is not None:
-        fixed = model.fix_by_reduced_cost(known[0])
-    info: dict[str, Any] = {
-        "root_bound": root.bound,
-        "root_lp": root.value,
-        "root_rounds": root.rounds,
-        "root_complete": root.complete,
-        "root_fixed": fixed,
-    }
+    model, known, bound, info = root_stage(problem, deadline, incumbent, verbose, model)
     stop, rounds = "time_limit", 0
     if known is None or not _closed(model, bound, known[0]):
         stop, rounds, known, bound = _mip_rounds(model, deadline, known, bound, mip_gap)
@@ -1082,6 +1077,43 @@ def solve_sop_cuts(
         runtime=time.perf_counter() - began,
         info=info,
     )
+
+
+def root_stage(
+    problem: SopProblem,
+    deadline: Deadline,
+    incumbent: Any = None,
+    verbose: bool = False,
+    model: SopCutModel | None = None,
+) -> tuple[SopCutModel, tuple[float, list[int]] | None, float, dict[str, Any]]:
+    """The root of the exact cut engines (:func:`solve_sop_cuts`,
+    :func:`taopt.models.sop_bc.solve_sop_bc`): the LP cut loop (stretch rows while
+    :func:`_wants_stretch`), the last point rounded to an order, arcs fixed by reduced cost
+    against the best order. Returns (model, best order or None, proven bound, info with
+    ``root_bound``, ``root_lp``, ``root_rounds``, ``root_complete``, ``root_fixed``).
+    ``model``: as in :func:`solve_sop_cuts`."""
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    if model is None:
+        model = SopCutModel(problem, verbose)
+    cheap = _cheap_bound(problem)
+    before = model.dual_bound() if model.is_mip is False and model.cut_rows else -math.inf
+    root = model.root(deadline, stretch=_wants_stretch(known, before))
+    if root.values is not None:
+        rounded = round_point(model, root.values, deadline)
+        if rounded is not None and (known is None or rounded[0] < known[0]):
+            known = rounded
+    bound = max(root.bound, cheap)
+    fixed = 0
+    if REDUCED_COST_FIXING and known is not None and root.values is not None:
+        fixed = model.fix_by_reduced_cost(known[0])
+    info: dict[str, Any] = {
+        "root_bound": root.bound,
+        "root_lp": root.value,
+        "root_rounds": root.rounds,
+        "root_complete": root.complete,
+        "root_fixed": fixed,
+    }
+    return model, known, bound, info
 
 
 def _wants_stretch(known: tuple[float, list[int]] | None, bound: float) -> bool:
