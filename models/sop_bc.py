@@ -67,11 +67,12 @@ from taopt.models.sop_cuts import (
     SET_CUTS,
     SopCutModel,
     _order_of,
+    cut_solution,
     root_stage,
     round_point,
 )
 from taopt.models.sop_statelp import clipped_duals, constraint_matrix
-from taopt.result import Order, Solution, finish
+from taopt.result import Solution
 from taopt.runtime import MARGIN, Deadline
 from taopt.sop.problem import SopProblem
 
@@ -619,22 +620,4 @@ def solve_sop_bc(
             "trace": tree.trace,
         }
     )
-    if stop == "infeasible":
-        return finish(
-            None,
-            None,
-            method="exact-sop-bc",
-            stop="infeasible",
-            bound=math.inf,
-            runtime=time.perf_counter() - began,
-            info=info,
-        )
-    return finish(
-        problem,
-        None if known is None else Order(known[1]),
-        method="exact-sop-bc",
-        stop=stop,
-        bound=bound,
-        runtime=time.perf_counter() - began,
-        info=info,
-    )
+    return cut_solution(problem, known, "exact-sop-bc", stop, bound, began, info)

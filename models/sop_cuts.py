@@ -114,6 +114,7 @@ __all__ = [
     "RootCuts",
     "SopCutModel",
     "cut_bound",
+    "cut_solution",
     "polish",
     "root_stage",
     "round_point",
@@ -1058,11 +1059,27 @@ def solve_sop_cuts(
             "detached": model.detached,
         }
     )
+    return cut_solution(problem, known, "exact-sop-cuts", stop, bound, began, info)
+
+
+def cut_solution(
+    problem: SopProblem,
+    known: tuple[float, list[int]] | None,
+    method: str,
+    stop: str,
+    bound: float,
+    began: float,
+    info: dict[str, Any],
+) -> Solution:
+    """The :class:`~taopt.result.Solution` of a cut engine (:func:`solve_sop_cuts`, and the
+    branch-and-cut of :mod:`taopt.models.sop_bc`) that stopped with ``stop``: no order and an
+    infinite bound when ``"infeasible"``, else the best order ``known`` and ``bound``; the
+    runtime counted from ``began`` (``time.perf_counter()``)."""
     if stop == "infeasible":
         return finish(
             None,
             None,
-            method="exact-sop-cuts",
+            method=method,
             stop="infeasible",
             bound=math.inf,
             runtime=time.perf_counter() - began,
@@ -1071,7 +1088,7 @@ def solve_sop_cuts(
     return finish(
         problem,
         None if known is None else Order(known[1]),
-        method="exact-sop-cuts",
+        method=method,
         stop=stop,
         bound=bound,
         runtime=time.perf_counter() - began,
