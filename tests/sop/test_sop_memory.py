@@ -393,9 +393,10 @@ def test_layer_watch_reads_the_first_layers_of_the_dp():
 
 def test_run_records_the_probe_before_its_later_stages(esc25):
     """A portfolio run whose DP stage ran records its estimate from the probe of that stage's
-    first layers (layer sizes, states measured, extrapolated), within the guard."""
-    guard, _ = _footprint(esc25, {"time_limit": 2.0, "cpsat": False})
-    result = solve_sop_problem(esc25, time_limit=2.0, cpsat=False)
+    first layers (layer sizes, states measured, extrapolated), within the guard (a 10 s limit:
+    ESC25 closes in about 1 s, and at 2 s a loaded machine could stop it before its DP began)."""
+    guard, _ = _footprint(esc25, {"time_limit": 10.0, "cpsat": False})
+    result = solve_sop_problem(esc25, time_limit=10.0, cpsat=False)
     prediction = result.info["memory_prediction"]
     assert prediction["path"] in ("dp", "root+dp")
     probe = prediction["probe"]
