@@ -266,11 +266,7 @@ class BranchCut:
         returns the box (lower, upper)."""
         model = self.model
         highs = model.highs
-        if len(self._changed):
-            back = self._changed
-            highs.changeColsBounds(
-                len(back), back, np.zeros(len(back)), np.where(model.fixed[back], 0.0, 1.0)
-            )
+        self._undo()
         lower = np.zeros(model.n_arcs)
         upper = np.where(model.fixed, 0.0, 1.0)
         lower[node.ones] = 1.0
@@ -310,13 +306,18 @@ class BranchCut:
         try:
             return self._search(deadline, node_limit)
         finally:  # the model's LP as before the tree (the portfolio's later stages re-solve it)
-            back = self._changed
-            if len(back):
-                model.highs.changeColsBounds(
-                    len(back), back, np.zeros(len(back)), np.where(model.fixed[back], 0.0, 1.0)
-                )
-            self._changed = np.zeros(0, dtype=np.int32)
+            self._undo()
             self._last = -1
+
+    def _undo(self) -> None:
+        """Put back the root's bounds of the columns the last node changed (0 or 1; 0 for
+        the arcs fixed at the root)."""
+        back = self._changed
+        if len(back):
+            self.model.highs.changeColsBounds(
+                len(back), back, np.zeros(len(back)), np.where(self.model.fixed[back], 0.0, 1.0)
+            )
+        self._changed = np.zeros(0, dtype=np.int32)
 
     def _search(self, deadline: Deadline, node_limit: int | None) -> str:
         """The loop of :meth:`run`."""
