@@ -78,15 +78,19 @@ from taopt.sop.problem import SopProblem
 
 __all__ = [
     "BRANCHING",
+    "LOOKAHEAD",
     "NODE_ROUNDS",
     "NODE_FULL",
     "NODE_STALL",
     "NODE_TIGHT",
+    "PSEUDO_CANDIDATES",
+    "RELIABLE",
     "ROUND_EVERY",
     "STRONG_CANDIDATES",
     "STRONG_ITERATIONS",
     "TREE_MIN_GAP",
     "BranchCut",
+    "PseudoCosts",
     "Rows",
     "node_bound",
     "solve_sop_bc",
@@ -116,9 +120,27 @@ NODE_FULL = 16
 #: at every this-many-th node (and at every node while no order is known).
 ROUND_EVERY = 4
 
-#: Strong branching: the child LPs of this many candidate branchings are solved and the one
-#: whose two children gain most (product) is taken; 1 takes the first candidate (nearest 1/2).
+#: Strong branching: the child LPs of this many candidate branchings at most are solved and
+#: the one whose two children gain most (product) is taken; 1 takes the first candidate
+#: (nearest 1/2) without scoring (reliability branching, :meth:`BranchCut._branch`).
 STRONG_CANDIDATES = 8
+
+#: Reliability branching: a candidate branching whose key (the node and side of an out/in-arc
+#: split, or the arc) has this many observed gains in each of its two children is scored by
+#: its pseudo-costs (:class:`PseudoCosts`), not strong-branched. 4, below SCIP's default 5 (its
+#: ``reliability``), by reasoning not measurement: a split's F changes from node to node, so an
+#: older observation says less; each strong-branched candidate adds one per child, a child
+#: node's first LP another; the keys are 2n (about 100), so the first 25-50 nodes strong-branch
+#: as before and the later ones mostly do not.
+RELIABLE = 4
+
+#: Strong branching stops after this many strong-branched candidates in a row that did not
+#: improve the best score (SCIP's lookahead, 8 there over longer lists; ours hold 8).
+LOOKAHEAD = 4
+
+#: The candidate branchings scored per node (the splits nearest 1/2; the pseudo-costs make the
+#: ones beyond :data:`STRONG_CANDIDATES` free to score).
+PSEUDO_CANDIDATES = 32
 
 #: Simplex iterations of a strong-branching child LP at most.
 STRONG_ITERATIONS = 200
@@ -196,6 +218,66 @@ class _Node:
     zeros: np.ndarray = field(compare=False)
     basis: Any = field(compare=False, default=None)
     parent: int = field(compare=False, default=-1)
+    #: (branching key, child 0 or 1, the LP mass the branching removed, the parent's LP
+    #: value): the child's first LP is a pseudo-cost observation.
+    origin: tuple[Any, int, float, float] | None = field(compare=False, default=None)
+
+
+@dataclass
+class _Branching:
+    """A candidate branching: its pseudo-cost key, its two children (ones, zeros) and the
+    LP mass each child cuts off (``x(F)`` and ``x(R)`` of a split, ``1 - x_a`` and ``x_a``
+    of an arc)."""
+
+    key: tuple[str, int]
+    children: list[tuple[np.ndarray, np.ndarray]]
+    shares: tuple[float, float]
+
+
+@dataclass
+class PseudoCosts:
+    """Per branching key and child, the LP gains observed per unit of the mass the child cuts
+    off (strong-branching child LPs and children's first LPs): the estimate of a child's gain
+    is its key's mean times its share, the mean over every key where its key has none yet
+    (1 with none at all). Only the choice of the branching reads them, never a bound."""
+
+    sums: dict[tuple[str, int], np.ndarray] = field(default_factory=dict)
+    counts: dict[tuple[str, int], np.ndarray] = field(default_factory=dict)
+    total: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    seen: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    def observe(self, key: tuple[str, int], child: int, gain: float, share: float) -> None:
+        """One observed LP gain of ``key``'s child ``child`` (0 or 1) cutting off ``share``."""
+        if share <= INTEGRAL or not math.isfinite(gain):
+            return
+        unit = max(gain, 0.0) / share
+        if key not in self.sums:
+            self.sums[key], self.counts[key] = np.zeros(2), np.zeros(2)
+        self.sums[key][child] += unit
+        self.counts[key][child] += 1
+        self.total[child] += unit
+        self.seen[child] += 1
+
+    def reliable(self, key: tuple[str, int]) -> bool:
+        """Whether each child of ``key`` has :data:`RELIABLE` observations."""
+        counts = self.counts.get(key)
+        return bool((0 if counts is None else counts.min()) >= RELIABLE)
+
+    def estimate(self, key: tuple[str, int], shares: tuple[float, float]) -> np.ndarray:
+        """The two children's estimated gains."""
+        mean = np.where(self.seen > 0, self.total / np.maximum(self.seen, 1), 1.0)
+        counts = self.counts.get(key)
+        if counts is not None:
+            own = self.sums[key] / np.maximum(counts, 1)
+            mean = np.where(counts > 0, own, mean)
+        return mean * np.asarray(shares)
+
+
+def _score(gains: Any, value: float) -> float:
+    """A branching's score: the product of its two children's gains (each capped at 1e12 for
+    an infeasible child, plus ``1e-6 |value|`` so that one gain of 0 does not tie all)."""
+    tiny = 1e-6 * max(abs(value), 1.0)
+    return float(np.prod([min(max(float(g), 0.0), 1e12) + tiny for g in gains]))
 
 
 @dataclass
@@ -225,6 +307,9 @@ class BranchCut:
     cuts: int = 0
     max_depth: int = 0
     trace: list[tuple[float, float]] = field(default_factory=list)
+    pseudo: PseudoCosts = field(default_factory=PseudoCosts)
+    strong_lps: int = 0
+    pseudo_branchings: int = 0
     _open: list[_Node] = field(default_factory=list)
     _count: int = 0
     _last: int = -1  # the node whose LP HiGHS holds
@@ -256,10 +341,19 @@ class BranchCut:
 
     # ------------------------------------------------------------------ nodes
     def _push(
-        self, bound: float, depth: int, ones: np.ndarray, zeros: np.ndarray, basis: Any, parent: int
+        self,
+        bound: float,
+        depth: int,
+        ones: np.ndarray,
+        zeros: np.ndarray,
+        basis: Any,
+        parent: int,
+        origin: tuple[Any, int, float, float] | None = None,
     ) -> None:
         self._count += 1
-        heapq.heappush(self._open, _Node(bound, -depth, self._count, ones, zeros, basis, parent))
+        heapq.heappush(
+            self._open, _Node(bound, -depth, self._count, ones, zeros, basis, parent, origin)
+        )
 
     def _apply(self, node: _Node) -> tuple[np.ndarray, np.ndarray]:
         """Set the node's column bounds in HiGHS (the previous node's undone) and its basis;
@@ -347,6 +441,7 @@ class BranchCut:
         depth = -node.depth_key
         self.max_depth = max(self.max_depth, depth)
         value, bound, raw = -math.inf, node.bound, -math.inf
+        new_value = -math.inf
         values = np.zeros(0)
         reduced = np.zeros(0)
         rounds = 0
@@ -366,6 +461,9 @@ class BranchCut:
                 return True
             values = model.lp_values()
             new_value = float(model.highs.getInfo().objective_function_value)
+            if rounds == 0 and node.origin is not None:  # a pseudo-cost observation
+                key, child, share, parent_value = node.origin
+                self.pseudo.observe(key, child, new_value - parent_value, share)
             integral = not ((values > INTEGRAL) & (values < 1 - INTEGRAL)).any()
             if integral:
                 order = _order_of(model, values)
@@ -409,109 +507,167 @@ class BranchCut:
         candidates = self._candidates(values, ones, zeros)
         pick, bounds = candidates[0], [bound, bound]
         if STRONG_CANDIDATES > 1 and len(candidates) > 1:
-            pick, bounds = self._strong(candidates, lower, upper, basis, bound, deadline)
-        for (child_ones, child_zeros), child_bound in zip(pick, bounds, strict=True):
+            pick, bounds = self._branch(candidates, lower, upper, basis, new_value, bound, deadline)
+        for child, ((child_ones, child_zeros), child_bound) in enumerate(
+            zip(pick.children, bounds, strict=True)
+        ):
             if child_bound <= self._limit():
-                self._push(child_bound, depth + 1, child_ones, child_zeros, saved, node.number)
+                origin = (pick.key, child, pick.shares[child], new_value)
+                self._push(
+                    child_bound, depth + 1, child_ones, child_zeros, saved, node.number, origin
+                )
         return True
 
     # ------------------------------------------------------------------ branching
     def _candidates(
         self, values: np.ndarray, ones: np.ndarray, zeros: np.ndarray
-    ) -> list[list[tuple[np.ndarray, np.ndarray]]]:
-        """Branchings of a node with LP point ``values``, best first, at most
-        :data:`STRONG_CANDIDATES` (one at least): each two children (ones, zeros) that
+    ) -> list[_Branching]:
+        """Branchings of a node with LP point ``values``, nearest 1/2 first, at most
+        :data:`PSEUDO_CANDIDATES` (one at least): each two children (ones, zeros) that
         partition the node's orders (module doc). ``"split"``: the out/in-arc splits nearest
         1/2 (the arcs rule when no node has one); ``"arc"``: the most fractional arcs."""
-        count = max(STRONG_CANDIDATES, 1)
+        count = max(PSEUDO_CANDIDATES if STRONG_CANDIDATES > 1 else 1, 1)
         if self.branching == "split":
             splits = self._splits(values, ones, zeros)[:count]
             if splits:
                 return [
-                    [(ones, np.union1d(zeros, first)), (ones, np.union1d(zeros, rest))]
-                    for first, rest in splits
+                    _Branching(
+                        key,
+                        [(ones, np.union1d(zeros, first)), (ones, np.union1d(zeros, rest))],
+                        (float(values[first].sum()), float(values[rest].sum())),
+                    )
+                    for key, first, rest in splits
                 ]
         fractional = np.flatnonzero((values > INTEGRAL) & (values < 1 - INTEGRAL))
         if not len(fractional):  # an integral point cut by no row: cannot happen (module doc)
             raise RuntimeError("an integral point that is no order violates no row")
         ranked = fractional[np.argsort(np.abs(values[fractional] - 0.5), kind="stable")]
         return [
-            [(np.union1d(ones, [arc]), zeros), (ones, np.union1d(zeros, [arc]))]
+            _Branching(
+                ("arc", arc),
+                [(np.union1d(ones, [arc]), zeros), (ones, np.union1d(zeros, [arc]))],
+                (1.0 - float(values[arc]), float(values[arc])),
+            )
             for arc in ranked[:count].tolist()
         ]
 
-    def _strong(
+    def _branch(
         self,
-        candidates: list[list[tuple[np.ndarray, np.ndarray]]],
+        candidates: list[_Branching],
         lower: np.ndarray,
         upper: np.ndarray,
         basis: Any,
+        value: float,
         bound: float,
         deadline: Deadline,
-    ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[float]]:
-        """Strong branching: each candidate's two child LPs (warm from the node's basis, at
-        most :data:`STRONG_ITERATIONS` simplex iterations, no separation); the candidate of
-        the largest product of the two children's gains over ``bound`` is taken. Returns it
-        and its children's proven bounds: the node bound of a child LP solved to its end
-        (:func:`node_bound` on the child's box; ``inf`` for an infeasible one), else
-        ``bound``. The node's box and basis are restored after each child."""
-        model = self.model
-        highs = model.highs
+    ) -> tuple[_Branching, list[float]]:
+        """Reliability branching over ``candidates`` at a node of LP value ``value`` and
+        proven bound ``bound``: each is scored (:func:`_score`) by its children's estimated
+        gains (:class:`PseudoCosts`); in that order, the ones not :data:`RELIABLE` are
+        strong-branched (:meth:`_strong`), at most :data:`STRONG_CANDIDATES` and until
+        :data:`LOOKAHEAD` in a row did not raise the best score, and scored by their
+        children's measured gains instead. The best score among the strong-branched and the
+        reliable ones is taken (the first in that order when none is). Returns it and its
+        children's proven bounds (``bound`` each unless strong-branched)."""
+        estimates = [self.pseudo.estimate(c.key, c.shares) for c in candidates]
+        ranked = sorted(
+            range(len(candidates)), key=lambda k: -_score(estimates[k], value)
+        )  # stable: nearest 1/2 first among equal scores
+        best: tuple[float, _Branching, list[float], bool] = (
+            -math.inf,
+            candidates[ranked[0]],
+            [bound] * 2,
+            False,
+        )
+        highs = self.model.highs
         highs.setOptionValue("simplex_iteration_limit", STRONG_ITERATIONS)
-        best: tuple[float, int, list[float]] = (-math.inf, 0, [bound, bound])
+        tried, idle = 0, 0
         try:
-            for number, children in enumerate(candidates):
-                proven, gains = [], []
-                for child_ones, child_zeros in children:
-                    if deadline.expired(MARGIN):
-                        return candidates[best[1]], best[2]
-                    child_lower = np.zeros(model.n_arcs)
-                    child_lower[child_ones] = 1.0
-                    child_upper = np.where(model.fixed, 0.0, 1.0)
-                    child_upper[child_zeros] = 0.0
-                    changed = np.flatnonzero(
-                        (child_lower != lower) | (child_upper != upper)
-                    ).astype(np.int32)
-                    highs.changeColsBounds(
-                        len(changed), changed, child_lower[changed], child_upper[changed]
-                    )
-                    model._run(deadline)
-                    self.lps += 1
-                    status = highs.getModelStatus()
-                    value = bound
-                    if status == highspy.HighsModelStatus.kInfeasible:
-                        value = math.inf
-                    elif status == highspy.HighsModelStatus.kOptimal:
-                        raw, _ = self._bound_of(child_lower, child_upper)
-                        value = max(bound, model.round_up(raw))
-                    proven.append(value)
-                    gain = value
-                    if status not in (
-                        highspy.HighsModelStatus.kInfeasible,
-                        highspy.HighsModelStatus.kOptimal,
-                    ):  # stopped by its iteration limit: its value scores it only
-                        gain = max(bound, float(highs.getInfo().objective_function_value))
-                    gains.append(min(gain - bound, 1e12) + 1e-6 * max(abs(bound), 1.0))
-                    highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
-                    highs.setBasis(basis)
-                score = gains[0] * gains[1]
+            for k in ranked:
+                candidate = candidates[k]
+                score, bounds = _score(estimates[k], value), [bound, bound]
+                estimated = self.pseudo.reliable(candidate.key)
+                if not estimated:
+                    if tried >= STRONG_CANDIDATES or idle >= LOOKAHEAD:
+                        continue
+                    measured = self._strong(candidate, lower, upper, basis, value, bound, deadline)
+                    if measured is None:  # the deadline
+                        break
+                    gains, bounds = measured
+                    score, tried = _score(gains, value), tried + 1
+                    idle = 0 if score > best[0] else idle + 1
                 if score > best[0]:
-                    best = (score, number, proven)
+                    best = (score, candidate, bounds, estimated)
         finally:
             highs.setOptionValue("simplex_iteration_limit", ITERATIONS_UNLIMITED)
-        return candidates[best[1]], best[2]
+        self.pseudo_branchings += best[3]
+        return best[1], best[2]
+
+    def _strong(
+        self,
+        candidate: _Branching,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        basis: Any,
+        value: float,
+        bound: float,
+        deadline: Deadline,
+    ) -> tuple[list[float], list[float]] | None:
+        """Strong branching on one candidate: its two child LPs (warm from the node's basis,
+        at most :data:`STRONG_ITERATIONS` simplex iterations, set by the caller; no
+        separation), each a pseudo-cost observation. Returns the children's gains over the
+        node's LP value ``value`` (the LP value at the iteration limit, a dual simplex value
+        that only rises, scores a child stopped there; ``inf`` for an infeasible one) and
+        their proven bounds: the node bound of a child LP solved to its end
+        (:func:`node_bound` on the child's box; ``inf`` for an infeasible one), else
+        ``bound``. None when the deadline passed first. The node's box and basis are
+        restored after each child."""
+        model = self.model
+        highs = model.highs
+        proven, gains = [], []
+        for child, (child_ones, child_zeros) in enumerate(candidate.children):
+            if deadline.expired(MARGIN):
+                return None
+            child_lower = np.zeros(model.n_arcs)
+            child_lower[child_ones] = 1.0
+            child_upper = np.where(model.fixed, 0.0, 1.0)
+            child_upper[child_zeros] = 0.0
+            changed = np.flatnonzero((child_lower != lower) | (child_upper != upper)).astype(
+                np.int32
+            )
+            highs.changeColsBounds(
+                len(changed), changed, child_lower[changed], child_upper[changed]
+            )
+            model._run(deadline, brief=True)
+            self.lps += 1
+            self.strong_lps += 1
+            status = highs.getModelStatus()
+            limit, gain = bound, math.inf
+            if status == highspy.HighsModelStatus.kInfeasible:
+                limit = math.inf
+            else:
+                gain = float(highs.getInfo().objective_function_value) - value
+                if status == highspy.HighsModelStatus.kOptimal:
+                    raw, _ = self._bound_of(child_lower, child_upper)
+                    limit = max(bound, model.round_up(raw))
+                self.pseudo.observe(candidate.key, child, gain, candidate.shares[child])
+            proven.append(limit)
+            gains.append(gain)
+            highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
+            highs.setBasis(basis)
+        return gains, proven
 
     def _splits(
         self, values: np.ndarray, ones: np.ndarray, zeros: np.ndarray
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The out- and in-arc splits (F, rest of the node's open arcs), ``x(F)`` nearest
-        1/2 first, over the nodes with two open arcs of positive value at least and no arc
+    ) -> list[tuple[tuple[str, int], np.ndarray, np.ndarray]]:
+        """The out- and in-arc splits (key ``("out" or "in", node)``, F, rest of the node's
+        open arcs), ``x(F)`` nearest 1/2 first, over the nodes with two open arcs of positive value at least and no arc
         fixed to 1 on that side; F is built greedily from the arcs of largest value."""
         model = self.model
         open_arc = ~model.fixed
         open_arc[zeros] = False
-        found: list[tuple[float, np.ndarray, np.ndarray]] = []
-        for ends in (model.tails, model.heads):
+        found: list[tuple[float, tuple[str, int], np.ndarray, np.ndarray]] = []
+        for side, ends in (("out", model.tails), ("in", model.heads)):
             positive = open_arc & (values > INTEGRAL)
             counts = np.bincount(ends[positive], minlength=model.n)
             counts[ends[ones]] = 0
@@ -521,9 +677,10 @@ class BranchCut:
                 total = np.cumsum(values[ranked])
                 k = int(np.argmin(np.abs(total - 0.5)))
                 k = min(k, len(ranked) - 2)  # F and the rest both non-empty
-                found.append((abs(float(total[k]) - 0.5), ranked[: k + 1], ranked[k + 1 :]))
+                key = (side, int(v))
+                found.append((abs(float(total[k]) - 0.5), key, ranked[: k + 1], ranked[k + 1 :]))
         found.sort(key=lambda item: item[0])
-        return [(first, rest) for _, first, rest in found]
+        return [(key, first, rest) for _, key, first, rest in found]
 
 
 #: The portfolio (:func:`taopt.models.sop.solve_sop_problem`'s last cut stage) runs this tree
@@ -585,7 +742,9 @@ def solve_sop_bc(
     Solution
         "optimal" when the tree is empty, else "time_limit" with the best order and the proven
         bound; ``info`` has the root's keys, ``nodes``, ``lps``, ``cuts``, ``open``,
-        ``max_depth`` and ``trace`` (seconds, bound) each time the bound rose.
+        ``max_depth``, ``strong_lps`` (of the ``lps``: strong branching's child LPs),
+        ``pseudo_branchings`` (nodes branched on pseudo-costs alone) and
+        ``trace`` (seconds, bound) each time the bound rose.
 
     Examples
     --------
@@ -617,6 +776,8 @@ def solve_sop_bc(
             "tree_cuts": tree.cuts,
             "open": len(tree._open),
             "max_depth": tree.max_depth,
+            "strong_lps": tree.strong_lps,
+            "pseudo_branchings": tree.pseudo_branchings,
             "fixed": int(model.fixed.sum()),
             "trace": tree.trace,
         }
