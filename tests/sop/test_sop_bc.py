@@ -157,3 +157,19 @@ def test_pseudo_costs_estimate():
         costs.observe(("in", 2), 0, 1.0, 0.5)
         costs.observe(("in", 2), 1, 1.0, 0.5)
     assert costs.reliable(("in", 2))
+
+
+def test_rows_grown_equal_rows_read_whole():
+    """Rows read once and grown by the rows added since (``Rows.now``) equal the rows read
+    whole from HiGHS, and give the same node bound."""
+    problem = _instance(9)
+    model = SopCutModel(problem)
+    early = sop_bc.Rows.of(model)
+    model.root()
+    assert model.highs.getNumRow() > early.count
+    grown, whole = early.now(model), sop_bc.Rows.of(model)
+    assert grown.count == whole.count
+    assert (grown.matrix != whole.matrix).nnz == 0
+    assert np.array_equal(grown.lower, whole.lower) and np.array_equal(grown.upper, whole.upper)
+    lower, upper = np.zeros(model.n_arcs), np.where(model.fixed, 0.0, 1.0)
+    assert node_bound(model, lower, upper, grown)[0] == node_bound(model, lower, upper, whole)[0]
