@@ -126,3 +126,38 @@ def test_optimal_incumbent_is_certified_by_the_cutoff():
     assert again.status == OPTIMAL
     assert again.objective == pytest.approx(1675)
     assert again.bound == pytest.approx(1675)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_pair_flows_equal_one_flow_per_pair(seed):
+    """The batched maximum flows of ``pair_flows`` equal scipy's maximum flow of each pair's
+    own subgraph (capped at FLOW_CAP units), and where below the cap the source sides equal
+    the nodes reached from i in that flow's residual graph, on random fractional points of
+    random SOPs (some arcs of capacity 0, some pairs with no arc)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import maximum_flow
+
+    from taopt.models.sop_cuts import FLOW_CAP, FLOW_SCALE, _source_side, pair_flows
+
+    rng = np.random.default_rng([42, seed])
+    problem = sop_instance(seed)
+    model = SopCutModel(problem)
+    n = model.n
+    values = rng.random(model.n_arcs) * (rng.random(model.n_arcs) < 0.4)
+    support = values > 1e-9
+    tails, heads = model.tails[support], model.heads[support]
+    caps = np.floor(values[support] * FLOW_SCALE * rng.integers(1, 5)).astype(np.int32)
+    pairs = np.argwhere(rng.random((n, n)) < 0.5)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    inside = rng.random((len(pairs), n)) < 0.8
+    inside[np.arange(len(pairs)), pairs[:, 0]] = True
+    inside[np.arange(len(pairs)), pairs[:, 1]] = True
+    flows, sides = pair_flows(n, tails, heads, caps, pairs, inside)
+    for k, (i, j) in enumerate(pairs):
+        keep = inside[k][tails] & inside[k][heads]
+        graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
+        graph.sum_duplicates()
+        result = maximum_flow(graph, int(i), int(j))
+        assert flows[k] == min(result.flow_value, FLOW_CAP * FLOW_SCALE)
+        if flows[k] < FLOW_CAP * FLOW_SCALE:
+            assert np.array_equal(sides[k], _source_side(graph, result.flow, int(i)))
