@@ -190,21 +190,6 @@ ROOT_STALL = 1e-5
 ROOT_STALL_ROUNDS = 5
 
 
-def _source_side(graph: sp.csr_matrix, flow: sp.csr_matrix, source: int) -> np.ndarray:
-    """The nodes reached from ``source`` in the residual graph of a maximum ``flow`` on the
-    capacities ``graph`` (the source side of a minimum cut), as a boolean mask: arcs of
-    ``graph - flow`` above 0 (a forward arc not saturated, or the reverse of an arc with flow),
-    breadth-first on dense rows."""
-    residual = graph.toarray() - flow.toarray() > 0
-    reached = np.zeros(graph.shape[0], dtype=bool)
-    reached[source] = True
-    frontier = reached.copy()
-    while frontier.any():
-        frontier = residual[frontier].any(axis=0) & ~reached
-        reached |= frontier
-    return reached
-
-
 #: The pairs whose maximum flows one call of scipy's ``maximum_flow`` computes together
 #: (:func:`pair_flows`); also how often the separation looks at its deadline.
 PAIR_BATCH = 64
@@ -226,34 +211,53 @@ def pair_flows(
     """The maximum flows of several pairs at once: (each pair's flow from i to j on the arcs
     ``tails -> heads`` of capacities ``caps`` inside its node mask ``inside[k]``, at most
     ``FLOW_CAP * FLOW_SCALE``; per pair, the source side of a minimum cut, a boolean row of
-    ``n``, meaningful where the flow is below the cap).
+    ``n``, meaningful where the flow is below the cap): :func:`copy_flows` with one source
+    and one sink per copy."""
+    copies = np.arange(len(pairs))
+    return copy_flows(n, tails, heads, caps, inside, (copies, pairs[:, 0]), (copies, pairs[:, 1]))
 
-    One graph holds a copy of each pair's subgraph (pair k's node v is ``k n + v``), a super
-    source with an arc of capacity ``FLOW_CAP * FLOW_SCALE`` to each copy of i and an arc of
-    the same capacity from each copy of j to a super sink. The copies share no node, so every
-    maximum flow of the whole is a maximum flow in each copy, capped (the sum of the capped
-    maxima is reached only when each is); where the source's arc to a copy is not saturated,
-    the nodes reached from the super source in the residual graph within that copy are those
-    reached from i in the copy's own residual graph (the source side of its minimum cut, the
-    same set for every maximum flow). Why: one scipy call per pair spent about 0.3 ms of its
-    0.4 ms in the set-up of sparse matrices (csr checks, the reverse arcs, the flow matrix;
-    ft53.1, 117 pairs, 109 support arcs), the flow itself about 0.05 ms.
+
+def copy_flows(
+    n: int,
+    tails: np.ndarray,
+    heads: np.ndarray,
+    caps: np.ndarray,
+    inside: np.ndarray,
+    starts: tuple[np.ndarray, np.ndarray],
+    stops: tuple[np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The maximum flows of several copies of one graph at once, copy k restricted to the
+    nodes ``inside[k]``, from its sources to its sinks (``starts`` and ``stops``: (copy,
+    node) arrays): (each copy's flow on the arcs ``tails -> heads`` of capacities ``caps``,
+    exact below ``FLOW_CAP * FLOW_SCALE`` and at least that otherwise; per copy, the source
+    side of a minimum cut, a boolean row of ``n``, meaningful where the flow is below the
+    cap).
+
+    One graph holds the copies (copy k's node v is ``k n + v``), a super source with an arc
+    of capacity ``FLOW_CAP * FLOW_SCALE`` to each copy's sources and an arc of the same
+    capacity from each copy's sinks to a super sink. The copies share no node, so every
+    maximum flow of the whole is a maximum flow in each copy (the sum of the copies' maxima
+    is reached only when each is); a copy whose flow is below the cap saturates none of its
+    arcs from the super source, so its flow is that with uncapped sources and sinks, and the
+    nodes reached from the super source in the residual graph within that copy are the
+    source side of its minimum cut (the same set for every maximum flow). Why: one scipy call
+    per pair spent about 0.3 ms of its 0.4 ms in the set-up of sparse matrices (csr checks,
+    the reverse arcs, the flow matrix; ft53.1, 117 pairs, 109 support arcs), the flow itself
+    about 0.05 ms.
     """
-    count = len(pairs)
+    count = len(inside)
     cap = FLOW_CAP * FLOW_SCALE
     copy, arc = np.nonzero(inside[:, tails] & inside[:, heads])
     source, sink = count * n, count * n + 1
-    offsets = np.arange(count) * n
+    first = starts[0] * n + starts[1]
     graph = sp.csr_matrix(
         (
-            np.concatenate([caps[arc], np.full(2 * count, cap)]).astype(np.int32),
+            np.concatenate([caps[arc], np.full(len(first) + len(stops[0]), cap)]).astype(np.int32),
             (
                 np.concatenate(
-                    [copy * n + tails[arc], np.full(count, source), offsets + pairs[:, 1]]
+                    [copy * n + tails[arc], np.full(len(first), source), stops[0] * n + stops[1]]
                 ),
-                np.concatenate(
-                    [copy * n + heads[arc], offsets + pairs[:, 0], np.full(count, sink)]
-                ),
+                np.concatenate([copy * n + heads[arc], first, np.full(len(stops[0]), sink)]),
             ),
         ),
         shape=(count * n + 2, count * n + 2),
@@ -261,13 +265,13 @@ def pair_flows(
     graph.sum_duplicates()
     result = maximum_flow(graph, source, sink)
     flow = result.flow.tocsr()
-    out = flow[source].toarray().ravel()[offsets + pairs[:, 0]]
+    out = np.bincount(starts[0], weights=flow[source].toarray().ravel()[first], minlength=count)
     residual = (graph - flow).tocsr()
     residual.data = (residual.data > 0).astype(np.int8)
     residual.eliminate_zeros()
     reached = np.zeros(count * n + 2, dtype=bool)
     reached[breadth_first_order(residual, source, directed=True, return_predecessors=False)] = True
-    return out.astype(np.int64), reached[: count * n].reshape(count, n)
+    return np.round(out).astype(np.int64), reached[: count * n].reshape(count, n)
 
 
 def _before_matrix(closure: nx.DiGraph, n: int) -> np.ndarray:
@@ -707,54 +711,61 @@ class SopCutModel:
         tails, heads = self.tails[support], self.heads[support]
         caps = np.floor(values[support] * FLOW_SCALE).astype(np.int64)
         before = self.before
-        big = 4 * FLOW_SCALE
-        source, sink = n, n + 1
         found: list[tuple[float, np.ndarray, float]] = []
         seen: set[bytes] = set()
         flows = self.flows
-        for number, (xs, ys, side) in enumerate(self.set_candidates()):
-            if number % 64 == 0 and deadline is not None and deadline.expired(MARGIN):
-                break
+        tried: list[tuple[tuple[int, ...], tuple[int, ...], int]] = []
+        for xs, ys, side in self.set_candidates():
             # tried only where the pair cuts it is made of are nearly tight
             if side == 2:
                 if flows[xs[0], ys[1]] >= side + SET_TIGHT:
                     continue
             elif max(flows[x, y] for x in xs for y in ys) >= 1 + SET_TIGHT:
                 continue
-            inside: np.ndarray
-            if side == 2:  # the chain's own W(i, j)
-                inside = ~before[:, xs[0]] & ~before[ys[1], :]
-            else:  # W = V minus π(X) and σ(Y)
-                inside = np.asarray(
-                    ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
-                )
-            starts = [x for x in xs if inside[x]]
-            stops = [y for y in ys if inside[y]]
-            keep = inside[tails] & inside[heads]
-            graph = sp.csr_matrix(
-                (
-                    np.concatenate([caps[keep], np.full(len(starts) + len(stops), big)]).astype(
-                        np.int32
-                    ),
-                    (
-                        np.concatenate([tails[keep], np.full(len(starts), source), stops]),
-                        np.concatenate([heads[keep], starts, np.full(len(stops), sink)]),
-                    ),
-                ),
-                shape=(n + 2, n + 2),
+            tried.append((xs, ys, side))
+        for first in range(0, len(tried), PAIR_BATCH):
+            if deadline is not None and deadline.expired(MARGIN):
+                break
+            batch = tried[first : first + PAIR_BATCH]
+            inside = np.array(
+                [
+                    # the chain's own W(i, j); else W = V minus π(X) and σ(Y)
+                    ~before[:, xs[0]] & ~before[ys[1], :]
+                    if side == 2
+                    else ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+                    for xs, ys, side in batch
+                ]
+            ).reshape(len(batch), n)
+            starts = np.array(
+                [(k, x) for k, (xs, _, _) in enumerate(batch) for x in xs if inside[k, x]],
+                dtype=np.int64,
+            ).reshape(-1, 2)
+            stops = np.array(
+                [(k, y) for k, (_, ys, _) in enumerate(batch) for y in ys if inside[k, y]],
+                dtype=np.int64,
+            ).reshape(-1, 2)
+            values_of, sides = copy_flows(
+                n,
+                tails,
+                heads,
+                caps,
+                inside,
+                (starts[:, 0], starts[:, 1]),
+                (stops[:, 0], stops[:, 1]),
             )
-            graph.sum_duplicates()
-            result = maximum_flow(graph, source, sink)
-            if result.flow_value >= (side - CUT_TOLERANCE) * FLOW_SCALE:
-                continue
-            near = _source_side(graph, result.flow, source)[:n] & inside
-            arcs = np.flatnonzero(near[self.tails] & (inside & ~near)[self.heads])
-            lhs = float(values[arcs].sum())
-            key = arcs.tobytes() + bytes([side])
-            if lhs >= side - CUT_TOLERANCE or key in seen:
-                continue
-            seen.add(key)
-            found.append((lhs - side, arcs, float(side)))
+            for (_, _, side), mask, value, near in zip(
+                batch, inside, values_of, sides, strict=True
+            ):
+                if value >= (side - CUT_TOLERANCE) * FLOW_SCALE:
+                    continue
+                near = near & mask
+                arcs = np.flatnonzero(near[self.tails] & (mask & ~near)[self.heads])
+                lhs = float(values[arcs].sum())
+                key = arcs.tobytes() + bytes([side])
+                if lhs >= side - CUT_TOLERANCE or key in seen:
+                    continue
+                seen.add(key)
+                found.append((lhs - side, arcs, float(side)))
         found.sort(key=lambda item: item[0])
         found = found[:limit]
         return [arcs for _, arcs, _ in found], [side for _, _, side in found]

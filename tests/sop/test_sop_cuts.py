@@ -128,36 +128,81 @@ def test_optimal_incumbent_is_certified_by_the_cutoff():
     assert again.bound == pytest.approx(1675)
 
 
+def _reached(graph, flow, source):
+    """The nodes reached from ``source`` in the residual graph of ``flow`` (the reference)."""
+    residual = graph.toarray() - flow.toarray() > 0
+    reached = np.zeros(graph.shape[0], dtype=bool)
+    reached[source] = True
+    frontier = reached.copy()
+    while frontier.any():
+        frontier = residual[frontier].any(axis=0) & ~reached
+        reached |= frontier
+    return reached
+
+
 @pytest.mark.parametrize("seed", range(8))
-def test_pair_flows_equal_one_flow_per_pair(seed):
-    """The batched maximum flows of ``pair_flows`` equal scipy's maximum flow of each pair's
-    own subgraph (capped at FLOW_CAP units), and where below the cap the source sides equal
-    the nodes reached from i in that flow's residual graph, on random fractional points of
-    random SOPs (some arcs of capacity 0, some pairs with no arc)."""
+def test_copy_flows_equal_one_flow_per_copy(seed):
+    """The batched maximum flows of ``copy_flows`` (``pair_flows``: one source and one sink)
+    equal scipy's maximum flow of each copy's own subgraph, from a super source to a super
+    sink joined to its 1-2 sources and sinks (capped at FLOW_CAP units), and where below the
+    cap the source sides equal the nodes reached from the sources in that flow's residual
+    graph, on random fractional points of random SOPs (some copies without arcs)."""
     import scipy.sparse as sp
     from scipy.sparse.csgraph import maximum_flow
 
-    from taopt.models.sop_cuts import FLOW_CAP, FLOW_SCALE, _source_side, pair_flows
+    from taopt.models.sop_cuts import FLOW_CAP, FLOW_SCALE, copy_flows, pair_flows
 
     rng = np.random.default_rng([42, seed])
-    problem = sop_instance(seed)
-    model = SopCutModel(problem)
+    model = SopCutModel(sop_instance(seed))
     n = model.n
     values = rng.random(model.n_arcs) * (rng.random(model.n_arcs) < 0.4)
     support = values > 1e-9
     tails, heads = model.tails[support], model.heads[support]
     caps = np.floor(values[support] * FLOW_SCALE * rng.integers(1, 5)).astype(np.int32)
-    pairs = np.argwhere(rng.random((n, n)) < 0.5)
-    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
-    inside = rng.random((len(pairs), n)) < 0.8
-    inside[np.arange(len(pairs)), pairs[:, 0]] = True
-    inside[np.arange(len(pairs)), pairs[:, 1]] = True
-    flows, sides = pair_flows(n, tails, heads, caps, pairs, inside)
-    for k, (i, j) in enumerate(pairs):
-        keep = inside[k][tails] & inside[k][heads]
-        graph = sp.csr_matrix((caps[keep], (tails[keep], heads[keep])), shape=(n, n))
-        graph.sum_duplicates()
-        result = maximum_flow(graph, int(i), int(j))
-        assert flows[k] == min(result.flow_value, FLOW_CAP * FLOW_SCALE)
-        if flows[k] < FLOW_CAP * FLOW_SCALE:
-            assert np.array_equal(sides[k], _source_side(graph, result.flow, int(i)))
+    count = 30
+    ends = [[rng.choice(n, size=rng.integers(1, 3), replace=False) for _ in range(count)]]
+    ends.append([rng.choice(np.setdiff1d(range(n), xs), size=len(xs) % 2 + 1) for xs in ends[0]])
+    inside = rng.random((count, n)) < 0.8
+    for k in range(count):
+        inside[k, np.concatenate([ends[0][k], ends[1][k]])] = True
+    single = np.array([len(xs) == 1 == len(ys) for xs, ys in zip(*ends, strict=True)])
+    pairs = np.array([[xs[0], ys[0]] for xs, ys in zip(*ends, strict=True)])[single]
+    runs = [
+        (pair_flows(n, tails, heads, caps, pairs, inside[single]), np.flatnonzero(single)),
+        (
+            copy_flows(
+                n,
+                tails,
+                heads,
+                caps,
+                inside,
+                *[
+                    (np.repeat(np.arange(count), [len(e) for e in side]), np.concatenate(side))
+                    for side in ends
+                ],
+            ),
+            np.arange(count),
+        ),
+    ]
+    for (flows, sides), copies in runs:
+        for at, k in enumerate(copies):
+            keep = inside[k][tails] & inside[k][heads]
+            xs, ys = ends[0][k], ends[1][k]
+            big = np.full(len(xs) + len(ys), 10 * FLOW_SCALE)
+            graph = sp.csr_matrix(
+                (
+                    np.concatenate([caps[keep], big]),
+                    (
+                        np.concatenate([tails[keep], np.full(len(xs), n), ys]),
+                        np.concatenate([heads[keep], xs, np.full(len(ys), n + 1)]),
+                    ),
+                ),
+                shape=(n + 2, n + 2),
+            )
+            graph.sum_duplicates()
+            result = maximum_flow(graph, n, n + 1)
+            assert min(flows[at], FLOW_CAP * FLOW_SCALE) == min(
+                result.flow_value, FLOW_CAP * FLOW_SCALE
+            )
+            if flows[at] < FLOW_CAP * FLOW_SCALE:
+                assert np.array_equal(sides[at], _reached(graph, result.flow, n)[:n])
