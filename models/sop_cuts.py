@@ -555,19 +555,20 @@ class SopCutModel:
         before = self.before
         found: list[tuple[float, np.ndarray]] = []
         seen: set[bytes] = set()
-        inside_all = ~before[:, pairs[:, 0]].T & ~before[pairs[:, 1], :]  # W(i, j) per pair
-        has_arcs = (inside_all[:, tails] & inside_all[:, heads]).any(axis=1)
-        pairs, inside_all = pairs[has_arcs], inside_all[has_arcs]
         for first in range(0, len(pairs), PAIR_BATCH):
             if deadline is not None and deadline.expired(MARGIN):
                 break
-            batch = slice(first, first + PAIR_BATCH)
-            flows, sides = pair_flows(n, tails, heads, caps, pairs[batch], inside_all[batch])
-            self.flows[pairs[batch, 0], pairs[batch, 1]] = flows / FLOW_SCALE
-            for (i, j), inside, value, side in zip(
-                pairs[batch], inside_all[batch], flows, sides, strict=True
-            ):
-                found += self._pair_cut(values, int(i), int(j), inside, value, side, seen)
+            batch = pairs[first : first + PAIR_BATCH]
+            # W(i, j) per pair (a batch at a time: the dense closures have thousands of pairs)
+            inside = ~before[:, batch[:, 0]].T & ~before[batch[:, 1], :]
+            has_arcs = (inside[:, tails] & inside[:, heads]).any(axis=1)
+            batch, inside = batch[has_arcs], inside[has_arcs]
+            if not len(batch):
+                continue
+            flows, sides = pair_flows(n, tails, heads, caps, batch, inside)
+            self.flows[batch[:, 0], batch[:, 1]] = flows / FLOW_SCALE
+            for (i, j), within, value, side in zip(batch, inside, flows, sides, strict=True):
+                found += self._pair_cut(values, int(i), int(j), within, value, side, seen)
         return found
 
     def _pair_cut(
