@@ -39,6 +39,12 @@ Validity
   costs at least that minimum. It holds whenever the search stops; with best-first selection
   it is the bound of the node being solved.
 
+Which branching a node takes (reliability branching, :meth:`BranchCut._branch`: strong
+branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
+of the others) changes the search, never a bound: every candidate partitions the node's
+orders, and a child's bound is its parent's or the node bound of its strong-branching LP
+solved to its end.
+
 An integral node point is either an order (checked with the problem's own test, it is the
 node's optimum and the node is closed) or violates a path cut (a cycle apart from the path is
 not reached from the start; an inversion of ``i ≺ j`` leaves i with no way to j; exact
