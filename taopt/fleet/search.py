@@ -250,11 +250,14 @@ class _Tables:
         self._cols_size = 0
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
         self._firsts: dict[tuple, np.ndarray] = {}
-        self._first_of: dict[tuple, np.ndarray] = {}  # _first_recoveries, per drone and label
+        self._first_cands: dict[tuple, tuple] = {}  # _first_candidates
         self.nowhere = np.full(s, INF)  # (read only)
+        self._arrive_key: tuple[int, float, float] | None = None  # _arrivals
+        self._arrive = self.nowhere
         self._release: dict[tuple[int, int, int, int], tuple | None] = {}  # _release_rows
         self._tail: tuple | None = None  # _tail_table
-        self._kept: dict[tuple[int, int, int], np.ndarray] = {}  # _kept_sets
+        self._kept: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}  # _kept_pairs
+        self._kept_size = 0
         self._release_parts: dict[
             tuple[int, int, int, int], list[list[int]]
         ] = {}  # per row, the parts
@@ -335,14 +338,27 @@ def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
     return INF  # not reached
 
 
+def _arrivals(tab: _Tables, w: int, A: float, T: float) -> np.ndarray:
+    """Per stop q, the earliest a truck at stop w (arrival A, departure bound T) is there: A
+    at w, ``T + tt(w, q)`` elsewhere (read only; the last truck's kept: the drones of a
+    label's truck and its terms ask for the same one in turn)."""
+    key = (w, A, T)
+    if tab._arrive_key == key:
+        return tab._arrive
+    arrive = T + tab.tt_np[w]
+    arrive[w] = A
+    arrive.flags.writeable = False
+    tab._arrive_key, tab._arrive = key, arrive
+    return arrive
+
+
 def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any) -> tuple:
     """Per stop q, the earliest an airborne drone ``dr`` of a truck at stop w (arrival A,
     departure bound T) can be recovered there and its τ done (``inf`` beyond its range; one
     that has served nobody yet is charged no flight), and the truck's arrival times per stop
-    (``arrive``, computed once per truck: pass None first)."""
+    (``arrive``, :func:`_arrivals` when None)."""
     if arrive is None:
-        arrive = T + tab.tt_np[w]
-        arrive[w] = A
+        arrive = _arrivals(tab, w, A, T)
     o = dr[1]
     if o >= 0:
         back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tab.tau
@@ -379,18 +395,8 @@ def _first_recoveries(
     ``max(a_j + ft(j, q), arrival at q) + τ``, with ``d(w_L, j) + d(j, q)`` within the range
     left (``svc``: the label's service times). The least over j is a lower bound; ``inf`` everywhere when it can take no one
     (such a label has no completion)."""
-    # the least a_j + ft(j, q) depends on the drone, the served set, the service times and
-    # ``times`` only: memoised on them (siblings and the terms of one label share it)
-    memo = (k, S, dr, svc, None if times is None else tuple(times))
-    first = tab._first_of.get(memo)
-    if first is None:
-        first = _first_legs(tab, k, dr, S, svc, times)
-        if len(tab._first_of) > 1 << 16:
-            tab._first_of.clear()
-        tab._first_of[memo] = first
-    arrive = T + tab.tt_np[w]
-    arrive[w] = A
-    back = np.maximum(first, arrive)
+    first = _first_legs(tab, k, dr, S, svc, times)
+    back = np.maximum(first, _arrivals(tab, w, A, T))
     back += tab.tau
     return back
 
@@ -401,15 +407,63 @@ def _first_legs(
     """Per stop q, ``min_j a_j + ft(j, q)`` over the customers j a drone launched with no
     customer yet may take first, within range (:func:`_first_recoveries`; ``inf`` everywhere
     when it can take no one)."""
-    lazy = tab.lazy
+    ws = -dr[1] - 1
+    t, delta = dr[3], dr[4]
+    tau, limit = tab.tau, tab.limit
+    firsts, spent, cands = _first_candidates(tab, k, dr, S)
+    if not firsts:
+        return tab.nowhere
+    value: list[float] = []
+    for f, done, open_, rel in cands:
+        a = t + f + tau
+        for r in done:
+            if svc[r] > a:
+                a = svc[r]
+        if times is not None:
+            for r in open_:
+                if times[r] > a:
+                    a = times[r]
+        if rel > a:
+            a = rel
+        value.append(a)
+    key = (ws, delta, tuple(firsts), tuple(value))
+    first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
+    if first is None:
+        if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
+            rows = tab.fst_np[list(firsts)] + np.asarray(value)[:, None]
+            rows[tab.fsd_np[list(firsts)] + np.asarray(spent)[:, None] > limit] = INF
+        else:
+            legs = tab._legs.get(ws)
+            if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range
+                legs = tab._legs[ws] = np.where(
+                    tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
+                )
+            rows = legs[list(firsts)] + np.asarray(value)[:, None]
+        first = rows.min(axis=0)
+        if len(tab._firsts) > 1 << 15:
+            tab._firsts.clear()
+        tab._firsts[key] = first
+    return first
+
+
+def _first_candidates(
+    tab: _Tables, k: int, dr: tuple, S: int
+) -> tuple[tuple[int, ...], list[float], list[tuple[float, list[int], list[int], float]]]:
+    """The time-free part of :func:`_first_legs`: the customers j a drone launched with no
+    customer yet (``dr``, of truck k, served set S) may take first (ascending), the distance
+    flown on reaching each, and per j (ft(w_L, j), its served predecessors, its unserved
+    ones, its release); memoised per (k, S, launch stop, distance, freshness)."""
+    fresh = not tab.lazy or dr[6]
+    key = (k, S, dr[1], dr[4], -1 if fresh else dr[7])
+    got = tab._first_cands.get(key)
+    if got is not None:
+        return got
     owner, pred_mask, release = tab.owner, tab.pred_mask, tab.release
     ws = -dr[1] - 1
-    t, delta, seen = dr[3], dr[4], dr[7]
-    fresh = not lazy or dr[6]
-    tau, limit = tab.tau, tab.limit
+    delta, seen, limit = dr[4], dr[7], tab.limit
     firsts: list[int] = []
-    value: list[float] = []
     spent: list[float] = []
+    cands: list[tuple[float, list[int], list[int], float]] = []
     for j in range(tab.n):
         if S >> j & 1 or not tab.drone_ok[j] or (owner is not None and owner[j] != k):
             continue
@@ -418,41 +472,16 @@ def _first_legs(
         dist = delta + tab.fsd[j][ws]
         if dist + tab.near[j] > limit:
             continue
-        a = t + tab.fst[j][ws] + tau
-        for r in tab.preds[j]:
-            if S >> r & 1:
-                tr = svc[r]
-            elif times is not None:
-                tr = times[r]
-            else:
-                continue
-            if tr > a:
-                a = tr
-        if release[j] > a:
-            a = release[j]
         firsts.append(j)
-        value.append(a)
         spent.append(dist)
-    if not firsts:
-        return tab.nowhere
-    key = (ws, delta, tuple(firsts), tuple(value))
-    first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
-    if first is None:
-        if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
-            rows = tab.fst_np[firsts] + np.asarray(value)[:, None]
-            rows[tab.fsd_np[firsts] + np.asarray(spent)[:, None] > limit] = INF
-        else:
-            legs = tab._legs.get(ws)
-            if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range
-                legs = tab._legs[ws] = np.where(
-                    tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
-                )
-            rows = legs[firsts] + np.asarray(value)[:, None]
-        first = rows.min(axis=0)
-        if len(tab._firsts) > 1 << 15:
-            tab._firsts.clear()
-        tab._firsts[key] = first
-    return first
+        done = [r for r in tab.preds[j] if S >> r & 1]
+        open_ = [r for r in tab.preds[j] if not S >> r & 1]
+        cands.append((tab.fst[j][ws], done, open_, release[j]))
+    got = (tuple(firsts), spent, cands)
+    if len(tab._first_cands) > 1 << 16:
+        tab._first_cands.clear()
+    tab._first_cands[key] = got
+    return got
 
 
 def _fresh_sorties(
@@ -481,9 +510,9 @@ def _fresh_sorties(
         for dr in drones:
             if dr[0] == 0 and dr[1] < rho:
                 rho = dr[1]
-        best = None
-        if rho < INF:
-            best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), tab.Gnp[w] + T)
+        # the least recovery per stop over the airborne drones (then one drive-and-fly
+        # step for all: fl(x + g) is monotone in x, so min_d (b_d + G) = min_d b_d + G)
+        low = None
         for dr in drones:
             if dr[0] != 1:
                 continue
@@ -491,9 +520,15 @@ def _fresh_sorties(
                 back = _first_recoveries(tab, k, w, A, T, dr, S, svc, None)
             else:
                 back, _ = _recoveries(tab, w, A, T, dr, None)
-            cand = (back[:, None] + tab.Gnp).min(axis=0)
-            best = cand if best is None else np.minimum(best, cand)
-        assert best is not None
+            low = back if low is None else np.minimum(low, back)
+        if low is None:
+            best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), tab.Gnp[w] + T)
+        else:
+            if rho < INF and T < low[w]:  # (an aboard drone driven on from w: T + G[w, j])
+                low[w] = T
+            best = (low[:, None] + tab.Gnp).min(axis=0)
+            if rho < INF:
+                best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), best)
         best += tau
         out.append(best.tolist())
     return out
@@ -677,11 +712,7 @@ def _sortie_time_bound(
     ):
         # the releases across the drones' parts (:func:`_release_term`): only for labels
         # whose independent term is near the cutoff (skipping it leaves a valid bound)
-        least = float(
-            np.maximum(ends[0], ends[1][::-1]).min()
-            if len(ends) == 2
-            else _least_largest(ends, int(tab.popcount[U]))[-1]
-        )
+        least = _least_largest_at(ends, int(tab.popcount[U]))
         if least < cutoff and (cutoff == INF or least >= RELEASE_FROM * cutoff):
             v = _release_term(
                 tab, U, ends, _plain_ends(tab, cols, drones_left, ends), S, svc, times, cutoff
@@ -700,9 +731,7 @@ def _sortie_time_bound(
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
         # sets U \ Y left to new sorties
-        m = int(tab.popcount[U])
-        g = ends[0] if len(ends) == 1 else _least_largest(ends, m)
-        least = float(g[_kept_sets(tab, U, drop, count)].min())
+        least = _least_largest_at(ends, int(tab.popcount[U]), _kept_pairs(tab, U, drop, count))
         if (
             least < cutoff
             and least >= RELEASE_FROM * cutoff
@@ -727,10 +756,9 @@ def _sortie_time_bound(
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
         return float(np.maximum(ends[0], ends[1][::-1]).min())
-    last = len(cols[0]) - 1
     m = int(tab.popcount[U])
     if m <= PARTITION_MAX_CUSTOMERS:
-        return float(_least_largest(ends, m)[last])
+        return _least_largest_at(ends, m)
     size = -(-m // len(ends))
     big = tab.popcount[_submasks(tab, U)] >= size
     return float(min(np.min(e[big]) for e in ends))
@@ -820,26 +848,30 @@ def _shared_recoveries(
     return max(float(J.min()), least)
 
 
-def _kept_sets(tab: _Tables, U: int, drop: int, count: int) -> np.ndarray:
-    """The local indices (among the submasks of U, ascending) of the sets U \\ Y, Y ⊆ drop,
-    |Y| <= count (cached per (U, drop, count))."""
+def _kept_pairs(tab: _Tables, U: int, drop: int, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (Y, Z ^ Y), Y ⊆ Z, of local indices (among the submasks of U, ascending) over
+    the kept sets Z = U \\ X, X ⊆ drop, |X| <= count: :func:`_least_largest_at`'s last step
+    (cached per (U, drop, count), the cache cleared past 2^22 indices in all)."""
     key = (U, drop, count)
     got = tab._kept.get(key)
     if got is None:
         m = int(tab.popcount[U])
         local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
         top = (1 << m) - 1
-        got = np.array(
-            [
-                top ^ sum(1 << i for i in Y)
-                for size in range(min(count, len(local)) + 1)
-                for Y in itertools.combinations(local, size)
-            ],
-            dtype=np.int64,
-        )
-        if len(tab._kept) > 1 << 14:
+        kept = [
+            top ^ sum(1 << i for i in X)
+            for size in range(min(count, len(local)) + 1)
+            for X in itertools.combinations(local, size)
+        ]
+        full = np.arange(1 << m, dtype=np.int64)
+        Y = np.concatenate([full[(full & ~Z) == 0] for Z in kept])
+        Z = np.repeat(np.array(kept, dtype=np.int64), [1 << int(tab.popcount[Z]) for Z in kept])
+        got = (Y, Z ^ Y)
+        if tab._kept_size + 2 * len(Y) > 1 << 22:
             tab._kept.clear()
+            tab._kept_size = 0
         tab._kept[key] = got
+        tab._kept_size += 2 * len(Y)
     return got
 
 
@@ -1165,6 +1197,24 @@ def _least_largest(ends: list[np.ndarray], m: int) -> np.ndarray:
     for e in ends[1:]:
         g = np.minimum.reduceat(np.maximum(e[Y], g[rest]), starts)
     return g
+
+
+def _least_largest_at(
+    ends: list[np.ndarray], m: int, pairs: tuple[np.ndarray, np.ndarray] | None = None
+) -> float:
+    """The least, over the sets Z given by ``pairs`` (``(Y, Z ^ Y)`` for every Y ⊆ Z,
+    :func:`_kept_pairs`; without it Z is all m customers), of :func:`_least_largest`'s
+    ``g[Z]``: the same value, with the last drone's convolution taken only at those Z
+    (``min_Z g[Z] = min_Z min_{Y ⊆ Z} max(ends[-1][Y], g'[Z \\ Y])``, g' the convolution of
+    the other drones: one flat least over the pairs)."""
+    if len(ends) == 1:
+        e = ends[0]
+        return float(e[-1] if pairs is None else e[pairs[0][pairs[1] == 0]].min())
+    g = ends[0] if len(ends) == 2 else _least_largest(ends[:-1], m)
+    if pairs is None:  # the submasks ascend: Z \ Y of Y is at the mirrored index
+        return float(np.maximum(ends[-1], g[::-1]).min())
+    Y, rest = pairs
+    return float(np.maximum(ends[-1][Y], g[rest]).min())
 
 
 def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
