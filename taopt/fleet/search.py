@@ -947,7 +947,20 @@ def _release_rows(tab: _Tables, U: int, N: int, drop: int = 0, count: int = 0) -
             if r in at
         ]
         items.append((j, idx, tj, edges))
-    got = (loc[parts[:N]], items)
+    # the same, stacked over the customers (their order kept): per drone the index arrays,
+    # the tails, and per customer with predecessors in U their positions and gaps
+    at_item = {j: i for i, (j, _idx, _tj, _edges) in enumerate(items)}
+    got = (
+        loc[parts[:N]],
+        [j for j, _idx, _tj, _edges in items],
+        np.stack([idx for _j, idx, _tj, _edges in items], axis=1),
+        np.stack([tj for _j, _idx, tj, _edges in items]),
+        [
+            (i, [(at_item[r], add) for r, add in edges])
+            for i, (_j, _idx, _tj, edges) in enumerate(items)
+            if edges
+        ],
+    )
     if len(tab._release) > 1 << 12:
         tab._release.clear()
         tab._release_parts.clear()
@@ -1064,29 +1077,12 @@ def _release_term(
     if not drop or not count:
         drop = count = 0
     key = (U, len(ends), drop, count)
-    parts, items = got
+    parts, cust, _idx, tails, _edges = got
     top = ends[0][parts[0]]
     for d in range(1, len(ends)):
         top = np.maximum(top, ends[d][parts[d]])
-    L: dict[int, np.ndarray] = {}
-    pred_mask = tab.pred_mask
-    for j, idx, tail, edges in items:
-        Lj = plain[0][idx[0]]
-        for d in range(1, len(plain)):
-            Lj = np.maximum(Lj, plain[d][idx[d]])
-        rel = tab.release[j]
-        if times is not None and times[j] > rel:
-            rel = times[j]
-        if S is not None and pred_mask[j] & S:
-            for r in tab.preds[j]:
-                if S >> r & 1 and svc[r] > rel:
-                    rel = svc[r]
-        if rel > 0.0:
-            Lj = np.maximum(Lj, rel)
-        for r, add in edges:
-            Lj = np.maximum(Lj, L[r] + add)
-        L[j] = Lj
-        top = np.maximum(top, Lj + tail)
+    L = _release_floors(tab, got, plain, S, svc, times)
+    top = np.maximum(top, (L + tails).max(axis=0))
     least = float(top.min())
     if least >= cutoff:
         return least
@@ -1100,8 +1096,8 @@ def _release_term(
     rel = [0.0] * tab.n
     best = INF  # the least exact row so far
     for pos, r in enumerate(cand.tolist()):
-        for j in L:
-            rel[j] = float(L[j][r])
+        for j, v in zip(cust, L[:, r].tolist(), strict=True):
+            rel[j] = v
         v = float(top[r])
         for X in owners[r]:
             if X and int(tab.popcount[X]) <= RELEASE_MAX_SEQUENCE:
@@ -1117,6 +1113,42 @@ def _release_term(
             return min(best, after)
     rest = top[top >= cutoff]
     return min(best, float(rest.min()) if len(rest) else INF)
+
+
+def _release_floors(
+    tab: _Tables,
+    rows: tuple,
+    plain: list[np.ndarray],
+    S: int | None,
+    svc: Sequence[float],
+    times: Sequence[float] | None,
+) -> np.ndarray:
+    """:func:`_release_term`'s releases: ``L[i, row]`` a lower bound on the service of the
+    i-th customer of U (``rows``: :func:`_release_rows`) in every completion of that row's
+    assignment: the largest ``plain[e][anc ∩ X_e]``, its release, ``times``, its served
+    predecessors' times, and ``L[r] + gap`` over its predecessors r in U (a topological
+    order). All customers at once (a maximum is exact in any order), then raised along the
+    predecessors, each in turn."""
+    _parts, cust, idx, _tails, edges = rows
+    L = plain[0][idx[0]]
+    for d in range(1, len(plain)):
+        L = np.maximum(L, plain[d][idx[d]])
+    pred_mask = tab.pred_mask
+    floors = []
+    for j in cust:
+        rel = tab.release[j]
+        if times is not None and times[j] > rel:
+            rel = times[j]
+        if S is not None and pred_mask[j] & S:
+            for r in tab.preds[j]:
+                if S >> r & 1 and svc[r] > rel:
+                    rel = svc[r]
+        floors.append(rel if rel > 0.0 else -INF)
+    L = np.maximum(L, np.asarray(floors)[:, None])
+    for i, gaps in edges:
+        for r, add in gaps:
+            np.maximum(L[i], L[r] + add, out=L[i])
+    return L
 
 
 def _sequence_end(

@@ -21,7 +21,10 @@ from taopt.fleet.search import (
     _fresh_sorties,
     _kept_pairs,
     _least_largest_at,
+    _release_floors,
+    _release_rows,
     _Tables,
+    _tail_table,
 )
 
 # one truck with two and three drones, capacity 1 and 2, precedences (residential)
@@ -184,3 +187,52 @@ def test_bound_with_warm_caches_equals_cold(shape):
         assert _bound(cold, label) == v
         if v < INF:
             assert _bound(warm, label, 1.01 * v) == _bound(cold, label, 1.01 * v)
+
+
+@pytest.mark.parametrize("drones", [2, 3])
+def test_release_floors_equal_the_sequential_computation(drones):
+    """The release term's releases, taken for all customers at once then raised along the
+    precedences, equal the customer-by-customer computation in a topological order, on
+    random drone ends, earliest services and served sets of a residential instance."""
+    p = residential_fleet(6, 1, drones, 1, seed=2)
+    tab = _Tables(p)
+    assert tab.lazy
+    rng = np.random.default_rng(drones)
+    hop, _tail, anc, _desc = _tail_table(tab)
+    for trial in range(40):
+        S = int(rng.integers(0, 1 << p.n))
+        U = tab.full & ~S
+        if not U:
+            continue
+        m = bin(U).count("1")
+        drop = int(rng.integers(0, 1 << p.n)) & U if trial % 2 else 0
+        rows = _release_rows(tab, U, drones, drop, 1 if drop else 0)
+        if rows is None:
+            continue
+        parts = tab._release_parts[(U, drones, drop, 1 if drop else 0)]
+        plain = [rng.uniform(0, 100, 1 << m) for _ in range(drones)]
+        for e in plain:
+            e[0] = 0.0
+        svc = tuple(float(x) for x in rng.uniform(0, 100, p.n))
+        times = [float(x) for x in rng.uniform(0, 150, p.n)]
+        got = _release_floors(tab, rows, plain, S, svc, times)
+        cust = [j for j in range(p.n) if U >> j & 1]
+        loc = {X: i for i, X in enumerate(x for x in range(1 << p.n) if not x & ~U)}
+        for row, owners in enumerate(parts):
+            owner = {j: d for d in range(drones) for j in cust if owners[d] >> j & 1}
+            L: dict[int, float] = {}
+            for j in tab.topo:
+                if not U >> j & 1:
+                    continue
+                v = max(
+                    plain[d][loc[(owners[d] & anc[j]) | (1 << j if owner.get(j) == d else 0)]]
+                    for d in range(drones)
+                )
+                v = max(v, times[j], tab.release[j])
+                v = max([v] + [svc[r] for r in tab.preds[j] if S >> r & 1])
+                for r in tab.preds[j]:
+                    if U >> r & 1:
+                        same = r in owner and owner.get(j) == owner[r]
+                        v = max(v, L[r] + (hop[r][j] if same else 0.0))
+                L[j] = v
+            assert [got[i, row] for i in range(m)] == [L[j] for j in rows[1]], (trial, row)
