@@ -251,6 +251,7 @@ class _Tables:
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
         self._firsts: dict[tuple, np.ndarray] = {}
         self._first_cands: dict[tuple, tuple] = {}  # _first_candidates
+        self._reach: dict[tuple, tuple[int, int, int, list[tuple[int, float]]]] = {}  # _air_reach
         self.nowhere = np.full(s, INF)  # (read only)
         self._arrive_key: tuple[int, float, float] | None = None  # _arrivals
         self._arrive = self.nowhere
@@ -1264,7 +1265,6 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     tau = tab.tau
     full = tab.full
     lazy = tab.lazy
-    drone_ok, pred_mask, owner = tab.drone_ok, tab.pred_mask, tab.owner
     unserved = full & ~S
     if lazy:
         # a stale drone launched with no customer yet takes one only after a predecessor
@@ -1315,43 +1315,15 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             if air is None:
                 air = [INF] * n
             room += c - dr[2]
-            o = dr[1]
-            # a stale drone takes next only a customer with a predecessor served since its
-            # last event (:func:`_appendable`); after that append it is fresh, so with room
-            # for two it may go on to any customer within range (d(ℓ, j) + d(j, k) >=
-            # d(ℓ, k)), at most c - m - 1 of them: those may stay out of the walk and
-            # sortie terms too (``ext``, ``more``)
-            rule = lazy and not dr[6]
-            for _ in range(2):
-                takes = 0
-                for j in range(n):
-                    if not (unserved >> j & 1 and drone_ok[j]) or (
-                        owner is not None and owner[j] != k
-                    ):
-                        continue  # (truck_of: only j's own truck may serve it)
-                    if rule and not pred_mask[j] & ~dr[7]:
-                        continue
-                    if o >= 0:
-                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
-                    else:
-                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-                    if dr[4] + dist + tab.near[j] <= tab.limit:
-                        takes |= 1 << j
-                        v = dr[3] + fly + tau
-                        if v < air[j]:
-                            air[j] = v
-                if rule:
-                    relaxed |= takes
-                    if not (takes and c - dr[2] >= 2):
-                        break
-                    rule = False
-                    more += c - dr[2] - 1
-                else:
-                    if lazy and not dr[6]:
-                        ext |= takes
-                    else:
-                        relaxed |= takes
-                    break
+            takes, later, extra, reach = _air_reach(tab, k, dr, S)
+            relaxed |= takes
+            ext |= later
+            more += extra
+            t = dr[3]
+            for j, fly in reach:
+                v = t + fly + tau
+                if v < air[j]:
+                    air[j] = v
     ext &= ~relaxed
     v = _walk_bound(tab, unserved & ~relaxed, trucks, ext, more)
     if v > b:
@@ -1391,6 +1363,57 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         if v > b:
             b = v
     return b
+
+
+def _air_reach(
+    tab: _Tables, k: int, dr: tuple, S: int
+) -> tuple[int, int, int, list[tuple[int, float]]]:
+    """For an airborne drone ``dr`` of truck k with room (:func:`_bound`): the customers it
+    may take next (``relaxed``), those it may take only after its next append and how many
+    of them at most (``ext``, ``more``), and (j, its flight time to j) for each of either,
+    whose service it bounds from below by ``t + ft + τ``. Memoised per (k, S, ℓ or launch
+    stop, distance flown, m, the served set at its last event when it is stale).
+
+    A stale drone takes next only a customer with a predecessor served since its last event
+    (:func:`_appendable`); after that append it is fresh, so with room for two it may go on
+    to any customer within range (d(ℓ, j) + d(j, k) >= d(ℓ, k)), at most c - m - 1 of them:
+    those may stay out of the walk and sortie terms too."""
+    stale = tab.lazy and not dr[6]
+    key = (k, S, dr[1], dr[4], dr[2], dr[7] if stale else -1)
+    got = tab._reach.get(key)
+    if got is not None:
+        return got
+    n, c, o = tab.n, tab.c, dr[1]
+    owner, drone_ok, pred_mask = tab.owner, tab.drone_ok, tab.pred_mask
+    flights: dict[int, float] = {}
+    found = []
+    rule = stale
+    for _ in range(2):
+        takes = 0
+        for j in range(n):
+            if S >> j & 1 or not drone_ok[j] or (owner is not None and owner[j] != k):
+                continue  # (truck_of: only j's own truck may serve it)
+            if rule and not pred_mask[j] & ~dr[7]:
+                continue
+            if o >= 0:
+                dist, fly = tab.fcd[o][j], tab.fct[o][j]
+            else:
+                dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+            if dr[4] + dist + tab.near[j] <= tab.limit:
+                takes |= 1 << j
+                flights[j] = fly
+        found.append(takes)
+        if not (rule and takes and c - dr[2] >= 2):
+            break
+        rule = False
+    if len(found) == 2:
+        got = (found[0], found[1], c - dr[2] - 1, list(flights.items()))
+    else:
+        got = (found[0], 0, 0, list(flights.items()))
+    if len(tab._reach) > 1 << 16:
+        tab._reach.clear()
+    tab._reach[key] = got
+    return got
 
 
 def _service_term(tab: _Tables, unserved: int, est: list[float]) -> float:

@@ -15,6 +15,7 @@ import pytest
 from taopt.fleet.instances import residential_fleet
 from taopt.fleet.search import (
     INF,
+    _air_reach,
     _bound,
     _children,
     _first_recoveries,
@@ -236,3 +237,45 @@ def test_release_floors_equal_the_sequential_computation(drones):
                         v = max(v, L[r] + (hop[r][j] if same else 0.0))
                 L[j] = v
             assert [got[i, row] for i in range(m)] == [L[j] for j in rows[1]], (trial, row)
+
+
+@pytest.mark.parametrize("shape", [(6, 1, 2, 2), (6, 1, 3, 2), (6, 2, 1, 3)])
+def test_air_reach_equals_the_two_passes(shape):
+    """Per airborne drone with room, the memoised reach equals the plain two passes over
+    the customers (the rule on a stale drone first, then any customer within range)."""
+    n, K, D, c = shape
+    p = residential_fleet(n, K, D, c, seed=4)
+    tab = _Tables(p)
+    checked = 0
+    for S, _M, _svc, trucks in _labels(p):
+        for k, tr in enumerate(trucks):
+            for dr in tr[6]:
+                if tr[4] or not (dr[0] == 1 and dr[5] and dr[2] < tab.c):
+                    continue
+                o, passes, rule = dr[1], [], tab.lazy and not dr[6]
+                flights = {}
+                while True:
+                    takes = 0
+                    for j in range(tab.n):
+                        if S >> j & 1 or not tab.drone_ok[j]:
+                            continue
+                        if rule and not tab.pred_mask[j] & ~dr[7]:
+                            continue
+                        if o >= 0:
+                            dist, fly = tab.fcd[o][j], tab.fct[o][j]
+                        else:
+                            dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+                        if dr[4] + dist + tab.near[j] <= tab.limit:
+                            takes |= 1 << j
+                            flights[j] = fly
+                    passes.append(takes)
+                    if not (rule and takes and tab.c - dr[2] >= 2):
+                        break
+                    rule = False
+                later = passes[1] if len(passes) == 2 else 0
+                extra = tab.c - dr[2] - 1 if len(passes) == 2 else 0
+                got = _air_reach(tab, k, dr, S)
+                assert got[:3] == (passes[0], later, extra)
+                assert sorted(got[3]) == sorted(flights.items())
+                checked += 1
+    assert checked >= 20
