@@ -120,6 +120,10 @@ MATCH_TOLERANCE = 1e-9
 
 INF = math.inf
 
+#: ``np.minimum.reduce``: ``ndarray.min`` without its Python wrapper (the same values; the
+#: bound takes several per label on arrays of tens of entries).
+_least = np.minimum.reduce
+
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 
@@ -440,7 +444,7 @@ def _first_legs(
                     tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
                 )
             rows = legs[list(firsts)] + np.asarray(value)[:, None]
-        first = rows.min(axis=0)
+        first = _least(rows, axis=0)
         if len(tab._firsts) > 1 << 15:
             tab._firsts.clear()
         tab._firsts[key] = first
@@ -527,7 +531,7 @@ def _fresh_sorties(
         else:
             if rho < INF and T < low[w]:  # (an aboard drone driven on from w: T + G[w, j])
                 low[w] = T
-            best = (low[:, None] + tab.Gnp).min(axis=0)
+            best = _least(low[:, None] + tab.Gnp, axis=0)
             if rho < INF:
                 best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), best)
         best += tau
@@ -684,7 +688,7 @@ def _sortie_time_bound(
             if T > a and H is not None:  # launched here from a, or after the truck leaves
                 return min(a + float(H[w, U]), T + float(F[w, U]))
             return a + float(F[w, U])
-        return float((back_of(k, w, A, T, dr) + F[:, U]).min())
+        return float(_least(back_of(k, w, A, T, dr) + F[:, U]))
     cols = _columns(tab, U)
     ends: list[np.ndarray] = []
     backs: list[np.ndarray] = []
@@ -698,7 +702,7 @@ def _sortie_time_bound(
             continue
         back = back_of(k, w, A, T, dr)
         backs.append(back)
-        ends.append((back[:, None] + cols).min(axis=0))
+        ends.append(_least(back[:, None] + cols, axis=0))
     # two airborne drones of one truck: recovered by that one truck (:func:`_shared_recoveries`)
     shared = len(backs) == 2 and len(ends) == 2 and drones_left[0][0] == drones_left[1][0]
     if not tab.one_drone or not tab.ret:
@@ -725,7 +729,7 @@ def _sortie_time_bound(
                     v, _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
                 )
     if shared and not drop:
-        least = float(np.maximum(ends[0], ends[1][::-1]).min())
+        least = float(_least(np.maximum(ends[0], ends[1][::-1])))
         if least >= cutoff or (cutoff < INF and least < SHARED_FROM * cutoff):
             return least  # (already pruned, or too far below the cutoff to be pruned by it)
         return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
@@ -756,7 +760,7 @@ def _sortie_time_bound(
                 least = v
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
-        return float(np.maximum(ends[0], ends[1][::-1]).min())
+        return float(_least(np.maximum(ends[0], ends[1][::-1])))
     m = int(tab.popcount[U])
     if m <= PARTITION_MAX_CUSTOMERS:
         return _least_largest_at(ends, m)
@@ -1084,7 +1088,7 @@ def _release_term(
         top = np.maximum(top, ends[d][parts[d]])
     L = _release_floors(tab, got, plain, S, svc, times)
     top = np.maximum(top, (L + tails).max(axis=0))
-    least = float(top.min())
+    least = float(_least(top))
     if least >= cutoff:
         return least
     # the rows below the cutoff, least first: each part's order under its releases
@@ -1245,9 +1249,9 @@ def _least_largest_at(
         return float(e[-1] if pairs is None else e[pairs[0][pairs[1] == 0]].min())
     g = ends[0] if len(ends) == 2 else _least_largest(ends[:-1], m)
     if pairs is None:  # the submasks ascend: Z \ Y of Y is at the mirrored index
-        return float(np.maximum(ends[-1], g[::-1]).min())
+        return float(_least(np.maximum(ends[-1], g[::-1])))
     Y, rest = pairs
-    return float(np.maximum(ends[-1][Y], g[rest]).min())
+    return float(_least(np.maximum(ends[-1][Y], g[rest])))
 
 
 def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
