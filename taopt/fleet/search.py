@@ -120,6 +120,10 @@ MATCH_TOLERANCE = 1e-9
 
 INF = math.inf
 
+#: ``np.minimum.reduce``: ``ndarray.min`` without its Python wrapper (the same values; the
+#: bound takes several per label on arrays of tens of entries).
+_least = np.minimum.reduce
+
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 
@@ -250,11 +254,15 @@ class _Tables:
         self._cols_size = 0
         self._legs: dict[int, np.ndarray] = {}  # _first_recoveries
         self._firsts: dict[tuple, np.ndarray] = {}
-        self._first_of: dict[tuple, np.ndarray] = {}  # _first_recoveries, per drone and label
+        self._first_cands: dict[tuple, tuple] = {}  # _first_candidates
+        self._reach: dict[tuple, tuple[int, int, int, list[tuple[int, float]]]] = {}  # _air_reach
         self.nowhere = np.full(s, INF)  # (read only)
+        self._arrive_key: tuple[int, float, float] | None = None  # _arrivals
+        self._arrive = self.nowhere
         self._release: dict[tuple[int, int, int, int], tuple | None] = {}  # _release_rows
         self._tail: tuple | None = None  # _tail_table
-        self._kept: dict[tuple[int, int, int], np.ndarray] = {}  # _kept_sets
+        self._kept: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}  # _kept_pairs
+        self._kept_size = 0
         self._release_parts: dict[
             tuple[int, int, int, int], list[list[int]]
         ] = {}  # per row, the parts
@@ -335,14 +343,27 @@ def _water_fill(tab: _Tables, S: int, trucks: tuple) -> float:
     return INF  # not reached
 
 
+def _arrivals(tab: _Tables, w: int, A: float, T: float) -> np.ndarray:
+    """Per stop q, the earliest a truck at stop w (arrival A, departure bound T) is there: A
+    at w, ``T + tt(w, q)`` elsewhere (read only; the last truck's kept: the drones of a
+    label's truck and its terms ask for the same one in turn)."""
+    key = (w, A, T)
+    if tab._arrive_key == key:
+        return tab._arrive
+    arrive = T + tab.tt_np[w]
+    arrive[w] = A
+    arrive.flags.writeable = False
+    tab._arrive_key, tab._arrive = key, arrive
+    return arrive
+
+
 def _recoveries(tab: _Tables, w: int, A: float, T: float, dr: tuple, arrive: Any) -> tuple:
     """Per stop q, the earliest an airborne drone ``dr`` of a truck at stop w (arrival A,
     departure bound T) can be recovered there and its τ done (``inf`` beyond its range; one
     that has served nobody yet is charged no flight), and the truck's arrival times per stop
-    (``arrive``, computed once per truck: pass None first)."""
+    (``arrive``, :func:`_arrivals` when None)."""
     if arrive is None:
-        arrive = T + tab.tt_np[w]
-        arrive[w] = A
+        arrive = _arrivals(tab, w, A, T)
     o = dr[1]
     if o >= 0:
         back = np.maximum(dr[3] + tab.fst_np[o], arrive) + tab.tau
@@ -379,18 +400,8 @@ def _first_recoveries(
     ``max(a_j + ft(j, q), arrival at q) + τ``, with ``d(w_L, j) + d(j, q)`` within the range
     left (``svc``: the label's service times). The least over j is a lower bound; ``inf`` everywhere when it can take no one
     (such a label has no completion)."""
-    # the least a_j + ft(j, q) depends on the drone, the served set, the service times and
-    # ``times`` only: memoised on them (siblings and the terms of one label share it)
-    memo = (k, S, dr, svc, None if times is None else tuple(times))
-    first = tab._first_of.get(memo)
-    if first is None:
-        first = _first_legs(tab, k, dr, S, svc, times)
-        if len(tab._first_of) > 1 << 16:
-            tab._first_of.clear()
-        tab._first_of[memo] = first
-    arrive = T + tab.tt_np[w]
-    arrive[w] = A
-    back = np.maximum(first, arrive)
+    first = _first_legs(tab, k, dr, S, svc, times)
+    back = np.maximum(first, _arrivals(tab, w, A, T))
     back += tab.tau
     return back
 
@@ -401,15 +412,63 @@ def _first_legs(
     """Per stop q, ``min_j a_j + ft(j, q)`` over the customers j a drone launched with no
     customer yet may take first, within range (:func:`_first_recoveries`; ``inf`` everywhere
     when it can take no one)."""
-    lazy = tab.lazy
+    ws = -dr[1] - 1
+    t, delta = dr[3], dr[4]
+    tau, limit = tab.tau, tab.limit
+    firsts, spent, cands = _first_candidates(tab, k, dr, S)
+    if not firsts:
+        return tab.nowhere
+    value: list[float] = []
+    for f, done, open_, rel in cands:
+        a = t + f + tau
+        for r in done:
+            if svc[r] > a:
+                a = svc[r]
+        if times is not None:
+            for r in open_:
+                if times[r] > a:
+                    a = times[r]
+        if rel > a:
+            a = rel
+        value.append(a)
+    key = (ws, delta, tuple(firsts), tuple(value))
+    first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
+    if first is None:
+        if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
+            rows = tab.fst_np[list(firsts)] + np.asarray(value)[:, None]
+            rows[tab.fsd_np[list(firsts)] + np.asarray(spent)[:, None] > limit] = INF
+        else:
+            legs = tab._legs.get(ws)
+            if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range
+                legs = tab._legs[ws] = np.where(
+                    tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
+                )
+            rows = legs[list(firsts)] + np.asarray(value)[:, None]
+        first = _least(rows, axis=0)
+        if len(tab._firsts) > 1 << 15:
+            tab._firsts.clear()
+        tab._firsts[key] = first
+    return first
+
+
+def _first_candidates(
+    tab: _Tables, k: int, dr: tuple, S: int
+) -> tuple[tuple[int, ...], list[float], list[tuple[float, list[int], list[int], float]]]:
+    """The time-free part of :func:`_first_legs`: the customers j a drone launched with no
+    customer yet (``dr``, of truck k, served set S) may take first (ascending), the distance
+    flown on reaching each, and per j (ft(w_L, j), its served predecessors, its unserved
+    ones, its release); memoised per (k, S, launch stop, distance, freshness)."""
+    fresh = not tab.lazy or dr[6]
+    key = (k, S, dr[1], dr[4], -1 if fresh else dr[7])
+    got = tab._first_cands.get(key)
+    if got is not None:
+        return got
     owner, pred_mask, release = tab.owner, tab.pred_mask, tab.release
     ws = -dr[1] - 1
-    t, delta, seen = dr[3], dr[4], dr[7]
-    fresh = not lazy or dr[6]
-    tau, limit = tab.tau, tab.limit
+    delta, seen, limit = dr[4], dr[7], tab.limit
     firsts: list[int] = []
-    value: list[float] = []
     spent: list[float] = []
+    cands: list[tuple[float, list[int], list[int], float]] = []
     for j in range(tab.n):
         if S >> j & 1 or not tab.drone_ok[j] or (owner is not None and owner[j] != k):
             continue
@@ -418,41 +477,16 @@ def _first_legs(
         dist = delta + tab.fsd[j][ws]
         if dist + tab.near[j] > limit:
             continue
-        a = t + tab.fst[j][ws] + tau
-        for r in tab.preds[j]:
-            if S >> r & 1:
-                tr = svc[r]
-            elif times is not None:
-                tr = times[r]
-            else:
-                continue
-            if tr > a:
-                a = tr
-        if release[j] > a:
-            a = release[j]
         firsts.append(j)
-        value.append(a)
         spent.append(dist)
-    if not firsts:
-        return tab.nowhere
-    key = (ws, delta, tuple(firsts), tuple(value))
-    first = tab._firsts.get(key)  # per stop q: min_j a_j + ft(j, q), within range
-    if first is None:
-        if delta > 0.0:  # (a launched drone has flown nothing before its first customer)
-            rows = tab.fst_np[firsts] + np.asarray(value)[:, None]
-            rows[tab.fsd_np[firsts] + np.asarray(spent)[:, None] > limit] = INF
-        else:
-            legs = tab._legs.get(ws)
-            if legs is None:  # ft(j, q), inf where d(w_s, j) + d(j, q) is beyond the range
-                legs = tab._legs[ws] = np.where(
-                    tab.fsd_np[:, ws : ws + 1] + tab.fsd_np > limit, INF, tab.fst_np
-                )
-            rows = legs[firsts] + np.asarray(value)[:, None]
-        first = rows.min(axis=0)
-        if len(tab._firsts) > 1 << 15:
-            tab._firsts.clear()
-        tab._firsts[key] = first
-    return first
+        done = [r for r in tab.preds[j] if S >> r & 1]
+        open_ = [r for r in tab.preds[j] if not S >> r & 1]
+        cands.append((tab.fst[j][ws], done, open_, release[j]))
+    got = (tuple(firsts), spent, cands)
+    if len(tab._first_cands) > 1 << 16:
+        tab._first_cands.clear()
+    tab._first_cands[key] = got
+    return got
 
 
 def _fresh_sorties(
@@ -481,9 +515,9 @@ def _fresh_sorties(
         for dr in drones:
             if dr[0] == 0 and dr[1] < rho:
                 rho = dr[1]
-        best = None
-        if rho < INF:
-            best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), tab.Gnp[w] + T)
+        # the least recovery per stop over the airborne drones (then one drive-and-fly
+        # step for all: fl(x + g) is monotone in x, so min_d (b_d + G) = min_d b_d + G)
+        low = None
         for dr in drones:
             if dr[0] != 1:
                 continue
@@ -491,9 +525,15 @@ def _fresh_sorties(
                 back = _first_recoveries(tab, k, w, A, T, dr, S, svc, None)
             else:
                 back, _ = _recoveries(tab, w, A, T, dr, None)
-            cand = (back[:, None] + tab.Gnp).min(axis=0)
-            best = cand if best is None else np.minimum(best, cand)
-        assert best is not None
+            low = back if low is None else np.minimum(low, back)
+        if low is None:
+            best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), tab.Gnp[w] + T)
+        else:
+            if rho < INF and T < low[w]:  # (an aboard drone driven on from w: T + G[w, j])
+                low[w] = T
+            best = _least(low[:, None] + tab.Gnp, axis=0)
+            if rho < INF:
+                best = np.minimum(tab.Fnp[w] + (rho if rho > A else A), best)
         best += tau
         out.append(best.tolist())
     return out
@@ -648,7 +688,7 @@ def _sortie_time_bound(
             if T > a and H is not None:  # launched here from a, or after the truck leaves
                 return min(a + float(H[w, U]), T + float(F[w, U]))
             return a + float(F[w, U])
-        return float((back_of(k, w, A, T, dr) + F[:, U]).min())
+        return float(_least(back_of(k, w, A, T, dr) + F[:, U]))
     cols = _columns(tab, U)
     ends: list[np.ndarray] = []
     backs: list[np.ndarray] = []
@@ -662,7 +702,7 @@ def _sortie_time_bound(
             continue
         back = back_of(k, w, A, T, dr)
         backs.append(back)
-        ends.append((back[:, None] + cols).min(axis=0))
+        ends.append(_least(back[:, None] + cols, axis=0))
     # two airborne drones of one truck: recovered by that one truck (:func:`_shared_recoveries`)
     shared = len(backs) == 2 and len(ends) == 2 and drones_left[0][0] == drones_left[1][0]
     if not tab.one_drone or not tab.ret:
@@ -677,11 +717,7 @@ def _sortie_time_bound(
     ):
         # the releases across the drones' parts (:func:`_release_term`): only for labels
         # whose independent term is near the cutoff (skipping it leaves a valid bound)
-        least = float(
-            np.maximum(ends[0], ends[1][::-1]).min()
-            if len(ends) == 2
-            else _least_largest(ends, int(tab.popcount[U]))[-1]
-        )
+        least = _least_largest_at(ends, int(tab.popcount[U]))
         if least < cutoff and (cutoff == INF or least >= RELEASE_FROM * cutoff):
             v = _release_term(
                 tab, U, ends, _plain_ends(tab, cols, drones_left, ends), S, svc, times, cutoff
@@ -693,16 +729,14 @@ def _sortie_time_bound(
                     v, _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
                 )
     if shared and not drop:
-        least = float(np.maximum(ends[0], ends[1][::-1]).min())
+        least = float(_least(np.maximum(ends[0], ends[1][::-1])))
         if least >= cutoff or (cutoff < INF and least < SHARED_FROM * cutoff):
             return least  # (already pruned, or too far below the cutoff to be pruned by it)
         return _shared_recoveries(tab, cols, backs[0], backs[1], ends[0], ends[1], cutoff)
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
         # sets U \ Y left to new sorties
-        m = int(tab.popcount[U])
-        g = ends[0] if len(ends) == 1 else _least_largest(ends, m)
-        least = float(g[_kept_sets(tab, U, drop, count)].min())
+        least = _least_largest_at(ends, int(tab.popcount[U]), _kept_pairs(tab, U, drop, count))
         if (
             least < cutoff
             and least >= RELEASE_FROM * cutoff
@@ -726,11 +760,10 @@ def _sortie_time_bound(
                 least = v
         return least
     if len(ends) == 2:  # the columns ascend: U itself is last, the empty set first
-        return float(np.maximum(ends[0], ends[1][::-1]).min())
-    last = len(cols[0]) - 1
+        return float(_least(np.maximum(ends[0], ends[1][::-1])))
     m = int(tab.popcount[U])
     if m <= PARTITION_MAX_CUSTOMERS:
-        return float(_least_largest(ends, m)[last])
+        return _least_largest_at(ends, m)
     size = -(-m // len(ends))
     big = tab.popcount[_submasks(tab, U)] >= size
     return float(min(np.min(e[big]) for e in ends))
@@ -820,26 +853,30 @@ def _shared_recoveries(
     return max(float(J.min()), least)
 
 
-def _kept_sets(tab: _Tables, U: int, drop: int, count: int) -> np.ndarray:
-    """The local indices (among the submasks of U, ascending) of the sets U \\ Y, Y ⊆ drop,
-    |Y| <= count (cached per (U, drop, count))."""
+def _kept_pairs(tab: _Tables, U: int, drop: int, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (Y, Z ^ Y), Y ⊆ Z, of local indices (among the submasks of U, ascending) over
+    the kept sets Z = U \\ X, X ⊆ drop, |X| <= count: :func:`_least_largest_at`'s last step
+    (cached per (U, drop, count), the cache cleared past 2^22 indices in all)."""
     key = (U, drop, count)
     got = tab._kept.get(key)
     if got is None:
         m = int(tab.popcount[U])
         local = [i for i, j in enumerate(j for j in range(tab.n) if U >> j & 1) if drop >> j & 1]
         top = (1 << m) - 1
-        got = np.array(
-            [
-                top ^ sum(1 << i for i in Y)
-                for size in range(min(count, len(local)) + 1)
-                for Y in itertools.combinations(local, size)
-            ],
-            dtype=np.int64,
-        )
-        if len(tab._kept) > 1 << 14:
+        kept = [
+            top ^ sum(1 << i for i in X)
+            for size in range(min(count, len(local)) + 1)
+            for X in itertools.combinations(local, size)
+        ]
+        full = np.arange(1 << m, dtype=np.int64)
+        Y = np.concatenate([full[(full & ~Z) == 0] for Z in kept])
+        Z = np.repeat(np.array(kept, dtype=np.int64), [1 << int(tab.popcount[Z]) for Z in kept])
+        got = (Y, Z ^ Y)
+        if tab._kept_size + 2 * len(Y) > 1 << 22:
             tab._kept.clear()
+            tab._kept_size = 0
         tab._kept[key] = got
+        tab._kept_size += 2 * len(Y)
     return got
 
 
@@ -915,7 +952,20 @@ def _release_rows(tab: _Tables, U: int, N: int, drop: int = 0, count: int = 0) -
             if r in at
         ]
         items.append((j, idx, tj, edges))
-    got = (loc[parts[:N]], items)
+    # the same, stacked over the customers (their order kept): per drone the index arrays,
+    # the tails, and per customer with predecessors in U their positions and gaps
+    at_item = {j: i for i, (j, _idx, _tj, _edges) in enumerate(items)}
+    got = (
+        loc[parts[:N]],
+        [j for j, _idx, _tj, _edges in items],
+        np.stack([idx for _j, idx, _tj, _edges in items], axis=1),
+        np.stack([tj for _j, _idx, tj, _edges in items]),
+        [
+            (i, [(at_item[r], add) for r, add in edges])
+            for i, (_j, _idx, _tj, edges) in enumerate(items)
+            if edges
+        ],
+    )
     if len(tab._release) > 1 << 12:
         tab._release.clear()
         tab._release_parts.clear()
@@ -1032,30 +1082,13 @@ def _release_term(
     if not drop or not count:
         drop = count = 0
     key = (U, len(ends), drop, count)
-    parts, items = got
+    parts, cust, _idx, tails, _edges = got
     top = ends[0][parts[0]]
     for d in range(1, len(ends)):
         top = np.maximum(top, ends[d][parts[d]])
-    L: dict[int, np.ndarray] = {}
-    pred_mask = tab.pred_mask
-    for j, idx, tail, edges in items:
-        Lj = plain[0][idx[0]]
-        for d in range(1, len(plain)):
-            Lj = np.maximum(Lj, plain[d][idx[d]])
-        rel = tab.release[j]
-        if times is not None and times[j] > rel:
-            rel = times[j]
-        if S is not None and pred_mask[j] & S:
-            for r in tab.preds[j]:
-                if S >> r & 1 and svc[r] > rel:
-                    rel = svc[r]
-        if rel > 0.0:
-            Lj = np.maximum(Lj, rel)
-        for r, add in edges:
-            Lj = np.maximum(Lj, L[r] + add)
-        L[j] = Lj
-        top = np.maximum(top, Lj + tail)
-    least = float(top.min())
+    L = _release_floors(tab, got, plain, S, svc, times)
+    top = np.maximum(top, (L + tails).max(axis=0))
+    least = float(_least(top))
     if least >= cutoff:
         return least
     # the rows below the cutoff, least first: each part's order under its releases
@@ -1068,8 +1101,8 @@ def _release_term(
     rel = [0.0] * tab.n
     best = INF  # the least exact row so far
     for pos, r in enumerate(cand.tolist()):
-        for j in L:
-            rel[j] = float(L[j][r])
+        for j, v in zip(cust, L[:, r].tolist(), strict=True):
+            rel[j] = v
         v = float(top[r])
         for X in owners[r]:
             if X and int(tab.popcount[X]) <= RELEASE_MAX_SEQUENCE:
@@ -1085,6 +1118,42 @@ def _release_term(
             return min(best, after)
     rest = top[top >= cutoff]
     return min(best, float(rest.min()) if len(rest) else INF)
+
+
+def _release_floors(
+    tab: _Tables,
+    rows: tuple,
+    plain: list[np.ndarray],
+    S: int | None,
+    svc: Sequence[float],
+    times: Sequence[float] | None,
+) -> np.ndarray:
+    """:func:`_release_term`'s releases: ``L[i, row]`` a lower bound on the service of the
+    i-th customer of U (``rows``: :func:`_release_rows`) in every completion of that row's
+    assignment: the largest ``plain[e][anc ∩ X_e]``, its release, ``times``, its served
+    predecessors' times, and ``L[r] + gap`` over its predecessors r in U (a topological
+    order). All customers at once (a maximum is exact in any order), then raised along the
+    predecessors, each in turn."""
+    _parts, cust, idx, _tails, edges = rows
+    L = plain[0][idx[0]]
+    for d in range(1, len(plain)):
+        L = np.maximum(L, plain[d][idx[d]])
+    pred_mask = tab.pred_mask
+    floors = []
+    for j in cust:
+        rel = tab.release[j]
+        if times is not None and times[j] > rel:
+            rel = times[j]
+        if S is not None and pred_mask[j] & S:
+            for r in tab.preds[j]:
+                if S >> r & 1 and svc[r] > rel:
+                    rel = svc[r]
+        floors.append(rel if rel > 0.0 else -INF)
+    L = np.maximum(L, np.asarray(floors)[:, None])
+    for i, gaps in edges:
+        for r, add in gaps:
+            np.maximum(L[i], L[r] + add, out=L[i])
+    return L
 
 
 def _sequence_end(
@@ -1167,6 +1236,24 @@ def _least_largest(ends: list[np.ndarray], m: int) -> np.ndarray:
     return g
 
 
+def _least_largest_at(
+    ends: list[np.ndarray], m: int, pairs: tuple[np.ndarray, np.ndarray] | None = None
+) -> float:
+    """The least, over the sets Z given by ``pairs`` (``(Y, Z ^ Y)`` for every Y ⊆ Z,
+    :func:`_kept_pairs`; without it Z is all m customers), of :func:`_least_largest`'s
+    ``g[Z]``: the same value, with the last drone's convolution taken only at those Z
+    (``min_Z g[Z] = min_Z min_{Y ⊆ Z} max(ends[-1][Y], g'[Z \\ Y])``, g' the convolution of
+    the other drones: one flat least over the pairs)."""
+    if len(ends) == 1:
+        e = ends[0]
+        return float(e[-1] if pairs is None else e[pairs[0][pairs[1] == 0]].min())
+    g = ends[0] if len(ends) == 2 else _least_largest(ends[:-1], m)
+    if pairs is None:  # the submasks ascend: Z \ Y of Y is at the mirrored index
+        return float(_least(np.maximum(ends[-1], g[::-1])))
+    Y, rest = pairs
+    return float(_least(np.maximum(ends[-1][Y], g[rest])))
+
+
 def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     """A lower bound on the objective of every completion of ``label`` (module docstring):
     the largest of its terms.
@@ -1182,7 +1269,6 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     tau = tab.tau
     full = tab.full
     lazy = tab.lazy
-    drone_ok, pred_mask, owner = tab.drone_ok, tab.pred_mask, tab.owner
     unserved = full & ~S
     if lazy:
         # a stale drone launched with no customer yet takes one only after a predecessor
@@ -1233,43 +1319,15 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
             if air is None:
                 air = [INF] * n
             room += c - dr[2]
-            o = dr[1]
-            # a stale drone takes next only a customer with a predecessor served since its
-            # last event (:func:`_appendable`); after that append it is fresh, so with room
-            # for two it may go on to any customer within range (d(ℓ, j) + d(j, k) >=
-            # d(ℓ, k)), at most c - m - 1 of them: those may stay out of the walk and
-            # sortie terms too (``ext``, ``more``)
-            rule = lazy and not dr[6]
-            for _ in range(2):
-                takes = 0
-                for j in range(n):
-                    if not (unserved >> j & 1 and drone_ok[j]) or (
-                        owner is not None and owner[j] != k
-                    ):
-                        continue  # (truck_of: only j's own truck may serve it)
-                    if rule and not pred_mask[j] & ~dr[7]:
-                        continue
-                    if o >= 0:
-                        dist, fly = tab.fcd[o][j], tab.fct[o][j]
-                    else:
-                        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-                    if dr[4] + dist + tab.near[j] <= tab.limit:
-                        takes |= 1 << j
-                        v = dr[3] + fly + tau
-                        if v < air[j]:
-                            air[j] = v
-                if rule:
-                    relaxed |= takes
-                    if not (takes and c - dr[2] >= 2):
-                        break
-                    rule = False
-                    more += c - dr[2] - 1
-                else:
-                    if lazy and not dr[6]:
-                        ext |= takes
-                    else:
-                        relaxed |= takes
-                    break
+            takes, later, extra, reach = _air_reach(tab, k, dr, S)
+            relaxed |= takes
+            ext |= later
+            more += extra
+            t = dr[3]
+            for j, fly in reach:
+                v = t + fly + tau
+                if v < air[j]:
+                    air[j] = v
     ext &= ~relaxed
     v = _walk_bound(tab, unserved & ~relaxed, trucks, ext, more)
     if v > b:
@@ -1309,6 +1367,57 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
         if v > b:
             b = v
     return b
+
+
+def _air_reach(
+    tab: _Tables, k: int, dr: tuple, S: int
+) -> tuple[int, int, int, list[tuple[int, float]]]:
+    """For an airborne drone ``dr`` of truck k with room (:func:`_bound`): the customers it
+    may take next (``relaxed``), those it may take only after its next append and how many
+    of them at most (``ext``, ``more``), and (j, its flight time to j) for each of either,
+    whose service it bounds from below by ``t + ft + τ``. Memoised per (k, S, ℓ or launch
+    stop, distance flown, m, the served set at its last event when it is stale).
+
+    A stale drone takes next only a customer with a predecessor served since its last event
+    (:func:`_appendable`); after that append it is fresh, so with room for two it may go on
+    to any customer within range (d(ℓ, j) + d(j, k) >= d(ℓ, k)), at most c - m - 1 of them:
+    those may stay out of the walk and sortie terms too."""
+    stale = tab.lazy and not dr[6]
+    key = (k, S, dr[1], dr[4], dr[2], dr[7] if stale else -1)
+    got = tab._reach.get(key)
+    if got is not None:
+        return got
+    n, c, o = tab.n, tab.c, dr[1]
+    owner, drone_ok, pred_mask = tab.owner, tab.drone_ok, tab.pred_mask
+    flights: dict[int, float] = {}
+    found = []
+    rule = stale
+    for _ in range(2):
+        takes = 0
+        for j in range(n):
+            if S >> j & 1 or not drone_ok[j] or (owner is not None and owner[j] != k):
+                continue  # (truck_of: only j's own truck may serve it)
+            if rule and not pred_mask[j] & ~dr[7]:
+                continue
+            if o >= 0:
+                dist, fly = tab.fcd[o][j], tab.fct[o][j]
+            else:
+                dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+            if dr[4] + dist + tab.near[j] <= tab.limit:
+                takes |= 1 << j
+                flights[j] = fly
+        found.append(takes)
+        if not (rule and takes and c - dr[2] >= 2):
+            break
+        rule = False
+    if len(found) == 2:
+        got = (found[0], found[1], c - dr[2] - 1, list(flights.items()))
+    else:
+        got = (found[0], 0, 0, list(flights.items()))
+    if len(tab._reach) > 1 << 16:
+        tab._reach.clear()
+    tab._reach[key] = got
+    return got
 
 
 def _service_term(tab: _Tables, unserved: int, est: list[float]) -> float:
