@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from taopt.fleet.problem import FleetPlan, FleetProblem, Sortie
-from taopt.fleet.search import trace
+from taopt.fleet.search import next_flight, trace
 from taopt.runtime import Deadline
 
 INF = math.inf
@@ -511,15 +511,11 @@ def _airborne(tab: Any, S: int, trucks: tuple) -> list[float]:
         for dr in drones:
             if not (dr[0] == 1 and dr[5] and dr[2] < c):
                 continue
-            o = dr[1]
             for j in range(tab.n):
                 if S >> j & 1 or not tab.drone_ok[j]:
                     continue
-                if o >= 0:
-                    dist, fly = tab.fcd[o][j], tab.fct[o][j]
-                else:
-                    dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-                if dr[4] + dist + tab.near[j] <= tab.limit:
+                fly = next_flight(tab, dr, j)
+                if fly is not None:
                     v = dr[3] + fly + tau
                     if v < air[j]:
                         air[j] = v

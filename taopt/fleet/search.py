@@ -1369,6 +1369,18 @@ def _bound(tab: _Tables, label: tuple, cutoff: float = INF) -> float:
     return b
 
 
+def next_flight(tab: Any, dr: tuple, j: int) -> float | None:
+    """The flight time of the airborne drone ``dr`` from its last customer (or its launch
+    stop while it has served none) to customer j, or None when j is out of its range (the
+    distance flown, the leg to j and j's nearest way back exceed the drone's range)."""
+    o = dr[1]
+    if o >= 0:
+        dist, fly = tab.fcd[o][j], tab.fct[o][j]
+    else:
+        dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
+    return fly if dr[4] + dist + tab.near[j] <= tab.limit else None
+
+
 def _air_reach(
     tab: _Tables, k: int, dr: tuple, S: int
 ) -> tuple[int, int, int, list[tuple[int, float]]]:
@@ -1387,7 +1399,7 @@ def _air_reach(
     got = tab._reach.get(key)
     if got is not None:
         return got
-    n, c, o = tab.n, tab.c, dr[1]
+    n, c = tab.n, tab.c
     owner, drone_ok, pred_mask = tab.owner, tab.drone_ok, tab.pred_mask
     flights: dict[int, float] = {}
     found = []
@@ -1399,11 +1411,8 @@ def _air_reach(
                 continue  # (truck_of: only j's own truck may serve it)
             if rule and not pred_mask[j] & ~dr[7]:
                 continue
-            if o >= 0:
-                dist, fly = tab.fcd[o][j], tab.fct[o][j]
-            else:
-                dist, fly = tab.fsd[j][-o - 1], tab.fst[j][-o - 1]
-            if dr[4] + dist + tab.near[j] <= tab.limit:
+            fly = next_flight(tab, dr, j)
+            if fly is not None:
                 takes |= 1 << j
                 flights[j] = fly
         found.append(takes)
