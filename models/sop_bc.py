@@ -39,7 +39,7 @@ Validity
   costs at least that minimum. It holds whenever the search stops; with best-first selection
   it is the bound of the node being solved.
 
-Which branching a node takes (reliability branching, :meth:`BranchCut._branch`: strong
+Which branching a node takes (reliability branching, ``BranchCut._branch``: strong
 branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
 of the others) changes the search, never a bound: every candidate partitions the node's
 orders, and a child's bound is its parent's or the node bound of its strong-branching LP
@@ -128,7 +128,7 @@ ROUND_EVERY = 4
 
 #: Strong branching: the child LPs of this many candidate branchings at most are solved and
 #: the one whose two children gain most (product) is taken; 1 takes the first candidate
-#: (nearest 1/2) without scoring (reliability branching, :meth:`BranchCut._branch`).
+#: (nearest 1/2) without scoring (reliability branching, ``BranchCut._branch``).
 STRONG_CANDIDATES = 8
 
 #: Reliability branching: a candidate branching whose key (the node and side of an out/in-arc
