@@ -39,6 +39,12 @@ Validity
   costs at least that minimum. It holds whenever the search stops; with best-first selection
   it is the bound of the node being solved.
 
+* **The cut pool** (:class:`CutPool`) takes separated rows out of the LP and puts them back;
+  every row holds for every order (or every better one), in the LP or not, so the node bound
+  of an LP with fewer rows is still a bound of the node's orders: the pool changes the LP's
+  size and the bounds' strength, never their validity. A stored basis that no longer fits
+  the rows is not set (a stale basis only costs iterations).
+
 Which branching a node takes (reliability branching, :meth:`BranchCut._branch`: strong
 branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
 of the others) changes the search, never a bound: every candidate partitions the node's
@@ -215,7 +221,10 @@ class Rows:
         """The rows of ``model``'s HiGHS object now, these kept and only the rows past
         ``count`` read (``getRows``; the cut model only appends rows): a whole ``getLp`` copy
         cost 15 ms a node on ft53.1 (load 3.8), most of :func:`node_bound`'s time. Read whole
-        (:meth:`of`) when rows were deleted."""
+        (:meth:`of`) when fewer rows are there; the tree's cut pool deletes rows itself and
+        keeps its ``Rows`` in step (:meth:`CutPool.retire` returns them without the rows it
+        took out), so a count that came back equal after a deletion and an addition is never
+        read here as unchanged."""
         highs = model.highs
         total = int(highs.getNumRow())
         if total == self.count:
@@ -627,7 +636,9 @@ class BranchCut:
         self.rows_end = int(highs.getNumRow())
         if pool is None or not pool.retired:
             return
+        restored = pool.restored
         pool.restore(self.model)
+        pool.restored = restored  # counts the rows a node's point brought back only
         rows = Rows.of(self.model)
         pool._grow(rows.count)
         if np.all(np.diff(pool.ids) > 0):
