@@ -39,6 +39,12 @@ Validity
   costs at least that minimum. It holds whenever the search stops; with best-first selection
   it is the bound of the node being solved.
 
+* **The cut pool** (:class:`CutPool`) takes separated rows out of the LP and puts them back;
+  every row holds for every order (or every better one), in the LP or not, so the node bound
+  of an LP with fewer rows is still a bound of the node's orders: the pool changes the LP's
+  size and the bounds' strength, never their validity. A stored basis that no longer fits
+  the rows is not set (a stale basis only costs iterations).
+
 Which branching a node takes (reliability branching, ``BranchCut._branch``: strong
 branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
 of the others) changes the search, never a bound: every candidate partitions the node's
@@ -89,6 +95,9 @@ __all__ = [
     "NODE_FULL",
     "NODE_STALL",
     "NODE_TIGHT",
+    "POOL",
+    "POOL_AGE",
+    "POOL_SLACK",
     "PSEUDO_CANDIDATES",
     "RELIABLE",
     "ROUND_EVERY",
@@ -96,6 +105,7 @@ __all__ = [
     "STRONG_ITERATIONS",
     "TREE_MIN_GAP",
     "BranchCut",
+    "CutPool",
     "PseudoCosts",
     "Rows",
     "node_bound",
@@ -157,6 +167,23 @@ ITERATIONS_UNLIMITED = 2**31 - 1
 #: A value this close to 0 or 1 is integral.
 INTEGRAL = 1e-6
 
+#: Whether the tree keeps a cut pool (:class:`CutPool`): rows slack for :data:`POOL_AGE`
+#: node LPs in a row leave the LP and come back when violated.
+POOL = True
+
+#: A separated row leaves the LP after this many consecutive node LPs at which it was slack
+#: (SCIP's ``lp/rowagelimit``, 10, by reference, not measured here).
+POOL_AGE = 10
+
+#: A row is slack at an LP point when its activity is above its lower side (below its upper
+#: side) by this much times ``max(1, |side|)``: such a row's slack is basic (nonbasic slacks
+#: sit at a side), so removing it keeps HiGHS's basis valid and the LP's optimum optimal.
+POOL_SLACK = 1e-3
+
+#: A pooled row comes back when the node's point violates it by more than this (times
+#: ``max(1, |side|)``).
+POOL_VIOLATED = 1e-6
+
 
 #: HiGHS's basis statuses by their values (a basis is kept per open node as int8 arrays).
 _STATUSES = {int(status): status for status in highspy.HighsBasisStatus.__members__.values()}
@@ -194,7 +221,10 @@ class Rows:
         """The rows of ``model``'s HiGHS object now, these kept and only the rows past
         ``count`` read (``getRows``; the cut model only appends rows): a whole ``getLp`` copy
         cost 15 ms a node on ft53.1 (load 3.8), most of :func:`node_bound`'s time. Read whole
-        (:meth:`of`) when rows were deleted."""
+        (:meth:`of`) when fewer rows are there; the tree's cut pool deletes rows itself and
+        keeps its ``Rows`` in step (:meth:`CutPool.retire` returns them without the rows it
+        took out), so a count that came back equal after a deletion and an addition is never
+        read here as unchanged."""
         highs = model.highs
         total = int(highs.getNumRow())
         if total == self.count:
@@ -213,6 +243,158 @@ class Rows:
             np.concatenate([self.lower, lower]),
             np.concatenate([self.upper, upper]),
         )
+
+
+def _margin(sides: np.ndarray, share: float) -> np.ndarray:
+    """``share * max(1, |side|)`` for each finite row side (0 for an infinite one)."""
+    return share * np.maximum(1.0, np.where(np.isfinite(sides), np.abs(sides), 0.0))
+
+
+@dataclass
+class CutPool:
+    """The rows taken out of the tree's LP, and the age of each row in it.
+
+    Every row of the LP has an identity (``ids``: its position in the LP when the tree began
+    for the rows then, the next number for each row added since; a row keeps its identity
+    out of the LP and back). After each optimal node LP (:meth:`observe`) the age of a row
+    slack at the LP's point (:data:`POOL_SLACK`) grows by one, of the others goes back to 0;
+    :meth:`retire` moves the rows of age :data:`POOL_AGE` or more out of the LP into the pool
+    (the first ``kept`` rows, the degree rows of the model, never), :meth:`violated` /
+    :meth:`restore` put back the pooled rows a node's point violates (one sparse mat-vec),
+    which the node's separation would otherwise skip as known (``SopCutModel``'s keys).
+
+    Validity: every row, in the LP or not, holds for every order (or for every order better
+    than the best known, module doc), so the node bound (weak duality on the rows in the LP)
+    is valid whatever rows the LP holds; the pool only changes which rows that is. The stored
+    bases carry the ``ids`` they were taken with (``BranchCut._apply`` maps them by
+    identity): a stale basis only costs simplex iterations.
+    """
+
+    kept: int
+    ids: np.ndarray
+    age: np.ndarray
+    next_id: int
+    pooled: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    matrix: sp.csr_matrix | None = None
+    lower: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    upper: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    retired: int = 0
+    restored: int = 0
+    stale: int = 0
+
+    @classmethod
+    def of(cls, model: SopCutModel, rows: Rows) -> CutPool:
+        """The pool of ``model``'s LP with ``rows`` (none pooled yet)."""
+        return cls(
+            model.degree_rows,
+            np.arange(rows.count, dtype=np.int64),
+            np.zeros(rows.count, dtype=np.int64),
+            rows.count,
+        )
+
+    def _grow(self, count: int) -> None:
+        """Identities and age 0 for the rows appended to the LP since (up to ``count``)."""
+        extra = count - len(self.ids)
+        if extra > 0:
+            fresh = np.arange(self.next_id, self.next_id + extra, dtype=np.int64)
+            self.ids = np.concatenate([self.ids, fresh])
+            self.age = np.concatenate([self.age, np.zeros(extra, dtype=np.int64)])
+            self.next_id += extra
+
+    def observe(self, rows: Rows, values: np.ndarray) -> None:
+        """Age the LP's rows at its optimal point ``values``."""
+        self._grow(rows.count)
+        activity = rows.matrix @ values
+        slack = (activity - rows.lower > _margin(rows.lower, POOL_SLACK)) & (
+            rows.upper - activity > _margin(rows.upper, POOL_SLACK)
+        )
+        self.age = np.where(slack, self.age + 1, 0)
+
+    def retire(self, model: SopCutModel, rows: Rows) -> Rows:
+        """Move the rows of age :data:`POOL_AGE` or more (past the first ``kept``) out of the
+        LP; returns ``rows`` without them. Called right after :meth:`observe` on an LP, so
+        their slacks are basic and HiGHS keeps its basis."""
+        self._grow(rows.count)
+        old = np.flatnonzero(self.age >= POOL_AGE)
+        old = old[old >= self.kept]
+        if not len(old):
+            return rows
+        model.highs.deleteRows(len(old), old.astype(np.int32))
+        keep = np.ones(rows.count, dtype=bool)
+        keep[old] = False
+        block = rows.matrix[old]
+        self.matrix = block if self.matrix is None else sp.vstack([self.matrix, block], "csr")
+        self.pooled = np.concatenate([self.pooled, self.ids[old]])
+        self.lower = np.concatenate([self.lower, rows.lower[old]])
+        self.upper = np.concatenate([self.upper, rows.upper[old]])
+        self.ids, self.age = self.ids[keep], self.age[keep]
+        self.retired += len(old)
+        return Rows(int(keep.sum()), rows.matrix[keep], rows.lower[keep], rows.upper[keep])
+
+    def violated(self, values: np.ndarray) -> np.ndarray:
+        """The positions in the pool of the rows ``values`` violates (:data:`POOL_VIOLATED`)."""
+        if self.matrix is None or not len(self.pooled):
+            return np.zeros(0, dtype=np.int64)
+        activity = self.matrix @ values
+        return np.flatnonzero(
+            (activity < self.lower - _margin(self.lower, POOL_VIOLATED))
+            | (activity > self.upper + _margin(self.upper, POOL_VIOLATED))
+        )
+
+    def restore(self, model: SopCutModel, which: np.ndarray | None = None) -> int:
+        """Append the pooled rows at positions ``which`` (every pooled row when None) to the
+        LP, with their identities and age 0; returns how many. The tree's :class:`Rows`
+        read them as rows appended (:meth:`Rows.now`)."""
+        if self.matrix is None or not len(self.pooled):
+            return 0
+        if which is None:
+            which = np.arange(len(self.pooled))
+        if not len(which):
+            return 0
+        self._grow(int(model.highs.getNumRow()))  # rows the model appended keep their place
+        block = self.matrix[which]
+        model.highs.addRows(
+            len(which),
+            self.lower[which],
+            self.upper[which],
+            block.nnz,
+            block.indptr[:-1].astype(np.int32),
+            block.indices.astype(np.int32),
+            block.data.astype(float),
+        )
+        self.ids = np.concatenate([self.ids, self.pooled[which]])
+        self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
+        rest = np.ones(len(self.pooled), dtype=bool)
+        rest[which] = False
+        self.matrix = self.matrix[rest]
+        self.pooled, self.lower, self.upper = (
+            self.pooled[rest],
+            self.lower[rest],
+            self.upper[rest],
+        )
+        self.restored += len(which)
+        return len(which)
+
+    def statuses(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray | None:
+        """A stored basis's row statuses for the LP's rows now, by identity (rows it does not
+        know: basic); None when that basis no longer has one basic variable per row (a row
+        nonbasic in it has left the LP), and counts it in ``stale``."""
+        col_status, row_status, ids = basis
+        basic = int(highspy.HighsBasisStatus.kBasic)
+        if len(ids) == len(self.ids) and ids is self.ids:
+            mapped = row_status
+        else:
+            order = np.argsort(ids, kind="stable")
+            place = np.searchsorted(ids[order], self.ids)
+            place = np.minimum(place, max(len(ids) - 1, 0))
+            known = (ids[order][place] == self.ids) if len(ids) else np.zeros(len(self.ids), bool)
+            mapped = np.where(known, row_status[order[place]] if len(ids) else basic, basic)
+            mapped = mapped.astype(np.int8)
+        count = int((col_status == basic).sum() + (mapped == basic).sum())
+        if count != len(self.ids):
+            self.stale += 1
+            return None
+        return mapped
 
 
 def node_bound(
@@ -346,6 +528,10 @@ class BranchCut:
     _last: int = -1  # the node whose LP HiGHS holds
     _changed: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
     _rows: Rows | None = None
+    #: The cut pool (:class:`CutPool`; made by :meth:`run`).
+    pool: CutPool | None = None
+    #: The LP's rows when the search stopped (before the pool's rows went back).
+    rows_end: int = 0
 
     def _bound_of(self, lower: np.ndarray, upper: np.ndarray) -> tuple[float, np.ndarray]:
         """:func:`node_bound` of the last LP, the rows read again only when rows were added."""
@@ -400,16 +586,17 @@ class BranchCut:
             highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
         self._changed = changed
         if node.basis is not None and node.parent != self._last:
-            col_status, row_status = node.basis
-            basis = highspy.HighsBasis()
-            basis.col_status = [_STATUSES[k] for k in col_status.tolist()]
-            rows = highs.getNumRow()
-            # rows added since: basic (their slacks), as HiGHS itself keeps them
-            basis.row_status = [_STATUSES[k] for k in row_status.tolist()] + [
-                highspy.HighsBasisStatus.kBasic
-            ] * (rows - len(row_status))
-            basis.valid = True
-            highs.setBasis(basis)
+            # by row identity: rows added since basic (their slacks), as HiGHS itself keeps
+            # them; a basis that lost a nonbasic row is not set (HiGHS's own is kept)
+            pool = self._pool()
+            pool._grow(int(highs.getNumRow()))
+            row_status = pool.statuses(node.basis)
+            if row_status is not None:
+                basis = highspy.HighsBasis()
+                basis.col_status = [_STATUSES[k] for k in node.basis[0].tolist()]
+                basis.row_status = [_STATUSES[k] for k in row_status.tolist()]
+                basis.valid = True
+                highs.setBasis(basis)
         self._last = node.number
         return lower, upper
 
@@ -432,6 +619,46 @@ class BranchCut:
         finally:  # the model's LP as before the tree (the portfolio's later stages re-solve it)
             self._undo()
             self._last = -1
+            self._unpool()
+
+    def _pool(self) -> CutPool:
+        """The cut pool, made on first use with the LP's rows now."""
+        if self.pool is None:
+            self._rows = Rows.of(self.model) if self._rows is None else self._rows.now(self.model)
+            self.pool = CutPool.of(self.model, self._rows)
+        return self.pool
+
+    def _unpool(self) -> None:
+        """Every pooled row back in the LP, the rows in their order of identity (the order
+        without the pool: the model's ``cut_rows`` by position, as the root's prices read)."""
+        pool = self.pool
+        highs = self.model.highs
+        self.rows_end = int(highs.getNumRow())
+        if pool is None or not pool.retired:
+            return
+        restored = pool.restored
+        pool.restore(self.model)
+        pool.restored = restored  # counts the rows a node's point brought back only
+        rows = Rows.of(self.model)
+        pool._grow(rows.count)
+        if np.all(np.diff(pool.ids) > 0):
+            return
+        tail = np.arange(pool.kept, rows.count)
+        order = pool.kept + np.argsort(pool.ids[pool.kept :], kind="stable")
+        block = rows.matrix[order]
+        highs.deleteRows(len(tail), tail.astype(np.int32))
+        highs.addRows(
+            len(order),
+            rows.lower[order],
+            rows.upper[order],
+            block.nnz,
+            block.indptr[:-1].astype(np.int32),
+            block.indices.astype(np.int32),
+            block.data.astype(float),
+        )
+        pool.ids = np.concatenate([pool.ids[: pool.kept], pool.ids[order]])
+        pool.age = np.zeros(len(pool.ids), dtype=np.int64)
+        self._rows = None
 
     def _undo(self) -> None:
         """Put back the root's bounds of the columns the last node changed (0 or 1; 0 for
@@ -491,6 +718,8 @@ class BranchCut:
                 return True
             values = model.lp_values()
             new_value = float(model.highs.getInfo().objective_function_value)
+            if self._rows is not None:
+                self._pool().observe(self._rows, values)
             if rounds == 0 and node.origin is not None:  # a pseudo-cost observation
                 key, child, share, parent_value = node.origin
                 self.pseudo.observe(key, child, new_value - parent_value, share)
@@ -505,6 +734,10 @@ class BranchCut:
             ):
                 break
             value, rounds = new_value, rounds + 1
+            back = self._pool().violated(values) if POOL else np.zeros(0)
+            if len(back):  # pooled rows first: separation would skip them as known
+                self._pool().restore(model, back)
+                continue
             among = None
             if not integral and self.nodes % NODE_FULL:  # the nearly tight pairs (heuristic)
                 among = model.flows[model.pairs[:, 0], model.pairs[:, 1]] < 1 + NODE_TIGHT
@@ -519,6 +752,8 @@ class BranchCut:
             self.cuts += model.add_cuts(cuts, sides)
         if deadline.expired(MARGIN):
             return False
+        if POOL and self._rows is not None:  # HiGHS holds the last LP, observed: retire
+            self._rows = self._pool().retire(model, self._rows)
         if self.known is None or self.nodes % ROUND_EVERY == 1:
             self._new_order(round_point(model, values, deadline))
         if bound > self._limit():
@@ -533,7 +768,9 @@ class BranchCut:
             )
             ones = np.union1d(ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
         basis = model.highs.getBasis()
-        saved = (_packed(basis.col_status), _packed(basis.row_status))
+        pool = self._pool()
+        pool._grow(int(model.highs.getNumRow()))
+        saved = (_packed(basis.col_status), _packed(basis.row_status), pool.ids)
         candidates = self._candidates(values, ones, zeros)
         pick, bounds = candidates[0], [bound, bound]
         if STRONG_CANDIDATES > 1 and len(candidates) > 1:
@@ -809,6 +1046,14 @@ def solve_sop_bc(
             "strong_lps": tree.strong_lps,
             "pseudo_branchings": tree.pseudo_branchings,
             "fixed": int(model.fixed.sum()),
+            "rows_end": tree.rows_end,
+            "pool": None
+            if tree.pool is None
+            else {
+                "retired": tree.pool.retired,
+                "restored": tree.pool.restored,
+                "stale": tree.pool.stale,
+            },
             "trace": tree.trace,
         }
     )

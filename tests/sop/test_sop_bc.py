@@ -173,3 +173,96 @@ def test_rows_grown_equal_rows_read_whole():
     assert np.array_equal(grown.lower, whole.lower) and np.array_equal(grown.upper, whole.upper)
     lower, upper = np.zeros(model.n_arcs), np.where(model.fixed, 0.0, 1.0)
     assert node_bound(model, lower, upper, grown)[0] == node_bound(model, lower, upper, whole)[0]
+
+
+@pytest.mark.parametrize("age", [1, 2])
+def test_cut_pool_matches_brute_force(age, monkeypatch):
+    """With a tiny aging threshold (rows leave the LP after 1 or 2 slack node LPs) the tree's
+    optimum equals brute force on 24 random SOPs, every bound when stopped after 3 nodes is
+    at most the optimum, rows do leave and come back, and after the tree the model holds
+    every row again in its order (the LP read whole equals the rows kept by the model)."""
+    monkeypatch.setattr(sop_bc, "POOL_AGE", age)
+    monkeypatch.setattr(sop_bc, "STRONG_CANDIDATES", 1 + age % 2 * 7)
+    retired = restored = 0
+    for seed in range(24):
+        problem = _instance(seed)
+        optimum = sop_brute_force(problem)
+        model = SopCutModel(problem)
+        result = solve_sop_bc(problem, model=model)
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        pool = result.info["pool"]
+        if pool is not None:
+            retired, restored = retired + pool["retired"], restored + pool["restored"]
+        # every row back, in the model's order: the cut rows by position
+        rows = sop_bc.Rows.of(model)
+        assert rows.count == model.degree_rows + len(model.cut_rows) + model.pool_rows
+        for k, arcs in enumerate(model.cut_rows):
+            assert set(rows.matrix[model.degree_rows + k].indices) == set(arcs.tolist())
+        stopped = solve_sop_bc(problem, node_limit=3)
+        assert stopped.bound <= optimum + 1e-6
+    assert retired > 0
+
+
+def test_cut_pool_rows_come_back(monkeypatch):
+    """On 6 random 13-node SOPs, the tree with rows leaving after one slack LP ends at the
+    optimum of the tree without the pool, its bound after 2 nodes is at most that optimum, and
+    some pooled rows came back at a node's point (the pool is exercised both ways)."""
+    monkeypatch.setattr(sop_bc, "POOL_AGE", 1)
+    restored = 0
+    for seed in range(6):
+        rng = np.random.default_rng([43, seed])
+        cost = rng.integers(0, 100, size=(13, 13)).astype(float)
+        pairs = [(a, b) for a, b in itertools.combinations(range(1, 12), 2) if rng.random() < 0.1]
+        problem = SopProblem(cost, pairs, 0, 12)
+        monkeypatch.setattr(sop_bc, "POOL", False)
+        plain = solve_sop_bc(problem)
+        monkeypatch.setattr(sop_bc, "POOL", True)
+        pooled = solve_sop_bc(problem)
+        assert plain.status == pooled.status == OPTIMAL
+        assert pooled.objective == pytest.approx(plain.objective)
+        assert evaluate_order(problem, pooled.order) == pytest.approx(plain.objective)
+        assert solve_sop_bc(problem, node_limit=2).bound <= plain.objective + 1e-6
+        restored += (pooled.info["pool"] or {}).get("restored", 0)
+    assert restored > 0
+
+
+def test_cut_pool_rows_round_trip():
+    """Rows retired from the LP and restored come back with their coefficients and sides; a
+    stored basis maps by row identity (rows it does not know: basic) or is refused when it
+    lost a nonbasic row."""
+    problem = _instance(9)
+    model = SopCutModel(problem)
+    model.root()
+    model.highs.run()
+    rows = sop_bc.Rows.of(model)
+    pool = sop_bc.CutPool.of(model, rows)
+    values = model.lp_values()
+    pool.observe(rows, values)
+    slack = np.flatnonzero(pool.age[pool.kept :] > 0) + pool.kept
+    assert len(slack)  # a root LP with slack cut rows (instance 9)
+    pool.age[slack] = sop_bc.POOL_AGE
+    basis = model.highs.getBasis()
+    stored = (
+        sop_bc._packed(basis.col_status),
+        sop_bc._packed(basis.row_status),
+        pool.ids,
+    )
+    fewer = pool.retire(model, rows)
+    assert fewer.count == rows.count - len(slack) == model.highs.getNumRow()
+    assert not len(pool.violated(values))  # slack at this point
+    mapped = pool.statuses(stored)  # the retired rows were basic: still one basic per row
+    assert mapped is not None and len(mapped) == fewer.count
+    assert pool.restore(model) == len(slack)
+    back = sop_bc.Rows.of(model)
+    assert back.count == rows.count
+    moved = np.concatenate([np.setdiff1d(np.arange(rows.count), slack), slack])
+    assert (back.matrix != rows.matrix[moved]).nnz == 0
+    assert np.array_equal(back.lower, rows.lower[moved])
+    assert np.array_equal(np.sort(pool.ids), np.arange(rows.count))
+    basic = int(sop_bc.highspy.HighsBasisStatus.kBasic)
+    tight = np.flatnonzero(stored[1] != basic)
+    tight = tight[tight >= pool.kept]
+    assert len(tight)  # a tight cut row at the root
+    without = sop_bc.CutPool(pool.kept, np.delete(stored[2], tight[0]), pool.age[:-1], 0)
+    assert without.statuses(stored) is None and without.stale == 1
