@@ -245,6 +245,22 @@ class Rows:
         )
 
 
+def _add_csr_rows(
+    highs: highspy.Highs, block: sp.csr_matrix, lower: np.ndarray, upper: np.ndarray
+) -> None:
+    """Append the rows ``lower <= block @ x <= upper`` (a CSR block over all columns) to
+    ``highs``."""
+    highs.addRows(
+        block.shape[0],
+        lower,
+        upper,
+        block.nnz,
+        block.indptr[:-1].astype(np.int32),
+        block.indices.astype(np.int32),
+        block.data.astype(float),
+    )
+
+
 def _margin(sides: np.ndarray, share: float) -> np.ndarray:
     """``share * max(1, |side|)`` for each finite row side (0 for an infinite one)."""
     return share * np.maximum(1.0, np.where(np.isfinite(sides), np.abs(sides), 0.0))
@@ -352,16 +368,7 @@ class CutPool:
         if not len(which):
             return 0
         self._grow(int(model.highs.getNumRow()))  # rows the model appended keep their place
-        block = self.matrix[which]
-        model.highs.addRows(
-            len(which),
-            self.lower[which],
-            self.upper[which],
-            block.nnz,
-            block.indptr[:-1].astype(np.int32),
-            block.indices.astype(np.int32),
-            block.data.astype(float),
-        )
+        _add_csr_rows(model.highs, self.matrix[which], self.lower[which], self.upper[which])
         self.ids = np.concatenate([self.ids, self.pooled[which]])
         self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
         rest = np.ones(len(self.pooled), dtype=bool)
@@ -645,17 +652,8 @@ class BranchCut:
             return
         tail = np.arange(pool.kept, rows.count)
         order = pool.kept + np.argsort(pool.ids[pool.kept :], kind="stable")
-        block = rows.matrix[order]
         highs.deleteRows(len(tail), tail.astype(np.int32))
-        highs.addRows(
-            len(order),
-            rows.lower[order],
-            rows.upper[order],
-            block.nnz,
-            block.indptr[:-1].astype(np.int32),
-            block.indices.astype(np.int32),
-            block.data.astype(float),
-        )
+        _add_csr_rows(highs, rows.matrix[order], rows.lower[order], rows.upper[order])
         pool.ids = np.concatenate([pool.ids[: pool.kept], pool.ids[order]])
         pool.age = np.zeros(len(pool.ids), dtype=np.int64)
         self._rows = None
