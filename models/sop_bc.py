@@ -443,15 +443,36 @@ class _Node:
     origin: tuple[Any, int, float, float] | None = field(compare=False, default=None)
 
 
+def _union(n: int, *parts: Any) -> np.ndarray:
+    """The sorted union of index arrays over ``range(n)`` (``np.union1d``'s result) by a
+    mask: ``union1d``'s sort or hash on each of 64 children per node was a fifth of the
+    tree's time on ft53.1 (cProfile, 10.6 of 55 s)."""
+    mask = np.zeros(n, dtype=bool)
+    for part in parts:
+        mask[part] = True
+    return np.flatnonzero(mask)
+
+
 @dataclass
 class _Branching:
-    """A candidate branching: its pseudo-cost key, its two children (ones, zeros) and the
-    LP mass each child cuts off (``x(F)`` and ``x(R)`` of a split, ``1 - x_a`` and ``x_a``
-    of an arc)."""
+    """A candidate branching: its pseudo-cost key, the node's ``ones`` and ``zeros``, what
+    each of its two children adds to them (``adds[k]``: ones, zeros), and the LP mass each
+    child cuts off (``x(F)`` and ``x(R)`` of a split, ``1 - x_a`` and ``x_a`` of an arc).
+    The children's arrays are built (:meth:`child`) only for the candidates strong-branched
+    and the one taken."""
 
     key: tuple[str, int]
-    children: list[tuple[np.ndarray, np.ndarray]]
+    ones: np.ndarray
+    zeros: np.ndarray
+    adds: tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
     shares: tuple[float, float]
+
+    def child(self, k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Child ``k``'s (ones, zeros) over ``n`` arcs."""
+        more_ones, more_zeros = self.adds[k]
+        ones = _union(n, self.ones, more_ones) if len(more_ones) else self.ones
+        zeros = _union(n, self.zeros, more_zeros) if len(more_zeros) else self.zeros
+        return ones, zeros
 
 
 @dataclass
@@ -588,7 +609,7 @@ class BranchCut:
         upper = np.where(model.fixed, 0.0, 1.0)
         lower[node.ones] = 1.0
         upper[node.zeros] = 0.0
-        changed = np.union1d(node.ones, node.zeros).astype(np.int32)
+        changed = _union(model.n_arcs, node.ones, node.zeros).astype(np.int32)
         if len(changed):
             highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
         self._changed = changed
@@ -703,7 +724,11 @@ class BranchCut:
         while True:
             if deadline.expired(MARGIN):
                 return False
-            model._run(deadline)
+            # a plain run under HiGHS's own time limit (``brief``), not in a helper thread
+            # waiting for Ctrl-C: a warm node LP takes milliseconds, the thread's start and the
+            # interrupt callbacks cost 5-6 ms a run at load 3.5-6 (cProfile, ft53.1 and
+            # ry48p.1: 6.2 and 5.5 s in Thread.start of 55 and 51 s); Ctrl-C is raised after it
+            model._run(deadline, brief=True)
             status = model.highs.getModelStatus()
             if status == highspy.HighsModelStatus.kInfeasible:
                 return True  # no point of the rows in the box: no (better) order here
@@ -761,10 +786,9 @@ class BranchCut:
         limit = self._limit()
         if math.isfinite(limit) and len(reduced):
             free = ~model.fixed & (lower < 0.5) & (upper > 0.5)
-            zeros = np.union1d(
-                zeros, np.flatnonzero(free & (reduced > 0) & (raw + reduced > limit))
-            )
-            ones = np.union1d(ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
+            n = model.n_arcs
+            zeros = _union(n, zeros, np.flatnonzero(free & (reduced > 0) & (raw + reduced > limit)))
+            ones = _union(n, ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
         basis = model.highs.getBasis()
         pool = self._pool()
         pool._grow(int(model.highs.getNumRow()))
@@ -773,10 +797,9 @@ class BranchCut:
         pick, bounds = candidates[0], [bound, bound]
         if STRONG_CANDIDATES > 1 and len(candidates) > 1:
             pick, bounds = self._branch(candidates, lower, upper, basis, new_value, bound, deadline)
-        for child, ((child_ones, child_zeros), child_bound) in enumerate(
-            zip(pick.children, bounds, strict=True)
-        ):
+        for child, child_bound in enumerate(bounds):
             if child_bound <= self._limit():
+                child_ones, child_zeros = pick.child(child, model.n_arcs)
                 origin = (pick.key, child, pick.shares[child], new_value)
                 self._push(
                     child_bound, depth + 1, child_ones, child_zeros, saved, node.number, origin
@@ -792,13 +815,16 @@ class BranchCut:
         partition the node's orders (module doc). ``"split"``: the out/in-arc splits nearest
         1/2 (the arcs rule when no node has one); ``"arc"``: the most fractional arcs."""
         count = max(PSEUDO_CANDIDATES if STRONG_CANDIDATES > 1 else 1, 1)
+        none = np.zeros(0, dtype=np.int64)
         if self.branching == "split":
             splits = self._splits(values, ones, zeros)[:count]
             if splits:
                 return [
                     _Branching(
                         key,
-                        [(ones, np.union1d(zeros, first)), (ones, np.union1d(zeros, rest))],
+                        ones,
+                        zeros,
+                        ((none, first), (none, rest)),
                         (float(values[first].sum()), float(values[rest].sum())),
                     )
                     for key, first, rest in splits
@@ -810,7 +836,9 @@ class BranchCut:
         return [
             _Branching(
                 ("arc", arc),
-                [(np.union1d(ones, [arc]), zeros), (ones, np.union1d(zeros, [arc]))],
+                ones,
+                zeros,
+                ((np.array([arc]), none), (none, np.array([arc]))),
                 (1.0 - float(values[arc]), float(values[arc])),
             )
             for arc in ranked[:count].tolist()
@@ -890,9 +918,10 @@ class BranchCut:
         model = self.model
         highs = model.highs
         proven, gains = [], []
-        for child, (child_ones, child_zeros) in enumerate(candidate.children):
+        for child in range(2):
             if deadline.expired(MARGIN):
                 return None
+            child_ones, child_zeros = candidate.child(child, model.n_arcs)
             child_lower = np.zeros(model.n_arcs)
             child_lower[child_ones] = 1.0
             child_upper = np.where(model.fixed, 0.0, 1.0)
