@@ -97,6 +97,9 @@ __all__ = [
     "NODE_TIGHT",
     "POOL",
     "POOL_AGE",
+    "POOL_BACKOFF",
+    "POOL_BACKOFF_CAP",
+    "POOL_REPAIR",
     "POOL_SLACK",
     "PSEUDO_CANDIDATES",
     "RELIABLE",
@@ -183,6 +186,25 @@ POOL_SLACK = 1e-3
 #: A pooled row comes back when the node's point violates it by more than this (times
 #: ``max(1, |side|)``).
 POOL_VIOLATED = 1e-6
+
+#: Whether a row that came back violated retires later: after ``POOL_AGE * 2**k`` slack node
+#: LPs, k the times it came back (at most :data:`POOL_BACKOFF_CAP` doublings). With one age
+#: for every row, 91-96 % of the retired rows came back (docs/benchmarks.md, "a cut pool"):
+#: a row that a later node needs again is, by that evidence, one the tree's nodes keep
+#: needing, and a retirement that doubles with each return stops the back-and-forth of such
+#: rows within a few returns while a row never needed again still leaves after ``POOL_AGE``.
+#: Our rule (exponential backoff), not SCIP's: SCIP ages its LP rows by one limit
+#: (``lp/rowagelimit``) and keeps the rows it removes in a separate cut pool.
+POOL_BACKOFF = True
+
+#: See :data:`POOL_BACKOFF`: at most 2**4 = 16 times :data:`POOL_AGE` (160 node LPs, some
+#: 20-50 nodes).
+POOL_BACKOFF_CAP = 4
+
+#: Whether a stored basis whose tight (nonbasic) rows have left the LP gets them back from
+#: the pool before it is set (:meth:`CutPool.missing`), rather than being dropped (HiGHS then
+#: starts from the last node's basis).
+POOL_REPAIR = True
 
 
 #: HiGHS's basis statuses by their values (a basis is kept per open node as int8 arrays).
@@ -294,9 +316,14 @@ class CutPool:
     matrix: sp.csr_matrix | None = None
     lower: np.ndarray = field(default_factory=lambda: np.zeros(0))
     upper: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: Per LP row (as ``ids``) and per pooled row (as ``pooled``): the times it came back
+    #: violated (:data:`POOL_BACKOFF`).
+    returns: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    pooled_returns: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     retired: int = 0
     restored: int = 0
     stale: int = 0
+    repaired: int = 0
 
     @classmethod
     def of(cls, model: SopCutModel, rows: Rows) -> CutPool:
@@ -316,6 +343,9 @@ class CutPool:
             self.ids = np.concatenate([self.ids, fresh])
             self.age = np.concatenate([self.age, np.zeros(extra, dtype=np.int64)])
             self.next_id += extra
+        short = len(self.ids) - len(self.returns)
+        if short > 0:
+            self.returns = np.concatenate([self.returns, np.zeros(short, dtype=np.int64)])
 
     def observe(self, rows: Rows, values: np.ndarray) -> None:
         """Age the LP's rows at its optimal point ``values``."""
@@ -326,12 +356,19 @@ class CutPool:
         )
         self.age = np.where(slack, self.age + 1, 0)
 
+    def limits(self) -> np.ndarray:
+        """The age at which each LP row retires: :data:`POOL_AGE`, doubled per return
+        (:data:`POOL_BACKOFF`)."""
+        if not POOL_BACKOFF:
+            return np.full(len(self.ids), POOL_AGE, dtype=np.int64)
+        return POOL_AGE * np.left_shift(1, np.minimum(self.returns, POOL_BACKOFF_CAP))
+
     def retire(self, model: SopCutModel, rows: Rows) -> Rows:
-        """Move the rows of age :data:`POOL_AGE` or more (past the first ``kept``) out of the
+        """Move the rows of age :meth:`limits` or more (past the first ``kept``) out of the
         LP; returns ``rows`` without them. Called right after :meth:`observe` on an LP, so
         their slacks are basic and HiGHS keeps its basis."""
         self._grow(rows.count)
-        old = np.flatnonzero(self.age >= POOL_AGE)
+        old = np.flatnonzero(self.age >= self.limits())
         old = old[old >= self.kept]
         if not len(old):
             return rows
@@ -341,9 +378,10 @@ class CutPool:
         block = rows.matrix[old]
         self.matrix = block if self.matrix is None else sp.vstack([self.matrix, block], "csr")
         self.pooled = np.concatenate([self.pooled, self.ids[old]])
+        self.pooled_returns = np.concatenate([self.pooled_returns, self.returns[old]])
         self.lower = np.concatenate([self.lower, rows.lower[old]])
         self.upper = np.concatenate([self.upper, rows.upper[old]])
-        self.ids, self.age = self.ids[keep], self.age[keep]
+        self.ids, self.age, self.returns = self.ids[keep], self.age[keep], self.returns[keep]
         self.retired += len(old)
         return Rows(int(keep.sum()), rows.matrix[keep], rows.lower[keep], rows.upper[keep])
 
@@ -357,10 +395,22 @@ class CutPool:
             | (activity > self.upper + _margin(self.upper, POOL_VIOLATED))
         )
 
-    def restore(self, model: SopCutModel, which: np.ndarray | None = None) -> int:
+    def missing(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+        """The positions in the pool of the rows nonbasic in a stored basis (tight at its
+        LP): with them back in the LP (:meth:`restore`) the basis maps (:meth:`statuses`)."""
+        _, row_status, ids = basis
+        if not len(self.pooled):
+            return np.zeros(0, dtype=np.int64)
+        tight = ids[row_status != int(highspy.HighsBasisStatus.kBasic)]
+        return np.flatnonzero(np.isin(self.pooled, tight))
+
+    def restore(
+        self, model: SopCutModel, which: np.ndarray | None = None, returned: bool = True
+    ) -> int:
         """Append the pooled rows at positions ``which`` (every pooled row when None) to the
-        LP, with their identities and age 0; returns how many. The tree's :class:`Rows`
-        read them as rows appended (:meth:`Rows.now`)."""
+        LP, with their identities and age 0; returns how many. ``returned``: a return of
+        each (a violated row: :data:`POOL_BACKOFF`; not a row back for a basis). The tree's
+        :class:`Rows` read them as rows appended (:meth:`Rows.now`)."""
         if self.matrix is None or not len(self.pooled):
             return 0
         if which is None:
@@ -371,15 +421,20 @@ class CutPool:
         _add_csr_rows(model.highs, self.matrix[which], self.lower[which], self.upper[which])
         self.ids = np.concatenate([self.ids, self.pooled[which]])
         self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
+        self.returns = np.concatenate([self.returns, self.pooled_returns[which] + returned])
         rest = np.ones(len(self.pooled), dtype=bool)
         rest[which] = False
         self.matrix = self.matrix[rest]
-        self.pooled, self.lower, self.upper = (
+        self.pooled, self.pooled_returns, self.lower, self.upper = (
             self.pooled[rest],
+            self.pooled_returns[rest],
             self.lower[rest],
             self.upper[rest],
         )
-        self.restored += len(which)
+        if returned:
+            self.restored += len(which)
+        else:
+            self.repaired += len(which)
         return len(which)
 
     def statuses(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray | None:
@@ -615,8 +670,11 @@ class BranchCut:
         self._changed = changed
         if node.basis is not None and node.parent != self._last:
             # by row identity: rows added since basic (their slacks), as HiGHS itself keeps
-            # them; a basis that lost a nonbasic row is not set (HiGHS's own is kept)
+            # them; the basis's tight rows that left the LP come back (POOL_REPAIR), else a
+            # basis that lost a nonbasic row is not set (HiGHS's own is kept)
             pool = self._pool()
+            if POOL_REPAIR:
+                pool.restore(model, pool.missing(node.basis), returned=False)
             pool._grow(int(highs.getNumRow()))
             row_status = pool.statuses(node.basis)
             if row_status is not None:
@@ -664,9 +722,9 @@ class BranchCut:
         self.rows_end = int(highs.getNumRow())
         if pool is None or not pool.retired:
             return
-        restored = pool.restored
+        counts = pool.restored, pool.repaired
         pool.restore(self.model)
-        pool.restored = restored  # counts the rows a node's point brought back only
+        pool.restored, pool.repaired = counts  # count the rows back at a node only
         rows = Rows.of(self.model)
         pool._grow(rows.count)
         if np.all(np.diff(pool.ids) > 0):
@@ -676,6 +734,7 @@ class BranchCut:
         highs.deleteRows(len(tail), tail.astype(np.int32))
         _add_csr_rows(highs, rows.matrix[order], rows.lower[order], rows.upper[order])
         pool.ids = np.concatenate([pool.ids[: pool.kept], pool.ids[order]])
+        pool.returns = np.concatenate([pool.returns[: pool.kept], pool.returns[order]])
         pool.age = np.zeros(len(pool.ids), dtype=np.int64)
         self._rows = None
 
@@ -1080,6 +1139,7 @@ def solve_sop_bc(
                 "retired": tree.pool.retired,
                 "restored": tree.pool.restored,
                 "stale": tree.pool.stale,
+                "repaired": tree.pool.repaired,
             },
             "trace": tree.trace,
         }
