@@ -42,8 +42,9 @@ Validity
 * **The cut pool** (:class:`CutPool`) takes separated rows out of the LP and puts them back;
   every row holds for every order (or every better one), in the LP or not, so the node bound
   of an LP with fewer rows is still a bound of the node's orders: the pool changes the LP's
-  size and the bounds' strength, never their validity. A stored basis that no longer fits
-  the rows is not set (a stale basis only costs iterations).
+  size and the bounds' strength, never their validity. A stored basis whose tight rows left
+  the LP gets them back from the pool before it is set (rows added since enter basic); a
+  basis only costs or saves iterations, never changes a bound.
 
 Which branching a node takes (reliability branching, ``BranchCut._branch``: strong
 branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
@@ -296,16 +297,18 @@ class CutPool:
     for the rows then, the next number for each row added since; a row keeps its identity
     out of the LP and back). After each optimal node LP (:meth:`observe`) the age of a row
     slack at the LP's point (:data:`POOL_SLACK`) grows by one, of the others goes back to 0;
-    :meth:`retire` moves the rows of age :data:`POOL_AGE` or more out of the LP into the pool
-    (the first ``kept`` rows, the degree rows of the model, never), :meth:`violated` /
-    :meth:`restore` put back the pooled rows a node's point violates (one sparse mat-vec),
-    which the node's separation would otherwise skip as known (``SopCutModel``'s keys).
+    :meth:`retire` moves the rows of age :meth:`limits` or more (:data:`POOL_AGE`, doubled
+    per return: :data:`POOL_BACKOFF`) out of the LP into the pool (the first ``kept`` rows,
+    the degree rows of the model, never), :meth:`violated` / :meth:`restore` put back the
+    pooled rows a node's point violates (one sparse mat-vec), which the node's separation
+    would otherwise skip as known (``SopCutModel``'s keys); :meth:`missing` names the pooled
+    rows a stored basis holds tight, put back before it is set (:data:`POOL_REPAIR`).
 
     Validity: every row, in the LP or not, holds for every order (or for every order better
     than the best known, module doc), so the node bound (weak duality on the rows in the LP)
     is valid whatever rows the LP holds; the pool only changes which rows that is. The stored
     bases carry the ``ids`` they were taken with (``BranchCut._apply`` maps them by
-    identity): a stale basis only costs simplex iterations.
+    identity): a basis only costs or saves simplex iterations.
     """
 
     kept: int
