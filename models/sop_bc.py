@@ -189,14 +189,15 @@ POOL_SLACK = 1e-3
 POOL_VIOLATED = 1e-6
 
 #: Whether a row that came back violated retires later: after ``POOL_AGE * 2**k`` slack node
-#: LPs, k the times it came back (at most :data:`POOL_BACKOFF_CAP` doublings). With one age
-#: for every row, 91-96 % of the retired rows came back (docs/benchmarks.md, "a cut pool"):
-#: a row that a later node needs again is, by that evidence, one the tree's nodes keep
-#: needing, and a retirement that doubles with each return stops the back-and-forth of such
-#: rows within a few returns while a row never needed again still leaves after ``POOL_AGE``.
-#: Our rule (exponential backoff), not SCIP's: SCIP ages its LP rows by one limit
-#: (``lp/rowagelimit``) and keeps the rows it removes in a separate cut pool.
-POOL_BACKOFF = True
+#: LPs, k the times it came back (at most :data:`POOL_BACKOFF_CAP` doublings). Off: tried
+#: because 91-96 % of the retired rows came back (docs/benchmarks.md, "a cut pool"), it
+#: cut the returns by half or more but kept 1.5-2 times the rows in the LP and solved fewer
+#: LPs a second (ft53.1, ry48p.1, prob.42 at 60 s; docs/benchmarks.md, "the cut pool's
+#: churn"): a return costs one mat-vec and one ``addRows``, and once :data:`POOL_REPAIR`
+#: brings back the tight rows of a stored basis it no longer costs that basis. Our rule
+#: (exponential backoff), not SCIP's: SCIP ages its LP rows by one limit
+#: (``lp/rowagelimit``, 10, as :data:`POOL_AGE`).
+POOL_BACKOFF = False
 
 #: See :data:`POOL_BACKOFF`: at most 2**4 = 16 times :data:`POOL_AGE` (160 node LPs, some
 #: 20-50 nodes).
@@ -204,7 +205,12 @@ POOL_BACKOFF_CAP = 4
 
 #: Whether a stored basis whose tight (nonbasic) rows have left the LP gets them back from
 #: the pool before it is set (:meth:`CutPool.missing`), rather than being dropped (HiGHS then
-#: starts from the last node's basis).
+#: starts from the last node's basis, far from the node's optimum: 87-147 simplex
+#: iterations for such a node's first LP against 33-56 once repaired, ft53.1 and
+#: ry48p.1 to 200-250 nodes). The rows come back at age 0 and leave again when slack for
+#: :data:`POOL_AGE` LPs. Rows added since the basis was stored enter basic (their slacks), as
+#: before; this is the exact basis of the parent's last LP on its rows, so dual feasible for
+#: the child, which only changes column bounds.
 POOL_REPAIR = True
 
 

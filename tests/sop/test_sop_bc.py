@@ -268,7 +268,7 @@ def test_cut_pool_rows_round_trip():
     assert without.statuses(stored) is None and without.stale == 1
 
 
-def test_cut_pool_repair_and_backoff():
+def test_cut_pool_repair_and_backoff(monkeypatch):
     """A stored basis that holds a row tight which has since left the LP is refused as it is,
     and maps once ``missing`` names that row and it comes back (a repair, not a return: its
     limit stays POOL_AGE); a row that came back violated retires after twice POOL_AGE, four
@@ -299,6 +299,7 @@ def test_cut_pool_repair_and_backoff():
     mapped = pool.statuses(stored)
     assert mapped is not None and pool.stale == 1
     assert mapped[pool.ids == stored[2][slack[0]]][0] == row_status[slack[0]]
+    monkeypatch.setattr(sop_bc, "POOL_BACKOFF", True)
     assert pool.limits()[-1] == sop_bc.POOL_AGE  # a repair is no return
     # returns double the age limit, up to the cap
     for k in range(1, sop_bc.POOL_BACKOFF_CAP + 3):
