@@ -319,9 +319,10 @@ def test_pool_backoff_and_repair_equal_the_plain_tree(monkeypatch):
     """On a random 18-node SOP that branches (no strong branching, rows leaving after one
     slack LP), the tree with the retirement doubling per return and the stored bases repaired
     from the pool, and the tree with neither, end at the optimum of the tree without a pool;
-    its bound after 2 nodes is at most it; with the repair no basis is dropped and some
-    are repaired, without it some are dropped (both paths exercised). The 7-9-node brute
-    force runs with both on by default (``test_cut_pool_matches_brute_force``)."""
+    with the repair no basis is dropped and some are repaired, without it some are dropped
+    (both paths exercised). The 7-9-node brute
+    force, and its bound stopped after 3 nodes, run with the repair on by default
+    (``test_cut_pool_matches_brute_force``)."""
     monkeypatch.setattr(sop_bc, "POOL_AGE", 1)
     monkeypatch.setattr(sop_bc, "STRONG_CANDIDATES", 1)
     counts = {False: [0, 0], True: [0, 0]}
@@ -334,7 +335,6 @@ def test_pool_backoff_and_repair_equal_the_plain_tree(monkeypatch):
         plain = solve_sop_bc(problem)
         assert plain.status == OPTIMAL
         monkeypatch.setattr(sop_bc, "POOL", True)
-        assert solve_sop_bc(problem, node_limit=2).bound <= plain.objective + 1e-6
         for on in (False, True):
             monkeypatch.setattr(sop_bc, "POOL_BACKOFF", on)
             monkeypatch.setattr(sop_bc, "POOL_REPAIR", on)
