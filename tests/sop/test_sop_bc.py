@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -204,6 +205,17 @@ def test_cut_pool_matches_brute_force(age, monkeypatch):
     assert retired > 0
 
 
+def _random_sop(key: list[int], n: int, density: float) -> SopProblem:
+    """A random n-node SOP (costs 0-99, start 0, end n - 1), each pair of inner nodes a
+    precedence with probability ``density``, drawn from ``default_rng(key)``."""
+    rng = np.random.default_rng(key)
+    cost = rng.integers(0, 100, size=(n, n)).astype(float)
+    pairs = [
+        (a, b) for a, b in itertools.combinations(range(1, n - 1), 2) if rng.random() < density
+    ]
+    return SopProblem(cost, pairs, 0, n - 1)
+
+
 def test_cut_pool_rows_come_back(monkeypatch):
     """On 6 random 13-node SOPs, the tree with rows leaving after one slack LP ends at the
     optimum of the tree without the pool, its bound after 2 nodes is at most that optimum, and
@@ -211,10 +223,7 @@ def test_cut_pool_rows_come_back(monkeypatch):
     monkeypatch.setattr(sop_bc, "POOL_AGE", 1)
     restored = 0
     for seed in range(6):
-        rng = np.random.default_rng([43, seed])
-        cost = rng.integers(0, 100, size=(13, 13)).astype(float)
-        pairs = [(a, b) for a, b in itertools.combinations(range(1, 12), 2) if rng.random() < 0.1]
-        problem = SopProblem(cost, pairs, 0, 12)
+        problem = _random_sop([43, seed], 13, 0.1)
         monkeypatch.setattr(sop_bc, "POOL", False)
         plain = solve_sop_bc(problem)
         monkeypatch.setattr(sop_bc, "POOL", True)
@@ -227,12 +236,10 @@ def test_cut_pool_rows_come_back(monkeypatch):
     assert restored > 0
 
 
-def test_cut_pool_rows_round_trip():
-    """Rows retired from the LP and restored come back with their coefficients and sides; a
-    stored basis maps by row identity (rows it does not know: basic) or is refused when it
-    lost a nonbasic row."""
-    problem = _instance(9)
-    model = SopCutModel(problem)
+def _root_pool() -> tuple[SopCutModel, Any, Any, np.ndarray, np.ndarray]:
+    """Instance 9's root LP, its rows, a pool that observed its point, the point, and the
+    cut rows slack there (asserted some: a root LP with slack cut rows)."""
+    model = SopCutModel(_instance(9))
     model.root()
     model.highs.run()
     rows = sop_bc.Rows.of(model)
@@ -240,7 +247,15 @@ def test_cut_pool_rows_round_trip():
     values = model.lp_values()
     pool.observe(rows, values)
     slack = np.flatnonzero(pool.age[pool.kept :] > 0) + pool.kept
-    assert len(slack)  # a root LP with slack cut rows (instance 9)
+    assert len(slack)
+    return model, rows, pool, values, slack
+
+
+def test_cut_pool_rows_round_trip():
+    """Rows retired from the LP and restored come back with their coefficients and sides; a
+    stored basis maps by row identity (rows it does not know: basic) or is refused when it
+    lost a nonbasic row."""
+    model, rows, pool, values, slack = _root_pool()
     pool.age[slack] = sop_bc.POOL_AGE
     basis = model.highs.getBasis()
     stored = (
@@ -273,15 +288,7 @@ def test_cut_pool_repair_and_backoff(monkeypatch):
     and maps once ``missing`` names that row and it comes back (a repair, not a return: its
     limit stays POOL_AGE); a row that came back violated retires after twice POOL_AGE, four
     times after a second return, never more than the cap."""
-    problem = _instance(9)
-    model = SopCutModel(problem)
-    model.root()
-    model.highs.run()
-    rows = sop_bc.Rows.of(model)
-    pool = sop_bc.CutPool.of(model, rows)
-    pool.observe(rows, model.lp_values())
-    slack = np.flatnonzero(pool.age[pool.kept :] > 0) + pool.kept
-    assert len(slack)
+    model, rows, pool, _, slack = _root_pool()
     basis = model.highs.getBasis()
     col_status, row_status = sop_bc._packed(basis.col_status), sop_bc._packed(basis.row_status)
     basic = int(sop_bc.highspy.HighsBasisStatus.kBasic)
@@ -327,10 +334,7 @@ def test_pool_backoff_and_repair_equal_the_plain_tree(monkeypatch):
     monkeypatch.setattr(sop_bc, "STRONG_CANDIDATES", 1)
     counts = {False: [0, 0], True: [0, 0]}
     for seed in (0,):
-        rng = np.random.default_rng([47, seed])
-        cost = rng.integers(0, 100, size=(18, 18)).astype(float)
-        pairs = [(a, b) for a, b in itertools.combinations(range(1, 17), 2) if rng.random() < 0.05]
-        problem = SopProblem(cost, pairs, 0, 17)
+        problem = _random_sop([47, seed], 18, 0.05)
         monkeypatch.setattr(sop_bc, "POOL", False)
         plain = solve_sop_bc(problem)
         assert plain.status == OPTIMAL
