@@ -410,9 +410,12 @@ def test_a_run_past_its_give_up_time_is_detached_and_waited_for_at_exit():
     ignores its callbacks (a sleep stands for HiGHS between two looks at them); the run counts
     as detached until it ends, the next run starts only after it, and the interpreter's exit
     waits for a detached run (exit code 0). A run that ends before ``give_up`` returns its own
-    value. In a child process: the main thread with Ctrl-C catchable, as a user's script."""
+    value. In a child process: the main thread with Ctrl-C catchable, as a user's script
+    (the child sets Python's own SIGINT handler: a parent started in the background, as
+    ``cmd &`` in a script, passes SIGINT on ignored, and the run would then be plain)."""
     code = """
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import highspy
 from taopt.runtime import interrupt
 from taopt.runtime.highs import DETACH_GRACE, DETACHED, run_interruptibly
