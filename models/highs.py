@@ -78,6 +78,7 @@ __all__ = [
     "OPTIMALITY_TOLERANCE",
     "HighsModel",
     "HighsRun",
+    "add_csr_rows",
     "new_highs",
     "relative_gap",
     "solve_highs",
@@ -336,6 +337,22 @@ def highs_outcome(
     )
 
 
+def add_csr_rows(
+    highs: highspy.Highs, block: sp.csr_matrix, lower: np.ndarray, upper: np.ndarray
+) -> None:
+    """Append the rows ``lower <= block @ x <= upper`` (a CSR block over all columns) to
+    ``highs`` (one ``addRows`` call)."""
+    highs.addRows(
+        block.shape[0],
+        lower,
+        upper,
+        block.nnz,
+        block.indptr[:-1].astype(np.int32),
+        block.indices.astype(np.int32),
+        block.data.astype(float),
+    )
+
+
 #: HiGHS options (name -> (value in a time-limited MIP run, value otherwise)) for the MIP
 #: phases that do not look at HiGHS's clock: probing in presolve (rule 2^15) and a presolve
 #: restart after the root. With them a 3 s run of the 20-customer delivery MILP took 4.1 s
@@ -571,15 +588,7 @@ class HighsModel:
         lower = np.broadcast_to(lower, (count,)).copy()
         upper = np.broadcast_to(upper, (count,)).copy()
         matrix.sort_indices()
-        self.highs.addRows(
-            count,
-            lower,
-            upper,
-            matrix.nnz,
-            matrix.indptr[:-1].astype(np.int32),
-            matrix.indices.astype(np.int32),
-            matrix.data.astype(float),
-        )
+        add_csr_rows(self.highs, matrix, lower, upper)
         self._row_blocks.append((matrix, lower, upper))
 
     @property

@@ -76,6 +76,7 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
+from taopt.models.highs import add_csr_rows
 from taopt.models.sop_cuts import (
     SET_CUTS,
     SopCutModel,
@@ -274,22 +275,6 @@ class Rows:
         )
 
 
-def _add_csr_rows(
-    highs: highspy.Highs, block: sp.csr_matrix, lower: np.ndarray, upper: np.ndarray
-) -> None:
-    """Append the rows ``lower <= block @ x <= upper`` (a CSR block over all columns) to
-    ``highs``."""
-    highs.addRows(
-        block.shape[0],
-        lower,
-        upper,
-        block.nnz,
-        block.indptr[:-1].astype(np.int32),
-        block.indices.astype(np.int32),
-        block.data.astype(float),
-    )
-
-
 def _margin(sides: np.ndarray, share: float) -> np.ndarray:
     """``share * max(1, |side|)`` for each finite row side (0 for an infinite one)."""
     return share * np.maximum(1.0, np.where(np.isfinite(sides), np.abs(sides), 0.0))
@@ -427,7 +412,7 @@ class CutPool:
         if not len(which):
             return 0
         self._grow(int(model.highs.getNumRow()))  # rows the model appended keep their place
-        _add_csr_rows(model.highs, self.matrix[which], self.lower[which], self.upper[which])
+        add_csr_rows(model.highs, self.matrix[which], self.lower[which], self.upper[which])
         self.ids = np.concatenate([self.ids, self.pooled[which]])
         self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
         self.returns = np.concatenate([self.returns, self.pooled_returns[which] + returned])
@@ -741,7 +726,7 @@ class BranchCut:
         tail = np.arange(pool.kept, rows.count)
         order = pool.kept + np.argsort(pool.ids[pool.kept :], kind="stable")
         highs.deleteRows(len(tail), tail.astype(np.int32))
-        _add_csr_rows(highs, rows.matrix[order], rows.lower[order], rows.upper[order])
+        add_csr_rows(highs, rows.matrix[order], rows.lower[order], rows.upper[order])
         pool.ids = np.concatenate([pool.ids[: pool.kept], pool.ids[order]])
         pool.returns = np.concatenate([pool.returns[: pool.kept], pool.returns[order]])
         pool.age = np.zeros(len(pool.ids), dtype=np.int64)
