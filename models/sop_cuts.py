@@ -190,6 +190,12 @@ ROOT_STALL = 1e-5
 ROOT_STALL_ROUNDS = 5
 
 
+#: :meth:`~taopt.models.sop_cuts.SopCutModel._near` passes a pair to the exact check when a
+#: candidate row's left-hand side, summed in another order, is below ``1 - CUT_TOLERANCE``
+#: plus this: far above the rounding of a sum of at most ``n`` units over some ten thousand
+#: arcs (``1e-16`` relative per term), far below any violation that matters.
+NEAR_MARGIN = 1e-6
+
 #: The pairs whose maximum flows one call of scipy's ``maximum_flow`` computes together
 #: (:func:`pair_flows`); also how often the separation looks at its deadline.
 PAIR_BATCH = 64
@@ -567,9 +573,54 @@ class SopCutModel:
                 continue
             flows, sides = pair_flows(n, tails, heads, caps, batch, inside)
             self.flows[batch[:, 0], batch[:, 1]] = flows / FLOW_SCALE
-            for (i, j), within, value, side in zip(batch, inside, flows, sides, strict=True):
-                found += self._pair_cut(values, int(i), int(j), within, value, side, seen)
+            near = self._near(values[support], tails, heads, batch, inside, flows, sides)
+            for k in np.flatnonzero(near):
+                i, j = batch[k]
+                found += self._pair_cut(values, int(i), int(j), inside[k], flows[k], sides[k], seen)
         return found
+
+    def _near(
+        self,
+        weights: np.ndarray,
+        tails: np.ndarray,
+        heads: np.ndarray,
+        pairs: np.ndarray,
+        inside: np.ndarray,
+        flows: np.ndarray,
+        sides: np.ndarray,
+    ) -> np.ndarray:
+        """A mask over ``pairs``: False where :meth:`_pair_cut` is sure to return no row
+        (its flow at or above its threshold, or every candidate row's left-hand side at
+        least ``1 - CUT_TOLERANCE + NEAR_MARGIN``), worked out for all pairs at once.
+
+        The point's support arcs ``tails -> heads`` carry ``weights``; a candidate row's
+        left-hand side is summed over them here (a matrix product) where :meth:`_pair_cut`
+        sums over every arc of the row: the two differ by rounding only (far below
+        :data:`NEAR_MARGIN`), so a pair left out would have given no row there, and the
+        pairs kept go through :meth:`_pair_cut` itself (the same rows, in the same order).
+        """
+        start, end = self.problem.start, self.problem.end
+        plain = (1 - CUT_TOLERANCE) * FLOW_SCALE
+        wide = (LIFT_TRY if LIFT else 1 - CUT_TOLERANCE) * FLOW_SCALE
+        ends = (pairs[:, 0] == start) | (pairs[:, 1] == end)
+        near = flows < np.where(LIFT_ALL | ends, wide, plain)
+        if not near.any():
+            return near
+        rows = np.flatnonzero(near)
+        source = sides[rows] & inside[rows]
+        sink = inside[rows] & ~sides[rows]
+        sets = [(source, sink)]
+        if LIFT:
+            before = self.before
+            lifted_a = (sink & before[pairs[rows, 0]]) @ before  # σ(T ∩ σ(i))
+            lifted_b = (source & before[:, pairs[rows, 1]].T) @ before.T  # π(S ∩ π(j))
+            sets += [(source & ~lifted_a, sink & ~lifted_a), (source & ~lifted_b, sink & ~lifted_b)]
+        lhs = np.min(
+            [(tail_set[:, tails] & head_set[:, heads]) @ weights for tail_set, head_set in sets],
+            axis=0,
+        )
+        near[rows] = lhs < 1 - CUT_TOLERANCE + NEAR_MARGIN
+        return near
 
     def _pair_cut(
         self,
