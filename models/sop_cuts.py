@@ -406,6 +406,7 @@ class SopCutModel:
         #: :meth:`~taopt.models.sop_cuts.SopCutModel.lagrangian_prices`).
         self.root_duals: np.ndarray | None = None
         self._candidates: list[tuple[tuple[int, ...], tuple[int, ...], int]] | None = None
+        self._set_cache: tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         #: The last maximum flow of each closure pair at a separated point (``inf``: none
         #: yet), which picks the candidates of the set path cuts.
         self.flows = np.full((n, n), np.inf)
@@ -730,6 +731,33 @@ class SopCutModel:
         self._candidates = found
         return found
 
+    def _set_arrays(self) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """For the candidates of :meth:`set_candidates` (cached, as they are): their node
+        sets W (a boolean row of ``n`` each: the chain's own ``W(i, j)``, else V minus π(X)
+        and σ(Y)) and the pairs whose flows decide whether one is tried, as (x, y, side):
+        ``x[k], y[k]`` the two pairs (x, y) of X × Y of a candidate of side 1 (it has two
+        sources or two sinks), the pair (i, j) twice for a chain."""
+        if self._set_cache is None:
+            before, n = self.before, self.n
+            candidates = self.set_candidates()
+            within = np.array(
+                [
+                    ~before[:, xs[0]] & ~before[ys[1], :]
+                    if side == 2
+                    else ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+                    for xs, ys, side in candidates
+                ],
+                dtype=bool,
+            ).reshape(len(candidates), n)
+            pairs = [
+                [(xs[0], ys[1])] * 2 if side == 2 else [(x, y) for x in xs for y in ys]
+                for xs, ys, side in candidates
+            ]
+            probe = np.array(pairs, dtype=np.int64).reshape(len(candidates), 2, 2)
+            sides = np.array([side for _, _, side in candidates], dtype=float)
+            self._set_cache = (within, (probe[:, :, 0], probe[:, :, 1], sides))
+        return self._set_cache
+
     def separate_sets(
         self, values: np.ndarray, limit: int = CUTS_PER_ROUND, deadline: Deadline | None = None
     ) -> tuple[list[np.ndarray], list[float]]:
@@ -762,32 +790,17 @@ class SopCutModel:
         support = values > 1e-9
         tails, heads = self.tails[support], self.heads[support]
         caps = np.floor(values[support] * FLOW_SCALE).astype(np.int64)
-        before = self.before
         found: list[tuple[float, np.ndarray, float]] = []
         seen: set[bytes] = set()
-        flows = self.flows
-        tried: list[tuple[tuple[int, ...], tuple[int, ...], int]] = []
-        for xs, ys, side in self.set_candidates():
-            # tried only where the pair cuts it is made of are nearly tight
-            if side == 2:
-                if flows[xs[0], ys[1]] >= side + SET_TIGHT:
-                    continue
-            elif max(flows[x, y] for x in xs for y in ys) >= 1 + SET_TIGHT:
-                continue
-            tried.append((xs, ys, side))
+        candidates = self.set_candidates()
+        within, probes = self._set_arrays()
+        # tried only where the pair cuts it is made of are nearly tight
+        tried = np.flatnonzero(self.flows[probes[0], probes[1]].max(axis=1) < probes[2] + SET_TIGHT)
         for first in range(0, len(tried), PAIR_BATCH):
             if deadline is not None and deadline.expired(MARGIN):
                 break
-            batch = tried[first : first + PAIR_BATCH]
-            inside = np.array(
-                [
-                    # the chain's own W(i, j); else W = V minus π(X) and σ(Y)
-                    ~before[:, xs[0]] & ~before[ys[1], :]
-                    if side == 2
-                    else ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
-                    for xs, ys, side in batch
-                ]
-            ).reshape(len(batch), n)
+            batch = [candidates[k] for k in tried[first : first + PAIR_BATCH]]
+            inside = within[tried[first : first + PAIR_BATCH]]
             starts = np.array(
                 [(k, x) for k, (xs, _, _) in enumerate(batch) for x in xs if inside[k, x]],
                 dtype=np.int64,

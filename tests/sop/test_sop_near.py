@@ -72,3 +72,26 @@ def test_a_pair_left_out_has_no_row(seed):
             row = model._pair_cut(values, int(i), int(j), inside[k], 0.0, sides[k], set())
             assert row == [], (i, j)
     assert left_out  # the filter is exercised
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_set_arrays_match_the_candidates(seed):
+    """_set_arrays' W of each set candidate and its tried test (at random flows, near the
+    thresholds) are those written out per candidate."""
+    model = _model(seed)
+    before = model.before
+    candidates = model.set_candidates()
+    within, (xs_of, ys_of, sides) = model._set_arrays()
+    assert len(within) == len(candidates)
+    rng = np.random.default_rng([5, seed])
+    model.flows = rng.choice([0.5, 1.0, 1.5, 2.0, 2.5, 3.0, np.inf], size=model.flows.shape)
+    tried = model.flows[xs_of, ys_of].max(axis=1) < sides + sop_cuts.SET_TIGHT
+    for k, (xs, ys, side) in enumerate(candidates):
+        if side == 2:
+            inside = ~before[:, xs[0]] & ~before[ys[1], :]
+            skip = model.flows[xs[0], ys[1]] >= side + sop_cuts.SET_TIGHT
+        else:
+            inside = ~before[:, list(xs)].any(axis=1) & ~before[list(ys), :].any(axis=0)
+            skip = max(model.flows[x, y] for x in xs for y in ys) >= 1 + sop_cuts.SET_TIGHT
+        assert np.array_equal(within[k], inside)
+        assert tried[k] == (not skip)
