@@ -104,6 +104,7 @@ __all__ = [
     "MIP_RESERVE_MAX",
     "MIP_ROUNDS",
     "MIP_SUB_HEURISTICS",
+    "POLISH_BLOCK",
     "POLISH_PASSES",
     "REDUCED_COST_FIXING",
     "ROOT_ROUNDS",
@@ -1510,6 +1511,12 @@ def _solution(values: np.ndarray) -> highspy.HighsSolution:
 #: Passes of the relocation search that polishes an order rounded from a point.
 POLISH_PASSES = 20
 
+#: Runs whose moves :func:`polish` evaluates together (one numpy evaluation of this many runs
+#: by every place). Not tuned: large enough that an order of some 50 nodes takes one or two
+#: evaluations a pass when nothing moves, small enough that a move on an order of hundreds
+#: of nodes does not re-evaluate hundreds of runs.
+POLISH_BLOCK = 32
+
 
 def round_point(
     model: SopCutModel, values: np.ndarray, deadline: Deadline | None = None
@@ -1556,10 +1563,12 @@ def polish(
     no predecessor of a node of the run is at or after q and no successor is before q.
 
     The runs are visited in the order of their first position p (for each length), each
-    moved to its best place when that saves; the moves of all the runs from p on are
-    evaluated at once (:func:`_first_move`), so a pass costs one numpy evaluation per move
-    made plus one per length, not one per run (the same moves as one run at a time: a run
-    that does not move leaves the order as it was).
+    moved to its best place when that saves; the moves of the next :data:`POLISH_BLOCK` runs
+    from p on are evaluated at once (:func:`_first_move`), so a pass costs one numpy
+    evaluation per move made plus one per block, not one per run (the same moves as one run
+    at a time: a run that does not move leaves the order as it was). The block bounds an
+    evaluation's work (``POLISH_BLOCK`` runs by ``n`` places) where many moves are made on
+    a long order.
     """
     cost, before = model.problem.cost, model.before
     current = np.asarray(order, dtype=np.int64)
@@ -1571,9 +1580,11 @@ def polish(
         for length in (1, 2, 3):
             p = 1
             while p + length <= n - 1:
-                move = _first_move(cost, before, current, length, p)
+                stop = min(p + POLISH_BLOCK, n - length)
+                move = _first_move(cost, before, current, length, p, stop)
                 if move is None:
-                    break
+                    p = stop
+                    continue
                 p, place = move
                 rest = np.concatenate([current[:p], current[p + length :]])
                 current = np.concatenate([rest[:place], current[p : p + length], rest[place:]])
@@ -1585,10 +1596,11 @@ def polish(
 
 
 def _first_move(
-    cost: np.ndarray, before: np.ndarray, order: np.ndarray, length: int, first: int
+    cost: np.ndarray, before: np.ndarray, order: np.ndarray, length: int, first: int, stop: int
 ) -> tuple[int, int] | None:
-    """The first run of ``length`` nodes at a position p >= ``first`` of ``order`` with a
-    saving place, as (p, its best place in the order without the run), or None.
+    """The first run of ``length`` nodes at a position ``first <= p < stop`` of ``order``
+    (``stop <= len(order) - length``) with a saving place, as (p, its best place in the
+    order without the run), or None.
 
     For every such p at once: ``rest`` the order without the run, a place q (between
     ``rest[q - 1]`` and ``rest[q]``, ``1 <= q < len(rest)``) is allowed after the last
@@ -1598,7 +1610,7 @@ def _first_move(
     place is the first of the least value, a saving when below ``-1e-9``.
     """
     n = len(order)
-    starts = np.arange(first, n - length)  # p + length <= n - 1
+    starts = np.arange(first, stop)
     size = n - length  # len(rest)
     places = np.arange(size)
     # rest[p, r]: the order without the run at p

@@ -86,8 +86,11 @@ def _random_order(model: SopCutModel, rng: np.random.Generator) -> list[int]:
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_polish_makes_the_reference_moves(seed):
-    """From random orders, the polish returns the reference search's cost and order."""
+@pytest.mark.parametrize("block", [32, 3])
+def test_polish_makes_the_reference_moves(seed, block, monkeypatch):
+    """From random orders, the polish returns the reference search's cost and order (a
+    small block: many block ends)."""
+    monkeypatch.setattr(sop_cuts, "POLISH_BLOCK", block)
     problem = _problem(seed)
     model = SopCutModel(problem)
     rng = np.random.default_rng(seed)
