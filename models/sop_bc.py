@@ -114,6 +114,7 @@ __all__ = [
     "STRONG_CANDIDATES",
     "STRONG_CUTOFF",
     "STRONG_FIXING",
+    "STRONG_FLOOR",
     "STRONG_ITERATIONS",
     "STRONG_STOPPED",
     "TREE_MIN_GAP",
@@ -200,6 +201,14 @@ STRONG_FIXING = True
 #: first LP then starts at the child LP's end (an optimal child: 0 iterations) rather than at
 #: the parent's basis. A basis only costs or saves iterations, never changes a bound.
 STRONG_BASES = True
+
+#: Whether strong branching raises the node's bound, hence its children's: every
+#: strong-branched candidate partitions the node's orders into its two children, so each
+#: better order of the node costs at least the smaller of that candidate's two children's
+#: proven bounds, and the node (with each child of the branching taken, a subset of its
+#: orders) at least the largest such minimum over the candidates strong-branched (SCIP raises
+#: a node's lower bound from its strong branching likewise). Off: a child's bound is its own.
+STRONG_FLOOR = True
 
 #: HiGHS's default ``simplex_iteration_limit`` (none), restored after strong branching.
 ITERATIONS_UNLIMITED = 2**31 - 1
@@ -658,6 +667,8 @@ class BranchCut:
     #: (:data:`STRONG_STOPPED`); nodes that took a child in place (:data:`STRONG_FIXING`).
     strong_stopped: int = 0
     strong_fixings: int = 0
+    #: Children pushed with a bound raised by :data:`STRONG_FLOOR`.
+    strong_floors: int = 0
     _open: list[_Node] = field(default_factory=list)
     _count: int = 0
     _last: int = -1  # the node whose LP HiGHS holds
@@ -885,9 +896,9 @@ class BranchCut:
                 )
             limit = self._limit()
             alive = [child for child in range(2) if bounds[child] <= limit]
+            if not alive:
+                return True  # neither child holds a better order
             if STRONG_FIXING and len(alive) < 2:
-                if not alive:
-                    return True  # neither child holds a better order
                 self.strong_fixings += 1
                 node.ones, node.zeros = pick.child(alive[0], model.n_arcs)
                 node.bound, node.basis, node.own = bounds[alive[0]], saved, bases[alive[0]]
@@ -1041,8 +1052,9 @@ class BranchCut:
         :data:`LOOKAHEAD` in a row did not raise the best score, and scored by their
         children's measured gains instead. The best score among the strong-branched and the
         reliable ones is taken (the first in that order when none is). Returns it, its
-        children's proven bounds (``bound`` each unless strong-branched) and their final
-        bases (:data:`STRONG_BASES`; None unless strong-branched). With
+        children's proven bounds (``bound`` each unless strong-branched; each raised to the
+        largest of the strong-branched candidates' smaller child bounds: :data:`STRONG_FLOOR`)
+        and their final bases (:data:`STRONG_BASES`; None unless strong-branched). With
         :data:`STRONG_FIXING`, the first strong-branched candidate with a child above the
         limit (no better order in it) is returned at once: the caller takes its other child
         in place. With :data:`STRONG_CUTOFF` the child LPs stop at the limit."""
@@ -1064,7 +1076,7 @@ class BranchCut:
         cutoff = STRONG_CUTOFF and math.isfinite(limit)
         if cutoff:
             highs.setOptionValue("objective_bound", limit)
-        tried, idle = 0, 0
+        tried, idle, floor = 0, 0, bound
         try:
             for k in ranked:
                 candidate = candidates[k]
@@ -1077,8 +1089,10 @@ class BranchCut:
                     if measured is None:  # the deadline
                         break
                     gains, bounds, bases = measured
+                    if STRONG_FLOOR:
+                        floor = max(floor, min(bounds))
                     if STRONG_FIXING and max(bounds) > limit:
-                        return candidate, bounds, bases
+                        return candidate, [max(b, floor) for b in bounds], bases
                     score, tried = _score(gains, value), tried + 1
                     idle = 0 if score > best[0] else idle + 1
                 if score > best[0]:
@@ -1088,7 +1102,8 @@ class BranchCut:
             if cutoff:
                 highs.setOptionValue("objective_bound", highspy.kHighsInf)
         self.pseudo_branchings += best[3]
-        return best[1], best[2], best[4]
+        self.strong_floors += sum(floor > b for b in best[2])
+        return best[1], [max(b, floor) for b in best[2]], best[4]
 
     def _strong(
         self,
@@ -1248,7 +1263,8 @@ def solve_sop_bc(
         ``pseudo_branchings`` (nodes branched on pseudo-costs alone), ``strong_iterations``
         and ``first_iterations`` (simplex iterations of the strong-branching LPs and of the
         nodes' first LPs), ``strong_stopped`` (strong child LPs stopped early that gave a
-        node bound), ``strong_fixings`` (nodes that took a child in place) and
+        node bound), ``strong_fixings`` (nodes that took a child in place),
+        ``strong_floors`` (children whose bound :data:`STRONG_FLOOR` raised) and
         ``trace`` (seconds, bound) each time the bound rose.
 
     Examples
@@ -1287,6 +1303,7 @@ def solve_sop_bc(
             "first_iterations": tree.first_iterations,
             "strong_stopped": tree.strong_stopped,
             "strong_fixings": tree.strong_fixings,
+            "strong_floors": tree.strong_floors,
             "fixed": int(model.fixed.sum()),
             "rows_end": tree.rows_end,
             "pool": None

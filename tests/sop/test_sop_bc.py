@@ -151,7 +151,7 @@ def test_stopped_child_bound_holds_on_the_box():
     assert {"kIterationLimit", "kObjectiveBound"} <= statuses
 
 
-_RULES = ["STRONG_STOPPED", "STRONG_FIXING", "STRONG_CUTOFF", "STRONG_BASES"]
+_RULES = ["STRONG_STOPPED", "STRONG_FIXING", "STRONG_CUTOFF", "STRONG_BASES", "STRONG_FLOOR"]
 
 
 @pytest.mark.parametrize("off", [None, *_RULES])
