@@ -165,7 +165,7 @@ def test_strong_rules_match_brute_force(off, monkeypatch):
     monkeypatch.setattr(sop_bc, "RELIABLE", 8)  # strong branching at every node
     if off is not None:
         monkeypatch.setattr(sop_bc, off, False)
-    stopped = fixings = 0
+    stopped = fixings = floors = 0
     for seed in range(12):
         problem = _instance(seed)
         optimum = sop_brute_force(problem)
@@ -178,8 +178,22 @@ def test_strong_rules_match_brute_force(off, monkeypatch):
         for info in (result.info, warm.info):
             stopped += info["strong_stopped"]
             fixings += info["strong_fixings"]
+            floors += info["strong_floors"]
     assert (stopped > 0) == (off != "STRONG_STOPPED")
     assert (fixings > 0) == (off != "STRONG_FIXING")
+    assert floors == 0 or off != "STRONG_FLOOR"  # too few branchings here to raise one
+
+
+@pytest.mark.slow
+def test_strong_floor_on_esc47():
+    """ESC47 (optimum 1288) solved by the tree: children's bounds raised by other candidates'
+    strong branching (STRONG_FLOOR; the tiny SOPs above branch too little to raise one), and
+    every proven bound of its trace at most the optimum. Some 5-15 s (the root stage)."""
+    cost, precedences, start, end, name = load_sop("ESC47")
+    result = solve_sop_bc(SopProblem(cost, precedences, start, end, name=name))
+    assert result.status == OPTIMAL and result.objective == pytest.approx(1288)
+    assert result.info["strong_floors"] > 0
+    assert all(bound <= 1288 + 1e-9 for _, bound in result.info["trace"])
 
 
 def test_time_limited_run_returns_a_proven_bound():
