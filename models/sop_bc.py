@@ -720,8 +720,11 @@ class BranchCut:
         )
 
     def _apply(self, node: _Node) -> tuple[np.ndarray, np.ndarray]:
-        """Set the node's column bounds in HiGHS (the previous node's undone) and its basis;
-        returns the box (lower, upper)."""
+        """Set the node's column bounds in HiGHS (the previous node's undone) and its basis
+        (its strong-branching child LP's when kept, :data:`STRONG_BASES`, as HiGHS's object
+        while the rows are those it was taken with, else packed and mapped by row identity as
+        a parent's; a parent's only when another node was solved since); returns the box
+        (lower, upper)."""
         model = self.model
         highs = model.highs
         self._undo()
