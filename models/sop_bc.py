@@ -49,8 +49,12 @@ Validity
 Which branching a node takes (reliability branching, ``BranchCut._branch``: strong
 branching on the candidates whose pseudo-costs are not yet :data:`RELIABLE`, the pseudo-costs
 of the others) changes the search, never a bound: every candidate partitions the node's
-orders, and a child's bound is its parent's or the node bound of its strong-branching LP
-solved to its end.
+orders, and a child's bound is its parent's or the node bound of its strong-branching LP's
+duals on the child's box (weak duality holds for any duals: the LP solved to its end, or
+stopped at the iteration limit or at the cutoff, ``BranchCut._strong``). A node one of whose
+strong-branched children holds no better order (infeasible, or bound above the limit) takes
+the other child in place (strong-branching fixing, :data:`STRONG_FIXING`): the two children
+partition its orders.
 
 An integral node point is either an order (checked with the problem's own test, it is the
 node's optimum and the node is closed) or violates a path cut (a cycle apart from the path is
@@ -106,8 +110,13 @@ __all__ = [
     "PSEUDO_CANDIDATES",
     "RELIABLE",
     "ROUND_EVERY",
+    "STRONG_BASES",
     "STRONG_CANDIDATES",
+    "STRONG_CUTOFF",
+    "STRONG_FIXING",
+    "STRONG_FLOOR",
     "STRONG_ITERATIONS",
+    "STRONG_STOPPED",
     "TREE_MIN_GAP",
     "BranchCut",
     "CutPool",
@@ -165,6 +174,41 @@ PSEUDO_CANDIDATES = 32
 
 #: Simplex iterations of a strong-branching child LP at most.
 STRONG_ITERATIONS = 200
+
+#: Whether a strong-branching child LP that did not end optimal (stopped at
+#: :data:`STRONG_ITERATIONS`, or at the cutoff: :data:`STRONG_CUTOFF`) still gives its child a
+#: proven bound: :func:`node_bound` of its duals on the child's box (weak duality holds for
+#: any duals, clipped to their signs; a stopped dual simplex only gives weaker ones). Off: such
+#: a child gets its parent's bound.
+STRONG_STOPPED = True
+
+#: Whether strong branching stops a child LP at the cutoff: HiGHS's ``objective_bound`` is the
+#: best order's limit (``BranchCut._limit``) while strong branching runs, so its dual simplex
+#: stops once its (dual) objective passes it (status ``kObjectiveBound``); the child is pruned
+#: only when its own :func:`node_bound` passes the limit (:data:`STRONG_STOPPED`), never on
+#: HiGHS's word.
+STRONG_CUTOFF = True
+
+#: Strong-branching fixing (SCIP's): when one child of a strong-branched candidate holds no
+#: better order (its LP infeasible or its proven bound above the limit), every better order of
+#: the node lies in the other child, so the node takes that child's box in place and solves
+#: its LP again (rounds and separation) instead of branching; when both hold none the node is
+#: pruned. Off: the node branches and pushes the one child left.
+STRONG_FIXING = True
+
+#: Whether a strong-branching child LP's final basis (HiGHS's ``getBasis``, a copy in C++;
+#: packed only if the LP's rows change before it is used) is kept for that child's node: its
+#: first LP then starts at the child LP's end (an optimal child: 0 iterations) rather than at
+#: the parent's basis. A basis only costs or saves iterations, never changes a bound.
+STRONG_BASES = True
+
+#: Whether strong branching raises the node's bound, hence its children's: every
+#: strong-branched candidate partitions the node's orders into its two children, so each
+#: better order of the node costs at least the smaller of that candidate's two children's
+#: proven bounds, and the node (with each child of the branching taken, a subset of its
+#: orders) at least the largest such minimum over the candidates strong-branched (SCIP raises
+#: a node's lower bound from its strong branching likewise). Off: a child's bound is its own.
+STRONG_FLOOR = True
 
 #: HiGHS's default ``simplex_iteration_limit`` (none), restored after strong branching.
 ITERATIONS_UNLIMITED = 2**31 - 1
@@ -490,6 +534,22 @@ class _Node:
     #: (branching key, child 0 or 1, the LP mass the branching removed, the parent's LP
     #: value): the child's first LP is a pseudo-cost observation.
     origin: tuple[Any, int, float, float] | None = field(compare=False, default=None)
+    #: The basis its strong-branching child LP ended at (:data:`STRONG_BASES`), set before
+    #: the node's first LP even when the parent was the last node solved.
+    own: _ChildBasis | None = field(compare=False, default=None)
+
+
+@dataclass
+class _ChildBasis:
+    """A strong-branching child LP's final basis: HiGHS's own object (``raw``) and the pool's
+    row identities when it was taken (``ids``, the same array while no row has changed)."""
+
+    raw: Any
+    ids: np.ndarray
+
+    def packed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The basis as a node stores it (int8 statuses and the row identities)."""
+        return _packed(self.raw.col_status), _packed(self.raw.row_status), self.ids
 
 
 def _union(n: int, *parts: Any) -> np.ndarray:
@@ -600,6 +660,15 @@ class BranchCut:
     pseudo: PseudoCosts = field(default_factory=PseudoCosts)
     strong_lps: int = 0
     pseudo_branchings: int = 0
+    #: Simplex iterations of the strong-branching child LPs, and of the nodes' first LPs.
+    strong_iterations: int = 0
+    first_iterations: int = 0
+    #: Strong-branching child LPs that stopped early and gave their child a node bound
+    #: (:data:`STRONG_STOPPED`); nodes that took a child in place (:data:`STRONG_FIXING`).
+    strong_stopped: int = 0
+    strong_fixings: int = 0
+    #: Children pushed with a bound raised by :data:`STRONG_FLOOR`.
+    strong_floors: int = 0
     _open: list[_Node] = field(default_factory=list)
     _count: int = 0
     _last: int = -1  # the node whose LP HiGHS holds
@@ -642,15 +711,20 @@ class BranchCut:
         basis: Any,
         parent: int,
         origin: tuple[Any, int, float, float] | None = None,
+        own: _ChildBasis | None = None,
     ) -> None:
         self._count += 1
         heapq.heappush(
-            self._open, _Node(bound, -depth, self._count, ones, zeros, basis, parent, origin)
+            self._open,
+            _Node(bound, -depth, self._count, ones, zeros, basis, parent, origin, own),
         )
 
     def _apply(self, node: _Node) -> tuple[np.ndarray, np.ndarray]:
-        """Set the node's column bounds in HiGHS (the previous node's undone) and its basis;
-        returns the box (lower, upper)."""
+        """Set the node's column bounds in HiGHS (the previous node's undone) and its basis
+        (its strong-branching child LP's when kept, :data:`STRONG_BASES`, as HiGHS's object
+        while the rows are those it was taken with, else packed and mapped by row identity as
+        a parent's; a parent's only when another node was solved since); returns the box
+        (lower, upper)."""
         model = self.model
         highs = model.highs
         self._undo()
@@ -662,18 +736,27 @@ class BranchCut:
         if len(changed):
             highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
         self._changed = changed
-        if node.basis is not None and node.parent != self._last:
+        stored, own, node.own = node.basis, node.own, None
+        if own is not None:  # its strong-branching child LP's basis (STRONG_BASES)
+            pool = self._pool()
+            pool._grow(int(highs.getNumRow()))  # rows appended since: new identities
+            if own.ids is pool.ids:  # the same rows: HiGHS's own object
+                highs.setBasis(own.raw)
+                self._last = node.number
+                return lower, upper
+            stored = node.basis = own.packed()  # the rows changed: mapped as any basis
+        if stored is not None and (own is not None or node.parent != self._last):
             # by row identity: rows added since basic (their slacks), as HiGHS itself keeps
             # them; the basis's tight rows that left the LP come back (POOL_REPAIR), else a
             # basis that lost a nonbasic row is not set (HiGHS's own is kept)
             pool = self._pool()
             if POOL_REPAIR:
-                pool.restore(model, pool.missing(node.basis), returned=False)
+                pool.restore(model, pool.missing(stored), returned=False)
             pool._grow(int(highs.getNumRow()))
-            row_status = pool.statuses(node.basis)
+            row_status = pool.statuses(stored)
             if row_status is not None:
                 basis = highspy.HighsBasis()
-                basis.col_status = [_STATUSES[k] for k in node.basis[0].tolist()]
+                basis.col_status = [_STATUSES[k] for k in stored[0].tolist()]
                 basis.row_status = [_STATUSES[k] for k in row_status.tolist()]
                 basis.valid = True
                 highs.setBasis(basis)
@@ -761,7 +844,14 @@ class BranchCut:
 
     def _solve(self, node: _Node, deadline: Deadline) -> bool:
         """Solve one node: LP rounds with separation, then prune, close or branch. False when
-        the deadline stopped it before its children were pushed (the node stays open)."""
+        the deadline stopped it before its children were pushed (the node stays open).
+
+        Strong-branching fixing (:data:`STRONG_FIXING`): when a strong-branched candidate
+        has a child above the limit (module doc: its better orders, none), the node's better
+        orders all lie in the other child (the two partition the node's orders), so the node
+        becomes that child (its ones, zeros, bound and basis: ``node`` is changed in place, a
+        node still open if the deadline stops it) and its LP rounds run again; both above
+        the limit: the node holds no better order and is pruned."""
         model = self.model
         if model.fixed[node.ones].any():
             return True  # an arc no better order uses: no better order here
@@ -769,42 +859,124 @@ class BranchCut:
         self.nodes += 1
         depth = -node.depth_key
         self.max_depth = max(self.max_depth, depth)
-        value, bound, raw = -math.inf, node.bound, -math.inf
+        bound, observed = node.bound, node.origin is None
+        while True:
+            done, solved = self._rounds(node, lower, upper, bound, observed, deadline)
+            if solved is None:
+                return done
+            bound, value, values, raw, reduced = solved
+            observed = True
+            if deadline.expired(MARGIN):
+                return False
+            if POOL and self._rows is not None:  # HiGHS holds the last LP, observed: retire
+                self._rows = self._pool().retire(model, self._rows)
+            if self.known is None or self.nodes % ROUND_EVERY == 1:
+                self._new_order(round_point(model, values, deadline))
+            limit = self._limit()
+            if bound > limit:
+                return True
+            # node fixing by reduced cost against the best order (the module's proof)
+            ones, zeros = node.ones, node.zeros
+            if math.isfinite(limit) and len(reduced):
+                free = ~model.fixed & (lower < 0.5) & (upper > 0.5)
+                n = model.n_arcs
+                zeros = _union(
+                    n, zeros, np.flatnonzero(free & (reduced > 0) & (raw + reduced > limit))
+                )
+                ones = _union(
+                    n, ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit))
+                )
+            basis = model.highs.getBasis()
+            pool = self._pool()
+            pool._grow(int(model.highs.getNumRow()))
+            saved = (_packed(basis.col_status), _packed(basis.row_status), pool.ids)
+            candidates = self._candidates(values, ones, zeros)
+            pick, bounds = candidates[0], [bound, bound]
+            bases: list[_ChildBasis | None] = [None, None]
+            if STRONG_CANDIDATES > 1 and len(candidates) > 1:
+                pick, bounds, bases = self._branch(
+                    candidates, lower, upper, basis, value, bound, deadline
+                )
+            limit = self._limit()
+            alive = [child for child in range(2) if bounds[child] <= limit]
+            if not alive:
+                return True  # neither child holds a better order
+            if STRONG_FIXING and len(alive) < 2:
+                self.strong_fixings += 1
+                node.ones, node.zeros = pick.child(alive[0], model.n_arcs)
+                node.bound, node.basis, node.own = bounds[alive[0]], saved, bases[alive[0]]
+                lower, upper = self._apply(node)
+                bound = node.bound
+                continue
+            for child in alive:
+                child_ones, child_zeros = pick.child(child, model.n_arcs)
+                origin = (pick.key, child, pick.shares[child], value)
+                self._push(
+                    bounds[child],
+                    depth + 1,
+                    child_ones,
+                    child_zeros,
+                    saved,
+                    node.number,
+                    origin,
+                    bases[child],
+                )
+            return True
+
+    def _rounds(
+        self,
+        node: _Node,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        bound: float,
+        observed: bool,
+        deadline: Deadline,
+    ) -> tuple[bool, tuple[float, float, np.ndarray, float, np.ndarray] | None]:
+        """The node's LP rounds (solve, separate, add) in the box ``lower``, ``upper`` of
+        proven bound ``bound``: ``(True, None)`` when the node is done (infeasible, above the
+        limit, or its point an order), ``(False, None)`` when the deadline stopped them, else
+        ``(True, (the proven bound, the last LP's value, point, unrounded node bound, reduced
+        costs))`` for branching.
+        ``observed``: the node's first LP is no pseudo-cost observation (already made)."""
+        model = self.model
+        value, raw = -math.inf, -math.inf
         new_value = -math.inf
         values = np.zeros(0)
         reduced = np.zeros(0)
         rounds = 0
         while True:
             if deadline.expired(MARGIN):
-                return False
+                return False, None
             # a plain run under HiGHS's own time limit (``brief``), not in a helper thread
             # waiting for Ctrl-C: a warm node LP takes milliseconds, the thread's start and the
             # interrupt callbacks cost 5-6 ms a run at load 3.5-6 (cProfile, ft53.1 and
             # ry48p.1: 6.2 and 5.5 s in Thread.start of 55 and 51 s); Ctrl-C is raised after it
             model._run(deadline, brief=True)
             status = model.highs.getModelStatus()
+            if rounds == 0:
+                self.first_iterations += int(model.highs.getInfo().simplex_iteration_count)
             if status == highspy.HighsModelStatus.kInfeasible:
-                return True  # no point of the rows in the box: no (better) order here
+                return True, None  # no point of the rows in the box: no (better) order here
             if status != highspy.HighsModelStatus.kOptimal:
-                return False  # stopped by the clock
+                return False, None  # stopped by the clock
             self.lps += 1
             raw, reduced = self._bound_of(lower, upper)
             bound = max(bound, model.round_up(raw))
             if bound > self._limit():
-                return True
+                return True, None
             values = model.lp_values()
             new_value = float(model.highs.getInfo().objective_function_value)
             if self._rows is not None:
                 self._pool().observe(self._rows, values)
-            if rounds == 0 and node.origin is not None:  # a pseudo-cost observation
-                key, child, share, parent_value = node.origin
+            if rounds == 0 and not observed and node.origin is not None:
+                key, child, share, parent_value = node.origin  # a pseudo-cost observation
                 self.pseudo.observe(key, child, new_value - parent_value, share)
             integral = not ((values > INTEGRAL) & (values < 1 - INTEGRAL)).any()
             if integral:
                 order = _order_of(model, values)
                 if order is not None:  # the node's optimum (its LP's) is this order
                     self._new_order((float(model.problem.cost[order[:-1], order[1:]].sum()), order))
-                    return True
+                    return True, None
             elif rounds >= NODE_ROUNDS or (
                 rounds and new_value - value <= NODE_STALL * max(abs(value), 1.0)
             ):
@@ -823,41 +995,10 @@ class BranchCut:
                 cuts, sides = model.separate_sets(values, deadline=deadline)
             if not cuts:
                 if integral:  # an integral non-order violates a row (module doc): the
-                    return False  # deadline cut the separation short
+                    return False, None  # deadline cut the separation short
                 break
             self.cuts += model.add_cuts(cuts, sides)
-        if deadline.expired(MARGIN):
-            return False
-        if POOL and self._rows is not None:  # HiGHS holds the last LP, observed: retire
-            self._rows = self._pool().retire(model, self._rows)
-        if self.known is None or self.nodes % ROUND_EVERY == 1:
-            self._new_order(round_point(model, values, deadline))
-        if bound > self._limit():
-            return True
-        # node fixing by reduced cost against the best order (the module's proof)
-        ones, zeros = node.ones, node.zeros
-        limit = self._limit()
-        if math.isfinite(limit) and len(reduced):
-            free = ~model.fixed & (lower < 0.5) & (upper > 0.5)
-            n = model.n_arcs
-            zeros = _union(n, zeros, np.flatnonzero(free & (reduced > 0) & (raw + reduced > limit)))
-            ones = _union(n, ones, np.flatnonzero(free & (reduced < 0) & (raw - reduced > limit)))
-        basis = model.highs.getBasis()
-        pool = self._pool()
-        pool._grow(int(model.highs.getNumRow()))
-        saved = (_packed(basis.col_status), _packed(basis.row_status), pool.ids)
-        candidates = self._candidates(values, ones, zeros)
-        pick, bounds = candidates[0], [bound, bound]
-        if STRONG_CANDIDATES > 1 and len(candidates) > 1:
-            pick, bounds = self._branch(candidates, lower, upper, basis, new_value, bound, deadline)
-        for child, child_bound in enumerate(bounds):
-            if child_bound <= self._limit():
-                child_ones, child_zeros = pick.child(child, model.n_arcs)
-                origin = (pick.key, child, pick.shares[child], new_value)
-                self._push(
-                    child_bound, depth + 1, child_ones, child_zeros, saved, node.number, origin
-                )
-        return True
+        return True, (bound, new_value, values, raw, reduced)
 
     # ------------------------------------------------------------------ branching
     def _candidates(
@@ -906,32 +1047,43 @@ class BranchCut:
         value: float,
         bound: float,
         deadline: Deadline,
-    ) -> tuple[_Branching, list[float]]:
+    ) -> tuple[_Branching, list[float], list[_ChildBasis | None]]:
         """Reliability branching over ``candidates`` at a node of LP value ``value`` and
         proven bound ``bound``: each is scored (:func:`_score`) by its children's estimated
         gains (:class:`PseudoCosts`); in that order, the ones not :data:`RELIABLE` are
         strong-branched (:meth:`_strong`), at most :data:`STRONG_CANDIDATES` and until
         :data:`LOOKAHEAD` in a row did not raise the best score, and scored by their
         children's measured gains instead. The best score among the strong-branched and the
-        reliable ones is taken (the first in that order when none is). Returns it and its
-        children's proven bounds (``bound`` each unless strong-branched)."""
+        reliable ones is taken (the first in that order when none is). Returns it, its
+        children's proven bounds (``bound`` each unless strong-branched; each raised to the
+        largest of the strong-branched candidates' smaller child bounds: :data:`STRONG_FLOOR`)
+        and their final bases (:data:`STRONG_BASES`; None unless strong-branched). With
+        :data:`STRONG_FIXING`, the first strong-branched candidate with a child above the
+        limit (no better order in it) is returned at once: the caller takes its other child
+        in place. With :data:`STRONG_CUTOFF` the child LPs stop at the limit."""
         estimates = [self.pseudo.estimate(c.key, c.shares) for c in candidates]
         ranked = sorted(
             range(len(candidates)), key=lambda k: -_score(estimates[k], value)
         )  # stable: nearest 1/2 first among equal scores
-        best: tuple[float, _Branching, list[float], bool] = (
+        none: list[_ChildBasis | None] = [None, None]
+        best: tuple[float, _Branching, list[float], bool, list[_ChildBasis | None]] = (
             -math.inf,
             candidates[ranked[0]],
             [bound] * 2,
             False,
+            none,
         )
         highs = self.model.highs
         highs.setOptionValue("simplex_iteration_limit", STRONG_ITERATIONS)
-        tried, idle = 0, 0
+        limit = self._limit()
+        cutoff = STRONG_CUTOFF and math.isfinite(limit)
+        if cutoff:
+            highs.setOptionValue("objective_bound", limit)
+        tried, idle, floor = 0, 0, bound
         try:
             for k in ranked:
                 candidate = candidates[k]
-                score, bounds = _score(estimates[k], value), [bound, bound]
+                score, bounds, bases = _score(estimates[k], value), [bound, bound], none
                 estimated = self.pseudo.reliable(candidate.key)
                 if not estimated:
                     if tried >= STRONG_CANDIDATES or idle >= LOOKAHEAD:
@@ -939,15 +1091,22 @@ class BranchCut:
                     measured = self._strong(candidate, lower, upper, basis, value, bound, deadline)
                     if measured is None:  # the deadline
                         break
-                    gains, bounds = measured
+                    gains, bounds, bases = measured
+                    if STRONG_FLOOR:
+                        floor = max(floor, min(bounds))
+                    if STRONG_FIXING and max(bounds) > limit:
+                        return candidate, [max(b, floor) for b in bounds], bases
                     score, tried = _score(gains, value), tried + 1
                     idle = 0 if score > best[0] else idle + 1
                 if score > best[0]:
-                    best = (score, candidate, bounds, estimated)
+                    best = (score, candidate, bounds, estimated, bases)
         finally:
             highs.setOptionValue("simplex_iteration_limit", ITERATIONS_UNLIMITED)
+            if cutoff:
+                highs.setOptionValue("objective_bound", highspy.kHighsInf)
         self.pseudo_branchings += best[3]
-        return best[1], best[2]
+        self.strong_floors += sum(floor > b for b in best[2])
+        return best[1], [max(b, floor) for b in best[2]], best[4]
 
     def _strong(
         self,
@@ -958,19 +1117,27 @@ class BranchCut:
         value: float,
         bound: float,
         deadline: Deadline,
-    ) -> tuple[list[float], list[float]] | None:
+    ) -> tuple[list[float], list[float], list[_ChildBasis | None]] | None:
         """Strong branching on one candidate: its two child LPs (warm from the node's basis,
-        at most :data:`STRONG_ITERATIONS` simplex iterations, set by the caller; no
-        separation), each a pseudo-cost observation. Returns the children's gains over the
-        node's LP value ``value`` (the LP value at the iteration limit, a dual simplex value
-        that only rises, scores a child stopped there; ``inf`` for an infeasible one) and
-        their proven bounds: the node bound of a child LP solved to its end
-        (:func:`node_bound` on the child's box; ``inf`` for an infeasible one), else
-        ``bound``. None when the deadline passed first. The node's box and basis are
-        restored after each child."""
+        at most :data:`STRONG_ITERATIONS` simplex iterations and stopped at the limit
+        (:data:`STRONG_CUTOFF`), both set by the caller; no separation), each a pseudo-cost
+        observation. Returns the children's gains over the node's LP value ``value`` (the LP
+        value where it stopped, a dual simplex value that only rises, scores a child stopped
+        early; ``inf`` for an infeasible one), their proven bounds and their final bases
+        (:data:`STRONG_BASES`, else None). None when the deadline passed first. The node's
+        box and basis are restored after each child.
+
+        A child's proven bound is ``inf`` when its LP is infeasible (no point of the rows in
+        its box, hence no better order), else ``max(bound, node_bound)`` rounded up, the node
+        bound (:func:`node_bound`) of the LP's duals on the child's box: weak duality holds
+        for *any* row duals clipped to their signs, so it bounds every better order of the
+        child whether the LP ended optimal or stopped at the iteration limit or the cutoff
+        (:data:`STRONG_STOPPED`; off, a stopped child keeps ``bound``); without duals
+        (``dual_valid`` false) it is ``-inf`` and the child keeps ``bound``."""
         model = self.model
         highs = model.highs
         proven, gains = [], []
+        bases: list[_ChildBasis | None] = [None, None]
         for child in range(2):
             if deadline.expired(MARGIN):
                 return None
@@ -988,21 +1155,27 @@ class BranchCut:
             model._run(deadline, brief=True)
             self.lps += 1
             self.strong_lps += 1
+            info = highs.getInfo()
+            self.strong_iterations += int(info.simplex_iteration_count)
             status = highs.getModelStatus()
             limit, gain = bound, math.inf
             if status == highspy.HighsModelStatus.kInfeasible:
                 limit = math.inf
             else:
-                gain = float(highs.getInfo().objective_function_value) - value
-                if status == highspy.HighsModelStatus.kOptimal:
+                gain = float(info.objective_function_value) - value
+                optimal = status == highspy.HighsModelStatus.kOptimal
+                if optimal or STRONG_STOPPED:
                     raw, _ = self._bound_of(child_lower, child_upper)
                     limit = max(bound, model.round_up(raw))
+                    self.strong_stopped += not optimal
                 self.pseudo.observe(candidate.key, child, gain, candidate.shares[child])
+                if STRONG_BASES:
+                    bases[child] = _ChildBasis(highs.getBasis(), self._pool().ids)
             proven.append(limit)
             gains.append(gain)
             highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
             highs.setBasis(basis)
-        return gains, proven
+        return gains, proven, bases
 
     def _splits(
         self, values: np.ndarray, ones: np.ndarray, zeros: np.ndarray
@@ -1090,7 +1263,11 @@ def solve_sop_bc(
         "optimal" when the tree is empty, else "time_limit" with the best order and the proven
         bound; ``info`` has the root's keys, ``nodes``, ``lps``, ``cuts``, ``open``,
         ``max_depth``, ``strong_lps`` (of the ``lps``: strong branching's child LPs),
-        ``pseudo_branchings`` (nodes branched on pseudo-costs alone) and
+        ``pseudo_branchings`` (nodes branched on pseudo-costs alone), ``strong_iterations``
+        and ``first_iterations`` (simplex iterations of the strong-branching LPs and of the
+        nodes' first LPs), ``strong_stopped`` (strong child LPs stopped early that gave a
+        node bound), ``strong_fixings`` (nodes that took a child in place),
+        ``strong_floors`` (children whose bound :data:`STRONG_FLOOR` raised) and
         ``trace`` (seconds, bound) each time the bound rose.
 
     Examples
@@ -1125,6 +1302,11 @@ def solve_sop_bc(
             "max_depth": tree.max_depth,
             "strong_lps": tree.strong_lps,
             "pseudo_branchings": tree.pseudo_branchings,
+            "strong_iterations": tree.strong_iterations,
+            "first_iterations": tree.first_iterations,
+            "strong_stopped": tree.strong_stopped,
+            "strong_fixings": tree.strong_fixings,
+            "strong_floors": tree.strong_floors,
             "fixed": int(model.fixed.sum()),
             "rows_end": tree.rows_end,
             "pool": None

@@ -81,14 +81,119 @@ def test_node_bound_holds_on_the_box():
         )
         model.highs.run()
         bound, _ = node_bound(model, lower, upper)
-        for order in itertools.permutations(range(1, problem.n - 1)):
-            path = [0, *order, problem.n - 1]
-            arcs = model.arc_index[path[:-1], path[1:]]
-            if (arcs < 0).any() or (upper[arcs] < 0.5).any():
+        for cost in _box_costs(problem, model, lower, upper):
+            assert bound <= cost + 1e-6
+
+
+def _box_costs(
+    problem: SopProblem, model: SopCutModel, lower: np.ndarray, upper: np.ndarray
+) -> list[float]:
+    """The costs of every order (brute force) whose arcs lie in the box: each of its arcs of
+    upper bound 1, each arc of lower bound 1 among its arcs."""
+    costs = []
+    for order in itertools.permutations(range(1, problem.n - 1)):
+        path = [0, *order, problem.n - 1]
+        arcs = model.arc_index[path[:-1], path[1:]]
+        if (arcs < 0).any() or (upper[arcs] < 0.5).any():
+            continue
+        if not set(np.flatnonzero(lower > 0.5).tolist()) <= set(arcs.tolist()):
+            continue
+        if not all(path.index(a) < path.index(b) for a, b in problem.closure.edges()):
+            continue
+        costs.append(float(problem.cost[path[:-1], path[1:]].sum()))
+    return costs
+
+
+def test_stopped_child_bound_holds_on_the_box():
+    """A child LP stopped after 1-3 dual simplex iterations (HiGHS's iteration limit) or at an
+    objective bound just above the root's LP value still gives a node bound at most the
+    cost of every order in the child's box (weak duality with any clipped duals), on 8 random
+    SOPs and random boxes (an arc fixed to 1 or 0, and some arcs to 0); both stops occur."""
+    statuses: set[str] = set()
+    for seed in range(8):
+        problem = _instance(seed)
+        model = SopCutModel(problem)
+        model.root()
+        model.highs.run()
+        root = model.highs.getBasis()
+        value = float(model.highs.getInfo().objective_function_value)
+        rng = np.random.default_rng([7, seed])
+        for trial in range(6):
+            lower = np.zeros(model.n_arcs)
+            upper = np.where(model.fixed, 0.0, 1.0)
+            upper[rng.random(model.n_arcs) < 0.1] = 0.0
+            arc = int(rng.integers(model.n_arcs))
+            if trial % 2:
+                lower[arc] = upper[arc]  # fixed to 1 (where still open)
+            else:
+                upper[arc] = 0.0
+            columns = np.arange(model.n_arcs, dtype=np.int32)
+            model.highs.changeColsBounds(model.n_arcs, columns, lower, upper)
+            model.highs.setBasis(root)
+            if trial < 3:
+                model.highs.setOptionValue("simplex_iteration_limit", trial + 1)
+            else:
+                model.highs.setOptionValue("objective_bound", value + 0.01 * abs(value))
+            model.highs.run()
+            model.highs.setOptionValue("simplex_iteration_limit", sop_bc.ITERATIONS_UNLIMITED)
+            model.highs.setOptionValue("objective_bound", sop_bc.highspy.kHighsInf)
+            status = model.highs.getModelStatus()
+            statuses.add(status.name)
+            if status == sop_bc.highspy.HighsModelStatus.kInfeasible:
+                assert not _box_costs(problem, model, lower, upper)
                 continue
-            if not all(path.index(a) < path.index(b) for a, b in problem.closure.edges()):
-                continue
-            assert bound <= problem.cost[path[:-1], path[1:]].sum() + 1e-6
+            bound, _ = node_bound(model, lower, upper)
+            for cost in _box_costs(problem, model, lower, upper):
+                assert bound <= cost + 1e-6
+        model.highs.changeColsBounds(
+            model.n_arcs, columns, np.zeros(model.n_arcs), np.where(model.fixed, 0.0, 1.0)
+        )
+    assert {"kIterationLimit", "kObjectiveBound"} <= statuses
+
+
+_RULES = ["STRONG_STOPPED", "STRONG_FIXING", "STRONG_CUTOFF", "STRONG_BASES", "STRONG_FLOOR"]
+
+
+@pytest.mark.parametrize("off", [None, *_RULES])
+def test_strong_rules_match_brute_force(off, monkeypatch):
+    """With child LPs stopped after 2 iterations (most strong-branching children stop early)
+    and each of the strong-branching rules off in turn (none off: all on), the tree's optimum
+    equals brute force on 12 random SOPs, from no order and from the optimal order (a tight
+    cutoff: children above it, fixings); stopped after 2 nodes its bound is at most the
+    optimum. Rules on are exercised: stopped children bound, nodes fixed."""
+    monkeypatch.setattr(sop_bc, "STRONG_ITERATIONS", 2)
+    monkeypatch.setattr(sop_bc, "RELIABLE", 8)  # strong branching at every node
+    if off is not None:
+        monkeypatch.setattr(sop_bc, off, False)
+    stopped = fixings = floors = 0
+    for seed in range(12):
+        problem = _instance(seed)
+        optimum = sop_brute_force(problem)
+        result = solve_sop_bc(problem)
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        warm = solve_sop_bc(problem, incumbent=result.order)
+        assert warm.status == OPTIMAL and warm.objective == pytest.approx(optimum)
+        assert solve_sop_bc(problem, node_limit=2).bound <= optimum + 1e-6
+        for info in (result.info, warm.info):
+            stopped += info["strong_stopped"]
+            fixings += info["strong_fixings"]
+            floors += info["strong_floors"]
+    assert (stopped > 0) == (off != "STRONG_STOPPED")
+    assert (fixings > 0) == (off != "STRONG_FIXING")
+    assert floors == 0 or off != "STRONG_FLOOR"  # too few branchings here to raise one
+
+
+@pytest.mark.slow
+def test_strong_floor_on_esc47():
+    """ESC47 (optimum 1288) solved by the tree: children's bounds raised by other candidates'
+    strong branching (STRONG_FLOOR; the tiny SOPs above branch too little to raise one), and
+    every proven bound of its trace at most the optimum. Some 5-15 s (the root stage)."""
+    cost, precedences, start, end, name = load_sop("ESC47")
+    result = solve_sop_bc(SopProblem(cost, precedences, start, end, name=name))
+    assert result.status == OPTIMAL and result.objective == pytest.approx(1288)
+    assert result.info["strong_floors"] > 0
+    assert all(bound <= 1288 + 1e-9 for _, bound in result.info["trace"])
 
 
 def test_time_limited_run_returns_a_proven_bound():
