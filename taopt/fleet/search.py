@@ -108,7 +108,7 @@ SHARED_FROM = 0.95
 #: whose sortie-time term is at least this share of the cutoff (skipping a term leaves a
 #: valid, lower bound).
 CHAIN_MIN_DRONES = 3
-CHAIN_FROM = 0.95
+CHAIN_FROM = 0.85
 
 #: The release term (:func:`_release_term`) is computed for at most this many drones left
 #: and this many assignments of the unserved customers to them.
