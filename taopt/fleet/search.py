@@ -668,7 +668,13 @@ def _sortie_time_bound(
     already in the air (and so need no new sortie): the least of the term over U \\ Y, Y ⊆
     ``drop`` with ``|Y| <= count`` (from the least-largest values of every subset of U, up to
     :data:`PARTITION_MAX_CUSTOMERS` customers; above, all of ``drop`` is left out, which is
-    no more)."""
+    no more).
+
+    The split over the drones is :func:`_split_term`'s (with the release term and the shared
+    recoveries of two airborne drones); with :data:`CHAIN_MIN_DRONES` drones or more, two or
+    more of them airborne on one truck, it is raised to :func:`_chained_recoveries` (their
+    first recoveries one after another on the truck's timeline) on labels whose independent
+    split is at least :data:`CHAIN_FROM` of the cutoff (skipping it leaves a valid bound)."""
     F = tab.sortie_time
     drop &= U
     if drop and count <= 0:
