@@ -365,8 +365,12 @@ PARENT = """
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGINT], ids=["killed", "ctrl-c"])
 def test_worker_dies_with_its_parent(how):
-    """A busy worker does not outlive a parent that is killed or interrupted (no orphans)."""
-    parent = run_script(PARENT)
+    """A busy worker does not outlive a parent that is killed or interrupted (no orphans).
+
+    The parent starts with SIGINT at its default, as from a terminal: pytest run in the
+    background (``cmd &`` in a script) passes SIGINT on ignored, and the parent would then
+    never see the Ctrl-C (as test_study.py's study does)."""
+    parent = run_script(PARENT, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     worker_pid = int(parent.stdout.readline())
     time.sleep(1.0)  # the 60 s solve is running
     assert not process_gone(worker_pid)
