@@ -732,7 +732,7 @@ def _sortie_time_bound(
     # a truck with three drones or more, two or more of them airborne: their recoveries on
     # that truck's one timeline (:func:`_chained_recoveries`), before the release term (when
     # it prunes, the release term is not needed)
-    chained = 0.0
+    chained, least = 0.0, None
     chain: list[int] = []  # the airborne drones of the truck with the most of them
     for k in {drones_left[i][0] for i in air}:
         of_k = [i for i in air if drones_left[i][0] == k]
@@ -752,7 +752,9 @@ def _sortie_time_bound(
             )
             if chained >= cutoff:
                 return chained
-    v = _split_term(tab, U, cols, ends, backs, drones_left, S, svc, times, drop, count, cutoff)
+    v = _split_term(
+        tab, U, cols, ends, backs, drones_left, S, svc, times, drop, count, cutoff, least
+    )
     return v if v > chained else chained
 
 
@@ -769,12 +771,15 @@ def _split_term(
     drop: int,
     count: int,
     cutoff: float,
+    least: float | None = None,
 ) -> float:
     """:func:`_sortie_time_bound`'s split of U over two or more drones, from each drone's
     ends per submask of U (``ends``, column 0 set) and the airborne drones' recoveries per stop
     (``backs``): the release term (:func:`_release_term`) and the shared recoveries of two
     airborne drones (:func:`_shared_recoveries`) where they apply, else the least largest
-    end."""
+    end. ``least``: the independent split's least largest end over the kept sets
+    (``_least_largest_at(ends, m, _kept_pairs(...) if drop else None)``) when the caller has
+    it already, else None."""
     # two airborne drones of one truck: recovered by that one truck (:func:`_shared_recoveries`)
     shared = len(backs) == 2 and len(ends) == 2 and drones_left[0][0] == drones_left[1][0]
     if (
@@ -786,7 +791,8 @@ def _split_term(
     ):
         # the releases across the drones' parts (:func:`_release_term`): only for labels
         # whose independent term is near the cutoff (skipping it leaves a valid bound)
-        least = _least_largest_at(ends, int(tab.popcount[U]))
+        if least is None:
+            least = _least_largest_at(ends, int(tab.popcount[U]))
         if least < cutoff and (cutoff == INF or least >= RELEASE_FROM * cutoff):
             v = _release_term(
                 tab, U, ends, _plain_ends(tab, cols, drones_left, ends), S, svc, times, cutoff
@@ -805,7 +811,8 @@ def _split_term(
     if drop:
         # per subset Z of U (local masks), the least largest end; then the least over the
         # sets U \ Y left to new sorties
-        least = _least_largest_at(ends, int(tab.popcount[U]), _kept_pairs(tab, U, drop, count))
+        if least is None:
+            least = _least_largest_at(ends, int(tab.popcount[U]), _kept_pairs(tab, U, drop, count))
         if (
             least < cutoff
             and least >= RELEASE_FROM * cutoff
