@@ -337,11 +337,11 @@ def highs_outcome(
     )
 
 
-def add_csr_rows(
-    highs: highspy.Highs, block: sp.csr_matrix, lower: np.ndarray, upper: np.ndarray
-) -> None:
-    """Append the rows ``lower <= block @ x <= upper`` (a CSR block over all columns) to
-    ``highs`` (one ``addRows`` call)."""
+def add_csr_rows(highs: highspy.Highs, block: Any, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Append the rows ``lower <= block @ x <= upper`` (a CSR block over all columns: a
+    ``scipy.sparse.csr_matrix``, or anything with its ``shape``, ``nnz``, ``indptr``,
+    ``indices`` and ``data``, as :class:`~taopt.models.sop_bc.CsrRows`) to ``highs`` (one
+    ``addRows`` call)."""
     highs.addRows(
         block.shape[0],
         lower,

@@ -264,21 +264,133 @@ _STATUSES = {int(status): status for status in highspy.HighsBasisStatus.__member
 
 
 def _packed(statuses: Any) -> np.ndarray:
-    """Basis statuses as an int8 array (a node's basis in 1 byte per column and row)."""
-    return np.fromiter((int(status) for status in statuses), dtype=np.int8)
+    """Basis statuses as an int8 array (a node's basis in 1 byte per column and row; the
+    enums' ``value``, half the time of ``int()`` on each)."""
+    return np.array([status.value for status in statuses], dtype=np.int8)
+
+
+@dataclass
+class CsrRows:
+    """Rows of a sparse matrix over ``n`` columns as plain CSR arrays (``indptr``, ``indices``,
+    ``data``): the tree's LP rows (:class:`Rows`) and its pooled rows (:class:`CutPool`).
+
+    Appending rows (:meth:`append`) and selecting rows (:meth:`take`) are a few numpy calls on
+    these arrays, where ``scipy.sparse``'s ``vstack`` and row indexing built matrices through
+    their constructors' checks at each step (15,959 constructions, some 1.5-2 s, for the
+    2,053 LPs of prob.42's tree, cProfile). The two products (:meth:`dot`, ``A x``;
+    :meth:`tdot`, ``A^T y``) are scipy's own kernels (``csr_matvec``, ``csc_matvec``) on
+    these arrays, through one scipy matrix of each kind made on first use and kept while the
+    rows are these: the same sums in the same order as the scipy matrices the tree kept
+    before, so the same values to the bit, hence the same bounds and the same search.
+    """
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    data: np.ndarray
+    n: int
+    _csr: Any = field(default=None, repr=False, compare=False)
+    _csc: Any = field(default=None, repr=False, compare=False)
+
+    @classmethod
+    def of(cls, matrix: Any) -> CsrRows:
+        """The rows of a scipy sparse matrix (its CSR form's arrays, entry order kept)."""
+        csr = sp.csr_matrix(matrix)
+        return cls(
+            csr.indptr.astype(np.int32), csr.indices.astype(np.int32), csr.data, int(csr.shape[1])
+        )
+
+    @classmethod
+    def entries(cls, starts: np.ndarray, index: np.ndarray, value: np.ndarray, n: int) -> CsrRows:
+        """The rows of HiGHS's row-wise entries (``getRowsEntries``: row starts, column
+        indices, values) over ``n`` columns."""
+        indptr = np.append(np.asarray(starts, dtype=np.int32), np.int32(len(index)))
+        return cls(indptr, np.asarray(index, dtype=np.int32), np.asarray(value, dtype=float), n)
+
+    @classmethod
+    def lists(cls, rows: list[np.ndarray], weights: list[Any], n: int) -> CsrRows:
+        """Rows given as column lists, each with its weights (None: all 1)."""
+        indptr = np.zeros(len(rows) + 1, dtype=np.int32)
+        np.cumsum([len(row) for row in rows], out=indptr[1:])
+        data = [
+            np.ones(len(row)) if w is None else np.asarray(w, dtype=float)
+            for row, w in zip(rows, weights, strict=True)
+        ]
+        return cls(indptr, np.concatenate(rows).astype(np.int32), np.concatenate(data), n)
+
+    @property
+    def count(self) -> int:
+        """Rows."""
+        return len(self.indptr) - 1
+
+    @property
+    def nnz(self) -> int:
+        """Stored entries."""
+        return int(self.indptr[-1])
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, columns)."""
+        return self.count, self.n
+
+    def matrix(self) -> sp.csr_matrix:
+        """The rows as a scipy CSR matrix (kept; on these arrays, not a copy)."""
+        if self._csr is None:
+            self._csr = sp.csr_matrix((self.data, self.indices, self.indptr), shape=self.shape)
+        return self._csr
+
+    def dot(self, x: np.ndarray) -> np.ndarray:
+        """``A x``."""
+        return self.matrix() @ x
+
+    def tdot(self, y: np.ndarray) -> np.ndarray:
+        """``A^T y``."""
+        if self._csc is None:  # the transpose's arrays are these (scipy's ``.T``)
+            self._csc = sp.csc_matrix(
+                (self.data, self.indices, self.indptr), shape=(self.n, self.count)
+            )
+        return self._csc @ y
+
+    def take(self, which: np.ndarray) -> CsrRows:
+        """The rows at positions ``which`` (indices, in their order, or a mask)."""
+        if which.dtype == bool:  # entries by a mask, in their order
+            lengths = np.diff(self.indptr)
+            indptr = np.zeros(int(which.sum()) + 1, dtype=np.int32)
+            np.cumsum(lengths[which], out=indptr[1:])
+            entries = np.repeat(which, lengths)
+            return CsrRows(indptr, self.indices[entries], self.data[entries], self.n)
+        starts = self.indptr[which]
+        lengths = self.indptr[which + 1] - starts
+        indptr = np.zeros(len(which) + 1, dtype=np.int32)
+        np.cumsum(lengths, out=indptr[1:])
+        where = np.repeat(starts - indptr[:-1], lengths) + np.arange(indptr[-1])
+        return CsrRows(indptr, self.indices[where], self.data[where], self.n)
+
+    def append(self, other: CsrRows) -> CsrRows:
+        """These rows, then ``other``'s."""
+        return CsrRows(
+            np.concatenate([self.indptr, other.indptr[1:] + self.indptr[-1]]).astype(np.int32),
+            np.concatenate([self.indices, other.indices]),
+            np.concatenate([self.data, other.data]),
+            self.n,
+        )
 
 
 @dataclass
 class Rows:
-    """The model's rows as of ``count`` rows: ``A`` (rows x columns, CSR) and the row sides,
-    read once from HiGHS (:func:`~taopt.models.sop_statelp.constraint_matrix`) and kept while
-    no row is added (the tree's LPs between two separations), then grown by the rows added
-    (:meth:`now`)."""
+    """The model's rows as of ``count`` rows: ``csr`` (rows x columns, :class:`CsrRows`) and
+    the row sides, read once from HiGHS (:func:`~taopt.models.sop_statelp.constraint_matrix`)
+    and kept while no row is added (the tree's LPs between two separations), then grown by the
+    rows added (:meth:`now`)."""
 
     count: int
-    matrix: sp.csr_matrix
+    csr: CsrRows
     lower: np.ndarray
     upper: np.ndarray
+
+    @property
+    def matrix(self) -> sp.csr_matrix:
+        """The rows as a scipy CSR matrix (:meth:`CsrRows.matrix`)."""
+        return self.csr.matrix()
 
     @classmethod
     def of(cls, model: SopCutModel) -> Rows:
@@ -286,7 +398,7 @@ class Rows:
         lp = model.highs.getLp()
         return cls(
             int(lp.num_row_),
-            constraint_matrix(lp).tocsr(),
+            CsrRows.of(constraint_matrix(lp)),
             np.asarray(lp.row_lower_, dtype=float),
             np.asarray(lp.row_upper_, dtype=float),
         )
@@ -308,14 +420,16 @@ class Rows:
         fresh = np.arange(self.count, total, dtype=np.int32)
         _, _, lower, upper, _ = highs.getRows(len(fresh), fresh)
         _, starts, index, value = highs.getRowsEntries(len(fresh), fresh)
-        block = sp.csr_matrix(
-            (value, index, np.append(starts, len(index))), shape=(len(fresh), model.n_arcs)
-        )
+        block = CsrRows.entries(starts, index, value, model.n_arcs)
+        return self.plus(Rows(len(fresh), block, np.asarray(lower), np.asarray(upper)))
+
+    def plus(self, more: Rows) -> Rows:
+        """These rows, then ``more``."""
         return Rows(
-            total,
-            sp.vstack([self.matrix, block], format="csr"),
-            np.concatenate([self.lower, lower]),
-            np.concatenate([self.upper, upper]),
+            self.count + more.count,
+            self.csr.append(more.csr),
+            np.concatenate([self.lower, more.lower]),
+            np.concatenate([self.upper, more.upper]),
         )
 
 
@@ -351,7 +465,7 @@ class CutPool:
     age: np.ndarray
     next_id: int
     pooled: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    matrix: sp.csr_matrix | None = None
+    matrix: CsrRows | None = None
     lower: np.ndarray = field(default_factory=lambda: np.zeros(0))
     upper: np.ndarray = field(default_factory=lambda: np.zeros(0))
     #: Per LP row (as ``ids``) and per pooled row (as ``pooled``): the times it came back
@@ -362,6 +476,9 @@ class CutPool:
     restored: int = 0
     stale: int = 0
     repaired: int = 0
+    #: The rows the last :meth:`restore` appended to the LP (the tree's :class:`Rows` take
+    #: them from here, not read back from HiGHS: ``BranchCut._added``).
+    back: Rows | None = None
 
     @classmethod
     def of(cls, model: SopCutModel, rows: Rows) -> CutPool:
@@ -388,7 +505,7 @@ class CutPool:
     def observe(self, rows: Rows, values: np.ndarray) -> None:
         """Age the LP's rows at its optimal point ``values``."""
         self._grow(rows.count)
-        activity = rows.matrix @ values
+        activity = rows.csr.dot(values)
         slack = (activity - rows.lower > _margin(rows.lower, POOL_SLACK)) & (
             rows.upper - activity > _margin(rows.upper, POOL_SLACK)
         )
@@ -413,21 +530,21 @@ class CutPool:
         model.highs.deleteRows(len(old), old.astype(np.int32))
         keep = np.ones(rows.count, dtype=bool)
         keep[old] = False
-        block = rows.matrix[old]
-        self.matrix = block if self.matrix is None else sp.vstack([self.matrix, block], "csr")
+        block = rows.csr.take(old)
+        self.matrix = block if self.matrix is None else self.matrix.append(block)
         self.pooled = np.concatenate([self.pooled, self.ids[old]])
         self.pooled_returns = np.concatenate([self.pooled_returns, self.returns[old]])
         self.lower = np.concatenate([self.lower, rows.lower[old]])
         self.upper = np.concatenate([self.upper, rows.upper[old]])
         self.ids, self.age, self.returns = self.ids[keep], self.age[keep], self.returns[keep]
         self.retired += len(old)
-        return Rows(int(keep.sum()), rows.matrix[keep], rows.lower[keep], rows.upper[keep])
+        return Rows(int(keep.sum()), rows.csr.take(keep), rows.lower[keep], rows.upper[keep])
 
     def violated(self, values: np.ndarray) -> np.ndarray:
         """The positions in the pool of the rows ``values`` violates (:data:`POOL_VIOLATED`)."""
         if self.matrix is None or not len(self.pooled):
             return np.zeros(0, dtype=np.int64)
-        activity = self.matrix @ values
+        activity = self.matrix.dot(values)
         return np.flatnonzero(
             (activity < self.lower - _margin(self.lower, POOL_VIOLATED))
             | (activity > self.upper + _margin(self.upper, POOL_VIOLATED))
@@ -448,7 +565,7 @@ class CutPool:
         """Append the pooled rows at positions ``which`` (every pooled row when None) to the
         LP, with their identities and age 0; returns how many. ``returned``: a return of
         each (a violated row: :data:`POOL_BACKOFF`; not a row back for a basis). The tree's
-        :class:`Rows` read them as rows appended (:meth:`Rows.now`)."""
+        :class:`Rows` take them as rows appended (:attr:`back`)."""
         if self.matrix is None or not len(self.pooled):
             return 0
         if which is None:
@@ -456,13 +573,14 @@ class CutPool:
         if not len(which):
             return 0
         self._grow(int(model.highs.getNumRow()))  # rows the model appended keep their place
-        add_csr_rows(model.highs, self.matrix[which], self.lower[which], self.upper[which])
+        self.back = Rows(len(which), self.matrix.take(which), self.lower[which], self.upper[which])
+        add_csr_rows(model.highs, self.back.csr, self.back.lower, self.back.upper)
         self.ids = np.concatenate([self.ids, self.pooled[which]])
         self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
         self.returns = np.concatenate([self.returns, self.pooled_returns[which] + returned])
         rest = np.ones(len(self.pooled), dtype=bool)
         rest[which] = False
-        self.matrix = self.matrix[rest]
+        self.matrix = self.matrix.take(rest)
         self.pooled, self.pooled_returns, self.lower, self.upper = (
             self.pooled[rest],
             self.pooled_returns[rest],
@@ -513,7 +631,7 @@ def node_bound(
     if not solution.dual_valid:
         return -math.inf, np.zeros(0)
     y, constant = clipped_duals(np.asarray(solution.row_dual, dtype=float), rows.lower, rows.upper)
-    reduced = model.costs - rows.matrix.T @ y
+    reduced = model.costs - rows.csr.tdot(y)
     free = ~model.fixed
     d = reduced[free]
     terms = np.minimum(d * lower[free], d * upper[free])
@@ -679,6 +797,39 @@ class BranchCut:
     #: The LP's rows when the search stopped (before the pool's rows went back).
     rows_end: int = 0
 
+    def _added(self, before: int, more: Rows) -> None:
+        """The rows ``more`` were just appended to the LP, which had ``before`` rows: the
+        tree's :class:`Rows` take them as they are (no ``getRows``/``getRowsEntries`` read of
+        rows known here) when they held the LP's ``before`` rows; else :meth:`Rows.now` reads
+        them later. The same arrays as read back: the rows are appended as given, each
+        row's columns in increasing order (the model's rows, and so the pool's, are), and
+        a test compares them with HiGHS's at every LP."""
+        rows = self._rows
+        if rows is not None and rows.count == before:
+            if int(self.model.highs.getNumRow()) == before + more.count:
+                self._rows = rows.plus(more)
+
+    def _restore(self, which: np.ndarray | None, returned: bool = True) -> int:
+        """:meth:`CutPool.restore`, the tree's :class:`Rows` kept in step (:meth:`_added`)."""
+        pool = self._pool()
+        before = int(self.model.highs.getNumRow())
+        count = pool.restore(self.model, which, returned)
+        if count and pool.back is not None:
+            self._added(before, pool.back)
+        return count
+
+    def _add_cuts(self, cuts: list[np.ndarray], sides: list[float] | None) -> None:
+        """The model's ``add_cuts``, the tree's :class:`Rows` kept in step (:meth:`_added`:
+        the model's newest ``cut_rows``, ``cut_sides`` and ``cut_weights``)."""
+        model = self.model
+        before = int(model.highs.getNumRow())
+        count = model.add_cuts(cuts, sides)
+        self.cuts += count
+        if count:
+            block = CsrRows.lists(model.cut_rows[-count:], model.cut_weights[-count:], model.n_arcs)
+            lower = np.asarray(model.cut_sides[-count:], dtype=float)
+            self._added(before, Rows(count, block, lower, np.full(count, highspy.kHighsInf)))
+
     def _bound_of(self, lower: np.ndarray, upper: np.ndarray) -> tuple[float, np.ndarray]:
         """:func:`node_bound` of the last LP, the rows read again only when rows were added."""
         self._rows = Rows.of(self.model) if self._rows is None else self._rows.now(self.model)
@@ -751,7 +902,7 @@ class BranchCut:
             # basis that lost a nonbasic row is not set (HiGHS's own is kept)
             pool = self._pool()
             if POOL_REPAIR:
-                pool.restore(model, pool.missing(stored), returned=False)
+                self._restore(pool.missing(stored), returned=False)
             pool._grow(int(highs.getNumRow()))
             row_status = pool.statuses(stored)
             if row_status is not None:
@@ -809,7 +960,7 @@ class BranchCut:
         tail = np.arange(pool.kept, rows.count)
         order = pool.kept + np.argsort(pool.ids[pool.kept :], kind="stable")
         highs.deleteRows(len(tail), tail.astype(np.int32))
-        add_csr_rows(highs, rows.matrix[order], rows.lower[order], rows.upper[order])
+        add_csr_rows(highs, rows.csr.take(order), rows.lower[order], rows.upper[order])
         pool.ids = np.concatenate([pool.ids[: pool.kept], pool.ids[order]])
         pool.returns = np.concatenate([pool.returns[: pool.kept], pool.returns[order]])
         pool.age = np.zeros(len(pool.ids), dtype=np.int64)
@@ -984,7 +1135,7 @@ class BranchCut:
             value, rounds = new_value, rounds + 1
             back = self._pool().violated(values) if POOL else np.zeros(0)
             if len(back):  # pooled rows first: separation would skip them as known
-                self._pool().restore(model, back)
+                self._restore(back)
                 continue
             among = None
             if not integral and self.nodes % NODE_FULL:  # the nearly tight pairs (heuristic)
@@ -997,7 +1148,7 @@ class BranchCut:
                 if integral:  # an integral non-order violates a row (module doc): the
                     return False, None  # deadline cut the separation short
                 break
-            self.cuts += model.add_cuts(cuts, sides)
+            self._add_cuts(cuts, sides)
         return True, (bound, new_value, values, raw, reduced)
 
     # ------------------------------------------------------------------ branching
@@ -1186,19 +1337,27 @@ class BranchCut:
         model = self.model
         open_arc = ~model.fixed
         open_arc[zeros] = False
+        positive = open_arc & (values > INTEGRAL)
         found: list[tuple[float, tuple[str, int], np.ndarray, np.ndarray]] = []
         for side, ends in (("out", model.tails), ("in", model.heads)):
-            positive = open_arc & (values > INTEGRAL)
             counts = np.bincount(ends[positive], minlength=model.n)
             counts[ends[ones]] = 0
-            for v in np.flatnonzero(counts >= 2):
-                arcs = np.flatnonzero(open_arc & (ends == v))
-                ranked = arcs[np.argsort(-values[arcs], kind="stable")]
+            split = counts >= 2
+            # the open arcs of the split nodes by node, largest value first, ties by arc
+            # (each node's ``argsort(-values, stable)`` over its arcs in increasing order)
+            arcs = np.flatnonzero(open_arc & split[ends])
+            arcs = arcs[np.lexsort((-values[arcs], ends[arcs]))]
+            nodes, firsts = np.unique(ends[arcs], return_index=True)
+            for v, lo, hi in zip(
+                nodes.tolist(), firsts.tolist(), [*firsts[1:].tolist(), len(arcs)], strict=True
+            ):
+                ranked = arcs[lo:hi]
                 total = np.cumsum(values[ranked])
                 k = int(np.argmin(np.abs(total - 0.5)))
                 k = min(k, len(ranked) - 2)  # F and the rest both non-empty
-                key = (side, int(v))
-                found.append((abs(float(total[k]) - 0.5), key, ranked[: k + 1], ranked[k + 1 :]))
+                found.append(
+                    (abs(float(total[k]) - 0.5), (side, v), ranked[: k + 1], ranked[k + 1 :])
+                )
         found.sort(key=lambda item: item[0])
         return [(key, first, rest) for _, key, first, rest in found]
 
