@@ -105,6 +105,7 @@ __all__ = [
     "POOL_AGE",
     "POOL_BACKOFF",
     "POOL_BACKOFF_CAP",
+    "POOL_DEAD",
     "POOL_REPAIR",
     "POOL_SLACK",
     "PSEUDO_CANDIDATES",
@@ -247,6 +248,13 @@ POOL_BACKOFF = False
 #: See :data:`POOL_BACKOFF`: at most 2**4 = 16 times :data:`POOL_AGE` (160 node LPs, some
 #: 20-50 nodes).
 POOL_BACKOFF_CAP = 4
+
+#: The pool's arrays drop the rows put back once these are more than this share of the rows
+#: still pooled (:attr:`CutPool.alive`): mechanics only (which rows are pooled, and their
+#: order, is the same), by reasoning not measurement: a compaction copies the pool once, a
+#: pool product (:meth:`CutPool.violated`) at most 1.25 times the rows it needs; most
+#: returns move a few rows of hundreds to thousands pooled.
+POOL_DEAD = 0.25
 
 #: Whether a stored basis whose tight (nonbasic) rows have left the LP gets them back from
 #: the pool before it is set (:meth:`CutPool.missing`), rather than being dropped (HiGHS then
@@ -489,6 +497,10 @@ class CutPool:
     restored: int = 0
     stale: int = 0
     repaired: int = 0
+    #: Per pooled row: still in the pool (a row put back stays in the pool's arrays, not
+    #: alive, until the dead rows are more than :data:`POOL_DEAD` of the alive ones: then the
+    #: arrays are compacted, not at each :meth:`restore`).
+    alive: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     #: The rows the last :meth:`restore` appended to the LP (the tree's :class:`Rows` take
     #: them from here, not read back from HiGHS: ``BranchCut._added``).
     back: Rows | None = None
@@ -547,6 +559,7 @@ class CutPool:
         self.matrix = block if self.matrix is None else self.matrix.append(block)
         self.pooled = np.concatenate([self.pooled, self.ids[old]])
         self.pooled_returns = np.concatenate([self.pooled_returns, self.returns[old]])
+        self.alive = np.concatenate([self.alive, np.ones(len(old), dtype=bool)])
         self.lower = np.concatenate([self.lower, rows.lower[old]])
         self.upper = np.concatenate([self.upper, rows.upper[old]])
         self.ids, self.age, self.returns = self.ids[keep], self.age[keep], self.returns[keep]
@@ -555,22 +568,25 @@ class CutPool:
 
     def violated(self, values: np.ndarray) -> np.ndarray:
         """The positions in the pool of the rows ``values`` violates (:data:`POOL_VIOLATED`)."""
-        if self.matrix is None or not len(self.pooled):
+        if self.matrix is None or not self.alive.any():
             return np.zeros(0, dtype=np.int64)
         activity = self.matrix.dot(values)
         return np.flatnonzero(
-            (activity < self.lower - _margin(self.lower, POOL_VIOLATED))
-            | (activity > self.upper + _margin(self.upper, POOL_VIOLATED))
+            (
+                (activity < self.lower - _margin(self.lower, POOL_VIOLATED))
+                | (activity > self.upper + _margin(self.upper, POOL_VIOLATED))
+            )
+            & self.alive
         )
 
     def missing(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
         """The positions in the pool of the rows nonbasic in a stored basis (tight at its
         LP): with them back in the LP (:meth:`restore`) the basis maps (:meth:`statuses`)."""
         _, row_status, ids = basis
-        if not len(self.pooled):
+        if not self.alive.any():
             return np.zeros(0, dtype=np.int64)
         tight = ids[row_status != int(highspy.HighsBasisStatus.kBasic)]
-        return np.flatnonzero(np.isin(self.pooled, tight))
+        return np.flatnonzero(np.isin(self.pooled, tight) & self.alive)
 
     def restore(
         self, model: SopCutModel, which: np.ndarray | None = None, returned: bool = True
@@ -579,10 +595,10 @@ class CutPool:
         LP, with their identities and age 0; returns how many. ``returned``: a return of
         each (a violated row: :data:`POOL_BACKOFF`; not a row back for a basis). The tree's
         :class:`Rows` take them as rows appended (:attr:`back`)."""
-        if self.matrix is None or not len(self.pooled):
+        if self.matrix is None or not self.alive.any():
             return 0
         if which is None:
-            which = np.arange(len(self.pooled))
+            which = np.flatnonzero(self.alive)
         if not len(which):
             return 0
         self._grow(int(model.highs.getNumRow()))  # rows the model appended keep their place
@@ -591,15 +607,18 @@ class CutPool:
         self.ids = np.concatenate([self.ids, self.pooled[which]])
         self.age = np.concatenate([self.age, np.zeros(len(which), dtype=np.int64)])
         self.returns = np.concatenate([self.returns, self.pooled_returns[which] + returned])
-        rest = np.ones(len(self.pooled), dtype=bool)
-        rest[which] = False
-        self.matrix = self.matrix.take(rest)
-        self.pooled, self.pooled_returns, self.lower, self.upper = (
-            self.pooled[rest],
-            self.pooled_returns[rest],
-            self.lower[rest],
-            self.upper[rest],
-        )
+        self.alive[which] = False
+        dead = len(self.alive) - int(self.alive.sum())
+        if dead > POOL_DEAD * (len(self.alive) - dead):
+            rest = self.alive
+            self.matrix = self.matrix.take(rest)
+            self.pooled, self.pooled_returns, self.lower, self.upper, self.alive = (
+                self.pooled[rest],
+                self.pooled_returns[rest],
+                self.lower[rest],
+                self.upper[rest],
+                self.alive[rest],
+            )
         if returned:
             self.restored += len(which)
         else:

@@ -58,7 +58,8 @@ def _splits_reference(
 
 def _old_mechanics(monkeypatch: Any) -> None:
     """The tree's mechanics before: a scipy matrix built for each product, the rows the tree
-    adds read back from HiGHS (``Rows.now``), the per-node split loop."""
+    adds read back from HiGHS (``Rows.now``), the per-node split loop, the pool's arrays
+    compacted at each return, HiGHS's whole info record read."""
     monkeypatch.setattr(
         CsrRows,
         "dot",
@@ -73,6 +74,8 @@ def _old_mechanics(monkeypatch: Any) -> None:
     )
     monkeypatch.setattr(BranchCut, "_added", lambda self, before, more: None)
     monkeypatch.setattr(BranchCut, "_splits", _splits_reference)
+    monkeypatch.setattr(sop_bc, "POOL_DEAD", 0.0)  # the pool compacted at each return
+    monkeypatch.setattr(sop_bc, "_info", lambda highs, name: getattr(highs.getInfo(), name))
 
 
 def _search(problem: SopProblem, nodes: int) -> dict[str, Any]:
