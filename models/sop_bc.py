@@ -764,20 +764,26 @@ class PseudoCosts:
         return bool((0 if counts is None else counts.min()) >= RELIABLE)
 
     def estimate(self, key: tuple[str, int], shares: tuple[float, float]) -> np.ndarray:
-        """The two children's estimated gains."""
-        mean = np.where(self.seen > 0, self.total / np.maximum(self.seen, 1), 1.0)
-        counts = self.counts.get(key)
-        if counts is not None:
-            own = self.sums[key] / np.maximum(counts, 1)
-            mean = np.where(counts > 0, own, mean)
-        return mean * np.asarray(shares)
+        """The two children's estimated gains (in Python floats: the same IEEE operations as
+        on the 2-element arrays, a fifth of the time, at each of 32 candidates a node)."""
+        counts, sums = self.counts.get(key), self.sums.get(key)
+        gains = []
+        for child in (0, 1):
+            if counts is not None and sums is not None and counts[child] > 0:
+                mean = float(sums[child]) / float(counts[child])
+            elif self.seen[child] > 0:
+                mean = float(self.total[child]) / float(self.seen[child])
+            else:
+                mean = 1.0
+            gains.append(mean * shares[child])
+        return np.array(gains)
 
 
 def _score(gains: Any, value: float) -> float:
     """A branching's score: the product of its two children's gains (each capped at 1e12 for
     an infeasible child, plus ``1e-6 |value|`` so that one gain of 0 does not tie all)."""
     tiny = 1e-6 * max(abs(value), 1.0)
-    return float(np.prod([min(max(float(g), 0.0), 1e12) + tiny for g in gains]))
+    return math.prod(min(max(float(g), 0.0), 1e12) + tiny for g in gains)
 
 
 @dataclass

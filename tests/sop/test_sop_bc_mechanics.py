@@ -8,6 +8,7 @@ bound trace, nodes, LPs, rows and pool counts on random SOPs of 16-20 nodes."""
 from __future__ import annotations
 
 import itertools
+import math
 from typing import Any
 
 import numpy as np
@@ -56,10 +57,29 @@ def _splits_reference(
     return [(key, first, rest) for _, key, first, rest in found]
 
 
+def _estimate_reference(
+    costs: sop_bc.PseudoCosts, key: tuple[str, int], shares: tuple[float, float]
+) -> np.ndarray:
+    """``PseudoCosts.estimate`` on numpy arrays, as before."""
+    mean = np.where(costs.seen > 0, costs.total / np.maximum(costs.seen, 1), 1.0)
+    counts = costs.counts.get(key)
+    if counts is not None:
+        own = costs.sums[key] / np.maximum(counts, 1)
+        mean = np.where(counts > 0, own, mean)
+    return mean * np.asarray(shares)
+
+
+def _score_reference(gains: Any, value: float) -> float:
+    """``_score`` by ``np.prod``, as before."""
+    tiny = 1e-6 * max(abs(value), 1.0)
+    return float(np.prod([min(max(float(g), 0.0), 1e12) + tiny for g in gains]))
+
+
 def _old_mechanics(monkeypatch: Any) -> None:
     """The tree's mechanics before: a scipy matrix built for each product, the rows the tree
     adds read back from HiGHS (``Rows.now``), the per-node split loop, the pool's arrays
-    compacted at each return, HiGHS's whole info record read."""
+    compacted at each return, HiGHS's whole info record read, the pseudo-cost estimates and
+    scores on numpy arrays."""
     monkeypatch.setattr(
         CsrRows,
         "dot",
@@ -75,6 +95,8 @@ def _old_mechanics(monkeypatch: Any) -> None:
     monkeypatch.setattr(BranchCut, "_added", lambda self, before, more: None)
     monkeypatch.setattr(BranchCut, "_splits", _splits_reference)
     monkeypatch.setattr(sop_bc, "POOL_DEAD", 0.0)  # the pool compacted at each return
+    monkeypatch.setattr(sop_bc.PseudoCosts, "estimate", _estimate_reference)
+    monkeypatch.setattr(sop_bc, "_score", _score_reference)
     monkeypatch.setattr(sop_bc, "_info", lambda highs, name: getattr(highs.getInfo(), name))
 
 
@@ -145,6 +167,24 @@ def test_tree_rows_are_highs_rows_at_every_lp(monkeypatch):
         monkeypatch.setattr(sop_bc, "POOL_AGE", age)
         solve_sop_bc(_random_sop([33, 12, 1], n, 0.15), node_limit=12)
     assert checked >= 150 and taken >= 20
+
+
+def test_estimates_and_scores_equal_the_numpy_ones():
+    """``PseudoCosts.estimate`` and ``_score`` equal their numpy forms to the bit on random
+    observations (keys seen, unseen, one child seen)."""
+    rng = np.random.default_rng(3)
+    costs = sop_bc.PseudoCosts()
+    keys = [("out", k) for k in range(5)] + [("in", k) for k in range(5)]
+    for trial in range(200):
+        key = keys[int(rng.integers(len(keys)))]
+        shares = (float(rng.random()), float(rng.random()))
+        assert np.array_equal(costs.estimate(key, shares), _estimate_reference(costs, key, shares))
+        gains = [float(g) for g in rng.normal(2.0, 3.0, size=2)]
+        if trial % 7 == 0:
+            gains[0] = math.inf
+        value = float(rng.normal(100.0, 50.0))
+        assert sop_bc._score(gains, value) == _score_reference(gains, value)
+        costs.observe(key, int(rng.integers(2)), float(rng.random() * 5), float(rng.random()))
 
 
 def test_vectorised_splits_equal_the_loop():
