@@ -95,6 +95,7 @@ def _old_mechanics(monkeypatch: Any) -> None:
     monkeypatch.setattr(BranchCut, "_added", lambda self, before, more: None)
     monkeypatch.setattr(BranchCut, "_splits", _splits_reference)
     monkeypatch.setattr(sop_bc, "POOL_DEAD", 0.0)  # the pool compacted at each return
+    monkeypatch.setattr(sop_bc, "TDOT_SPARSE", 0.0)  # every row multiplied
     monkeypatch.setattr(sop_bc.PseudoCosts, "estimate", _estimate_reference)
     monkeypatch.setattr(sop_bc, "_score", _score_reference)
     monkeypatch.setattr(sop_bc, "_info", lambda highs, name: getattr(highs.getInfo(), name))
@@ -122,6 +123,11 @@ def test_csr_rows_products_and_selection_are_scipys():
     x, y = rng.normal(size=30), rng.normal(size=40)
     assert np.array_equal(rows.dot(x), matrix @ x)
     assert np.array_equal(rows.tdot(y), matrix.T @ y)
+    for share in (0.05, 0.3, 0.6):  # duals mostly zero (the rows taken alone), some -0
+        sparse = np.where(rng.random(40) < share, rng.normal(size=40), 0.0)
+        sparse[rng.random(40) < 0.2] = -0.0
+        ours, scipys = rows.tdot(sparse), matrix.T @ sparse
+        assert np.array_equal(ours.view(np.int64), scipys.view(np.int64))  # bits, signed 0
     which = rng.permutation(40)[:17]
     mask = rng.random(40) < 0.5
     for pick in (which, mask, np.zeros(0, dtype=np.int64)):
