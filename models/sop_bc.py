@@ -1400,16 +1400,29 @@ class BranchCut:
             arcs = np.flatnonzero(open_arc & split[ends])
             arcs = arcs[np.lexsort((-values[arcs], ends[arcs]))]
             nodes, firsts = np.unique(ends[arcs], return_index=True)
-            for v, lo, hi in zip(
-                nodes.tolist(), firsts.tolist(), [*firsts[1:].tolist(), len(arcs)], strict=True
+            if not len(nodes):
+                continue
+            # each node's running sums x(F) in one row of a padded grid: ``cumsum`` along a
+            # row adds in order (an accumulation, never pairwise), the 1-D sums' bits
+            lengths = np.diff(np.append(firsts, len(arcs)))
+            row = np.repeat(np.arange(len(nodes)), lengths)
+            col = np.arange(len(arcs)) - np.repeat(firsts, lengths)
+            grid = np.zeros((len(nodes), int(lengths.max())))
+            grid[row, col] = values[arcs]
+            total = np.cumsum(grid, axis=1)
+            inside = np.arange(grid.shape[1]) < lengths[:, None]
+            best = np.argmin(np.where(inside, np.abs(total - 0.5), np.inf), axis=1)
+            best = np.minimum(best, lengths - 2)  # F and the rest both non-empty
+            gaps = np.abs(total[np.arange(len(nodes)), best] - 0.5)
+            for v, lo, k, hi, gap in zip(
+                nodes.tolist(),
+                firsts.tolist(),
+                (firsts + best + 1).tolist(),
+                (firsts + lengths).tolist(),
+                gaps.tolist(),
+                strict=True,
             ):
-                ranked = arcs[lo:hi]
-                total = np.cumsum(values[ranked])
-                k = int(np.argmin(np.abs(total - 0.5)))
-                k = min(k, len(ranked) - 2)  # F and the rest both non-empty
-                found.append(
-                    (abs(float(total[k]) - 0.5), (side, v), ranked[: k + 1], ranked[k + 1 :])
-                )
+                found.append((gap, (side, v), arcs[lo:k], arcs[k:hi]))
         found.sort(key=lambda item: item[0])
         return [(key, first, rest) for _, key, first, rest in found]
 
