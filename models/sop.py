@@ -1689,6 +1689,31 @@ PROOF_GAP = 0.06
 #: (root 7,189); the DP stages' own bounds stay at or near the root's.
 TRIAL_CUTOFFS = True
 
+#: Whether the trial cutoffs run where our branch-and-cut tree comes next after a root loop
+#: that ended within its share of the limit (:func:`trials_wanted`). False: the tree gets
+#: their time there. Their proven bound does not reach the tree (it prunes by the incumbent's
+#: cost, not by a lower bound; the two bounds are only combined at the end), and where the
+#: root's LPs are quick the tree raises the bound faster at these gaps (all above
+#: :data:`PROOF_GAP`, so above :data:`taopt.models.sop_bc.TREE_MIN_GAP`): at 60 s, load
+#: 2.7-4.9, the trials took prob.42 from 230 to 242 in 21 s (9.7 s of it on three trials above
+#: 242 that gave up) and left the tree 25 s, too little to close it (the tree alone proves 243
+#: in 13 s); on ry48p.1 they took 19 s for 14,775 -> 14,943 and the tree then reached 15,156 in
+#: the 20 s left. Where the root loop did not end within :data:`ROOT_SHARE` of the limit the
+#: tree, which starts with that loop again and re-solves an LP of its size per node, gets few
+#: nodes (esc-like-65, root cut at 6 s: 0-2 nodes in 20 s) while the trials raised its bound
+#: 609 -> 648 in 10 s; they run there as before, and where the cut engine does not follow.
+TRIALS_BEFORE_TREE = False
+
+
+def trials_wanted(tree_next: bool, root_complete: bool) -> bool:
+    """Whether the proof stage may run its trial cutoffs on a gap above :data:`PROOF_GAP`:
+    :data:`TRIAL_CUTOFFS`, and not where our tree comes next (``tree_next``: the cut engine
+    fits the memory with the ``"cuts"`` formulation) after a root loop that ended with no
+    violated row within its share of the limit (``root_complete``), unless
+    :data:`TRIALS_BEFORE_TREE`."""
+    return TRIAL_CUTOFFS and (TRIALS_BEFORE_TREE or not (tree_next and root_complete))
+
+
 #: Share of the time left the trial cutoffs may use: they replace the first DP stage's time
 #: where its bound stays at the root's, and leave the rest to the primal search and the cut
 #: engine as :data:`DP_SHARE` leaves it to the MILP.
@@ -2157,7 +2182,8 @@ def _root_stage(
     first (:data:`CUTS_FIRST_SHARE`). The root's rows are precedence path cuts valid for every
     order, and no arc is fixed here, so the Lagrangian bound holds for every order
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``). ``info`` gains
-    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed).
+    ``root_stage`` (bound, seconds, rounds, whether its loop ended with no violated row, the
+    share of the gap it closed).
     """
     from taopt.models.sop_cuts import SopCutModel, round_point
 
@@ -2182,6 +2208,7 @@ def _root_stage(
         "bound": root.bound,
         "seconds": time.perf_counter() - began,
         "rounds": root.rounds,
+        "complete": root.complete,
         "closed": closed,
         "cuts_first": cuts_first,
     }
@@ -2322,6 +2349,17 @@ def _stages(
     else:
         ideals, capped, counted_in = counted
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    seconds: dict[str, float] = {}  # info["stage_seconds"]: wall seconds per stage
+    if counted is None:
+        seconds["count"] = counted_in
+    clock = [time.perf_counter()]
+
+    def lap(name: str) -> None:
+        """Add the wall seconds since the last lap to stage ``name``."""
+        now = time.perf_counter()
+        seconds[name] = seconds.get(name, 0.0) + now - clock[0]
+        clock[0] = now
+
     bounding = time.perf_counter()
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
     # a DP stage's setup (its bounds, its first layers) runs outside its clock: about
@@ -2520,7 +2558,7 @@ def _stages(
         """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
         and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
         since the root stage; ``trials_ok``: where the gap is wider than :data:`PROOF_GAP`, the
-        trial cutoffs of :data:`TRIAL_CUTOFFS` instead of nothing; ``setup``: the measured
+        trial cutoffs instead of nothing (:func:`trials_wanted`); ``setup``: the measured
         setup of the DP stage before it, which it needs again). None when it does not run
         (``info["proof"]`` says why). A run
         that gave up is combined with the later stages' result at the end only, so their
@@ -2542,7 +2580,7 @@ def _stages(
             lower = max(lower, bound)
         gap = root_gap(None if value is None else value[0], lower)
         trials = gap > PROOF_GAP
-        if trials and not (TRIAL_CUTOFFS and trials_ok):
+        if trials and not trials_ok:
             info["proof"] = f"skipped: the gap is {100 * gap:.1f} %"
             return None
         left = deadline.share(TRIAL_SHARE) if trials else deadline.remaining()
@@ -2596,8 +2634,10 @@ def _stages(
         and (deadline.remaining() or 0.0) * (1.0 if engine == "dp" or not capped else DP_SHARE)
         < counted_in + MARGIN
     )
+    lap("setup")
     if plan != "dp" and engine != "milp":  # the DP does not fit the memory: a stage that does
         result = degraded(problem, plan, deadline, incumbent, max_memory_gb, began, stage)
+        lap("degraded")
         used = plan
     elif deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
@@ -2606,6 +2646,7 @@ def _stages(
         used = "none"
     elif engine == "milp":
         result = milp(incumbent, deadline.remaining())
+        lap("milp")
         used = "milp"
     elif engine == "dp" or not capped:
         alone = None if alone_states >= every_state else alone_states  # None: no cap
@@ -2619,6 +2660,7 @@ def _stages(
         )
         if watch is not None:  # stopped before the probe's end: what it saw
             watch.close()
+        lap("dp")
         used = "dp"
     else:
         cuts_first = False
@@ -2627,6 +2669,7 @@ def _stages(
             root_model, lagrange, incumbent, cuts_first = _root_stage(
                 problem, deadline, incumbent, info, verbose
             )
+            lap("root")
             if ROW_CREDIT and lagrange is not None:
                 credit = root_model.row_credit(saved=True)
             if on_root is not None:
@@ -2634,15 +2677,18 @@ def _stages(
             root_bound = info["root_stage"]["bound"]
             if not cuts_first:
                 window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
+                lap("window")
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             path = "cuts" if cuts_first else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if cuts_first:  # the root closed most of the gap: the cut engine gets the time
             result = milp(incumbent, deadline.remaining())
+            lap("milp")
             used = "milp"
         else:
             # the proof stage first when the order known is already close to the root bound
             proved = proof(incumbent, None)
+            lap("proof")
             if proved is not None and proved.solution is not None:
                 incumbent = proved.solution
             share = deadline.share(DP_SHARE)
@@ -2676,19 +2722,25 @@ def _stages(
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
+                lap("dp")
             if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 root_bound = info.get("root_stage", {}).get("bound", cheap)
                 lower = float(root_bound) if np.isfinite(root_bound) else cheap
                 result = _searched(problem, result, deadline, seed, info, lower)
+                lap("search")
             if result.status == TIME_LIMIT and proved is None and not deadline.expired(MARGIN):
                 # the first stages brought the order close to the bound: the proof stage now,
                 # or its trial cutoffs where the gap is still wide (TRIAL_CUTOFFS)
                 proved = proof(
                     result.solution,
                     result.bound,
-                    trials_ok=True,
+                    trials_ok=trials_wanted(
+                        milp_ok and formulation == "cuts",
+                        bool(info.get("root_stage", {}).get("complete")),
+                    ),
                     setup=result.info.get("setup_seconds", 0.0),
                 )
+                lap("proof")
                 if proved is not None:
                     used += "+proof"
                     if proved.status != TIME_LIMIT:
@@ -2727,12 +2779,14 @@ def _stages(
                     state_lp=state_lp(),
                     window=window,
                 )
+                lap("second_dp")
                 used += "+dp"
                 result = _combine(first, second)
             if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 info.update({f"dp_{k}": v for k, v in result.info.items()})
                 known = result.solution if result.solution is not None else incumbent
                 result = milp(known, deadline.remaining(), dp_result=result)
+                lap("milp")
                 used += "+milp"
             if proved is not None and proved.status == TIME_LIMIT:
                 # a proof stage that gave up: its order and bound join at the end, the later
@@ -2747,6 +2801,7 @@ def _stages(
         last_cap = max(second_states, max_states) if grow else 1 << 62
         setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
+        lap("rest")
     if result.status == TIME_LIMIT and np.isfinite(window_bound):
         result = _raised(result, window_bound)
     stage(BASE_BYTES)  # the process itself, whatever ran
@@ -2755,6 +2810,8 @@ def _stages(
     info["memory_stages"] = info["memory_estimate"]
     if predicted:
         info["memory_estimate"] = predicted[0]
+    lap("other")
+    info["stage_seconds"] = seconds
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",
