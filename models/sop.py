@@ -1958,7 +1958,9 @@ def solve_sop_problem(
     the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
     stage and its local search brought it there, the proof stage runs
     (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
-    giving the time back as soon as its layers show it cannot end). When
+    giving the time back as soon as its layers show it cannot end; after them on a wider gap,
+    its trial cutoffs, unless our tree follows a root loop complete within its share:
+    :func:`trials_wanted`). When
     the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
@@ -1971,7 +1973,8 @@ def solve_sop_problem(
     MILP (:func:`solve_sop`) gets the rest, warm-started with the best order so far; the
     bound reported is the larger of the two proven bounds (never below the assignment
     and arborescence bounds). The rule is the same for any number of nodes (the DP's masks
-    take several words beyond 64). The figures behind the rule are in
+    take several words beyond 64). ``info["stage_seconds"]`` gives the wall seconds each
+    stage took. The figures behind the rule are in
     ``docs/benchmarks.md`` (SOP section).
 
     Parameters
