@@ -402,6 +402,7 @@ def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
     monkeypatch.setattr(sop, "_root_stage", complete)
     monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
     monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
+    monkeypatch.setattr(sop, "TREE_FIRST", False)  # the DP stages first, then the tree
     reached = 0
     for seed in range(6):
         problem = _instance(seed)
@@ -419,3 +420,63 @@ def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
         skipped = str(result.info.get("proof", "")).startswith("skipped: the gap")
         reached += skipped and "milp" in result.info["engine"]
     assert reached > 0
+
+
+def test_tree_first_where_the_trials_leave_the_gap_to_the_tree(monkeypatch):
+    """The rule of :func:`taopt.models.sop.tree_first`: only on a gap above PROOF_GAP, where
+    :func:`taopt.models.sop.trials_wanted` leaves it to the tree; never with TREE_FIRST off."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", False)
+    monkeypatch.setattr(sop, "TRIAL_CUTOFFS", True)
+    monkeypatch.setattr(sop, "TREE_FIRST", True)
+    wide, narrow = sop.PROOF_GAP + 0.01, sop.PROOF_GAP / 2
+    assert sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=narrow)
+    assert not sop.tree_first(tree_next=True, root_complete=False, gap=wide)
+    assert not sop.tree_first(tree_next=False, root_complete=True, gap=wide)
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", True)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", False)
+    monkeypatch.setattr(sop, "TREE_FIRST", False)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+
+
+def test_portfolio_tree_first_proves_the_brute_force_optimum(monkeypatch):
+    """With a weak root (one round) taken as complete and a wide gap, the portfolio skips the
+    DP stages for the tree (TREE_FIRST, ``info["tree_first"]``, engine "milp", no DP stage's
+    seconds) and still ends at the brute-force optimum, its order scored as reported."""
+    from taopt.models import sop
+
+    root = SopCutModel.root
+
+    def one_round(self, deadline=None, rounds=1, **kwargs):  # a weaker root: a gap left
+        return root(self, deadline, rounds=1, **kwargs)
+
+    stage = sop._root_stage
+
+    def complete(*args, **kwargs):  # taken as complete: the rule's case
+        got = stage(*args, **kwargs)
+        args[3]["root_stage"]["complete"] = True
+        return got
+
+    monkeypatch.setattr(SopCutModel, "root", one_round)
+    monkeypatch.setattr(sop, "_root_stage", complete)
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)  # every gap is wide
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
+    monkeypatch.setattr(sop, "TREE_FIRST", True)
+    straight = 0
+    for seed in range(6):
+        problem = _instance(seed)
+        optimum = sop_brute_force(problem)
+        if not math.isfinite(optimum):
+            continue
+        result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+        if result.info.get("tree_first"):
+            straight += 1
+            assert result.info["engine"] == "milp"
+            assert "dp" not in result.info["stage_seconds"]
+    assert straight > 0
