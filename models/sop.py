@@ -1714,6 +1714,25 @@ TRIALS_BEFORE_TREE = False
 #: 243 in 12.6-13.4 s. False: the stages run as before.
 TREE_FIRST = True
 
+#: On the tree-first path (:data:`TREE_FIRST`) the first DP stage's beam passes give the
+#: tree an order within this share of the time left (of which the passes take
+#: :data:`taopt.models.sop_dp.BEAM_SHARE`, the first at least its
+#: :data:`~taopt.models.sop_dp.FIRST_BEAM_SHARE`): the tree's own roundings can stay far above
+#: the DP's orders where the root is weak (esc-like-65-0.04 at 60 s, load 4.5: the tree's best
+#: 1015 against 417 from the DP stage and its search; beams of 64, 256 and 1,024 give 666, 417
+#: and 337 in 0.6, 1.1 and 3.3 s at load 4).
+TREE_FIRST_BEAM_SHARE = 0.3
+
+#: The widest of those passes (the DP stage's default ``beam_width``).
+TREE_FIRST_BEAM_WIDTH = 1024
+
+#: The share of the time left after the beam that the primal search (:func:`_searched`, from
+#: the beam's order, stopped after :data:`ILS_PATIENCE` steps without a better order) may use
+#: before the tree, whose cutoff its order becomes. Run after the tree instead, from the tree's
+#: best order, it ended esc-like-65-0.04 at 510 (60 s, load 4.8), where the DP stage's order
+#: and the search from it gave 417.
+TREE_FIRST_SEARCH_SHARE = 0.15
+
 
 def trials_wanted(tree_next: bool, root_complete: bool) -> bool:
     """Whether the proof stage may run its trial cutoffs on a gap above :data:`PROOF_GAP`:
@@ -2289,6 +2308,26 @@ def _window_stage(
     return (found.lam if used else None), bound
 
 
+def _beamed(
+    problem: SopProblem,
+    incumbent: Any,
+    deadline: Deadline,
+    beam_start: Callable[..., tuple[float, list[int]] | None],
+    info: dict[str, Any],
+) -> Any:
+    """The better of ``incumbent`` and the orders of the DP stage's beam passes
+    (:func:`taopt.models.sop_dp._beam_start`, passed as ``beam_start``: widths 64, 256 and
+    :data:`TREE_FIRST_BEAM_WIDTH`, each started only when it should end in its budget) within
+    :data:`TREE_FIRST_BEAM_SHARE` of the time left; ``info["tree_first_beam"]`` their best
+    cost when it improved the incumbent."""
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    budget = Deadline(deadline.share(TREE_FIRST_BEAM_SHARE), cancel=deadline.token)
+    passes: dict[str, Any] = {}
+    found = beam_start(problem, known, TREE_FIRST_BEAM_WIDTH, budget, passes)
+    info["tree_first_beam"] = passes.get("beam")
+    return incumbent if found is None or found is known else found[1]
+
+
 def _searched(
     problem: SopProblem,
     result: Solution,
@@ -2296,10 +2335,11 @@ def _searched(
     seed: int,
     info: dict[str, Any],
     lower: float,
+    share: float = ILS_SHARE,
 ) -> Solution:
     """``result`` (the first DP stage's, stopped) with its order improved by the primal search
-    (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within
-    :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run when its order is at
+    (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within ``share`` (by
+    default :data:`ILS_SHARE`) of the time left and :data:`ILS_PATIENCE`; not run when its order is at
     most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower`` (the root stage's
     bound). The bound is kept (an order changes no bound); the order found is re-scored by
     the family's scorer; ``info["ils"]`` says what ran."""
@@ -2312,7 +2352,7 @@ def _searched(
         info["ils"] = f"skipped: the gap is {100 * gap:.1f} %"
         return result
     began = time.perf_counter()
-    budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+    budget = Deadline(deadline.share(share), cancel=deadline.token)
     iterations = None if deadline.limited else ILS_ITERATIONS
     value, order, found = large_neighbourhood_search(
         problem,
@@ -2352,7 +2392,7 @@ def _stages(
 
     ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
     ``(ideals, capped, seconds)`` of a count already made (not made again)."""
-    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp, trial_cutoffs
+    from taopt.models.sop_dp import IDEAL_CAP, _beam_start, solve_sop_dp, trial_cutoffs
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
@@ -2711,13 +2751,27 @@ def _stages(
                 straight = tree_first(True, complete, gap)
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
-        if cuts_first or straight:  # the cut engine gets the time (the root closed most of
-            # the gap, or the tree goes first: TREE_FIRST)
+        if straight:  # the tree first (TREE_FIRST): a narrow beam's order, the tree, the search
+            incumbent = _beamed(problem, incumbent, deadline, _beam_start, info)
+            lap("beam")
+            known = _known_order(
+                problem.cost, problem.closure, problem.start, problem.end, incumbent
+            )
+            if known is not None:
+                start = _stopped(problem, known, lower, began, "portfolio", {})
+                searched = _searched(
+                    problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
+                )
+                incumbent = searched.solution
+                lap("search")
             result = milp(incumbent, deadline.remaining())
             lap("milp")
             used = "milp"
-            if straight:
-                info["tree_first"] = True
+            info["tree_first"] = True
+        elif cuts_first:  # the root closed most of the gap: the cut engine gets the time
+            result = milp(incumbent, deadline.remaining())
+            lap("milp")
+            used = "milp"
         else:
             # the proof stage first when the order known is already close to the root bound
             proved = proof(incumbent, None)
