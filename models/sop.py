@@ -1689,6 +1689,68 @@ PROOF_GAP = 0.06
 #: (root 7,189); the DP stages' own bounds stay at or near the root's.
 TRIAL_CUTOFFS = True
 
+#: Whether the trial cutoffs run where our branch-and-cut tree comes next after a root loop
+#: that ended within its share of the limit (:func:`trials_wanted`). False: the tree gets
+#: their time there. Their proven bound does not reach the tree (it prunes by the incumbent's
+#: cost, not by a lower bound; the two bounds are only combined at the end), and where the
+#: root's LPs are quick the tree raises the bound faster at these gaps (all above
+#: :data:`PROOF_GAP`, so above :data:`taopt.models.sop_bc.TREE_MIN_GAP`): at 60 s, load
+#: 2.7-4.9, the trials took prob.42 from 230 to 242 in 21 s (9.7 s of it on three trials above
+#: 242 that gave up) and left the tree 25 s, too little to close it (the tree alone proves 243
+#: in 13 s); on ry48p.1 they took 19 s for 14,775 -> 14,943 and the tree then reached 15,156 in
+#: the 20 s left. Where the root loop did not end within :data:`ROOT_SHARE` of the limit the
+#: tree, which starts with that loop again and re-solves an LP of its size per node, gets few
+#: nodes (esc-like-65, root cut at 6 s: 0-2 nodes in 20 s) while the trials raised its bound
+#: 609 -> 648 in 10 s; they run there as before, and where the cut engine does not follow.
+TRIALS_BEFORE_TREE = False
+
+
+#: Where the trial cutoffs are skipped for our tree (:func:`trials_wanted` false on a gap
+#: above :data:`PROOF_GAP`), the first DP stage, its primal search and the second DP stage are
+#: skipped too and the tree gets the time at once (:func:`tree_first`). Those stages' bound
+#: stays at the root's on such a gap (the DP's states are pruned by the root's prices and the
+#: gap is wide), and the tree finds its own orders: on prob.42 the first DP stage and its
+#: search took 8-22 s of a 60-s run (their order 259, the optimum 243), the tree alone proves
+#: 243 in 12.6-13.4 s. False: the stages run as before.
+TREE_FIRST = True
+
+#: On the tree-first path (:data:`TREE_FIRST`) the first DP stage's beam passes give the
+#: tree an order within this share of the time left (of which the passes take
+#: :data:`taopt.models.sop_dp.BEAM_SHARE`, the first at least its
+#: :data:`~taopt.models.sop_dp.FIRST_BEAM_SHARE`): the tree's own roundings can stay far above
+#: the DP's orders where the root is weak (esc-like-65-0.04 at 60 s, load 4.5: the tree's best
+#: 1015 against 417 from the DP stage and its search; beams of 64, 256 and 1,024 give 666, 417
+#: and 337 in 0.6, 1.1 and 3.3 s at load 4).
+TREE_FIRST_BEAM_SHARE = 0.3
+
+#: The widest of those passes (the DP stage's default ``beam_width``).
+TREE_FIRST_BEAM_WIDTH = 1024
+
+#: The share of the time left after the beam that the primal search (:func:`_searched`, from
+#: the beam's order, stopped after :data:`ILS_PATIENCE` steps without a better order) may use
+#: before the tree, whose cutoff its order becomes. Run after the tree instead, from the tree's
+#: best order, it ended esc-like-65-0.04 at 510 (60 s, load 4.8), where the DP stage's order
+#: and the search from it gave 417.
+TREE_FIRST_SEARCH_SHARE = 0.15
+
+
+def trials_wanted(tree_next: bool, root_complete: bool) -> bool:
+    """Whether the proof stage may run its trial cutoffs on a gap above :data:`PROOF_GAP`:
+    :data:`TRIAL_CUTOFFS`, and not where our tree comes next (``tree_next``: the cut engine
+    fits the memory with the ``"cuts"`` formulation) after a root loop that ended with no
+    violated row within its share of the limit (``root_complete``), unless
+    :data:`TRIALS_BEFORE_TREE`."""
+    return TRIAL_CUTOFFS and (TRIALS_BEFORE_TREE or not (tree_next and root_complete))
+
+
+def tree_first(tree_next: bool, root_complete: bool, gap: float) -> bool:
+    """Whether our tree runs right after the root and window stages (:data:`TREE_FIRST`):
+    where it comes next (``tree_next``) after a root loop complete within its share
+    (``root_complete``) and the relative ``gap`` of the best order to the best bound is above
+    :data:`PROOF_GAP`, that is where :func:`trials_wanted` leaves the gap to the tree."""
+    return TREE_FIRST and gap > PROOF_GAP and not trials_wanted(tree_next, root_complete)
+
+
 #: Share of the time left the trial cutoffs may use: they replace the first DP stage's time
 #: where its bound stays at the root's, and leave the rest to the primal search and the cut
 #: engine as :data:`DP_SHARE` leaves it to the MILP.
@@ -1933,7 +1995,9 @@ def solve_sop_problem(
     the best order is then within :data:`PROOF_GAP` of the root bound, or once the first DP
     stage and its local search brought it there, the proof stage runs
     (:data:`PROOF_STAGE`: the DP with the root's LP re-solved per state for the time left,
-    giving the time back as soon as its layers show it cannot end). When
+    giving the time back as soon as its layers show it cannot end; after them on a wider gap,
+    its trial cutoffs, unless our tree follows a root loop complete within its share:
+    :func:`trials_wanted`). When
     the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
@@ -1946,7 +2010,8 @@ def solve_sop_problem(
     MILP (:func:`solve_sop`) gets the rest, warm-started with the best order so far; the
     bound reported is the larger of the two proven bounds (never below the assignment
     and arborescence bounds). The rule is the same for any number of nodes (the DP's masks
-    take several words beyond 64). The figures behind the rule are in
+    take several words beyond 64). ``info["stage_seconds"]`` gives the wall seconds each
+    stage took. The figures behind the rule are in
     ``docs/benchmarks.md`` (SOP section).
 
     Parameters
@@ -2157,7 +2222,8 @@ def _root_stage(
     first (:data:`CUTS_FIRST_SHARE`). The root's rows are precedence path cuts valid for every
     order, and no arc is fixed here, so the Lagrangian bound holds for every order
     (:func:`taopt.models.sop_dp.solve_sop_dp`'s ``lagrange``). ``info`` gains
-    ``root_stage`` (bound, seconds, rounds, the share of the gap it closed).
+    ``root_stage`` (bound, seconds, rounds, whether its loop ended with no violated row, the
+    share of the gap it closed).
     """
     from taopt.models.sop_cuts import SopCutModel, round_point
 
@@ -2182,6 +2248,7 @@ def _root_stage(
         "bound": root.bound,
         "seconds": time.perf_counter() - began,
         "rounds": root.rounds,
+        "complete": root.complete,
         "closed": closed,
         "cuts_first": cuts_first,
     }
@@ -2241,6 +2308,26 @@ def _window_stage(
     return (found.lam if used else None), bound
 
 
+def _beamed(
+    problem: SopProblem,
+    incumbent: Any,
+    deadline: Deadline,
+    beam_start: Callable[..., tuple[float, list[int]] | None],
+    info: dict[str, Any],
+) -> Any:
+    """The better of ``incumbent`` and the orders of the DP stage's beam passes
+    (:func:`taopt.models.sop_dp._beam_start`, passed as ``beam_start``: widths 64, 256 and
+    :data:`TREE_FIRST_BEAM_WIDTH`, each started only when it should end in its budget) within
+    :data:`TREE_FIRST_BEAM_SHARE` of the time left; ``info["tree_first_beam"]`` their best
+    cost when it improved the incumbent."""
+    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    budget = Deadline(deadline.share(TREE_FIRST_BEAM_SHARE), cancel=deadline.token)
+    passes: dict[str, Any] = {}
+    found = beam_start(problem, known, TREE_FIRST_BEAM_WIDTH, budget, passes)
+    info["tree_first_beam"] = passes.get("beam")
+    return incumbent if found is None or found is known else found[1]
+
+
 def _searched(
     problem: SopProblem,
     result: Solution,
@@ -2248,10 +2335,11 @@ def _searched(
     seed: int,
     info: dict[str, Any],
     lower: float,
+    share: float = ILS_SHARE,
 ) -> Solution:
     """``result`` (the first DP stage's, stopped) with its order improved by the primal search
-    (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within
-    :data:`ILS_SHARE` of the time left and :data:`ILS_PATIENCE`; not run when its order is at
+    (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within ``share`` (by
+    default :data:`ILS_SHARE`) of the time left and :data:`ILS_PATIENCE`; not run when its order is at
     most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower`` (the root stage's
     bound). The bound is kept (an order changes no bound); the order found is re-scored by
     the family's scorer; ``info["ils"]`` says what ran."""
@@ -2264,7 +2352,7 @@ def _searched(
         info["ils"] = f"skipped: the gap is {100 * gap:.1f} %"
         return result
     began = time.perf_counter()
-    budget = Deadline(deadline.share(ILS_SHARE), cancel=deadline.token)
+    budget = Deadline(deadline.share(share), cancel=deadline.token)
     iterations = None if deadline.limited else ILS_ITERATIONS
     value, order, found = large_neighbourhood_search(
         problem,
@@ -2304,7 +2392,7 @@ def _stages(
 
     ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
     ``(ideals, capped, seconds)`` of a count already made (not made again)."""
-    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp, trial_cutoffs
+    from taopt.models.sop_dp import IDEAL_CAP, _beam_start, solve_sop_dp, trial_cutoffs
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
@@ -2322,6 +2410,17 @@ def _stages(
     else:
         ideals, capped, counted_in = counted
     info: dict[str, Any] = {"ideals": ideals, "ideals_capped": capped}
+    seconds: dict[str, float] = {}  # info["stage_seconds"]: wall seconds per stage
+    if counted is None:
+        seconds["count"] = counted_in
+    clock = [time.perf_counter()]
+
+    def lap(name: str) -> None:
+        """Add the wall seconds since the last lap to stage ``name``."""
+        now = time.perf_counter()
+        seconds[name] = seconds.get(name, 0.0) + now - clock[0]
+        clock[0] = now
+
     bounding = time.perf_counter()
     _cheap_bound(problem)  # now, on the clock: a stage stopped at the deadline only reads it
     # a DP stage's setup (its bounds, its first layers) runs outside its clock: about
@@ -2520,7 +2619,7 @@ def _stages(
         """The proof stage (:data:`PROOF_GAP`): the DP with the root's LP re-solved per state
         and its give-up rule, for the time left, from ``known`` (``bound``: a bound proven
         since the root stage; ``trials_ok``: where the gap is wider than :data:`PROOF_GAP`, the
-        trial cutoffs of :data:`TRIAL_CUTOFFS` instead of nothing; ``setup``: the measured
+        trial cutoffs instead of nothing (:func:`trials_wanted`); ``setup``: the measured
         setup of the DP stage before it, which it needs again). None when it does not run
         (``info["proof"]`` says why). A run
         that gave up is combined with the later stages' result at the end only, so their
@@ -2542,7 +2641,7 @@ def _stages(
             lower = max(lower, bound)
         gap = root_gap(None if value is None else value[0], lower)
         trials = gap > PROOF_GAP
-        if trials and not (TRIAL_CUTOFFS and trials_ok):
+        if trials and not trials_ok:
             info["proof"] = f"skipped: the gap is {100 * gap:.1f} %"
             return None
         left = deadline.share(TRIAL_SHARE) if trials else deadline.remaining()
@@ -2596,8 +2695,10 @@ def _stages(
         and (deadline.remaining() or 0.0) * (1.0 if engine == "dp" or not capped else DP_SHARE)
         < counted_in + MARGIN
     )
+    lap("setup")
     if plan != "dp" and engine != "milp":  # the DP does not fit the memory: a stage that does
         result = degraded(problem, plan, deadline, incumbent, max_memory_gb, began, stage)
+        lap("degraded")
         used = plan
     elif deadline.expired(MARGIN) or dp_cannot_fit:  # no time left after warm start and count
         known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
@@ -2606,6 +2707,7 @@ def _stages(
         used = "none"
     elif engine == "milp":
         result = milp(incumbent, deadline.remaining())
+        lap("milp")
         used = "milp"
     elif engine == "dp" or not capped:
         alone = None if alone_states >= every_state else alone_states  # None: no cap
@@ -2619,14 +2721,16 @@ def _stages(
         )
         if watch is not None:  # stopped before the probe's end: what it saw
             watch.close()
+        lap("dp")
         used = "dp"
     else:
-        cuts_first = False
+        cuts_first = straight = False
         watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
                 problem, deadline, incumbent, info, verbose
             )
+            lap("root")
             if ROW_CREDIT and lagrange is not None:
                 credit = root_model.row_credit(saved=True)
             if on_root is not None:
@@ -2634,15 +2738,44 @@ def _stages(
             root_bound = info["root_stage"]["bound"]
             if not cuts_first:
                 window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
+                lap("window")
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
-            path = "cuts" if cuts_first else "root+dp"
+            if not cuts_first and not root_closed():
+                # the tree first where the trials would be skipped for it (TREE_FIRST)
+                value = _known_order(
+                    problem.cost, problem.closure, problem.start, problem.end, incumbent
+                )
+                best = max(lower, cheap, window_bound)
+                gap = root_gap(None if value is None else value[0], best)
+                complete = bool(info["root_stage"].get("complete"))
+                straight = tree_first(True, complete, gap)
+            path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
-        if cuts_first:  # the root closed most of the gap: the cut engine gets the time
+        if straight:  # the tree first (TREE_FIRST): a narrow beam's order, the tree, the search
+            incumbent = _beamed(problem, incumbent, deadline, _beam_start, info)
+            lap("beam")
+            known = _known_order(
+                problem.cost, problem.closure, problem.start, problem.end, incumbent
+            )
+            if known is not None:
+                start = _stopped(problem, known, lower, began, "portfolio", {})
+                searched = _searched(
+                    problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
+                )
+                incumbent = searched.solution
+                lap("search")
             result = milp(incumbent, deadline.remaining())
+            lap("milp")
+            used = "milp"
+            info["tree_first"] = True
+        elif cuts_first:  # the root closed most of the gap: the cut engine gets the time
+            result = milp(incumbent, deadline.remaining())
+            lap("milp")
             used = "milp"
         else:
             # the proof stage first when the order known is already close to the root bound
             proved = proof(incumbent, None)
+            lap("proof")
             if proved is not None and proved.solution is not None:
                 incumbent = proved.solution
             share = deadline.share(DP_SHARE)
@@ -2676,19 +2809,25 @@ def _stages(
                 )
                 if watch is not None:  # stopped before the probe's end: what it saw
                     watch.close()
+                lap("dp")
             if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 root_bound = info.get("root_stage", {}).get("bound", cheap)
                 lower = float(root_bound) if np.isfinite(root_bound) else cheap
                 result = _searched(problem, result, deadline, seed, info, lower)
+                lap("search")
             if result.status == TIME_LIMIT and proved is None and not deadline.expired(MARGIN):
                 # the first stages brought the order close to the bound: the proof stage now,
                 # or its trial cutoffs where the gap is still wide (TRIAL_CUTOFFS)
                 proved = proof(
                     result.solution,
                     result.bound,
-                    trials_ok=True,
+                    trials_ok=trials_wanted(
+                        milp_ok and formulation == "cuts",
+                        bool(info.get("root_stage", {}).get("complete")),
+                    ),
                     setup=result.info.get("setup_seconds", 0.0),
                 )
+                lap("proof")
                 if proved is not None:
                     used += "+proof"
                     if proved.status != TIME_LIMIT:
@@ -2727,12 +2866,14 @@ def _stages(
                     state_lp=state_lp(),
                     window=window,
                 )
+                lap("second_dp")
                 used += "+dp"
                 result = _combine(first, second)
             if result.status == TIME_LIMIT and not deadline.expired(MARGIN):
                 info.update({f"dp_{k}": v for k, v in result.info.items()})
                 known = result.solution if result.solution is not None else incumbent
                 result = milp(known, deadline.remaining(), dp_result=result)
+                lap("milp")
                 used += "+milp"
             if proved is not None and proved.status == TIME_LIMIT:
                 # a proof stage that gave up: its order and bound join at the end, the later
@@ -2747,6 +2888,7 @@ def _stages(
         last_cap = max(second_states, max_states) if grow else 1 << 62
         setup = max(setups, default=counted_in)  # no DP stage ran: as long as the count
         result = use_the_rest(problem, result, deadline, last_cap, max_memory_gb, setup, stage)
+        lap("rest")
     if result.status == TIME_LIMIT and np.isfinite(window_bound):
         result = _raised(result, window_bound)
     stage(BASE_BYTES)  # the process itself, whatever ran
@@ -2755,6 +2897,8 @@ def _stages(
     info["memory_stages"] = info["memory_estimate"]
     if predicted:
         info["memory_estimate"] = predicted[0]
+    lap("other")
+    info["stage_seconds"] = seconds
     return result.replace(
         runtime=time.perf_counter() - began,
         method="exact-sop",

@@ -326,6 +326,7 @@ def _portfolio_with_trials(seed: int, monkeypatch) -> tuple[float, object] | Non
     monkeypatch.setattr(SopCutModel, "root", one_round)
     monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
     monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", True)  # the trials, though the tree follows
     problem = _instance(seed)
     optimum = sop_brute_force(problem)
     if not math.isfinite(optimum):
@@ -347,3 +348,135 @@ def test_portfolio_trial_cutoffs_prove_the_brute_force_optimum(monkeypatch):
         if got is not None:
             ran += "proof_trials" in got[1].info
     assert ran > 0
+
+
+def test_trials_wanted_only_without_the_tree_next(monkeypatch):
+    """The rule of :func:`taopt.models.sop.trials_wanted`: no trial cutoffs where the tree
+    follows a complete root loop (unless TRIALS_BEFORE_TREE); they run where the tree does not
+    follow or the root loop was cut short; never without TRIAL_CUTOFFS."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", False)
+    monkeypatch.setattr(sop, "TRIAL_CUTOFFS", True)
+    assert not sop.trials_wanted(tree_next=True, root_complete=True)
+    assert sop.trials_wanted(tree_next=True, root_complete=False)
+    assert sop.trials_wanted(tree_next=False, root_complete=True)
+    assert sop.trials_wanted(tree_next=False, root_complete=False)
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", True)
+    assert sop.trials_wanted(tree_next=True, root_complete=True)
+    monkeypatch.setattr(sop, "TRIAL_CUTOFFS", False)
+    for tree_next in (True, False):
+        for complete in (True, False):
+            assert not sop.trials_wanted(tree_next, complete)
+
+
+def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
+    """On the tiny SOPs of :func:`_portfolio_with_trials`'s setting but with the rule's
+    default (the tree follows: no trials), the portfolio runs no trial cutoff, still proves
+    the brute-force optimum, reports its stages' seconds, and some run reached the cut engine
+    past a proof stage skipped on its gap (the rule's path was taken; the one-round root loop
+    taken as complete)."""
+    from taopt.models import sop, sop_dp
+
+    plain = sop_dp.solve_sop_dp
+
+    def stopped_early(*args, **kwargs):
+        if kwargs.get("state_lp") is None:  # a DP stage, not a trial
+            kwargs["max_states"] = 1
+        return plain(*args, **kwargs)
+
+    root = SopCutModel.root
+
+    def one_round(self, deadline=None, rounds=1, **kwargs):  # a weaker root: a gap left
+        return root(self, deadline, rounds=1, **kwargs)
+
+    stage = sop._root_stage
+
+    def complete(*args, **kwargs):  # taken as complete: the rule's case
+        got = stage(*args, **kwargs)
+        args[3]["root_stage"]["complete"] = True
+        return got
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", stopped_early)
+    monkeypatch.setattr(SopCutModel, "root", one_round)
+    monkeypatch.setattr(sop, "_root_stage", complete)
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
+    monkeypatch.setattr(sop, "TREE_FIRST", False)  # the DP stages first, then the tree
+    reached = 0
+    for seed in range(6):
+        problem = _instance(seed)
+        optimum = sop_brute_force(problem)
+        if not math.isfinite(optimum):
+            continue
+        result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+        assert "proof_trials" not in result.info
+        stages = result.info["stage_seconds"]
+        assert "root" in stages and all(v >= 0.0 for v in stages.values())
+        assert sum(stages.values()) <= result.runtime + 1e-6
+        skipped = str(result.info.get("proof", "")).startswith("skipped: the gap")
+        reached += skipped and "milp" in result.info["engine"]
+    assert reached > 0
+
+
+def test_tree_first_where_the_trials_leave_the_gap_to_the_tree(monkeypatch):
+    """The rule of :func:`taopt.models.sop.tree_first`: only on a gap above PROOF_GAP, where
+    :func:`taopt.models.sop.trials_wanted` leaves it to the tree; never with TREE_FIRST off."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", False)
+    monkeypatch.setattr(sop, "TRIAL_CUTOFFS", True)
+    monkeypatch.setattr(sop, "TREE_FIRST", True)
+    wide, narrow = sop.PROOF_GAP + 0.01, sop.PROOF_GAP / 2
+    assert sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=narrow)
+    assert not sop.tree_first(tree_next=True, root_complete=False, gap=wide)
+    assert not sop.tree_first(tree_next=False, root_complete=True, gap=wide)
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", True)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+    monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", False)
+    monkeypatch.setattr(sop, "TREE_FIRST", False)
+    assert not sop.tree_first(tree_next=True, root_complete=True, gap=wide)
+
+
+def test_portfolio_tree_first_proves_the_brute_force_optimum(monkeypatch):
+    """With a weak root (one round) taken as complete and a wide gap, the portfolio skips the
+    DP stages for the tree (TREE_FIRST, ``info["tree_first"]``, engine "milp", no DP stage's
+    seconds) and still ends at the brute-force optimum, its order scored as reported."""
+    from taopt.models import sop
+
+    root = SopCutModel.root
+
+    def one_round(self, deadline=None, rounds=1, **kwargs):  # a weaker root: a gap left
+        return root(self, deadline, rounds=1, **kwargs)
+
+    stage = sop._root_stage
+
+    def complete(*args, **kwargs):  # taken as complete: the rule's case
+        got = stage(*args, **kwargs)
+        args[3]["root_stage"]["complete"] = True
+        return got
+
+    monkeypatch.setattr(SopCutModel, "root", one_round)
+    monkeypatch.setattr(sop, "_root_stage", complete)
+    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)  # every gap is wide
+    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
+    monkeypatch.setattr(sop, "TREE_FIRST", True)
+    straight = 0
+    for seed in range(6):
+        problem = _instance(seed)
+        optimum = sop_brute_force(problem)
+        if not math.isfinite(optimum):
+            continue
+        result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+        assert result.status == OPTIMAL
+        assert result.objective == pytest.approx(optimum)
+        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+        if result.info.get("tree_first"):
+            straight += 1
+            assert result.info["engine"] == "milp"
+            assert "dp" not in result.info["stage_seconds"]
+    assert straight > 0
