@@ -391,10 +391,15 @@ def test_layer_watch_reads_the_first_layers_of_the_dp():
     assert len(stopped) == 1
 
 
-def test_run_records_the_probe_before_its_later_stages(esc25):
+def test_run_records_the_probe_before_its_later_stages(esc25, monkeypatch):
     """A portfolio run whose DP stage ran records its estimate from the probe of that stage's
     first layers (layer sizes, states measured, extrapolated), within the guard (a 10 s limit:
-    ESC25 closes in about 1 s, and at 2 s a loaded machine could stop it before its DP began)."""
+    ESC25 closes in about 1 s, and at 2 s a loaded machine could stop it before its DP began).
+    The DP stage first (TREE_FIRST off: ESC25's root loop is complete, so the tree would go
+    first and no DP stage would run)."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, "TREE_FIRST", False)
     guard, _ = _footprint(esc25, {"time_limit": 10.0, "cpsat": False})
     result = solve_sop_problem(esc25, time_limit=10.0, cpsat=False)
     prediction = result.info["memory_prediction"]
