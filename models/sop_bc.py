@@ -151,8 +151,8 @@ NODE_FULL = 16
 #: (off: only when no path cut is violated, as the root loop does). Off: on, the nodes to
 #: proof fell by a fifth or a quarter (prob.42 331 against 415, ftv33-0.02-1 107 against 143,
 #: the optimum as incumbent), but each node costs more (``separate_sets`` every round), and
-#: at 60 s the bound was lower on ry48p.1 (15,204 at 438 nodes against 15,250 at 780) and
-#: level on ft53.1 (docs/benchmarks.md, issue 33, branch b14).
+#: at 60 s the bound was lower on ry48p.1 (15,204 against 15,250, 15,264 against 15,289)
+#: and level on ft53.1 (docs/benchmarks.md, issue 33, branch b14).
 NODE_SETS = False
 
 #: The node's last LP point is rounded to an order (:func:`~taopt.models.sop_cuts.round_point`)
