@@ -99,6 +99,7 @@ __all__ = [
     "LOOKAHEAD",
     "NODE_ROUNDS",
     "NODE_FULL",
+    "NODE_SETS",
     "NODE_STALL",
     "NODE_TIGHT",
     "POOL",
@@ -146,6 +147,14 @@ NODE_TIGHT = 0.5
 
 #: See :data:`NODE_TIGHT`.
 NODE_FULL = 16
+
+#: Whether a node round that found precedence path cuts also separates the set path cuts
+#: (off: only when no path cut is violated, as the root loop does). Off: on, the nodes to
+#: proof fell by a fifth or a quarter (prob.42 331 against 415, ftv33-0.02-1 107 against 143,
+#: the optimum as incumbent), but each node costs more (``separate_sets`` every round), and
+#: at 60 s the bound was lower on ry48p.1 (15,204 against 15,250, 15,264 against 15,289)
+#: and level on ft53.1 (docs/benchmarks.md, issue 33, branch b14).
+NODE_SETS = False
 
 #: The node's last LP point is rounded to an order (:func:`~taopt.models.sop_cuts.round_point`)
 #: at every this-many-th node (and at every node while no order is known).
@@ -1195,6 +1204,10 @@ class BranchCut:
                 among = model.flows[model.pairs[:, 0], model.pairs[:, 1]] < 1 + NODE_TIGHT
             cuts = model.separate(values, deadline=deadline, among=among)
             sides = None
+            if cuts and NODE_SETS and SET_CUTS:  # both families this round
+                sides = [1.0] * len(cuts)
+                more, more_sides = model.separate_sets(values, deadline=deadline)
+                cuts, sides = cuts + more, sides + list(more_sides)
             if not cuts and SET_CUTS:
                 cuts, sides = model.separate_sets(values, deadline=deadline)
             if not cuts:

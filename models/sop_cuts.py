@@ -94,6 +94,7 @@ __all__ = [
     "SET_TIGHT",
     "STRETCH_CUTS",
     "STRETCH_MIN_GAP",
+    "STRETCH_BACK_TO_BACK",
     "CUT_TOLERANCE",
     "FLOW_SCALE",
     "KEEP_HIGHS_CUTS",
@@ -156,6 +157,17 @@ STRETCH_CUTS = True
 #: Stretch rows only while the best order is more than this share above the bound
 #: (``_wants_stretch``).
 STRETCH_MIN_GAP = 0.01
+
+#: Whether one LP loop (:meth:`SopCutModel.root`) may start a second extended LP right after
+#: the first one's rows (the model's :data:`~taopt.models.sop_stretch.STRETCH_ROUNDS` allowing).
+#: At its optimum the first one's rows give the x-LP the extended LP's value (LP duality,
+#: :mod:`taopt.models.sop_stretch`), so a second one right after it adds only what the path
+#: and set rows separated in between add: +0.3 on ft53.1 and prob.42, +3 on ry48p.1, +0.7 on
+#: ftv33-0.02-1 for 2-10 s each. Off, the second waits for a later loop (after a MIP round's
+#: rows, :func:`solve_sop_cuts`). On, as before: off, the tree needed more nodes to proof
+#: (prob.42 479 against 415, ftv33-0.02-1 235 against 143, the optimum as incumbent) and its
+#: bound at 60 s on ft53.1 was lower in both runs (docs/benchmarks.md, issue 33, branch b14).
+STRETCH_BACK_TO_BACK = True
 
 #: A row is violated when the LP point's left-hand side is below ``1 - CUT_TOLERANCE``.
 CUT_TOLERANCE = 1e-4
@@ -388,6 +400,9 @@ class SopCutModel:
         self.cut_weights: list[np.ndarray | None] = []
         #: Extended LPs of :mod:`taopt.models.sop_stretch` solved so far.
         self.stretch_solves = 0
+        #: Seconds in :meth:`~taopt.models.sop_cuts.SopCutModel._stretch` so far (the
+        #: extended LPs, built and solved, started or not).
+        self.stretch_seconds = 0.0
         self.is_mip = False
         #: True once a MIP round was left running past the deadline
         #: (:data:`taopt.runtime.highs.DETACHED`): ``highs`` must not be touched again.
@@ -1053,7 +1068,7 @@ class SopCutModel:
             if not cuts:  # none violated, unless the deadline cut the separation short
                 complete = deadline is None or not deadline.expired(MARGIN)
                 if complete and stretch and self._stretch(new_value, deadline):
-                    stall = 0
+                    stall, stretch = 0, STRETCH_BACK_TO_BACK
                     continue
                 break
             self.add_cuts(cuts, sides)
@@ -1066,7 +1081,9 @@ class SopCutModel:
         started for lack of time is tried again when a later loop (a MIP round's) completes."""
         if self.stretch_solves >= STRETCH_ROUNDS:
             return False
+        began = time.perf_counter()
         rows = stretch_rows(self, value, deadline)
+        self.stretch_seconds += time.perf_counter() - began
         if rows is None:  # not started (no inner pair, or too little time): a later loop may
             return False
         self.stretch_solves += 1
@@ -1265,7 +1282,9 @@ def root_stage(
     :func:`taopt.models.sop_bc.solve_sop_bc`): the LP cut loop (stretch rows while
     :func:`_wants_stretch`), the last point rounded to an order, arcs fixed by reduced cost
     against the best order. Returns (model, best order or None, proven bound, info with
-    ``root_bound``, ``root_lp``, ``root_rounds``, ``root_complete``, ``root_fixed``).
+    ``root_bound``, ``root_lp``, ``root_rounds``, ``root_complete``, ``root_fixed``,
+    ``root_stretch_lps`` and ``root_stretch_seconds``: the model's extended LPs and their
+    seconds so far, :meth:`SopCutModel._stretch`).
     ``model``: as in :func:`solve_sop_cuts`."""
     known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
     if model is None:
@@ -1287,6 +1306,8 @@ def root_stage(
         "root_rounds": root.rounds,
         "root_complete": root.complete,
         "root_fixed": fixed,
+        "root_stretch_lps": model.stretch_solves,
+        "root_stretch_seconds": model.stretch_seconds,
     }
     return model, known, bound, info
 

@@ -9,6 +9,7 @@ import itertools
 import numpy as np
 import pytest
 
+from taopt.models import sop_cuts
 from taopt.models.sop_cuts import SopCutModel, solve_sop_cuts
 from taopt.models.sop_stretch import stretch_domains, stretch_rows
 from taopt.result import OPTIMAL
@@ -118,3 +119,24 @@ def test_cut_engine_with_stretch_rows_matches_brute_force(seed, density):
     assert result.status == OPTIMAL
     assert result.objective == pytest.approx(optimum)
     assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+
+
+@pytest.mark.parametrize("back_to_back", [False, True])
+def test_extended_lps_per_root_loop(back_to_back, monkeypatch):
+    """``STRETCH_BACK_TO_BACK`` off: a root loop starts one extended LP at most, the model's
+    second waits for the next loop; on: both in the first loop (an extended LP that always
+    finds rows stands in for the real one, whose rows the tiny SOPs' cut loop leaves none)."""
+    monkeypatch.setattr(sop_cuts, "STRETCH_BACK_TO_BACK", back_to_back)
+
+    def always(self, value, deadline):
+        if self.stretch_solves >= sop_cuts.STRETCH_ROUNDS:
+            return False
+        self.stretch_solves += 1
+        return True
+
+    monkeypatch.setattr(SopCutModel, "_stretch", always)
+    model = SopCutModel(_instance(1, 0.5))
+    model.root(stretch=True)
+    assert model.stretch_solves == (2 if back_to_back else 1)
+    model.root(stretch=True)
+    assert model.stretch_solves == 2
