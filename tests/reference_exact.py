@@ -115,6 +115,20 @@ def sop_orders(problem):
                 yield order
 
 
+def assert_rows_hold(model, problem, tolerance: float = 1e-9) -> None:
+    """Every cut row of ``model`` (a :class:`taopt.models.sop_cuts.SopCutModel`: the sum of
+    its arcs, weighted or not, at least its side) holds on every feasible order of
+    ``problem`` (:func:`sop_orders`), up to ``tolerance``."""
+    for order in sop_orders(problem):
+        used = np.zeros(model.n_arcs)
+        used[model.arc_index[order[:-1], order[1:]]] = 1.0
+        for row, side, weights in zip(
+            model.cut_rows, model.cut_sides, model.cut_weights, strict=True
+        ):
+            lhs = used[row].sum() if weights is None else used[row] @ weights
+            assert lhs >= side - tolerance, (order, row)
+
+
 def sop_brute_force(problem: taopt.SopProblem) -> float:
     """Cheapest precedence-respecting path from start to end over every order of the rest."""
     inner = [v for v in range(problem.n) if v not in (problem.start, problem.end)]

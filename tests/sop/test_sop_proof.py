@@ -161,14 +161,9 @@ def test_portfolio_proof_stage_proves_the_brute_force_optimum(seed, monkeypatch)
 
     monkeypatch.setattr(sop, "PROOF_GAP", 1.0)
     monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
-    problem = _instance(seed)
-    optimum = sop_brute_force(problem)
-    if not math.isfinite(optimum):
+    result = _checked_run(seed)
+    if result is None:
         return
-    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
-    assert result.status == OPTIMAL
-    assert result.objective == pytest.approx(optimum)
-    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
     assert isinstance(result.info["proof"], dict)
 
 
@@ -327,15 +322,8 @@ def _portfolio_with_trials(seed: int, monkeypatch) -> tuple[float, object] | Non
     monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
     monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)  # the DP path, never the cut engine first
     monkeypatch.setattr(sop, "TRIALS_BEFORE_TREE", True)  # the trials, though the tree follows
-    problem = _instance(seed)
-    optimum = sop_brute_force(problem)
-    if not math.isfinite(optimum):
-        return None
-    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
-    assert result.status == OPTIMAL
-    assert result.objective == pytest.approx(optimum)
-    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
-    return optimum, result
+    result = _checked_run(seed)
+    return None if result is None else (result.objective, result)
 
 
 def test_portfolio_trial_cutoffs_prove_the_brute_force_optimum(monkeypatch):
@@ -370,20 +358,11 @@ def test_trials_wanted_only_without_the_tree_next(monkeypatch):
             assert not sop.trials_wanted(tree_next, complete)
 
 
-def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
-    """On the tiny SOPs of :func:`_portfolio_with_trials`'s setting but with the rule's
-    default (the tree follows: no trials), the portfolio runs no trial cutoff, still proves
-    the brute-force optimum, reports its stages' seconds, and some run reached the cut engine
-    past a proof stage skipped on its gap (the rule's path was taken; the one-round root loop
-    taken as complete)."""
-    from taopt.models import sop, sop_dp
-
-    plain = sop_dp.solve_sop_dp
-
-    def stopped_early(*args, **kwargs):
-        if kwargs.get("state_lp") is None:  # a DP stage, not a trial
-            kwargs["max_states"] = 1
-        return plain(*args, **kwargs)
+def _rule_setting(monkeypatch, tree_first: bool) -> None:
+    """The setting of the trial and tree-first rules' portfolio tests: a weaker root (one
+    round) taken as complete within its share, every gap wide (``PROOF_GAP`` -1), the cut
+    engine never first; ``TREE_FIRST`` as given."""
+    from taopt.models import sop
 
     root = SopCutModel.root
 
@@ -392,27 +371,62 @@ def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
 
     stage = sop._root_stage
 
-    def complete(*args, **kwargs):  # taken as complete: the rule's case
+    def complete(*args, **kwargs):  # taken as complete: the rules' case
         got = stage(*args, **kwargs)
         args[3]["root_stage"]["complete"] = True
         return got
 
-    monkeypatch.setattr(sop_dp, "solve_sop_dp", stopped_early)
     monkeypatch.setattr(SopCutModel, "root", one_round)
     monkeypatch.setattr(sop, "_root_stage", complete)
     monkeypatch.setattr(sop, "PROOF_GAP", -1.0)
     monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
-    monkeypatch.setattr(sop, "TREE_FIRST", False)  # the DP stages first, then the tree
-    reached = 0
+    monkeypatch.setattr(sop, "TREE_FIRST", tree_first)
+
+
+def _checked_run(seed: int):
+    """The portfolio (no CP-SAT, ideals taken as too many, the worst order as the warm start)
+    on the tiny SOP of ``seed``, checked against brute force (optimal, the optimum, its order
+    so scored); None when the SOP has no order."""
+    from taopt.models import sop
+
+    problem = _instance(seed)
+    optimum = sop_brute_force(problem)
+    if not math.isfinite(optimum):
+        return None
+    result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
+    assert result.status == OPTIMAL
+    assert result.objective == pytest.approx(optimum)
+    assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    return result
+
+
+def _rule_runs():
+    """:func:`_checked_run` on seeds 0-5, the SOPs that have an order."""
     for seed in range(6):
-        problem = _instance(seed)
-        optimum = sop_brute_force(problem)
-        if not math.isfinite(optimum):
-            continue
-        result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
-        assert result.status == OPTIMAL
-        assert result.objective == pytest.approx(optimum)
-        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+        result = _checked_run(seed)
+        if result is not None:
+            yield result
+
+
+def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
+    """On the tiny SOPs of :func:`_portfolio_with_trials`'s setting but with the rule's
+    default (the tree follows: no trials), the portfolio runs no trial cutoff, still proves
+    the brute-force optimum, reports its stages' seconds, and some run reached the cut engine
+    past a proof stage skipped on its gap (the rule's path was taken; the one-round root loop
+    taken as complete)."""
+    from taopt.models import sop_dp
+
+    plain = sop_dp.solve_sop_dp
+
+    def stopped_early(*args, **kwargs):
+        if kwargs.get("state_lp") is None:  # a DP stage, not a trial
+            kwargs["max_states"] = 1
+        return plain(*args, **kwargs)
+
+    monkeypatch.setattr(sop_dp, "solve_sop_dp", stopped_early)
+    _rule_setting(monkeypatch, tree_first=False)  # the DP stages first, then the tree
+    reached = 0
+    for result in _rule_runs():
         assert "proof_trials" not in result.info
         stages = result.info["stage_seconds"]
         assert "root" in stages and all(v >= 0.0 for v in stages.values())
@@ -446,35 +460,10 @@ def test_portfolio_tree_first_proves_the_brute_force_optimum(monkeypatch):
     """With a weak root (one round) taken as complete and a wide gap, the portfolio skips the
     DP stages for the tree (TREE_FIRST, ``info["tree_first"]``, engine "milp", no DP stage's
     seconds) and still ends at the brute-force optimum, its order scored as reported."""
-    from taopt.models import sop
 
-    root = SopCutModel.root
-
-    def one_round(self, deadline=None, rounds=1, **kwargs):  # a weaker root: a gap left
-        return root(self, deadline, rounds=1, **kwargs)
-
-    stage = sop._root_stage
-
-    def complete(*args, **kwargs):  # taken as complete: the rule's case
-        got = stage(*args, **kwargs)
-        args[3]["root_stage"]["complete"] = True
-        return got
-
-    monkeypatch.setattr(SopCutModel, "root", one_round)
-    monkeypatch.setattr(sop, "_root_stage", complete)
-    monkeypatch.setattr(sop, "PROOF_GAP", -1.0)  # every gap is wide
-    monkeypatch.setattr(sop, "CUTS_FIRST_SHARE", 2.0)
-    monkeypatch.setattr(sop, "TREE_FIRST", True)
+    _rule_setting(monkeypatch, tree_first=True)
     straight = 0
-    for seed in range(6):
-        problem = _instance(seed)
-        optimum = sop_brute_force(problem)
-        if not math.isfinite(optimum):
-            continue
-        result = sop.solve_sop_problem(problem, ideal_cap=1, cpsat=False, incumbent=_worst(problem))
-        assert result.status == OPTIMAL
-        assert result.objective == pytest.approx(optimum)
-        assert evaluate_order(problem, result.order) == pytest.approx(optimum)
+    for result in _rule_runs():
         if result.info.get("tree_first"):
             straight += 1
             assert result.info["engine"] == "milp"
