@@ -2001,7 +2001,11 @@ def solve_sop_problem(
     the root closes at least :data:`CUTS_FIRST_SHARE` of the gap
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
-    limit has passed (its last order and bound kept). Otherwise the DP runs first with at
+    limit has passed (its last order and bound kept). Where the trials would be skipped for
+    our tree and the best order is more than :data:`PROOF_GAP` above the bound after the root
+    and window stages, the tree goes first (:func:`tree_first`, :data:`TREE_FIRST`): the DP
+    stage's beam passes and the primal search give it an order, then it gets all the time
+    left (``info["tree_first"]``). Otherwise the DP runs first with at
     most ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
     often close the instance anyway: ESC25), then, if it has not proved the optimum, a
     second DP stage with the bound on both price sets (``both_prices``) and
