@@ -1284,7 +1284,7 @@ def root_stage(
     against the best order. Returns (model, best order or None, proven bound, info with
     ``root_bound``, ``root_lp``, ``root_rounds``, ``root_complete``, ``root_fixed``,
     ``root_stretch_lps`` and ``root_stretch_seconds``: the model's extended LPs and their
-    seconds so far, :meth:`SopCutModel._stretch`).
+    seconds so far, :meth:`~taopt.models.sop_cuts.SopCutModel._stretch`).
     ``model``: as in :func:`solve_sop_cuts`."""
     known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
     if model is None:
