@@ -2314,22 +2314,22 @@ def _window_stage(
 
 def _beamed(
     problem: SopProblem,
-    incumbent: Any,
+    known: tuple[float, list[int]] | None,
     deadline: Deadline,
-    beam_start: Callable[..., tuple[float, list[int]] | None],
     info: dict[str, Any],
-) -> Any:
-    """The better of ``incumbent`` and the orders of the DP stage's beam passes
-    (:func:`taopt.models.sop_dp._beam_start`, passed as ``beam_start``: widths 64, 256 and
+) -> tuple[float, list[int]] | None:
+    """The better of ``known`` (cost, order) and the orders of the DP stage's beam passes
+    (:func:`taopt.models.sop_dp._beam_start`: widths 64, 256 and
     :data:`TREE_FIRST_BEAM_WIDTH`, each started only when it should end in its budget) within
     :data:`TREE_FIRST_BEAM_SHARE` of the time left; ``info["tree_first_beam"]`` their best
-    cost when it improved the incumbent."""
-    known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
+    cost when it improved ``known``."""
+    from taopt.models.sop_dp import _beam_start  # sop_dp imports this module
+
     budget = Deadline(deadline.share(TREE_FIRST_BEAM_SHARE), cancel=deadline.token)
     passes: dict[str, Any] = {}
-    found = beam_start(problem, known, TREE_FIRST_BEAM_WIDTH, budget, passes)
+    found = _beam_start(problem, known, TREE_FIRST_BEAM_WIDTH, budget, passes)
     info["tree_first_beam"] = passes.get("beam")
-    return incumbent if found is None or found is known else found[1]
+    return found
 
 
 def _searched(
@@ -2396,7 +2396,7 @@ def _stages(
 
     ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
     ``(ideals, capped, seconds)`` of a count already made (not made again)."""
-    from taopt.models.sop_dp import IDEAL_CAP, _beam_start, solve_sop_dp, trial_cutoffs
+    from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp, trial_cutoffs
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
 
     began = time.perf_counter()
@@ -2729,6 +2729,7 @@ def _stages(
         used = "dp"
     else:
         cuts_first = straight = False
+        after_root: tuple[float, list[int]] | None = None  # the order known after the root
         watch = None
         if formulation == "cuts" and milp_ok:
             root_model, lagrange, incumbent, cuts_first = _root_stage(
@@ -2746,21 +2747,18 @@ def _stages(
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
             if not cuts_first and not root_closed():
                 # the tree first where the trials would be skipped for it (TREE_FIRST)
-                value = _known_order(
+                after_root = _known_order(
                     problem.cost, problem.closure, problem.start, problem.end, incumbent
                 )
                 best = max(lower, cheap, window_bound)
-                gap = root_gap(None if value is None else value[0], best)
+                gap = root_gap(None if after_root is None else after_root[0], best)
                 complete = bool(info["root_stage"].get("complete"))
                 straight = tree_first(True, complete, gap)
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
-        if straight:  # the tree first (TREE_FIRST): a narrow beam's order, the tree, the search
-            incumbent = _beamed(problem, incumbent, deadline, _beam_start, info)
+        if straight:  # the tree first (TREE_FIRST): the beams' order, the search, the tree
+            known = _beamed(problem, after_root, deadline, info)
             lap("beam")
-            known = _known_order(
-                problem.cost, problem.closure, problem.start, problem.end, incumbent
-            )
             if known is not None:
                 start = _stopped(problem, known, lower, began, "portfolio", {})
                 searched = _searched(
