@@ -1733,6 +1733,15 @@ TREE_FIRST_BEAM_WIDTH = 1024
 #: and the search from it gave 417.
 TREE_FIRST_SEARCH_SHARE = 0.15
 
+#: On the tree-first path the primal search runs only where the beams' order is more than this
+#: (relative) above the best bound: there the tree's own roundings stay far from it
+#: (esc-like-65-0.04, beams' order 417 on a bound of 203-208: the tree's best 1015). Below it
+#: the tree's orders are as good as the search's and its proof does not wait for it
+#: (60 s, load 5-6, the search before the tree and not: the same final orders on prob.42 243,
+#: ft53.1 7678-7679 and ry48p.1 15805, from beams' gaps of 15, 6.5 and 7.9 %; the search
+#: took 2.3 s of prob.42's 16-s proof, 444 nodes with it and without it).
+TREE_FIRST_SEARCH_GAP = 0.25
+
 
 def trials_wanted(tree_next: bool, root_complete: bool) -> bool:
     """Whether the proof stage may run its trial cutoffs on a gap above :data:`PROOF_GAP`:
@@ -1749,6 +1758,12 @@ def tree_first(tree_next: bool, root_complete: bool, gap: float) -> bool:
     (``root_complete``) and the relative ``gap`` of the best order to the best bound is above
     :data:`PROOF_GAP`, that is where :func:`trials_wanted` leaves the gap to the tree."""
     return TREE_FIRST and gap > PROOF_GAP and not trials_wanted(tree_next, root_complete)
+
+
+def tree_first_search(gap: float) -> bool:
+    """Whether the primal search runs before the tree on the tree-first path: the relative
+    ``gap`` of the beams' order to the best bound above :data:`TREE_FIRST_SEARCH_GAP`."""
+    return gap > TREE_FIRST_SEARCH_GAP
 
 
 #: Share of the time left the trial cutoffs may use: they replace the first DP stage's time
@@ -2004,8 +2019,9 @@ def solve_sop_problem(
     limit has passed (its last order and bound kept). Where the trials would be skipped for
     our tree and the best order is more than :data:`PROOF_GAP` above the bound after the root
     and window stages, the tree goes first (:func:`tree_first`, :data:`TREE_FIRST`): the DP
-    stage's beam passes and the primal search give it an order, then it gets all the time
-    left (``info["tree_first"]``). Otherwise the DP runs first with at
+    stage's beam passes give it an order, improved by the primal search where it is far above
+    the bound (:func:`tree_first_search`), then it gets all the time left
+    (``info["tree_first"]``). Otherwise the DP runs first with at
     most ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
     often close the instance anyway: ESC25), then, if it has not proved the optimum, a
     second DP stage with the bound on both price sets (``both_prices``) and
@@ -2756,10 +2772,10 @@ def _stages(
                 straight = tree_first(True, complete, gap)
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
-        if straight:  # the tree first (TREE_FIRST): the beams' order, the search, the tree
+        if straight:  # the tree first (TREE_FIRST): the beams, the search on a wide gap, the tree
             known = _beamed(problem, after_root, deadline, info)
             lap("beam")
-            if known is not None:
+            if known is not None and tree_first_search(root_gap(known[0], best)):
                 start = _stopped(problem, known, lower, began, "portfolio", {})
                 searched = _searched(
                     problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE

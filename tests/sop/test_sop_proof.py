@@ -469,3 +469,25 @@ def test_portfolio_tree_first_proves_the_brute_force_optimum(monkeypatch):
             assert result.info["engine"] == "milp"
             assert "dp" not in result.info["stage_seconds"]
     assert straight > 0
+
+
+def test_tree_first_searches_only_on_a_wide_gap(monkeypatch):
+    """:func:`taopt.models.sop.tree_first_search` on either side of its threshold, and the
+    portfolio on the tree-first path: the primal search before the tree where the gap is wide
+    (``info["ils"]``, a "search" stage), none where it is not; the brute-force optimum
+    either way."""
+    from taopt.models import sop
+
+    limit = sop.TREE_FIRST_SEARCH_GAP
+    assert sop.tree_first_search(limit + 0.01)
+    assert not sop.tree_first_search(limit)
+    _rule_setting(monkeypatch, tree_first=True)
+    for gap, searched in ((-1.0, True), (math.inf, False)):
+        monkeypatch.setattr(sop, "TREE_FIRST_SEARCH_GAP", gap)
+        straight = 0
+        for result in _rule_runs():
+            if result.info.get("tree_first"):
+                straight += 1
+                assert ("search" in result.info["stage_seconds"]) == searched
+                assert ("ils" in result.info) == searched
+        assert straight > 0
