@@ -332,3 +332,39 @@ def test_same_search_as_the_old_mechanics(seed, n, monkeypatch):
         old = _search(problem, 25)
     assert new == old
     assert new["lps"] > new["nodes"] > 1
+
+
+def test_missing_by_identity_equals_isin():
+    """``CutPool.missing`` (a lookup by row identity) names the pooled rows alive whose
+    identity is nonbasic in a stored basis, as ``np.isin`` does, on random pools."""
+    rng = np.random.default_rng(17)
+    for _ in range(200):
+        next_id = int(rng.integers(1, 60))
+        pooled = rng.permutation(next_id)[: int(rng.integers(1, next_id + 1))]
+        pool = sop_bc.CutPool(0, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), next_id)
+        pool.pooled, pool.alive = pooled, rng.random(len(pooled)) < 0.7
+        ids = rng.permutation(next_id)[: int(rng.integers(0, next_id + 1))]
+        row_status = np.where(rng.random(len(ids)) < 0.4, 0, sop_bc._BASIC).astype(np.int8)
+        expect = np.flatnonzero(np.isin(pooled, ids[row_status != sop_bc._BASIC]) & pool.alive)
+        got = pool.missing((None, row_status, ids))
+        assert np.array_equal(got, expect) if pool.alive.any() else not len(got)
+
+
+@pytest.mark.parametrize("runs", [0, 1, 3, 32])
+def test_take_by_runs_equals_entry_by_entry(runs, monkeypatch):
+    """``CsrRows.take`` of a mask copies the same arrays run by run (slices) as entry by
+    entry, whatever :data:`~taopt.models.sop_bc.TAKE_RUNS` lets through."""
+    rng = np.random.default_rng(19)
+    monkeypatch.setattr(sop_bc, "TAKE_RUNS", runs)
+    for _ in range(100):
+        count = int(rng.integers(0, 30))
+        dense = np.where(rng.random((count, 20)) < 0.3, rng.normal(size=(count, 20)), 0.0)
+        rows = CsrRows.of(sp.csr_matrix(dense))
+        mask = rng.random(count) < rng.random()
+        got = rows.take(mask)
+        lengths = np.diff(rows.indptr)
+        entries = np.repeat(mask, lengths)
+        assert np.array_equal(got.indptr, np.concatenate([[0], np.cumsum(lengths[mask])]))
+        assert np.array_equal(got.indices, rows.indices[entries])
+        assert np.array_equal(got.data, rows.data[entries])
+        assert got.indices.dtype == np.int32 and got.indptr.dtype == np.int32
