@@ -282,6 +282,9 @@ _STATUSES = {int(status): status for status in highspy.HighsBasisStatus.__member
 #: The same by value as a list (a list's index is cheaper than a dict's lookup).
 _BY_VALUE = [_STATUSES.get(value) for value in range(max(_STATUSES) + 1)]
 
+#: The value of ``kBasic``.
+_BASIC = int(highspy.HighsBasisStatus.kBasic)
+
 
 def _info(highs: highspy.Highs, name: str) -> Any:
     """HiGHS's info value ``name`` of the last run (``getInfoValue``: 0.5 µs, where
@@ -305,6 +308,12 @@ def _packed(statuses: Any) -> np.ndarray:
 TDOT_SPARSE = 0.5
 
 
+#: :meth:`CsrRows.take` copies the rows of a mask run by run (slices) when they lie in this
+#: many runs at most (mechanics only: the same arrays; 32 by reasoning, a slice costs about
+#: a microsecond where an entry-by-entry copy of the rows costs some hundreds).
+TAKE_RUNS = 32
+
+
 @dataclass
 class CsrRows:
     """Rows of a sparse matrix over ``n`` columns as plain CSR arrays (``indptr``, ``indices``,
@@ -326,6 +335,9 @@ class CsrRows:
     n: int
     _csr: Any = field(default=None, repr=False, compare=False)
     _csc: Any = field(default=None, repr=False, compare=False)
+    #: The growable arrays ``indices`` and ``data`` are the first ``nnz`` entries of, when
+    #: made by :meth:`append` (:class:`_Entries`); None for arrays of their own.
+    _store: _Entries | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def of(cls, matrix: Any) -> CsrRows:
@@ -387,8 +399,10 @@ class CsrRows:
         = s`` for ``s ≠ 0``, and a sum that starts at ``+0`` is ``+0`` or nonzero, never
         ``-0`` (``+0 + (-0) = +0``, an exact cancellation gives ``+0``)."""
         nonzero = np.flatnonzero(y)
-        if len(nonzero) < TDOT_SPARSE * self.count:
-            return self.take(nonzero).tdot(y[nonzero])
+        if len(nonzero) < TDOT_SPARSE * self.count:  # those rows' transpose, made once
+            part = self.take(nonzero)
+            shape = (self.n, len(nonzero))
+            return sp.csc_matrix((part.data, part.indices, part.indptr), shape=shape) @ y[nonzero]
         if self._csc is None:  # the transpose's arrays are these (scipy's ``.T``)
             self._csc = sp.csc_matrix(
                 (self.data, self.indices, self.indptr), shape=(self.n, self.count)
@@ -396,11 +410,21 @@ class CsrRows:
         return self._csc @ y
 
     def take(self, which: np.ndarray) -> CsrRows:
-        """The rows at positions ``which`` (indices, in their order, or a mask)."""
+        """The rows at positions ``which`` (indices, in their order, or a mask). A mask of
+        a few runs of rows (the rows left after the pool retires a few: :data:`TAKE_RUNS`)
+        copies each run's entries as one slice, not entry by entry; the same arrays."""
         if which.dtype == bool:  # entries by a mask, in their order
             lengths = np.diff(self.indptr)
             indptr = np.zeros(int(which.sum()) + 1, dtype=np.int32)
             np.cumsum(lengths[which], out=indptr[1:])
+            edges = np.flatnonzero(np.diff(which, prepend=False, append=False))
+            if len(edges) <= 2 * TAKE_RUNS:  # runs [edges[0], edges[1]), [edges[2], ...)
+                spans = self.indptr[edges].reshape(-1, 2).tolist()
+                indices = np.concatenate(
+                    [self.indices[a:b] for a, b in spans] or [self.indices[:0]]
+                )
+                data = np.concatenate([self.data[a:b] for a, b in spans] or [self.data[:0]])
+                return CsrRows(indptr, indices, data, self.n)
             entries = np.repeat(which, lengths)
             return CsrRows(indptr, self.indices[entries], self.data[entries], self.n)
         starts = self.indptr[which]
@@ -411,13 +435,50 @@ class CsrRows:
         return CsrRows(indptr, self.indices[where], self.data[where], self.n)
 
     def append(self, other: CsrRows) -> CsrRows:
-        """These rows, then ``other``'s."""
+        """These rows, then ``other``'s: their entries written after these in place when
+        these are the last rows appended to a growable store (:class:`_Entries`, which then
+        copies only ``other``'s entries), else into a new store of twice the room. The
+        same arrays as a concatenation; rows made before keep theirs (a store is only ever
+        written past the entries in use)."""
+        nnz, more = self.nnz, other.nnz
+        indptr = np.concatenate([self.indptr, other.indptr[1:] + np.int32(nnz)]).astype(np.int32)
+        store = self._store
+        if store is None or store.used != nnz or store.room < nnz + more:
+            store = _Entries.of(self.indices, self.data, 2 * (nnz + more))
+        store.indices[nnz : nnz + more] = other.indices
+        store.data[nnz : nnz + more] = other.data
+        store.used = nnz + more
         return CsrRows(
-            np.concatenate([self.indptr, other.indptr[1:] + self.indptr[-1]]).astype(np.int32),
-            np.concatenate([self.indices, other.indices]),
-            np.concatenate([self.data, other.data]),
+            indptr,
+            store.indices[: nnz + more],
+            store.data[: nnz + more],
             self.n,
+            _store=store,
         )
+
+
+@dataclass
+class _Entries:
+    """Growable column indices and values of CSR rows (:meth:`CsrRows.append`): ``used``
+    entries written, room for ``room``. Rows made on the first ``k <= used`` entries view
+    them; only entries past ``used`` are ever written, so those rows never change."""
+
+    indices: np.ndarray
+    data: np.ndarray
+    used: int
+
+    @property
+    def room(self) -> int:
+        """Entries the arrays hold."""
+        return len(self.indices)
+
+    @classmethod
+    def of(cls, indices: np.ndarray, data: np.ndarray, room: int) -> _Entries:
+        """A store of ``room`` entries holding ``indices`` and ``data`` first."""
+        store = cls(np.empty(room, dtype=np.int32), np.empty(room, dtype=float), len(indices))
+        store.indices[: len(indices)] = indices
+        store.data[: len(data)] = data
+        return store
 
 
 @dataclass
@@ -603,14 +664,16 @@ class CutPool:
             & self.alive
         )
 
-    def missing(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    def missing(self, basis: tuple[np.ndarray | None, np.ndarray, np.ndarray]) -> np.ndarray:
         """The positions in the pool of the rows nonbasic in a stored basis (tight at its
         LP): with them back in the LP (:meth:`restore`) the basis maps (:meth:`statuses`)."""
         _, row_status, ids = basis
         if not self.alive.any():
             return np.zeros(0, dtype=np.int64)
-        tight = ids[row_status != int(highspy.HighsBasisStatus.kBasic)]
-        return np.flatnonzero(np.isin(self.pooled, tight) & self.alive)
+        size = max(self.next_id, int(ids.max(initial=-1)) + 1, int(self.pooled.max()) + 1)
+        tight = np.zeros(size, dtype=bool)  # by identity (``isin`` sorted both)
+        tight[ids[row_status != _BASIC]] = True
+        return np.flatnonzero(tight[self.pooled] & self.alive)
 
     def restore(
         self, model: SopCutModel, which: np.ndarray | None = None, returned: bool = True
@@ -649,10 +712,16 @@ class CutPool:
             self.repaired += len(which)
         return len(which)
 
-    def statuses(self, basis: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray | None:
+    def statuses(
+        self,
+        basis: tuple[np.ndarray | None, np.ndarray, np.ndarray],
+        basic_columns: int | None = None,
+    ) -> np.ndarray | None:
         """A stored basis's row statuses for the LP's rows now, by identity (rows it does not
         know: basic); None when that basis no longer has one basic variable per row (a row
-        nonbasic in it has left the LP), and counts it in ``stale``."""
+        nonbasic in it has left the LP), and counts it in ``stale``. ``basic_columns``: its
+        basic columns when known (:meth:`_ChildBasis.basic_columns`; its column statuses are
+        then not read)."""
         col_status, row_status, ids = basis
         basic = int(highspy.HighsBasisStatus.kBasic)
         if len(ids) == len(self.ids) and ids is self.ids:
@@ -664,7 +733,10 @@ class CutPool:
             known = (ids[order][place] == self.ids) if len(ids) else np.zeros(len(self.ids), bool)
             mapped = np.where(known, row_status[order[place]] if len(ids) else basic, basic)
             mapped = mapped.astype(np.int8)
-        count = int((col_status == basic).sum() + (mapped == basic).sum())
+        if basic_columns is None:
+            assert col_status is not None
+            basic_columns = int((col_status == basic).sum())
+        count = basic_columns + int((mapped == basic).sum())
         if count != len(self.ids):
             self.stale += 1
             return None
@@ -703,7 +775,9 @@ class _Node:
     number: int
     ones: np.ndarray = field(compare=False)
     zeros: np.ndarray = field(compare=False)
-    basis: Any = field(compare=False, default=None)
+    #: Its parent's final basis (:class:`_ChildBasis`), set when another node was solved
+    #: since the parent.
+    basis: _ChildBasis | None = field(compare=False, default=None)
     parent: int = field(compare=False, default=-1)
     #: (branching key, child 0 or 1, the LP mass the branching removed, the parent's LP
     #: value): the child's first LP is a pseudo-cost observation.
@@ -715,15 +789,46 @@ class _Node:
 
 @dataclass
 class _ChildBasis:
-    """A strong-branching child LP's final basis: HiGHS's own object (``raw``) and the pool's
-    row identities when it was taken (``ids``, the same array while no row has changed)."""
+    """An LP's final basis kept for a node: a strong-branching child LP's (the node's own,
+    :data:`STRONG_BASES`) or its parent's last LP's, as HiGHS's own object (``raw``, a copy
+    in C++) and the pool's row identities when it was taken (``ids``, the same array while
+    no row has changed). Packed into int8 statuses (:meth:`packed`) only when a node uses it
+    on other rows, not at every branching (most children never need their parent's)."""
 
     raw: Any
     ids: np.ndarray
+    _rows: np.ndarray | None = field(default=None, repr=False)
+
+    def row_status(self) -> np.ndarray:
+        """Its row statuses as int8 (read from ``raw`` once: reading a status list from
+        HiGHS makes a Python object per entry, some 0.2 µs each)."""
+        if self._rows is None:
+            self._rows = _packed(self.raw.row_status)
+        return self._rows
 
     def packed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The basis as a node stores it (int8 statuses and the row identities)."""
-        return _packed(self.raw.col_status), _packed(self.raw.row_status), self.ids
+        """The basis as int8 statuses and the row identities."""
+        return _packed(self.raw.col_status), self.row_status(), self.ids
+
+    def basic_columns(self) -> int:
+        """Its basic columns, without reading the column statuses: HiGHS's bases (``getBasis``
+        of a solved LP, ``valid``) have one basic variable per row, so the rows (``ids``)
+        less the basic rows; counted from the column statuses for any other."""
+        if not self.raw.valid:
+            return int((self.packed()[0] == _BASIC).sum())
+        return len(self.ids) - int((self.row_status() == _BASIC).sum())
+
+    def set(self, highs: highspy.Highs, row_status: np.ndarray) -> None:
+        """Set this basis in ``highs`` with the row statuses ``row_status`` (the LP's rows
+        now, :meth:`CutPool.statuses`): ``raw`` itself with its rows replaced, marked as a
+        basis set by hand (``alien``: HiGHS checks and factors it, as it does a new
+        ``HighsBasis``); its column statuses stay in HiGHS's object, never read into Python.
+        :meth:`row_status` was read before, so later uses of this basis map from it."""
+        self.row_status()
+        raw = self.raw
+        raw.row_status = [_BY_VALUE[k] for k in row_status.tolist()]
+        raw.valid, raw.alien, raw.was_alien = True, True, True
+        highs.setBasis(raw)
 
 
 def _union(n: int, *parts: Any) -> np.ndarray:
@@ -921,7 +1026,7 @@ class BranchCut:
         depth: int,
         ones: np.ndarray,
         zeros: np.ndarray,
-        basis: Any,
+        basis: _ChildBasis | None,
         parent: int,
         origin: tuple[Any, int, float, float] | None = None,
         own: _ChildBasis | None = None,
@@ -940,14 +1045,17 @@ class BranchCut:
         (lower, upper)."""
         model = self.model
         highs = model.highs
-        self._undo()
         lower = np.zeros(model.n_arcs)
         upper = np.where(model.fixed, 0.0, 1.0)
         lower[node.ones] = 1.0
         upper[node.zeros] = 0.0
         changed = _union(model.n_arcs, node.ones, node.zeros).astype(np.int32)
-        if len(changed):
-            highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
+        # the last node's columns back to the root's bounds and this node's set, in one call
+        # (:meth:`_undo`'s and this node's: HiGHS keeps a nonbasic column's status through a
+        # change of its finite bounds, so the LP and its basis are those of the two calls)
+        touched = _union(model.n_arcs, self._changed, changed).astype(np.int32)
+        if len(touched):
+            highs.changeColsBounds(len(touched), touched, lower[touched], upper[touched])
         self._changed = changed
         stored, own, node.own = node.basis, node.own, None
         if own is not None:  # its strong-branching child LP's basis (STRONG_BASES)
@@ -957,22 +1065,19 @@ class BranchCut:
                 highs.setBasis(own.raw)
                 self._last = node.number
                 return lower, upper
-            stored = node.basis = own.packed()  # the rows changed: mapped as any basis
+            stored = node.basis = own  # the rows changed: mapped as any basis
         if stored is not None and (own is not None or node.parent != self._last):
+            packed = (None, stored.row_status(), stored.ids)
             # by row identity: rows added since basic (their slacks), as HiGHS itself keeps
             # them; the basis's tight rows that left the LP come back (POOL_REPAIR), else a
             # basis that lost a nonbasic row is not set (HiGHS's own is kept)
             pool = self._pool()
             if POOL_REPAIR:
-                self._restore(pool.missing(stored), returned=False)
+                self._restore(pool.missing(packed), returned=False)
             pool._grow(int(highs.getNumRow()))
-            row_status = pool.statuses(stored)
+            row_status = pool.statuses(packed, stored.basic_columns())
             if row_status is not None:
-                basis = highspy.HighsBasis()
-                basis.col_status = [_BY_VALUE[k] for k in stored[0].tolist()]
-                basis.row_status = [_BY_VALUE[k] for k in row_status.tolist()]
-                basis.valid = True
-                highs.setBasis(basis)
+                stored.set(highs, row_status)
         self._last = node.number
         return lower, upper
 
@@ -1102,7 +1207,7 @@ class BranchCut:
             basis = model.highs.getBasis()
             pool = self._pool()
             pool._grow(int(model.highs.getNumRow()))
-            saved = (_packed(basis.col_status), _packed(basis.row_status), pool.ids)
+            saved = _ChildBasis(basis, pool.ids)
             candidates = self._candidates(values, ones, zeros)
             pick, bounds = candidates[0], [bound, bound]
             bases: list[_ChildBasis | None] = [None, None]

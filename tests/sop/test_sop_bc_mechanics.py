@@ -75,11 +75,63 @@ def _score_reference(gains: Any, value: float) -> float:
     return float(np.prod([min(max(float(g), 0.0), 1e12) + tiny for g in gains]))
 
 
+def _append_reference(self: CsrRows, other: CsrRows) -> CsrRows:
+    """``CsrRows.append`` by concatenation (main before issue 33's B17)."""
+    return CsrRows(
+        np.concatenate([self.indptr, other.indptr[1:] + self.indptr[-1]]).astype(np.int32),
+        np.concatenate([self.indices, other.indices]),
+        np.concatenate([self.data, other.data]),
+        self.n,
+    )
+
+
+def _apply_reference(self: BranchCut, node: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``BranchCut._apply`` as before issue 33's B17: the last node's bounds undone in a call
+    of their own, a stored basis packed whole (column statuses read into Python) and set as
+    a new ``HighsBasis``."""
+    model = self.model
+    highs = model.highs
+    self._undo()
+    lower = np.zeros(model.n_arcs)
+    upper = np.where(model.fixed, 0.0, 1.0)
+    lower[node.ones] = 1.0
+    upper[node.zeros] = 0.0
+    changed = sop_bc._union(model.n_arcs, node.ones, node.zeros).astype(np.int32)
+    if len(changed):
+        highs.changeColsBounds(len(changed), changed, lower[changed], upper[changed])
+    self._changed = changed
+    stored, own, node.own = node.basis, node.own, None
+    if own is not None:
+        pool = self._pool()
+        pool._grow(int(highs.getNumRow()))
+        if own.ids is pool.ids:
+            highs.setBasis(own.raw)
+            self._last = node.number
+            return lower, upper
+        stored = node.basis = own
+    if stored is not None and (own is not None or node.parent != self._last):
+        packed = stored.packed()
+        pool = self._pool()
+        if sop_bc.POOL_REPAIR:
+            self._restore(pool.missing(packed), returned=False)
+        pool._grow(int(highs.getNumRow()))
+        row_status = pool.statuses(packed)
+        if row_status is not None:
+            basis = sop_bc.highspy.HighsBasis()
+            basis.col_status = [sop_bc._BY_VALUE[k] for k in packed[0].tolist()]
+            basis.row_status = [sop_bc._BY_VALUE[k] for k in row_status.tolist()]
+            basis.valid = True
+            highs.setBasis(basis)
+    self._last = node.number
+    return lower, upper
+
+
 def _old_mechanics(monkeypatch: Any) -> None:
     """The tree's mechanics before: a scipy matrix built for each product, the rows the tree
     adds read back from HiGHS (``Rows.now``), the per-node split loop, the pool's arrays
     compacted at each return, HiGHS's whole info record read, the pseudo-cost estimates and
-    scores on numpy arrays."""
+    scores on numpy arrays; rows appended by concatenation, the bounds of two nodes changed
+    in two calls, stored bases read whole and set as new objects."""
     monkeypatch.setattr(
         CsrRows,
         "dot",
@@ -99,6 +151,8 @@ def _old_mechanics(monkeypatch: Any) -> None:
     monkeypatch.setattr(sop_bc.PseudoCosts, "estimate", _estimate_reference)
     monkeypatch.setattr(sop_bc, "_score", _score_reference)
     monkeypatch.setattr(sop_bc, "_info", lambda highs, name: getattr(highs.getInfo(), name))
+    monkeypatch.setattr(CsrRows, "append", _append_reference)
+    monkeypatch.setattr(BranchCut, "_apply", _apply_reference)
 
 
 def _search(problem: SopProblem, nodes: int) -> dict[str, Any]:
@@ -137,6 +191,60 @@ def test_csr_rows_products_and_selection_are_scipys():
     listed = CsrRows.lists([np.array([3, 5]), np.array([0, 29, 7])], [None, [0.5, 2.0, 1.0]], 30)
     assert np.array_equal(listed.matrix().toarray()[1, [0, 29, 7]], [0.5, 2.0, 1.0])
     assert listed.matrix().toarray()[0].sum() == 2.0
+
+
+def test_append_in_place_keeps_the_rows_made_before():
+    """Appends into a growable store equal concatenation, and rows made before keep their
+    entries when their store is appended to again (in place) or from an older prefix (a
+    copy): two branches from one base."""
+    rng = np.random.default_rng(11)
+
+    def block(rows: int) -> CsrRows:
+        dense = np.where(rng.random((rows, 25)) < 0.3, rng.normal(size=(rows, 25)), 0.0)
+        return CsrRows.of(sp.csr_matrix(dense))
+
+    base = block(6)
+    made = [base]
+    for step in range(12):  # in place, from the newest, or from an older one (a copy)
+        pick = made[-1] if step % 3 else made[int(rng.integers(len(made)))]
+        more = block(int(rng.integers(0, 4)))
+        grown = pick.append(more)
+        expect = _append_reference(pick, more)
+        for a, b in ((grown.indptr, expect.indptr), (grown.indices, expect.indices)):
+            assert np.array_equal(a, b)
+        assert np.array_equal(grown.data, expect.data)
+        made.append(grown)
+    copies = [(m.indices.copy(), m.data.copy()) for m in made]
+    for m in made:  # appending to each again never changes any made before
+        m.append(block(2))
+    for m, (indices, data) in zip(made, copies, strict=True):
+        assert np.array_equal(m.indices, indices) and np.array_equal(m.data, data)
+
+
+def test_stored_basis_counts_and_sets_as_a_new_basis():
+    """``_ChildBasis.basic_columns`` equals the count from its column statuses, and setting
+    it (``set``: HiGHS's object with its rows replaced) leaves HiGHS with the same basis as a
+    new ``HighsBasis`` of the same statuses, on LPs of random SOPs."""
+    for seed in range(3):
+        model = SopCutModel(_random_sop([33, 14, seed], 18, 0.15))
+        model.highs.run()
+        ids = np.arange(int(model.highs.getNumRow()))
+        stored = sop_bc._ChildBasis(model.highs.getBasis(), ids)
+        col_status, row_status, _ = stored.packed()
+        assert stored.basic_columns() == int((col_status == sop_bc._BASIC).sum())
+        fresh = sop_bc.highspy.HighsBasis()
+        fresh.col_status = [sop_bc._BY_VALUE[k] for k in col_status.tolist()]
+        fresh.row_status = [sop_bc._BY_VALUE[k] for k in row_status.tolist()]
+        fresh.valid = True
+        model.highs.setBasis(fresh)
+        expect = model.highs.getBasis()
+        model.highs.setBasis()  # the slack basis between
+        stored.set(model.highs, row_status)
+        got = model.highs.getBasis()
+        assert sop_bc._packed(got.col_status).tolist() == sop_bc._packed(expect.col_status).tolist()
+        assert sop_bc._packed(got.row_status).tolist() == sop_bc._packed(expect.row_status).tolist()
+        assert (got.valid, got.alien) == (expect.valid, expect.alien)
+        assert np.array_equal(stored.row_status(), row_status)  # read before the change
 
 
 def test_tree_rows_are_highs_rows_at_every_lp(monkeypatch):
@@ -224,3 +332,39 @@ def test_same_search_as_the_old_mechanics(seed, n, monkeypatch):
         old = _search(problem, 25)
     assert new == old
     assert new["lps"] > new["nodes"] > 1
+
+
+def test_missing_by_identity_equals_isin():
+    """``CutPool.missing`` (a lookup by row identity) names the pooled rows alive whose
+    identity is nonbasic in a stored basis, as ``np.isin`` does, on random pools."""
+    rng = np.random.default_rng(17)
+    for _ in range(200):
+        next_id = int(rng.integers(1, 60))
+        pooled = rng.permutation(next_id)[: int(rng.integers(1, next_id + 1))]
+        pool = sop_bc.CutPool(0, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), next_id)
+        pool.pooled, pool.alive = pooled, rng.random(len(pooled)) < 0.7
+        ids = rng.permutation(next_id)[: int(rng.integers(0, next_id + 1))]
+        row_status = np.where(rng.random(len(ids)) < 0.4, 0, sop_bc._BASIC).astype(np.int8)
+        expect = np.flatnonzero(np.isin(pooled, ids[row_status != sop_bc._BASIC]) & pool.alive)
+        got = pool.missing((None, row_status, ids))
+        assert np.array_equal(got, expect) if pool.alive.any() else not len(got)
+
+
+@pytest.mark.parametrize("runs", [0, 1, 3, 32])
+def test_take_by_runs_equals_entry_by_entry(runs, monkeypatch):
+    """``CsrRows.take`` of a mask copies the same arrays run by run (slices) as entry by
+    entry, whatever :data:`~taopt.models.sop_bc.TAKE_RUNS` lets through."""
+    rng = np.random.default_rng(19)
+    monkeypatch.setattr(sop_bc, "TAKE_RUNS", runs)
+    for _ in range(100):
+        count = int(rng.integers(0, 30))
+        dense = np.where(rng.random((count, 20)) < 0.3, rng.normal(size=(count, 20)), 0.0)
+        rows = CsrRows.of(sp.csr_matrix(dense))
+        mask = rng.random(count) < rng.random()
+        got = rows.take(mask)
+        lengths = np.diff(rows.indptr)
+        entries = np.repeat(mask, lengths)
+        assert np.array_equal(got.indptr, np.concatenate([[0], np.cumsum(lengths[mask])]))
+        assert np.array_equal(got.indices, rows.indices[entries])
+        assert np.array_equal(got.data, rows.data[entries])
+        assert got.indices.dtype == np.int32 and got.indptr.dtype == np.int32
