@@ -1753,11 +1753,23 @@ def trials_wanted(tree_next: bool, root_complete: bool) -> bool:
 
 
 def tree_first(tree_next: bool, root_complete: bool, gap: float) -> bool:
-    """Whether our tree runs right after the root and window stages (:data:`TREE_FIRST`):
+    """Whether our tree runs right after the root stage (:data:`TREE_FIRST`; the window stage
+    between them only with :data:`TREE_FIRST_WINDOW`):
     where it comes next (``tree_next``) after a root loop complete within its share
     (``root_complete``) and the relative ``gap`` of the best order to the best bound is above
     :data:`PROOF_GAP`, that is where :func:`trials_wanted` leaves the gap to the tree."""
     return TREE_FIRST and gap > PROOF_GAP and not trials_wanted(tree_next, root_complete)
+
+
+#: Whether the window stage runs where the root's gap already sends the tree first
+#: (:func:`tree_first` on the root's bound and the order known after it). Its prices serve
+#: the DP stages, which that path skips, and its bound stayed below the complete root loop's
+#: on every file that took the path (10 s, load 1-1.5, window / root: prob.42 227 / 230,
+#: ft53.1 6135 / 7189, ry48p.1 14058 / 14775, esc-like-65-0.04 110 / 170, ESC25 1569 / 1663,
+#: ESC47 1199 / 1254; 0.2-0.8 s each). False: the tree goes first without it (the gap from
+#: the root's bound alone); True: it runs, and its bound may still send the run to the DP
+#: path, as before.
+TREE_FIRST_WINDOW = False
 
 
 def tree_first_search(gap: float) -> bool:
@@ -2017,8 +2029,9 @@ def solve_sop_problem(
     between the DP's root bound and the best order (p43.1), the cut engine runs next with
     all the time left, and CP-SAT beside is stopped once :data:`CPSAT_PROBE_SHARE` of the
     limit has passed (its last order and bound kept). Where the trials would be skipped for
-    our tree and the best order is more than :data:`PROOF_GAP` above the bound after the root
-    and window stages, the tree goes first (:func:`tree_first`, :data:`TREE_FIRST`): the DP
+    our tree and the best order is more than :data:`PROOF_GAP` above the root's bound, the
+    tree goes first (:func:`tree_first`, :data:`TREE_FIRST`; the window stage skipped unless
+    :data:`TREE_FIRST_WINDOW`): the DP
     stage's beam passes give it an order, improved by the primal search where it is far above
     the bound (:func:`tree_first_search`), then it gets all the time left
     (``info["tree_first"]``). Otherwise the DP runs first with at
@@ -2757,19 +2770,24 @@ def _stages(
             if on_root is not None:
                 on_root(cuts_first)
             root_bound = info["root_stage"]["bound"]
-            if not cuts_first:
-                window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
-                lap("window")
             lower = float(root_bound) if np.isfinite(root_bound) else cheap
+            complete = bool(info["root_stage"].get("complete"))
             if not cuts_first and not root_closed():
                 # the tree first where the trials would be skipped for it (TREE_FIRST)
                 after_root = _known_order(
                     problem.cost, problem.closure, problem.start, problem.end, incumbent
                 )
-                best = max(lower, cheap, window_bound)
-                gap = root_gap(None if after_root is None else after_root[0], best)
-                complete = bool(info["root_stage"].get("complete"))
-                straight = tree_first(True, complete, gap)
+                cost_after = None if after_root is None else after_root[0]
+                best = max(lower, cheap)
+                straight = tree_first(True, complete, root_gap(cost_after, best))
+            if not cuts_first and not (straight and not TREE_FIRST_WINDOW):
+                window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
+                lap("window")
+                if straight:  # the window's bound may narrow the gap below PROOF_GAP
+                    best = max(best, window_bound)
+                    straight = tree_first(True, complete, root_gap(cost_after, best))
+            elif straight:
+                info["window"] = "skipped: the tree goes first (TREE_FIRST_WINDOW)"
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if straight:  # the tree first (TREE_FIRST): the beams, the search on a wide gap, the tree

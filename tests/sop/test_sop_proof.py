@@ -491,3 +491,21 @@ def test_tree_first_searches_only_on_a_wide_gap(monkeypatch):
                 assert ("search" in result.info["stage_seconds"]) == searched
                 assert ("ils" in result.info) == searched
         assert straight > 0
+
+
+def test_tree_first_skips_the_window_stage_unless_asked(monkeypatch):
+    """On the tree-first path the window stage does not run (``TREE_FIRST_WINDOW`` off: no
+    "window" stage, ``info["window"]`` says why) and runs with it on; the brute-force optimum
+    either way (:func:`_checked_run`)."""
+    from taopt.models import sop
+
+    _rule_setting(monkeypatch, tree_first=True)
+    for asked in (False, True):
+        monkeypatch.setattr(sop, "TREE_FIRST_WINDOW", asked)
+        straight = 0
+        for result in _rule_runs():
+            if result.info.get("tree_first"):
+                straight += 1
+                assert ("window" in result.info["stage_seconds"]) == asked
+                assert str(result.info["window"]).startswith("skipped") != asked
+        assert straight > 0
