@@ -2793,13 +2793,15 @@ def _stages(
         if straight:  # the tree first (TREE_FIRST): the beams, the search on a wide gap, the tree
             known = _beamed(problem, after_root, deadline, info)
             lap("beam")
-            if known is not None and tree_first_search(root_gap(known[0], best)):
+            if known is not None:  # the beams' order, searched from on a wide gap
                 start = _stopped(problem, known, lower, began, "portfolio", {})
-                searched = _searched(
-                    problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
-                )
-                incumbent = searched.solution
-                lap("search")
+                incumbent = start.solution
+                if tree_first_search(root_gap(known[0], best)):
+                    searched = _searched(
+                        problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
+                    )
+                    incumbent = searched.solution
+                    lap("search")
             result = milp(incumbent, deadline.remaining())
             lap("milp")
             used = "milp"

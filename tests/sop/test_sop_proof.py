@@ -474,14 +474,41 @@ def test_portfolio_tree_first_proves_the_brute_force_optimum(monkeypatch):
 def test_tree_first_searches_only_on_a_wide_gap(monkeypatch):
     """:func:`taopt.models.sop.tree_first_search` on either side of its threshold, and the
     portfolio on the tree-first path: the primal search before the tree where the gap is wide
-    (``info["ils"]``, a "search" stage), none where it is not; the brute-force optimum
-    either way."""
-    from taopt.models import sop
+    (``info["ils"]``, a "search" stage), none where it is not; either way the cut engine is
+    warm-started with an order at most the beams' (here made an optimal one after a root
+    stage that leaves the dearest: the beams' order is not dropped with the search) and the
+    run ends at the brute-force optimum."""
+    from taopt.models import sop, sop_bc, sop_cuts
+    from taopt.result import Order
 
     limit = sop.TREE_FIRST_SEARCH_GAP
     assert sop.tree_first_search(limit + 0.01)
     assert not sop.tree_first_search(limit)
     _rule_setting(monkeypatch, tree_first=True)
+    beams: list[float] = []
+    starts: list[float] = []
+    stage = sop._root_stage
+
+    def worst_after(problem, *args, **kwargs):  # the root stage leaves the dearest order
+        got = stage(problem, *args, **kwargs)
+        return got[0], got[1], Order(_worst(problem)), got[3]
+
+    def recorded(problem, *args, **kwargs):  # the beams find an optimal order
+        best = min(sop_orders(problem), key=lambda o: evaluate_order(problem, o))
+        beams.append(evaluate_order(problem, best))
+        return beams[-1], list(best)
+
+    def warm(engine):
+        def run(problem, time_left, known, *args, **kwargs):
+            starts.append(evaluate_order(problem, list(known)))
+            return engine(problem, time_left, known, *args, **kwargs)
+
+        return run
+
+    monkeypatch.setattr(sop, "_root_stage", worst_after)
+    monkeypatch.setattr(sop, "_beamed", recorded)
+    monkeypatch.setattr(sop_bc, "solve_sop_bc", warm(sop_bc.solve_sop_bc))
+    monkeypatch.setattr(sop_cuts, "solve_sop_cuts", warm(sop_cuts.solve_sop_cuts))
     for gap, searched in ((-1.0, True), (math.inf, False)):
         monkeypatch.setattr(sop, "TREE_FIRST_SEARCH_GAP", gap)
         straight = 0
@@ -490,6 +517,9 @@ def test_tree_first_searches_only_on_a_wide_gap(monkeypatch):
                 straight += 1
                 assert ("search" in result.info["stage_seconds"]) == searched
                 assert ("ils" in result.info) == searched
+                assert starts[-1] <= beams[-1] + 1e-9
+            beams.clear()
+            starts.clear()
         assert straight > 0
 
 
