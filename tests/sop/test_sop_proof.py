@@ -408,6 +408,20 @@ def _rule_runs():
             yield result
 
 
+def _tree_first_runs(monkeypatch, name: str, value):
+    """The runs of :func:`_rule_runs` that took the tree-first path, with the module constant
+    ``name`` of :mod:`taopt.models.sop` set to ``value``; at least one does."""
+    from taopt.models import sop
+
+    monkeypatch.setattr(sop, name, value)
+    straight = 0
+    for result in _rule_runs():
+        if result.info.get("tree_first"):
+            straight += 1
+            yield result
+    assert straight > 0
+
+
 def test_portfolio_gives_the_trials_time_to_the_tree(monkeypatch):
     """On the tiny SOPs of :func:`_portfolio_with_trials`'s setting but with the rule's
     default (the tree follows: no trials), the portfolio runs no trial cutoff, still proves
@@ -510,32 +524,18 @@ def test_tree_first_searches_only_on_a_wide_gap(monkeypatch):
     monkeypatch.setattr(sop_bc, "solve_sop_bc", warm(sop_bc.solve_sop_bc))
     monkeypatch.setattr(sop_cuts, "solve_sop_cuts", warm(sop_cuts.solve_sop_cuts))
     for gap, searched in ((-1.0, True), (math.inf, False)):
-        monkeypatch.setattr(sop, "TREE_FIRST_SEARCH_GAP", gap)
-        straight = 0
-        for result in _rule_runs():
-            if result.info.get("tree_first"):
-                straight += 1
-                assert ("search" in result.info["stage_seconds"]) == searched
-                assert ("ils" in result.info) == searched
-                assert starts[-1] <= beams[-1] + 1e-9
-            beams.clear()
-            starts.clear()
-        assert straight > 0
+        for result in _tree_first_runs(monkeypatch, "TREE_FIRST_SEARCH_GAP", gap):
+            assert ("search" in result.info["stage_seconds"]) == searched
+            assert ("ils" in result.info) == searched
+            assert starts[-1] <= beams[-1] + 1e-9  # this run's: each appends once
 
 
 def test_tree_first_skips_the_window_stage_unless_asked(monkeypatch):
     """On the tree-first path the window stage does not run (``TREE_FIRST_WINDOW`` off: no
     "window" stage, ``info["window"]`` says why) and runs with it on; the brute-force optimum
     either way (:func:`_checked_run`)."""
-    from taopt.models import sop
-
     _rule_setting(monkeypatch, tree_first=True)
     for asked in (False, True):
-        monkeypatch.setattr(sop, "TREE_FIRST_WINDOW", asked)
-        straight = 0
-        for result in _rule_runs():
-            if result.info.get("tree_first"):
-                straight += 1
-                assert ("window" in result.info["stage_seconds"]) == asked
-                assert str(result.info["window"]).startswith("skipped") != asked
-        assert straight > 0
+        for result in _tree_first_runs(monkeypatch, "TREE_FIRST_WINDOW", asked):
+            assert ("window" in result.info["stage_seconds"]) == asked
+            assert str(result.info["window"]).startswith("skipped") != asked
