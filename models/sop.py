@@ -2780,14 +2780,14 @@ def _stages(
                 cost_after = None if after_root is None else after_root[0]
                 best = max(lower, cheap)
                 straight = tree_first(True, complete, root_gap(cost_after, best))
-            if not cuts_first and not (straight and not TREE_FIRST_WINDOW):
+            if straight and not TREE_FIRST_WINDOW:
+                info["window"] = "skipped: the tree goes first (TREE_FIRST_WINDOW)"
+            elif not cuts_first:
                 window, window_bound = _window_stage(problem, deadline, incumbent, info, cheap)
                 lap("window")
                 if straight:  # the window's bound may narrow the gap below PROOF_GAP
                     best = max(best, window_bound)
                     straight = tree_first(True, complete, root_gap(cost_after, best))
-            elif straight:
-                info["window"] = "skipped: the tree goes first (TREE_FIRST_WINDOW)"
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if straight:  # the tree first (TREE_FIRST): the beams, the search on a wide gap, the tree
