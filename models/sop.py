@@ -2162,6 +2162,14 @@ def solve_sop_problem(
             )
             task.cancel()  # its worker answers with the last order (and bound) it sent
 
+    def on_tree() -> None:  # the tree's peer process takes CP-SAT's core (TREE_SPLIT)
+        if not task.done():
+            rule["stopped"] = (
+                f"by the rule after {time.perf_counter() - began:.1f} s: the tree took its "
+                "core (TREE_SPLIT)"
+            )
+            task.cancel()
+
     def on_root(cuts_first: bool) -> None:
         # the root closed most of the gap: CP-SAT's circuit bound will not help, and the cut
         # engine wants the cores; CP-SAT keeps CPSAT_PROBE_SHARE of the limit for its orders
@@ -2174,7 +2182,9 @@ def solve_sop_problem(
 
     try:
         with cancel_scope(race):
-            ours = _stages(problem, left, **options, on_root=on_root, counted=counted)
+            ours = _stages(
+                problem, left, **options, on_root=on_root, counted=counted, on_tree=on_tree
+            )
     except BaseException:  # Ctrl-C or an error: stop CP-SAT's worker too, then re-raise
         task.cancel()
         task.wait(CPSAT_STOP_WAIT)
@@ -2229,6 +2239,38 @@ def solve_sop_problem(
             "memory_estimate": estimate,
         },
     )
+
+
+#: Where the tree goes first (:func:`tree_first`), it searches in two processes
+#: (:mod:`taopt.models.sop_split`, when :func:`~taopt.models.sop_split.split_wanted`): the
+#: peer process is started as the path is chosen, and CP-SAT's worker beside the portfolio is
+#: stopped then to give it its core (``on_tree``). On that path CP-SAT's circuit bound stayed
+#: far below the root's and its orders above the tree's (60 s: prob.42 250 [180], ft53.1
+#: 7569 [5931] against the root's 230 and 7,189 and the optima 243 and 7,531).
+TREE_SPLIT = True
+
+#: The tree-first path starts the peer only with this many seconds left (its start, about
+#: 1.5-3.5 s on the 2-core machine, would take the whole of a shorter run).
+TREE_SPLIT_MIN_SECONDS = 5.0
+
+
+def _tree_peer(
+    problem: SopProblem, deadline: Deadline, on_tree: Callable[[], None] | None, info: dict
+) -> Any:
+    """The tree's peer process, started (:data:`TREE_SPLIT`), or None; ``on_tree()`` first."""
+    from taopt.models.sop_split import Peer, split_wanted
+
+    left = deadline.remaining()
+    if not (TREE_SPLIT and split_wanted()):
+        info["tree_split"] = "off"
+        return None
+    if left is not None and left < TREE_SPLIT_MIN_SECONDS:
+        info["tree_split"] = f"off: {left:.1f} s left < {TREE_SPLIT_MIN_SECONDS:g} s"
+        return None
+    if on_tree is not None:
+        on_tree()
+    info["tree_split"] = "on"
+    return Peer(problem, left)
 
 
 def _left(time_limit: float | None, began: float) -> float | None:
@@ -2420,10 +2462,12 @@ def _stages(
     on_root: Callable[[bool], None] | None = None,
     counted: tuple[int, bool, float] | None = None,
     seed: int = 0,
+    on_tree: Callable[[], None] | None = None,
 ) -> Solution:
     """The portfolio's own stages (the rule of :func:`solve_sop_problem`), in this process.
 
-    ``on_root(cuts_first)`` is called after the root stage (when it ran). ``counted``:
+    ``on_root(cuts_first)`` is called after the root stage (when it ran); ``on_tree()`` when
+    the tree-first path starts its tree's peer process (:data:`TREE_SPLIT`). ``counted``:
     ``(ideals, capped, seconds)`` of a count already made (not made again)."""
     from taopt.models.sop_dp import IDEAL_CAP, solve_sop_dp, trial_cutoffs
     from taopt.models.sop_stages import degraded, memory_plan, use_the_rest
@@ -2554,7 +2598,15 @@ def _stages(
     window_bound = -np.inf  # and its bound
     credit: Any = None  # the same LP's prices with its priced rows (the DP's row credit)
 
-    def milp(known: Any, time_left: float | None, dp_result: Solution | None = None) -> Solution:
+    def milp(
+        known: Any,
+        time_left: float | None,
+        dp_result: Solution | None = None,
+        peer: Any = None,
+    ) -> Solution:
+        if peer is not None and not (milp_ok and formulation == "cuts"):  # no tree: not used
+            peer.close()
+            peer = None
         if not milp_ok:  # degrade: the DP (state cap fitted to memory) for the rest
             return more_dp(dp_result, time_left)
         if formulation == "cuts":  # array-built and interruptible: no compile to fear
@@ -2567,13 +2619,20 @@ def _stages(
                 -np.inf if dp_result is None else float(dp_result.bound or -np.inf),
             )
             if wants_tree(np.inf if order is None else order[0], lower):  # our own tree
-                result = solve_sop_bc(problem, time_left, known, verbose=verbose, model=root_model)
+                result = solve_sop_bc(
+                    problem, time_left, known, verbose=verbose, model=root_model, peer=peer
+                )
+                peer = None  # stopped and reaped there
                 info["cut_engine"] = "tree"
+                if "peer" in result.info:
+                    info["tree_peer"] = result.info["peer"]
             else:
                 result = solve_sop_cuts(
                     problem, time_left, known, verbose=verbose, mip_gap=mip_gap, model=root_model
                 )
                 info["cut_engine"] = "mip-rounds"
+            if peer is not None:  # the MIP rounds instead: the peer is not used
+                peer.close()
             nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
             stage(BASE_BYTES + cut_engine_bytes(nonzeros, time_left))
         else:
@@ -2791,18 +2850,27 @@ def _stages(
             path = "cuts" if cuts_first or straight else "root+dp"
             watch = predict(path, incumbent, lower, deadline.share(DP_SHARE), max_states)
         if straight:  # the tree first (TREE_FIRST): the beams, the search on a wide gap, the tree
-            known = _beamed(problem, after_root, deadline, info)
-            lap("beam")
-            if known is not None:  # the beams' order, searched from on a wide gap
-                start = _stopped(problem, known, lower, began, "portfolio", {})
-                incumbent = start.solution
-                if tree_first_search(root_gap(known[0], best)):
-                    searched = _searched(
-                        problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
-                    )
-                    incumbent = searched.solution
-                    lap("search")
-            result = milp(incumbent, deadline.remaining())
+            peer = _tree_peer(problem, deadline, on_tree, info)  # starts while the beams run
+            try:
+                known = _beamed(problem, after_root, deadline, info)
+                lap("beam")
+                if known is not None:  # the beams' order, searched from on a wide gap
+                    start = _stopped(problem, known, lower, began, "portfolio", {})
+                    incumbent = start.solution
+                    if tree_first_search(root_gap(known[0], best)):
+                        searched = _searched(
+                            problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
+                        )
+                        incumbent = searched.solution
+                        lap("search")
+                if peer is not None:  # the tree and its peer: two of this model in memory
+                    nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
+                    stage(2 * (BASE_BYTES + cut_engine_bytes(nonzeros, deadline.remaining())))
+                handed, peer = peer, None
+                result = milp(incumbent, deadline.remaining(), peer=handed)
+            finally:
+                if peer is not None:  # not handed on (an error before the tree)
+                    peer.close()
             lap("milp")
             used = "milp"
             info["tree_first"] = True

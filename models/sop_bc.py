@@ -963,6 +963,13 @@ class BranchCut:
     pool: CutPool | None = None
     #: The LP's rows when the search stopped (before the pool's rows went back).
     rows_end: int = 0
+    #: The peer process (:class:`taopt.models.sop_split.Peer`) to share the nodes with, once
+    #: it is ready; its pipe's end (:class:`taopt.models.sop_split.Link`) once loaded, or this
+    #: side's link in the peer process.
+    peer: Any = None
+    link: Any = None
+    #: The peer's counts (nodes, LPs, nodes taken and given), from its last answer.
+    peer_counts: dict[str, int] | None = None
 
     def _added(self, before: int, more: Rows) -> None:
         """The rows ``more`` were just appended to the LP, which had ``before`` rows: the
@@ -1011,8 +1018,11 @@ class BranchCut:
         return z - step + 1e-6 if step else z - 1e-9 * max(1.0, abs(z))
 
     def bound(self, current: float = math.inf) -> float:
-        """The proven bound: ``min(best, open nodes' bounds, current)``."""
+        """The proven bound: ``min(best, open nodes' bounds, current)``, and the nodes in the
+        peer process or on their way to it (:meth:`taopt.models.sop_split.Link.outside`)."""
         least = min([node.bound for node in self._open] + [current])
+        if self.link is not None and self.link.main:
+            least = min(least, self.link.outside())
         return least if self.known is None else min(least, self.known[0])
 
     def _record(self, value: float) -> None:
@@ -1086,14 +1096,20 @@ class BranchCut:
             self.known = candidate
 
     def run(
-        self, deadline: Deadline, node_limit: int | None = None, root_bound: float = -math.inf
+        self,
+        deadline: Deadline,
+        node_limit: int | None = None,
+        root_bound: float = -math.inf,
+        root: bool = True,
     ) -> str:
-        """Search from the root node (of bound ``root_bound``); returns ``"optimal"`` (tree empty), ``"infeasible"`` (tree
-        empty, no order), or ``"time_limit"`` (deadline or ``node_limit`` nodes)."""
+        """Search from the root node (of bound ``root_bound``); returns ``"optimal"`` (tree
+        empty), ``"infeasible"`` (tree empty, no order), or ``"time_limit"`` (deadline or
+        ``node_limit`` nodes). ``root``: push the root node first (False in the peer process,
+        which is given its nodes)."""
         model = self.model
         model.make_integral(False)
         empty = np.zeros(0, dtype=np.int64)
-        if not self._open and self.nodes == 0:
+        if root and not self._open and self.nodes == 0:
             self._push(root_bound, 0, empty, empty, None, -1)
         try:
             return self._search(deadline, node_limit)
@@ -1144,8 +1160,23 @@ class BranchCut:
         self._changed = np.zeros(0, dtype=np.int32)
 
     def _search(self, deadline: Deadline, node_limit: int | None) -> str:
-        """The loop of :meth:`run`."""
-        while self._open:
+        """The loop of :meth:`run`; with a peer (:mod:`taopt.models.sop_split`) the nodes are
+        shared at each loop head and an empty list waits for the peer's."""
+        while True:
+            if self.peer is not None and self.link is None:
+                self.link = self.peer.load(self)
+            if self.link is not None:
+                self.link.poll(self)
+                if self.link.stopped:
+                    return "time_limit"
+                if not self._open:
+                    state = self.link.idle(self, deadline, MARGIN)
+                    if state == "time_limit":
+                        return state
+                    if state == "done":
+                        break
+            if not self._open:
+                break
             if deadline.expired(MARGIN) or (node_limit is not None and self.nodes >= node_limit):
                 return "time_limit"
             node = heapq.heappop(self._open)
@@ -1577,6 +1608,8 @@ def solve_sop_bc(
     node_limit: int | None = None,
     branching: str = BRANCHING,
     model: SopCutModel | None = None,
+    split: bool = False,
+    peer: Any = None,
 ) -> Solution:
     """Exact SOP by our own branch-and-cut over the cut model (module doc).
 
@@ -1598,6 +1631,11 @@ def solve_sop_bc(
         ``"split"`` or ``"arc"`` (:data:`BRANCHING`).
     model : SopCutModel, optional
         As in :func:`~taopt.models.sop_cuts.solve_sop_cuts`.
+    split : bool
+        Search the tree in two processes (:mod:`taopt.models.sop_split`): a peer process is
+        started at once, builds its model while the root runs and takes nodes once ready.
+    peer : taopt.models.sop_split.Peer, optional
+        A peer process already started (the portfolio's); stopped and reaped here.
 
     Returns
     -------
@@ -1623,10 +1661,18 @@ def solve_sop_bc(
     """
     began = time.perf_counter()
     deadline = Deadline(time_limit)
-    model, known, bound, info = root_stage(problem, deadline, incumbent, verbose, model)
-    tree = BranchCut(model, known, branching, began=began)
-    tree._record(bound)
-    stop = tree.run(deadline, node_limit, bound)
+    if split and peer is None:
+        from taopt.models.sop_split import Peer
+
+        peer = Peer(problem, time_limit)
+    try:
+        model, known, bound, info = root_stage(problem, deadline, incumbent, verbose, model)
+        tree = BranchCut(model, known, branching, began=began, peer=peer)
+        tree._record(bound)
+        stop = tree.run(deadline, node_limit, bound)
+    finally:
+        if peer is not None:  # its last answer (orders, bound) read into the tree, then reaped
+            peer.close(tree if "tree" in locals() else None)
     known = tree.known
     if stop == "time_limit":
         bound = (
@@ -1662,4 +1708,20 @@ def solve_sop_bc(
             "trace": tree.trace,
         }
     )
+    if peer is not None:  # the peer's counts, and this side's of the exchange
+        link = tree.link
+        info["peer"] = {
+            "startup": peer.startup,
+            "loaded": link is not None,
+            "lost": bool(link is not None and link.lost),
+            **(tree.peer_counts or {}),
+        }
+        if link is not None:
+            info["split"] = {
+                "given": link.given,
+                "taken": link.taken,
+                "waited": round(link.waited, 3),
+                "rows_sent": link.rows_sent,
+                "rows_taken": link.rows_taken,
+            }
     return cut_solution(problem, known, "exact-sop-bc", stop, bound, began, info)
