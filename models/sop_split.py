@@ -48,9 +48,7 @@ from __future__ import annotations
 import contextlib
 import heapq
 import math
-import multiprocessing
 import os
-import threading
 import time
 from typing import Any
 
@@ -59,7 +57,7 @@ import numpy as np
 
 from taopt.models.highs import add_csr_rows
 from taopt.runtime import Deadline
-from taopt.runtime.workers import ONE_THREAD_ENV, become_worker, main_hidden
+from taopt.runtime.workers import PipedWorker
 from taopt.sop.problem import SopProblem
 
 __all__ = [
@@ -293,28 +291,6 @@ class Link:
                 self.conn.poll(IDLE_POLL)
 
 
-class _InThread:
-    """A thread with a process's handle (``start``, ``is_alive``, ``join``, ``kill``): the
-    peer of :class:`Peer` ``(in_thread=True)``. ``kill`` does nothing: the thread ends on the
-    ``stop`` it is sent."""
-
-    def __init__(self, target: Any, args: tuple[Any, ...]) -> None:
-        self.thread = threading.Thread(target=target, args=args, name="taopt-tree-peer")
-        self.thread.daemon = True
-
-    def start(self) -> None:
-        self.thread.start()
-
-    def is_alive(self) -> bool:
-        return self.thread.is_alive()
-
-    def join(self, timeout: float | None = None) -> None:
-        self.thread.join(timeout)
-
-    def kill(self) -> None:
-        pass
-
-
 class Peer:
     """The peer process (main side's handle): started at once, loaded later.
 
@@ -329,23 +305,9 @@ class Peer:
     """
 
     def __init__(self, problem: SopProblem, seconds: float | None, in_thread: bool = False) -> None:
-        context = multiprocessing.get_context("spawn")
-        self.conn, child = context.Pipe(duplex=True)
         self.began = time.perf_counter()
-        self.process: Any
-        if in_thread:
-            self.process = _InThread(serve, (child, problem, seconds))
-            self.process.start()
-        else:
-            with main_hidden():
-                self.process = context.Process(
-                    target=_peer_main,
-                    args=(child, problem, os.getpid(), seconds),
-                    name="taopt-tree-peer",
-                    daemon=True,
-                )
-                self.process.start()
-            child.close()
+        self.process = PipedWorker(serve, (problem, seconds), "taopt-tree-peer", in_thread)
+        self.conn = self.process.conn
         self.ready = False
         self.loaded = False
         self.link: Link | None = None
@@ -407,9 +369,7 @@ class Peer:
         else:
             link.send(("stop",))
         self.process.join(PEER_STOP_WAIT)
-        if self.process.is_alive():
-            self.process.kill()
-            self.process.join()
+        self.process.kill()  # if it lingers
         self.conn.close()
 
 
@@ -442,13 +402,6 @@ def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarr
         model.fixed[fixed] = True
         index = np.asarray(fixed, dtype=np.int32)
         model.highs.changeColsBounds(len(index), index, np.zeros(len(index)), np.zeros(len(index)))
-
-
-def _peer_main(conn: Any, problem: SopProblem, parent: int, seconds: float | None) -> None:
-    """The peer process: a worker's environment (one solver thread, dies with ``parent``),
-    then :func:`serve`."""
-    become_worker(parent, ONE_THREAD_ENV)
-    serve(conn, problem, seconds)
 
 
 def serve(conn: Any, problem: SopProblem, seconds: float | None) -> None:

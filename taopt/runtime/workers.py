@@ -488,6 +488,87 @@ class Background(Generic[_T]):
         return f"Background({self.thread.name!r}, done={self.done()})"
 
 
+def _piped_main(
+    target: Callable[..., Any], conn: Any, args: tuple[Any, ...], parent: int
+) -> None:  # pragma: no cover - runs in the worker
+    become_worker(parent, ONE_THREAD_ENV)
+    target(conn, *args)
+
+
+class PipedWorker:
+    """``target(conn, *args)`` in a spawned worker process (:func:`become_worker` first)
+    holding one end of a duplex pipe; :attr:`conn` is this process's end. For a worker that
+    talks with its parent while both run (the SOP tree's peer, :mod:`taopt.models.sop_split`).
+
+    ``in_thread``: run it in a daemon thread of this process instead (the same pipe; tests).
+    :meth:`kill` (SIGKILL; nothing for a thread, which ends on its pipe) and :meth:`join`
+    are the owner's to call; the worker dies with its parent in any case.
+
+    Example
+    -------
+    >>> worker = PipedWorker(lambda conn, x: conn.send(x * 2), (21,), "double", in_thread=True)
+    >>> worker.conn.recv()
+    42
+    >>> worker.join(10)
+    """
+
+    def __init__(
+        self,
+        target: Callable[..., Any],
+        args: tuple[Any, ...],
+        name: str,
+        in_thread: bool = False,
+    ) -> None:
+        context = multiprocessing.get_context("spawn")
+        self.conn, child = context.Pipe(duplex=True)
+        self.name = name
+        self.process: multiprocessing.process.BaseProcess | None = None
+        self.thread: threading.Thread | None = None
+        if in_thread:
+            self.thread = threading.Thread(
+                target=target, args=(child, *args), name=name, daemon=True
+            )
+            self.thread.start()
+            return
+        with _START_LOCK, main_hidden():
+            self.process = context.Process(
+                target=_piped_main,
+                args=(target, child, args, os.getpid()),
+                name=name,
+                daemon=True,
+            )
+            self.process.start()
+        child.close()
+
+    def is_alive(self) -> bool:
+        """Whether the worker still runs."""
+        if self.thread is not None:
+            return self.thread.is_alive()
+        assert self.process is not None
+        return self.process.is_alive()
+
+    @property
+    def exitcode(self) -> int | None:
+        """The process's exit code once reaped (0 for a thread that ended)."""
+        if self.thread is not None:
+            return None if self.thread.is_alive() else 0
+        assert self.process is not None
+        return self.process.exitcode
+
+    def join(self, timeout: float | None = None) -> None:
+        """Wait at most ``timeout`` seconds for the worker to end (reaped if it did)."""
+        if self.thread is not None:
+            self.thread.join(timeout)
+        elif self.process is not None:
+            self.process.join(timeout)
+
+    def kill(self) -> None:
+        """SIGKILL the process and reap it (a thread is left to end on its pipe)."""
+        if self.process is not None and self.process.is_alive():
+            self.process.kill()
+            self.process.join()
+
+
 def kill_processes(pids: list[int]) -> None:
     """SIGKILL each of ``pids`` that still exists (processes that are not this pool's
     children, e.g. a local Dask cluster's workers)."""
@@ -498,6 +579,7 @@ def kill_processes(pids: list[int]) -> None:
 
 __all__ = [
     "ONE_THREAD_ENV",
+    "PipedWorker",
     "STOP_POLL",
     "Background",
     "ScriptWorker",

@@ -5,6 +5,7 @@ SOPs checked against the brute force, forward, backward and meeting."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -539,3 +540,50 @@ def test_tree_first_skips_the_window_stage_unless_asked(monkeypatch):
         for result in _tree_first_runs(monkeypatch, "TREE_FIRST_WINDOW", asked):
             assert ("window" in result.info["stage_seconds"]) == asked
             assert str(result.info["window"]).startswith("skipped") != asked
+
+
+def test_tree_first_splits_the_tree_with_a_peer(monkeypatch):
+    """On the tree-first path the tree gets a peer (:data:`taopt.models.sop.TREE_SPLIT`;
+    here in a thread, made ready before the tree starts) and still ends at the brute-force
+    optimum; with the split off, no peer."""
+    from taopt.models import sop, sop_split
+
+    made: list[sop_split.Peer] = []
+    plain = sop_split.Peer
+
+    def ready_peer(problem, seconds):
+        peer = plain(problem, seconds, in_thread=True)
+        while not peer.poll_ready():
+            time.sleep(0.002)
+        made.append(peer)
+        return peer
+
+    monkeypatch.setattr(sop_split, "Peer", ready_peer)
+    _rule_setting(monkeypatch, tree_first=True)
+    for result in _tree_first_runs(monkeypatch, "TREE_SPLIT", True):
+        assert result.info["tree_split"] == "on"
+        if result.info.get("cut_engine") == "tree":
+            assert result.info["tree_peer"]["loaded"]
+    assert made and all(not peer.process.is_alive() for peer in made)
+    count = len(made)
+    for result in _tree_first_runs(monkeypatch, "TREE_SPLIT", False):
+        assert result.info["tree_split"] == "off"
+    assert len(made) == count
+
+
+def test_tree_peer_rule(monkeypatch):
+    """:func:`taopt.models.sop._tree_peer`: no peer with too little time left (and no call to
+    ``on_tree``: CP-SAT keeps its core), else ``on_tree`` first, then the peer."""
+    from taopt.models import sop, sop_split
+    from taopt.runtime import Deadline
+
+    calls: list[str] = []
+    monkeypatch.setattr(sop_split, "Peer", lambda problem, seconds: calls.append("peer") or "p")
+    monkeypatch.setattr(sop_split, "split_wanted", lambda: True)
+    info: dict = {}
+    problem = _instance(0)
+    short = Deadline(sop.TREE_SPLIT_MIN_SECONDS / 2)
+    assert sop._tree_peer(problem, short, lambda: calls.append("tree"), info) is None
+    assert calls == [] and info["tree_split"].startswith("off")
+    assert sop._tree_peer(problem, Deadline(60), lambda: calls.append("tree"), info) == "p"
+    assert calls == ["tree", "peer"] and info["tree_split"] == "on"

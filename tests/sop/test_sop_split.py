@@ -75,9 +75,7 @@ def test_split_stopped_early_keeps_a_valid_bound(branching: None) -> None:
     assert _cost(problem, list(stopped.order)) == stopped.objective
 
 
-def test_a_lost_peer_gives_its_nodes_back(
-    branching: None, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_lost_peer_gives_its_nodes_back(branching: None, monkeypatch: pytest.MonkeyPatch) -> None:
     """The peer solves two nodes and vanishes without its last answer: this side takes back
     every node it lent and still proves the optimum."""
 
