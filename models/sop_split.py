@@ -61,6 +61,7 @@ from taopt.runtime.workers import PipedWorker
 from taopt.sop.problem import SopProblem
 
 __all__ = [
+    "PEER_STOP_GRACE",
     "PEER_STOP_WAIT",
     "SPLIT",
     "SPLIT_MIN_CORES",
@@ -83,6 +84,10 @@ PEER_STOP_WAIT = 1.0
 #: ``SopCutModel.add_cuts``; each holds for every order): the other side adds the new ones
 #: between two nodes, as its own separation would.
 SHARE_ROWS = True
+
+#: Seconds past the peer's own limit that this side waits for its last answer, and for its
+#: end after that answer (then it is killed).
+PEER_STOP_GRACE = 0.2
 
 #: Seconds between two looks at the pipe while a side waits for nodes.
 IDLE_POLL = 0.01
@@ -306,12 +311,16 @@ class Peer:
 
     def __init__(self, problem: SopProblem, seconds: float | None, in_thread: bool = False) -> None:
         self.began = time.perf_counter()
-        self.process = PipedWorker(serve, (problem, seconds), "taopt-tree-peer", in_thread)
+        #: The wall-clock end (``time.time()``) of the peer's own limit: the same instant in
+        #: both processes, whenever the peer starts.
+        self.end = None if seconds is None else time.time() + seconds
+        self.process = PipedWorker(serve, (problem, self.end), "taopt-tree-peer", in_thread)
         self.conn = self.process.conn
         self.ready = False
         self.loaded = False
         self.link: Link | None = None
-        #: Seconds from the start to its model built (None before).
+        #: Seconds from the start until this side saw it ready (None before; this side looks
+        #: between two nodes of its tree).
         self.startup: float | None = None
 
     def poll_ready(self) -> bool:
@@ -349,7 +358,11 @@ class Peer:
         return self.link
 
     def close(self, tree: Any | None = None) -> None:
-        """Stop the peer (its last answer read into ``tree`` when given) and reap it."""
+        """Stop the peer (its last answer read into ``tree`` when given) and reap it.
+
+        The wait for its last answer is at most :data:`PEER_STOP_WAIT`, and ends
+        :data:`PEER_STOP_GRACE` after the peer's own limit (it stops there by itself, as this
+        side's tree does): the run's wall time stays within its allowance."""
         link = self.link
         if link is None:  # never loaded: nothing of it to read
             with contextlib.suppress(OSError, EOFError, ValueError):
@@ -361,14 +374,17 @@ class Peer:
         link.closing = True
         if tree is not None and not link.gone:
             link.send(("stop",))
-            until = time.perf_counter() + PEER_STOP_WAIT
+            wait = PEER_STOP_WAIT
+            if self.end is not None:
+                wait = min(wait, max(self.end + PEER_STOP_GRACE - time.time(), IDLE_POLL))
+            until = time.perf_counter() + wait
             while not link.gone and time.perf_counter() < until:
                 with contextlib.suppress(OSError, EOFError):
                     self.conn.poll(IDLE_POLL)
                 link.poll(tree)
         else:
             link.send(("stop",))
-        self.process.join(PEER_STOP_WAIT)
+        self.process.join(PEER_STOP_GRACE)
         self.process.kill()  # if it lingers
         self.conn.close()
 
@@ -404,13 +420,13 @@ def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarr
         model.highs.changeColsBounds(len(index), index, np.zeros(len(index)), np.zeros(len(index)))
 
 
-def serve(conn: Any, problem: SopProblem, seconds: float | None) -> None:
+def serve(conn: Any, problem: SopProblem, end: float | None) -> None:
     """The peer's work: build the model, take the rows, search the nodes it is given
     (:func:`search_given`), answer ``left``."""
     from taopt.models.sop_bc import BranchCut
     from taopt.models.sop_cuts import SopCutModel
 
-    deadline = Deadline(seconds)
+    deadline = Deadline(None if end is None else max(end - time.time(), 0.0))
     model = SopCutModel(problem)
     try:
         conn.send(("ready",))
