@@ -546,7 +546,7 @@ def test_tree_first_splits_the_tree_with_a_peer(monkeypatch):
     """On the tree-first path the tree gets a peer (:data:`taopt.models.sop.TREE_SPLIT`;
     here in a thread, made ready before the tree starts) and still ends at the brute-force
     optimum; with the split off, no peer."""
-    from taopt.models import sop, sop_split
+    from taopt.models import sop_split
 
     made: list[sop_split.Peer] = []
     plain = sop_split.Peer
