@@ -497,7 +497,7 @@ def _piped_main(
 
 class PipedWorker:
     """``target(conn, *args)`` in a spawned worker process (:func:`become_worker` first)
-    holding one end of a duplex pipe; :attr:`conn` is this process's end. For a worker that
+    holding one end of a duplex pipe; its ``conn`` is this process's end. For a worker that
     talks with its parent while both run (the SOP tree's peer, :mod:`taopt.models.sop_split`).
 
     ``in_thread``: run it in a daemon thread of this process instead (the same pipe; tests).
