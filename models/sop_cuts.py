@@ -120,6 +120,7 @@ __all__ = [
     "polish",
     "root_stage",
     "round_point",
+    "row_key",
     "solve_sop_cuts",
 ]
 
@@ -326,6 +327,15 @@ class RootCuts:
     values: np.ndarray | None = field(default=None, repr=False)
 
 
+def row_key(arcs: np.ndarray, side: float, weights: np.ndarray | None = None) -> bytes:
+    """The identity of a cut row (its arcs, side and weights) by which
+    :class:`SopCutModel` adds a row only once: a 0/1 row of ``add_cuts`` (``weights`` None),
+    or a weighted row of ``add_weighted_rows``."""
+    if weights is None:
+        return np.sort(arcs).astype(np.int64).tobytes() + (b"" if side == 1.0 else b"=2")
+    return b"w" + np.concatenate([arcs, np.round(weights, 9), [side]]).astype(float).tobytes()
+
+
 class SopCutModel:
     """The arc model of one SOP in a live HiGHS object, with precedence path cuts.
 
@@ -437,7 +447,7 @@ class SopCutModel:
         fresh, fresh_sides = [], []
         for k, cut in enumerate(cuts):
             side = 1.0 if sides is None else float(sides[k])
-            key = np.sort(cut).astype(np.int64).tobytes() + (b"" if side == 1.0 else b"=2")
+            key = row_key(cut, side)
             if key not in self._keys:
                 self._keys.add(key)
                 fresh.append(np.sort(cut).astype(np.int32))
@@ -465,9 +475,7 @@ class SopCutModel:
         of :func:`~taopt.models.sop_stretch.stretch_rows`); new ones only; returns how many."""
         fresh = []
         for arcs, weights, side in rows:
-            key = (
-                b"w" + np.concatenate([arcs, np.round(weights, 9), [side]]).astype(float).tobytes()
-            )
+            key = row_key(arcs, side, weights)
             if key not in self._keys and len(arcs):
                 self._keys.add(key)
                 fresh.append((arcs.astype(np.int32), weights.astype(float), float(side)))

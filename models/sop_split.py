@@ -392,6 +392,7 @@ class Peer:
 def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarray) -> None:
     """The main side's cut rows, in its order, and its root fixings, into ``model``."""
     from taopt.models.sop_bc import CsrRows
+    from taopt.models.sop_cuts import row_key
 
     n = model.n_arcs
     if rows:
@@ -402,15 +403,7 @@ def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarr
             np.asarray(sides, dtype=float),
             np.full(len(rows), highspy.kHighsInf),
         )
-        for arcs, side, weight in zip(rows, sides, weights, strict=True):
-            if weight is None:
-                key = np.sort(arcs).astype(np.int64).tobytes() + (b"" if side == 1.0 else b"=2")
-            else:
-                key = (
-                    b"w"
-                    + np.concatenate([arcs, np.round(weight, 9), [side]]).astype(float).tobytes()
-                )
-            model._keys.add(key)
+        model._keys.update(map(row_key, rows, sides, weights))
         model.cut_rows += list(rows)
         model.cut_sides += list(sides)
         model.cut_weights += list(weights)

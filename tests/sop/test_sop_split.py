@@ -131,3 +131,26 @@ def test_the_outside_bound_counts_batches_in_flight() -> None:
     assert link.flight == {2: 7.0} and link.outside() == 7.0
     link._report(np.inf, 2)
     assert link.outside() == math.inf
+
+
+def test_rows_installed_in_the_peer_are_known_there() -> None:
+    """The rows the peer's model takes in (:func:`taopt.models.sop_split._install`) are in
+    its LP, in order, and known by their keys (``SopCutModel.row_key``): sent again, none is
+    added twice."""
+    from taopt.models.sop_cuts import SopCutModel
+
+    problem = random_sop(14, 0.1, 0)
+    main = SopCutModel(problem)
+    main.root()
+    assert main.cut_rows
+    peer = SopCutModel(problem)
+    sop_split._install(peer, main.cut_rows, main.cut_sides, main.cut_weights, np.zeros(0, int))
+    assert peer.highs.getNumRow() == main.highs.getNumRow()
+    plain = [k for k, weights in enumerate(main.cut_weights) if weights is None]
+    assert plain
+    assert peer.add_cuts([main.cut_rows[k] for k in plain], [main.cut_sides[k] for k in plain]) == 0
+    main.highs.run()
+    peer.highs.run()
+    assert peer.highs.getInfo().objective_function_value == pytest.approx(
+        main.highs.getInfo().objective_function_value
+    )
