@@ -119,6 +119,7 @@ __all__ = [
     "STRONG_FLOOR",
     "STRONG_ITERATIONS",
     "STRONG_STOPPED",
+    "SPLIT_STRETCH",
     "TREE_MIN_GAP",
     "BranchCut",
     "CutPool",
@@ -1581,6 +1582,13 @@ class BranchCut:
 #: order is more than this share above the best bound (:func:`wants_tree`).
 TREE_MIN_GAP = 0.01
 
+#: Whether the tree's root stage tries the stretch rows (:data:`~taopt.models.sop_cuts.STRETCH_CUTS`)
+#: when the tree has a peer process (:mod:`taopt.models.sop_split`). False: it does not. Their
+#: extended LP runs in this process alone (2.2 s of interior point on prob.42) while the peer
+#: could already take nodes, and the rows make every node LP denser. Measured with the split at
+#: 60 s (``port4.py``, load 1.4-1.9): see docs/benchmarks.md, "The tree in two processes".
+SPLIT_STRETCH = False
+
 
 def wants_tree(value: float, bound: float) -> bool:
     """The tree, not the MIP rounds, for a gap above :data:`TREE_MIN_GAP` (of ``value``).
@@ -1666,7 +1674,10 @@ def solve_sop_bc(
 
         peer = Peer(problem, time_limit)
     try:
-        model, known, bound, info = root_stage(problem, deadline, incumbent, verbose, model)
+        stretch = peer is None or SPLIT_STRETCH  # with a peer, its nodes instead (SPLIT_STRETCH)
+        model, known, bound, info = root_stage(
+            problem, deadline, incumbent, verbose, model, stretch=stretch
+        )
         tree = BranchCut(model, known, branching, began=began, peer=peer)
         tree._record(bound)
         stop = tree.run(deadline, node_limit, bound)

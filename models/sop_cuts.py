@@ -1285,6 +1285,7 @@ def root_stage(
     incumbent: Any = None,
     verbose: bool = False,
     model: SopCutModel | None = None,
+    stretch: bool = True,
 ) -> tuple[SopCutModel, tuple[float, list[int]] | None, float, dict[str, Any]]:
     """The root of the exact cut engines (:func:`solve_sop_cuts`,
     :func:`taopt.models.sop_bc.solve_sop_bc`): the LP cut loop (stretch rows while
@@ -1293,13 +1294,14 @@ def root_stage(
     ``root_bound``, ``root_lp``, ``root_rounds``, ``root_complete``, ``root_fixed``,
     ``root_stretch_lps`` and ``root_stretch_seconds``: the model's extended LPs and their
     seconds so far, :meth:`~taopt.models.sop_cuts.SopCutModel._stretch`).
-    ``model``: as in :func:`solve_sop_cuts`."""
+    ``model``: as in :func:`solve_sop_cuts`. ``stretch``: False skips the stretch rows (the
+    tree with a peer process, :data:`taopt.models.sop_bc.SPLIT_STRETCH`)."""
     known = _known_order(problem.cost, problem.closure, problem.start, problem.end, incumbent)
     if model is None:
         model = SopCutModel(problem, verbose)
     cheap = _cheap_bound(problem)
     before = model.dual_bound() if model.is_mip is False and model.cut_rows else -math.inf
-    root = model.root(deadline, stretch=_wants_stretch(known, before))
+    root = model.root(deadline, stretch=stretch and _wants_stretch(known, before))
     if root.values is not None:
         rounded = round_point(model, root.values, deadline)
         if rounded is not None and (known is None or rounded[0] < known[0]):
