@@ -85,6 +85,7 @@ from taopt.models.sop_cuts import (
     SET_CUTS,
     SopCutModel,
     _order_of,
+    _wants_stretch,
     cut_solution,
     root_stage,
     round_point,
@@ -1005,6 +1006,18 @@ class BranchCut:
             lower = np.asarray(model.cut_sides[-count:], dtype=float)
             self._added(before, Rows(count, block, lower, np.full(count, highspy.kHighsInf)))
 
+    def _add_weighted(self, rows: list[tuple[np.ndarray, np.ndarray, float]]) -> None:
+        """The model's ``add_weighted_rows`` (rows given as (arcs, weights, side)), the tree's
+        :class:`Rows` kept in step as in :meth:`_add_cuts`."""
+        model = self.model
+        before = int(model.highs.getNumRow())
+        count = model.add_weighted_rows(rows)
+        self.cuts += count
+        if count:
+            block = CsrRows.lists(model.cut_rows[-count:], model.cut_weights[-count:], model.n_arcs)
+            lower = np.asarray(model.cut_sides[-count:], dtype=float)
+            self._added(before, Rows(count, block, lower, np.full(count, highspy.kHighsInf)))
+
     def _bound_of(self, lower: np.ndarray, upper: np.ndarray) -> tuple[float, np.ndarray]:
         """:func:`node_bound` of the last LP, the rows read again only when rows were added."""
         self._rows = Rows.of(self.model) if self._rows is None else self._rows.now(self.model)
@@ -1674,16 +1687,19 @@ def solve_sop_bc(
 
         peer = Peer(problem, time_limit)
     try:
-        stretch = peer is None or SPLIT_STRETCH  # with a peer, its nodes instead (SPLIT_STRETCH)
+        stretch = peer is None or SPLIT_STRETCH  # with a peer, the peer's (SPLIT_STRETCH)
         model, known, bound, info = root_stage(
             problem, deadline, incumbent, verbose, model, stretch=stretch
         )
+        if peer is not None and not stretch:
+            peer.stretch = _wants_stretch(known, bound)
         tree = BranchCut(model, known, branching, began=began, peer=peer)
         tree._record(bound)
         stop = tree.run(deadline, node_limit, bound)
     finally:
-        if peer is not None:  # its last answer (orders, bound) read into the tree, then reaped
-            peer.close(tree if "tree" in locals() else None)
+        if peer is not None:  # reaped; its last answer (orders, bound, counts) read first
+            # (waited for briefly where the tree closed: it needs nothing more of it)
+            peer.close(locals().get("tree"), closed=locals().get("stop") != "time_limit")
     known = tree.known
     if stop == "time_limit":
         bound = (

@@ -57,6 +57,7 @@ import numpy as np
 
 from taopt.models.highs import add_csr_rows
 from taopt.runtime import Deadline
+from taopt.runtime.deadline import CancelToken
 from taopt.runtime.workers import PipedWorker
 from taopt.sop.problem import SopProblem
 
@@ -192,7 +193,14 @@ class Link:
             self.asked = False
         elif kind == "rows":
             before = len(tree.model.cut_rows)
-            tree._add_cuts(list(message[1]), list(message[2]))
+            rows, sides, weights = message[1], message[2], message[3]
+            plain = [k for k, w in enumerate(weights) if w is None]
+            if plain:
+                tree._add_cuts([rows[k] for k in plain], [sides[k] for k in plain])
+            if len(plain) < len(rows):
+                tree._add_weighted(
+                    [(rows[k], w, sides[k]) for k, w in enumerate(weights) if w is not None]
+                )
             self.rows_taken += len(tree.model.cut_rows) - before
             self.rows_seen = len(tree.model.cut_rows)
         elif kind == "want":
@@ -231,12 +239,12 @@ class Link:
             self.rows_seen = count
             return
         new = range(self.rows_seen, count)
-        rows = [model.cut_rows[k] for k in new if model.cut_weights[k] is None]
-        sides = [model.cut_sides[k] for k in new if model.cut_weights[k] is None]
+        rows = [model.cut_rows[k] for k in new]
+        sides = [model.cut_sides[k] for k in new]
+        weights = [model.cut_weights[k] for k in new]
         self.rows_seen = count
-        if rows:
-            self.send(("rows", rows, sides))
-            self.rows_sent += len(rows)
+        self.send(("rows", rows, sides, weights))
+        self.rows_sent += len(rows)
 
     def _share(self, tree: Any) -> None:
         known = tree.known
@@ -314,8 +322,15 @@ class Peer:
         #: The wall-clock end (``time.time()``) of the peer's own limit: the same instant in
         #: both processes, whenever the peer starts.
         self.end = None if seconds is None else time.time() + seconds
-        self.process = PipedWorker(serve, (problem, self.end), "taopt-tree-peer", in_thread)
+        #: Cancels a thread peer's run (:meth:`close`); a process is killed instead.
+        self.token = CancelToken()
+        args = (problem, self.end, self.token if in_thread else None)
+        self.process = PipedWorker(serve, args, "taopt-tree-peer", in_thread)
         self.conn = self.process.conn
+        #: Whether the peer, once loaded, runs the root's stretch rows (its extended LP) before
+        #: it takes nodes, and sends them here (the tree's root skipped them:
+        #: :data:`taopt.models.sop_bc.SPLIT_STRETCH`); set by the tree.
+        self.stretch = False
         self.ready = False
         self.loaded = False
         self.link: Link | None = None
@@ -347,6 +362,7 @@ class Peer:
             np.flatnonzero(model.fixed),
             bool(model.conditional),
             tree.known,
+            bool(self.stretch),
         )
         try:
             self.conn.send(message)
@@ -357,24 +373,22 @@ class Peer:
         self.link.shared = math.inf if tree.known is None else tree.known[0]
         return self.link
 
-    def close(self, tree: Any | None = None) -> None:
-        """Stop the peer (its last answer read into ``tree`` when given) and reap it.
+    def close(self, tree: Any | None = None, closed: bool = False) -> None:
+        """Stop the peer and reap it; with ``tree`` its last answer (orders, bound, counts)
+        is read into it first.
 
-        The wait for its last answer is at most :data:`PEER_STOP_WAIT`, and ends
-        :data:`PEER_STOP_GRACE` after the peer's own limit (it stops there by itself, as this
-        side's tree does): the run's wall time stays within its allowance."""
+        The wait for that answer is at most :data:`PEER_STOP_WAIT` (:data:`PEER_STOP_GRACE`
+        where the tree is ``closed``: it needs nothing more of the peer, which answers at
+        once unless it is inside its root), and ends :data:`PEER_STOP_GRACE` after the
+        peer's own limit (it stops there by itself, as this side's tree does): the run's
+        wall time stays within its allowance. Then the process is killed if it lingers; a
+        thread's run is cancelled and joined."""
         link = self.link
-        if link is None:  # never loaded: nothing of it to read
-            with contextlib.suppress(OSError, EOFError, ValueError):
-                self.conn.send(("stop",))  # a thread's end (a process is killed too)
-            self.process.kill()
-            self.process.join(PEER_STOP_WAIT)
-            self.conn.close()
-            return
-        link.closing = True
-        if tree is not None and not link.gone:
+        if link is not None:
+            link.closing = True
+        if link is not None and tree is not None and not link.gone:
             link.send(("stop",))
-            wait = PEER_STOP_WAIT
+            wait = PEER_STOP_GRACE if closed else PEER_STOP_WAIT
             if self.end is not None:
                 wait = min(wait, max(self.end + PEER_STOP_GRACE - time.time(), IDLE_POLL))
             until = time.perf_counter() + wait
@@ -382,10 +396,12 @@ class Peer:
                 with contextlib.suppress(OSError, EOFError):
                     self.conn.poll(IDLE_POLL)
                 link.poll(tree)
-        else:
-            link.send(("stop",))
-        self.process.join(PEER_STOP_GRACE)
-        self.process.kill()  # if it lingers
+            self.process.join(PEER_STOP_GRACE)
+        with contextlib.suppress(OSError, EOFError, ValueError):
+            self.conn.send(("stop",))  # a thread waiting for its model ends on it
+        self.token.cancel()  # a thread's run stops at its next look (a process is killed)
+        self.process.kill()
+        self.process.join(None if self.process.thread is not None else PEER_STOP_GRACE)
         self.conn.close()
 
 
@@ -413,13 +429,15 @@ def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarr
         model.highs.changeColsBounds(len(index), index, np.zeros(len(index)), np.zeros(len(index)))
 
 
-def serve(conn: Any, problem: SopProblem, end: float | None) -> None:
+def serve(
+    conn: Any, problem: SopProblem, end: float | None, token: CancelToken | None = None
+) -> None:
     """The peer's work: build the model, take the rows, search the nodes it is given
     (:func:`search_given`), answer ``left``."""
     from taopt.models.sop_bc import BranchCut
     from taopt.models.sop_cuts import SopCutModel
 
-    deadline = Deadline(None if end is None else max(end - time.time(), 0.0))
+    deadline = Deadline(None if end is None else max(end - time.time(), 0.0), cancel=token)
     model = SopCutModel(problem)
     try:
         conn.send(("ready",))
@@ -428,14 +446,17 @@ def serve(conn: Any, problem: SopProblem, end: float | None) -> None:
         return
     if message[0] != "model":
         return
-    _, rows, sides, weights, fixed, conditional, known = message
+    _, rows, sides, weights, fixed, conditional, known, stretch = message
     _install(model, rows, sides, weights, fixed)
     model.conditional = conditional
     tree = BranchCut(model, None if known is None else (float(known[0]), list(known[1])))
     link = Link(conn, main=False)
     link.shared = math.inf if known is None else float(known[0])
+    link.rows_seen = len(model.cut_rows)  # the rows both sides start with
     tree.link = link
     try:
+        if stretch:  # the root's stretch rows, sent to the other side at the first look
+            model.root(deadline, stretch=True)
         search_given(tree, deadline)
     finally:
         bound = tree.bound() if tree._open else math.inf

@@ -154,3 +154,39 @@ def test_rows_installed_in_the_peer_are_known_there() -> None:
     assert peer.highs.getInfo().objective_function_value == pytest.approx(
         main.highs.getInfo().objective_function_value
     )
+
+
+def test_the_peer_runs_the_stretch_rows_and_they_reach_this_side() -> None:
+    """With a peer the tree's root skips the stretch rows (``SPLIT_STRETCH`` off) and asks the
+    peer for them: the peer runs them before it takes nodes and sends them at its first
+    look, and they enter this side's LP (weighted rows, the LP's row count with them)."""
+    from taopt.models.sop_cuts import root_stage
+    from taopt.runtime import Deadline
+
+    problem = random_sop(26, 0.05, 0)
+    assert solve_sop_bc(problem).info["root_stretch_lps"] > 0  # the tree alone runs them
+    model, known, _, info = root_stage(problem, Deadline(None), stretch=False)
+    assert info["root_stretch_lps"] == 0
+    tree = sop_bc.BranchCut(model, known)
+    peer = _ready(problem)
+    peer.stretch = True
+    link = peer.load(tree)
+    assert link is not None
+    rows = model.highs.getNumRow()
+    until = time.perf_counter() + 60
+    while not any(weights is not None for weights in model.cut_weights):
+        assert time.perf_counter() < until, "no stretch row came"
+        link.poll(tree)
+        time.sleep(0.005)
+    added = sum(weights is not None for weights in model.cut_weights)
+    assert model.highs.getNumRow() >= rows + added and link.rows_taken >= added
+    peer.close(tree)
+    assert tree.peer_counts is not None and not peer.process.is_alive()
+
+
+def test_a_tree_with_a_peer_asks_it_for_the_stretch_rows() -> None:
+    problem = random_sop(26, 0.05, 0)
+    peer = _ready(problem)
+    split = solve_sop_bc(problem, peer=peer)
+    assert split.info["root_stretch_lps"] == 0 and peer.stretch
+    assert split.status == "optimal" and split.objective == solve_sop_bc(problem).objective
