@@ -1595,11 +1595,14 @@ class BranchCut:
 #: order is more than this share above the best bound (:func:`wants_tree`).
 TREE_MIN_GAP = 0.01
 
-#: Whether the tree's root stage tries the stretch rows (:data:`~taopt.models.sop_cuts.STRETCH_CUTS`)
-#: when the tree has a peer process (:mod:`taopt.models.sop_split`). False: it does not. Their
-#: extended LP runs in this process alone (2.2 s of interior point on prob.42) while the peer
-#: could already take nodes, and the rows make every node LP denser. Measured with the split at
-#: 60 s (``port4.py``, load 1.4-1.9): see docs/benchmarks.md, "The tree in two processes".
+#: Whether the tree's root stage runs the stretch rows
+#: (:data:`~taopt.models.sop_cuts.STRETCH_CUTS`) when the tree has a peer process
+#: (:mod:`taopt.models.sop_split`). False: the peer runs them, before it takes nodes, and sends
+#: them (``Peer.stretch``), while this side starts its nodes. Their extended LP is serial
+#: (2.2 s of interior point on prob.42). At 60 s with the split (load 1.4-2.0; docs/benchmarks.md,
+#: "The tree in two processes"): at the root, prob.42 10.2-12.1 s, ft53.1 optimal in 42-51 s;
+#: in the peer, prob.42 8.8-12.3 s, ft53.1 optimal in 35-38 s, ry48p.1's bound 15,409 against
+#: 15,341-15,350.
 SPLIT_STRETCH = False
 
 
