@@ -1772,12 +1772,6 @@ def tree_first(tree_next: bool, root_complete: bool, gap: float) -> bool:
 TREE_FIRST_WINDOW = False
 
 
-def tree_first_search(gap: float) -> bool:
-    """Whether the primal search runs before the tree on the tree-first path: the relative
-    ``gap`` of the beams' order to the best bound above :data:`TREE_FIRST_SEARCH_GAP`."""
-    return gap > TREE_FIRST_SEARCH_GAP
-
-
 #: Share of the time left the trial cutoffs may use: they replace the first DP stage's time
 #: where its bound stays at the root's, and leave the rest to the primal search and the cut
 #: engine as :data:`DP_SHARE` leaves it to the MILP.
@@ -2033,7 +2027,7 @@ def solve_sop_problem(
     tree goes first (:func:`tree_first`, :data:`TREE_FIRST`; the window stage skipped unless
     :data:`TREE_FIRST_WINDOW`): the DP
     stage's beam passes give it an order, improved by the primal search where it is far above
-    the bound (:func:`tree_first_search`), then it gets all the time left
+    the bound (:data:`TREE_FIRST_SEARCH_GAP`), then it gets all the time left
     (``info["tree_first"]``). Otherwise the DP runs first with at
     most ``max_states`` states and :data:`DP_SHARE` of the time (its beam pass and its pruning
     often close the instance anyway: ESC25), then, if it has not proved the optimum, a
@@ -2411,20 +2405,23 @@ def _searched(
     info: dict[str, Any],
     lower: float,
     share: float = ILS_SHARE,
+    min_gap: float = ILS_MIN_GAP,
 ) -> Solution:
-    """``result`` (the first DP stage's, stopped) with its order improved by the primal search
+    """``result`` (the first DP stage's, stopped, or the beams' order on the tree-first path)
+    with its order improved by the primal search
     (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within ``share`` (by
-    default :data:`ILS_SHARE`) of the time left and :data:`ILS_PATIENCE`; not run when its order is at
-    most :data:`ILS_MIN_GAP` above the larger of its bound and ``lower`` (the root stage's
-    bound). The bound is kept (an order changes no bound); the order found is re-scored by
+    default :data:`ILS_SHARE`) of the time left and :data:`ILS_PATIENCE`; not run when its
+    order is at most ``min_gap`` (by default :data:`ILS_MIN_GAP`; the tree-first path's
+    :data:`TREE_FIRST_SEARCH_GAP`) above the larger of its bound and ``lower`` (the root
+    stage's bound). The bound is kept (an order changes no bound); the order found is re-scored by
     the family's scorer; ``info["ils"]`` says what ran."""
 
     if not isinstance(result.solution, Order) or not np.isfinite(result.objective):
         info["ils"] = "skipped: no order"
         return result
     gap = root_gap(result.objective, max(result.bound or 0.0, lower))
-    if gap <= ILS_MIN_GAP:
-        info["ils"] = f"skipped: the gap is {100 * gap:.1f} %"
+    if gap <= min_gap:
+        info["ils"] = f"skipped: the gap is {100 * gap:.1f} %, at most {100 * min_gap:g} %"
         return result
     began = time.perf_counter()
     budget = Deadline(deadline.share(share), cancel=deadline.token)
@@ -2857,11 +2854,18 @@ def _stages(
                 if known is not None:  # the beams' order, searched from on a wide gap
                     start = _stopped(problem, known, lower, began, "portfolio", {})
                     incumbent = start.solution
-                    if tree_first_search(root_gap(known[0], best)):
-                        searched = _searched(
-                            problem, start, deadline, seed, info, lower, TREE_FIRST_SEARCH_SHARE
-                        )
-                        incumbent = searched.solution
+                    searched = _searched(
+                        problem,
+                        start,
+                        deadline,
+                        seed,
+                        info,
+                        best,
+                        TREE_FIRST_SEARCH_SHARE,
+                        min_gap=TREE_FIRST_SEARCH_GAP,
+                    )
+                    incumbent = searched.solution
+                    if isinstance(info.get("ils"), dict):  # it ran
                         lap("search")
                 if peer is not None:  # the tree and its peer: two of this model in memory
                     nonzeros = nonzero_count(problem.cost, problem.closure, problem.start, "cuts")
