@@ -2405,13 +2405,13 @@ def _searched(
     info: dict[str, Any],
     lower: float,
     share: float = ILS_SHARE,
-    min_gap: float = ILS_MIN_GAP,
+    min_gap: float | None = None,
 ) -> Solution:
     """``result`` (the first DP stage's, stopped, or the beams' order on the tree-first path)
     with its order improved by the primal search
     (:func:`taopt.models.sop_lns.large_neighbourhood_search`, ``seed``) within ``share`` (by
     default :data:`ILS_SHARE`) of the time left and :data:`ILS_PATIENCE`; not run when its
-    order is at most ``min_gap`` (by default :data:`ILS_MIN_GAP`; the tree-first path's
+    order is at most ``min_gap`` (None: :data:`ILS_MIN_GAP`; the tree-first path's
     :data:`TREE_FIRST_SEARCH_GAP`) above the larger of its bound and ``lower`` (the root
     stage's bound). The bound is kept (an order changes no bound); the order found is re-scored by
     the family's scorer; ``info["ils"]`` says what ran."""
@@ -2420,6 +2420,7 @@ def _searched(
         info["ils"] = "skipped: no order"
         return result
     gap = root_gap(result.objective, max(result.bound or 0.0, lower))
+    min_gap = ILS_MIN_GAP if min_gap is None else min_gap  # read at the call (tests set it)
     if gap <= min_gap:
         info["ils"] = f"skipped: the gap is {100 * gap:.1f} %, at most {100 * min_gap:g} %"
         return result

@@ -49,6 +49,8 @@ import contextlib
 import heapq
 import math
 import os
+import queue
+import threading
 import time
 from typing import Any
 
@@ -142,18 +144,41 @@ class Link:
         #: Seconds this side waited for nodes (:meth:`idle`).
         self.waited = 0.0
         #: The model's cut rows up to here were sent or came from the other side.
+        self._outbox: queue.Queue[tuple[Any, ...] | None] = queue.Queue()
+        self._pump: threading.Thread | None = None  # the sending thread, started on first use
         self.rows_seen = -1
         self.rows_sent = 0  # cut rows sent
         self.rows_taken = 0  # cut rows taken in
 
     # ------------------------------------------------------------------ messages
     def send(self, message: tuple[Any, ...]) -> None:
+        """Queue ``message`` for this side's sending thread: a send never blocks the search
+        (a pipe's buffer holds a few hundred kB; two sides each blocked in a send to the
+        other, neither reading, would never end)."""
         if self.gone:
             return
-        try:
-            self.conn.send(message)
-        except (OSError, EOFError, ValueError):
-            self.gone = True
+        if self._pump is None:
+            self._pump = threading.Thread(target=self._sending, name="tree-link", daemon=True)
+            self._pump.start()
+        self._outbox.put(message)
+
+    def _sending(self) -> None:
+        while True:
+            message = self._outbox.get()
+            if message is None:
+                return
+            try:
+                self.conn.send(message)
+            except (OSError, EOFError, ValueError):
+                self.gone = True
+                return
+
+    def flush(self, timeout: float) -> None:
+        """Wait at most ``timeout`` seconds for every queued message to be sent, then end the
+        sending thread."""
+        if self._pump is not None:
+            self._outbox.put(None)
+            self._pump.join(timeout)
 
     def poll(self, tree: Any, current: float = math.inf) -> None:
         """Read every message waiting, hand out nodes if asked, share a better order and the
@@ -397,8 +422,12 @@ class Peer:
                     self.conn.poll(IDLE_POLL)
                 link.poll(tree)
             self.process.join(PEER_STOP_GRACE)
-        with contextlib.suppress(OSError, EOFError, ValueError):
-            self.conn.send(("stop",))  # a thread waiting for its model ends on it
+        if link is not None:
+            link.send(("stop",))
+            link.flush(PEER_STOP_GRACE)
+        else:
+            with contextlib.suppress(OSError, EOFError, ValueError):
+                self.conn.send(("stop",))  # a thread waiting for its model ends on it
         self.token.cancel()  # a thread's run stops at its next look (a process is killed)
         self.process.kill()
         self.process.join(None if self.process.thread is not None else PEER_STOP_GRACE)
@@ -472,6 +501,7 @@ def serve(
         }
         link._share(tree)
         link.send(("left", bound, link.got, counts))
+        link.flush(PEER_STOP_WAIT)  # sent before the process ends
 
 
 def search_given(tree: Any, deadline: Deadline) -> None:
