@@ -1689,6 +1689,8 @@ def solve_sop_bc(
         from taopt.models.sop_split import Peer
 
         peer = Peer(problem, time_limit)
+    tree: BranchCut | None = None
+    stop = "interrupted"  # until the search says otherwise
     try:
         stretch = peer is None or SPLIT_STRETCH  # with a peer, the peer's (SPLIT_STRETCH)
         model, known, bound, info = root_stage(
@@ -1702,7 +1704,8 @@ def solve_sop_bc(
     finally:
         if peer is not None:  # reaped; its last answer (orders, bound, counts) read first
             # (waited for briefly where the tree closed: it needs nothing more of it)
-            peer.close(locals().get("tree"), closed=locals().get("stop") != "time_limit")
+            peer.close(tree, closed=stop != "time_limit")
+    assert tree is not None  # made, or the try raised
     known = tree.known
     if stop == "time_limit":
         bound = (
@@ -1747,11 +1750,5 @@ def solve_sop_bc(
             **(tree.peer_counts or {}),
         }
         if link is not None:
-            info["split"] = {
-                "given": link.given,
-                "taken": link.taken,
-                "waited": round(link.waited, 3),
-                "rows_sent": link.rows_sent,
-                "rows_taken": link.rows_taken,
-            }
+            info["split"] = link.counts()
     return cut_solution(problem, known, "exact-sop-bc", stop, bound, began, info)

@@ -66,6 +66,7 @@ from taopt.sop.problem import SopProblem
 __all__ = [
     "PEER_STOP_GRACE",
     "PEER_STOP_WAIT",
+    "SHARE_ROWS",
     "SPLIT",
     "SPLIT_MIN_CORES",
     "Link",
@@ -100,9 +101,8 @@ def split_wanted() -> bool:
     """Whether to start a peer: :data:`SPLIT` on a machine of :data:`SPLIT_MIN_CORES` cores,
     unless this process is a pool's worker (``TAOPT_SOLVER_THREADS=1``,
     :data:`taopt.runtime.workers.ONE_THREAD_ENV`)."""
-    if (
-        os.environ.get("TAOPT_SOLVER_THREADS") == "1"
-    ):  # a pool's worker: the pool is the parallelism
+    # a pool's worker: the pool is the parallelism
+    if os.environ.get("TAOPT_SOLVER_THREADS") == "1":
         return False
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     return SPLIT and (cores or 1) >= SPLIT_MIN_CORES
@@ -149,6 +149,17 @@ class Link:
         self.rows_seen = -1
         self.rows_sent = 0  # cut rows sent
         self.rows_taken = 0  # cut rows taken in
+
+    def counts(self) -> dict[str, Any]:
+        """This side's part of the exchange: nodes given and taken, seconds waited, rows
+        sent and taken in."""
+        return {
+            "given": self.given,
+            "taken": self.taken,
+            "waited": round(self.waited, 3),
+            "rows_sent": self.rows_sent,
+            "rows_taken": self.rows_taken,
+        }
 
     # ------------------------------------------------------------------ messages
     def send(self, message: tuple[Any, ...]) -> None:
@@ -357,7 +368,6 @@ class Peer:
         #: :data:`taopt.models.sop_bc.SPLIT_STRETCH`); set by the tree.
         self.stretch = False
         self.ready = False
-        self.loaded = False
         self.link: Link | None = None
         #: Seconds from the start until this side saw it ready (None before; this side looks
         #: between two nodes of its tree).
@@ -375,7 +385,7 @@ class Peer:
     def load(self, tree: Any) -> Link | None:
         """Send the tree's model (rows, root fixings, best order) to a ready peer; its
         :class:`Link`, or None when it is not ready."""
-        if self.loaded or not self.poll_ready():
+        if self.link is not None or not self.poll_ready():
             return self.link
         model = tree.model
         weights = [None if w is None else np.asarray(w, float) for w in model.cut_weights]
@@ -393,7 +403,6 @@ class Peer:
             self.conn.send(message)
         except (OSError, EOFError, ValueError):
             return None
-        self.loaded = True
         self.link = Link(self.conn, main=True)
         self.link.shared = math.inf if tree.known is None else tree.known[0]
         return self.link
@@ -489,16 +498,7 @@ def serve(
         search_given(tree, deadline)
     finally:
         bound = tree.bound() if tree._open else math.inf
-        counts = {
-            "nodes": tree.nodes,
-            "lps": tree.lps,
-            "cuts": tree.cuts,
-            "taken": link.taken,
-            "given": link.given,
-            "waited": round(link.waited, 3),
-            "rows_sent": link.rows_sent,
-            "rows_taken": link.rows_taken,
-        }
+        counts = {"nodes": tree.nodes, "lps": tree.lps, "cuts": tree.cuts, **link.counts()}
         link._share(tree)
         link.send(("left", bound, link.got, counts))
         link.flush(PEER_STOP_WAIT)  # sent before the process ends
