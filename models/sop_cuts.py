@@ -1032,11 +1032,51 @@ class SopCutModel:
         drop = ~self.fixed & (reduced > 0) & (raw + reduced > limit)
         count = int(drop.sum())
         if count:
-            index = np.flatnonzero(drop).astype(np.int32)
-            self.highs.changeColsBounds(count, index, np.zeros(count), np.zeros(count))
-            self.fixed |= drop
+            self._fix(np.flatnonzero(drop))
             self.conditional = True
         return count
+
+    def _fix(self, arcs: np.ndarray) -> None:
+        """Fix the arcs ``arcs`` (indices) to 0, in the LP and in ``fixed``."""
+        index = np.asarray(arcs, dtype=np.int32)
+        self.highs.changeColsBounds(len(index), index, np.zeros(len(index)), np.zeros(len(index)))
+        self.fixed[index] = True
+
+    def install(
+        self,
+        rows: list[np.ndarray],
+        sides: list[float],
+        weights: list[np.ndarray | None],
+        fixed: np.ndarray,
+        conditional: bool,
+    ) -> None:
+        """Take in another model's rows ``Σ_k w_k x_{a_k} >= side`` (arcs, side and weights
+        (None: all 1) as in ``cut_rows``, ``cut_sides`` and ``cut_weights``: the same
+        rows in the same order, not checked against the rows known here, each known by its
+        key after) and its arcs fixed to 0 (``fixed``, indices; ``conditional`` as there):
+        the tree's peer process (:mod:`taopt.models.sop_split`) starts from its main side's
+        model."""
+        if rows:
+            values = [
+                np.ones(len(row)) if w is None else np.asarray(w, dtype=float)
+                for row, w in zip(rows, weights, strict=True)
+            ]
+            self.highs.addRows(
+                len(rows),
+                np.asarray(sides, dtype=float),
+                np.full(len(rows), highspy.kHighsInf),
+                sum(len(row) for row in rows),
+                np.cumsum([0] + [len(row) for row in rows[:-1]]).astype(np.int32),
+                np.concatenate(rows).astype(np.int32),
+                np.concatenate(values),
+            )
+            self._keys.update(map(row_key, rows, sides, weights))
+            self.cut_rows += list(rows)
+            self.cut_sides += list(sides)
+            self.cut_weights += list(weights)
+        if len(fixed):
+            self._fix(fixed)
+        self.conditional = conditional
 
     def root(
         self, deadline: Deadline | None = None, rounds: int = ROOT_ROUNDS, stretch: bool = False

@@ -54,10 +54,8 @@ import threading
 import time
 from typing import Any
 
-import highspy
 import numpy as np
 
-from taopt.models.highs import add_csr_rows
 from taopt.runtime import Deadline
 from taopt.runtime.deadline import CancelToken
 from taopt.runtime.workers import PipedWorker
@@ -443,30 +441,6 @@ class Peer:
         self.conn.close()
 
 
-def _install(model: Any, rows: list, sides: list, weights: list, fixed: np.ndarray) -> None:
-    """The main side's cut rows, in its order, and its root fixings, into ``model``."""
-    from taopt.models.sop_bc import CsrRows
-    from taopt.models.sop_cuts import row_key
-
-    n = model.n_arcs
-    if rows:
-        block = CsrRows.lists(rows, weights, n)
-        add_csr_rows(
-            model.highs,
-            block,
-            np.asarray(sides, dtype=float),
-            np.full(len(rows), highspy.kHighsInf),
-        )
-        model._keys.update(map(row_key, rows, sides, weights))
-        model.cut_rows += list(rows)
-        model.cut_sides += list(sides)
-        model.cut_weights += list(weights)
-    if len(fixed):
-        model.fixed[fixed] = True
-        index = np.asarray(fixed, dtype=np.int32)
-        model.highs.changeColsBounds(len(index), index, np.zeros(len(index)), np.zeros(len(index)))
-
-
 def serve(
     conn: Any, problem: SopProblem, end: float | None, token: CancelToken | None = None
 ) -> None:
@@ -485,20 +459,24 @@ def serve(
     if message[0] != "model":
         return
     _, rows, sides, weights, fixed, conditional, known, stretch = message
-    _install(model, rows, sides, weights, fixed)
-    model.conditional = conditional
+    model.install(rows, sides, weights, fixed, conditional)
     tree = BranchCut(model, None if known is None else (float(known[0]), list(known[1])))
     link = Link(conn, main=False)
     link.shared = math.inf if known is None else float(known[0])
     link.rows_seen = len(model.cut_rows)  # the rows both sides start with
     tree.link = link
+    began = time.perf_counter()
+    stretched = 0.0
     try:
         if stretch:  # the root's stretch rows, sent to the other side at the first look
             model.root(deadline, stretch=True)
+            stretched = time.perf_counter() - began
         search_given(tree, deadline)
     finally:
         bound = tree.bound() if tree._open else math.inf
         counts = {"nodes": tree.nodes, "lps": tree.lps, "cuts": tree.cuts, **link.counts()}
+        counts["stretch_seconds"] = round(stretched, 3)
+        counts["searched_seconds"] = round(time.perf_counter() - began - stretched, 3)
         link._share(tree)
         link.send(("left", bound, link.got, counts))
         link.flush(PEER_STOP_WAIT)  # sent before the process ends

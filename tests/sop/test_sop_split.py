@@ -134,21 +134,29 @@ def test_the_outside_bound_counts_batches_in_flight() -> None:
 
 
 def test_rows_installed_in_the_peer_are_known_there() -> None:
-    """The rows the peer's model takes in (:func:`taopt.models.sop_split._install`) are in
-    its LP, in order, and known by their keys (``SopCutModel.row_key``): sent again, none is
-    added twice."""
+    """The rows and fixings the peer's model takes in (``SopCutModel.install``) are in its
+    LP, in order, and known by their keys (``row_key``): sent again, none is added twice; the
+    two LPs have the same optimum."""
     from taopt.models.sop_cuts import SopCutModel
 
     problem = random_sop(14, 0.1, 0)
     main = SopCutModel(problem)
-    main.root()
+    main.root(stretch=True)
     assert main.cut_rows
+    main.fix_by_reduced_cost(main.dual_bound() + 3.0)
+    fixed = np.flatnonzero(main.fixed)
+    assert len(fixed)
     peer = SopCutModel(problem)
-    sop_split._install(peer, main.cut_rows, main.cut_sides, main.cut_weights, np.zeros(0, int))
+    peer.install(main.cut_rows, main.cut_sides, main.cut_weights, fixed, main.conditional)
     assert peer.highs.getNumRow() == main.highs.getNumRow()
+    assert (peer.fixed == main.fixed).all() and peer.conditional == main.conditional
     plain = [k for k, weights in enumerate(main.cut_weights) if weights is None]
     assert plain
     assert peer.add_cuts([main.cut_rows[k] for k in plain], [main.cut_sides[k] for k in plain]) == 0
+    weighted = [k for k, weights in enumerate(main.cut_weights) if weights is not None]
+    assert weighted  # the stretch rows
+    again = [(main.cut_rows[k], main.cut_weights[k], main.cut_sides[k]) for k in weighted]
+    assert peer.add_weighted_rows(again) == 0
     main.highs.run()
     peer.highs.run()
     assert peer.highs.getInfo().objective_function_value == pytest.approx(
