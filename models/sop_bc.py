@@ -113,7 +113,6 @@ __all__ = [
     "PSEUDO_CANDIDATES",
     "RELIABLE",
     "ROUND_EVERY",
-    "BUCKETS",
     "STRONG_BASES",
     "STRONG_CANDIDATES",
     "STRONG_CUTOFF",
@@ -162,12 +161,6 @@ NODE_SETS = False
 #: The node's last LP point is rounded to an order (:func:`~taopt.models.sop_cuts.round_point`)
 #: at every this-many-th node (and at every node while no order is known).
 ROUND_EVERY = 4
-
-#: Open nodes are taken by their bound raised to the costs' step (``SopCutModel.round_up``),
-#: then deeper first: nodes whose bounds round to the same value are all solved before the
-#: bound passes it unless a better order prunes them, so among them the deepest (the nearest
-#: to an order) goes first. False: by the unrounded bound.
-BUCKETS = True
 
 #: Strong branching: the child LPs of this many candidate branchings at most are solved and
 #: the one whose two children gain most (product) is taken; 1 takes the first candidate
@@ -777,12 +770,11 @@ def node_bound(
 
 @dataclass(order=True)
 class _Node:
-    """An open node: its rank (:data:`BUCKETS`), then deeper first, then the older first."""
+    """An open node: its bound, then deeper first, then the older first."""
 
-    rank: float
+    bound: float
     depth_key: int
     number: int
-    bound: float = field(compare=False)
     ones: np.ndarray = field(compare=False)
     zeros: np.ndarray = field(compare=False)
     #: Its parent's final basis (:class:`_ChildBasis`), set when another node was solved
@@ -1066,18 +1058,7 @@ class BranchCut:
         self._count += 1
         heapq.heappush(
             self._open,
-            _Node(
-                self.model.round_up(bound) if BUCKETS else bound,
-                -depth,
-                self._count,
-                bound,
-                ones,
-                zeros,
-                basis,
-                parent,
-                origin,
-                own,
-            ),
+            _Node(bound, -depth, self._count, ones, zeros, basis, parent, origin, own),
         )
 
     def _apply(self, node: _Node) -> tuple[np.ndarray, np.ndarray]:
@@ -1287,7 +1268,6 @@ class BranchCut:
                 self.strong_fixings += 1
                 node.ones, node.zeros = pick.child(alive[0], model.n_arcs)
                 node.bound, node.basis, node.own = bounds[alive[0]], saved, bases[alive[0]]
-                node.rank = model.round_up(node.bound) if BUCKETS else node.bound
                 lower, upper = self._apply(node)
                 bound = node.bound
                 continue

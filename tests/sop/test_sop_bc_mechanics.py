@@ -7,7 +7,6 @@ bound trace, nodes, LPs, rows and pool counts on random SOPs of 16-20 nodes."""
 
 from __future__ import annotations
 
-import heapq
 import itertools
 import math
 from typing import Any
@@ -369,24 +368,3 @@ def test_take_by_runs_equals_entry_by_entry(runs, monkeypatch):
         assert np.array_equal(got.indices, rows.indices[entries])
         assert np.array_equal(got.data, rows.data[entries])
         assert got.indices.dtype == np.int32 and got.indptr.dtype == np.int32
-
-
-@pytest.mark.parametrize("buckets", [True, False])
-def test_open_nodes_by_rounded_bound_then_deeper(buckets, monkeypatch):
-    """With ``BUCKETS`` the open list gives its nodes by their bound raised to the costs' step,
-    the deeper first among equal ones; without, by the bound itself. Either way the tree's
-    proven bound is the least unrounded bound open."""
-    monkeypatch.setattr(sop_bc, "BUCKETS", buckets)
-    model = SopCutModel(_random_sop([33, 14], 12, 0.1))
-    assert model.step == 1
-    tree = BranchCut(model, None)
-    empty = np.zeros(0, dtype=np.int64)
-    for bound, depth in [(10.2, 1), (10.7, 3), (9.5, 0), (11.0, 5), (10.9, 2)]:
-        tree._push(bound, depth, empty, empty, None, -1)
-    assert tree.bound() == 9.5
-    popped = [heapq.heappop(tree._open) for _ in range(5)]
-    taken = [(node.bound, -node.depth_key) for node in popped]
-    if buckets:
-        assert taken == [(9.5, 0), (11.0, 5), (10.7, 3), (10.9, 2), (10.2, 1)]
-    else:
-        assert taken == [(9.5, 0), (10.2, 1), (10.7, 3), (10.9, 2), (11.0, 5)]
