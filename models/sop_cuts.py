@@ -452,22 +452,8 @@ class SopCutModel:
                 self._keys.add(key)
                 fresh.append(np.sort(cut).astype(np.int32))
                 fresh_sides.append(side)
-        if not fresh:
-            return 0
-        starts = np.cumsum([0] + [len(c) for c in fresh[:-1]]).astype(np.int32)
-        index = np.concatenate(fresh).astype(np.int32)
-        self.highs.addRows(
-            len(fresh),
-            np.asarray(fresh_sides, dtype=float),
-            np.full(len(fresh), highspy.kHighsInf),
-            len(index),
-            starts,
-            index,
-            np.ones(len(index)),
-        )
-        self.cut_rows += fresh
-        self.cut_sides += fresh_sides
-        self.cut_weights += [None] * len(fresh)
+        if fresh:
+            self._append(fresh, fresh_sides, [None] * len(fresh))
         return len(fresh)
 
     def add_weighted_rows(self, rows: list[StretchRow]) -> int:
@@ -479,21 +465,35 @@ class SopCutModel:
             if key not in self._keys and len(arcs):
                 self._keys.add(key)
                 fresh.append((arcs.astype(np.int32), weights.astype(float), float(side)))
-        if not fresh:
-            return 0
-        self.highs.addRows(
-            len(fresh),
-            np.array([side for _, _, side in fresh]),
-            np.full(len(fresh), highspy.kHighsInf),
-            sum(len(arcs) for arcs, _, _ in fresh),
-            np.cumsum([0] + [len(arcs) for arcs, _, _ in fresh[:-1]]).astype(np.int32),
-            np.concatenate([arcs for arcs, _, _ in fresh]),
-            np.concatenate([weights for _, weights, _ in fresh]),
-        )
-        self.cut_rows += [arcs for arcs, _, _ in fresh]
-        self.cut_sides += [side for _, _, side in fresh]
-        self.cut_weights += [weights for _, weights, _ in fresh]
+        if fresh:
+            self._append(
+                [arcs for arcs, _, _ in fresh],
+                [side for _, _, side in fresh],
+                [weights for _, weights, _ in fresh],
+            )
         return len(fresh)
+
+    def _append(
+        self, rows: list[np.ndarray], sides: list[float], weights: list[np.ndarray | None]
+    ) -> None:
+        """Add the rows ``Σ_k w_k x_{a_k} >= side`` (arcs, sides, weights; None: all 1) to the
+        LP and to ``cut_rows``, ``cut_sides`` and ``cut_weights``, in their order, unchecked."""
+        values = [
+            np.ones(len(row)) if w is None else np.asarray(w, dtype=float)
+            for row, w in zip(rows, weights, strict=True)
+        ]
+        self.highs.addRows(
+            len(rows),
+            np.asarray(sides, dtype=float),
+            np.full(len(rows), highspy.kHighsInf),
+            sum(len(row) for row in rows),
+            np.cumsum([0] + [len(row) for row in rows[:-1]]).astype(np.int32),
+            np.concatenate(rows).astype(np.int32),
+            np.concatenate(values),
+        )
+        self.cut_rows += list(rows)
+        self.cut_sides += list(sides)
+        self.cut_weights += list(weights)
 
     def add_pool_rows(
         self,
@@ -1057,23 +1057,8 @@ class SopCutModel:
         the tree's peer process (:mod:`taopt.models.sop_split`) starts from its main side's
         model."""
         if rows:
-            values = [
-                np.ones(len(row)) if w is None else np.asarray(w, dtype=float)
-                for row, w in zip(rows, weights, strict=True)
-            ]
-            self.highs.addRows(
-                len(rows),
-                np.asarray(sides, dtype=float),
-                np.full(len(rows), highspy.kHighsInf),
-                sum(len(row) for row in rows),
-                np.cumsum([0] + [len(row) for row in rows[:-1]]).astype(np.int32),
-                np.concatenate(rows).astype(np.int32),
-                np.concatenate(values),
-            )
+            self._append(rows, sides, weights)
             self._keys.update(map(row_key, rows, sides, weights))
-            self.cut_rows += list(rows)
-            self.cut_sides += list(sides)
-            self.cut_weights += list(weights)
         if len(fixed):
             self._fix(fixed)
         self.conditional = conditional
